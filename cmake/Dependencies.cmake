@@ -1,0 +1,28 @@
+# Every dependency comes from a Debian package; when one is missing, say which package to install
+# (scripts/setup installs them all).
+function(dfbwall_missing what package)
+  message(FATAL_ERROR "dfbwall: ${what} not found. Install the Debian package '${package}' "
+                      "(apt-get install ${package}), or run scripts/setup, which installs everything.")
+endfunction()
+
+macro(dfbwall_find_package name package)
+  find_package(${name} ${ARGN} QUIET)
+  if(NOT ${name}_FOUND)
+    dfbwall_missing(${name} ${package})
+  endif()
+endmacro()
+
+# The C bindings only: the CXX component drags in the deprecated libmpi_cxx.
+dfbwall_find_package(MPI "libopenmpi-dev and openmpi-bin" COMPONENTS C)
+dfbwall_find_package(Snappy libsnappy-dev CONFIG)
+dfbwall_find_package(TBB libtbb-dev COMPONENTS tbb)
+dfbwall_find_package(PNG libpng-dev)
+dfbwall_find_package(tomlplusplus libtomlplusplus-dev 3)
+dfbwall_find_package(CLI11 libcli11-dev CONFIG)
+if(DFBWALL_BUILD_TESTS)
+  dfbwall_find_package(GTest libgtest-dev)
+endif()
+
+if(NOT MPIEXEC_EXECUTABLE)
+  dfbwall_missing(mpiexec openmpi-bin)
+endif()

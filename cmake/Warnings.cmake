@@ -1,0 +1,13 @@
+# Warnings for our own targets only (never for imported ones), and sanitizers for everything.
+add_library(dfbwall_warnings INTERFACE)
+target_compile_options(dfbwall_warnings INTERFACE -Wall -Wextra -Wpedantic -Wshadow
+                       -Wnon-virtual-dtor -Wold-style-cast -Wcast-align -Wnull-dereference
+                       -Wimplicit-fallthrough)
+if(DFBWALL_WERROR)
+  target_compile_options(dfbwall_warnings INTERFACE -Werror)
+endif()
+
+if(DFBWALL_SANITIZE)
+  add_compile_options(-fsanitize=${DFBWALL_SANITIZE} -fno-omit-frame-pointer -fno-sanitize-recover=all)
+  add_link_options(-fsanitize=${DFBWALL_SANITIZE})
+endif()

@@ -1,0 +1,16 @@
+#pragma once
+// The one exception type the DFB throws: a message a user can act on.
+#include <stdexcept>
+#include <string>
+
+namespace dfb {
+
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Turns an MPI return code into an Error naming the call; MPI_SUCCESS passes through.
+void checkMpi(int code, const char* call);
+
+}  // namespace dfb

@@ -1,0 +1,387 @@
+#include "dfb/Messenger.h"
+
+#include <algorithm>
+#include <condition_variable>
+#include <cstdio>
+#include <cstring>
+#include <deque>
+#include <mutex>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+#include "dfb/Error.h"
+
+namespace dfb {
+namespace {
+
+constexpr int kTag = 7;
+constexpr std::uint32_t kCompressed = 1;
+
+struct WireHeader {
+  std::uint64_t object;
+  std::uint32_t rawBytes;
+  std::uint32_t flags;
+};
+static_assert(sizeof(WireHeader) == 16, "the wire header is part of the protocol");
+
+struct Packet {
+  int rank;  // destination when outgoing, source when incoming
+  Bytes wire;
+};
+
+WireHeader readHeader(const Bytes& wire) {
+  WireHeader header;
+  if (wire.size() < sizeof header) throw Error("truncated message of " + std::to_string(wire.size()) + " bytes");
+  std::memcpy(&header, wire.data(), sizeof header);
+  return header;
+}
+
+using Clock = std::chrono::steady_clock;
+
+}  // namespace
+
+struct Messenger::Impl {
+  MPI_Comm p2p = MPI_COMM_NULL;
+  MPI_Comm control = MPI_COMM_NULL;
+  int rank = 0, size = 1;
+  MessengerOptions options;
+
+  std::mutex outboxMutex;
+  std::condition_variable outboxCv;
+  std::vector<Packet> outbox;
+
+  std::mutex inboxMutex;
+  std::condition_variable inboxCv;
+  std::deque<Packet> inbox;
+  bool inboxBusy = false;
+
+  std::mutex registryMutex;
+  std::unordered_map<ObjectId, MessageHandler*> handlers;
+  std::mutex dispatchMutex;  // held while a handler runs, so unregister can wait for it
+  std::thread::id inboxThreadId;
+
+  std::mutex errorMutex;
+  ErrorCallback onError;
+
+  std::atomic<bool> exitThreads{false};
+  std::atomic<std::uint64_t> sendsInFlight{0};
+  std::atomic<std::uint64_t> messagesSent{0}, messagesReceived{0}, messagesHandled{0},
+      rawBytesSent{0}, wireBytesSent{0}, rawBytesReceived{0}, wireBytesReceived{0},
+      messagesCompressed{0}, unknownReceiver{0}, handlerErrors{0};
+
+  std::thread mpiThread, inboxThread;
+  bool stopped = false;
+
+  void report(const std::string& message) {
+    std::lock_guard lock(errorMutex);
+    if (onError)
+      onError(message);
+    else
+      std::fprintf(stderr, "[rank %d] dfb messaging: %s\n", rank, message.c_str());
+  }
+
+  void pushInbox(Packet packet) {
+    {
+      std::lock_guard lock(inboxMutex);
+      inbox.push_back(std::move(packet));
+    }
+    inboxCv.notify_one();
+  }
+
+  void mpiLoop();
+  void inboxLoop();
+  void dispatch(Packet& packet);
+  void waitLocallyIdle(Clock::time_point deadline);
+};
+
+void Messenger::Impl::mpiLoop() {
+  std::vector<MPI_Request> sendRequests;
+  std::vector<Bytes> sendBuffers;
+  std::deque<MPI_Request> receiveRequests;  // in posting order, which is per-sender send order
+  std::deque<Packet> receiveBuffers;
+  std::vector<Packet> fresh;
+  std::vector<int> done;
+  auto idleSleep = std::chrono::microseconds(1);
+
+  while (true) {
+    bool active = false;
+    {
+      std::lock_guard lock(outboxMutex);
+      fresh.swap(outbox);
+    }
+    for (Packet& packet : fresh) {
+      MPI_Request request;
+      MPI_Isend(packet.wire.data(), static_cast<int>(packet.wire.size()), MPI_BYTE, packet.rank,
+                kTag, p2p, &request);
+      sendRequests.push_back(request);
+      sendBuffers.push_back(std::move(packet.wire));
+      active = true;
+    }
+    fresh.clear();
+
+    if (!sendRequests.empty()) {
+      int completed = 0;
+      done.resize(sendRequests.size());
+      MPI_Testsome(static_cast<int>(sendRequests.size()), sendRequests.data(), &completed,
+                   done.data(), MPI_STATUSES_IGNORE);
+      if (completed > 0 && completed != MPI_UNDEFINED) {
+        size_t kept = 0;
+        for (size_t i = 0; i < sendRequests.size(); ++i) {
+          if (sendRequests[i] == MPI_REQUEST_NULL) continue;
+          if (kept != i) {  // a self-move would free a buffer MPI is still sending from
+            sendRequests[kept] = sendRequests[i];
+            sendBuffers[kept] = std::move(sendBuffers[i]);
+          }
+          ++kept;
+        }
+        sendRequests.resize(kept);
+        sendBuffers.resize(kept);
+        sendsInFlight -= static_cast<std::uint64_t>(completed);
+        active = true;
+      }
+    }
+
+    for (;;) {
+      int flag = 0;
+      MPI_Message message;
+      MPI_Status status;
+      MPI_Improbe(MPI_ANY_SOURCE, kTag, p2p, &flag, &message, &status);
+      if (!flag) break;
+      int count = 0;
+      MPI_Get_count(&status, MPI_BYTE, &count);
+      receiveBuffers.push_back(Packet{status.MPI_SOURCE, Bytes(static_cast<size_t>(count))});
+      MPI_Request request;
+      MPI_Imrecv(receiveBuffers.back().wire.data(), count, MPI_BYTE, &message, &request);
+      receiveRequests.push_back(request);
+      active = true;
+    }
+
+    while (!receiveRequests.empty()) {
+      int flag = 0;
+      MPI_Test(&receiveRequests.front(), &flag, MPI_STATUS_IGNORE);
+      if (!flag) break;
+      Packet packet = std::move(receiveBuffers.front());
+      receiveRequests.pop_front();
+      receiveBuffers.pop_front();
+      messagesReceived++;
+      wireBytesReceived += packet.wire.size();
+      pushInbox(std::move(packet));
+      active = true;
+    }
+
+    if (exitThreads && sendRequests.empty() && receiveRequests.empty()) {
+      std::lock_guard lock(outboxMutex);
+      if (outbox.empty()) break;
+    }
+    if (active) {
+      idleSleep = std::chrono::microseconds(1);
+    } else {
+      // Ranks share cores: an idle MPI thread sleeps, longer the longer it stays idle, but a
+      // new outgoing message wakes it at once.
+      std::unique_lock lock(outboxMutex);
+      outboxCv.wait_for(lock, idleSleep, [&] { return !outbox.empty() || exitThreads.load(); });
+      idleSleep = std::min(idleSleep * 2, options.maxIdleSleep);
+    }
+  }
+}
+
+void Messenger::Impl::inboxLoop() {
+  while (true) {
+    Packet packet;
+    {
+      std::unique_lock lock(inboxMutex);
+      inboxCv.wait(lock, [&] { return !inbox.empty() || exitThreads.load(); });
+      if (inbox.empty()) return;
+      packet = std::move(inbox.front());
+      inbox.pop_front();
+      inboxBusy = true;
+    }
+    dispatch(packet);
+    messagesHandled++;
+    std::lock_guard lock(inboxMutex);
+    inboxBusy = false;
+  }
+}
+
+void Messenger::Impl::dispatch(Packet& packet) {
+  try {
+    const WireHeader header = readHeader(packet.wire);
+    const std::span<const std::byte> body(packet.wire.data() + sizeof header,
+                                          packet.wire.size() - sizeof header);
+    Bytes payload;
+    if (header.flags & kCompressed) {
+      decompress(body, header.rawBytes, payload);
+    } else {
+      payload.assign(body.begin(), body.end());
+    }
+    rawBytesReceived += payload.size();
+
+    std::lock_guard dispatching(dispatchMutex);
+    MessageHandler* handler = nullptr;
+    {
+      std::lock_guard lock(registryMutex);
+      auto found = handlers.find(header.object);
+      if (found != handlers.end()) handler = found->second;
+    }
+    if (!handler) {
+      unknownReceiver++;
+      report("message from rank " + std::to_string(packet.rank) + " to object id " +
+             std::to_string(header.object) + " on rank " + std::to_string(rank) +
+             ", which has no object registered under that id; message discarded");
+      return;
+    }
+    handler->incoming(packet.rank, std::move(payload));
+  } catch (const std::exception& e) {
+    handlerErrors++;
+    report("handling a message from rank " + std::to_string(packet.rank) + ": " + e.what());
+  }
+}
+
+void Messenger::Impl::waitLocallyIdle(Clock::time_point deadline) {
+  while (Clock::now() < deadline) {
+    bool idle = sendsInFlight == 0;
+    if (idle) {
+      std::lock_guard lock(outboxMutex);
+      idle = outbox.empty();
+    }
+    if (idle) {
+      std::lock_guard lock(inboxMutex);
+      idle = inbox.empty() && !inboxBusy;
+    }
+    if (idle) return;
+    std::this_thread::sleep_for(std::chrono::microseconds(50));
+  }
+}
+
+Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_unique<Impl>()) {
+  impl_->options = options;
+  checkMpi(MPI_Comm_dup(comm, &impl_->p2p), "MPI_Comm_dup");
+  checkMpi(MPI_Comm_dup(comm, &impl_->control), "MPI_Comm_dup");
+  MPI_Comm_rank(impl_->p2p, &impl_->rank);
+  MPI_Comm_size(impl_->p2p, &impl_->size);
+  impl_->mpiThread = std::thread([this] { impl_->mpiLoop(); });
+  impl_->inboxThread = std::thread([this] { impl_->inboxLoop(); });
+  impl_->inboxThreadId = impl_->inboxThread.get_id();
+}
+
+Messenger::~Messenger() {
+  try {
+    stop();
+  } catch (const std::exception& e) {
+    impl_->report(std::string("stopping: ") + e.what());
+    impl_->exitThreads = true;
+    impl_->outboxCv.notify_all();
+    impl_->inboxCv.notify_all();
+    if (impl_->mpiThread.joinable()) impl_->mpiThread.join();
+    if (impl_->inboxThread.joinable()) impl_->inboxThread.join();
+  }
+}
+
+int Messenger::rank() const { return impl_->rank; }
+int Messenger::size() const { return impl_->size; }
+
+void Messenger::registerObject(ObjectId id, MessageHandler* handler) {
+  std::lock_guard lock(impl_->registryMutex);
+  if (!impl_->handlers.emplace(id, handler).second)
+    throw Error("object id " + std::to_string(id) + " is already registered on rank " +
+                std::to_string(impl_->rank));
+}
+
+void Messenger::unregisterObject(ObjectId id) {
+  {
+    std::lock_guard lock(impl_->registryMutex);
+    impl_->handlers.erase(id);
+  }
+  if (std::this_thread::get_id() != impl_->inboxThreadId) {
+    std::lock_guard wait(impl_->dispatchMutex);
+  }
+}
+
+void Messenger::send(int toRank, ObjectId id, Bytes payload) {
+  if (toRank < 0 || toRank >= impl_->size)
+    throw Error("send to rank " + std::to_string(toRank) + " of a messenger with " +
+                std::to_string(impl_->size) + " ranks");
+  WireHeader header{id, static_cast<std::uint32_t>(payload.size()), 0};
+  Bytes wire;
+  Bytes compressed;
+  const bool remote = toRank != impl_->rank;
+  if (remote && impl_->options.compress && payload.size() >= impl_->options.compressMinBytes &&
+      compressIfSmaller(payload, compressed)) {
+    header.flags |= kCompressed;
+    impl_->messagesCompressed++;
+  }
+  const Bytes& body = (header.flags & kCompressed) ? compressed : payload;
+  wire.resize(sizeof header + body.size());
+  std::memcpy(wire.data(), &header, sizeof header);
+  std::memcpy(wire.data() + sizeof header, body.data(), body.size());
+
+  impl_->messagesSent++;
+  impl_->rawBytesSent += payload.size();
+  if (!remote) {
+    impl_->pushInbox(Packet{toRank, std::move(wire)});
+    return;
+  }
+  impl_->wireBytesSent += wire.size();
+  impl_->sendsInFlight++;
+  {
+    std::lock_guard lock(impl_->outboxMutex);
+    impl_->outbox.push_back(Packet{toRank, std::move(wire)});
+  }
+  impl_->outboxCv.notify_one();
+}
+
+void Messenger::quiesce() {
+  const auto deadline = Clock::now() + impl_->options.quiesceTimeout;
+  std::uint64_t previous[2] = {~0ull, ~0ull};
+  // Counting termination detection: done when the global sent and handled totals agree, twice
+  // in a row with the same values, so no message can hide between two ranks' snapshots.
+  while (true) {
+    impl_->waitLocallyIdle(deadline);
+    std::uint64_t local[2] = {impl_->messagesSent.load(), impl_->messagesHandled.load()};
+    std::uint64_t global[2] = {0, 0};
+    MPI_Request request;
+    checkMpi(MPI_Iallreduce(local, global, 2, MPI_UINT64_T, MPI_SUM, impl_->control, &request),
+             "MPI_Iallreduce");
+    for (int flag = 0; !flag;) {
+      MPI_Test(&request, &flag, MPI_STATUS_IGNORE);
+      if (flag) break;
+      if (Clock::now() > deadline)
+        throw Error("messaging did not quiesce within " +
+                    std::to_string(impl_->options.quiesceTimeout.count()) +
+                    " ms: another rank is not answering");
+      std::this_thread::sleep_for(std::chrono::microseconds(20));
+    }
+    if (global[0] == global[1] && global[0] == previous[0] && global[1] == previous[1]) return;
+    previous[0] = global[0];
+    previous[1] = global[1];
+  }
+}
+
+void Messenger::stop() {
+  if (impl_->stopped) return;
+  quiesce();
+  impl_->stopped = true;
+  impl_->exitThreads = true;
+  impl_->outboxCv.notify_all();
+  impl_->inboxCv.notify_all();
+  impl_->mpiThread.join();
+  impl_->inboxThread.join();
+  MPI_Comm_free(&impl_->p2p);
+  MPI_Comm_free(&impl_->control);
+}
+
+MessengerCounters Messenger::counters() const {
+  const Impl& i = *impl_;
+  return {i.messagesSent,       i.messagesReceived,  i.messagesHandled,
+          i.rawBytesSent,       i.wireBytesSent,     i.rawBytesReceived,
+          i.wireBytesReceived,  i.messagesCompressed, i.unknownReceiver,
+          i.handlerErrors};
+}
+
+void Messenger::setErrorCallback(ErrorCallback callback) {
+  std::lock_guard lock(impl_->errorMutex);
+  impl_->onError = std::move(callback);
+}
+
+}  // namespace dfb

@@ -1,0 +1,91 @@
+#pragma once
+// Asynchronous point-to-point messaging between distributed objects (paper, section 3.2).
+//
+// An object registers a handler under a global id on every rank that takes part; a message goes
+// to (rank, id). Two threads do the work: the MPI thread owns every MPI call on the messenger's
+// own duplicated communicator (non-blocking send, matched probe, receive, test) and backs off
+// when idle instead of spinning; the inbox thread decompresses received messages and hands them
+// to their handler, one at a time. Messages to one's own rank never touch MPI.
+//
+// Contracts:
+//  - send() is thread-safe and never blocks on the network; the messenger owns the payload.
+//  - Handlers run on the inbox thread only, serially. A handler may send.
+//  - A message to an id not registered on the receiver is an error reported through the error
+//    callback with both ids and counted; it never crashes and is never dropped silently.
+//    Register on every rank before anyone sends (a collective constructor does that).
+//  - quiesce() and stop() are collective over the communicator.
+#include <mpi.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "dfb/Compression.h"
+
+namespace dfb {
+
+using ObjectId = std::uint64_t;
+
+class MessageHandler {
+ public:
+  virtual ~MessageHandler() = default;
+  virtual void incoming(int fromRank, Bytes&& payload) = 0;
+};
+
+struct MessengerOptions {
+  bool compress = true;
+  // Payloads smaller than this go raw: Snappy costs more than it saves on tiny messages.
+  std::size_t compressMinBytes = 2048;
+  // Longest sleep of an idle MPI thread; bounds the added receive latency.
+  std::chrono::microseconds maxIdleSleep{200};
+  // quiesce()/stop() give up with an Error after this long.
+  std::chrono::milliseconds quiesceTimeout{30000};
+};
+
+struct MessengerCounters {
+  std::uint64_t messagesSent = 0, messagesReceived = 0, messagesHandled = 0;
+  std::uint64_t rawBytesSent = 0, wireBytesSent = 0;  // wire: after compression, with header
+  std::uint64_t rawBytesReceived = 0, wireBytesReceived = 0;
+  std::uint64_t messagesCompressed = 0;
+  std::uint64_t unknownReceiver = 0, handlerErrors = 0;
+};
+
+class Messenger {
+ public:
+  using ErrorCallback = std::function<void(const std::string&)>;
+
+  // Collective over `comm`, which it duplicates (twice: point-to-point traffic and its own
+  // collectives never share a communicator with the caller's collectives).
+  explicit Messenger(MPI_Comm comm, MessengerOptions options = {});
+  ~Messenger();  // stop()s if still running; collective then too.
+  Messenger(const Messenger&) = delete;
+  Messenger& operator=(const Messenger&) = delete;
+
+  int rank() const;
+  int size() const;
+
+  void registerObject(ObjectId id, MessageHandler* handler);
+  // Waits for a handler call in progress on another thread to finish first.
+  void unregisterObject(ObjectId id);
+
+  void send(int toRank, ObjectId id, Bytes payload);
+
+  // Returns once every message sent by any rank before it entered quiesce() (and every message
+  // those sent while being handled) has been handled. Throws Error on timeout.
+  void quiesce();
+  // quiesce(), then joins both threads. Idempotent.
+  void stop();
+
+  MessengerCounters counters() const;
+  // Default: print to stderr with the rank.
+  void setErrorCallback(ErrorCallback callback);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace dfb
