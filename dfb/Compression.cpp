@@ -37,8 +37,8 @@ void planeDeltaEncode(std::span<const std::byte> pixels, int channels, Bytes& ou
     unsigned char previous = 0;
     std::byte* plane = out.data() + static_cast<size_t>(c) * count;
     for (size_t i = 0; i < count; ++i) {
-      const auto value = static_cast<unsigned char>(pixels[i * static_cast<size_t>(channels) +
-                                                           static_cast<size_t>(c)]);
+      const auto value = static_cast<unsigned char>(
+          pixels[i * static_cast<size_t>(channels) + static_cast<size_t>(c)]);
       plane[i] = static_cast<std::byte>(static_cast<unsigned char>(value - previous));
       previous = value;
     }
@@ -53,7 +53,8 @@ void planeDeltaDecode(std::span<const std::byte> encoded, int channels, Bytes& o
     const std::byte* plane = encoded.data() + static_cast<size_t>(c) * count;
     for (size_t i = 0; i < count; ++i) {
       previous = static_cast<unsigned char>(previous + static_cast<unsigned char>(plane[i]));
-      out[i * static_cast<size_t>(channels) + static_cast<size_t>(c)] = static_cast<std::byte>(previous);
+      out[i * static_cast<size_t>(channels) + static_cast<size_t>(c)] =
+          static_cast<std::byte>(previous);
     }
   }
 }

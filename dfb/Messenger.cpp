@@ -32,7 +32,8 @@ struct Packet {
 
 WireHeader readHeader(const Bytes& wire) {
   WireHeader header;
-  if (wire.size() < sizeof header) throw Error("truncated message of " + std::to_string(wire.size()) + " bytes");
+  if (wire.size() < sizeof header)
+    throw Error("truncated message of " + std::to_string(wire.size()) + " bytes");
   std::memcpy(&header, wire.data(), sizeof header);
   return header;
 }
@@ -373,10 +374,9 @@ void Messenger::stop() {
 
 MessengerCounters Messenger::counters() const {
   const Impl& i = *impl_;
-  return {i.messagesSent,       i.messagesReceived,  i.messagesHandled,
-          i.rawBytesSent,       i.wireBytesSent,     i.rawBytesReceived,
-          i.wireBytesReceived,  i.messagesCompressed, i.unknownReceiver,
-          i.handlerErrors};
+  return {i.messagesSent,    i.messagesReceived, i.messagesHandled,   i.rawBytesSent,
+          i.wireBytesSent,   i.rawBytesReceived, i.wireBytesReceived, i.messagesCompressed,
+          i.unknownReceiver, i.handlerErrors};
 }
 
 void Messenger::setErrorCallback(ErrorCallback callback) {

@@ -128,7 +128,8 @@ TEST(Messenger, MessageToUnknownIdIsReportedWithBothIds) {
   const int previous = (rank + size - 1) % size;
   ASSERT_EQ(errors.size(), 1u);
   EXPECT_NE(errors[0].find("object id 999"), std::string::npos) << errors[0];
-  EXPECT_NE(errors[0].find("from rank " + std::to_string(previous)), std::string::npos) << errors[0];
+  EXPECT_NE(errors[0].find("from rank " + std::to_string(previous)), std::string::npos)
+      << errors[0];
   EXPECT_NE(errors[0].find("on rank " + std::to_string(rank)), std::string::npos) << errors[0];
   EXPECT_EQ(messenger.counters().unknownReceiver, 1u);
   EXPECT_EQ(known.count.load(), 1) << "the good message still arrives";

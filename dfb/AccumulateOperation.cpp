@@ -1,0 +1,143 @@
+// Progressive refinement (paper 4.1) with redundant inputs per frame (paper 4.1.1).
+//
+// The running sum of weighted color over every input of the epoch is kept per pixel, and the
+// finished tile is sum / total weight. Inputs of one frame are combined in `sequence` order once
+// all have arrived, so any arrival order gives the same bits. The error estimate is the standard
+// error of the per-frame luminance means, relative to the luminance, averaged over the tile.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <string>
+
+#include "dfb/Error.h"
+#include "dfb/TileOperation.h"
+
+namespace dfb {
+namespace {
+
+float luminance(const float* rgba) {
+  return 0.2126f * rgba[0] + 0.7152f * rgba[1] + 0.0722f * rgba[2];
+}
+
+class AccumulateOperation final : public TileOperation {
+ public:
+  explicit AccumulateOperation(const Region& region) : region_(region) {
+    const size_t n = static_cast<size_t>(region.pixelCount());
+    sum_.resize(4 * n);
+    lumSum_.resize(n);
+    lumSquareSum_.resize(n);
+    finished_.reset(region);
+  }
+
+  void newFrame(const FrameInfo&, std::uint32_t accumulationId, int expectedInputs) override {
+    if (accumulationId == 0) {
+      std::fill(sum_.begin(), sum_.end(), 0.0f);
+      std::fill(lumSum_.begin(), lumSum_.end(), 0.0f);
+      std::fill(lumSquareSum_.begin(), lumSquareSum_.end(), 0.0f);
+      totalWeight_ = 0;
+      frames_ = 0;
+    }
+    accumulationId_ = accumulationId;
+    expected_ = std::max(1, expectedInputs);
+    inputs_.clear();
+    received_ = 0;
+  }
+
+  bool process(const Tile& input) override {
+    if (input.region != region_) throw Error("input region does not match its tile");
+    if (input.accumulationId != accumulationId_)
+      throw Error(where() + ": input for accumulation pass " +
+                  std::to_string(input.accumulationId) + ", but this frame is pass " +
+                  std::to_string(accumulationId_));
+    if (input.weight == 0) throw Error(where() + ": input with weight 0");
+    if (received_ >= expected_)
+      throw Error(where() + ": more than the " + std::to_string(expected_) + " expected inputs");
+    ++received_;
+    if (expected_ == 1) {  // the common case: no copy of the input
+      const Tile* only = &input;
+      combine(std::span<const Tile* const>(&only, 1));
+      return true;
+    }
+    inputs_.push_back(input);
+    if (static_cast<int>(inputs_.size()) < expected_) return false;
+    std::sort(inputs_.begin(), inputs_.end(),
+              [](const Tile& a, const Tile& b) { return a.sequence < b.sequence; });
+    std::vector<const Tile*> ordered;
+    for (size_t i = 0; i < inputs_.size(); ++i) {
+      if (i > 0 && inputs_[i].sequence == inputs_[i - 1].sequence)
+        throw Error(where() + ": two inputs with sequence " + std::to_string(inputs_[i].sequence) +
+                    "; redundant inputs need distinct sequences to be combined deterministically");
+      ordered.push_back(&inputs_[i]);
+    }
+    combine(ordered);
+    return true;
+  }
+
+  const Tile& finished() const override { return finished_; }
+  float error() const override { return error_; }
+
+ private:
+  std::string where() const {
+    return "tile at (" + std::to_string(region_.x0) + ", " + std::to_string(region_.y0) + ")";
+  }
+
+  // `inputs` in ascending sequence order.
+  void combine(std::span<const Tile* const> inputs) {
+    const size_t n = static_cast<size_t>(region_.pixelCount());
+    std::uint64_t frameWeight = 0;
+    for (const Tile* t : inputs) frameWeight += t->weight;
+    const float invFrameWeight = 1.0f / static_cast<float>(frameWeight);
+    totalWeight_ += frameWeight;
+    ++frames_;
+    const float invTotal = 1.0f / static_cast<float>(totalWeight_);
+
+    double relativeError = 0;
+    for (size_t p = 0; p < n; ++p) {
+      float frame[4] = {0, 0, 0, 0};
+      for (const Tile* t : inputs) {
+        const float w = static_cast<float>(t->weight);
+        for (int c = 0; c < 4; ++c) frame[c] += w * t->color[4 * p + static_cast<size_t>(c)];
+      }
+      for (int c = 0; c < 4; ++c) {
+        sum_[4 * p + static_cast<size_t>(c)] += frame[c];
+        finished_.color[4 * p + static_cast<size_t>(c)] =
+            sum_[4 * p + static_cast<size_t>(c)] * invTotal;
+      }
+      const float frameLum = luminance(frame) * invFrameWeight;
+      lumSum_[p] += frameLum;
+      lumSquareSum_[p] += frameLum * frameLum;
+      if (frames_ > 1) {
+        const double k = static_cast<double>(frames_);
+        const double mean = lumSum_[p] / k;
+        const double variance = std::max(0.0, lumSquareSum_[p] / k - mean * mean);
+        relativeError += std::sqrt(variance / k) / std::sqrt(std::max(mean, 1e-3));
+      }
+    }
+    error_ = frames_ > 1 ? static_cast<float>(relativeError / static_cast<double>(n))
+                         : std::numeric_limits<float>::infinity();
+    if (inputs.front()->depth.size() == n)
+      finished_.depth = inputs.front()->depth;
+    else
+      finished_.depth.clear();
+    finished_.accumulationId = accumulationId_;
+    finished_.weight = static_cast<std::uint32_t>(totalWeight_);
+  }
+
+  Region region_;
+  std::vector<float> sum_, lumSum_, lumSquareSum_;
+  std::uint64_t totalWeight_ = 0;
+  std::uint32_t frames_ = 0, accumulationId_ = 0;
+  int expected_ = 1, received_ = 0;
+  std::vector<Tile> inputs_;
+  Tile finished_;
+  float error_ = std::numeric_limits<float>::infinity();
+};
+
+}  // namespace
+
+TileOperationFactory accumulateOperation() {
+  return [](const Region& region) { return std::make_unique<AccumulateOperation>(region); };
+}
+
+}  // namespace dfb

@@ -1,0 +1,116 @@
+// Sort-last compositing over a per-tile dependency tree (paper 3.1.1).
+//
+// Generation 0 holds `expectedInputs` tiles (1: a single root); every tile announces `children`
+// in the next generation, so generation g+1 expects the sum of the children announced in g. The
+// tree is complete when each generation has exactly what the one before announced and the last
+// announces none. Inputs come in any order — a child may arrive before its parent — so they are
+// buffered, and blended only once the whole tree is here: per pixel, fragments sorted by depth
+// (ties broken by generation, then sequence, so arrival order never matters) and composited
+// front to back with premultiplied alpha.
+#include <algorithm>
+#include <limits>
+#include <map>
+#include <string>
+
+#include "dfb/Error.h"
+#include "dfb/TileOperation.h"
+
+namespace dfb {
+namespace {
+
+class AlphaBlendOperation final : public TileOperation {
+ public:
+  explicit AlphaBlendOperation(const Region& region) : region_(region) {
+    finished_.reset(region, true);
+  }
+
+  void newFrame(const FrameInfo&, std::uint32_t, int expectedInputs) override {
+    roots_ = std::max(1, expectedInputs);
+    inputs_.clear();
+    received_.clear();
+    announced_.clear();
+  }
+
+  bool process(const Tile& input) override {
+    if (input.region != region_) throw Error("input region does not match its tile");
+    if (input.generation < 0 || input.children < 0)
+      throw Error(where() + ": negative generation or children count");
+    const size_t n = static_cast<size_t>(region_.pixelCount());
+    if (!input.depth.empty() && input.depth.size() != n)
+      throw Error(where() + ": depth size mismatch");
+    inputs_.push_back(input);
+    received_[input.generation]++;
+    announced_[input.generation] += input.children;
+    if (!treeComplete()) return false;
+    blend();
+    return true;
+  }
+
+  const Tile& finished() const override { return finished_; }
+
+ private:
+  std::string where() const {
+    return "tile at (" + std::to_string(region_.x0) + ", " + std::to_string(region_.y0) + ")";
+  }
+
+  bool treeComplete() const {
+    long expected = roots_;
+    size_t total = 0;
+    for (int g = 0;; ++g) {
+      auto found = received_.find(g);
+      const long got = found == received_.end() ? 0 : found->second;
+      if (got > expected)
+        throw Error(where() + ": generation " + std::to_string(g) + " got " + std::to_string(got) +
+                    " tiles, but the generation before announced " + std::to_string(expected));
+      if (got < expected) return false;
+      total += static_cast<size_t>(got);
+      auto next = announced_.find(g);
+      expected = next == announced_.end() ? 0 : next->second;
+      if (expected == 0) break;
+    }
+    if (total != inputs_.size())
+      throw Error(where() + ": tiles in generations beyond the end of the dependency tree");
+    return true;
+  }
+
+  void blend() {
+    // A fixed order of inputs first, so equal-depth fragments always blend the same way.
+    std::vector<const Tile*> ordered;
+    for (const Tile& t : inputs_) ordered.push_back(&t);
+    std::stable_sort(ordered.begin(), ordered.end(), [](const Tile* a, const Tile* b) {
+      return a->generation != b->generation ? a->generation < b->generation
+                                            : a->sequence < b->sequence;
+    });
+    const size_t n = static_cast<size_t>(region_.pixelCount());
+    const float infinity = std::numeric_limits<float>::infinity();
+    std::vector<std::pair<float, const Tile*>> fragments(ordered.size());
+    for (size_t p = 0; p < n; ++p) {
+      for (size_t i = 0; i < ordered.size(); ++i)
+        fragments[i] = {ordered[i]->depth.empty() ? infinity : ordered[i]->depth[p], ordered[i]};
+      std::stable_sort(fragments.begin(), fragments.end(),
+                       [](const auto& a, const auto& b) { return a.first < b.first; });
+      float out[4] = {0, 0, 0, 0};
+      for (const auto& [depth, tile] : fragments) {
+        const float* c = &tile->color[4 * p];
+        const float transmitted = 1.0f - out[3];
+        for (int k = 0; k < 4; ++k) out[k] += transmitted * c[k];
+      }
+      for (int k = 0; k < 4; ++k) finished_.color[4 * p + static_cast<size_t>(k)] = out[k];
+      finished_.depth[p] = fragments.empty() ? infinity : fragments.front().first;
+    }
+  }
+
+  Region region_;
+  int roots_ = 1;
+  std::vector<Tile> inputs_;
+  std::map<int, long> received_, announced_;
+  Tile finished_;
+};
+
+}  // namespace
+
+TileOperationFactory alphaBlendOperation() {
+  return [](const Region& region) { return std::make_unique<AlphaBlendOperation>(region); };
+}
+
+}  // namespace dfb

@@ -1,0 +1,383 @@
+#include "dfb/DistributedFrameBuffer.h"
+
+#include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <cstring>
+#include <map>
+#include <mutex>
+#include <string>
+
+#include "dfb/Error.h"
+#include "dfb/ImageGather.h"
+#include "dfb/TileMessage.h"
+
+namespace dfb {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start, Clock::time_point end) {
+  return std::chrono::duration<double, std::milli>(end - start).count();
+}
+
+}  // namespace
+
+int roundRobinOwner(int tileIndex, int, int ranks) { return tileIndex % ranks; }
+
+// What the owner keeps per tile: the live operation and the final pixels of the last frame.
+struct OwnedTile {
+  std::mutex mutex;
+  std::unique_ptr<TileOperation> operation;
+  std::vector<std::uint32_t> rgba8;
+  bool complete = false;
+};
+
+struct DistributedFrameBuffer::Impl {
+  Impl(Messenger& m, DfbOptions o)
+      : messenger(m),
+        options(std::move(o)),
+        grid(options.width, options.height, options.tileSize) {}
+
+  Messenger& messenger;
+  DfbOptions options;
+  TileGrid grid;
+  MPI_Comm comm = MPI_COMM_NULL;
+  int rank = 0, size = 1;
+  std::vector<int> messengerRank;                 // of each rank of `comm`
+  std::vector<int> owner;                         // of each tile
+  std::vector<int> ownedTiles;                    // ascending
+  std::vector<std::unique_ptr<OwnedTile>> tiles;  // non-null where owned
+  std::vector<std::shared_ptr<PixelOp>> pixelOps;
+
+  // Frame state; `frameMutex` orders incoming inputs against begin()/end().
+  std::mutex frameMutex;
+  std::condition_variable frameDone;
+  std::int64_t activeFrame = -1;
+  bool inFrame = false;
+  FrameInfo frame;
+  std::uint32_t accumulationId = 0;
+  bool haveEpoch = false;
+  std::map<std::uint32_t, std::vector<Bytes>> early;  // inputs for frames not begun yet
+  int remaining = 0;                                  // owned tiles not complete this frame
+  std::vector<std::string> inputErrors;
+
+  std::vector<float> tileErrors;
+  std::vector<std::uint32_t> imageRgba8;
+  std::vector<float> imageRgbaF32;
+
+  std::atomic<std::uint64_t> tilesSet{0}, tilesCompleted{0}, tileBytesSent{0}, tileBytesReceived{0},
+      staleInputs{0}, earlyInputs{0};
+  std::atomic<std::int64_t> lastSetTileNs{0};
+  Clock::time_point frameStart;
+  FrameStats lastStats;
+
+  void processInput(int tileIndex, const Tile& input);
+  void completeTile(int tileIndex, OwnedTile& owned);
+  void deliver(Bytes&& bytes);
+  void failInput(const std::string& message) {
+    std::lock_guard lock(frameMutex);
+    inputErrors.push_back(message);
+    frameDone.notify_all();
+  }
+};
+
+DistributedFrameBuffer::DistributedFrameBuffer(Messenger& messenger, MPI_Comm comm,
+                                               DfbOptions options)
+    : impl_(std::make_unique<Impl>(messenger, std::move(options))) {
+  Impl& d = *impl_;
+  checkMpi(MPI_Comm_dup(comm, &d.comm), "MPI_Comm_dup");
+  MPI_Comm_rank(d.comm, &d.rank);
+  MPI_Comm_size(d.comm, &d.size);
+  d.messengerRank.resize(static_cast<size_t>(d.size));
+  int mine = messenger.rank();
+  checkMpi(MPI_Allgather(&mine, 1, MPI_INT, d.messengerRank.data(), 1, MPI_INT, d.comm),
+           "MPI_Allgather");
+
+  const int count = d.grid.tileCount();
+  d.owner.resize(static_cast<size_t>(count));
+  d.tiles.resize(static_cast<size_t>(count));
+  d.tileErrors.assign(static_cast<size_t>(count), 0.0f);
+  for (int t = 0; t < count; ++t) {
+    const int o = d.options.ownership(t, count, d.size);
+    if (o < 0 || o >= d.size)
+      throw Error("the ownership function gave tile " + std::to_string(t) + " to rank " +
+                  std::to_string(o) + " of " + std::to_string(d.size));
+    d.owner[static_cast<size_t>(t)] = o;
+    if (o == d.rank) {
+      d.ownedTiles.push_back(t);
+      auto owned = std::make_unique<OwnedTile>();
+      owned->operation = d.options.operation(d.grid.region(t));
+      d.tiles[static_cast<size_t>(t)] = std::move(owned);
+    }
+  }
+  d.pixelOps.push_back(std::make_shared<ToneMapOp>(d.options.toneMap));
+  messenger.registerObject(d.options.objectId, this);
+  // Nobody may send to this object before every rank has registered it.
+  checkMpi(MPI_Barrier(d.comm), "MPI_Barrier");
+}
+
+DistributedFrameBuffer::~DistributedFrameBuffer() {
+  impl_->messenger.unregisterObject(impl_->options.objectId);
+  MPI_Comm_free(&impl_->comm);
+}
+
+void DistributedFrameBuffer::addPixelOp(std::shared_ptr<PixelOp> op) {
+  impl_->pixelOps.push_back(std::move(op));
+}
+
+void DistributedFrameBuffer::begin(const FrameInfo& frame) {
+  Impl& d = *impl_;
+  std::vector<Bytes> held;
+  {
+    std::lock_guard lock(d.frameMutex);
+    if (d.inFrame)
+      throw Error("begin(" + std::to_string(frame.frameId) + ") inside frame " +
+                  std::to_string(d.frame.frameId));
+    if (static_cast<std::int64_t>(frame.frameId) <= d.activeFrame)
+      throw Error("frame ids must increase: begin(" + std::to_string(frame.frameId) +
+                  ") after frame " + std::to_string(d.activeFrame));
+    if (!d.haveEpoch || frame.epoch != d.frame.epoch)
+      d.accumulationId = 0;
+    else
+      ++d.accumulationId;
+    d.haveEpoch = true;
+    d.frame = frame;
+    for (int t : d.ownedTiles) {
+      OwnedTile& owned = *d.tiles[static_cast<size_t>(t)];
+      std::lock_guard tileLock(owned.mutex);
+      owned.operation->newFrame(frame, d.accumulationId,
+                                d.options.expectedInputs ? d.options.expectedInputs(t) : 1);
+      owned.complete = false;
+    }
+    d.remaining = static_cast<int>(d.ownedTiles.size());
+    d.inputErrors.clear();
+    d.tilesSet = d.tilesCompleted = d.tileBytesSent = d.tileBytesReceived = 0;
+    d.staleInputs = d.earlyInputs = 0;
+    d.lastSetTileNs = 0;
+    d.frameStart = Clock::now();
+    d.activeFrame = frame.frameId;
+    d.inFrame = true;
+    auto found = d.early.find(frame.frameId);
+    if (found != d.early.end()) {
+      held = std::move(found->second);
+      d.early.erase(found);
+      d.earlyInputs = held.size();  // counted for the frame they belong to
+    }
+    // Anything older can never be used.
+    while (!d.early.empty() && d.early.begin()->first < frame.frameId) {
+      d.staleInputs += d.early.begin()->second.size();
+      d.early.erase(d.early.begin());
+    }
+  }
+  for (Bytes& bytes : held) d.deliver(std::move(bytes));
+}
+
+void DistributedFrameBuffer::setTile(const Tile& tile) {
+  Impl& d = *impl_;
+  const int index = d.grid.indexOfOrigin(tile.region.x0, tile.region.y0);
+  if (index < 0 || d.grid.region(index) != tile.region)
+    throw Error("setTile: region [" + std::to_string(tile.region.x0) + ", " +
+                std::to_string(tile.region.x1) + ") x [" + std::to_string(tile.region.y0) + ", " +
+                std::to_string(tile.region.y1) + ") is not a tile of the " +
+                std::to_string(d.grid.width()) + "x" + std::to_string(d.grid.height()) +
+                " image at tile size " + std::to_string(d.grid.tileSize()));
+  d.tilesSet++;
+  const int owner = d.owner[static_cast<size_t>(index)];
+  if (owner == d.rank) {
+    d.processInput(index, tile);
+  } else {
+    Bytes bytes = packTile(tile, index, d.frame.frameId, d.frame.epoch);
+    d.tileBytesSent += bytes.size();
+    d.messenger.send(d.messengerRank[static_cast<size_t>(owner)], d.options.objectId,
+                     std::move(bytes));
+  }
+  d.lastSetTileNs = Clock::now().time_since_epoch().count();
+}
+
+void DistributedFrameBuffer::incoming(int, Bytes&& payload) {
+  impl_->tileBytesReceived += payload.size();
+  impl_->deliver(std::move(payload));
+}
+
+void DistributedFrameBuffer::Impl::deliver(Bytes&& bytes) {
+  TileMessageHeader header;
+  Tile tile;
+  try {
+    tile = unpackTile(bytes, header);
+  } catch (const Error& e) {
+    failInput(e.what());
+    return;
+  }
+  {
+    std::lock_guard lock(frameMutex);
+    if (static_cast<std::int64_t>(header.frameId) > activeFrame) {
+      early[header.frameId].push_back(std::move(bytes));
+      return;
+    }
+    if (!inFrame || static_cast<std::int64_t>(header.frameId) < activeFrame) {
+      staleInputs++;
+      return;
+    }
+  }
+  if (header.tileIndex < 0 || header.tileIndex >= grid.tileCount() ||
+      owner[static_cast<size_t>(header.tileIndex)] != rank) {
+    failInput("rank " + std::to_string(rank) + " received tile " +
+              std::to_string(header.tileIndex) + ", which it does not own");
+    return;
+  }
+  processInput(header.tileIndex, tile);
+}
+
+void DistributedFrameBuffer::Impl::processInput(int tileIndex, const Tile& input) {
+  OwnedTile& owned = *tiles[static_cast<size_t>(tileIndex)];
+  try {
+    std::lock_guard lock(owned.mutex);
+    if (owned.complete)
+      throw Error("tile " + std::to_string(tileIndex) + " got an input after it was complete");
+    if (owned.operation->process(input)) completeTile(tileIndex, owned);
+  } catch (const std::exception& e) {
+    failInput("frame " + std::to_string(frame.frameId) + ", tile " + std::to_string(tileIndex) +
+              ": " + e.what());
+  }
+}
+
+// Runs on the thread that delivered the last input, with the tile's mutex held.
+void DistributedFrameBuffer::Impl::completeTile(int tileIndex, OwnedTile& owned) {
+  owned.complete = true;
+  FinishedTile finished;
+  finished.tileIndex = tileIndex;
+  finished.region = grid.region(tileIndex);
+  finished.frameId = frame.frameId;
+  finished.accumulationId = accumulationId;
+  finished.linear = &owned.operation->finished();
+  finished.rgba8 = &owned.rgba8;
+  finished.error = owned.operation->error();
+  for (auto& op : pixelOps) op->process(finished);
+  tileErrors[static_cast<size_t>(tileIndex)] = finished.error;
+  tilesCompleted++;
+  std::lock_guard lock(frameMutex);
+  if (--remaining == 0) frameDone.notify_all();
+}
+
+void DistributedFrameBuffer::end() {
+  Impl& d = *impl_;
+  const auto deadline = Clock::now() + d.options.frameTimeout;
+  std::string failure;
+  {
+    std::unique_lock lock(d.frameMutex);
+    if (!d.inFrame) throw Error("end() without begin()");
+    d.frameDone.wait_until(lock, deadline,
+                           [&] { return d.remaining == 0 || !d.inputErrors.empty(); });
+    if (!d.inputErrors.empty()) {
+      failure = d.inputErrors.front();
+    } else if (d.remaining > 0) {
+      std::string missing;
+      int listed = 0;
+      for (int t : d.ownedTiles)
+        if (!d.tiles[static_cast<size_t>(t)]->complete && listed++ < 8)
+          missing += " " + std::to_string(t);
+      failure = "frame " + std::to_string(d.frame.frameId) + " not complete after " +
+                std::to_string(d.options.frameTimeout.count()) + " ms on rank " +
+                std::to_string(d.rank) + ": " + std::to_string(d.remaining) +
+                " owned tiles still waiting for inputs (tiles" + missing +
+                (d.remaining > 8 ? " ..." : "") + ")";
+    }
+  }
+
+  // One reduction agrees that every rank's tiles are complete, shares the tiles' error estimates
+  // (each owner contributes its own, the rest are zero) and spreads a failure to every rank.
+  const size_t count = d.tileErrors.size();
+  std::vector<float> local(count + 1), global(count + 1);
+  for (int t : d.ownedTiles) local[static_cast<size_t>(t)] = d.tileErrors[static_cast<size_t>(t)];
+  local[count] = failure.empty() ? 0.0f : 1.0f;
+  MPI_Request request;
+  checkMpi(MPI_Iallreduce(local.data(), global.data(), static_cast<int>(count + 1), MPI_FLOAT,
+                          MPI_MAX, d.comm, &request),
+           "MPI_Iallreduce");
+  for (int done = 0; !done;) {
+    MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+    if (done) break;
+    if (Clock::now() > deadline + d.options.frameTimeout)
+      throw Error("frame " + std::to_string(d.frame.frameId) +
+                  ": another rank did not finish the frame within " +
+                  std::to_string(2 * d.options.frameTimeout.count()) + " ms");
+    std::this_thread::sleep_for(std::chrono::microseconds(20));
+  }
+  const auto complete = Clock::now();
+  {
+    std::lock_guard lock(d.frameMutex);
+    d.inFrame = false;
+  }
+  if (!failure.empty()) throw Error(failure);
+  if (global[count] != 0.0f)
+    throw Error("frame " + std::to_string(d.frame.frameId) + " failed on another rank");
+  std::copy(global.begin(), global.end() - 1, d.tileErrors.begin());
+
+  FrameStats stats;
+  stats.frameId = d.frame.frameId;
+  stats.tilesSet = d.tilesSet;
+  stats.tilesCompleted = d.tilesCompleted;
+  stats.tileBytesSent = d.tileBytesSent;
+  stats.tileBytesReceived = d.tileBytesReceived;
+  stats.staleInputs = d.staleInputs;
+  stats.earlyInputs = d.earlyInputs;
+  const std::int64_t lastSet = d.lastSetTileNs;
+  if (lastSet != 0)
+    stats.lastSetTileToCompleteMs = std::chrono::duration<double, std::milli>(
+                                        complete.time_since_epoch() - Clock::duration(lastSet))
+                                        .count();
+
+  if (d.options.format != DisplayFormat::NONE) {
+    const bool rgba8 = d.options.format == DisplayFormat::RGBA8;
+    const int bytesPerPixel = rgba8 ? 4 : 16;
+    std::byte* image = nullptr;
+    if (d.rank == 0) {
+      const size_t pixels =
+          static_cast<size_t>(d.grid.width()) * static_cast<size_t>(d.grid.height());
+      if (rgba8) {
+        d.imageRgba8.resize(pixels);
+        image = reinterpret_cast<std::byte*>(d.imageRgba8.data());
+      } else {
+        d.imageRgbaF32.resize(4 * pixels);
+        image = reinterpret_cast<std::byte*>(d.imageRgbaF32.data());
+      }
+    }
+    auto tilesOf = [&](int r) {
+      std::vector<int> list;
+      for (int t = 0; t < d.grid.tileCount(); ++t)
+        if (d.owner[static_cast<size_t>(t)] == r) list.push_back(t);
+      return list;
+    };
+    auto pixelsOf = [&](int t) -> const std::byte* {
+      OwnedTile& owned = *d.tiles[static_cast<size_t>(t)];
+      if (rgba8) return reinterpret_cast<const std::byte*>(owned.rgba8.data());
+      return reinterpret_cast<const std::byte*>(owned.operation->finished().color.data());
+    };
+    const GatherCounts counts = gatherImage(d.comm, d.grid, bytesPerPixel, d.options.compressGather,
+                                            d.ownedTiles, tilesOf, pixelsOf, image);
+    stats.gatherBytesSent = counts.bytesSent;
+    stats.gatherBytesReceived = counts.bytesReceived;
+    stats.pixelBytesReceived = counts.pixelBytesReceived;
+  }
+  stats.frameMs = msSince(d.frameStart, Clock::now());
+  d.lastStats = stats;
+}
+
+const TileGrid& DistributedFrameBuffer::grid() const { return impl_->grid; }
+int DistributedFrameBuffer::rank() const { return impl_->rank; }
+int DistributedFrameBuffer::ranks() const { return impl_->size; }
+int DistributedFrameBuffer::ownerOf(int tileIndex) const {
+  return impl_->owner.at(static_cast<size_t>(tileIndex));
+}
+std::uint32_t DistributedFrameBuffer::accumulationId() const { return impl_->accumulationId; }
+const std::vector<float>& DistributedFrameBuffer::tileErrors() const { return impl_->tileErrors; }
+const std::vector<std::uint32_t>& DistributedFrameBuffer::imageRgba8() const {
+  return impl_->imageRgba8;
+}
+const std::vector<float>& DistributedFrameBuffer::imageRgbaF32() const {
+  return impl_->imageRgbaF32;
+}
+FrameStats DistributedFrameBuffer::stats() const { return impl_->lastStats; }
+
+}  // namespace dfb

@@ -1,0 +1,104 @@
+#pragma once
+// The Distributed FrameBuffer (paper, section 3).
+//
+// Every rank of `comm` holds a descriptor of every tile and computes its owner locally; the
+// owner holds the tile's TileOperation. Renderers call setTile() from any number of threads; the
+// tile travels to its owner (or is processed in place), the operation completes it, the pixel
+// ops run on the owner, and end() returns once every tile of the frame is complete on its owner
+// on every rank. Display formats RGBA8 / RGBAF32 gather the image to rank 0 of `comm` with one
+// compressed MPI_Gatherv; NONE gathers nothing.
+//
+// Contracts:
+//  - Construction, begin(), end() and destruction are collective over `comm`.
+//  - setTile() is thread-safe and may be called between begin() and end() only.
+//  - Tile messages carry their frame: inputs for a frame a rank has not begun yet are held and
+//    applied at its begin(); inputs for a past frame are rejected and counted.
+//  - Every wait is bounded by DfbOptions::frameTimeout; a timeout is a dfb::Error naming the
+//    incomplete tiles, on every rank.
+#include <mpi.h>
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "dfb/Messenger.h"
+#include "dfb/PixelOp.h"
+#include "dfb/Tile.h"
+#include "dfb/TileOperation.h"
+
+namespace dfb {
+
+enum class DisplayFormat { NONE, RGBA8, RGBAF32 };
+
+// Owner of a tile among `ranks` ranks; must give the same answer on every rank.
+using OwnershipFunction = std::function<int(int tileIndex, int tileCount, int ranks)>;
+int roundRobinOwner(int tileIndex, int tileCount, int ranks);
+
+struct DfbOptions {
+  int width = 0, height = 0;
+  int tileSize = 64;
+  DisplayFormat format = DisplayFormat::RGBA8;
+  TileOperationFactory operation = accumulateOperation();
+  OwnershipFunction ownership = roundRobinOwner;
+  // How many inputs each tile gets this frame; asked at begin(). Default: one.
+  std::function<int(int tileIndex)> expectedInputs;
+  // The first pixel op of every chain: linear color to display RGBA8 on the tile owner.
+  ToneMapSettings toneMap;
+  // Gathered images (RGBA8, RGBAF32) are compressed; RGBA8 through the plane-delta filter first.
+  bool compressGather = true;
+  // Distinct per DFB sharing a messenger; the same on every rank.
+  ObjectId objectId = 0xDFB0;
+  std::chrono::milliseconds frameTimeout{60000};
+};
+
+struct FrameStats {
+  std::uint32_t frameId = 0;
+  std::uint64_t tilesSet = 0;                                  // setTile calls on this rank
+  std::uint64_t tilesCompleted = 0;                            // owned tiles completed on this rank
+  std::uint64_t tileBytesSent = 0, tileBytesReceived = 0;      // tile traffic, on the wire
+  std::uint64_t gatherBytesSent = 0, gatherBytesReceived = 0;  // display-format gather
+  std::uint64_t pixelBytesReceived = 0;  // final pixels into this rank (gather), uncompressed
+  std::uint64_t staleInputs = 0, earlyInputs = 0;
+  double lastSetTileToCompleteMs = 0;  // last local setTile → frame complete on all ranks
+  double frameMs = 0;                  // begin → end returned
+};
+
+class DistributedFrameBuffer final : public MessageHandler {
+ public:
+  DistributedFrameBuffer(Messenger& messenger, MPI_Comm comm, DfbOptions options);
+  ~DistributedFrameBuffer() override;
+  DistributedFrameBuffer(const DistributedFrameBuffer&) = delete;
+  DistributedFrameBuffer& operator=(const DistributedFrameBuffer&) = delete;
+
+  // Appended to the chain after tone mapping; call between frames.
+  void addPixelOp(std::shared_ptr<PixelOp> op);
+
+  void begin(const FrameInfo& frame);
+  void setTile(const Tile& tile);
+  void end();
+
+  const TileGrid& grid() const;
+  int rank() const;  // in `comm`
+  int ranks() const;
+  int ownerOf(int tileIndex) const;
+  // Sample pass of the current frame within its accumulation epoch (0 after a reset).
+  std::uint32_t accumulationId() const;
+  // Every tile's error estimate after the last end(), on every rank (for load balancing).
+  const std::vector<float>& tileErrors() const;
+
+  // Rank 0 after end(): the whole image, row-major, y down. Empty elsewhere or with NONE.
+  const std::vector<std::uint32_t>& imageRgba8() const;
+  const std::vector<float>& imageRgbaF32() const;
+
+  FrameStats stats() const;  // of the last frame, this rank
+
+  void incoming(int fromRank, Bytes&& payload) override;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace dfb

@@ -1,0 +1,106 @@
+#include "dfb/ImageGather.h"
+
+#include <cstring>
+
+#include "dfb/Error.h"
+
+namespace dfb {
+namespace {
+
+struct BlockHeader {
+  std::uint64_t rawBytes;
+  std::uint32_t compressed;  // 0 raw, 1 Snappy, 2 plane-delta + Snappy
+  std::uint32_t reserved;
+};
+
+}  // namespace
+
+GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel, bool compress,
+                         const std::vector<int>& ownedTiles,
+                         const std::function<std::vector<int>(int rank)>& tilesOf,
+                         const std::function<const std::byte*(int tile)>& pixelsOf,
+                         std::byte* image) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  GatherCounts counts;
+
+  Bytes raw;
+  for (int tile : ownedTiles) {
+    const size_t bytes = static_cast<size_t>(grid.region(tile).pixelCount() * bytesPerPixel);
+    const std::byte* pixels = pixelsOf(tile);
+    raw.insert(raw.end(), pixels, pixels + bytes);
+  }
+
+  BlockHeader header{raw.size(), 0, 0};
+  Bytes body, filtered;
+  if (compress && !raw.empty()) {
+    if (bytesPerPixel == 4) {
+      planeDeltaEncode(raw, 4, filtered);
+      if (compressIfSmaller(filtered, body)) header.compressed = 2;
+    } else if (compressIfSmaller(raw, body)) {
+      header.compressed = 1;
+    }
+  }
+  const Bytes& payload = header.compressed ? body : raw;
+  Bytes block(sizeof header + payload.size());
+  std::memcpy(block.data(), &header, sizeof header);
+  std::memcpy(block.data() + sizeof header, payload.data(), payload.size());
+  counts.bytesSent = rank == 0 ? 0 : block.size();
+
+  int blockSize = static_cast<int>(block.size());
+  std::vector<int> sizes(rank == 0 ? static_cast<size_t>(size) : 0);
+  checkMpi(MPI_Gather(&blockSize, 1, MPI_INT, sizes.data(), 1, MPI_INT, 0, comm), "MPI_Gather");
+  std::vector<int> offsets(sizes.size());
+  Bytes all;
+  if (rank == 0) {
+    size_t total = 0;
+    for (size_t r = 0; r < sizes.size(); ++r) {
+      offsets[r] = static_cast<int>(total);
+      total += static_cast<size_t>(sizes[r]);
+    }
+    all.resize(total);
+  }
+  checkMpi(MPI_Gatherv(block.data(), blockSize, MPI_BYTE, all.data(), sizes.data(), offsets.data(),
+                       MPI_BYTE, 0, comm),
+           "MPI_Gatherv");
+  if (rank != 0) return counts;
+
+  Bytes unpacked, unfiltered;
+  for (int r = 0; r < size; ++r) {
+    if (r != 0) counts.bytesReceived += static_cast<std::uint64_t>(sizes[static_cast<size_t>(r)]);
+    const std::byte* at = all.data() + offsets[static_cast<size_t>(r)];
+    BlockHeader h;
+    std::memcpy(&h, at, sizeof h);
+    const std::span<const std::byte> data(
+        at + sizeof h, static_cast<size_t>(sizes[static_cast<size_t>(r)]) - sizeof h);
+    const std::byte* pixels = data.data();
+    if (h.compressed) {
+      decompress(data, h.rawBytes, unpacked);
+      pixels = unpacked.data();
+      if (h.compressed == 2) {
+        planeDeltaDecode(unpacked, 4, unfiltered);
+        pixels = unfiltered.data();
+      }
+    }
+    size_t used = 0;
+    for (int tile : tilesOf(r)) {
+      const Region region = grid.region(tile);
+      const size_t rowBytes = static_cast<size_t>(region.width() * bytesPerPixel);
+      for (int y = region.y0; y < region.y1; ++y) {
+        std::memcpy(image + (static_cast<size_t>(y) * static_cast<size_t>(grid.width()) +
+                             static_cast<size_t>(region.x0)) *
+                                static_cast<size_t>(bytesPerPixel),
+                    pixels + used, rowBytes);
+        used += rowBytes;
+      }
+    }
+    if (used != h.rawBytes)
+      throw Error("gather: rank " + std::to_string(r) + " sent " + std::to_string(h.rawBytes) +
+                  " pixel bytes for tiles that need " + std::to_string(used));
+    counts.pixelBytesReceived += used;
+  }
+  return counts;
+}
+
+}  // namespace dfb

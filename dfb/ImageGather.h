@@ -1,0 +1,31 @@
+#pragma once
+// The display-format gather of paper 3.2: at the end of a frame every rank packs the final pixels
+// of the tiles it owns into one buffer, compresses it, and rank 0 receives all of them with a
+// single MPI_Gatherv and places them. Internal to the DFB.
+#include <mpi.h>
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "dfb/Compression.h"
+#include "dfb/Tile.h"
+
+namespace dfb {
+
+struct GatherCounts {
+  std::uint64_t bytesSent = 0;           // compressed, this rank
+  std::uint64_t bytesReceived = 0;       // compressed, root only
+  std::uint64_t pixelBytesReceived = 0;  // uncompressed pixels placed in the root's image
+};
+
+// `bytesPerPixel` 4 (RGBA8) or 16 (RGBAF32). `ownedTiles` in ascending order on each rank;
+// `tilesOf(rank)` gives another rank's list on the root. `pixelsOf(tile)` points at the final
+// pixels of an owned tile. The root's `image` is width*height*bytesPerPixel bytes.
+GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel, bool compress,
+                         const std::vector<int>& ownedTiles,
+                         const std::function<std::vector<int>(int rank)>& tilesOf,
+                         const std::function<const std::byte*(int tile)>& pixelsOf,
+                         std::byte* image);
+
+}  // namespace dfb

@@ -1,0 +1,62 @@
+#pragma once
+// A tile: a rectangle of the image with its pixels, and where it sits in a tile operation's
+// dependency tree (paper, listing 1). Sizes are dynamic: tiles at the image edge are partial.
+#include <cstdint>
+#include <vector>
+
+namespace dfb {
+
+// Half-open pixel rectangle [x0, x1) x [y0, y1) in image coordinates, y down.
+struct Region {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  int width() const { return x1 - x0; }
+  int height() const { return y1 - y0; }
+  int pixelCount() const { return width() * height(); }
+  bool empty() const { return x1 <= x0 || y1 <= y0; }
+  bool operator==(const Region&) const = default;
+};
+
+Region intersect(const Region& a, const Region& b);
+
+struct Tile {
+  Region region;
+  // Dependency tree (paper 3.1.1): this tile belongs to `generation` and announces `children`
+  // tiles in generation + 1. A plain image-parallel tile is generation 0 with no children.
+  int generation = 0;
+  int children = 0;
+  // Sample pass within the current accumulation epoch; the owner rejects a mismatch.
+  std::uint32_t accumulationId = 0;
+  // Redundant inputs of one tile are combined in ascending `sequence` order, each weighted by
+  // `weight` (the samples per pixel behind it), so the result does not depend on arrival order.
+  std::uint32_t sequence = 0;
+  std::uint32_t weight = 1;
+
+  std::vector<float> color;   // RGBA per pixel, row-major over the region; RGB linear radiance
+  std::vector<float> depth;   // one per pixel; empty means "at infinity"
+  std::vector<float> normal;  // optional, 3 per pixel
+  std::vector<float> albedo;  // optional, 3 per pixel
+
+  // Sets the region and sizes color (and depth when `withDepth`) for it, zero-filled.
+  void reset(const Region& r, bool withDepth = false);
+  int pixelCount() const { return region.pixelCount(); }
+};
+
+// Which tiles an image of a given size has, at a given tile size.
+class TileGrid {
+ public:
+  TileGrid(int width, int height, int tileSize);
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int tileSize() const { return tileSize_; }
+  int tilesX() const { return tilesX_; }
+  int tilesY() const { return tilesY_; }
+  int tileCount() const { return tilesX_ * tilesY_; }
+  Region region(int tileIndex) const;
+  // The tile whose region starts at (x0, y0); -1 when that is no tile's origin.
+  int indexOfOrigin(int x0, int y0) const;
+
+ private:
+  int width_, height_, tileSize_, tilesX_, tilesY_;
+};
+
+}  // namespace dfb

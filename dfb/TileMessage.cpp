@@ -1,0 +1,90 @@
+#include "dfb/TileMessage.h"
+
+#include <cstring>
+#include <string>
+
+#include "dfb/Error.h"
+
+namespace dfb {
+namespace {
+
+void append(Bytes& out, size_t& at, const std::vector<float>& channel) {
+  std::memcpy(out.data() + at, channel.data(), channel.size() * sizeof(float));
+  at += channel.size() * sizeof(float);
+}
+
+void take(const Bytes& in, size_t& at, std::vector<float>& channel, size_t count) {
+  channel.resize(count);
+  std::memcpy(channel.data(), in.data() + at, count * sizeof(float));
+  at += count * sizeof(float);
+}
+
+}  // namespace
+
+Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId, std::uint32_t epoch) {
+  const size_t n = static_cast<size_t>(tile.pixelCount());
+  if (tile.color.size() != 4 * n)
+    throw Error("tile " + std::to_string(tileIndex) + " has " + std::to_string(tile.color.size()) +
+                " color floats for " + std::to_string(n) + " pixels");
+  TileMessageHeader header{};
+  header.magic = kTileMagic;
+  header.frameId = frameId;
+  header.epoch = epoch;
+  header.accumulationId = tile.accumulationId;
+  header.tileIndex = tileIndex;
+  header.x0 = tile.region.x0;
+  header.y0 = tile.region.y0;
+  header.x1 = tile.region.x1;
+  header.y1 = tile.region.y1;
+  header.generation = tile.generation;
+  header.children = tile.children;
+  header.sequence = tile.sequence;
+  header.weight = tile.weight;
+  size_t floats = 4 * n;
+  if (tile.depth.size() == n) header.channels |= kHasDepth, floats += n;
+  if (tile.normal.size() == 3 * n) header.channels |= kHasNormal, floats += 3 * n;
+  if (tile.albedo.size() == 3 * n) header.channels |= kHasAlbedo, floats += 3 * n;
+  header.payloadBytes = static_cast<std::uint32_t>(floats * sizeof(float));
+
+  Bytes out(sizeof header + header.payloadBytes);
+  std::memcpy(out.data(), &header, sizeof header);
+  size_t at = sizeof header;
+  append(out, at, tile.color);
+  if (header.channels & kHasDepth) append(out, at, tile.depth);
+  if (header.channels & kHasNormal) append(out, at, tile.normal);
+  if (header.channels & kHasAlbedo) append(out, at, tile.albedo);
+  return out;
+}
+
+Tile unpackTile(const Bytes& bytes, TileMessageHeader& header) {
+  if (bytes.size() < sizeof header)
+    throw Error("tile message of " + std::to_string(bytes.size()) +
+                " bytes is shorter than its header");
+  std::memcpy(&header, bytes.data(), sizeof header);
+  if (header.magic != kTileMagic) throw Error("message is not a tile (bad magic)");
+  Tile tile;
+  tile.region = Region{header.x0, header.y0, header.x1, header.y1};
+  tile.generation = header.generation;
+  tile.children = header.children;
+  tile.accumulationId = header.accumulationId;
+  tile.sequence = header.sequence;
+  tile.weight = header.weight;
+  const size_t n = static_cast<size_t>(std::max(0, tile.region.pixelCount()));
+  size_t floats = 4 * n;
+  if (header.channels & kHasDepth) floats += n;
+  if (header.channels & kHasNormal) floats += 3 * n;
+  if (header.channels & kHasAlbedo) floats += 3 * n;
+  if (header.payloadBytes != floats * sizeof(float) ||
+      bytes.size() != sizeof header + header.payloadBytes)
+    throw Error("tile message for tile " + std::to_string(header.tileIndex) + " has " +
+                std::to_string(bytes.size() - sizeof header) +
+                " payload bytes, its header implies " + std::to_string(floats * sizeof(float)));
+  size_t at = sizeof header;
+  take(bytes, at, tile.color, 4 * n);
+  if (header.channels & kHasDepth) take(bytes, at, tile.depth, n);
+  if (header.channels & kHasNormal) take(bytes, at, tile.normal, 3 * n);
+  if (header.channels & kHasAlbedo) take(bytes, at, tile.albedo, 3 * n);
+  return tile;
+}
+
+}  // namespace dfb

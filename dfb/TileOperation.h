@@ -1,0 +1,49 @@
+#pragma once
+// What the owner of a tile does with the inputs it receives (paper 3.1, listing 1). The DFB
+// makes one operation per owned tile through a factory and calls it, for one tile, from one
+// thread at a time; different tiles' operations run concurrently.
+#include <cstdint>
+#include <functional>
+#include <memory>
+
+#include "dfb/Tile.h"
+
+namespace dfb {
+
+struct FrameInfo {
+  std::uint32_t frameId = 0;
+  // Accumulation restarts whenever the epoch changes (e.g. the camera moved).
+  std::uint32_t epoch = 0;
+};
+
+class TileOperation {
+ public:
+  virtual ~TileOperation() = default;
+  // A new frame begins; `accumulationId` is the sample pass within the epoch (0 after a reset),
+  // `expectedInputs` how many inputs the renderer will send this tile (operations whose inputs
+  // announce themselves, like the alpha-blend tree, ignore it).
+  virtual void newFrame(const FrameInfo& frame, std::uint32_t accumulationId,
+                        int expectedInputs) = 0;
+  // Takes one input. Returns true exactly once per frame: when the tile is complete, after which
+  // finished() holds the result. Throws dfb::Error on an input that does not fit.
+  virtual bool process(const Tile& input) = 0;
+  // RGBA linear color (and depth) of the completed tile, valid until the next newFrame.
+  virtual const Tile& finished() const = 0;
+  // An estimate of the remaining error in the tile (0 when the operation keeps none).
+  virtual float error() const { return 0.0f; }
+};
+
+using TileOperationFactory = std::function<std::unique_ptr<TileOperation>(const Region& region)>;
+
+// Image-parallel: exactly one input per tile and frame, written as it is.
+TileOperationFactory writeOperation();
+// Progressive refinement: averages every frame of the epoch, and in one frame any number of
+// redundant inputs (`expectedInputs` of them), combined in
+// `sequence` order weighted by `weight`. Keeps a per-tile error estimate.
+TileOperationFactory accumulateOperation();
+// Sort-last compositing: collects the whole dependency tree (any order, children before
+// parents), then per pixel sorts fragments by depth and blends front to back. Colors are
+// premultiplied by alpha.
+TileOperationFactory alphaBlendOperation();
+
+}  // namespace dfb

@@ -1,0 +1,39 @@
+// Image-parallel write: one input per tile and frame, taken as it is.
+#include <string>
+
+#include "dfb/Error.h"
+#include "dfb/TileOperation.h"
+
+namespace dfb {
+namespace {
+
+class WriteOperation final : public TileOperation {
+ public:
+  explicit WriteOperation(const Region& region) : region_(region) {}
+
+  void newFrame(const FrameInfo&, std::uint32_t, int) override { received_ = 0; }
+
+  bool process(const Tile& input) override {
+    if (input.region != region_) throw Error("input region does not match its tile");
+    if (++received_ > 1)
+      throw Error("tile at (" + std::to_string(region_.x0) + ", " + std::to_string(region_.y0) +
+                  ") got a second input in one frame; the write operation takes exactly one");
+    finished_ = input;
+    return true;
+  }
+
+  const Tile& finished() const override { return finished_; }
+
+ private:
+  Region region_;
+  Tile finished_;
+  int received_ = 0;
+};
+
+}  // namespace
+
+TileOperationFactory writeOperation() {
+  return [](const Region& region) { return std::make_unique<WriteOperation>(region); };
+}
+
+}  // namespace dfb

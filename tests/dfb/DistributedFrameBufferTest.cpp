@@ -1,0 +1,412 @@
+// The DFB on real ranks: run under mpiexec with 1, 2 and 4 ranks.
+#include "dfb/DistributedFrameBuffer.h"
+
+#include <gtest/gtest.h>
+#include <mpi.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <string>
+#include <thread>
+
+#include "dfb/Error.h"
+#include "dfb/TileMessage.h"
+
+namespace dfb {
+namespace {
+
+int worldRank() {
+  int r = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r;
+}
+int worldSize() {
+  int s = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &s);
+  return s;
+}
+
+constexpr int kWidth = 150, kHeight = 100, kTileSize = 32;  // edge tiles are partial
+
+float pixelValue(int x, int y, std::uint32_t frame, int channel) {
+  return static_cast<float>((x * 7 + y * 13 + static_cast<int>(frame) * 5 + channel * 3) % 97) /
+         40.0f;
+}
+
+Tile renderTile(const Region& region, std::uint32_t frame, std::uint32_t accumulationId) {
+  Tile tile;
+  tile.reset(region);
+  tile.accumulationId = accumulationId;
+  size_t i = 0;
+  for (int y = region.y0; y < region.y1; ++y)
+    for (int x = region.x0; x < region.x1; ++x, ++i)
+      for (int c = 0; c < 4; ++c)
+        tile.color[4 * i + static_cast<size_t>(c)] = pixelValue(x, y, frame, c);
+  return tile;
+}
+
+// Work distribution deliberately unlike the round-robin ownership, so tiles travel.
+bool renders(int tile) { return (tile * 3 + 1) % worldSize() == worldRank(); }
+
+void renderFrame(DistributedFrameBuffer& dfb, std::uint32_t frame, std::uint32_t epoch = 0) {
+  dfb.begin({frame, epoch});
+  const std::uint32_t pass = dfb.accumulationId();
+  tbb::parallel_for(0, dfb.grid().tileCount(), [&](int t) {
+    if (renders(t)) dfb.setTile(renderTile(dfb.grid().region(t), frame, pass));
+  });
+  dfb.end();
+}
+
+DfbOptions options(DisplayFormat format, TileOperationFactory operation = writeOperation()) {
+  DfbOptions o;
+  o.width = kWidth;
+  o.height = kHeight;
+  o.tileSize = kTileSize;
+  o.format = format;
+  o.operation = std::move(operation);
+  o.frameTimeout = std::chrono::milliseconds(20000);
+  return o;
+}
+
+TEST(Dfb, GatheredRgbaF32EqualsTheReference) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::RGBAF32));
+  renderFrame(dfb, 1);
+  if (worldRank() == 0) {
+    const auto& image = dfb.imageRgbaF32();
+    ASSERT_EQ(image.size(), static_cast<size_t>(4 * kWidth * kHeight));
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x)
+        for (int c = 0; c < 4; ++c)
+          ASSERT_EQ(image[static_cast<size_t>(4 * (y * kWidth + x) + c)], pixelValue(x, y, 1, c))
+              << x << "," << y << " channel " << c;
+    EXPECT_EQ(dfb.stats().pixelBytesReceived, static_cast<std::uint64_t>(16 * kWidth * kHeight));
+  }
+  std::uint64_t completed = dfb.stats().tilesCompleted, total = 0;
+  MPI_Allreduce(&completed, &total, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD);
+  EXPECT_EQ(total, static_cast<std::uint64_t>(dfb.grid().tileCount()));
+}
+
+class GatherRgba8 : public ::testing::TestWithParam<bool> {};
+
+TEST_P(GatherRgba8, EqualsTheToneMappedReference) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DfbOptions o = options(DisplayFormat::RGBA8);
+  o.compressGather = GetParam();
+  o.toneMap.exposure = 0.7f;
+  o.toneMap.filmic = true;
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
+  for (std::uint32_t frame = 1; frame <= 3; ++frame) {
+    renderFrame(dfb, frame);
+    if (worldRank() != 0) {
+      EXPECT_TRUE(dfb.imageRgba8().empty());
+      continue;
+    }
+    const auto& image = dfb.imageRgba8();
+    ASSERT_EQ(image.size(), static_cast<size_t>(kWidth * kHeight));
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) {
+        float rgba[4];
+        for (int c = 0; c < 4; ++c) rgba[c] = pixelValue(x, y, frame, c);
+        ASSERT_EQ(image[static_cast<size_t>(y * kWidth + x)], toneMapPixel(rgba, o.toneMap))
+            << x << "," << y;
+      }
+    EXPECT_EQ(dfb.stats().pixelBytesReceived, static_cast<std::uint64_t>(4 * kWidth * kHeight));
+    if (worldSize() > 1 && GetParam()) {
+      EXPECT_LT(dfb.stats().gatherBytesReceived, dfb.stats().pixelBytesReceived)
+          << "the plane-delta filter makes smooth RGBA8 compressible";
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Compression, GatherRgba8, ::testing::Bool());
+
+TEST(Dfb, FormatNoneGathersNoPixelsToRankZero) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::NONE));
+  for (std::uint32_t frame = 1; frame <= 2; ++frame) {
+    renderFrame(dfb, frame);
+    const FrameStats s = dfb.stats();
+    EXPECT_EQ(s.pixelBytesReceived, 0u);
+    EXPECT_EQ(s.gatherBytesReceived, 0u);
+    EXPECT_EQ(s.gatherBytesSent, 0u);
+    EXPECT_TRUE(dfb.imageRgba8().empty());
+    EXPECT_TRUE(dfb.imageRgbaF32().empty());
+    std::uint64_t completed = s.tilesCompleted, total = 0;
+    MPI_Allreduce(&completed, &total, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD);
+    EXPECT_EQ(total, static_cast<std::uint64_t>(dfb.grid().tileCount()));
+    if (worldSize() > 1) {
+      EXPECT_GT(s.tileBytesSent + s.tileBytesReceived, 0u);
+    }
+  }
+}
+
+TEST(Dfb, AccumulationOverFramesIsTheRunningMean) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD,
+                             options(DisplayFormat::RGBAF32, accumulateOperation()));
+  for (std::uint32_t frame = 1; frame <= 4; ++frame) {
+    renderFrame(dfb, frame);
+    EXPECT_EQ(dfb.accumulationId(), frame - 1);
+    if (worldRank() != 0) continue;
+    const auto& image = dfb.imageRgbaF32();
+    for (int y = 0; y < kHeight; y += 7)
+      for (int x = 0; x < kWidth; x += 5) {
+        float mean = 0;
+        for (std::uint32_t f = 1; f <= frame; ++f) mean += pixelValue(x, y, f, 1);
+        mean /= static_cast<float>(frame);
+        ASSERT_NEAR(image[static_cast<size_t>(4 * (y * kWidth + x) + 1)], mean, 1e-5f)
+            << "frame " << frame;
+      }
+  }
+  // Every rank knows every tile's error estimate, and a varying image has one.
+  EXPECT_GT(*std::min_element(dfb.tileErrors().begin(), dfb.tileErrors().end()), 0.0f);
+  // A new epoch restarts accumulation.
+  renderFrame(dfb, 5, /*epoch=*/1);
+  EXPECT_EQ(dfb.accumulationId(), 0u);
+  if (worldRank() == 0) {
+    EXPECT_EQ(dfb.imageRgbaF32()[4], pixelValue(1, 0, 5, 0));
+  }
+}
+
+// Renders one frame where tile t gets `inputs` redundant inputs, input k from rank (t + k) % size
+// with sequence k and weight k + 1, sent after random delays.
+std::vector<float> renderRedundant(unsigned delaySeed, int inputs) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DfbOptions o = options(DisplayFormat::RGBAF32, accumulateOperation());
+  o.expectedInputs = [inputs](int) { return inputs; };
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
+  dfb.begin({1, 0});
+  std::vector<std::pair<int, int>> work;
+  for (int t = 0; t < dfb.grid().tileCount(); ++t)
+    for (int k = 0; k < inputs; ++k)
+      if ((t + k) % worldSize() == worldRank()) work.emplace_back(t, k);
+  std::mt19937 random(delaySeed * 31 + static_cast<unsigned>(worldRank()));
+  std::shuffle(work.begin(), work.end(), random);
+  for (auto [t, k] : work) {
+    Tile tile = renderTile(dfb.grid().region(t), static_cast<std::uint32_t>(10 + k), 0);
+    tile.sequence = static_cast<std::uint32_t>(k);
+    tile.weight = static_cast<std::uint32_t>(k + 1);
+    if (random() % 4 == 0) std::this_thread::sleep_for(std::chrono::microseconds(random() % 300));
+    dfb.setTile(tile);
+  }
+  dfb.end();
+  return dfb.imageRgbaF32();
+}
+
+TEST(Dfb, RedundantInputsGiveTheSameBytesInAnyArrivalOrder) {
+  const std::vector<float> first = renderRedundant(1, 3);
+  for (unsigned seed = 2; seed <= 4; ++seed) {
+    const std::vector<float> again = renderRedundant(seed, 3);
+    if (worldRank() == 0) {
+      ASSERT_EQ(first, again) << "delay seed " << seed;
+    }
+  }
+  if (worldRank() == 0) {
+    const float expected =
+        (1 * pixelValue(3, 4, 10, 2) + 2 * pixelValue(3, 4, 11, 2) + 3 * pixelValue(3, 4, 12, 2)) /
+        6;
+    EXPECT_NEAR(first[static_cast<size_t>(4 * (4 * kWidth + 3) + 2)], expected, 1e-5f);
+  }
+}
+
+// --- alpha blending over random dependency trees --------------------------------------------
+
+struct TreeNode {
+  int generation, children;
+  std::uint32_t sequence;
+};
+
+// The same tree on every rank: a function of (seed, tile) only.
+std::vector<TreeNode> randomTree(unsigned seed, int tile) {
+  std::mt19937 random(seed * 7919u + static_cast<unsigned>(tile));
+  std::vector<TreeNode> nodes{{0, static_cast<int>(random() % 4), 0}};
+  std::uint32_t sequence = 1;
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    const TreeNode parent = nodes[i];
+    for (int c = 0; c < parent.children; ++c) {
+      const int children = parent.generation < 2 ? static_cast<int>(random() % 3) : 0;
+      nodes.push_back({parent.generation + 1, children, sequence++});
+    }
+  }
+  return nodes;
+}
+
+Tile fragmentTile(const Region& region, unsigned seed, int tile, const TreeNode& node) {
+  Tile t;
+  t.reset(region, true);
+  t.generation = node.generation;
+  t.children = node.children;
+  t.sequence = node.sequence;
+  std::mt19937 random(seed * 104729u + static_cast<unsigned>(tile) * 131u + node.sequence);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  for (size_t p = 0; p < t.depth.size(); ++p) {
+    t.depth[p] = 1.0f + 100.0f * unit(random);
+    const float alpha = unit(random);
+    for (int c = 0; c < 3; ++c) t.color[4 * p + static_cast<size_t>(c)] = alpha * unit(random);
+    t.color[4 * p + 3] = alpha;
+  }
+  return t;
+}
+
+TEST(Dfb, AlphaBlendOfRandomTreesInRandomOrderEqualsSerialComposite) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DfbOptions o = options(DisplayFormat::RGBAF32, alphaBlendOperation());
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
+  const TileGrid& grid = dfb.grid();
+  for (unsigned seed = 1; seed <= 12; ++seed) {
+    dfb.begin({seed, 0});
+    std::vector<std::pair<int, TreeNode>> mine;
+    for (int t = 0; t < grid.tileCount(); ++t)
+      for (const TreeNode& node : randomTree(seed, t))
+        if ((node.sequence * 5 + static_cast<unsigned>(t) + seed) %
+                static_cast<unsigned>(worldSize()) ==
+            static_cast<unsigned>(worldRank()))
+          mine.emplace_back(t, node);
+    std::mt19937 random(seed + 1000u * static_cast<unsigned>(worldRank()));
+    std::shuffle(mine.begin(), mine.end(), random);  // children often before parents
+    for (auto& [t, node] : mine) {
+      if (random() % 8 == 0) std::this_thread::sleep_for(std::chrono::microseconds(random() % 200));
+      dfb.setTile(fragmentTile(grid.region(t), seed, t, node));
+    }
+    dfb.end();
+    if (worldRank() != 0) continue;
+
+    // Serial reference: every fragment of a pixel, sorted by depth, blended front to back.
+    const auto& image = dfb.imageRgbaF32();
+    for (int t = 0; t < grid.tileCount(); ++t) {
+      const Region region = grid.region(t);
+      std::vector<Tile> fragments;
+      for (const TreeNode& node : randomTree(seed, t))
+        fragments.push_back(fragmentTile(region, seed, t, node));
+      for (int p = 0; p < region.pixelCount(); p += 3) {
+        std::vector<std::pair<float, const float*>> order;
+        for (const Tile& f : fragments)
+          order.emplace_back(f.depth[static_cast<size_t>(p)], &f.color[4 * static_cast<size_t>(p)]);
+        std::sort(order.begin(), order.end(), [](auto& a, auto& b) { return a.first < b.first; });
+        float out[4] = {0, 0, 0, 0};
+        for (auto& [depth, c] : order)
+          for (int k = 0; k < 4; ++k) out[k] += (1.0f - out[3]) * c[k];
+        const int x = region.x0 + p % region.width(), y = region.y0 + p / region.width();
+        for (int k = 0; k < 4; ++k)
+          ASSERT_NEAR(image[static_cast<size_t>(4 * (y * kWidth + x) + k)], out[k], 1e-6f)
+              << "seed " << seed << " tile " << t << " pixel " << p;
+      }
+    }
+  }
+}
+
+TEST(Dfb, TilesForTheNextFrameArrivingEarlyAreHeldAndApplied) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::RGBAF32));
+  renderFrame(dfb, 1);
+  // Rank 0 starts frame 2 late, so the other ranks' tiles for it arrive before its begin().
+  if (worldRank() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  renderFrame(dfb, 2);
+  std::uint64_t early = dfb.stats().earlyInputs, total = 0;
+  MPI_Allreduce(&early, &total, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD);
+  if (worldSize() > 1) {
+    EXPECT_GT(total, 0u);
+  }
+  if (worldRank() == 0) {
+    for (int i = 0; i < kWidth * kHeight; i += 11) {
+      ASSERT_EQ(dfb.imageRgbaF32()[4 * static_cast<size_t>(i)],
+                pixelValue(i % kWidth, i / kWidth, 2, 0));
+    }
+  }
+}
+
+TEST(Dfb, StaleInputsAreRejectedAndCounted) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DfbOptions o = options(DisplayFormat::RGBAF32);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
+  renderFrame(dfb, 1);
+  dfb.begin({5, 0});
+  // An input for frame 3, which this DFB never runs again: stale on arrival.
+  const int next = (worldRank() + 1) % worldSize();
+  int target = 0;
+  while (dfb.ownerOf(target) != next) ++target;
+  messenger.send(next, o.objectId,
+                 packTile(renderTile(dfb.grid().region(target), 3, 0), target, 3, 0));
+  messenger.quiesce();
+  tbb::parallel_for(0, dfb.grid().tileCount(), [&](int t) {
+    if (renders(t)) dfb.setTile(renderTile(dfb.grid().region(t), 5, 0));
+  });
+  dfb.end();
+  EXPECT_EQ(dfb.stats().staleInputs, 1u);
+}
+
+TEST(Dfb, AMissingTileFailsTheFrameOnEveryRankWithinTheTimeout) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DfbOptions o = options(DisplayFormat::NONE);
+  o.frameTimeout = std::chrono::milliseconds(400);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
+  dfb.begin({1, 0});
+  for (int t = 1; t < dfb.grid().tileCount(); ++t)  // tile 0 never comes
+    if (renders(t)) dfb.setTile(renderTile(dfb.grid().region(t), 1, 0));
+  const auto start = std::chrono::steady_clock::now();
+  std::string message;
+  try {
+    dfb.end();
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(3));
+  ASSERT_FALSE(message.empty()) << "end() must fail";
+  if (dfb.ownerOf(0) == worldRank()) {
+    EXPECT_NE(message.find("tiles 0"), std::string::npos) << message;
+  } else {
+    EXPECT_NE(message.find("another rank"), std::string::npos) << message;
+  }
+}
+
+TEST(Dfb, SetTileRejectsARegionThatIsNoTile) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::NONE));
+  dfb.begin({1, 0});
+  Tile bad;
+  bad.reset(Region{3, 0, 35, 32});
+  EXPECT_THROW(dfb.setTile(bad), Error);
+  tbb::parallel_for(0, dfb.grid().tileCount(), [&](int t) {
+    if (renders(t)) dfb.setTile(renderTile(dfb.grid().region(t), 1, 0));
+  });
+  dfb.end();
+}
+
+long residentKiB() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+  return 0;
+}
+
+// Label 'stress': 1,000 small frames, no hang, no growth in memory.
+TEST(DfbStress, ThousandSmallFrames) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DfbOptions o = options(DisplayFormat::RGBA8, accumulateOperation());
+  o.width = 96;
+  o.height = 64;
+  o.tileSize = 16;
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
+  long afterWarmup = 0;
+  for (std::uint32_t frame = 1; frame <= 1000; ++frame) {
+    renderFrame(dfb, frame, frame / 50);
+    if (frame == 100) afterWarmup = residentKiB();
+  }
+  EXPECT_EQ(dfb.stats().frameId, 1000u);
+#if defined(__SANITIZE_ADDRESS__)
+  // AddressSanitizer's quarantine keeps freed memory resident on purpose; growth means nothing.
+  (void)afterWarmup;
+#else
+  const long growth = residentKiB() - afterWarmup;
+  EXPECT_LT(growth, 4096) << "resident memory grew by " << growth << " KiB over 900 frames";
+#endif
+}
+
+}  // namespace
+}  // namespace dfb

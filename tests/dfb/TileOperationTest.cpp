@@ -1,0 +1,185 @@
+// Tile operations and tone mapping on their own, without MPI.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "dfb/Error.h"
+#include "dfb/PixelOp.h"
+#include "dfb/TileMessage.h"
+#include "dfb/TileOperation.h"
+
+namespace dfb {
+namespace {
+
+const Region kRegion{64, 0, 100, 20};  // a partial tile at an image edge
+
+Tile constantTile(float value, std::uint32_t accumulationId = 0) {
+  Tile t;
+  t.reset(kRegion);
+  std::fill(t.color.begin(), t.color.end(), value);
+  t.accumulationId = accumulationId;
+  return t;
+}
+
+TEST(WriteOperation, TakesExactlyOneInput) {
+  auto op = writeOperation()(kRegion);
+  op->newFrame({}, 0, 1);
+  EXPECT_TRUE(op->process(constantTile(0.5f)));
+  EXPECT_EQ(op->finished().color[7], 0.5f);
+  EXPECT_THROW(op->process(constantTile(0.5f)), Error);
+}
+
+TEST(AccumulateOperation, IsTheRunningMeanAndResetsWithTheEpoch) {
+  auto op = accumulateOperation()(kRegion);
+  const float values[] = {1.0f, 2.0f, 6.0f, 3.0f};
+  float sum = 0;
+  for (std::uint32_t f = 0; f < 4; ++f) {
+    op->newFrame({f, 0}, f, 1);
+    ASSERT_TRUE(op->process(constantTile(values[f], f)));
+    sum += values[f];
+    EXPECT_FLOAT_EQ(op->finished().color[0], sum / static_cast<float>(f + 1)) << "frame " << f;
+  }
+  EXPECT_GT(op->error(), 0.0f);
+  op->newFrame({4, 1}, 0, 1);  // new epoch: pass 0 again
+  ASSERT_TRUE(op->process(constantTile(9.0f, 0)));
+  EXPECT_FLOAT_EQ(op->finished().color[0], 9.0f);
+  EXPECT_TRUE(std::isinf(op->error())) << "one frame gives no error estimate";
+}
+
+TEST(AccumulateOperation, RejectsAnInputForAnotherPass) {
+  auto op = accumulateOperation()(kRegion);
+  op->newFrame({0, 0}, 0, 1);
+  EXPECT_THROW(op->process(constantTile(1.0f, 3)), Error);
+}
+
+TEST(AccumulateOperation, RedundantInputsGiveTheSameBytesInAnyOrder) {
+  std::mt19937 random(5);
+  std::uniform_real_distribution<float> value(0.0f, 10.0f);
+  std::vector<Tile> inputs;
+  for (std::uint32_t s = 0; s < 5; ++s) {
+    Tile t;
+    t.reset(kRegion);
+    for (float& c : t.color) c = value(random);
+    t.sequence = s * 16;
+    t.weight = 1 + s % 3;
+    inputs.push_back(t);
+  }
+  std::vector<float> reference;
+  for (int trial = 0; trial < 20; ++trial) {
+    std::shuffle(inputs.begin(), inputs.end(), random);
+    auto op = accumulateOperation()(kRegion);
+    op->newFrame({}, 0, static_cast<int>(inputs.size()));
+    for (size_t i = 0; i < inputs.size(); ++i)
+      EXPECT_EQ(op->process(inputs[i]), i + 1 == inputs.size());
+    if (trial == 0) {
+      reference = op->finished().color;
+      // And it is the weighted mean.
+      double expected = 0, weight = 0;
+      for (const Tile& t : inputs) expected += t.weight * t.color[0], weight += t.weight;
+      EXPECT_NEAR(reference[0], expected / weight, 1e-5);
+    } else {
+      EXPECT_EQ(op->finished().color, reference) << "trial " << trial;
+    }
+  }
+}
+
+TEST(AlphaBlendOperation, WaitsForTheWholeTreeAndBlendsByDepth) {
+  auto op = alphaBlendOperation()(kRegion);
+  op->newFrame({}, 0, 1);
+  auto fragment = [](int generation, int children, float depth, float r, float a,
+                     std::uint32_t seq) {
+    Tile t;
+    t.reset(kRegion, true);
+    for (size_t p = 0; p < t.depth.size(); ++p) {
+      t.depth[p] = depth;
+      t.color[4 * p + 0] = r * a;  // premultiplied
+      t.color[4 * p + 3] = a;
+    }
+    t.generation = generation;
+    t.children = children;
+    t.sequence = seq;
+    return t;
+  };
+  // Children first, the root last: the tree is only known when the root arrives.
+  EXPECT_FALSE(op->process(fragment(1, 0, 5.0f, 1.0f, 0.5f, 1)));
+  EXPECT_FALSE(op->process(fragment(1, 0, 2.0f, 0.0f, 0.5f, 2)));
+  EXPECT_TRUE(op->process(fragment(0, 2, 9.0f, 1.0f, 1.0f, 0)));
+  // Front to back: depth 2 (r 0, a .5), depth 5 (r 1, a .5), depth 9 (r 1, a 1).
+  const float r = 0.0f + 0.5f * (0.5f + 0.5f * 1.0f);
+  EXPECT_FLOAT_EQ(op->finished().color[0], r);
+  EXPECT_FLOAT_EQ(op->finished().color[3], 1.0f);
+  EXPECT_FLOAT_EQ(op->finished().depth[0], 2.0f);
+}
+
+TEST(AlphaBlendOperation, TooManyTilesInAGenerationIsAnError) {
+  auto op = alphaBlendOperation()(kRegion);
+  op->newFrame({}, 0, 1);
+  Tile root;
+  root.reset(kRegion);
+  root.children = 1;
+  Tile child = root;
+  child.generation = 1;
+  child.children = 0;
+  EXPECT_FALSE(op->process(child));
+  EXPECT_THROW(
+      {
+        op->process(child);
+        op->process(root);
+      },
+      Error);
+}
+
+TEST(TileMessage, PacksAndUnpacksEveryChannel) {
+  Tile t;
+  t.reset(kRegion, true);
+  t.normal.assign(3 * static_cast<size_t>(kRegion.pixelCount()), 0.25f);
+  for (size_t i = 0; i < t.color.size(); ++i) t.color[i] = static_cast<float>(i);
+  t.generation = 2;
+  t.children = 3;
+  t.sequence = 40;
+  t.weight = 7;
+  t.accumulationId = 11;
+  const Bytes bytes = packTile(t, 5, 99, 4);
+  TileMessageHeader header;
+  const Tile back = unpackTile(bytes, header);
+  EXPECT_EQ(header.frameId, 99u);
+  EXPECT_EQ(header.epoch, 4u);
+  EXPECT_EQ(header.tileIndex, 5);
+  EXPECT_EQ(back.region, kRegion);
+  EXPECT_EQ(back.color, t.color);
+  EXPECT_EQ(back.depth, t.depth);
+  EXPECT_EQ(back.normal, t.normal);
+  EXPECT_TRUE(back.albedo.empty());
+  EXPECT_EQ(back.generation, 2);
+  EXPECT_EQ(back.children, 3);
+  EXPECT_EQ(back.sequence, 40u);
+  EXPECT_EQ(back.weight, 7u);
+  EXPECT_EQ(back.accumulationId, 11u);
+
+  Bytes truncated(bytes.begin(), bytes.end() - 4);
+  EXPECT_THROW(unpackTile(truncated, header), Error);
+}
+
+TEST(ToneMap, EncodesSrgbAndClamps) {
+  const ToneMapSettings plain;
+  const float black[4] = {0, 0, 0, 1}, white[4] = {1, 1, 1, 1}, hot[4] = {50, -1, 0.5f, 0.5f};
+  EXPECT_EQ(toneMapPixel(black, plain), 0xff000000u);
+  EXPECT_EQ(toneMapPixel(white, plain), 0xffffffffu);
+  const std::uint32_t p = toneMapPixel(hot, plain);
+  EXPECT_EQ(p & 0xff, 255u);
+  EXPECT_EQ((p >> 8) & 0xff, 0u);
+  EXPECT_EQ((p >> 16) & 0xff, 188u) << "sRGB of 0.5 is 0.735";
+  EXPECT_EQ(p >> 24, 128u);
+  ToneMapSettings filmic;
+  filmic.filmic = true;
+  const float bright[4] = {4, 4, 4, 1};
+  EXPECT_EQ(toneMapPixel(bright, plain) & 0xff, 255u);
+  EXPECT_LT(toneMapPixel(bright, filmic) & 0xff, 255u) << "the filmic curve rolls off, not clips";
+  EXPECT_EQ((toneMapPixel(hot, filmic) >> 16) & 0xff, 206u) << "ACES fit: 0.5 -> 0.616";
+}
+
+}  // namespace
+}  // namespace dfb
