@@ -11,8 +11,17 @@ function(add_unit_test name)
   add_executable(${name} ${T_SOURCES})
   target_link_libraries(${name} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main dfbwall_warnings)
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR})
-  gtest_discover_tests(${name} PROPERTIES LABELS "unit;${T_LABELS}" TIMEOUT 120
-                       DISCOVERY_TIMEOUT 30)
+  gtest_discover_tests(${name} PROPERTIES TIMEOUT 120 DISCOVERY_TIMEOUT 30)
+  # gtest_discover_tests flattens a list given in PROPERTIES (LABELS "unit;wall" becomes the
+  # label "unit" and a stray property "wall"), so the labels are set by a script CTest runs
+  # after it has read the discovered tests.
+  set(labels unit ${T_LABELS})
+  set(script ${CMAKE_CURRENT_BINARY_DIR}/${name}_labels.cmake)
+  file(WRITE ${script}
+       "foreach(t IN LISTS ${name}_TESTS)\n"
+       "  set_tests_properties(\${t} PROPERTIES LABELS \"${labels}\")\n"
+       "endforeach()\n")
+  set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${script})
 endfunction()
 
 # add_mpi_test(NAME TARGET NPROCS [ARGS ...] [LABELS ...] [TIMEOUT s])

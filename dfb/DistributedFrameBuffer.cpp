@@ -31,6 +31,7 @@ struct OwnedTile {
   std::unique_ptr<TileOperation> operation;
   std::vector<std::uint32_t> rgba8;
   bool complete = false;
+  bool active = false;  // expects inputs this frame
 };
 
 struct DistributedFrameBuffer::Impl {
@@ -143,14 +144,18 @@ void DistributedFrameBuffer::begin(const FrameInfo& frame) {
       ++d.accumulationId;
     d.haveEpoch = true;
     d.frame = frame;
+    d.remaining = 0;
     for (int t : d.ownedTiles) {
       OwnedTile& owned = *d.tiles[static_cast<size_t>(t)];
       std::lock_guard tileLock(owned.mutex);
-      owned.operation->newFrame(frame, d.accumulationId,
-                                d.options.expectedInputs ? d.options.expectedInputs(t) : 1);
-      owned.complete = false;
+      const int expected = d.options.expectedInputs ? d.options.expectedInputs(t) : 1;
+      owned.active = expected > 0;
+      owned.complete = !owned.active;  // a tile nobody renders this frame is done already
+      if (owned.active) {
+        owned.operation->newFrame(frame, d.accumulationId, expected);
+        ++d.remaining;
+      }
     }
-    d.remaining = static_cast<int>(d.ownedTiles.size());
     d.inputErrors.clear();
     d.tilesSet = d.tilesCompleted = d.tileBytesSent = d.tileBytesReceived = 0;
     d.staleInputs = d.earlyInputs = 0;
@@ -349,8 +354,14 @@ void DistributedFrameBuffer::end() {
         if (d.owner[static_cast<size_t>(t)] == r) list.push_back(t);
       return list;
     };
+    std::vector<std::byte> blank;
     auto pixelsOf = [&](int t) -> const std::byte* {
       OwnedTile& owned = *d.tiles[static_cast<size_t>(t)];
+      if (!owned.active) {  // not rendered this frame: black, transparent
+        blank.assign(static_cast<size_t>(d.grid.region(t).pixelCount() * bytesPerPixel),
+                     std::byte{0});
+        return blank.data();
+      }
       if (rgba8) return reinterpret_cast<const std::byte*>(owned.rgba8.data());
       return reinterpret_cast<const std::byte*>(owned.operation->finished().color.data());
     };

@@ -42,7 +42,9 @@ struct DfbOptions {
   DisplayFormat format = DisplayFormat::RGBA8;
   TileOperationFactory operation = accumulateOperation();
   OwnershipFunction ownership = roundRobinOwner;
-  // How many inputs each tile gets this frame; asked at begin(). Default: one.
+  // How many inputs each tile gets this frame; asked at begin(). Default: one. Zero leaves the
+  // tile out of the frame (e.g. no display shows it): it completes at once, runs no pixel ops,
+  // and gathers as transparent black.
   std::function<int(int tileIndex)> expectedInputs;
   // The first pixel op of every chain: linear color to display RGBA8 on the tile owner.
   ToneMapSettings toneMap;

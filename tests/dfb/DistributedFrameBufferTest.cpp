@@ -145,6 +145,24 @@ TEST(Dfb, FormatNoneGathersNoPixelsToRankZero) {
   }
 }
 
+TEST(Dfb, TilesWithNoExpectedInputsAreLeftOutOfTheFrame) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DfbOptions o = options(DisplayFormat::RGBAF32);
+  o.expectedInputs = [](int t) { return t % 3 == 0 ? 0 : 1; };
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
+  dfb.begin({1, 0});
+  tbb::parallel_for(0, dfb.grid().tileCount(), [&](int t) {
+    if (t % 3 != 0 && renders(t)) dfb.setTile(renderTile(dfb.grid().region(t), 1, 0));
+  });
+  dfb.end();
+  if (worldRank() != 0) return;
+  for (int t = 0; t < dfb.grid().tileCount(); ++t) {
+    const Region r = dfb.grid().region(t);
+    const float got = dfb.imageRgbaF32()[static_cast<size_t>(4 * (r.y0 * kWidth + r.x0) + 1)];
+    EXPECT_EQ(got, t % 3 == 0 ? 0.0f : pixelValue(r.x0, r.y0, 1, 1)) << "tile " << t;
+  }
+}
+
 TEST(Dfb, AccumulationOverFramesIsTheRunningMean) {
   Messenger messenger(MPI_COMM_WORLD);
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD,
