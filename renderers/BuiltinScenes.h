@@ -1,0 +1,22 @@
+#pragma once
+// Scenes compiled in, selectable as "builtin:NAME".
+//  - cornell: the measured Cornell box (graphics.cornell.edu/online/box/data.html), the same
+//    geometry, reflectances, light and camera as pbrt-v4's and Mitsuba's cornell-box scenes.
+//  - spheres: a few thousand spheres of mixed materials on a floor under an area light and a
+//    sky gradient; glass and metal crowd one side, so tile costs differ a lot (load balancing).
+#include <string>
+#include <vector>
+
+#include "renderers/SceneDesc.h"
+
+namespace renderers {
+
+SceneDesc cornellBox();
+SceneDesc manySpheres(int countX = 60, int countZ = 50);
+
+std::vector<std::string> builtinSceneNames();
+// "builtin:NAME" → that scene; anything else is a TOML file path (SceneToml.h).
+// Throws renderers::Error, listing the built-in names for an unknown one.
+SceneDesc loadSceneDesc(const std::string& spec);
+
+}  // namespace renderers

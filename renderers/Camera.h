@@ -1,0 +1,28 @@
+#pragma once
+// Pinhole camera (position, look-at, up, vertical field of view), optionally a thin lens.
+// Image plane coordinates are canvas pixels, x right and y down, as the DFB's tiles are.
+#include "renderers/Math.h"
+
+namespace renderers {
+
+struct CameraDesc {
+  Vec3 position{0, 0, -5};
+  Vec3 lookAt{0, 0, 0};
+  Vec3 up{0, 1, 0};
+  float fovY = 45.0f;          // degrees
+  float lensRadius = 0.0f;     // 0: pinhole
+  float focusDistance = 0.0f;  // 0: the distance to lookAt
+};
+
+class Camera {
+ public:
+  Camera(const CameraDesc& desc, int width, int height);
+  // The ray through canvas point (px, py); (u, v) in [0,1)^2 pick the point on the lens.
+  void ray(float px, float py, float u, float v, Vec3& origin, Vec3& direction) const;
+
+ private:
+  Vec3 origin_, forward_, right_, up_;
+  float halfWidth_, halfHeight_, invWidth_, invHeight_, lensRadius_, focus_;
+};
+
+}  // namespace renderers

@@ -1,0 +1,26 @@
+#pragma once
+// Unidirectional path tracer: next-event estimation on emissive triangles combined with BSDF
+// sampling by multiple importance sampling (power heuristic), Russian roulette after three
+// segments, at most RenderSettings::maxDepth segments.
+#include "renderers/Camera.h"
+#include "renderers/Renderer.h"
+#include "renderers/Rng.h"
+
+namespace renderers {
+
+class PathTracer final : public Renderer {
+ public:
+  PathTracer(const Scene& scene, const RenderSettings& settings);
+  void render(const dfb::Region& region, std::uint32_t accumulationId, std::uint32_t firstSample,
+              std::uint32_t samples, dfb::Tile& out) const override;
+  // Radiance along one camera ray; public for known-answer tests.
+  Vec3 radiance(Vec3 origin, Vec3 direction, const Sampler& sampler) const;
+
+ private:
+  const Scene& scene_;
+  RenderSettings settings_;
+  Camera camera_;
+  float epsilon_;
+};
+
+}  // namespace renderers

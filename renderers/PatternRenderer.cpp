@@ -1,0 +1,77 @@
+#include "renderers/PatternRenderer.h"
+
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+#include "renderers/Math.h"
+
+namespace renderers {
+namespace {
+
+// 3x5 glyphs, one row per 3 bits, top row first: digits, then '.'.
+constexpr std::array<std::array<unsigned char, 5>, 11> kGlyphs{{
+    {7, 5, 5, 5, 7},
+    {2, 6, 2, 2, 7},
+    {7, 1, 7, 4, 7},
+    {7, 1, 7, 1, 7},
+    {5, 5, 7, 1, 1},
+    {7, 4, 7, 1, 7},
+    {7, 4, 7, 5, 7},
+    {7, 1, 1, 1, 1},
+    {7, 5, 7, 5, 7},
+    {7, 5, 7, 1, 7},
+    {0, 0, 0, 0, 2},
+}};
+constexpr int kScale = 4, kAdvance = 4 * kScale, kMargin = 8;
+
+// Whether (x, y), relative to the label's top-left corner, is ink of `text`.
+bool labelInk(const std::string& text, int x, int y) {
+  if (x < 0 || y < 0 || y >= 5 * kScale) return false;
+  const int i = x / kAdvance, gx = (x % kAdvance) / kScale, gy = y / kScale;
+  if (i >= static_cast<int>(text.size()) || gx >= 3) return false;
+  const char c = text[i];
+  const auto& glyph = kGlyphs[c == '.' ? 10 : c - '0'];
+  return (glyph[gy] >> (2 - gx)) & 1;
+}
+
+const Vec3 kBars[8] = {{0.75f, 0.75f, 0.75f}, {0.75f, 0.75f, 0}, {0, 0.75f, 0.75f}, {0, 0.75f, 0},
+                       {0.75f, 0, 0.75f},     {0.75f, 0, 0},     {0, 0, 0.75f},     {0, 0, 0}};
+
+}  // namespace
+
+PatternRenderer::PatternRenderer(const RenderSettings& settings)
+    : width_(settings.width), height_(settings.height) {}
+
+void PatternRenderer::beginFrame(const dfb::FrameInfo& frame) { frameId_ = frame.frameId; }
+
+void PatternRenderer::render(const dfb::Region& region, std::uint32_t accumulationId,
+                             std::uint32_t firstSample, std::uint32_t samples,
+                             dfb::Tile& out) const {
+  prepareTile(region, accumulationId, firstSample, samples, out);
+  const int barTop = height_ - height_ / 8;
+  const int markerSize = 32;
+  const int markerX = static_cast<int>((frameId_ * 16u) % static_cast<unsigned>(width_));
+  const int markerY = height_ / 2 - markerSize / 2;
+  float* px = out.color.data();
+  for (int y = region.y0; y < region.y1; ++y) {
+    for (int x = region.x0; x < region.x1; ++x, px += 4) {
+      const int cx = x / kCell, cy = y / kCell, lx = x % kCell, ly = y % kCell;
+      Vec3 c = ((cx + cy) & 1) ? Vec3{0.10f} : Vec3{0.05f};
+      const float dx = static_cast<float>(lx) - kCell / 2 + 0.5f;
+      const float dy = static_cast<float>(ly) - kCell / 2 + 0.5f;
+      if (std::abs(std::sqrt(dx * dx + dy * dy) - 0.35f * kCell) < 1.0f) c = {0.3f, 0.3f, 0.6f};
+      if (lx < 2 || ly < 2) c = Vec3{0.8f};
+      if (labelInk(std::to_string(cx) + "." + std::to_string(cy), lx - kMargin, ly - kMargin))
+        c = {1.0f, 0.9f, 0.2f};
+      if (y >= barTop) c = kBars[std::min(7, 8 * x / width_)];
+      if (x < 4 || y < 4 || x >= width_ - 4 || y >= height_ - 4) c = {1.0f, 0.1f, 0.1f};
+      if (x >= markerX && x < markerX + markerSize && y >= markerY && y < markerY + markerSize)
+        c = {0.1f, 1.0f, 0.1f};
+      px[0] = c.x, px[1] = c.y, px[2] = c.z, px[3] = 1.0f;
+    }
+  }
+}
+
+}  // namespace renderers

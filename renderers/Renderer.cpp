@@ -1,0 +1,43 @@
+#include "renderers/Renderer.h"
+
+#include <pmmintrin.h>
+#include <xmmintrin.h>
+
+#include "renderers/Error.h"
+#include "renderers/PathTracer.h"
+#include "renderers/PatternRenderer.h"
+#include "renderers/PrimaryRenderer.h"
+
+namespace renderers {
+
+std::unique_ptr<Renderer> makeRenderer(const std::string& name, const Scene& scene,
+                                       const RenderSettings& settings) {
+  if (settings.width <= 0 || settings.height <= 0)
+    throw Error("renderer: canvas size must be positive");
+  if (name == "pathtracer") return std::make_unique<PathTracer>(scene, settings);
+  if (name == "primary") return std::make_unique<PrimaryRenderer>(scene, settings);
+  if (name == "pattern") return std::make_unique<PatternRenderer>(settings);
+  throw Error("unknown renderer '" + name + "' (choose pathtracer, primary or pattern)");
+}
+
+void prepareTile(const dfb::Region& region, std::uint32_t accumulationId, std::uint32_t firstSample,
+                 std::uint32_t samples, dfb::Tile& out) {
+  // Not Tile::reset: this must not need more of dfb than its headers.
+  out.region = region;
+  out.generation = 0;
+  out.children = 0;
+  out.accumulationId = accumulationId;
+  out.sequence = firstSample;
+  out.weight = samples;
+  out.color.assign(4 * static_cast<std::size_t>(region.pixelCount()), 0.0f);
+  out.depth.clear();
+  out.normal.clear();
+  out.albedo.clear();
+}
+
+void enableFlushToZero() {
+  _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+  _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+}
+
+}  // namespace renderers

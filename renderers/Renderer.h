@@ -1,0 +1,47 @@
+#pragma once
+// The one interface the frame driver renders tiles through.
+//
+// Contracts: render() is const and thread-safe (tiles render concurrently from TBB workers);
+// a pixel's value depends only on its canvas coordinates, the accumulation id, the sample
+// indices, the seed and the frame given to beginFrame(), never on the tile it is rendered in,
+// the thread or the rank. beginFrame() is called from one thread, between frames.
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "dfb/Tile.h"
+#include "dfb/TileOperation.h"
+
+namespace renderers {
+
+class Scene;
+
+struct RenderSettings {
+  int width = 0, height = 0;  // the whole canvas, in pixels
+  std::uint64_t seed = 0;
+  int maxDepth = 8;  // path segments (camera ray included), as Embree's --max-path-length
+};
+
+class Renderer {
+ public:
+  virtual ~Renderer() = default;
+  virtual void beginFrame(const dfb::FrameInfo& /*frame*/) {}
+  // Fills `out` for `region`: color is the MEAN RGBA over samples firstSample ..
+  // firstSample + samples - 1 (alpha 1), weight = samples, sequence = firstSample,
+  // accumulationId = accumulationId.
+  virtual void render(const dfb::Region& region, std::uint32_t accumulationId,
+                      std::uint32_t firstSample, std::uint32_t samples, dfb::Tile& out) const = 0;
+};
+
+// "pathtracer", "primary" or "pattern"; `scene` must outlive the renderer (unused by
+// "pattern"). Throws renderers::Error naming the choices for an unknown name.
+std::unique_ptr<Renderer> makeRenderer(const std::string& name, const Scene& scene,
+                                       const RenderSettings& settings);
+
+// Sizes out.color for `region` and fills the bookkeeping fields render() promises.
+void prepareTile(const dfb::Region& region, std::uint32_t accumulationId, std::uint32_t firstSample,
+                 std::uint32_t samples, dfb::Tile& out);
+// Flush denormals to zero in the calling thread (Embree's advice; cheap to repeat).
+void enableFlushToZero();
+
+}  // namespace renderers

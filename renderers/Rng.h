@@ -1,0 +1,38 @@
+#pragma once
+// Counter-based random numbers: every value is a pure function of (seed, canvas pixel,
+// accumulation id, sample index, dimension). Nothing depends on thread, rank, tile or the order
+// work is done in, which is what makes a wall render equal a single-process render bit for bit
+// (DESIGN.md, invariant 2).
+#include <cstdint>
+
+namespace renderers {
+
+// A 64-bit finalizer (splitmix64 / Stafford variant 13): good avalanche, a handful of cycles.
+constexpr std::uint64_t mix64(std::uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+// The random stream of one sample of one pixel. Cheap to make; holds only its key.
+class Sampler {
+ public:
+  constexpr Sampler(std::uint64_t seed, int x, int y, std::uint32_t accumulationId,
+                    std::uint32_t sampleIndex)
+      : key_(mix64(mix64(seed ^ 0x9e3779b97f4a7c15ull) ^
+                   mix64((static_cast<std::uint64_t>(static_cast<std::uint32_t>(y)) << 32) |
+                         static_cast<std::uint32_t>(x)) ^
+                   mix64((static_cast<std::uint64_t>(accumulationId) << 32 | sampleIndex) +
+                         0x632be59bd9b4e019ull))) {}
+
+  // Uniform in [0, 1) for dimension `d`; the same (key, d) always gives the same value.
+  constexpr float get(std::uint32_t d) const {
+    return static_cast<float>(mix64(key_ + (d + 1) * 0x9e3779b97f4a7c15ull) >> 40) *
+           (1.0f / 16777216.0f);
+  }
+
+ private:
+  std::uint64_t key_;
+};
+
+}  // namespace renderers

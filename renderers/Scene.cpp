@@ -1,0 +1,258 @@
+#include "renderers/Scene.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <limits>
+#include <string>
+
+#include "renderers/Error.h"
+
+namespace renderers {
+
+int SceneDesc::findMaterial(const std::string& name) const {
+  for (std::size_t i = 0; i < materials.size(); ++i)
+    if (materials[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+namespace {
+
+struct LightTriangle {
+  Vec3 p0, e1, e2, normal, radiance;
+};
+
+struct InstanceData {
+  const Shape* shape = nullptr;
+  Affine toObject;  // inverse of the instance transform
+  std::uint32_t material = 0;
+  std::vector<int> primitiveLight;  // empty when the instance has no emissive primitive
+};
+
+void embreeError(void* message, RTCError code, const char* text) {
+  if (code == RTC_ERROR_NONE) return;
+  auto* m = static_cast<std::string*>(message);
+  if (m->empty()) *m = text ? text : "unknown error";
+}
+
+void validate(const SceneDesc& d) {
+  const auto nm = d.materials.size();
+  for (const Shape& s : d.shapes) {
+    for (const auto& t : s.mesh.triangles)
+      for (auto i : t)
+        if (i >= s.mesh.positions.size())
+          throw Error("shape '" + s.name + "': vertex index " + std::to_string(i) +
+                      " out of range (" + std::to_string(s.mesh.positions.size()) + " vertices)");
+    for (float r : s.spheres.radii)
+      if (!(r > 0)) throw Error("shape '" + s.name + "': sphere radius must be positive");
+    if (s.spheres.radii.size() != s.spheres.centers.size())
+      throw Error("shape '" + s.name + "': sphere centers and radii differ in count");
+    if (!s.primitiveMaterials.empty() && s.primitiveMaterials.size() != s.primitiveCount())
+      throw Error("shape '" + s.name + "': one material per primitive expected");
+    for (auto m : s.primitiveMaterials)
+      if (m >= nm) throw Error("shape '" + s.name + "': material index out of range");
+  }
+  for (const Instance& i : d.instances) {
+    if (i.shape >= d.shapes.size()) throw Error("instance of an undefined shape");
+    if (i.material >= nm)
+      throw Error("instance of '" + d.shapes[i.shape].name + "': material index out of range");
+  }
+}
+
+}  // namespace
+
+struct Scene::Impl {
+  SceneDesc desc;
+  RTCDevice device = nullptr;
+  RTCScene top = nullptr;
+  std::vector<RTCScene> shapeScenes;
+  std::vector<InstanceData> instances;
+  std::vector<LightTriangle> lights;
+  std::vector<float> lightCdf;  // inclusive prefix sums of power, normalised to end at 1
+  std::vector<float> lightPdf;  // pdfArea per light
+  std::string embreeMessage;
+  float extent = 1;
+
+  void check(const char* what) {
+    if (!embreeMessage.empty()) throw Error(std::string("Embree: ") + what + ": " + embreeMessage);
+  }
+
+  RTCScene buildShape(const Shape& s) {
+    RTCScene scene = rtcNewScene(device);
+    RTCGeometry g;
+    if (s.isSpheres()) {
+      g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                            RTC_FORMAT_FLOAT4, 4 * sizeof(float),
+                                                            s.spheres.centers.size()));
+      for (std::size_t i = 0; i < s.spheres.centers.size(); ++i) {
+        const Vec3 c = s.spheres.centers[i];
+        v[4 * i] = c.x, v[4 * i + 1] = c.y, v[4 * i + 2] = c.z, v[4 * i + 3] = s.spheres.radii[i];
+      }
+    } else {
+      g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                            RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                            s.mesh.positions.size()));
+      for (std::size_t i = 0; i < s.mesh.positions.size(); ++i) {
+        const Vec3 p = s.mesh.positions[i];
+        v[3 * i] = p.x, v[3 * i + 1] = p.y, v[3 * i + 2] = p.z;
+      }
+      auto* idx = static_cast<std::uint32_t*>(
+          rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                  3 * sizeof(std::uint32_t), s.mesh.triangles.size()));
+      for (std::size_t i = 0; i < s.mesh.triangles.size(); ++i)
+        std::copy(s.mesh.triangles[i].begin(), s.mesh.triangles[i].end(), idx + 3 * i);
+    }
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(scene, g, 0);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(scene);
+    check(("building shape '" + s.name + "'").c_str());
+    return scene;
+  }
+
+  void collectLights(std::uint32_t instanceIndex) {
+    const Instance& inst = desc.instances[instanceIndex];
+    const Shape& s = desc.shapes[inst.shape];
+    if (s.isSpheres()) return;  // emissive spheres are found by BSDF sampling only
+    InstanceData& data = instances[instanceIndex];
+    for (std::size_t p = 0; p < s.mesh.triangles.size(); ++p) {
+      const Material& m =
+          desc.materials[s.primitiveMaterials.empty() ? inst.material : s.primitiveMaterials[p]];
+      if (m.type != MaterialType::Emissive || isBlack(m.emission)) continue;
+      const auto& t = s.mesh.triangles[p];
+      const Vec3 p0 = inst.transform.point(s.mesh.positions[t[0]]);
+      const Vec3 e1 = inst.transform.point(s.mesh.positions[t[1]]) - p0;
+      const Vec3 e2 = inst.transform.point(s.mesh.positions[t[2]]) - p0;
+      const Vec3 c = cross(e1, e2);
+      if (length(c) <= 0) continue;
+      if (data.primitiveLight.empty()) data.primitiveLight.assign(s.mesh.triangles.size(), -1);
+      data.primitiveLight[p] = static_cast<int>(lights.size());
+      lights.push_back({p0, e1, e2, normalize(c), m.emission});
+    }
+  }
+
+  void buildLightDistribution() {
+    double total = 0;
+    std::vector<double> power(lights.size());
+    for (std::size_t i = 0; i < lights.size(); ++i) {
+      const float area = 0.5f * length(cross(lights[i].e1, lights[i].e2));
+      power[i] = area * std::max(luminance(lights[i].radiance), 1e-6f);
+      total += power[i];
+    }
+    double running = 0;
+    for (std::size_t i = 0; i < lights.size(); ++i) {
+      running += power[i];
+      lightCdf.push_back(static_cast<float>(running / total));
+      const float area = 0.5f * length(cross(lights[i].e1, lights[i].e2));
+      lightPdf.push_back(static_cast<float>(power[i] / total) / area);
+    }
+    if (!lightCdf.empty()) lightCdf.back() = 1.0f;
+  }
+};
+
+Scene::Scene(SceneDesc desc) : impl_(std::make_unique<Impl>()) {
+  validate(desc);
+  Impl& m = *impl_;
+  m.desc = std::move(desc);
+  m.device = rtcNewDevice(nullptr);
+  if (!m.device) throw Error("Embree: cannot create a device");
+  rtcSetDeviceErrorFunction(m.device, embreeError, &m.embreeMessage);
+  for (const Shape& s : m.desc.shapes) m.shapeScenes.push_back(m.buildShape(s));
+
+  m.top = rtcNewScene(m.device);
+  m.instances.resize(m.desc.instances.size());
+  for (std::uint32_t i = 0; i < m.desc.instances.size(); ++i) {
+    const Instance& inst = m.desc.instances[i];
+    m.instances[i] = {&m.desc.shapes[inst.shape], inverse(inst.transform), inst.material, {}};
+    RTCGeometry g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(g, m.shapeScenes[inst.shape]);
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, &inst.transform.vx.x);
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(m.top, g, i);
+    rtcReleaseGeometry(g);
+    m.collectLights(i);
+  }
+  rtcCommitScene(m.top);
+  m.check("building the scene");
+  m.buildLightDistribution();
+  RTCBounds b;
+  rtcGetSceneBounds(m.top, &b);
+  if (b.lower_x <= b.upper_x)
+    m.extent = std::max({b.upper_x - b.lower_x, b.upper_y - b.lower_y, b.upper_z - b.lower_z,
+                         std::abs(b.lower_x), std::abs(b.upper_x), std::abs(b.lower_y),
+                         std::abs(b.upper_y), std::abs(b.lower_z), std::abs(b.upper_z), 1e-3f});
+}
+
+Scene::~Scene() {
+  if (impl_->top) rtcReleaseScene(impl_->top);
+  for (RTCScene s : impl_->shapeScenes) rtcReleaseScene(s);
+  if (impl_->device) rtcReleaseDevice(impl_->device);
+}
+
+const SceneDesc& Scene::desc() const { return impl_->desc; }
+int Scene::lightCount() const { return static_cast<int>(impl_->lights.size()); }
+float Scene::lightPdfArea(int light) const { return impl_->lightPdf[light]; }
+float Scene::extent() const { return impl_->extent; }
+RTCScene Scene::embreeScene() const { return impl_->top; }
+
+static RTCRay makeRay(Vec3 o, Vec3 d, float tNear, float tFar) {
+  RTCRay r;
+  r.org_x = o.x, r.org_y = o.y, r.org_z = o.z, r.tnear = tNear;
+  r.dir_x = d.x, r.dir_y = d.y, r.dir_z = d.z, r.time = 0;
+  r.tfar = tFar, r.mask = 0xFFFFFFFFu, r.id = 0, r.flags = 0;
+  return r;
+}
+
+bool Scene::intersect(Vec3 origin, Vec3 direction, float tNear, float tFar, Hit& hit) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh;
+  rh.ray = makeRay(origin, direction, tNear, tFar);
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(impl_->top, &context, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+
+  const InstanceData& inst = impl_->instances[rh.hit.instID[0]];
+  const Shape& s = *inst.shape;
+  const std::uint32_t prim = rh.hit.primID;
+  hit.t = rh.ray.tfar;
+  hit.position = origin + direction * hit.t;
+  Vec3 n;
+  if (s.isSpheres()) {
+    n = inst.toObject.point(hit.position) - s.spheres.centers[prim];
+  } else {
+    const auto& t = s.mesh.triangles[prim];
+    const Vec3 p0 = s.mesh.positions[t[0]];
+    n = cross(s.mesh.positions[t[1]] - p0, s.mesh.positions[t[2]] - p0);
+  }
+  hit.normal = normalize(transformNormal(inst.toObject, n));
+  hit.material =
+      &impl_->desc
+           .materials[s.primitiveMaterials.empty() ? inst.material : s.primitiveMaterials[prim]];
+  hit.light = inst.primitiveLight.empty() ? -1 : inst.primitiveLight[prim];
+  return true;
+}
+
+bool Scene::occluded(Vec3 origin, Vec3 direction, float tNear, float tFar) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRay r = makeRay(origin, direction, tNear, tFar);
+  rtcOccluded1(impl_->top, &context, &r);
+  return r.tfar < 0;  // Embree sets tfar to -inf on a hit
+}
+
+LightSample Scene::sampleLight(float u0, float u1, float u2) const {
+  const Impl& m = *impl_;
+  const auto it = std::upper_bound(m.lightCdf.begin(), m.lightCdf.end(), u0);
+  const std::size_t i = std::min<std::size_t>(it - m.lightCdf.begin(), m.lights.size() - 1);
+  const LightTriangle& l = m.lights[i];
+  // Uniform over the triangle: fold the unit square onto it.
+  const float su = std::sqrt(u1);
+  const float b1 = 1.0f - su, b2 = u2 * su;
+  return {l.p0 + l.e1 * b1 + l.e2 * b2, l.normal, l.radiance, m.lightPdf[i]};
+}
+
+}  // namespace renderers

@@ -1,0 +1,67 @@
+#pragma once
+// A scene as plain data: what SceneToml reads, BuiltinScenes make and Scene builds a BVH from.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "renderers/Camera.h"
+#include "renderers/Material.h"
+#include "renderers/Math.h"
+
+namespace renderers {
+
+struct TriangleMesh {
+  std::vector<Vec3> positions;
+  std::vector<std::array<std::uint32_t, 3>> triangles;  // counter-clockwise seen from the front
+};
+
+struct SphereSet {
+  std::vector<Vec3> centers;
+  std::vector<float> radii;
+};
+
+// Geometry in object space: a triangle mesh or a set of spheres (exactly one is non-empty).
+struct Shape {
+  std::string name;
+  TriangleMesh mesh;
+  SphereSet spheres;
+  // Optional material per primitive (indices into SceneDesc::materials); when empty the
+  // instance's material applies to every primitive.
+  std::vector<std::uint32_t> primitiveMaterials;
+  bool isSpheres() const { return !spheres.centers.empty(); }
+  std::size_t primitiveCount() const {
+    return isSpheres() ? spheres.centers.size() : mesh.triangles.size();
+  }
+};
+
+struct Instance {
+  std::uint32_t shape = 0;
+  Affine transform;
+  std::uint32_t material = 0;
+};
+
+struct Environment {
+  enum class Kind { Constant, Gradient };
+  Kind kind = Kind::Constant;
+  Vec3 color{};          // constant
+  Vec3 bottom{}, top{};  // gradient over the world y direction, bottom (y=-1) to top (y=1)
+  Vec3 radiance(Vec3 dir) const {
+    if (kind == Kind::Constant) return color;
+    const float t = 0.5f * (dir.y + 1.0f);
+    return bottom * (1.0f - t) + top * t;
+  }
+};
+
+struct SceneDesc {
+  std::vector<Material> materials;
+  std::vector<Shape> shapes;
+  std::vector<Instance> instances;
+  CameraDesc camera;
+  Environment environment;
+
+  // Index of the material called `name`, or -1.
+  int findMaterial(const std::string& name) const;
+};
+
+}  // namespace renderers
