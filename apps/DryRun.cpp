@@ -1,0 +1,40 @@
+// --dry-run: what the job would do, without rendering.
+#include <cstdio>
+
+#include "apps/Job.h"
+#include "renderers/FrameDriver.h"
+#include "wall/Routing.h"
+
+namespace app {
+
+void printDryRun(const Job& job) {
+  const Options& o = job.options;
+  const wall::Layout& layout = *job.layout;
+  std::printf("layout %s: canvas %dx%d, %zu displays, %d wall processes\n", layout.file.c_str(),
+              layout.canvasWidth, layout.canvasHeight, layout.displays.size(), layout.processCount);
+  std::printf("ranks: 0..%d render, %d..%d wall\n", job.roles.renderRanks - 1,
+              job.roles.renderRanks, job.roles.worldSize() - 1);
+  const std::vector<bool> active = wall::tilesShownByAnyDisplay(layout, o.tileSize);
+  int shown = 0;
+  for (bool a : active) shown += a;
+  std::printf(
+      "tiles: %zu of %d px, %d shown by some display (the rest are not rendered in route mode)\n",
+      active.size(), o.tileSize, shown);
+  const dfb::OwnershipFunction owner = job.gatherMode()
+                                           ? dfb::OwnershipFunction(dfb::roundRobinOwner)
+                                           : renderers::activeTileOwnership(active);
+  for (size_t d = 0; d < layout.displays.size(); ++d) {
+    const wall::Display& display = layout.displays[d];
+    const auto tiles = wall::tilesOfDisplay(layout, static_cast<int>(d), o.tileSize);
+    std::printf("display %-8s %4dx%-4d at (%d, %d), wall process %d (rank %d)%s%s, %zu tiles:",
+                display.name.c_str(), display.rect.width(), display.rect.height(), display.rect.x0,
+                display.rect.y0, display.process, job.roles.rankOfProcess(display.process),
+                display.host.empty() ? "" : ", host ", display.host.c_str(), tiles.size());
+    for (const wall::DisplayTile& t : tiles)
+      std::printf(" %d@r%d", t.tileIndex,
+                  owner(t.tileIndex, static_cast<int>(active.size()), job.roles.renderRanks));
+    std::printf("\n");
+  }
+}
+
+}  // namespace app

@@ -1,0 +1,55 @@
+#pragma once
+// What one run of dfbwall is, as every rank sees it after setup: the options, the layout (when
+// there is a wall), and this rank's role.
+#include <mpi.h>
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "apps/Options.h"
+#include "dfb/Messenger.h"
+#include "renderers/Scene.h"
+#include "wall/Layout.h"
+#include "wall/Ranks.h"
+
+namespace app {
+
+struct Job {
+  Options options;
+  std::optional<wall::Layout> layout;
+  wall::RankRoles roles;  // without a wall: every rank renders
+  int worldRank = 0;
+  int canvasWidth = 0, canvasHeight = 0;
+  std::shared_ptr<const renderers::Scene> scene;  // render ranks only
+  bool gatherMode() const { return options.mode == "gather"; }
+  bool isWallRank() const { return roles.processOfRank(worldRank) >= 0; }
+};
+
+struct FrameRecord {
+  std::uint32_t frame = 0;
+  double frameMs = 0;                 // rank 0: from the start of this frame to the next one's
+  double renderMs = 0;                // slowest render rank: begin() .. last setTile()
+  double compositeMs = 0;             // slowest render rank: last setTile() .. frame complete
+  std::uint64_t rank0PixelBytes = 0;  // final pixels into rank 0 (the gather)
+  std::uint64_t wallBytesSent = 0;    // pieces sent to wall ranks, all render ranks
+  std::uint64_t tileBytesSent = 0;    // tile inputs between render ranks
+  std::uint64_t tilesRendered = 0;
+  std::uint64_t samples = 0;
+};
+
+// Render ranks: renders the frames, feeds the wall (route or gather), writes --image on rank 0.
+// Returns the records (complete on rank 0).
+std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger,
+                                       MPI_Comm renderComm);
+// Wall ranks: assembles, swaps and presents the frames of this process's displays.
+void runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm);
+
+// --dry-run on rank 0: canvas, displays, roles, and per display its tiles and their owners.
+void printDryRun(const Job& job);
+// --stats FILE.json on rank 0.
+void writeStats(const Job& job, const std::vector<FrameRecord>& frames);
+// --image on rank 0: PNG from RGBA8 or PFM from linear RGBA float.
+void writePfm(const std::string& path, const float* rgba, int width, int height);
+
+}  // namespace app

@@ -1,0 +1,120 @@
+#include "apps/Options.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <regex>
+
+namespace app {
+namespace {
+
+// "WxH" with positive integers, e.g. 1920x1080.
+std::string parseSize(const std::string& text, int& width, int& height) {
+  static const std::regex pattern(R"((\d{1,6})x(\d{1,6}))");
+  std::smatch m;
+  if (!std::regex_match(text, m, pattern))
+    return "--size must look like WIDTHxHEIGHT, e.g. 512x512";
+  width = std::stoi(m[1]);
+  height = std::stoi(m[2]);
+  if (width <= 0 || height <= 0) return "--size: width and height must be positive";
+  return {};
+}
+
+bool endsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+}  // namespace
+
+int parseOptions(int argc, char** argv, Options& o, bool print) {
+  CLI::App cli{
+      "dfbwall: path-traces a scene on MPI ranks and shows it on a display wall through the "
+      "Distributed FrameBuffer.\n  image: mpirun -np N dfbwall --scene S --size WxH --image "
+      "out.png\n"
+      "  wall:  mpirun -np R+W dfbwall --wall configs/walls/2x2.toml --offscreen --capture DIR"};
+  std::string size;
+  cli.add_option("--scene", o.scene, "FILE.toml or builtin:NAME (cornell, spheres)")
+      ->capture_default_str();
+  cli.add_option("--size", size, "image size WxH (not with --wall: the layout sets the canvas)");
+  cli.add_option("--spp", o.spp, "samples per pixel per frame")
+      ->check(CLI::Range(1, 1 << 16))
+      ->capture_default_str();
+  cli.add_option("--frames", o.frames, "frames to render, accumulated")
+      ->check(CLI::Range(1, 1 << 30))
+      ->capture_default_str();
+  cli.add_option("--seed", o.seed, "random seed")->capture_default_str();
+  cli.add_option("--image", o.image,
+                 "write the last frame on rank 0: .png (tone-mapped) or .pfm (linear)");
+  cli.add_option("--tile-size", o.tileSize, "tile size in pixels")
+      ->check(CLI::Range(4, 1024))
+      ->capture_default_str();
+  cli.add_option("--threads", o.threads, "threads per rank (0: all cores)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  cli.add_option("--distribution", o.distribution, "work distribution")
+      ->check(CLI::IsMember({"static", "roundrobin", "dynamic"}))
+      ->capture_default_str();
+  cli.add_option("--renderer", o.renderer, "renderer")
+      ->check(CLI::IsMember({"pathtracer", "primary", "pattern"}))
+      ->capture_default_str();
+  cli.add_option("--max-depth", o.maxDepth, "maximum path length")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  cli.add_option("--exposure", o.exposure, "exposure before tone mapping")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cli.add_flag("--filmic", o.filmic, "filmic tone curve instead of a clamp");
+
+  cli.add_option("--wall", o.wall, "wall layout (configs/walls/*.toml)");
+  cli.add_flag("--offscreen", o.offscreen, "present through OSMesa instead of windows");
+  cli.add_option("--capture", o.captureDir,
+                 "write each display's last frame (and a wall preview) under DIR");
+  cli.add_option("--capture-every", o.captureEvery, "capture every K-th frame too")
+      ->check(CLI::Range(0, 1 << 30));
+  cli.add_option("--stats", o.statsFile, "write per-frame statistics as JSON");
+  cli.add_option("--mode", o.mode,
+                 "route: tiles go straight to the displays; gather: through rank 0")
+      ->check(CLI::IsMember({"route", "gather"}))
+      ->capture_default_str();
+  cli.add_flag("--dry-run", o.dryRun, "validate, print the plan, render nothing");
+  cli.add_option("--frames-in-flight", o.framesInFlight, "frames rendered ahead of the wall")
+      ->check(CLI::Range(1, 8))
+      ->capture_default_str();
+  cli.add_flag("!--no-compress", o.compress, "send tiles and pieces uncompressed");
+  cli.add_option("--timeout", o.timeoutSeconds, "seconds before a stalled frame is an error")
+      ->check(CLI::Range(1, 86400))
+      ->capture_default_str();
+  cli.add_flag("--quiet", o.quiet, "no progress line");
+
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return print ? cli.exit(e) : 0;
+  } catch (const CLI::ParseError& e) {
+    if (print) std::fprintf(stderr, "dfbwall: error: %s (see --help)\n", e.what());
+    return 2;
+  }
+  auto fail = [&](const std::string& message) {
+    if (print) std::fprintf(stderr, "dfbwall: error: %s\n", message.c_str());
+    return 2;
+  };
+  if (!size.empty()) {
+    const std::string problem = parseSize(size, o.width, o.height);
+    if (!problem.empty()) return fail(problem + " (got '" + size + "')");
+    o.sizeGiven = true;
+  }
+  if (!o.wall.empty() && o.sizeGiven)
+    return fail("--size and --wall: the canvas of a wall is the bounding box of its displays");
+  if (!o.wall.empty() && !o.image.empty())
+    return fail(
+        "--image is for runs without --wall; use --capture DIR to save what the wall shows");
+  if (o.wall.empty() && (o.offscreen || !o.captureDir.empty() || o.mode != "route" || o.dryRun))
+    return fail("--offscreen, --capture, --mode and --dry-run need --wall FILE.toml");
+  if (!o.image.empty() && !endsWith(o.image, ".png") && !endsWith(o.image, ".pfm"))
+    return fail("--image " + o.image +
+                ": the name must end in .png (RGBA8) or .pfm (linear float)");
+  return -1;
+}
+
+}  // namespace app

@@ -1,0 +1,44 @@
+#pragma once
+// The dfbwall command line, parsed into plain values. Every rank parses the same arguments and
+// gets the same answer, so a bad option is caught everywhere at once.
+#include <cstdint>
+#include <string>
+
+namespace app {
+
+struct Options {
+  // Scene and rendering (the renderer issue).
+  std::string scene = "builtin:cornell";
+  int width = 512, height = 512;
+  bool sizeGiven = false;
+  int spp = 1;
+  int frames = 1;
+  std::uint64_t seed = 0;
+  std::string image;  // .png: tone-mapped RGBA8; .pfm: linear radiance
+  int tileSize = 64;
+  int threads = 0;
+  std::string distribution = "roundrobin";
+  std::string renderer = "pathtracer";
+  int maxDepth = 8;
+  float exposure = 1.0f;
+  bool filmic = false;
+
+  // The wall.
+  std::string wall;  // layout file; empty: no wall
+  bool offscreen = false;
+  std::string captureDir;
+  int captureEvery = 0;
+  std::string statsFile;
+  std::string mode = "route";  // route | gather
+  bool dryRun = false;
+  int framesInFlight = 2;
+  bool compress = true;
+  int timeoutSeconds = 60;
+  bool quiet = false;
+};
+
+// Parses argv. Returns an exit code to stop with (0 after --help) or -1 to go on; messages go to
+// stdout/stderr only when `print` (rank 0).
+int parseOptions(int argc, char** argv, Options& options, bool print);
+
+}  // namespace app

@@ -1,0 +1,164 @@
+// The render ranks' frame loop: pace against the wall, render through the DFB, feed the wall.
+#include <chrono>
+#include <cstdio>
+
+#include "apps/Job.h"
+#include "dfb/DistributedFrameBuffer.h"
+#include "renderers/FrameDriver.h"
+#include "renderers/Renderer.h"
+#include "renderers/WorkDistribution.h"
+#include "wall/DisplayRoutingOp.h"
+#include "wall/FrameCredits.h"
+#include "wall/PieceMessage.h"
+#include "wall/Png.h"
+#include "wall/Routing.h"
+
+namespace app {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msBetween(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+bool endsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// Gather mode's relay, as Tide-like walls do it: rank 0 has the whole image and sends each
+// display its rectangle.
+std::uint64_t relayToDisplays(const Job& job, dfb::Messenger& messenger, std::uint32_t frameId,
+                              const std::vector<std::uint32_t>& image) {
+  std::uint64_t bytes = 0;
+  const wall::Layout& layout = *job.layout;
+  for (size_t d = 0; d < layout.displays.size(); ++d) {
+    const dfb::Region& rect = layout.displays[d].rect;
+    dfb::Bytes piece = wall::packPiece(frameId, static_cast<int>(d),
+                                       dfb::Region{0, 0, rect.width(), rect.height()}, image.data(),
+                                       job.canvasWidth, rect.x0, rect.y0, job.options.compress);
+    bytes += piece.size();
+    messenger.send(job.roles.rankOfProcess(layout.displays[d].process), wall::kWallNodeObject,
+                   std::move(piece));
+  }
+  return bytes;
+}
+
+}  // namespace
+
+std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger,
+                                       MPI_Comm renderComm) {
+  const Options& o = job.options;
+  int renderRank = 0;
+  MPI_Comm_rank(renderComm, &renderRank);
+  const bool hasWall = job.layout.has_value();
+  const bool route = hasWall && !job.gatherMode();
+
+  renderers::RenderSettings settings;
+  settings.width = job.canvasWidth;
+  settings.height = job.canvasHeight;
+  settings.seed = o.seed;
+  settings.maxDepth = o.maxDepth;
+  const auto renderer = renderers::makeRenderer(o.renderer, *job.scene, settings);
+
+  renderers::FrameDriverOptions driving;
+  driving.distribution = renderers::distributionFromName(o.distribution);
+  driving.samplesPerPixel = static_cast<std::uint32_t>(o.spp);
+  driving.threads = o.threads;
+  dfb::DfbOptions dfbOptions;
+  dfbOptions.width = job.canvasWidth;
+  dfbOptions.height = job.canvasHeight;
+  dfbOptions.tileSize = o.tileSize;
+  dfbOptions.operation = dfb::accumulateOperation();
+  dfbOptions.toneMap.exposure = o.exposure;
+  dfbOptions.toneMap.filmic = o.filmic;
+  dfbOptions.frameTimeout = std::chrono::seconds(o.timeoutSeconds);
+  if (route) {
+    // Tiles no display shows are never rendered; the rest are owned where they are rendered.
+    driving.activeTiles = wall::tilesShownByAnyDisplay(*job.layout, o.tileSize);
+    dfbOptions.ownership = renderers::activeTileOwnership(driving.activeTiles);
+    dfbOptions.format = dfb::DisplayFormat::NONE;
+  } else if (hasWall || endsWith(o.image, ".png")) {
+    dfbOptions.format = dfb::DisplayFormat::RGBA8;
+  } else if (endsWith(o.image, ".pfm")) {
+    dfbOptions.format = dfb::DisplayFormat::RGBAF32;
+  } else {
+    dfbOptions.format = dfb::DisplayFormat::NONE;
+  }
+  renderers::FrameDriver driver(*renderer, driving);
+  driver.configure(dfbOptions);
+  dfb::DistributedFrameBuffer dfb(messenger, renderComm, dfbOptions);
+  std::shared_ptr<wall::DisplayRoutingOp> routing;
+  if (route) {
+    routing = std::make_shared<wall::DisplayRoutingOp>(messenger, *job.layout, job.roles,
+                                                       o.tileSize, o.compress);
+    dfb.addPixelOp(routing);
+  }
+  std::unique_ptr<wall::FrameCredits> credits;
+  if (hasWall && job.worldRank == 0) credits = std::make_unique<wall::FrameCredits>(messenger);
+  // Every object of every rank is registered before anyone sends.
+  MPI_Barrier(MPI_COMM_WORLD);
+
+  std::vector<FrameRecord> records;
+  const auto timeout = std::chrono::seconds(o.timeoutSeconds);
+  auto lastProgress = Clock::now();
+  const auto runStart = Clock::now();
+  Clock::time_point previousStart;
+  for (std::uint32_t frameId = 1; frameId <= static_cast<std::uint32_t>(o.frames); ++frameId) {
+    if (credits)
+      credits->waitForPresented(static_cast<std::int64_t>(frameId) - o.framesInFlight, timeout);
+    dfb::FrameInfo frame{frameId, 0};
+    MPI_Bcast(&frame, sizeof frame, MPI_BYTE, 0, renderComm);
+    const auto start = Clock::now();
+    if (!records.empty()) records.back().frameMs = msBetween(previousStart, start);
+    previousStart = start;
+
+    const renderers::FrameReport report = driver.renderFrame(dfb, frame);
+    const dfb::FrameStats stats = dfb.stats();
+    std::uint64_t wallBytes = routing ? routing->takeBytesSent() : 0;
+    if (hasWall && !route && job.worldRank == 0)
+      wallBytes += relayToDisplays(job, messenger, frameId, dfb.imageRgba8());
+
+    // One small reduction per frame for the statistics and the progress line.
+    double localMs[2] = {report.renderMs, stats.lastSetTileToCompleteMs}, maxMs[2] = {0, 0};
+    std::uint64_t localCounts[4] = {wallBytes, stats.tileBytesSent,
+                                    static_cast<std::uint64_t>(report.tilesRendered),
+                                    report.samples};
+    std::uint64_t sums[4] = {0, 0, 0, 0};
+    MPI_Reduce(localMs, maxMs, 2, MPI_DOUBLE, MPI_MAX, 0, renderComm);
+    MPI_Reduce(localCounts, sums, 4, MPI_UINT64_T, MPI_SUM, 0, renderComm);
+    FrameRecord record;
+    record.frame = frameId;
+    record.renderMs = maxMs[0];
+    record.compositeMs = maxMs[1];
+    record.rank0PixelBytes = renderRank == 0 ? stats.pixelBytesReceived : 0;
+    record.wallBytesSent = sums[0];
+    record.tileBytesSent = sums[1];
+    record.tilesRendered = sums[2];
+    record.samples = sums[3];
+    records.push_back(record);
+
+    if (job.worldRank == 0 && !o.quiet &&
+        (msBetween(lastProgress, Clock::now()) > 1000 ||
+         frameId == static_cast<std::uint32_t>(o.frames))) {
+      lastProgress = Clock::now();
+      const double seconds = msBetween(runStart, lastProgress) / 1000;
+      std::printf("frame %u/%d  %.2f fps  %u spp accumulated\n", frameId, o.frames,
+                  frameId / seconds, (dfb.accumulationId() + 1) * static_cast<unsigned>(o.spp));
+      std::fflush(stdout);
+    }
+  }
+  if (credits) credits->waitForPresented(o.frames, timeout);
+  if (!records.empty()) records.back().frameMs = msBetween(previousStart, Clock::now());
+
+  if (job.worldRank == 0 && !o.image.empty()) {
+    if (endsWith(o.image, ".png"))
+      wall::writePng(o.image, dfb.imageRgba8().data(), job.canvasWidth, job.canvasHeight);
+    else
+      writePfm(o.image, dfb.imageRgbaF32().data(), job.canvasWidth, job.canvasHeight);
+  }
+  return records;
+}
+
+}  // namespace app

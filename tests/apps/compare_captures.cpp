@@ -1,0 +1,70 @@
+// compare_captures LAYOUT CAPTURE_DIR FULL_CANVAS_PNG FRAME   (or: compare_captures --info LAYOUT)
+// Invariant 2 of DESIGN.md: every display's capture of frame FRAME equals its rectangle cut out
+// of a single-process render of the whole canvas, byte for byte; the wall preview exists and
+// shows the same pixels. Exit 0 when all match, 1 with a message naming the first mismatch.
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <string>
+
+#include "wall/Capture.h"
+#include "wall/Image.h"
+#include "wall/Layout.h"
+#include "wall/Png.h"
+
+int main(int argc, char** argv) {
+  if (argc == 3 && std::string(argv[1]) == "--info") {  // "W WIDTHxHEIGHT" for the test script
+    try {
+      const wall::Layout layout = wall::loadLayout(argv[2]);
+      std::printf("%d %dx%d\n", layout.processCount, layout.canvasWidth, layout.canvasHeight);
+      return 0;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "compare_captures: %s\n", e.what());
+      return 1;
+    }
+  }
+  if (argc != 5) {
+    std::fprintf(stderr, "usage: %s LAYOUT CAPTURE_DIR FULL_CANVAS_PNG FRAME\n", argv[0]);
+    return 2;
+  }
+  try {
+    const wall::Layout layout = wall::loadLayout(argv[1]);
+    const std::string dir = argv[2];
+    const wall::Image full = wall::readPng(argv[3]);
+    const auto frame = static_cast<std::uint32_t>(std::stoul(argv[4]));
+    if (full.width != layout.canvasWidth || full.height != layout.canvasHeight) {
+      std::fprintf(stderr, "reference is %dx%d, the canvas %dx%d\n", full.width, full.height,
+                   layout.canvasWidth, layout.canvasHeight);
+      return 1;
+    }
+    const wall::Image preview = wall::readPng(wall::wallPreviewPath(dir, frame));
+    for (const wall::Display& d : layout.displays) {
+      const wall::Image expected = wall::crop(full, d.rect);
+      const wall::Image got = wall::readPng(wall::displayCapturePath(dir, d.name, frame));
+      const wall::Image shown = wall::crop(preview, d.rect);
+      for (const auto* image : {&got, &shown}) {
+        if (image->width != expected.width || image->height != expected.height) {
+          std::fprintf(stderr, "display %s: capture is %dx%d, its rectangle %dx%d\n",
+                       d.name.c_str(), image->width, image->height, expected.width,
+                       expected.height);
+          return 1;
+        }
+        for (int y = 0; y < expected.height; ++y)
+          for (int x = 0; x < expected.width; ++x)
+            if (image->at(x, y) != expected.at(x, y)) {
+              std::fprintf(stderr,
+                           "display %s (%s), pixel (%d, %d): 0x%08x, single process 0x%08x\n",
+                           d.name.c_str(), image == &got ? "capture" : "wall preview", x, y,
+                           image->at(x, y), expected.at(x, y));
+              return 1;
+            }
+      }
+    }
+    std::printf("%zu displays of frame %u equal the single-process render\n",
+                layout.displays.size(), frame);
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "compare_captures: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# End-to-end tests of the dfbwall executable on real ranks, offscreen. One scenario per call:
+#   wall_test.sh equals-single LAYOUT RENDER_RANKS [options for both runs...] [-- wall-only options]
+#   wall_test.sh rank0-bytes   LAYOUT RENDER_RANKS MODE
+#   wall_test.sh same-frames   LAYOUT RENDER_RANKS
+#   wall_test.sh fails         EXPECTED_TEXT NPROCS [dfbwall options...]
+#   wall_test.sh window        LAYOUT RENDER_RANKS
+# Needs DFBWALL (the executable), COMPARE (compare_captures) and MPIEXEC in the environment.
+set -euo pipefail
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+mpi() { local n=$1; shift; "$MPIEXEC" -n "$n" --oversubscribe --bind-to none "$@"; }
+processes() { "$COMPARE" --info "$1" | cut -d' ' -f1; }  # wall processes of a layout
+canvas() { "$COMPARE" --info "$1" | cut -d' ' -f2; }     # its canvas, WxH
+
+scenario=$1; shift
+case "$scenario" in
+  equals-single)
+    layout=$1 renders=$2; shift 2
+    w=$(processes "$layout"); size=$(canvas "$layout")
+    [ -n "$w" ] && [ -n "$size" ] || { echo "could not read $layout with --dry-run"; exit 1; }
+    common=(--frames 3 --spp 2 --seed 11) wallOnly=()
+    while [ $# -gt 0 ] && [ "$1" != "--" ]; do common+=("$1"); shift; done
+    [ $# -gt 0 ] && shift && wallOnly=("$@")
+    mpi $((renders + w)) "$DFBWALL" --wall "$layout" --offscreen --capture "$work/cap" --quiet "${common[@]}" ${wallOnly[@]+"${wallOnly[@]}"}
+    mpi 1 "$DFBWALL" --size "$size" --image "$work/full.png" --quiet "${common[@]}"
+    "$COMPARE" "$layout" "$work/cap" "$work/full.png" 3
+    ;;
+  rank0-bytes)
+    layout=$1 renders=$2 mode=$3
+    w=$(processes "$layout"); size=$(canvas "$layout")
+    mpi $((renders + w)) "$DFBWALL" --wall "$layout" --offscreen --mode "$mode" --renderer pattern \
+      --frames 4 --stats "$work/stats.json" --quiet
+    values=$(grep -o '"rank0_pixel_bytes_received": [0-9]*' "$work/stats.json" | awk '{print $2}' | sort -u)
+    frames=$(grep -c '"frame":' "$work/stats.json")
+    [ "$frames" -eq 4 ] || { echo "stats have $frames frames, expected 4"; exit 1; }
+    if [ "$mode" = route ]; then expected=0; else expected=$(( ${size%x*} * ${size#*x} * 4 )); fi
+    [ "$values" = "$expected" ] || { echo "rank0_pixel_bytes_received: '$values', expected $expected every frame"; exit 1; }
+    grep -q '"median_frame_ms"' "$work/stats.json" || { echo "no summary in the stats"; exit 1; }
+    echo "$mode: rank 0 received $expected pixel bytes in each of 4 frames"
+    ;;
+  same-frames)
+    layout=$1 renders=$2
+    w=$(processes "$layout")
+    mpi $((renders + w)) "$DFBWALL" --wall "$layout" --offscreen --renderer pattern --frames 5 \
+      --capture "$work/cap" --capture-every 2 --quiet
+    expected="frame-000002.png frame-000004.png frame-000005.png"
+    for dir in "$work"/cap/*/; do
+      got=$(ls "$dir" | tr '\n' ' ' | sed 's/ $//')
+      [ "$got" = "$expected" ] || { echo "$dir holds '$got', expected '$expected'"; exit 1; }
+    done
+    [ -f "$work/cap/wall-000002.png" ] && [ -f "$work/cap/wall-000004.png" ] && [ -f "$work/cap/wall-000005.png" ] \
+      || { echo "wall previews missing"; ls "$work/cap"; exit 1; }
+    [ -z "$(find "$work/cap" -name '*.partial' -o -name '*.tmp*')" ] || { echo "temporary files left"; exit 1; }
+    echo "every display captured frames 2, 4 and 5, with previews"
+    ;;
+  fails)
+    text=$1 n=$2; shift 2
+    start=$(date +%s)
+    set +e
+    output=$(timeout 30 "$MPIEXEC" -n "$n" --oversubscribe --bind-to none "$DFBWALL" "$@" 2>&1)
+    code=$?
+    set -e
+    elapsed=$(( $(date +%s) - start ))
+    echo "$output"
+    [ "$code" -ne 0 ] || { echo "FAIL: exit code 0 for bad input"; exit 1; }
+    [ "$code" -ne 124 ] || { echo "FAIL: hung (killed after 30 s)"; exit 1; }
+    grep -qF -- "$text" <<<"$output" || { echo "FAIL: the message lacks '$text'"; exit 1; }
+    [ "$(grep -c 'dfbwall: error' <<<"$output")" -eq 1 ] || { echo "FAIL: expected exactly one error line"; exit 1; }
+    grep -q 'core dumped\|Segmentation\|Aborted' <<<"$output" && { echo "FAIL: crashed"; exit 1; }
+    echo "exit $code after ${elapsed}s with the expected message"
+    ;;
+  window)
+    layout=$1 renders=$2
+    w=$(processes "$layout")
+    mpi $((renders + w)) "$DFBWALL" --wall "$layout" --offscreen --capture "$work/off" --frames 2 --quiet
+    xvfb-run -a -s "-screen 0 1280x1024x24" \
+      "$MPIEXEC" -n $((renders + w)) --oversubscribe --bind-to none -x DISPLAY -x XAUTHORITY \
+      "$DFBWALL" --wall "$layout" --capture "$work/win" --frames 2 --quiet
+    # The window's pixels are read back from the X server: they must equal the offscreen frame.
+    "$COMPARE" "$layout" "$work/win" "$work/off/wall-000002.png" 2
+    ;;
+  *) echo "unknown scenario $scenario"; exit 2 ;;
+esac

@@ -1,0 +1,29 @@
+#include "wall/DisplayRoutingOp.h"
+
+#include "wall/PieceMessage.h"
+
+namespace wall {
+
+DisplayRoutingOp::DisplayRoutingOp(dfb::Messenger& messenger, const Layout& layout,
+                                   const RankRoles& roles, int tileSize, bool planeDelta)
+    : messenger_(messenger), planeDelta_(planeDelta) {
+  const CanvasTiles tiles(layout, tileSize);
+  piecesOfTile_.resize(static_cast<size_t>(tiles.count()));
+  for (int t = 0; t < tiles.count(); ++t)
+    piecesOfTile_[static_cast<size_t>(t)] = piecesOf(layout, tiles.region(t));
+  for (const Display& d : layout.displays) rankOfDisplay_.push_back(roles.rankOfProcess(d.process));
+}
+
+void DisplayRoutingOp::process(dfb::FinishedTile& tile) {
+  const auto& pieces = piecesOfTile_.at(static_cast<size_t>(tile.tileIndex));
+  for (const Piece& piece : pieces) {
+    dfb::Bytes bytes =
+        packPiece(tile.frameId, piece.display, piece.local, tile.rgba8->data(), tile.region.width(),
+                  piece.canvas.x0 - tile.region.x0, piece.canvas.y0 - tile.region.y0, planeDelta_);
+    bytesSent_ += bytes.size();
+    messenger_.send(rankOfDisplay_[static_cast<size_t>(piece.display)], kWallNodeObject,
+                    std::move(bytes));
+  }
+}
+
+}  // namespace wall

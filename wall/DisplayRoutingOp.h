@@ -1,0 +1,37 @@
+#pragma once
+// The display-routing pixel op (paper 4.4): on the tile owner, right after tone mapping, cut the
+// finished tile at display borders and send each piece, RGBA8, to the wall rank that drives its
+// display. Pixels no display shows (behind bezels) are dropped. With the DFB's display format
+// NONE, no pixel passes through rank 0.
+//
+// Thread-safe: the DFB runs it for different tiles concurrently.
+#include <atomic>
+#include <vector>
+
+#include "dfb/Messenger.h"
+#include "dfb/PixelOp.h"
+#include "wall/Layout.h"
+#include "wall/Ranks.h"
+#include "wall/Routing.h"
+
+namespace wall {
+
+class DisplayRoutingOp : public dfb::PixelOp {
+ public:
+  // `tileSize` must be the DFB's; the cut of every tile is computed once, here.
+  DisplayRoutingOp(dfb::Messenger& messenger, const Layout& layout, const RankRoles& roles,
+                   int tileSize, bool planeDelta);
+  void process(dfb::FinishedTile& tile) override;
+
+  // Bytes handed to the messenger (headers included, before Snappy) since the last call.
+  std::uint64_t takeBytesSent() { return bytesSent_.exchange(0); }
+
+ private:
+  dfb::Messenger& messenger_;
+  std::vector<std::vector<Piece>> piecesOfTile_;
+  std::vector<int> rankOfDisplay_;
+  bool planeDelta_;
+  std::atomic<std::uint64_t> bytesSent_{0};
+};
+
+}  // namespace wall

@@ -1,0 +1,38 @@
+#pragma once
+// Frame pacing between the wall and the renderers (dw2's "frames in flight"): wall process 0
+// acknowledges each frame once every display has presented it, and render rank 0 waits for the
+// acknowledgement of frame F - K before it starts frame F. Rendering F+1 overlaps presenting F,
+// and no wall rank ever buffers more than K + 1 frames.
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+
+#include "dfb/Messenger.h"
+
+namespace wall {
+
+// Lives on render rank 0, registered under kFrameCreditsObject.
+class FrameCredits : public dfb::MessageHandler {
+ public:
+  explicit FrameCredits(dfb::Messenger& messenger);
+  ~FrameCredits() override;
+
+  // Blocks until frame `frameId` has been presented on every display (ids below 1 return at
+  // once). Throws wall::Error after `timeout`.
+  void waitForPresented(std::int64_t frameId, std::chrono::milliseconds timeout);
+  std::int64_t lastPresented() const;
+
+  void incoming(int fromRank, dfb::Bytes&& payload) override;
+
+ private:
+  dfb::Messenger& messenger_;
+  mutable std::mutex mutex_;
+  std::condition_variable presented_;
+  std::int64_t lastPresented_ = 0;
+};
+
+// Sent by wall process 0 to render rank 0 (world rank 0).
+void acknowledgeFrame(dfb::Messenger& messenger, std::uint32_t frameId);
+
+}  // namespace wall

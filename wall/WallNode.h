@@ -1,0 +1,88 @@
+#pragma once
+// A wall process: receives the pieces of its displays' frames, assembles them in per-frame back
+// buffers, and presents a frame only when every display of every wall process has it complete
+// (swap barrier among the wall ranks only), then acknowledges it to the renderers.
+//
+// The layout says exactly which pieces each display gets per frame (one per canvas tile that
+// touches it, or one whole-display piece in gather mode), so completion is counted in pieces,
+// never in pixels, and a duplicate is an error rather than a miscount.
+//
+// Threading: incoming() runs on the messenger's inbox thread; everything else on the thread that
+// made the node, which owns the presenters (GL contexts).
+#include <mpi.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "dfb/Messenger.h"
+#include "wall/Image.h"
+#include "wall/Layout.h"
+#include "wall/Presenter.h"
+
+namespace wall {
+
+struct WallNodeOptions {
+  int tileSize = 64;
+  bool gatherMode = false;  // one whole-display piece per frame from rank 0
+  std::string captureDir;   // empty: no captures
+  int captureEvery = 0;     // capture every K-th frame; 0: only the last
+  std::uint32_t lastFrame = 0;
+  std::chrono::milliseconds timeout{60000};
+};
+
+struct PresentReport {
+  double waitMs = 0;     // until every piece of this process's displays had arrived
+  double barrierMs = 0;  // in the swap barrier
+  double presentMs = 0;  // drawing on every display
+  std::uint64_t bytesReceived = 0;
+};
+
+class WallNode : public dfb::MessageHandler {
+ public:
+  // Collective over `wallComm` (the wall ranks). `presenters` has one per display of `process`,
+  // in layout.displaysOfProcess(process) order.
+  WallNode(dfb::Messenger& messenger, const Layout& layout, int process, MPI_Comm wallComm,
+           std::vector<std::unique_ptr<Presenter>> presenters, WallNodeOptions options);
+  ~WallNode() override;
+
+  // Waits for frame `frameId` on this process's displays, joins the swap barrier, presents,
+  // captures when asked, and (process 0) acknowledges the frame. Throws wall::Error on timeout
+  // or a protocol error.
+  PresentReport presentFrame(std::uint32_t frameId);
+
+  void incoming(int fromRank, dfb::Bytes&& payload) override;
+
+ private:
+  struct Slot {
+    std::vector<Image> displays;  // by position in mine_
+    std::vector<int> received;
+    int displaysComplete = 0;
+  };
+  Slot& slotFor(std::uint32_t frameId);  // with mutex_ held
+  void capture(std::uint32_t frameId);
+
+  dfb::Messenger& messenger_;
+  const Layout& layout_;
+  int process_;
+  MPI_Comm comm_ = MPI_COMM_NULL;
+  std::vector<std::unique_ptr<Presenter>> presenters_;
+  WallNodeOptions options_;
+  std::vector<int> mine_;               // display indices of this process
+  std::vector<int> positionOfDisplay_;  // layout index -> position in mine_, or -1
+  std::vector<int> expectedPieces_;     // by position in mine_
+
+  std::mutex mutex_;
+  std::condition_variable complete_;
+  std::map<std::uint32_t, Slot> slots_;
+  std::vector<Slot> spare_;  // buffers of presented frames, reused
+  std::int64_t lastPresented_ = 0;
+  std::string error_;
+  std::uint64_t bytesReceived_ = 0;
+};
+
+}  // namespace wall
