@@ -71,6 +71,15 @@ struct Messenger::Impl {
       rawBytesSent{0}, wireBytesSent{0}, rawBytesReceived{0}, wireBytesReceived{0},
       messagesCompressed{0}, unknownReceiver{0}, handlerErrors{0};
 
+  mutable std::mutex trafficMutex;
+  std::unordered_map<ObjectId, ObjectTraffic> traffic;
+  void countTraffic(ObjectId id, std::uint64_t sent, std::uint64_t received) {
+    std::lock_guard lock(trafficMutex);
+    ObjectTraffic& t = traffic[id];
+    t.bytesSent += sent;
+    t.bytesReceived += received;
+  }
+
   std::thread mpiThread, inboxThread;
   bool stopped = false;
 
@@ -167,6 +176,8 @@ void Messenger::Impl::mpiLoop() {
       receiveBuffers.pop_front();
       messagesReceived++;
       wireBytesReceived += packet.wire.size();
+      if (packet.wire.size() >= sizeof(WireHeader))
+        countTraffic(readHeader(packet.wire).object, 0, packet.wire.size());
       pushInbox(std::move(packet));
       active = true;
     }
@@ -324,6 +335,7 @@ void Messenger::send(int toRank, ObjectId id, Bytes payload) {
     return;
   }
   impl_->wireBytesSent += wire.size();
+  impl_->countTraffic(id, wire.size(), 0);
   impl_->sendsInFlight++;
   {
     std::lock_guard lock(impl_->outboxMutex);
@@ -377,6 +389,12 @@ MessengerCounters Messenger::counters() const {
   return {i.messagesSent,    i.messagesReceived, i.messagesHandled,   i.rawBytesSent,
           i.wireBytesSent,   i.rawBytesReceived, i.wireBytesReceived, i.messagesCompressed,
           i.unknownReceiver, i.handlerErrors};
+}
+
+Messenger::ObjectTraffic Messenger::traffic(ObjectId id) const {
+  std::lock_guard lock(impl_->trafficMutex);
+  auto found = impl_->traffic.find(id);
+  return found == impl_->traffic.end() ? ObjectTraffic{} : found->second;
 }
 
 void Messenger::setErrorCallback(ErrorCallback callback) {

@@ -80,6 +80,12 @@ class Messenger {
   void stop();
 
   MessengerCounters counters() const;
+  // Traffic of one distributed object between ranks, on the wire (after compression, headers
+  // included): what this rank sent to that id on other ranks, and what it received for it.
+  struct ObjectTraffic {
+    std::uint64_t bytesSent = 0, bytesReceived = 0;
+  };
+  ObjectTraffic traffic(ObjectId id) const;
   // Default: print to stderr with the rank.
   void setErrorCallback(ErrorCallback callback);
 

@@ -71,6 +71,10 @@ TEST_P(MessengerRoundTrip, EveryRankReachesEveryRankIntact) {
   const MessengerCounters counters = messenger.counters();
   EXPECT_EQ(counters.unknownReceiver, 0u);
   EXPECT_EQ(counters.handlerErrors, 0u);
+  // The only object in use carries all the traffic between ranks.
+  EXPECT_EQ(messenger.traffic(11).bytesSent, counters.wireBytesSent);
+  EXPECT_EQ(messenger.traffic(11).bytesReceived, counters.wireBytesReceived);
+  EXPECT_EQ(messenger.traffic(12).bytesSent, 0u);
   if (size > 1) {
     if (compress) {
       EXPECT_GT(counters.messagesCompressed, 0u);
