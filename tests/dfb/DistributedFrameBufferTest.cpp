@@ -16,19 +16,13 @@
 #include "dfb/Error.h"
 #include "dfb/TileMessage.h"
 
+#include "tests/MpiTestUtil.h"
+
 namespace dfb {
 namespace {
 
-int worldRank() {
-  int r = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
-int worldSize() {
-  int s = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &s);
-  return s;
-}
+using testutil::worldRank;
+using testutil::worldSize;
 
 constexpr int kWidth = 150, kHeight = 100, kTileSize = 32;  // edge tiles are partial
 

@@ -10,19 +10,13 @@
 #include <random>
 #include <vector>
 
+#include "tests/MpiTestUtil.h"
+
 namespace dfb {
 namespace {
 
-int worldRank() {
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  return rank;
-}
-int worldSize() {
-  int size = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  return size;
-}
+using testutil::worldRank;
+using testutil::worldSize;
 
 // A payload whose bytes depend on (sender, receiver, index), so corruption shows.
 Bytes makePayload(int from, int to, int index, size_t size, bool compressible) {
