@@ -5,6 +5,7 @@
 #   wall_test.sh same-frames   LAYOUT RENDER_RANKS
 #   wall_test.sh fails         EXPECTED_TEXT NPROCS [dfbwall options...]
 #   wall_test.sh window        LAYOUT RENDER_RANKS
+#   wall_test.sh dry-run       LAYOUT RENDER_RANKS
 # Needs DFBWALL (the executable), COMPARE (compare_captures) and MPIEXEC in the environment.
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
@@ -81,6 +82,19 @@ case "$scenario" in
       "$DFBWALL" --wall "$layout" --capture "$work/win" --frames 2 --quiet
     # The window's pixels are read back from the X server: they must equal the offscreen frame.
     "$COMPARE" "$layout" "$work/win" "$work/off/wall-000002.png" 2
+    ;;
+  dry-run)
+    layout=$1 renders=$2
+    w=$(processes "$layout"); size=$(canvas "$layout")
+    output=$(mpi $((renders + w)) "$DFBWALL" --wall "$layout" --dry-run --tile-size 64)
+    echo "$output"
+    grep -q "canvas $size, " <<<"$output" || { echo "FAIL: no canvas $size"; exit 1; }
+    grep -q "ranks: 0..$((renders - 1)) render, $renders..$((renders + w - 1)) wall" <<<"$output" \
+      || { echo "FAIL: rank roles"; exit 1; }
+    # Every listed tile names an owner among the render ranks.
+    owners=$(grep '^display ' <<<"$output" | grep -o '@r[0-9]*' | sort -u | tr -d '@r')
+    for o in $owners; do [ "$o" -lt "$renders" ] || { echo "FAIL: owner rank $o is not a render rank"; exit 1; }; done
+    [ -n "$owners" ] || { echo "FAIL: no tiles listed"; exit 1; }
     ;;
   *) echo "unknown scenario $scenario"; exit 2 ;;
 esac
