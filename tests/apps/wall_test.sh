@@ -6,6 +6,7 @@
 #   wall_test.sh fails         EXPECTED_TEXT NPROCS [dfbwall options...]
 #   wall_test.sh window        LAYOUT RENDER_RANKS
 #   wall_test.sh dry-run       LAYOUT RENDER_RANKS
+#   wall_test.sh rank-dies     LAYOUT RENDER_RANKS
 # Needs DFBWALL (the executable), COMPARE (compare_captures) and MPIEXEC in the environment.
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
@@ -95,6 +96,27 @@ case "$scenario" in
     owners=$(grep '^display ' <<<"$output" | grep -o '@r[0-9]*' | sort -u | tr -d '@r')
     for o in $owners; do [ "$o" -lt "$renders" ] || { echo "FAIL: owner rank $o is not a render rank"; exit 1; }; done
     [ -n "$owners" ] || { echo "FAIL: no tiles listed"; exit 1; }
+    ;;
+  rank-dies)
+    # Invariant 6: a wall rank killed mid-run ends the job with an error, it does not hang it.
+    layout=$1 renders=$2
+    w=$(processes "$layout")
+    "$MPIEXEC" -n $((renders + w)) --oversubscribe --bind-to none "$DFBWALL" --wall "$layout" \
+      --offscreen --renderer pattern --frames 1000000 --quiet --timeout 5 >"$work/log" 2>&1 &
+    job=$!
+    sleep 2
+    victim=$(pgrep -P "$job" -x dfbwall | tail -n 1)
+    [ -n "$victim" ] || { echo "FAIL: no rank to kill"; cat "$work/log"; exit 1; }
+    kill -9 "$victim"
+    start=$(date +%s)
+    set +e
+    for _ in $(seq 1 60); do kill -0 "$job" 2>/dev/null || break; sleep 0.5; done
+    if kill -0 "$job" 2>/dev/null; then kill -9 "$job"; echo "FAIL: job still running 30 s after a rank died"; exit 1; fi
+    wait "$job"
+    code=$?
+    set -e
+    [ "$code" -ne 0 ] || { echo "FAIL: exit code 0 after a rank died"; exit 1; }
+    echo "job ended with exit $code $(( $(date +%s) - start )) s after rank $victim was killed"
     ;;
   *) echo "unknown scenario $scenario"; exit 2 ;;
 esac
