@@ -10,6 +10,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
 
 namespace dfb {
@@ -356,15 +357,10 @@ void Messenger::quiesce() {
     MPI_Request request;
     checkMpi(MPI_Iallreduce(local, global, 2, MPI_UINT64_T, MPI_SUM, impl_->control, &request),
              "MPI_Iallreduce");
-    for (int flag = 0; !flag;) {
-      MPI_Test(&request, &flag, MPI_STATUS_IGNORE);
-      if (flag) break;
-      if (Clock::now() > deadline)
-        throw Error("messaging did not quiesce within " +
-                    std::to_string(impl_->options.quiesceTimeout.count()) +
-                    " ms: another rank is not answering");
-      std::this_thread::sleep_for(std::chrono::microseconds(20));
-    }
+    waitWithDeadline(request, deadline,
+                     "messaging did not quiesce within " +
+                         std::to_string(impl_->options.quiesceTimeout.count()) +
+                         " ms: another rank is not answering");
     if (global[0] == global[1] && global[0] == previous[0] && global[1] == previous[1]) return;
     previous[0] = global[0];
     previous[1] = global[1];

@@ -1,0 +1,20 @@
+#include "dfb/BoundedWait.h"
+
+#include <thread>
+
+#include "dfb/Error.h"
+
+namespace dfb {
+
+void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_point deadline,
+                      const std::string& timeoutMessage) {
+  // Short sleeps: other ranks share these cores, and a collective rarely completes at once.
+  for (int done = 0;;) {
+    checkMpi(MPI_Test(&request, &done, MPI_STATUS_IGNORE), "MPI_Test");
+    if (done) return;
+    if (std::chrono::steady_clock::now() > deadline) throw Error(timeoutMessage);
+    std::this_thread::sleep_for(std::chrono::microseconds(20));
+  }
+}
+
+}  // namespace dfb
