@@ -4,10 +4,15 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <sys/resource.h>
+
 #include <atomic>
+#include <chrono>
+#include <cstdio>
 #include <map>
 #include <mutex>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include "tests/MpiTestUtil.h"
@@ -160,6 +165,25 @@ TEST(Messenger, QuiesceWaitsForMessagesSentByHandlers) {
   int total = 0, mine = relay.seen.load();
   MPI_Allreduce(&mine, &total, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
   EXPECT_EQ(total, worldSize() * (kHops + 1));
+  messenger.stop();
+}
+
+double processCpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+// Ranks share cores: an idle messenger must sleep, not spin its MPI thread.
+TEST(Messenger, IdleMessengerBacksOffInsteadOfSpinning) {
+  Messenger messenger(MPI_COMM_WORLD);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let it settle into idling
+  const double before = processCpuSeconds();
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  const double used = processCpuSeconds() - before;
+  EXPECT_LT(used, 0.25) << "an idle second cost " << used << " s of CPU";
+  std::printf("idle messenger: %.1f ms of CPU per second\n", 1000 * used);
   messenger.stop();
 }
 
