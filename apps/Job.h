@@ -36,19 +36,43 @@ struct FrameRecord {
   std::uint64_t tileBytesSent = 0;    // tile inputs between render ranks
   std::uint64_t tilesRendered = 0;
   std::uint64_t samples = 0;
+  std::int64_t lastSetTileNs = 0;  // steady_clock, latest over render ranks
+  // steady_clock time the last display had every piece (wall ranks, filled on rank 0 at the end
+  // of the run); minus lastSetTileNs it is the compositing time. One host's clock: on a cluster
+  // the difference also holds the hosts' clock offset.
+  std::int64_t displaysCompleteNs = 0;
+};
+
+// Where one rank's time went over the whole run, in milliseconds summed over tiles or frames,
+// and its peak resident memory. Render ranks fill the first stages, wall ranks the last.
+struct RankTotals {
+  static constexpr int kStages = 12;
+  static constexpr const char* kStageNames[kStages] = {
+      "render",       "tile_unpack",  "tile_operation", "tone_map",  "cut",     "send",
+      "gather_relay", "piece_unpack", "assemble",       "wall_wait", "barrier", "present"};
+  double stageMs[kStages] = {};
+  double peakRssKiB = 0;
+  double role = 0;  // 0: render, 1: wall (a double so the whole struct gathers as doubles)
 };
 
 // Render ranks: renders the frames, feeds the wall (route or gather), writes --image on rank 0.
 // Returns the records (complete on rank 0).
 std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger,
-                                       MPI_Comm renderComm);
+                                       MPI_Comm renderComm, RankTotals& totals);
 // Wall ranks: assembles, swaps and presents the frames of this process's displays.
-void runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm);
+// Returns, per frame, the steady_clock time its last piece arrived on this rank.
+std::vector<std::int64_t> runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm,
+                                      RankTotals& totals);
+
+// The peak resident set of this process (VmHWM), in KiB; 0 where /proc is missing.
+double peakRssKiB();
 
 // --dry-run on rank 0: canvas, displays, roles, and per display its tiles and their owners.
 void printDryRun(const Job& job);
 // --stats FILE.json on rank 0.
-void writeStats(const Job& job, const std::vector<FrameRecord>& frames);
+// `ranks` has every rank's totals, by world rank.
+void writeStats(const Job& job, const std::vector<FrameRecord>& frames,
+                const std::vector<RankTotals>& ranks);
 // --image on rank 0: PNG from RGBA8 or PFM from linear RGBA float.
 void writePfm(const std::string& path, const float* rgba, int width, int height);
 

@@ -65,6 +65,11 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cli.add_flag("--filmic", o.filmic, "filmic tone curve instead of a clamp");
+  cli.add_option("--orbit", o.orbit,
+                 "camera orbit, DEGREES per frame about the look-at point around the up axis "
+                 "(each frame restarts accumulation)")
+      ->check(CLI::Range(-360.0f, 360.0f))
+      ->capture_default_str();
 
   cli.add_option("--wall", o.wall, "wall layout (configs/walls/*.toml)");
   cli.add_flag("--offscreen", o.offscreen, "present through OSMesa instead of windows");

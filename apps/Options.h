@@ -22,6 +22,7 @@ struct Options {
   int maxDepth = 8;
   float exposure = 1.0f;
   bool filmic = false;
+  float orbit = 0.0f;  // degrees per frame about the look-at point; each frame a new epoch
 
   // The wall.
   std::string wall;  // layout file; empty: no wall

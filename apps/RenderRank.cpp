@@ -48,7 +48,7 @@ std::uint64_t relayToDisplays(const Job& job, dfb::Messenger& messenger, std::ui
 }  // namespace
 
 std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger,
-                                       MPI_Comm renderComm) {
+                                       MPI_Comm renderComm, RankTotals& totals) {
   const Options& o = job.options;
   int renderRank = 0;
   MPI_Comm_rank(renderComm, &renderRank);
@@ -60,6 +60,7 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
   settings.height = job.canvasHeight;
   settings.seed = o.seed;
   settings.maxDepth = o.maxDepth;
+  settings.orbitDegreesPerFrame = o.orbit;
   const auto renderer = renderers::makeRenderer(o.renderer, *job.scene, settings);
 
   renderers::FrameDriverOptions driving;
@@ -108,7 +109,9 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
   for (std::uint32_t frameId = 1; frameId <= static_cast<std::uint32_t>(o.frames); ++frameId) {
     if (credits)
       credits->waitForPresented(static_cast<std::int64_t>(frameId) - o.framesInFlight, timeout);
-    dfb::FrameInfo frame{frameId, 0};
+    // A moving camera makes every frame its own accumulation epoch; the renderers compute the
+    // camera from the frame id, so no rank needs more than this broadcast.
+    dfb::FrameInfo frame{frameId, o.orbit != 0.0f ? frameId : 0u};
     MPI_Bcast(&frame, sizeof frame, MPI_BYTE, 0, renderComm);
     const auto start = Clock::now();
     if (!records.empty()) records.back().frameMs = msBetween(previousStart, start);
@@ -117,8 +120,19 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
     const renderers::FrameReport report = driver.renderFrame(dfb, frame);
     const dfb::FrameStats stats = dfb.stats();
     std::uint64_t wallBytes = routing ? routing->takeBytesSent() : 0;
+    const auto relayStart = Clock::now();
     if (hasWall && !route && job.worldRank == 0)
       wallBytes += relayToDisplays(job, messenger, frameId, dfb.imageRgba8());
+    totals.stageMs[6] += msBetween(relayStart, Clock::now());
+    totals.stageMs[0] += report.renderMs;
+    totals.stageMs[1] += stats.unpackMs;
+    totals.stageMs[2] += stats.operationMs;
+    totals.stageMs[3] += stats.toneMapMs;
+    if (routing) {
+      const auto ns = routing->takeStageNs();
+      totals.stageMs[4] += static_cast<double>(ns.cut) * 1e-6;
+      totals.stageMs[5] += static_cast<double>(ns.send) * 1e-6;
+    }
 
     // One small reduction per frame for the statistics and the progress line.
     double localMs[2] = {report.renderMs, stats.lastSetTileToCompleteMs}, maxMs[2] = {0, 0};
@@ -128,6 +142,8 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
     std::uint64_t sums[4] = {0, 0, 0, 0};
     MPI_Reduce(localMs, maxMs, 2, MPI_DOUBLE, MPI_MAX, 0, renderComm);
     MPI_Reduce(localCounts, sums, 4, MPI_UINT64_T, MPI_SUM, 0, renderComm);
+    std::int64_t lastSetTile = 0;
+    MPI_Reduce(&stats.lastSetTileNs, &lastSetTile, 1, MPI_INT64_T, MPI_MAX, 0, renderComm);
     FrameRecord record;
     record.frame = frameId;
     record.renderMs = maxMs[0];
@@ -137,6 +153,7 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
     record.tileBytesSent = sums[1];
     record.tilesRendered = sums[2];
     record.samples = sums[3];
+    record.lastSetTileNs = lastSetTile;
     records.push_back(record);
 
     if (job.worldRank == 0 && !o.quiet &&

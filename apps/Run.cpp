@@ -52,6 +52,28 @@ std::string setUp(Job& job, int worldSize) {
   }
 }
 
+// Every rank's totals to rank 0, and the displays' completion times into rank 0's records.
+// Collective over MPI_COMM_WORLD; called by every rank when --stats is given.
+std::vector<RankTotals> collectTotals(const Job& job, RankTotals mine,
+                                      std::vector<FrameRecord>& frames,
+                                      const std::vector<std::int64_t>& completeNs) {
+  int size = 0;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  mine.peakRssKiB = peakRssKiB();
+  std::vector<RankTotals> all(job.worldRank == 0 ? static_cast<size_t>(size) : 0);
+  static_assert(sizeof(RankTotals) == (RankTotals::kStages + 2) * sizeof(double));
+  MPI_Gather(&mine, RankTotals::kStages + 2, MPI_DOUBLE, all.data(), RankTotals::kStages + 2,
+             MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  std::vector<std::int64_t> local(static_cast<size_t>(job.options.frames), 0),
+      latest(local.size(), 0);
+  for (size_t i = 0; i < completeNs.size() && i < local.size(); ++i) local[i] = completeNs[i];
+  MPI_Reduce(local.data(), latest.data(), static_cast<int>(local.size()), MPI_INT64_T, MPI_MAX, 0,
+             MPI_COMM_WORLD);
+  for (size_t i = 0; i < frames.size() && i < latest.size(); ++i)
+    frames[i].displaysCompleteNs = latest[i];
+  return all;
+}
+
 }  // namespace
 
 int run(int argc, char** argv) {
@@ -79,11 +101,16 @@ int run(int argc, char** argv) {
     messaging.compress = job.options.compress;
     messaging.quiesceTimeout = std::chrono::seconds(job.options.timeoutSeconds);
     dfb::Messenger messenger(MPI_COMM_WORLD, messaging);
-    if (job.isWallRank()) {
-      runWallRank(job, messenger, roleComm);
-    } else {
-      const std::vector<FrameRecord> frames = runRenderRank(job, messenger, roleComm);
-      if (job.worldRank == 0 && !job.options.statsFile.empty()) writeStats(job, frames);
+    RankTotals totals;
+    std::vector<FrameRecord> frames;
+    std::vector<std::int64_t> completeNs;
+    if (job.isWallRank())
+      completeNs = runWallRank(job, messenger, roleComm, totals);
+    else
+      frames = runRenderRank(job, messenger, roleComm, totals);
+    if (!job.options.statsFile.empty()) {
+      const std::vector<RankTotals> ranks = collectTotals(job, totals, frames, completeNs);
+      if (job.worldRank == 0) writeStats(job, frames, ranks);
     }
     messenger.stop();
   } catch (const std::exception& e) {

@@ -8,7 +8,8 @@
 
 namespace app {
 
-void runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm) {
+std::vector<std::int64_t> runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm,
+                                      RankTotals& totals) {
   const Options& o = job.options;
   const wall::Layout& layout = *job.layout;
   const int process = job.roles.processOfRank(job.worldRank);
@@ -31,12 +32,22 @@ void runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm) {
   options.captureEvery = o.captureEvery;
   options.lastFrame = static_cast<std::uint32_t>(o.frames);
   options.timeout = std::chrono::seconds(o.timeoutSeconds);
+  std::vector<std::int64_t> completeNs;
   {
     wall::WallNode node(messenger, layout, process, wallComm, std::move(presenters), options);
     MPI_Barrier(MPI_COMM_WORLD);  // pairs with the render ranks' barrier: everyone registered
-    for (std::uint32_t frameId = 1; frameId <= static_cast<std::uint32_t>(o.frames); ++frameId)
-      node.presentFrame(frameId);
+    for (std::uint32_t frameId = 1; frameId <= static_cast<std::uint32_t>(o.frames); ++frameId) {
+      const wall::PresentReport r = node.presentFrame(frameId);
+      completeNs.push_back(r.completeNs);
+      totals.stageMs[7] += r.unpackMs;
+      totals.stageMs[8] += r.assembleMs;
+      totals.stageMs[9] += r.waitMs;
+      totals.stageMs[10] += r.barrierMs;
+      totals.stageMs[11] += r.presentMs;
+    }
   }
+  totals.role = 1;
+  return completeNs;
 }
 
 }  // namespace app

@@ -21,6 +21,10 @@ double msSince(Clock::time_point start, Clock::time_point end) {
   return std::chrono::duration<double, std::milli>(end - start).count();
 }
 
+std::int64_t nsBetween(Clock::time_point start, Clock::time_point end) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(end - start).count();
+}
+
 }  // namespace
 
 int roundRobinOwner(int tileIndex, int, int ranks) { return tileIndex % ranks; }
@@ -67,10 +71,13 @@ struct DistributedFrameBuffer::Impl {
   std::vector<std::uint32_t> imageRgba8;
   std::vector<float> imageRgbaF32;
 
-  std::atomic<std::uint64_t> tilesSet{0}, tilesCompleted{0}, tileBytesSent{0}, tileBytesReceived{0},
-      staleInputs{0}, earlyInputs{0};
+  std::atomic<std::uint64_t> tilesSet{0}, tilesCompleted{0}, staleInputs{0}, earlyInputs{0};
   std::atomic<std::int64_t> lastSetTileNs{0};
+  // Stage timers in nanoseconds: one steady_clock read per stage per tile, cheap next to a tile.
+  std::atomic<std::int64_t> unpackNs{0}, operationNs{0}, toneMapNs{0}, pixelOpsNs{0};
   Clock::time_point frameStart;
+  Messenger::ObjectTraffic trafficAtBegin;
+  MessengerCounters countersAtBegin;
   FrameStats lastStats;
 
   void processInput(int tileIndex, const Tile& input);
@@ -157,9 +164,12 @@ void DistributedFrameBuffer::begin(const FrameInfo& frame) {
       }
     }
     d.inputErrors.clear();
-    d.tilesSet = d.tilesCompleted = d.tileBytesSent = d.tileBytesReceived = 0;
+    d.tilesSet = d.tilesCompleted = 0;
+    d.trafficAtBegin = d.messenger.traffic(d.options.objectId);
+    d.countersAtBegin = d.messenger.counters();
     d.staleInputs = d.earlyInputs = 0;
     d.lastSetTileNs = 0;
+    d.unpackNs = d.operationNs = d.toneMapNs = d.pixelOpsNs = 0;
     d.frameStart = Clock::now();
     d.activeFrame = frame.frameId;
     d.inFrame = true;
@@ -193,27 +203,25 @@ void DistributedFrameBuffer::setTile(const Tile& tile) {
     d.processInput(index, tile);
   } else {
     Bytes bytes = packTile(tile, index, d.frame.frameId, d.frame.epoch);
-    d.tileBytesSent += bytes.size();
     d.messenger.send(d.messengerRank[static_cast<size_t>(owner)], d.options.objectId,
                      std::move(bytes));
   }
   d.lastSetTileNs = Clock::now().time_since_epoch().count();
 }
 
-void DistributedFrameBuffer::incoming(int, Bytes&& payload) {
-  impl_->tileBytesReceived += payload.size();
-  impl_->deliver(std::move(payload));
-}
+void DistributedFrameBuffer::incoming(int, Bytes&& payload) { impl_->deliver(std::move(payload)); }
 
 void DistributedFrameBuffer::Impl::deliver(Bytes&& bytes) {
   TileMessageHeader header;
   Tile tile;
+  const auto start = Clock::now();
   try {
     tile = unpackTile(bytes, header);
   } catch (const Error& e) {
     failInput(e.what());
     return;
   }
+  unpackNs += nsBetween(start, Clock::now());
   {
     std::lock_guard lock(frameMutex);
     if (static_cast<std::int64_t>(header.frameId) > activeFrame) {
@@ -240,7 +248,10 @@ void DistributedFrameBuffer::Impl::processInput(int tileIndex, const Tile& input
     std::lock_guard lock(owned.mutex);
     if (owned.complete)
       throw Error("tile " + std::to_string(tileIndex) + " got an input after it was complete");
-    if (owned.operation->process(input)) completeTile(tileIndex, owned);
+    const auto start = Clock::now();
+    const bool done = owned.operation->process(input);
+    operationNs += nsBetween(start, Clock::now());
+    if (done) completeTile(tileIndex, owned);
   } catch (const std::exception& e) {
     failInput("frame " + std::to_string(frame.frameId) + ", tile " + std::to_string(tileIndex) +
               ": " + e.what());
@@ -258,7 +269,12 @@ void DistributedFrameBuffer::Impl::completeTile(int tileIndex, OwnedTile& owned)
   finished.linear = &owned.operation->finished();
   finished.rgba8 = &owned.rgba8;
   finished.error = owned.operation->error();
-  for (auto& op : pixelOps) op->process(finished);
+  const auto start = Clock::now();
+  pixelOps.front()->process(finished);  // tone mapping, always first
+  const auto now = Clock::now();
+  toneMapNs += nsBetween(start, now);
+  for (size_t i = 1; i < pixelOps.size(); ++i) pixelOps[i]->process(finished);
+  if (pixelOps.size() > 1) pixelOpsNs += nsBetween(now, Clock::now());
   tileErrors[static_cast<size_t>(tileIndex)] = finished.error;
   tilesCompleted++;
   std::lock_guard lock(frameMutex);
@@ -323,11 +339,22 @@ void DistributedFrameBuffer::end() {
   stats.frameId = d.frame.frameId;
   stats.tilesSet = d.tilesSet;
   stats.tilesCompleted = d.tilesCompleted;
-  stats.tileBytesSent = d.tileBytesSent;
-  stats.tileBytesReceived = d.tileBytesReceived;
+  const Messenger::ObjectTraffic tiles = d.messenger.traffic(d.options.objectId);
+  const MessengerCounters all = d.messenger.counters();
+  stats.tileBytesSent = tiles.bytesSent - d.trafficAtBegin.bytesSent;
+  stats.tileBytesReceived = tiles.bytesReceived - d.trafficAtBegin.bytesReceived;
+  stats.otherBytesSent = all.wireBytesSent - d.countersAtBegin.wireBytesSent - stats.tileBytesSent;
+  stats.otherBytesReceived =
+      all.wireBytesReceived - d.countersAtBegin.wireBytesReceived - stats.tileBytesReceived;
   stats.staleInputs = d.staleInputs;
   stats.earlyInputs = d.earlyInputs;
   const std::int64_t lastSet = d.lastSetTileNs;
+  stats.lastSetTileNs = lastSet;
+  const auto ms = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-6; };
+  stats.unpackMs = ms(d.unpackNs);
+  stats.operationMs = ms(d.operationNs);
+  stats.toneMapMs = ms(d.toneMapNs);
+  stats.pixelOpsMs = ms(d.pixelOpsNs);
   if (lastSet != 0)
     stats.lastSetTileToCompleteMs = std::chrono::duration<double, std::milli>(
                                         complete.time_since_epoch() - Clock::duration(lastSet))

@@ -59,12 +59,18 @@ struct FrameStats {
   std::uint32_t frameId = 0;
   std::uint64_t tilesSet = 0;                                  // setTile calls on this rank
   std::uint64_t tilesCompleted = 0;                            // owned tiles completed on this rank
-  std::uint64_t tileBytesSent = 0, tileBytesReceived = 0;      // tile traffic, on the wire
+  std::uint64_t tileBytesSent = 0, tileBytesReceived = 0;      // tile inputs, on the wire
+  std::uint64_t otherBytesSent = 0, otherBytesReceived = 0;    // every other message, on the wire
   std::uint64_t gatherBytesSent = 0, gatherBytesReceived = 0;  // display-format gather
   std::uint64_t pixelBytesReceived = 0;  // final pixels into this rank (gather), uncompressed
   std::uint64_t staleInputs = 0, earlyInputs = 0;
   double lastSetTileToCompleteMs = 0;  // last local setTile → frame complete on all ranks
   double frameMs = 0;                  // begin → end returned
+  std::int64_t lastSetTileNs = 0;      // steady_clock time of the last local setTile; 0: none
+  // Where the owner's time went, summed over tiles (threads overlap, so these can exceed the
+  // frame): unpacking tile messages, the tile operation, tone mapping, the rest of the pixel-op
+  // chain (e.g. a wall's routing: cutting and sending).
+  double unpackMs = 0, operationMs = 0, toneMapMs = 0, pixelOpsMs = 0;
 };
 
 class DistributedFrameBuffer final : public MessageHandler {

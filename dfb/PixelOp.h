@@ -43,4 +43,9 @@ class ToneMapOp : public PixelOp {
 // The tone mapping of one pixel, shared with anything that must match the DFB bit for bit.
 std::uint32_t toneMapPixel(const float rgba[4], const ToneMapSettings& settings);
 
+// Linear [0, 1] (clamped) to an sRGB-encoded byte: the definition, with std::pow ...
+std::uint32_t encodeSrgb8Reference(float linear);
+// ... and what toneMapPixel uses: the same value for every float, through a table.
+std::uint32_t encodeSrgb8(float linear);
+
 }  // namespace dfb

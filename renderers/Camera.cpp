@@ -6,6 +6,14 @@
 
 namespace renderers {
 
+CameraDesc orbitCamera(const CameraDesc& desc, float degrees) {
+  if (degrees == 0.0f) return desc;
+  CameraDesc out = desc;
+  // Rotation() builds an orthonormal rotation from the normalised axis; lookAt is the pivot.
+  out.position = desc.lookAt + rotation(desc.up, degrees).vector(desc.position - desc.lookAt);
+  return out;
+}
+
 Camera::Camera(const CameraDesc& d, int width, int height) : origin_(d.position) {
   if (width <= 0 || height <= 0) throw Error("camera: image size must be positive");
   const Vec3 view = d.lookAt - d.position;

@@ -14,6 +14,11 @@ struct CameraDesc {
   float focusDistance = 0.0f;  // 0: the distance to lookAt
 };
 
+// `desc` with its position turned about lookAt around the up axis by `degrees` (right-handed
+// about up). Pure arithmetic on the description, so every rank that asks for the same angle gets
+// the same camera bit for bit, with no communication.
+CameraDesc orbitCamera(const CameraDesc& desc, float degrees);
+
 class Camera {
  public:
   Camera(const CameraDesc& desc, int width, int height);

@@ -22,8 +22,13 @@ float powerHeuristic(float a, float b) {
 PathTracer::PathTracer(const Scene& scene, const RenderSettings& settings)
     : scene_(scene),
       settings_(settings),
-      camera_(scene.desc().camera, settings.width, settings.height),
+      camera_(frameCamera(scene.desc().camera, settings, 1), settings.width, settings.height),
       epsilon_(1e-4f * scene.extent()) {}
+
+void PathTracer::beginFrame(const dfb::FrameInfo& frame) {
+  camera_ = Camera(frameCamera(scene_.desc().camera, settings_, frame.frameId), settings_.width,
+                   settings_.height);
+}
 
 Vec3 PathTracer::radiance(Vec3 origin, Vec3 direction, const Sampler& sampler) const {
   constexpr float kInf = std::numeric_limits<float>::infinity();

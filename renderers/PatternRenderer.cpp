@@ -55,6 +55,10 @@ void PatternRenderer::render(const dfb::Region& region, std::uint32_t accumulati
   const int markerX = static_cast<int>((frameId_ * 16u) % static_cast<unsigned>(width_));
   const int markerY = height_ / 2 - markerSize / 2;
   float* px = out.color.data();
+  // The cell label, rebuilt only when the cell changes: a string per pixel made this renderer,
+  // meant to cost nothing next to delivery, slower than tone mapping the whole canvas.
+  std::string label;
+  int labelCx = -1, labelCy = -1;
   for (int y = region.y0; y < region.y1; ++y) {
     for (int x = region.x0; x < region.x1; ++x, px += 4) {
       const int cx = x / kCell, cy = y / kCell, lx = x % kCell, ly = y % kCell;
@@ -63,8 +67,13 @@ void PatternRenderer::render(const dfb::Region& region, std::uint32_t accumulati
       const float dy = static_cast<float>(ly) - kCell / 2 + 0.5f;
       if (std::abs(std::sqrt(dx * dx + dy * dy) - 0.35f * kCell) < 1.0f) c = {0.3f, 0.3f, 0.6f};
       if (lx < 2 || ly < 2) c = Vec3{0.8f};
-      if (labelInk(std::to_string(cx) + "." + std::to_string(cy), lx - kMargin, ly - kMargin))
-        c = {1.0f, 0.9f, 0.2f};
+      if (ly >= kMargin && ly < kMargin + 5 * kScale && lx >= kMargin) {
+        if (cx != labelCx || cy != labelCy) {
+          label = std::to_string(cx) + "." + std::to_string(cy);
+          labelCx = cx, labelCy = cy;
+        }
+        if (labelInk(label, lx - kMargin, ly - kMargin)) c = {1.0f, 0.9f, 0.2f};
+      }
       if (y >= barTop) c = kBars[std::min(7, 8 * x / width_)];
       if (x < 4 || y < 4 || x >= width_ - 4 || y >= height_ - 4) c = {1.0f, 0.1f, 0.1f};
       if (x >= markerX && x < markerX + markerSize && y >= markerY && y < markerY + markerSize)

@@ -8,7 +8,14 @@
 namespace renderers {
 
 PrimaryRenderer::PrimaryRenderer(const Scene& scene, const RenderSettings& settings)
-    : scene_(scene), camera_(scene.desc().camera, settings.width, settings.height) {}
+    : scene_(scene),
+      settings_(settings),
+      camera_(frameCamera(scene.desc().camera, settings, 1), settings.width, settings.height) {}
+
+void PrimaryRenderer::beginFrame(const dfb::FrameInfo& frame) {
+  camera_ = Camera(frameCamera(scene_.desc().camera, settings_, frame.frameId), settings_.width,
+                   settings_.height);
+}
 
 void PrimaryRenderer::render(const dfb::Region& region, std::uint32_t accumulationId,
                              std::uint32_t firstSample, std::uint32_t samples,

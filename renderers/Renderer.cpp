@@ -3,6 +3,8 @@
 #include <pmmintrin.h>
 #include <xmmintrin.h>
 
+#include <cmath>
+
 #include "renderers/Error.h"
 #include "renderers/PathTracer.h"
 #include "renderers/PatternRenderer.h"
@@ -18,6 +20,15 @@ std::unique_ptr<Renderer> makeRenderer(const std::string& name, const Scene& sce
   if (name == "primary") return std::make_unique<PrimaryRenderer>(scene, settings);
   if (name == "pattern") return std::make_unique<PatternRenderer>(settings);
   throw Error("unknown renderer '" + name + "' (choose pathtracer, primary or pattern)");
+}
+
+CameraDesc frameCamera(const CameraDesc& base, const RenderSettings& settings,
+                       std::uint32_t frameId) {
+  if (settings.orbitDegreesPerFrame == 0.0f || frameId == 0) return base;
+  // In double and reduced to one turn, so long runs keep the angle exact enough.
+  const double degrees =
+      std::fmod(double(settings.orbitDegreesPerFrame) * double(frameId - 1), 360.0);
+  return orbitCamera(base, static_cast<float>(degrees));
 }
 
 void prepareTile(const dfb::Region& region, std::uint32_t accumulationId, std::uint32_t firstSample,

@@ -11,6 +11,7 @@
 
 #include "dfb/Tile.h"
 #include "dfb/TileOperation.h"
+#include "renderers/Camera.h"
 
 namespace renderers {
 
@@ -20,7 +21,14 @@ struct RenderSettings {
   int width = 0, height = 0;  // the whole canvas, in pixels
   std::uint64_t seed = 0;
   int maxDepth = 8;  // path segments (camera ray included), as Embree's --max-path-length
+  // Camera orbit: frame F sees the scene's camera turned about its look-at point around its up
+  // axis by orbitDegreesPerFrame * (F - 1). 0: a fixed camera.
+  float orbitDegreesPerFrame = 0.0f;
 };
+
+// The camera of frame `frameId` under the orbit in `settings`.
+CameraDesc frameCamera(const CameraDesc& base, const RenderSettings& settings,
+                       std::uint32_t frameId);
 
 class Renderer {
  public:

@@ -1,5 +1,7 @@
 #include "wall/DisplayRoutingOp.h"
 
+#include <chrono>
+
 #include "wall/PieceMessage.h"
 
 namespace wall {
@@ -15,14 +17,22 @@ DisplayRoutingOp::DisplayRoutingOp(dfb::Messenger& messenger, const Layout& layo
 }
 
 void DisplayRoutingOp::process(dfb::FinishedTile& tile) {
+  using Clock = std::chrono::steady_clock;
+  const auto ns = [](Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(b - a).count();
+  };
   const auto& pieces = piecesOfTile_.at(static_cast<size_t>(tile.tileIndex));
   for (const Piece& piece : pieces) {
+    const auto t0 = Clock::now();
     dfb::Bytes bytes =
         packPiece(tile.frameId, piece.display, piece.local, tile.rgba8->data(), tile.region.width(),
                   piece.canvas.x0 - tile.region.x0, piece.canvas.y0 - tile.region.y0, planeDelta_);
     bytesSent_ += bytes.size();
+    const auto t1 = Clock::now();
     messenger_.send(rankOfDisplay_[static_cast<size_t>(piece.display)], kWallNodeObject,
                     std::move(bytes));
+    cutNs_ += ns(t0, t1);
+    sendNs_ += ns(t1, Clock::now());
   }
 }
 

@@ -25,6 +25,12 @@ class DisplayRoutingOp : public dfb::PixelOp {
 
   // Bytes handed to the messenger (headers included, before Snappy) since the last call.
   std::uint64_t takeBytesSent() { return bytesSent_.exchange(0); }
+  // Nanoseconds spent, summed over tiles, since the last call: cutting and packing pieces, and
+  // handing them to the messenger (which compresses and copies them onto the wire there).
+  struct StageNs {
+    std::int64_t cut = 0, send = 0;
+  };
+  StageNs takeStageNs() { return {cutNs_.exchange(0), sendNs_.exchange(0)}; }
 
  private:
   dfb::Messenger& messenger_;
@@ -32,6 +38,7 @@ class DisplayRoutingOp : public dfb::PixelOp {
   std::vector<int> rankOfDisplay_;
   bool planeDelta_;
   std::atomic<std::uint64_t> bytesSent_{0};
+  std::atomic<std::int64_t> cutNs_{0}, sendNs_{0};
 };
 
 }  // namespace wall

@@ -20,6 +20,10 @@ double msBetween(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
+std::int64_t nsBetween(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(b - a).count();
+}
+
 }  // namespace
 
 WallNode::WallNode(dfb::Messenger& messenger, const Layout& layout, int process, MPI_Comm wallComm,
@@ -72,8 +76,10 @@ WallNode::Slot& WallNode::slotFor(std::uint32_t frameId) {
 
 void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
   try {
+    const auto start = Clock::now();
     std::vector<std::uint32_t> pixels;
     const PieceHeader h = unpackPiece(payload, pixels);
+    const auto unpacked = Clock::now();
     const int position =
         h.display >= 0 && static_cast<size_t>(h.display) < positionOfDisplay_.size()
             ? positionOfDisplay_[static_cast<size_t>(h.display)]
@@ -92,7 +98,10 @@ void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
     }
     // Only this thread writes slots; the presenting thread reads one only once it is complete.
     blit(*image, h.x0, h.y0, pixels.data(), h.x1 - h.x0, h.y1 - h.y0);
+    const auto assembled = Clock::now();
     std::lock_guard lock(mutex_);
+    unpackNs_ += nsBetween(start, unpacked);
+    assembleNs_ += nsBetween(unpacked, assembled);
     Slot& slot = slots_.at(h.frameId);
     const int got = ++slot.received[static_cast<size_t>(position)];
     const int expected = expectedPieces_[static_cast<size_t>(position)];
@@ -100,8 +109,10 @@ void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
       throw Error("display '" + layout_.displays[static_cast<size_t>(h.display)].name + "' got " +
                   std::to_string(got) + " pieces of frame " + std::to_string(h.frameId) +
                   ", expected " + std::to_string(expected));
-    if (got == expected && ++slot.displaysComplete == static_cast<int>(mine_.size()))
+    if (got == expected && ++slot.displaysComplete == static_cast<int>(mine_.size())) {
+      slot.completeNs = nsBetween(Clock::time_point{}, assembled);
       complete_.notify_all();
+    }
   } catch (const std::exception& e) {
     std::lock_guard lock(mutex_);
     if (error_.empty()) error_ = e.what();
@@ -139,6 +150,10 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     slot = &slots_.at(frameId);
     report.bytesReceived = bytesReceived_;
     bytesReceived_ = 0;
+    report.unpackMs = static_cast<double>(unpackNs_) * 1e-6;
+    report.assembleMs = static_cast<double>(assembleNs_) * 1e-6;
+    unpackNs_ = assembleNs_ = 0;
+    report.completeNs = slot->completeNs;
   }
   const auto arrived = Clock::now();
 

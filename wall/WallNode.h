@@ -40,6 +40,10 @@ struct PresentReport {
   double barrierMs = 0;  // in the swap barrier
   double presentMs = 0;  // drawing on every display
   std::uint64_t bytesReceived = 0;
+  // Since the previous presentFrame, on the inbox thread: unpacking pieces and copying them into
+  // the back buffers. completeNs: steady_clock time the last piece of this frame arrived.
+  double unpackMs = 0, assembleMs = 0;
+  std::int64_t completeNs = 0;
 };
 
 class WallNode : public dfb::MessageHandler {
@@ -62,6 +66,7 @@ class WallNode : public dfb::MessageHandler {
     std::vector<Image> displays;  // by position in mine_
     std::vector<int> received;
     int displaysComplete = 0;
+    std::int64_t completeNs = 0;
   };
   Slot& slotFor(std::uint32_t frameId);  // with mutex_ held
   void capture(std::uint32_t frameId);
@@ -83,6 +88,7 @@ class WallNode : public dfb::MessageHandler {
   std::int64_t lastPresented_ = 0;
   std::string error_;
   std::uint64_t bytesReceived_ = 0;
+  std::int64_t unpackNs_ = 0, assembleNs_ = 0;
 };
 
 }  // namespace wall
