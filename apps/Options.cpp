@@ -87,6 +87,8 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
       ->check(CLI::Range(1, 8))
       ->capture_default_str();
   cli.add_flag("!--no-compress", o.compress, "send tiles and pieces uncompressed");
+  cli.add_flag("--compress-within-host", o.compressWithinHost,
+               "compress messages between ranks of one host too (default: only across hosts)");
   cli.add_option("--timeout", o.timeoutSeconds, "seconds before a stalled frame is an error")
       ->check(CLI::Range(1, 86400))
       ->capture_default_str();
@@ -116,6 +118,10 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
         "--image is for runs without --wall; use --capture DIR to save what the wall shows");
   if (o.wall.empty() && (o.offscreen || !o.captureDir.empty() || o.mode != "route" || o.dryRun))
     return fail("--offscreen, --capture, --mode and --dry-run need --wall FILE.toml");
+  if (o.renderer == "pattern" && o.distribution == "dynamic")
+    return fail(
+        "--distribution dynamic balances noisy tiles by averaging redundant inputs; the "
+        "pattern renderer draws a new picture every frame: use static or roundrobin");
   if (!o.image.empty() && !endsWith(o.image, ".png") && !endsWith(o.image, ".pfm"))
     return fail("--image " + o.image +
                 ": the name must end in .png (RGBA8) or .pfm (linear float)");

@@ -34,6 +34,7 @@ struct Options {
   bool dryRun = false;
   int framesInFlight = 2;
   bool compress = true;
+  bool compressWithinHost = false;
   int timeoutSeconds = 60;
   bool quiet = false;
 };

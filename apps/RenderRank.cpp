@@ -35,12 +35,12 @@ std::uint64_t relayToDisplays(const Job& job, dfb::Messenger& messenger, std::ui
   const wall::Layout& layout = *job.layout;
   for (size_t d = 0; d < layout.displays.size(); ++d) {
     const dfb::Region& rect = layout.displays[d].rect;
+    const int to = job.roles.rankOfProcess(layout.displays[d].process);
     dfb::Bytes piece = wall::packPiece(frameId, static_cast<int>(d),
                                        dfb::Region{0, 0, rect.width(), rect.height()}, image.data(),
-                                       job.canvasWidth, rect.x0, rect.y0, job.options.compress);
+                                       job.canvasWidth, rect.x0, rect.y0, messenger.compresses(to));
     bytes += piece.size();
-    messenger.send(job.roles.rankOfProcess(layout.displays[d].process), wall::kWallNodeObject,
-                   std::move(piece));
+    messenger.send(to, wall::kWallNodeObject, std::move(piece));
   }
   return bytes;
 }
@@ -71,7 +71,11 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
   dfbOptions.width = job.canvasWidth;
   dfbOptions.height = job.canvasHeight;
   dfbOptions.tileSize = o.tileSize;
-  dfbOptions.operation = dfb::accumulateOperation();
+  // The pattern is a new picture every frame (its marker moves): nothing to average.
+  dfbOptions.operation =
+      o.renderer == "pattern" ? dfb::writeOperation() : dfb::accumulateOperation();
+  // Like the messenger: compress the gather only where it crosses hosts.
+  dfbOptions.compressGather = o.compress && !messenger.sameHost(0);
   dfbOptions.toneMap.exposure = o.exposure;
   dfbOptions.toneMap.filmic = o.filmic;
   dfbOptions.frameTimeout = std::chrono::seconds(o.timeoutSeconds);
@@ -92,8 +96,8 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
   dfb::DistributedFrameBuffer dfb(messenger, renderComm, dfbOptions);
   std::shared_ptr<wall::DisplayRoutingOp> routing;
   if (route) {
-    routing = std::make_shared<wall::DisplayRoutingOp>(messenger, *job.layout, job.roles,
-                                                       o.tileSize, o.compress);
+    routing =
+        std::make_shared<wall::DisplayRoutingOp>(messenger, *job.layout, job.roles, o.tileSize);
     dfb.addPixelOp(routing);
   }
   std::unique_ptr<wall::FrameCredits> credits;

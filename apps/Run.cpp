@@ -99,6 +99,7 @@ int run(int argc, char** argv) {
   try {
     dfb::MessengerOptions messaging;
     messaging.compress = job.options.compress;
+    messaging.compressWithinHost = job.options.compressWithinHost;
     messaging.quiesceTimeout = std::chrono::seconds(job.options.timeoutSeconds);
     dfb::Messenger messenger(MPI_COMM_WORLD, messaging);
     RankTotals totals;

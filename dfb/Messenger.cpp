@@ -48,6 +48,7 @@ struct Messenger::Impl {
   MPI_Comm control = MPI_COMM_NULL;
   int rank = 0, size = 1;
   MessengerOptions options;
+  std::vector<bool> sameHost;  // by rank of p2p
 
   std::mutex outboxMutex;
   std::condition_variable outboxCv;
@@ -273,6 +274,22 @@ Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_
   checkMpi(MPI_Comm_dup(comm, &impl_->control), "MPI_Comm_dup");
   MPI_Comm_rank(impl_->p2p, &impl_->rank);
   MPI_Comm_size(impl_->p2p, &impl_->size);
+  MPI_Comm host;
+  checkMpi(MPI_Comm_split_type(impl_->p2p, MPI_COMM_TYPE_SHARED, impl_->rank, MPI_INFO_NULL, &host),
+           "MPI_Comm_split_type");
+  MPI_Group hostGroup, allGroup;
+  MPI_Comm_group(host, &hostGroup);
+  MPI_Comm_group(impl_->p2p, &allGroup);
+  int hostSize = 0;
+  MPI_Comm_size(host, &hostSize);
+  std::vector<int> hostRanks(static_cast<size_t>(hostSize)), inAll(static_cast<size_t>(hostSize));
+  for (int i = 0; i < hostSize; ++i) hostRanks[static_cast<size_t>(i)] = i;
+  MPI_Group_translate_ranks(hostGroup, hostSize, hostRanks.data(), allGroup, inAll.data());
+  impl_->sameHost.assign(static_cast<size_t>(impl_->size), false);
+  for (int r : inAll) impl_->sameHost[static_cast<size_t>(r)] = true;
+  MPI_Group_free(&hostGroup);
+  MPI_Group_free(&allGroup);
+  MPI_Comm_free(&host);
   impl_->mpiThread = std::thread([this] { impl_->mpiLoop(); });
   impl_->inboxThread = std::thread([this] { impl_->inboxLoop(); });
   impl_->inboxThreadId = impl_->inboxThread.get_id();
@@ -319,7 +336,7 @@ void Messenger::send(int toRank, ObjectId id, Bytes payload) {
   Bytes wire;
   Bytes compressed;
   const bool remote = toRank != impl_->rank;
-  if (remote && impl_->options.compress && payload.size() >= impl_->options.compressMinBytes &&
+  if (compresses(toRank) && payload.size() >= impl_->options.compressMinBytes &&
       compressIfSmaller(payload, compressed)) {
     header.flags |= kCompressed;
     impl_->messagesCompressed++;
@@ -343,6 +360,13 @@ void Messenger::send(int toRank, ObjectId id, Bytes payload) {
     impl_->outbox.push_back(Packet{toRank, std::move(wire)});
   }
   impl_->outboxCv.notify_one();
+}
+
+bool Messenger::sameHost(int rank) const { return impl_->sameHost.at(static_cast<size_t>(rank)); }
+
+bool Messenger::compresses(int toRank) const {
+  return impl_->options.compress && toRank != impl_->rank &&
+         (impl_->options.compressWithinHost || !sameHost(toRank));
 }
 
 void Messenger::quiesce() {

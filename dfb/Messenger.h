@@ -37,6 +37,10 @@ class MessageHandler {
 
 struct MessengerOptions {
   bool compress = true;
+  // Between ranks on one host, shared memory moves bytes faster than Snappy shrinks them
+  // (measured on the wall: 1.2-1.45x more frames per second uncompressed), so by default only
+  // messages that leave the host are compressed.
+  bool compressWithinHost = false;
   // Payloads smaller than this go raw: Snappy costs more than it saves on tiny messages.
   std::size_t compressMinBytes = 2048;
   // Longest sleep of an idle MPI thread; bounds the added receive latency.
@@ -72,6 +76,10 @@ class Messenger {
   void unregisterObject(ObjectId id);
 
   void send(int toRank, ObjectId id, Bytes payload);
+  // Whether `rank` shares this rank's host (MPI_COMM_TYPE_SHARED), and whether a message to it
+  // is compressed (so a producer can choose a pre-filter that only pays before compression).
+  bool sameHost(int rank) const;
+  bool compresses(int toRank) const;
 
   // Returns once every message sent by any rank before it entered quiesce() (and every message
   // those sent while being handled) has been handled. Throws Error on timeout.

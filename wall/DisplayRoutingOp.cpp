@@ -7,13 +7,17 @@
 namespace wall {
 
 DisplayRoutingOp::DisplayRoutingOp(dfb::Messenger& messenger, const Layout& layout,
-                                   const RankRoles& roles, int tileSize, bool planeDelta)
-    : messenger_(messenger), planeDelta_(planeDelta) {
+                                   const RankRoles& roles, int tileSize)
+    : messenger_(messenger) {
   const CanvasTiles tiles(layout, tileSize);
   piecesOfTile_.resize(static_cast<size_t>(tiles.count()));
   for (int t = 0; t < tiles.count(); ++t)
     piecesOfTile_[static_cast<size_t>(t)] = piecesOf(layout, tiles.region(t));
-  for (const Display& d : layout.displays) rankOfDisplay_.push_back(roles.rankOfProcess(d.process));
+  for (const Display& d : layout.displays) {
+    rankOfDisplay_.push_back(roles.rankOfProcess(d.process));
+    // The filter only pays when Snappy follows it.
+    planeDelta_.push_back(messenger.compresses(rankOfDisplay_.back()));
+  }
 }
 
 void DisplayRoutingOp::process(dfb::FinishedTile& tile) {
@@ -26,7 +30,8 @@ void DisplayRoutingOp::process(dfb::FinishedTile& tile) {
     const auto t0 = Clock::now();
     dfb::Bytes bytes =
         packPiece(tile.frameId, piece.display, piece.local, tile.rgba8->data(), tile.region.width(),
-                  piece.canvas.x0 - tile.region.x0, piece.canvas.y0 - tile.region.y0, planeDelta_);
+                  piece.canvas.x0 - tile.region.x0, piece.canvas.y0 - tile.region.y0,
+                  planeDelta_[static_cast<size_t>(piece.display)]);
     bytesSent_ += bytes.size();
     const auto t1 = Clock::now();
     messenger_.send(rankOfDisplay_[static_cast<size_t>(piece.display)], kWallNodeObject,

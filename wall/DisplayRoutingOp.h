@@ -20,7 +20,7 @@ class DisplayRoutingOp : public dfb::PixelOp {
  public:
   // `tileSize` must be the DFB's; the cut of every tile is computed once, here.
   DisplayRoutingOp(dfb::Messenger& messenger, const Layout& layout, const RankRoles& roles,
-                   int tileSize, bool planeDelta);
+                   int tileSize);
   void process(dfb::FinishedTile& tile) override;
 
   // Bytes handed to the messenger (headers included, before Snappy) since the last call.
@@ -36,7 +36,7 @@ class DisplayRoutingOp : public dfb::PixelOp {
   dfb::Messenger& messenger_;
   std::vector<std::vector<Piece>> piecesOfTile_;
   std::vector<int> rankOfDisplay_;
-  bool planeDelta_;
+  std::vector<bool> planeDelta_;  // per display: pre-filter pieces for Snappy
   std::atomic<std::uint64_t> bytesSent_{0};
   std::atomic<std::int64_t> cutNs_{0}, sendNs_{0};
 };

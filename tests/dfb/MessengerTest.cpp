@@ -48,6 +48,7 @@ TEST_P(MessengerRoundTrip, EveryRankReachesEveryRankIntact) {
   const bool compress = GetParam();
   MessengerOptions options;
   options.compress = compress;
+  options.compressWithinHost = true;  // every rank of a test shares this host
   Messenger messenger(MPI_COMM_WORLD, options);
   Recorder recorder;
   messenger.registerObject(11, &recorder);
@@ -91,6 +92,22 @@ struct Counter : MessageHandler {
   std::atomic<int> count{0};
   void incoming(int, Bytes&&) override { count++; }
 };
+
+TEST(Messenger, CompressesOnlyMessagesThatLeaveTheHostByDefault) {
+  Messenger messenger(MPI_COMM_WORLD);
+  Recorder recorder;
+  messenger.registerObject(21, &recorder);
+  MPI_Barrier(MPI_COMM_WORLD);
+  for (int to = 0; to < worldSize(); ++to) {
+    EXPECT_TRUE(messenger.sameHost(to)) << "all test ranks run on this host";
+    EXPECT_FALSE(messenger.compresses(to));
+    messenger.send(to, 21, Bytes(100000, std::byte{7}));  // would compress 100x
+  }
+  messenger.quiesce();
+  EXPECT_EQ(recorder.received.size(), static_cast<size_t>(worldSize()));
+  EXPECT_EQ(messenger.counters().messagesCompressed, 0u);
+  messenger.stop();
+}
 
 TEST(Messenger, ManyObjectsEachGetTheirOwnMessages) {
   Messenger messenger(MPI_COMM_WORLD);
