@@ -8,6 +8,7 @@
 #include <mutex>
 #include <string>
 
+#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
 #include "dfb/ImageGather.h"
 #include "dfb/TileMessage.h"
@@ -316,15 +317,10 @@ void DistributedFrameBuffer::end() {
   checkMpi(MPI_Iallreduce(local.data(), global.data(), static_cast<int>(count + 1), MPI_FLOAT,
                           MPI_MAX, d.comm, &request),
            "MPI_Iallreduce");
-  for (int done = 0; !done;) {
-    MPI_Test(&request, &done, MPI_STATUS_IGNORE);
-    if (done) break;
-    if (Clock::now() > deadline + d.options.frameTimeout)
-      throw Error("frame " + std::to_string(d.frame.frameId) +
-                  ": another rank did not finish the frame within " +
-                  std::to_string(2 * d.options.frameTimeout.count()) + " ms");
-    std::this_thread::sleep_for(std::chrono::microseconds(20));
-  }
+  waitWithDeadline(request, deadline + d.options.frameTimeout,
+                   "frame " + std::to_string(d.frame.frameId) +
+                       ": another rank did not finish the frame within " +
+                       std::to_string(2 * d.options.frameTimeout.count()) + " ms");
   const auto complete = Clock::now();
   {
     std::lock_guard lock(d.frameMutex);

@@ -1,8 +1,8 @@
 #include "wall/WallNode.h"
 
 #include <string>
-#include <thread>
 
+#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
 #include "wall/Capture.h"
 #include "wall/Error.h"
@@ -160,15 +160,10 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   // The swap barrier: no display shows frame F before every display has it.
   MPI_Request barrier;
   dfb::checkMpi(MPI_Ibarrier(comm_, &barrier), "MPI_Ibarrier");
-  for (int done = 0; !done;) {
-    MPI_Test(&barrier, &done, MPI_STATUS_IGNORE);
-    if (done) break;
-    if (Clock::now() > deadline)
-      throw Error("swap barrier of frame " + std::to_string(frameId) +
-                  ": another wall process did not complete it within " +
-                  std::to_string(options_.timeout.count()) + " ms");
-    std::this_thread::sleep_for(std::chrono::microseconds(50));
-  }
+  dfb::waitWithDeadline(barrier, deadline,
+                        "swap barrier of frame " + std::to_string(frameId) +
+                            ": another wall process did not complete it within " +
+                            std::to_string(options_.timeout.count()) + " ms");
   const auto released = Clock::now();
   for (size_t i = 0; i < mine_.size(); ++i) {
     const Image& image = slot->displays[i];
