@@ -19,12 +19,17 @@ namespace {
 constexpr int kTag = 7;
 constexpr std::uint32_t kCompressed = 1;
 
+// The message's envelope travels as a trailer after the payload, not a header before it: the
+// payload vector becomes the wire buffer by appending 16 bytes (free when the producer reserved
+// them, see Messenger::kSpareCapacity) and becomes the payload again by dropping them, so neither
+// side copies the body.
 struct WireHeader {
   std::uint64_t object;
   std::uint32_t rawBytes;
   std::uint32_t flags;
 };
 static_assert(sizeof(WireHeader) == 16, "the wire header is part of the protocol");
+static_assert(sizeof(WireHeader) == Messenger::kSpareCapacity);
 
 struct Packet {
   int rank;  // destination when outgoing, source when incoming
@@ -35,7 +40,7 @@ WireHeader readHeader(const Bytes& wire) {
   WireHeader header;
   if (wire.size() < sizeof header)
     throw Error("truncated message of " + std::to_string(wire.size()) + " bytes");
-  std::memcpy(&header, wire.data(), sizeof header);
+  std::memcpy(&header, wire.data() + wire.size() - sizeof header, sizeof header);
   return header;
 }
 
@@ -221,13 +226,13 @@ void Messenger::Impl::inboxLoop() {
 void Messenger::Impl::dispatch(Packet& packet) {
   try {
     const WireHeader header = readHeader(packet.wire);
-    const std::span<const std::byte> body(packet.wire.data() + sizeof header,
-                                          packet.wire.size() - sizeof header);
     Bytes payload;
     if (header.flags & kCompressed) {
-      decompress(body, header.rawBytes, payload);
+      decompress(std::span<const std::byte>(packet.wire.data(), packet.wire.size() - sizeof header),
+                 header.rawBytes, payload);
     } else {
-      payload.assign(body.begin(), body.end());
+      payload = std::move(packet.wire);
+      payload.resize(payload.size() - sizeof header);
     }
     rawBytesReceived += payload.size();
 
@@ -333,21 +338,22 @@ void Messenger::send(int toRank, ObjectId id, Bytes payload) {
     throw Error("send to rank " + std::to_string(toRank) + " of a messenger with " +
                 std::to_string(impl_->size) + " ranks");
   WireHeader header{id, static_cast<std::uint32_t>(payload.size()), 0};
+  const size_t rawBytes = payload.size();
   Bytes wire;
-  Bytes compressed;
   const bool remote = toRank != impl_->rank;
   if (compresses(toRank) && payload.size() >= impl_->options.compressMinBytes &&
-      compressIfSmaller(payload, compressed)) {
+      compressIfSmaller(payload, wire)) {
     header.flags |= kCompressed;
     impl_->messagesCompressed++;
+  } else {
+    wire = std::move(payload);
   }
-  const Bytes& body = (header.flags & kCompressed) ? compressed : payload;
-  wire.resize(sizeof header + body.size());
-  std::memcpy(wire.data(), &header, sizeof header);
-  std::memcpy(wire.data() + sizeof header, body.data(), body.size());
+  const size_t bodyBytes = wire.size();
+  wire.resize(bodyBytes + sizeof header);
+  std::memcpy(wire.data() + bodyBytes, &header, sizeof header);
 
   impl_->messagesSent++;
-  impl_->rawBytesSent += payload.size();
+  impl_->rawBytesSent += rawBytes;
   if (!remote) {
     impl_->pushInbox(Packet{toRank, std::move(wire)});
     return;

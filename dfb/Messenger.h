@@ -75,6 +75,9 @@ class Messenger {
   // Waits for a handler call in progress on another thread to finish first.
   void unregisterObject(ObjectId id);
 
+  // A payload with this much spare capacity (reserve(size + kSpareCapacity)) goes out without
+  // being copied.
+  static constexpr std::size_t kSpareCapacity = 16;
   void send(int toRank, ObjectId id, Bytes payload);
   // Whether `rank` shares this rank's host (MPI_COMM_TYPE_SHARED), and whether a message to it
   // is compressed (so a producer can choose a pre-filter that only pays before compression).

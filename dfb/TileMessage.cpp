@@ -4,6 +4,7 @@
 #include <string>
 
 #include "dfb/Error.h"
+#include "dfb/Messenger.h"
 
 namespace dfb {
 namespace {
@@ -46,7 +47,9 @@ Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId, std::uint
   if (tile.albedo.size() == 3 * n) header.channels |= kHasAlbedo, floats += 3 * n;
   header.payloadBytes = static_cast<std::uint32_t>(floats * sizeof(float));
 
-  Bytes out(sizeof header + header.payloadBytes);
+  Bytes out;
+  out.reserve(sizeof header + header.payloadBytes + Messenger::kSpareCapacity);
+  out.resize(sizeof header + header.payloadBytes);
   std::memcpy(out.data(), &header, sizeof header);
   size_t at = sizeof header;
   append(out, at, tile.color);

@@ -13,25 +13,26 @@ dfb::Bytes packPiece(std::uint32_t frameId, int display, const dfb::Region& loca
   const PieceHeader header{kPieceMagic, frameId,  display,  local.x0,
                            local.y0,    local.x1, local.y1, planeDelta ? 1u : 0u};
   const size_t rowBytes = static_cast<size_t>(local.width()) * 4;
-  dfb::Bytes pixels(rowBytes * static_cast<size_t>(local.height()));
+  const size_t pixelBytes = rowBytes * static_cast<size_t>(local.height());
+  dfb::Bytes out;
+  out.reserve(sizeof header + pixelBytes + dfb::Messenger::kSpareCapacity);
+  out.resize(sizeof header + pixelBytes);
+  std::memcpy(out.data(), &header, sizeof header);
+  std::byte* pixels = out.data() + sizeof header;
   for (int y = 0; y < local.height(); ++y)
-    std::memcpy(pixels.data() + static_cast<size_t>(y) * rowBytes,
+    std::memcpy(pixels + static_cast<size_t>(y) * rowBytes,
                 source + static_cast<size_t>(sourceY + y) * static_cast<size_t>(sourceWidth) +
                     static_cast<size_t>(sourceX),
                 rowBytes);
-  dfb::Bytes out(sizeof header);
-  std::memcpy(out.data(), &header, sizeof header);
-  if (planeDelta) {
+  if (planeDelta) {  // only where Snappy follows: it makes smooth 8-bit pixels compressible
     dfb::Bytes filtered;
-    dfb::planeDeltaEncode(pixels, 4, filtered);
-    out.insert(out.end(), filtered.begin(), filtered.end());
-  } else {
-    out.insert(out.end(), pixels.begin(), pixels.end());
+    dfb::planeDeltaEncode(std::span<const std::byte>(pixels, pixelBytes), 4, filtered);
+    std::memcpy(pixels, filtered.data(), pixelBytes);
   }
   return out;
 }
 
-PieceHeader unpackPiece(const dfb::Bytes& bytes, std::vector<std::uint32_t>& pixels) {
+PieceHeader readPieceHeader(const dfb::Bytes& bytes) {
   PieceHeader header;
   if (bytes.size() < sizeof header) throw Error("piece message shorter than its header");
   std::memcpy(&header, bytes.data(), sizeof header);
@@ -43,16 +44,28 @@ PieceHeader unpackPiece(const dfb::Bytes& bytes, std::vector<std::uint32_t>& pix
     throw Error("piece message for display " + std::to_string(header.display) + " has " +
                 std::to_string(bytes.size() - sizeof header) +
                 " pixel bytes, its rectangle needs " + std::to_string(4 * count));
-  const std::span<const std::byte> body(bytes.data() + sizeof header, 4 * count);
-  pixels.resize(count);
-  if (header.planeDelta) {
-    dfb::Bytes decoded;
-    dfb::planeDeltaDecode(body, 4, decoded);
-    std::memcpy(pixels.data(), decoded.data(), decoded.size());
-  } else {
-    std::memcpy(pixels.data(), body.data(), body.size());
-  }
   return header;
+}
+
+void copyPiece(const dfb::Bytes& bytes, const PieceHeader& header, Image& display) {
+  const dfb::Region local{header.x0, header.y0, header.x1, header.y1};
+  if (local.x0 < 0 || local.y0 < 0 || local.x1 > display.width || local.y1 > display.height)
+    throw Error("piece [" + std::to_string(local.x0) + ", " + std::to_string(local.x1) + ") x [" +
+                std::to_string(local.y0) + ", " + std::to_string(local.y1) +
+                ") lies outside its display of " + std::to_string(display.width) + "x" +
+                std::to_string(display.height));
+  const std::span<const std::byte> body(bytes.data() + sizeof header,
+                                        4 * static_cast<size_t>(local.pixelCount()));
+  dfb::Bytes decoded;
+  const std::byte* pixels = body.data();
+  if (header.planeDelta) {
+    dfb::planeDeltaDecode(body, 4, decoded);
+    pixels = decoded.data();
+  }
+  const size_t rowBytes = 4 * static_cast<size_t>(local.width());
+  for (int y = 0; y < local.height(); ++y)
+    std::memcpy(&display.at(local.x0, local.y0 + y), pixels + static_cast<size_t>(y) * rowBytes,
+                rowBytes);
 }
 
 }  // namespace wall

@@ -7,6 +7,7 @@
 #include "dfb/Compression.h"
 #include "dfb/Messenger.h"
 #include "dfb/Tile.h"
+#include "wall/Image.h"
 
 namespace wall {
 
@@ -30,7 +31,11 @@ dfb::Bytes packPiece(std::uint32_t frameId, int display, const dfb::Region& loca
                      const std::uint32_t* source, int sourceWidth, int sourceX, int sourceY,
                      bool planeDelta);
 
-// Unpacks into `pixels` (rows of local.width()); throws wall::Error on a malformed message.
-PieceHeader unpackPiece(const dfb::Bytes& bytes, std::vector<std::uint32_t>& pixels);
+// The header of a piece message, checked against the message's size; throws wall::Error on a
+// malformed message.
+PieceHeader readPieceHeader(const dfb::Bytes& bytes);
+// Copies the piece's pixels to their place in its display's image (no intermediate buffer
+// unless the plane-delta filter must be undone); throws wall::Error if they do not fit.
+void copyPiece(const dfb::Bytes& bytes, const PieceHeader& header, Image& display);
 
 }  // namespace wall

@@ -77,8 +77,7 @@ WallNode::Slot& WallNode::slotFor(std::uint32_t frameId) {
 void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
   try {
     const auto start = Clock::now();
-    std::vector<std::uint32_t> pixels;
-    const PieceHeader h = unpackPiece(payload, pixels);
+    const PieceHeader h = readPieceHeader(payload);
     const auto unpacked = Clock::now();
     const int position =
         h.display >= 0 && static_cast<size_t>(h.display) < positionOfDisplay_.size()
@@ -97,7 +96,7 @@ void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
       bytesReceived_ += payload.size();
     }
     // Only this thread writes slots; the presenting thread reads one only once it is complete.
-    blit(*image, h.x0, h.y0, pixels.data(), h.x1 - h.x0, h.y1 - h.y0);
+    copyPiece(payload, h, *image);
     const auto assembled = Clock::now();
     std::lock_guard lock(mutex_);
     unpackNs_ += nsBetween(start, unpacked);
