@@ -2,21 +2,25 @@
 
 #include <CLI/CLI.hpp>
 
+#include <charconv>
 #include <cstdio>
-#include <regex>
+#include <string>
 
 namespace app {
 namespace {
 
 // "WxH" with positive integers, e.g. 1920x1080.
 std::string parseSize(const std::string& text, int& width, int& height) {
-  static const std::regex pattern(R"((\d{1,6})x(\d{1,6}))");
-  std::smatch m;
-  if (!std::regex_match(text, m, pattern))
-    return "--size must look like WIDTHxHEIGHT, e.g. 512x512";
-  width = std::stoi(m[1]);
-  height = std::stoi(m[2]);
-  if (width <= 0 || height <= 0) return "--size: width and height must be positive";
+  const char* const usage = "--size must look like WIDTHxHEIGHT, e.g. 512x512";
+  const size_t x = text.find('x');
+  if (x == std::string::npos || x == 0 || x + 1 == text.size()) return usage;
+  const char* end = text.data() + text.size();
+  auto [afterWidth, e1] = std::from_chars(text.data(), text.data() + x, width);
+  auto [afterHeight, e2] = std::from_chars(text.data() + x + 1, end, height);
+  if (e1 != std::errc() || e2 != std::errc() || afterWidth != text.data() + x || afterHeight != end)
+    return usage;
+  if (width <= 0 || height <= 0 || width > 65536 || height > 65536)
+    return "--size: width and height must be between 1 and 65536";
   return {};
 }
 
