@@ -5,6 +5,7 @@
 #include "renderers/Camera.h"
 #include "renderers/Renderer.h"
 #include "renderers/Rng.h"
+#include "renderers/Scene.h"
 
 namespace renderers {
 
@@ -19,6 +20,9 @@ class PathTracer final : public Renderer {
   Vec3 radiance(Vec3 origin, Vec3 direction, const Sampler& sampler) const;
 
  private:
+  // The same, given what the camera ray hits (found, hit) as Scene::intersect reports it.
+  Vec3 radiance(Vec3 origin, Vec3 direction, bool found, Hit hit, const Sampler& sampler) const;
+
   const Scene& scene_;
   RenderSettings settings_;
   Camera camera_;

@@ -17,6 +17,7 @@ constexpr std::uint64_t mix64(std::uint64_t z) {
 // The random stream of one sample of one pixel. Cheap to make; holds only its key.
 class Sampler {
  public:
+  constexpr Sampler() = default;  // a placeholder, to be assigned a real one
   constexpr Sampler(std::uint64_t seed, int x, int y, std::uint32_t accumulationId,
                     std::uint32_t sampleIndex)
       : key_(mix64(mix64(seed ^ 0x9e3779b97f4a7c15ull) ^
@@ -32,7 +33,7 @@ class Sampler {
   }
 
  private:
-  std::uint64_t key_;
+  std::uint64_t key_ = 0;
 };
 
 }  // namespace renderers
