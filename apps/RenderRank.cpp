@@ -4,6 +4,7 @@
 
 #include "apps/Job.h"
 #include "dfb/DistributedFrameBuffer.h"
+#include "dfb/Timing.h"
 #include "renderers/FrameDriver.h"
 #include "renderers/Renderer.h"
 #include "renderers/WorkDistribution.h"
@@ -16,11 +17,8 @@
 namespace app {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double msBetween(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
+using dfb::Clock;
+using dfb::msBetween;
 
 bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() &&

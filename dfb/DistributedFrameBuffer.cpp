@@ -12,21 +12,10 @@
 #include "dfb/Error.h"
 #include "dfb/ImageGather.h"
 #include "dfb/TileMessage.h"
+#include "dfb/Timing.h"
 
 namespace dfb {
-namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point start, Clock::time_point end) {
-  return std::chrono::duration<double, std::milli>(end - start).count();
-}
-
-std::int64_t nsBetween(Clock::time_point start, Clock::time_point end) {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(end - start).count();
-}
-
-}  // namespace
+namespace {}  // namespace
 
 int roundRobinOwner(int tileIndex, int, int ranks) { return tileIndex % ranks; }
 
@@ -396,7 +385,7 @@ void DistributedFrameBuffer::end() {
     stats.gatherBytesReceived = counts.bytesReceived;
     stats.pixelBytesReceived = counts.pixelBytesReceived;
   }
-  stats.frameMs = msSince(d.frameStart, Clock::now());
+  stats.frameMs = msBetween(d.frameStart, Clock::now());
   d.lastStats = stats;
 }
 

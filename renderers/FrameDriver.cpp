@@ -1,7 +1,6 @@
 #include "renderers/FrameDriver.h"
 
-#include <chrono>
-
+#include "dfb/Timing.h"
 #include "renderers/Parallel.h"
 
 namespace renderers {
@@ -72,7 +71,7 @@ const WorkPlan& FrameDriver::lastPlan() const { return *impl_->plan; }
 
 FrameReport FrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
                                      const dfb::FrameInfo& frame) {
-  using Clock = std::chrono::steady_clock;
+  using dfb::Clock;
   const auto t0 = Clock::now();
   Impl& m = *impl_;
   const dfb::TileGrid& grid = dfb.grid();
@@ -99,8 +98,8 @@ FrameReport FrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
   report.tilesRendered = static_cast<int>(mine.size());
   for (const Assignment& a : mine)
     report.samples += std::uint64_t{a.samples} * grid.region(a.tile).pixelCount();
-  report.renderMs = std::chrono::duration<double, std::milli>(t2 - t1).count();
-  report.frameMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  report.renderMs = dfb::msBetween(t1, t2);
+  report.frameMs = dfb::msBetween(t0, Clock::now());
   return report;
 }
 

@@ -1,7 +1,6 @@
 #include "wall/DisplayRoutingOp.h"
 
-#include <chrono>
-
+#include "dfb/Timing.h"
 #include "wall/PieceMessage.h"
 
 namespace wall {
@@ -21,10 +20,7 @@ DisplayRoutingOp::DisplayRoutingOp(dfb::Messenger& messenger, const Layout& layo
 }
 
 void DisplayRoutingOp::process(dfb::FinishedTile& tile) {
-  using Clock = std::chrono::steady_clock;
-  const auto ns = [](Clock::time_point a, Clock::time_point b) {
-    return std::chrono::duration_cast<std::chrono::nanoseconds>(b - a).count();
-  };
+  using dfb::Clock;
   const auto& pieces = piecesOfTile_.at(static_cast<size_t>(tile.tileIndex));
   for (const Piece& piece : pieces) {
     const auto t0 = Clock::now();
@@ -36,8 +32,8 @@ void DisplayRoutingOp::process(dfb::FinishedTile& tile) {
     const auto t1 = Clock::now();
     messenger_.send(rankOfDisplay_[static_cast<size_t>(piece.display)], kWallNodeObject,
                     std::move(bytes));
-    cutNs_ += ns(t0, t1);
-    sendNs_ += ns(t1, Clock::now());
+    cutNs_ += dfb::nsBetween(t0, t1);
+    sendNs_ += dfb::nsBetween(t1, Clock::now());
   }
 }
 

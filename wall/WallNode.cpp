@@ -4,6 +4,7 @@
 
 #include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
+#include "dfb/Timing.h"
 #include "wall/Capture.h"
 #include "wall/Error.h"
 #include "wall/FrameCredits.h"
@@ -14,15 +15,9 @@
 namespace wall {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double msBetween(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
-
-std::int64_t nsBetween(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(b - a).count();
-}
+using dfb::Clock;
+using dfb::msBetween;
+using dfb::nsBetween;
 
 }  // namespace
 
