@@ -43,7 +43,7 @@ class AccumulateOperation final : public TileOperation {
     received_ = 0;
   }
 
-  bool process(const Tile& input) override {
+  bool process(Tile&& input) override {
     if (input.region != region_) throw Error("input region does not match its tile");
     if (input.accumulationId != accumulationId_)
       throw Error(where() + ": input for accumulation pass " +
@@ -58,7 +58,7 @@ class AccumulateOperation final : public TileOperation {
       combine(std::span<const Tile* const>(&only, 1));
       return true;
     }
-    inputs_.push_back(input);
+    inputs_.push_back(std::move(input));
     if (static_cast<int>(inputs_.size()) < expected_) return false;
     std::sort(inputs_.begin(), inputs_.end(),
               [](const Tile& a, const Tile& b) { return a.sequence < b.sequence; });

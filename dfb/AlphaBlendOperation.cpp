@@ -31,16 +31,16 @@ class AlphaBlendOperation final : public TileOperation {
     announced_.clear();
   }
 
-  bool process(const Tile& input) override {
+  bool process(Tile&& input) override {
     if (input.region != region_) throw Error("input region does not match its tile");
     if (input.generation < 0 || input.children < 0)
       throw Error(where() + ": negative generation or children count");
     const size_t n = static_cast<size_t>(region_.pixelCount());
     if (!input.depth.empty() && input.depth.size() != n)
       throw Error(where() + ": depth size mismatch");
-    inputs_.push_back(input);
     received_[input.generation]++;
     announced_[input.generation] += input.children;
+    inputs_.push_back(std::move(input));
     if (!treeComplete()) return false;
     blend();
     return true;

@@ -70,7 +70,7 @@ struct DistributedFrameBuffer::Impl {
   MessengerCounters countersAtBegin;
   FrameStats lastStats;
 
-  void processInput(int tileIndex, const Tile& input);
+  void processInput(int tileIndex, Tile&& input);
   void completeTile(int tileIndex, OwnedTile& owned);
   void deliver(Bytes&& bytes);
   void failInput(const std::string& message) {
@@ -178,7 +178,7 @@ void DistributedFrameBuffer::begin(const FrameInfo& frame) {
   for (Bytes& bytes : held) d.deliver(std::move(bytes));
 }
 
-void DistributedFrameBuffer::setTile(const Tile& tile) {
+void DistributedFrameBuffer::setTile(Tile tile) {
   Impl& d = *impl_;
   const int index = d.grid.indexOfOrigin(tile.region.x0, tile.region.y0);
   if (index < 0 || d.grid.region(index) != tile.region)
@@ -190,7 +190,7 @@ void DistributedFrameBuffer::setTile(const Tile& tile) {
   d.tilesSet++;
   const int owner = d.owner[static_cast<size_t>(index)];
   if (owner == d.rank) {
-    d.processInput(index, tile);
+    d.processInput(index, std::move(tile));
   } else {
     Bytes bytes = packTile(tile, index, d.frame.frameId, d.frame.epoch);
     d.messenger.send(d.messengerRank[static_cast<size_t>(owner)], d.options.objectId,
@@ -229,17 +229,17 @@ void DistributedFrameBuffer::Impl::deliver(Bytes&& bytes) {
               std::to_string(header.tileIndex) + ", which it does not own");
     return;
   }
-  processInput(header.tileIndex, tile);
+  processInput(header.tileIndex, std::move(tile));
 }
 
-void DistributedFrameBuffer::Impl::processInput(int tileIndex, const Tile& input) {
+void DistributedFrameBuffer::Impl::processInput(int tileIndex, Tile&& input) {
   OwnedTile& owned = *tiles[static_cast<size_t>(tileIndex)];
   try {
     std::lock_guard lock(owned.mutex);
     if (owned.complete)
       throw Error("tile " + std::to_string(tileIndex) + " got an input after it was complete");
     const auto start = Clock::now();
-    const bool done = owned.operation->process(input);
+    const bool done = owned.operation->process(std::move(input));
     operationNs += nsBetween(start, Clock::now());
     if (done) completeTile(tileIndex, owned);
   } catch (const std::exception& e) {

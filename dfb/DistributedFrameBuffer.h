@@ -84,7 +84,8 @@ class DistributedFrameBuffer final : public MessageHandler {
   void addPixelOp(std::shared_ptr<PixelOp> op);
 
   void begin(const FrameInfo& frame);
-  void setTile(const Tile& tile);
+  // Takes the tile by value: move it in and a tile its owner processes here is never copied.
+  void setTile(Tile tile);
   void end();
 
   const TileGrid& grid() const;

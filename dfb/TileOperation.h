@@ -24,9 +24,10 @@ class TileOperation {
   // announce themselves, like the alpha-blend tree, ignore it).
   virtual void newFrame(const FrameInfo& frame, std::uint32_t accumulationId,
                         int expectedInputs) = 0;
-  // Takes one input. Returns true exactly once per frame: when the tile is complete, after which
-  // finished() holds the result. Throws dfb::Error on an input that does not fit.
-  virtual bool process(const Tile& input) = 0;
+  // Takes one input (moved in: an operation keeps it without a copy when it needs to). Returns
+  // true exactly once per frame: when the tile is complete, after which finished() holds the
+  // result. Throws dfb::Error on an input that does not fit.
+  virtual bool process(Tile&& input) = 0;
   // RGBA linear color (and depth) of the completed tile, valid until the next newFrame.
   virtual const Tile& finished() const = 0;
   // An estimate of the remaining error in the tile (0 when the operation keeps none).

@@ -91,7 +91,7 @@ FrameReport FrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     dfb::Tile tile;
     const Assignment& a = mine[i];
     m.renderer.render(grid.region(a.tile), accumulationId, a.firstSample, a.samples, tile);
-    dfb.setTile(tile);
+    dfb.setTile(std::move(tile));
   });
   const auto t2 = Clock::now();
   dfb.end();

@@ -74,7 +74,7 @@ TEST(AccumulateOperation, RedundantInputsGiveTheSameBytesInAnyOrder) {
     auto op = accumulateOperation()(kRegion);
     op->newFrame({}, 0, static_cast<int>(inputs.size()));
     for (size_t i = 0; i < inputs.size(); ++i)
-      EXPECT_EQ(op->process(inputs[i]), i + 1 == inputs.size());
+      EXPECT_EQ(op->process(Tile(inputs[i])), i + 1 == inputs.size());
     if (trial == 0) {
       reference = op->finished().color;
       // And it is the weighted mean.
@@ -124,11 +124,11 @@ TEST(AlphaBlendOperation, TooManyTilesInAGenerationIsAnError) {
   Tile child = root;
   child.generation = 1;
   child.children = 0;
-  EXPECT_FALSE(op->process(child));
+  EXPECT_FALSE(op->process(Tile(child)));
   EXPECT_THROW(
       {
-        op->process(child);
-        op->process(root);
+        op->process(Tile(child));
+        op->process(Tile(root));
       },
       Error);
 }
