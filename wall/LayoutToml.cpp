@@ -22,9 +22,9 @@ constexpr std::array<std::string_view, 2> kTopKeys = {"display", "grid"};
 constexpr std::array<std::string_view, 1> kTopScalarKeys = {"description"};
 constexpr std::array<std::string_view, 7> kDisplayKeys = {"name", "origin",  "size",      "process",
                                                           "host", "monitor", "fullscreen"};
-constexpr std::array<std::string_view, 8> kGridKeys = {"columns",    "rows",     "display_size",
+constexpr std::array<std::string_view, 9> kGridKeys = {"columns",    "rows",     "display_size",
                                                        "bezel_px",   "bezel_mm", "pixel_pitch_mm",
-                                                       "fullscreen", "monitor"};
+                                                       "fullscreen", "monitor",  "process_per"};
 
 int lineOf(const toml::node& n) { return static_cast<int>(n.source().begin.line); }
 
@@ -265,7 +265,8 @@ void readDisplays(const toml::node& node, Layout& layout, std::vector<bool>& tru
   }
 }
 
-// [grid]: columns x rows panels of one size, r<row>c<col>, process = row-major index. A panel's
+// [grid]: columns x rows panels of one size, r<row>c<col>, process = row-major index (or the
+// column, or the row, with process_per). A panel's
 // left edge is its column times (width + left bezel + right bezel): the pixels that would sit
 // behind the bezels belong to the canvas but to no display, so the picture continues.
 void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
@@ -370,6 +371,17 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
     monitor = readInt(*n, r, subject, "monitor").value_or(0);
     if (monitor < 0) r.add(lineOf(*n), subject, "monitor", "must be 0 or more");
   }
+  // Which panels one wall process drives: one each, or a whole column or row (one host with
+  // several monitors per column of a wall is a common way to cable one).
+  std::string processPer = "display";
+  if (const toml::node* n = t.get("process_per")) {
+    processPer = readString(*n, r, subject, "process_per").value_or("display");
+    if (processPer != "display" && processPer != "column" && processPer != "row") {
+      r.add(lineOf(*n), subject, "process_per",
+            "must be \"display\", \"column\" or \"row\", got \"" + processPer + "\"");
+      ok = false;
+    }
+  }
   if (!ok) return;
 
   const int64_t pitchX = int64_t{w} + bezel[0] + bezel[1],
@@ -387,9 +399,17 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
       d.rect.y0 = static_cast<int>(row * pitchY);
       d.rect.x1 = d.rect.x0 + w;
       d.rect.y1 = d.rect.y0 + h;
-      d.process = row * columns + col;
       d.fullscreen = fullscreen;
-      d.monitor = monitor;
+      if (processPer == "column") {  // the panels of a column are that host's monitors, top first
+        d.process = col;
+        d.monitor = monitor + row;
+      } else if (processPer == "row") {
+        d.process = row;
+        d.monitor = monitor + col;
+      } else {
+        d.process = row * columns + col;
+        d.monitor = monitor;
+      }
       d.lines = {line, line, line, sizeLine, line};
       layout.displays.push_back(std::move(d));
     }

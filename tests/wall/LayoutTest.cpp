@@ -63,12 +63,32 @@ TEST(Layout, AsymmetricBezelsInMillimetres) {
       const wall::Display& d = l.displays[row * 3 + col];
       EXPECT_EQ(d.name, "r" + std::to_string(row) + "c" + std::to_string(col));
       EXPECT_EQ(d.rect, rect(col * 205, row * 150, 160, 120)) << d.name;
-      EXPECT_EQ(d.process, row * 3 + col);
+      EXPECT_EQ(d.process, col) << "process_per = column";
+      EXPECT_EQ(d.monitor, row) << "a column's panels are its host's monitors, top first";
     }
   }
+  EXPECT_EQ(l.processCount, 3);
+  EXPECT_EQ(l.displaysOfProcess(1), (std::vector<int>{1, 4}));
   // The gap between columns is the right bezel of one plus the left bezel of the next.
   EXPECT_EQ(l.displays[1].rect.x0 - l.displays[0].rect.x1, 30 + 15);
   EXPECT_EQ(l.displays[3].rect.y0 - l.displays[0].rect.y1, 20 + 10);
+}
+
+TEST(Layout, GridProcessPerRowAndDisplay) {
+  const char* grid = "[grid]\ncolumns = 3\nrows = 2\ndisplay_size = [10, 10]\nmonitor = 1\n";
+  const auto byRow =
+      wall::readLayoutText(std::string(grid) + "process_per = \"row\"\n", "row.toml");
+  ASSERT_TRUE(byRow.ok()) << wall::joinProblems(byRow.problems);
+  EXPECT_EQ(byRow.layout.processCount, 2);
+  EXPECT_EQ(byRow.layout.displays[4].process, 1);  // r1c1
+  EXPECT_EQ(byRow.layout.displays[4].monitor, 2);  // base 1 + column 1
+  const auto byDisplay = wall::readLayoutText(grid, "display.toml");
+  ASSERT_TRUE(byDisplay.ok());
+  EXPECT_EQ(byDisplay.layout.processCount, 6);
+  const auto bad = wall::readLayoutText(std::string(grid) + "process_per = \"host\"\n", "bad.toml");
+  ASSERT_EQ(bad.problems.size(), 1u);
+  EXPECT_NE(bad.problems[0].find("bad.toml:6: grid: field 'process_per'"), std::string::npos)
+      << bad.problems[0];
 }
 
 TEST(Layout, MixedSizesAndOneProcessDrivingTwo) {
