@@ -163,6 +163,11 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     const Image& image = slot->displays[i];
     presenters_[i]->present(image.pixels.data(), image.width, image.height);
   }
+  // An operator closing any window stops the whole wall: the app turns this into a job abort.
+  for (size_t i = 0; i < mine_.size(); ++i)
+    if (presenters_[i]->closeRequested())
+      throw Error("the window of display '" + layout_.displays[static_cast<size_t>(mine_[i])].name +
+                  "' was closed; stopping the wall");
   const auto presented = Clock::now();
 
   const bool captureThis = !options_.captureDir.empty() &&

@@ -55,8 +55,8 @@ class WallNode : public dfb::MessageHandler {
   ~WallNode() override;
 
   // Waits for frame `frameId` on this process's displays, joins the swap barrier, presents,
-  // captures when asked, and (process 0) acknowledges the frame. Throws wall::Error on timeout
-  // or a protocol error.
+  // captures when asked, and (process 0) acknowledges the frame. Throws wall::Error on timeout,
+  // a protocol error, or when an operator has closed one of this process's windows.
   PresentReport presentFrame(std::uint32_t frameId);
 
   void incoming(int fromRank, dfb::Bytes&& payload) override;
