@@ -394,7 +394,11 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
   for (int row = 0; row < rows; ++row) {
     for (int col = 0; col < columns; ++col) {
       Display d;
-      d.name = "r" + std::to_string(row) + "c" + std::to_string(col);
+      // Built piecewise: GCC 12 -O3 warns falsely (-Wrestrict) on "r" + to_string(...).
+      d.name = 'r';
+      d.name += std::to_string(row);
+      d.name += 'c';
+      d.name += std::to_string(col);
       d.rect.x0 = static_cast<int>(col * pitchX);
       d.rect.y0 = static_cast<int>(row * pitchY);
       d.rect.x1 = d.rect.x0 + w;
