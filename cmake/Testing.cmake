@@ -11,6 +11,8 @@ function(add_unit_test name)
   add_executable(${name} ${T_SOURCES})
   target_link_libraries(${name} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main dfbwall_warnings)
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR})
+  # Tests read configs and fixtures from the source tree.
+  target_compile_definitions(${name} PRIVATE DFBWALL_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
   gtest_discover_tests(${name} PROPERTIES TIMEOUT 120 DISCOVERY_TIMEOUT 30)
   # gtest_discover_tests flattens a list given in PROPERTIES (LABELS "unit;wall" becomes the
   # label "unit" and a stray property "wall"), so the labels are set by a script CTest runs

@@ -260,7 +260,10 @@ void DistributedFrameBuffer::Impl::completeTile(int tileIndex, OwnedTile& owned)
   finished.rgba8 = &owned.rgba8;
   finished.error = owned.operation->error();
   const auto start = Clock::now();
-  pixelOps.front()->process(finished);  // tone mapping, always first
+  // Tone mapping comes first, but only when something reads its RGBA8: the display format or a
+  // later op. A linear-only frame (RGBAF32 or NONE without ops) skips the per-pixel work.
+  if (options.format == DisplayFormat::RGBA8 || pixelOps.size() > 1)
+    pixelOps.front()->process(finished);
   const auto now = Clock::now();
   toneMapNs += nsBetween(start, now);
   for (size_t i = 1; i < pixelOps.size(); ++i) pixelOps[i]->process(finished);

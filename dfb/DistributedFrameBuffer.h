@@ -46,7 +46,8 @@ struct DfbOptions {
   // tile out of the frame (e.g. no display shows it): it completes at once, runs no pixel ops,
   // and gathers as transparent black.
   std::function<int(int tileIndex)> expectedInputs;
-  // The first pixel op of every chain: linear color to display RGBA8 on the tile owner.
+  // The first pixel op of every chain: linear color to display RGBA8 on the tile owner (run
+  // when the format is RGBA8 or another pixel op follows; otherwise nothing reads its output).
   ToneMapSettings toneMap;
   // Gathered images (RGBA8, RGBAF32) are compressed; RGBA8 through the plane-delta filter first.
   bool compressGather = true;
