@@ -8,108 +8,12 @@
 
 #include "renderers/Error.h"
 #include "renderers/MeshImport.h"
+#include "renderers/TomlReader.h"
 
 namespace renderers {
 namespace {
 
-class Reader {
- public:
-  explicit Reader(std::string path) : path_(std::move(path)) {}
-
-  [[noreturn]] void fail(const toml::node& at, const std::string& what) const {
-    throw Error(path_ + ":" + std::to_string(at.source().begin.line) + ": " + what);
-  }
-
-  const toml::table& table(const toml::node& n, const std::string& what) const {
-    if (!n.is_table()) fail(n, what + " must be a table");
-    return *n.as_table();
-  }
-
-  // Rejects keys outside `known`: a misspelt field would otherwise be silently ignored.
-  void onlyKeys(const toml::table& t, const std::string& what,
-                std::initializer_list<std::string_view> known) const {
-    for (const auto& [key, value] : t) {
-      bool ok = false;
-      for (auto k : known) ok = ok || key.str() == k;
-      if (!ok) fail(value, "unknown field '" + std::string(key.str()) + "' in " + what);
-    }
-  }
-
-  const toml::node* get(const toml::table& t, std::string_view key) const { return t.get(key); }
-
-  const toml::node& require(const toml::table& t, std::string_view key,
-                            const std::string& what) const {
-    const toml::node* n = t.get(key);
-    if (!n) fail(t, what + ": missing field '" + std::string(key) + "'");
-    return *n;
-  }
-
-  float number(const toml::node& n, const std::string& what) const {
-    if (auto v = n.value<double>(); v && (n.is_integer() || n.is_floating_point()))
-      return static_cast<float>(*v);
-    fail(n, what + " must be a number");
-  }
-
-  float number(const toml::table& t, std::string_view key, const std::string& what,
-               float fallback) const {
-    const toml::node* n = t.get(key);
-    return n ? number(*n, what + "." + std::string(key)) : fallback;
-  }
-
-  std::string string(const toml::node& n, const std::string& what) const {
-    if (!n.is_string()) fail(n, what + " must be a string");
-    return std::string(*n.value<std::string_view>());
-  }
-
-  Vec3 vec3(const toml::node& n, const std::string& what) const {
-    const toml::array* a = n.as_array();
-    if (!a || a->size() != 3) fail(n, what + " must be an array of 3 numbers");
-    return {number((*a)[0], what), number((*a)[1], what), number((*a)[2], what)};
-  }
-
-  Vec3 vec3(const toml::table& t, std::string_view key, const std::string& what,
-            Vec3 fallback) const {
-    const toml::node* n = t.get(key);
-    return n ? vec3(*n, what + "." + std::string(key)) : fallback;
-  }
-
-  std::uint32_t index(const toml::node& n, const std::string& what) const {
-    auto v = n.value<std::int64_t>();
-    if (!n.is_integer() || !v || *v < 0) fail(n, what + " must be a non-negative integer");
-    return static_cast<std::uint32_t>(*v);
-  }
-
-  // scale, then rotate = [axis x, y, z, degrees], then translate.
-  Affine transform(const toml::table& t, const std::string& what) const {
-    Affine m;
-    if (const toml::node* s = t.get("scale")) {
-      m = s->is_array() ? scaling(vec3(*s, what + ".scale"))
-                        : scaling(Vec3{number(*s, what + ".scale")});
-    }
-    if (const toml::node* r = t.get("rotate")) {
-      const toml::array* a = r->as_array();
-      if (!a || a->size() != 4) fail(*r, what + ".rotate must be [axis x, y, z, degrees]");
-      const Vec3 axis{number((*a)[0], what), number((*a)[1], what), number((*a)[2], what)};
-      if (length(axis) <= 0) fail(*r, what + ".rotate: the axis must not be zero");
-      m = rotation(axis, number((*a)[3], what + ".rotate")) * m;
-    }
-    if (t.get("translate")) m = translation(vec3(t, "translate", what, {})) * m;
-    return m;
-  }
-
-  std::uint32_t material(const SceneDesc& d, const toml::table& t, const std::string& owner) const {
-    const toml::node& n = require(t, "material", owner);
-    const std::string name = string(n, owner + ".material");
-    const int i = d.findMaterial(name);
-    if (i < 0) fail(n, "material '" + name + "' of " + owner + " is not defined");
-    return static_cast<std::uint32_t>(i);
-  }
-
- private:
-  std::string path_;
-};
-
-void readCamera(const Reader& r, const toml::table& t, CameraDesc& c) {
+void readCamera(const TomlReader& r, const toml::table& t, CameraDesc& c) {
   r.onlyKeys(t, "camera", {"position", "look_at", "up", "fov", "lens_radius", "focus_distance"});
   c.position = r.vec3(r.require(t, "position", "camera"), "camera.position");
   c.lookAt = r.vec3(r.require(t, "look_at", "camera"), "camera.look_at");
@@ -120,7 +24,7 @@ void readCamera(const Reader& r, const toml::table& t, CameraDesc& c) {
   if (!(c.fovY > 0 && c.fovY < 180)) r.fail(*t.get("fov"), "camera.fov must be in (0, 180)");
 }
 
-void readEnvironment(const Reader& r, const toml::table& t, Environment& e) {
+void readEnvironment(const TomlReader& r, const toml::table& t, Environment& e) {
   r.onlyKeys(t, "environment", {"type", "color", "bottom", "top"});
   const std::string type =
       t.get("type") ? r.string(*t.get("type"), "environment.type") : "constant";
@@ -136,7 +40,7 @@ void readEnvironment(const Reader& r, const toml::table& t, Environment& e) {
   }
 }
 
-Material readMaterial(const Reader& r, const std::string& name, const toml::table& t) {
+Material readMaterial(const TomlReader& r, const std::string& name, const toml::table& t) {
   const std::string what = "material '" + name + "'";
   r.onlyKeys(t, what, {"type", "color", "emission", "roughness", "ior"});
   Material m;
@@ -165,7 +69,7 @@ Material readMaterial(const Reader& r, const std::string& name, const toml::tabl
   return m;
 }
 
-TriangleMesh readInlineMesh(const Reader& r, const toml::table& t, const std::string& what) {
+TriangleMesh readInlineMesh(const TomlReader& r, const toml::table& t, const std::string& what) {
   TriangleMesh mesh;
   const toml::node& vn = r.require(t, "vertices", what);
   const toml::array* vs = vn.as_array();
@@ -200,7 +104,7 @@ SceneDesc readSceneToml(const std::string& path) {
     throw Error(path + ":" + std::to_string(e.source().begin.line) + ": " +
                 std::string(e.description()));
   }
-  const Reader r(path);
+  const TomlReader r(path);
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
   r.onlyKeys(root, "the scene",
              {"camera", "environment", "materials", "meshes", "spheres", "instances"});

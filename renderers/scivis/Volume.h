@@ -1,0 +1,67 @@
+#pragma once
+// Structured scalar volumes: a regular grid of voxels (float32, uint8 or uint16) placed in the
+// world by an origin and a spacing, of which a Volume holds any sub-box. A rank that renders one
+// brick of a field holds only that brick's voxels plus its ghost layers, never the whole field.
+//
+// Coordinates: voxel (i, j, k) of the whole field sits at world point origin + spacing * (i, j, k)
+// (vertex-centred, as VTK's image data). Boxes are half-open voxel index ranges over the whole
+// field; voxels are stored x fastest, then y, then z, over the held box.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "renderers/Math.h"
+
+namespace renderers {
+
+enum class VoxelType { Float32, UInt8, UInt16 };
+std::size_t voxelBytes(VoxelType type);
+const char* voxelTypeName(VoxelType type);  // "float32", "uint8", "uint16"
+
+struct Index3 {
+  int x = 0, y = 0, z = 0;
+  constexpr int operator[](int a) const { return a == 0 ? x : (a == 1 ? y : z); }
+  constexpr bool operator==(const Index3&) const = default;
+};
+
+// [lo, hi) in voxel indices of the whole field.
+struct VoxelBox {
+  Index3 lo, hi;
+  bool empty() const { return hi.x <= lo.x || hi.y <= lo.y || hi.z <= lo.z; }
+  std::size_t voxelCount() const;
+  Index3 size() const { return {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}; }
+  bool contains(const VoxelBox& other) const;
+  bool operator==(const VoxelBox&) const = default;
+};
+
+// The whole field's grid and where it sits in the world.
+struct GridGeometry {
+  Index3 dims;  // voxels per axis, each >= 2
+  Vec3 origin;  // world position of voxel (0, 0, 0)
+  Vec3 spacing{1.0f};
+  VoxelBox wholeBox() const { return {{0, 0, 0}, dims}; }
+  Vec3 worldOf(float i, float j, float k) const {
+    return {origin.x + spacing.x * i, origin.y + spacing.y * j, origin.z + spacing.z * k};
+  }
+  // World-space bounds of the voxel centres of `box` (the region trilinear samples cover).
+  void bounds(const VoxelBox& box, Vec3& lo, Vec3& hi) const;
+};
+
+// The held voxels of one volume. Plain data: copyable, movable, no hidden state.
+struct Volume {
+  GridGeometry grid;
+  VoxelBox box;  // the held voxels (a sub-box of grid.wholeBox())
+  VoxelType type = VoxelType::Float32;
+  std::vector<std::byte> voxels;  // box.voxelCount() * voxelBytes(type) bytes
+  float valueMin = 0, valueMax = 0;  // over the held voxels
+
+  // The value of voxel (i, j, k), given in whole-field indices inside `box`.
+  float at(int i, int j, int k) const;
+  std::size_t bytes() const { return voxels.size(); }
+  // Recomputes valueMin / valueMax from the voxels.
+  void updateRange();
+};
+
+}  // namespace renderers

@@ -1,0 +1,60 @@
+#pragma once
+// Where a volume's voxels come from, and making any sub-box of them. Procedural fields are
+// evaluated only at the requested voxels; raw files are read only over the requested box (a
+// rank keeping one brick never reads the whole file); OpenVDB grids are sampled into the box.
+#include <cstdint>
+#include <string>
+
+#include "renderers/scivis/Volume.h"
+
+namespace renderers {
+
+// VTK's vtkRTAnalyticSource ("Wavelet"): v = maximum * exp(-(x²+y²+z²) / (2 sigma²))
+// + xMag sin(xFreq x) + yMag sin(yFreq y) + zMag cos(zFreq z) over its whole extent
+// [-10, 10]³, with x = (centre - i) / extent width as VTK computes it. Any resolution samples
+// that same extent (dims 21³ gives exactly VTK's values).
+struct WaveletParams {
+  float maximum = 255, sigma = 0.5f;
+  float xFreq = 60, xMag = 10, yFreq = 30, yMag = 18, zFreq = 40, zMag = 5;
+};
+
+// Marschner & Lobb's test signal on [-1, 1]³:
+// rho = (1 - sin(pi z / 2) + alpha (1 + cos(2 pi fM cos(pi r / 2)))) / (2 (1 + alpha)),
+// r = sqrt(x² + y²).
+struct MarschnerLobbParams {
+  float fM = 6, alpha = 0.25f;
+};
+
+struct RawFileParams {
+  std::string path;  // as given, resolved against the scene file's folder
+  bool bigEndian = false;
+  std::uint64_t headerBytes = 0;  // skipped at the start of the file
+};
+
+struct OpenVdbParams {
+  std::string path;
+  std::string gridName;  // empty: the first float grid in the file
+};
+
+struct VolumeSource {
+  enum class Kind { Wavelet, MarschnerLobb, RawFile, OpenVdb };
+  Kind kind = Kind::Wavelet;
+  // The whole field's grid, resolved when the source is read (defaults filled in), so every
+  // rank knows every volume's geometry without touching voxels.
+  GridGeometry grid;
+  VoxelType type = VoxelType::Float32;  // of the produced voxels; procedural fields: Float32
+  WaveletParams wavelet;
+  MarschnerLobbParams marschnerLobb;
+  RawFileParams raw;
+  OpenVdbParams vdb;
+};
+
+// The field's value at whole-field voxel (i, j, k) of a procedural source (Wavelet,
+// MarschnerLobb); for tests that compare against the formula.
+float proceduralValue(const VolumeSource& source, int i, int j, int k);
+
+// The voxels of `box` (non-empty, inside source.grid.wholeBox()). Throws renderers::Error
+// naming the file and what is wrong on any I/O problem (missing, too short, unreadable).
+Volume loadVolume(const VolumeSource& source, const VoxelBox& box);
+
+}  // namespace renderers
