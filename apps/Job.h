@@ -9,7 +9,7 @@
 
 #include "apps/Options.h"
 #include "dfb/Messenger.h"
-#include "renderers/Scene.h"
+#include "renderers/RenderScene.h"
 #include "wall/Layout.h"
 #include "wall/Ranks.h"
 
@@ -21,7 +21,7 @@ struct Job {
   wall::RankRoles roles;  // without a wall: every rank renders
   int worldRank = 0;
   int canvasWidth = 0, canvasHeight = 0;
-  std::shared_ptr<const renderers::Scene> scene;  // render ranks only
+  renderers::RenderScene scene;  // render ranks only
   bool gatherMode() const { return options.mode == "gather"; }
   bool isWallRank() const { return roles.processOfRank(worldRank) >= 0; }
 };

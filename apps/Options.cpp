@@ -38,7 +38,7 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
       "out.png\n"
       "  wall:  mpirun -np R+W dfbwall --wall configs/walls/2x2.toml --offscreen --capture DIR"};
   std::string size;
-  cli.add_option("--scene", o.scene, "FILE.toml or builtin:NAME (cornell, spheres)")
+  cli.add_option("--scene", o.scene, "FILE.toml or builtin:NAME (cornell, spheres; for --renderer scivis: wavelet, particles)")
       ->capture_default_str();
   cli.add_option("--size", size, "image size WxH (not with --wall: the layout sets the canvas)");
   cli.add_option("--spp", o.spp, "samples per pixel per frame")
@@ -60,7 +60,7 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
       ->check(CLI::IsMember({"static", "roundrobin", "dynamic"}))
       ->capture_default_str();
   cli.add_option("--renderer", o.renderer, "renderer")
-      ->check(CLI::IsMember({"pathtracer", "primary", "pattern"}))
+      ->check(CLI::IsMember({"pathtracer", "primary", "pattern", "scivis"}))
       ->capture_default_str();
   cli.add_option("--max-depth", o.maxDepth, "maximum path length")
       ->check(CLI::Range(1, 64))

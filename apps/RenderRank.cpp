@@ -59,7 +59,7 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
   settings.seed = o.seed;
   settings.maxDepth = o.maxDepth;
   settings.orbitDegreesPerFrame = o.orbit;
-  const auto renderer = renderers::makeRenderer(o.renderer, *job.scene, settings);
+  const auto renderer = renderers::makeRenderer(o.renderer, job.scene, settings);
 
   renderers::FrameDriverOptions driving;
   driving.distribution = renderers::distributionFromName(o.distribution);

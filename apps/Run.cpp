@@ -45,7 +45,7 @@ std::string setUp(Job& job, int worldSize) {
       job.canvasHeight = o.height;
     }
     if (!job.isWallRank() && !o.dryRun)
-      job.scene = std::make_shared<renderers::Scene>(renderers::loadSceneDesc(o.scene));
+      job.scene = renderers::buildRenderScene(o.renderer, renderers::loadSceneDesc(o.scene));
     return {};
   } catch (const std::exception& e) {
     return e.what();

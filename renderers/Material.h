@@ -16,6 +16,11 @@ struct Material {
   Vec3 emission{};
   float roughness = 0.0f;  // metal: GGX alpha = roughness^2; 0 is a perfect mirror
   float ior = 1.5f;        // glass
+  // The scivis renderer's local shading: 1 - opacity of the light passes through the surface,
+  // and a Phong highlight of `specular` strength and exponent `shininess`.
+  float opacity = 1.0f;
+  float specular = 0.0f;
+  float shininess = 32.0f;
 };
 
 // True when the BSDF is a delta distribution (no next-event estimation through it).

@@ -9,6 +9,8 @@
 #include "renderers/PathTracer.h"
 #include "renderers/PatternRenderer.h"
 #include "renderers/PrimaryRenderer.h"
+#include "renderers/RenderScene.h"
+#include "renderers/scivis/SciVisRenderer.h"
 
 namespace renderers {
 
@@ -19,7 +21,37 @@ std::unique_ptr<Renderer> makeRenderer(const std::string& name, const Scene& sce
   if (name == "pathtracer") return std::make_unique<PathTracer>(scene, settings);
   if (name == "primary") return std::make_unique<PrimaryRenderer>(scene, settings);
   if (name == "pattern") return std::make_unique<PatternRenderer>(settings);
-  throw Error("unknown renderer '" + name + "' (choose pathtracer, primary or pattern)");
+  if (name == "scivis")
+    throw Error("the scivis renderer draws a scivis scene: build it with buildRenderScene");
+  throw Error("unknown renderer '" + name + "' (choose pathtracer, primary, pattern or scivis)");
+}
+
+RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc) {
+  RenderScene out;
+  out.desc = std::make_shared<const SceneDesc>(std::move(desc));
+  if (renderer == "scivis") {
+    out.scivis = std::make_shared<const SciVisScene>(out.desc, wholeScene(*out.desc));
+  } else if (renderer != "pattern") {
+    if (out.desc->instances.empty())
+      throw Error("renderer " + renderer +
+                  " draws meshes and spheres, and the scene has none (its volumes and particles "
+                  "are drawn by --renderer scivis)");
+    out.surfaces = std::make_shared<const Scene>(*out.desc);
+  }
+  return out;
+}
+
+std::unique_ptr<Renderer> makeRenderer(const std::string& name, const RenderScene& scene,
+                                       const RenderSettings& settings) {
+  if (name == "scivis") {
+    if (settings.width <= 0 || settings.height <= 0)
+      throw Error("renderer: canvas size must be positive");
+    if (!scene.scivis) throw Error("renderer scivis: the scene was not built for it");
+    return std::make_unique<SciVisRenderer>(*scene.scivis, settings);
+  }
+  if (name == "pattern") return std::make_unique<PatternRenderer>(settings);
+  if (!scene.surfaces) throw Error("renderer " + name + ": the scene was built for scivis");
+  return makeRenderer(name, *scene.surfaces, settings);
 }
 
 CameraDesc frameCamera(const CameraDesc& base, const RenderSettings& settings,

@@ -26,6 +26,15 @@ class Sampler {
                    mix64((static_cast<std::uint64_t>(accumulationId) << 32 | sampleIndex) +
                          0x632be59bd9b4e019ull))) {}
 
+  // A further stream of this sample, named by `salt`: e.g. the random numbers for shading one
+  // surface hit, keyed by what was hit rather than by how many hits came before it, so a ray cut
+  // into pieces (data-parallel bricks) shades each hit with the numbers the whole ray uses.
+  constexpr Sampler fork(std::uint64_t salt) const {
+    Sampler s;
+    s.key_ = mix64(key_ ^ mix64(salt + 0xd1b54a32d192ed03ull));
+    return s;
+  }
+
   // Uniform in [0, 1) for dimension `d`; the same (key, d) always gives the same value.
   constexpr float get(std::uint32_t d) const {
     return static_cast<float>(mix64(key_ + (d + 1) * 0x9e3779b97f4a7c15ull) >> 40) *

@@ -1,5 +1,6 @@
 #pragma once
-// A scene as plain data: what SceneToml reads, BuiltinScenes make and Scene builds a BVH from.
+// A scene as plain data: what SceneToml reads, BuiltinScenes make, Scene builds a BVH from and
+// SciVisScene turns into volumes, isosurfaces and particles.
 #include <array>
 #include <cstdint>
 #include <string>
@@ -8,6 +9,7 @@
 #include "renderers/Camera.h"
 #include "renderers/Material.h"
 #include "renderers/Math.h"
+#include "renderers/scivis/SciVisDesc.h"
 
 namespace renderers {
 
@@ -59,6 +61,13 @@ struct SceneDesc {
   std::vector<Instance> instances;
   CameraDesc camera;
   Environment environment;
+
+  // Drawn by the scivis renderer only (the path tracer draws the meshes and spheres above).
+  std::vector<VolumeDesc> volumes;
+  std::vector<IsosurfaceDesc> isosurfaces;
+  std::vector<ParticlesDesc> particles;
+  std::vector<LightDesc> lights;  // empty: an ambient light and a headlight (SciVisScene.h)
+  SciVisSettings scivis;
 
   // Index of the material called `name`, or -1.
   int findMaterial(const std::string& name) const;

@@ -9,6 +9,7 @@
 #include "renderers/Error.h"
 #include "renderers/MeshImport.h"
 #include "renderers/TomlReader.h"
+#include "renderers/scivis/SciVisToml.h"
 
 namespace renderers {
 namespace {
@@ -42,7 +43,8 @@ void readEnvironment(const TomlReader& r, const toml::table& t, Environment& e) 
 
 Material readMaterial(const TomlReader& r, const std::string& name, const toml::table& t) {
   const std::string what = "material '" + name + "'";
-  r.onlyKeys(t, what, {"type", "color", "emission", "roughness", "ior"});
+  r.onlyKeys(t, what,
+             {"type", "color", "emission", "roughness", "ior", "opacity", "specular", "shininess"});
   Material m;
   m.name = name;
   const toml::node& typeNode = r.require(t, "type", what);
@@ -64,6 +66,12 @@ Material readMaterial(const TomlReader& r, const std::string& name, const toml::
   m.emission = r.vec3(t, "emission", what, {});
   m.roughness = r.number(t, "roughness", what, 0.0f);
   m.ior = r.number(t, "ior", what, 1.5f);
+  m.opacity = r.number(t, "opacity", what, 1.0f);
+  if (!(m.opacity >= 0 && m.opacity <= 1)) r.fail(*t.get("opacity"), what + ".opacity must be in [0, 1]");
+  m.specular = r.number(t, "specular", what, 0.0f);
+  if (!(m.specular >= 0)) r.fail(*t.get("specular"), what + ".specular must not be negative");
+  m.shininess = r.number(t, "shininess", what, 32.0f);
+  if (!(m.shininess >= 1)) r.fail(*t.get("shininess"), what + ".shininess must be at least 1");
   if (m.type == MaterialType::Emissive && !t.get("emission"))
     r.fail(t, what + ": missing field 'emission'");
   return m;
@@ -107,7 +115,8 @@ SceneDesc readSceneToml(const std::string& path) {
   const TomlReader r(path);
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
   r.onlyKeys(root, "the scene",
-             {"camera", "environment", "materials", "meshes", "spheres", "instances"});
+             {"camera", "environment", "materials", "meshes", "spheres", "instances", "volumes",
+              "isosurfaces", "particles", "lights", "scivis"});
   SceneDesc d;
   readCamera(r, r.table(r.require(root, "camera", "the scene"), "camera"), d.camera);
   if (const toml::node* e = root.get("environment"))
@@ -117,18 +126,7 @@ SceneDesc readSceneToml(const std::string& path) {
       d.materials.push_back(readMaterial(
           r, std::string(name.str()), r.table(node, "material '" + std::string(name.str()) + "'")));
 
-  auto entries = [&](std::string_view key) {
-    std::vector<const toml::table*> out;
-    if (const toml::node* n = root.get(key)) {
-      const toml::array* a = n->as_array();
-      if (!a)
-        r.fail(*n, std::string(key) + " must be an array of tables ([[" + std::string(key) + "]])");
-      for (const toml::node& e : *a) out.push_back(&r.table(e, std::string(key) + " entry"));
-    }
-    return out;
-  };
-
-  for (const toml::table* t : entries("meshes")) {
+  for (const toml::table* t : r.arrayOfTables(root, "meshes")) {
     const std::string name = r.string(r.require(*t, "name", "mesh"), "mesh.name");
     const std::string what = "mesh '" + name + "'";
     r.onlyKeys(*t, what,
@@ -150,7 +148,7 @@ SceneDesc readSceneToml(const std::string& path) {
     d.instances.push_back(
         {static_cast<std::uint32_t>(d.shapes.size() - 1), r.transform(*t, what), material});
   }
-  for (const toml::table* t : entries("spheres")) {
+  for (const toml::table* t : r.arrayOfTables(root, "spheres")) {
     const std::string name = t->get("name") ? r.string(*t->get("name"), "sphere.name") : "sphere";
     const std::string what = "sphere '" + name + "'";
     r.onlyKeys(*t, what, {"name", "material", "center", "radius"});
@@ -164,7 +162,7 @@ SceneDesc readSceneToml(const std::string& path) {
     d.shapes.push_back(std::move(s));
     d.instances.push_back({static_cast<std::uint32_t>(d.shapes.size() - 1), {}, material});
   }
-  for (const toml::table* t : entries("instances")) {
+  for (const toml::table* t : r.arrayOfTables(root, "instances")) {
     const toml::node& mn = r.require(*t, "mesh", "instance");
     const std::string mesh = r.string(mn, "instance.mesh");
     const std::string what = "instance of '" + mesh + "'";
@@ -178,7 +176,9 @@ SceneDesc readSceneToml(const std::string& path) {
     if (t->get("material")) material = r.material(d, *t, what);
     d.instances.push_back({shape, r.transform(*t, what), material});
   }
-  if (d.instances.empty()) r.fail(root, "the scene has no meshes or spheres");
+  readSciVis(r, root, folder, d);
+  if (d.instances.empty() && d.volumes.empty() && d.particles.empty())
+    r.fail(root, "the scene has no meshes, spheres, volumes or particles");
   return d;
 }
 

@@ -9,6 +9,7 @@
 #include <initializer_list>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "renderers/Error.h"
 #include "renderers/Math.h"
@@ -40,6 +41,27 @@ class TomlReader {
   }
 
   const toml::node* get(const toml::table& t, std::string_view key) const { return t.get(key); }
+
+  // The tables of an array of tables ([[key]] entries); none when `key` is absent.
+  std::vector<const toml::table*> arrayOfTables(const toml::table& t, std::string_view key) const {
+    std::vector<const toml::table*> out;
+    if (const toml::node* n = t.get(key)) {
+      const toml::array* a = n->as_array();
+      if (!a) fail(*n, std::string(key) + " must be an array of tables ([[" + std::string(key) + "]])");
+      for (const toml::node& e : *a) out.push_back(&table(e, std::string(key) + " entry"));
+    }
+    return out;
+  }
+
+  bool boolean(const toml::table& t, std::string_view key, const std::string& what,
+               bool fallback) const {
+    const toml::node* n = t.get(key);
+    if (!n) return fallback;
+    if (!n->is_boolean()) fail(*n, what + "." + std::string(key) + " must be true or false");
+    return *n->value<bool>();
+  }
+
+  const std::string& path() const { return path_; }
 
   const toml::node& require(const toml::table& t, std::string_view key,
                             const std::string& what) const {

@@ -19,17 +19,11 @@
 #include <string>
 
 #include "renderers/TomlReader.h"
+#include "renderers/scivis/SciVisDesc.h"
 #include "renderers/scivis/TransferFunction.h"
 #include "renderers/scivis/VolumeSource.h"
 
 namespace renderers {
-
-struct VolumeDesc {
-  std::string name;
-  VolumeSource source;
-  TransferFunction transfer;
-  bool visible = true;  // false: only for isosurfaces (no volume rendering of it)
-};
 
 // `folder` resolves relative file names. The transfer function's range defaults to the source's
 // value range where that is known without reading voxels (procedural fields), else it is required.

@@ -7,6 +7,7 @@
 #   wall_test.sh window        LAYOUT RENDER_RANKS
 #   wall_test.sh dry-run       LAYOUT RENDER_RANKS
 #   wall_test.sh rank-dies     LAYOUT RENDER_RANKS
+#   wall_test.sh ranks-equal   RANKS [dfbwall options...]   (--image on RANKS ranks == on 1)
 # Needs DFBWALL (the executable), COMPARE (compare_captures) and MPIEXEC in the environment.
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
@@ -117,6 +118,14 @@ case "$scenario" in
     set -e
     [ "$code" -ne 0 ] || { echo "FAIL: exit code 0 after a rank died"; exit 1; }
     echo "job ended with exit $code $(( $(date +%s) - start )) s after rank $victim was killed"
+    ;;
+  ranks-equal)
+    # Image-parallel: any number of ranks renders the picture one rank renders, byte for byte.
+    n=$1; shift
+    mpi 1 "$DFBWALL" --image "$work/one.png" --quiet "$@"
+    mpi "$n" "$DFBWALL" --image "$work/many.png" --quiet "$@"
+    cmp "$work/one.png" "$work/many.png" || { echo "FAIL: $n ranks differ from 1 rank"; exit 1; }
+    echo "$n ranks wrote the 1-rank image byte for byte ($(stat -c %s "$work/one.png") bytes)"
     ;;
   *) echo "unknown scenario $scenario"; exit 2 ;;
 esac

@@ -1,0 +1,116 @@
+// The scivis renderer on the wavelet, one process: frame time, camera rays/s and volume
+// samples/s, with the image as a PNG to put beside VTK's (bench/renderers/vtk_volume.py renders
+// the same field, transfer function, camera and sample spacing).
+//   scivis_bench MODE RESOLUTION SIZE THREADS FRAMES [OUT.png]
+// MODE: "volume"  the wavelet as a volume (VTK's comparison: blue-white-red over 37..277,
+//                 opacity ramp 0..0.4 per voxel, one sample per voxel, no shading)
+//       "iso-ao"  two opaque isosurfaces with 4 ambient-occlusion rays and shadows per hit
+// The camera is VTK's ResetCamera() view of the volume (view angle 30°, looking down -z),
+// turned about the volume's centre by 360/FRAMES degrees a frame; the result is the median.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "renderers/BuiltinScenes.h"
+#include "renderers/RenderScene.h"
+#include "renderers/scivis/SciVisRenderer.h"
+#include "tests/renderers/RenderTestUtil.h"
+#include "wall/Png.h"
+
+namespace {
+
+using namespace renderers;
+
+SceneDesc benchScene(const std::string& mode, int resolution) {
+  SceneDesc d = waveletScene(resolution);
+  VolumeDesc& v = d.volumes[0];
+  v.transfer.colors = {{37.0f, {0.23f, 0.30f, 0.75f}}, {157.0f, {0.87f, 0.87f, 0.87f}},
+                       {277.0f, {0.71f, 0.02f, 0.15f}}};
+  d.isosurfaces.clear();
+  d.scivis = {};
+  d.environment = {};
+  // VTK's ResetCamera: the bounding sphere fills a 30° view, looking down -z.
+  const float radius = std::sqrt(3.0f), distance = radius / std::sin(15.0f * kPi / 180.0f);
+  d.camera = {{0, 0, distance}, {0, 0, 0}, {0, 1, 0}, 30.0f, 0, 0};
+  if (mode == "volume") {
+    v.transfer.opacities = {{37.0f, 0.0f}, {277.0f, 0.4f}};
+  } else {
+    v.visible = false;
+    Material a{"a", MaterialType::Diffuse, {0.9f, 0.9f, 0.95f}, {}, 0, 1.5f};
+    Material b{"b", MaterialType::Diffuse, {1.0f, 0.55f, 0.2f}, {}, 0, 1.5f};
+    d.materials = {a, b};
+    d.isosurfaces = {{0, 145.0f, 0}, {0, 215.0f, 1}};
+    d.scivis.aoSamples = 4;
+    d.scivis.aoDistance = 0.3f;
+  }
+  return d;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 6) {
+    std::fprintf(stderr, "usage: %s volume|iso-ao RESOLUTION SIZE THREADS FRAMES [OUT.png]\n",
+                 argv[0]);
+    return 2;
+  }
+  try {
+    using Clock = std::chrono::steady_clock;
+    const std::string mode = argv[1];
+    const int resolution = std::atoi(argv[2]), size = std::atoi(argv[3]);
+    const int threads = std::atoi(argv[4]), frames = std::max(1, std::atoi(argv[5]));
+    const auto t0 = Clock::now();
+    const RenderScene scene = buildRenderScene("scivis", benchScene(mode, resolution));
+    const double loadS = std::chrono::duration<double>(Clock::now() - t0).count();
+    RenderSettings settings;
+    settings.width = settings.height = size;
+    settings.seed = 1;
+    settings.orbitDegreesPerFrame = 360.0f / static_cast<float>(frames);
+    auto renderer = makeRenderer("scivis", scene, settings);
+    const auto* scivis = dynamic_cast<const SciVisRenderer*>(renderer.get());
+    std::vector<double> seconds;
+    std::vector<float> image;
+    const std::uint64_t samplesBefore = scivis->volumeSamples();
+    for (int f = 1; f <= frames; ++f) {
+      renderer->beginFrame({static_cast<std::uint32_t>(f), static_cast<std::uint32_t>(f)});
+      const auto a = Clock::now();
+      image = test::renderImage(*renderer, size, size, 64, threads, 1);
+      seconds.push_back(std::chrono::duration<double>(Clock::now() - a).count());
+    }
+    const double samples = static_cast<double>(scivis->volumeSamples() - samplesBefore);
+    double total = 0;
+    for (double s : seconds) total += s;
+    std::vector<double> sorted = seconds;
+    std::sort(sorted.begin(), sorted.end());
+    const double median = sorted[sorted.size() / 2];
+    if (argc > 6) {
+      // Frame 1's view (the last frame rendered is frame `frames`, one step short of a turn).
+      renderer->beginFrame({1, 1});
+      image = test::renderImage(*renderer, size, size, 64, threads, 1);
+      std::vector<std::uint32_t> rgba8(static_cast<std::size_t>(size) * size);
+      for (std::size_t i = 0; i < rgba8.size(); ++i) {
+        std::uint32_t p = 0;
+        for (int c = 0; c < 4; ++c) {
+          const float v = c == 3 ? 1.0f : std::pow(std::clamp(image[4 * i + c], 0.0f, 1.0f), 1 / 2.2f);
+          p |= static_cast<std::uint32_t>(std::lround(v * 255)) << (8 * c);
+        }
+        rgba8[i] = p;
+      }
+      wall::writePng(argv[6], rgba8.data(), size, size);
+    }
+    std::printf(
+        "{\"mode\": \"%s\", \"resolution\": %d, \"size\": %d, \"threads\": %d, \"frames\": %d, "
+        "\"load_s\": %.3f, \"median_frame_s\": %.4f, \"camera_rays_per_s\": %.4g, "
+        "\"volume_samples_per_s\": %.4g, \"volume_samples_per_ray\": %.1f}\n",
+        mode.c_str(), resolution, size, threads, frames, loadS, median,
+        double(size) * size * frames / total, samples / total, samples / (double(size) * size * frames));
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "scivis_bench: %s\n", e.what());
+    return 1;
+  }
+}

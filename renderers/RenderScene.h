@@ -1,0 +1,26 @@
+#pragma once
+// The scene as a renderer needs it, built once per rank: the path tracer's BVH for the surface
+// renderers, or the scivis scene (volumes, isosurfaces, particles, meshes) for "scivis".
+#include <memory>
+#include <string>
+
+#include "renderers/Renderer.h"
+#include "renderers/Scene.h"
+#include "renderers/scivis/SciVisScene.h"
+
+namespace renderers {
+
+struct RenderScene {
+  std::shared_ptr<const SceneDesc> desc;
+  std::shared_ptr<const Scene> surfaces;      // pathtracer, primary, pattern
+  std::shared_ptr<const SciVisScene> scivis;  // scivis
+};
+
+// Builds what `renderer` draws from `desc` (the whole scene). Throws renderers::Error.
+RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc);
+
+// Any renderer by name: "pathtracer", "primary", "pattern" or "scivis". `scene` must outlive it.
+std::unique_ptr<Renderer> makeRenderer(const std::string& name, const RenderScene& scene,
+                                       const RenderSettings& settings);
+
+}  // namespace renderers

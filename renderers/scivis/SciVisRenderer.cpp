@@ -1,0 +1,357 @@
+#include "renderers/scivis/SciVisRenderer.h"
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cmath>
+
+#include "renderers/PixelBlocks.h"
+
+namespace renderers {
+namespace {
+
+constexpr float kInf = Box3::kInf;
+
+// The accumulated colour of a ray so far: premultiplied RGB and the light still getting through.
+struct Accumulator {
+  Vec3 rgb;
+  float transmittance = 1.0f;
+  float depth = kInf;
+  void add(Vec3 color, float alpha, float t) {
+    rgb += color * (transmittance * alpha);
+    transmittance *= 1.0f - alpha;
+    if (depth == kInf && transmittance <= 0.5f) depth = t;
+  }
+};
+
+std::atomic<std::uint64_t> gVolumeSamples{0};
+
+// Table lookup with linear interpolation between entries.
+inline void lookup(const SciVisScene::VolumeLayer& v, float value, float rgba[4]) {
+  const float x = std::clamp((value - v.valueMin) * v.tableScale, 0.0f,
+                             static_cast<float>(SciVisScene::kTableSize - 1));
+  const int i = std::min(static_cast<int>(x), SciVisScene::kTableSize - 2);
+  const float f = x - static_cast<float>(i);
+  const float* a = &v.table[4 * static_cast<std::size_t>(i)];
+  for (int c = 0; c < 4; ++c) rgba[c] = a[c] + f * (a[4 + c] - a[c]);
+}
+
+// The level crossing between (ta, fa) and (tb, fb) (values on opposite sides of `level`), by
+// regula falsi on the field itself; both ends must be inside the field's data.
+float refineCrossing(const VolumeField& field, Vec3 origin, Vec3 dir, float level, float ta,
+                     float fa, float tb, float fb) {
+  for (int iteration = 0; iteration < 3; ++iteration) {
+    const float tm = ta + (tb - ta) * ((level - fa) / (fb - fa));
+    float fm;
+    if (!(tm > ta && tm < tb) || !field.sample(origin + dir * tm, fm)) break;
+    if ((fm - level) * (fa - level) > 0)
+      ta = tm, fa = fm;
+    else
+      tb = tm, fb = fm;
+  }
+  return fb == fa ? ta : ta + (tb - ta) * ((level - fa) / (fb - fa));
+}
+
+inline bool crosses(float a, float b, float level) {
+  return (a < level) != (b < level);
+}
+
+// A cosine-weighted direction about unit n.
+Vec3 cosineDirection(Vec3 n, float u0, float u1) {
+  Vec3 t, b;
+  basis(n, t, b);
+  const float r = std::sqrt(u0), phi = 2.0f * kPi * u1;
+  const float x = r * std::cos(phi), y = r * std::sin(phi), z = std::sqrt(std::max(0.0f, 1 - u0));
+  return t * x + b * y + n * z;
+}
+
+std::uint64_t bitsOf(float t) { return std::bit_cast<std::uint32_t>(t); }
+
+}  // namespace
+
+SciVisRenderer::SciVisRenderer(const SciVisScene& scene, const RenderSettings& settings,
+                               SciVisOptions options)
+    : scene_(scene),
+      settings_(settings),
+      options_(options),
+      camera_(frameCamera(scene.desc().camera, settings, 1), settings.width, settings.height),
+      epsilon_(1e-4f * scene.extent() + 0.05f * scene.volumeStep()) {}
+
+void SciVisRenderer::beginFrame(const dfb::FrameInfo& frame) {
+  camera_ = Camera(frameCamera(scene_.desc().camera, settings_, frame.frameId), settings_.width,
+                   settings_.height);
+}
+
+std::uint64_t SciVisRenderer::volumeSamples() const { return gVolumeSamples.load(); }
+
+bool SciVisRenderer::isosurfaceBetween(Vec3 origin, Vec3 dir, float tFar, float jitter) const {
+  // Shading rays step one voxel (not the camera rays' finer step): they only ask yes or no.
+  for (const SciVisScene::VolumeLayer& v : scene_.volumes()) {
+    if (!v.field || v.isosurfaces.empty()) continue;
+    float t0 = 0, t1 = tFar;
+    if (!clipToBox(v.field->dataBounds(), origin, reciprocal(dir), t0, t1)) continue;
+    const float step = v.field->minSpacing();
+    float previous = 0;
+    bool havePrevious = false;
+    for (float k = std::floor(t0 / step - jitter); ; k += 1) {
+      const float t = (k + jitter) * step;
+      if (t > t1) break;
+      if (t < t0) continue;
+      const Vec3 p = origin + dir * t;
+      // Skip macrocells that hold no isosurface.
+      const int m = v.field->macroIndex(p);
+      if (m < 0) break;
+      bool any = false;
+      for (const IsosurfaceDesc* iso : v.isosurfaces)
+        any = any || (iso->value >= v.field->macroMin(m) && iso->value <= v.field->macroMax(m));
+      if (!any) {
+        float e0 = t, e1 = kInf;
+        clipToBox(v.field->macroBounds(m), origin, reciprocal(dir), e0, e1);
+        const float next = std::floor(e1 / step - jitter);
+        if (next > k) k = next;  // the loop's += 1 steps into the next macrocell
+        havePrevious = false;
+        continue;
+      }
+      float value;
+      if (!v.field->sample(p, value)) break;
+      if (havePrevious)
+        for (const IsosurfaceDesc* iso : v.isosurfaces)
+          if (crosses(previous, value, iso->value)) return true;
+      previous = value;
+      havePrevious = true;
+    }
+  }
+  return false;
+}
+
+bool SciVisRenderer::occluded(Vec3 origin, Vec3 dir, float tFar, const Sampler& s) const {
+  return scene_.surfaceOccluded(origin, dir, 0.0f, tFar) ||
+         isosurfaceBetween(origin, dir, tFar, s.get(0));
+}
+
+Vec3 SciVisRenderer::shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, const Material& m,
+                           const Sampler& hitSampler) const {
+  const SciVisSettings& settings = scene_.desc().scivis;
+  if (dot(normal, dir) > 0) normal = -normal;  // face the viewer
+  const Vec3 from = point + normal * epsilon_;
+  float ambientVisibility = 1.0f;
+  if (settings.aoSamples > 0) {
+    int blocked = 0;
+    for (int i = 0; i < settings.aoSamples; ++i) {
+      const Sampler ray = hitSampler.fork(static_cast<std::uint64_t>(i) + 1);
+      if (occluded(from, cosineDirection(normal, ray.get(1), ray.get(2)), scene_.aoDistance(), ray))
+        ++blocked;
+    }
+    ambientVisibility = 1.0f - static_cast<float>(blocked) / static_cast<float>(settings.aoSamples);
+  }
+  Vec3 color;
+  for (std::size_t i = 0; i < scene_.lights().size(); ++i) {
+    const ResolvedLight& light = scene_.lights()[i];
+    if (light.kind == LightDesc::Kind::Ambient) {
+      color += baseColor * light.radiance * ambientVisibility;
+      continue;
+    }
+    Vec3 toLight = light.direction;
+    float distance = kInf;
+    Vec3 radiance = light.radiance;
+    if (light.kind == LightDesc::Kind::Point) {
+      toLight = light.position - point;
+      distance = length(toLight);
+      if (!(distance > 0)) continue;
+      toLight = toLight / distance;
+      radiance = radiance / (distance * distance);
+    }
+    const float cosine = dot(normal, toLight);
+    if (cosine <= 0) continue;
+    if (settings.shadows &&
+        occluded(from, toLight, distance, hitSampler.fork(0x51u + i)))
+      continue;
+    Vec3 lit = baseColor * cosine;
+    if (m.specular > 0) {
+      const Vec3 half = normalize(toLight - dir);
+      lit += Vec3{m.specular * std::pow(std::max(0.0f, dot(normal, half)), m.shininess)};
+    }
+    color += lit * radiance;
+  }
+  return color;
+}
+
+Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, float t0, float t1,
+                                   const Sampler& sampler) const {
+  Accumulator acc;
+  Fragment out;
+  if (!(t0 < t1)) return out;
+  const float minTransmittance = scene_.desc().scivis.minTransmittance;
+  const Vec3 invDir = reciprocal(dir);
+
+  // Surfaces come from Embree one at a time, in order; the next one waits in `surface`.
+  SurfaceHit surface;
+  bool haveSurface = scene_.intersectSurface(origin, dir, t0, t1, surface) && surface.t < t1;
+  auto shadeSurface = [&](const SurfaceHit& s) {
+    const Vec3 p = origin + dir * s.t;
+    const Vec3 c = shade(p, s.normal, dir, s.color, *s.material, sampler.fork(bitsOf(s.t)));
+    acc.add(c, s.material->opacity, s.t);
+  };
+  auto nextSurface = [&] {
+    const float after = std::nextafter(surface.t, kInf);
+    haveSurface = scene_.intersectSurface(origin, dir, after, t1, surface) && surface.t < t1;
+  };
+  // Surfaces before t, in order.
+  auto surfacesBefore = [&](float t) {
+    while (haveSurface && surface.t < t && acc.transmittance > minTransmittance) {
+      shadeSurface(surface);
+      nextSurface();
+    }
+  };
+
+  // The stretch of the ray where some volume has data, widened by a step on each side: the
+  // samples just outside [t0, t1) find the isosurface crossings near its ends.
+  const float step = scene_.volumeStep();
+  float volumeStart = kInf, volumeEnd = -kInf;
+  for (const SciVisScene::VolumeLayer& v : scene_.volumes()) {
+    if (!v.field) continue;
+    float a = t0 - step, b = t1 + step;
+    if (clipToBox(v.field->dataBounds(), origin, invDir, a, b))
+      volumeStart = std::min(volumeStart, a), volumeEnd = std::max(volumeEnd, b);
+  }
+
+  if (volumeStart <= volumeEnd) {
+    const auto& layers = scene_.volumes();
+    const std::size_t n = layers.size();
+    // Per volume: the value at the previous sample (when it had one) and at this one.
+    constexpr std::size_t kMaxLayers = 8;
+    float previous[kMaxLayers], current[kMaxLayers];
+    bool hadPrevious[kMaxLayers] = {}, hasCurrent[kMaxLayers] = {};
+    const float jitter = sampler.get(2);
+    std::uint64_t samples = 0;
+    float k = std::ceil(volumeStart / step - jitter);
+    float tPrevious = -kInf;
+    struct Crossing {
+      float t;
+      const IsosurfaceDesc* iso;
+      const VolumeField* field;
+    };
+    Crossing crossings[16];
+    for (; acc.transmittance > minTransmittance; k += 1) {
+      const float t = (k + jitter) * step;
+      const Vec3 p = origin + dir * t;
+      bool anyData = false;
+      for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) {
+        hasCurrent[i] = layers[i].field && layers[i].field->sample(p, current[i]);
+        anyData = anyData || hasCurrent[i];
+      }
+      // Isosurface crossings in (tPrevious, t), shaded in order with the surfaces among them.
+      int found = 0;
+      for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) {
+        if (!hasCurrent[i] || !hadPrevious[i]) continue;
+        for (const IsosurfaceDesc* iso : layers[i].isosurfaces) {
+          if (!crosses(previous[i], current[i], iso->value) || found == 16) continue;
+          const float th = refineCrossing(*layers[i].field, origin, dir, iso->value, tPrevious,
+                                          previous[i], t, current[i]);
+          if (th >= t0 && th < t1) crossings[found++] = {th, iso, layers[i].field};
+        }
+      }
+      std::sort(crossings, crossings + found,
+                [](const Crossing& a, const Crossing& b) { return a.t < b.t; });
+      for (int c = 0; c < found; ++c) {
+        surfacesBefore(crossings[c].t);
+        if (acc.transmittance <= minTransmittance) break;
+        const Crossing& x = crossings[c];
+        const Material& m = scene_.desc().materials[x.iso->material];
+        const Vec3 hit = origin + dir * x.t;
+        const Vec3 gradient = x.field->gradient(hit, 0.5f * x.field->minSpacing());
+        const Vec3 normal = length(gradient) > 0 ? normalize(gradient) : -dir;
+        acc.add(shade(hit, normal, dir, m.color, m, sampler.fork(bitsOf(x.t))), m.opacity, x.t);
+      }
+      surfacesBefore(t);
+      if (t >= t1 || t > volumeEnd) break;
+      if (t >= t0) {
+        for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) {
+          if (!hasCurrent[i] || !layers[i].visible) continue;
+          float rgba[4];
+          lookup(layers[i], current[i], rgba);
+          if (rgba[3] > 0) acc.add({rgba[0], rgba[1], rgba[2]}, rgba[3], t);
+        }
+        ++samples;
+      }
+      // Empty space: when no volume can show anything in the macrocell here, jump to the last
+      // sample before its exit (the crossing test needs the value there).
+      float skipTo = kInf;
+      bool skippable = true;
+      for (std::size_t i = 0; i < n && i < kMaxLayers && skippable; ++i) {
+        if (!layers[i].field) continue;
+        const int m = hasCurrent[i] ? layers[i].field->macroIndex(p) : -1;
+        if (m < 0) {
+          // Outside this volume's data: skip to where the ray enters it, if it does later.
+          float a = t, b = kInf;
+          if (clipToBox(layers[i].field->dataBounds(), origin, invDir, a, b) && a > t)
+            skipTo = std::min(skipTo, a);
+          else if (!(a > t) && b > t)
+            skippable = false;  // inside but not sampled: leave it to the next step
+          continue;
+        }
+        if (SciVisScene::anythingIn(layers[i], layers[i].field->macroMin(m),
+                                    layers[i].field->macroMax(m))) {
+          skippable = false;
+        } else {
+          float a = t, b = kInf;
+          clipToBox(layers[i].field->macroBounds(m), origin, invDir, a, b);
+          skipTo = std::min(skipTo, b);
+        }
+      }
+      for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) {
+        previous[i] = current[i];
+        hadPrevious[i] = hasCurrent[i];
+      }
+      tPrevious = t;
+      if (skippable && skipTo > t) {
+        const float last = std::floor(skipTo / step - jitter) - 1;  // one sample before the exit
+        if (last > k) {
+          k = last - 1;  // the loop's += 1 lands on `last`
+          for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) hadPrevious[i] = false;
+        }
+      }
+    }
+    gVolumeSamples.fetch_add(samples, std::memory_order_relaxed);
+  }
+  surfacesBefore(t1);
+
+  out.rgba[0] = acc.rgb.x, out.rgba[1] = acc.rgb.y, out.rgba[2] = acc.rgb.z;
+  out.rgba[3] = 1.0f - acc.transmittance;
+  out.depth = acc.depth;
+  return out;
+}
+
+void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulationId,
+                            std::uint32_t firstSample, std::uint32_t samples,
+                            dfb::Tile& out) const {
+  enableFlushToZero();
+  prepareTile(region, accumulationId, firstSample, samples, out);
+  const float inv = samples ? 1.0f / static_cast<float>(samples) : 0.0f;
+  const Box3& bounds = scene_.bounds();
+  const Environment& background = scene_.desc().environment;
+  for (int y = region.y0; y < region.y1; ++y)
+    for (int x = region.x0; x < region.x1; ++x) {
+      float sum[4] = {0, 0, 0, 0};
+      for (std::uint32_t s = firstSample; s < firstSample + samples; ++s) {
+        const Sampler sampler(settings_.seed, x, y, accumulationId, s);
+        Vec3 origin, dir;
+        camera_.ray(static_cast<float>(x) + sampler.get(0), static_cast<float>(y) + sampler.get(1),
+                    0.5f, 0.5f, origin, dir);
+        float t0 = 0, t1 = kInf;
+        Fragment f;
+        if (clipToBox(bounds, origin, reciprocal(dir), t0, t1))
+          f = integrate(origin, dir, t0, t1, sampler);
+        if (options_.background) {
+          const Vec3 bg = background.radiance(dir) * (1.0f - f.rgba[3]);
+          f.rgba[0] += bg.x, f.rgba[1] += bg.y, f.rgba[2] += bg.z, f.rgba[3] = 1.0f;
+        }
+        for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
+      }
+      float* px = &out.color[4 * (static_cast<std::size_t>(y - region.y0) * region.width() +
+                                  static_cast<std::size_t>(x - region.x0))];
+      for (int c = 0; c < 4; ++c) px[c] = sum[c] * inv;
+    }
+}
+
+}  // namespace renderers

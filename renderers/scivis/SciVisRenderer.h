@@ -1,0 +1,66 @@
+#pragma once
+// The scientific-visualization renderer ("scivis"): one camera ray per sample, integrated front
+// to back through volumes (emission-absorption, opacity corrected for the step) with the
+// surfaces it meets in between (isosurfaces found on the volumes, particles, meshes; opaque or
+// transparent), shaded locally: diffuse + Phong highlight, shadows from directional and point
+// lights, ambient occlusion. Secondary rays never leave the brick's data (with its ghosts), so
+// the renderer works on one brick of a distributed scene as well as on the whole.
+//
+// Every ray is integrated over an interval [t0, t1] (the brick's clip bounds; the whole scene:
+// [0, inf)). Volume samples lie on a grid fixed along the ray, t_k = (k + j) * step with j from
+// the pixel's random stream, and a surface is shaded with random numbers keyed by its distance,
+// so a ray cut into pieces samples and shades exactly what the whole ray does: composited front
+// to back, the pieces give the whole ray's colour up to float rounding.
+#include <cstdint>
+
+#include "renderers/Camera.h"
+#include "renderers/Renderer.h"
+#include "renderers/Rng.h"
+#include "renderers/scivis/SciVisScene.h"
+
+namespace renderers {
+
+// Premultiplied RGBA of a piece of a ray and the distance where it became at least half opaque
+// (infinity if never).
+struct Fragment {
+  float rgba[4] = {0, 0, 0, 0};
+  float depth = Box3::kInf;
+};
+
+struct SciVisOptions {
+  // true: the background is composited under every pixel (alpha 1, image-parallel rendering);
+  // false: pixels keep their alpha for sort-last compositing.
+  bool background = true;
+};
+
+class SciVisRenderer final : public Renderer {
+ public:
+  SciVisRenderer(const SciVisScene& scene, const RenderSettings& settings,
+                 SciVisOptions options = {});
+
+  void beginFrame(const dfb::FrameInfo& frame) override;
+  void render(const dfb::Region& region, std::uint32_t accumulationId, std::uint32_t firstSample,
+              std::uint32_t samples, dfb::Tile& out) const override;
+
+  // origin + t dir (dir unit length) over [t0, t1), front to back. `sampler` is the pixel
+  // sample's stream (dimension 2 places the volume sample grid).
+  Fragment integrate(Vec3 origin, Vec3 dir, float t0, float t1, const Sampler& sampler) const;
+
+  // Counters since construction (for benchmarks): volume samples taken by camera rays.
+  std::uint64_t volumeSamples() const;
+
+ private:
+  struct March;
+  Vec3 shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, const Material& m,
+             const Sampler& hitSampler) const;
+  bool occluded(Vec3 origin, Vec3 dir, float tFar, const Sampler& s) const;
+  bool isosurfaceBetween(Vec3 origin, Vec3 dir, float tFar, float jitter) const;
+
+  const SciVisScene& scene_;
+  RenderSettings settings_;
+  SciVisOptions options_;
+  Camera camera_;
+  float epsilon_;
+};
+
+}  // namespace renderers

@@ -1,0 +1,308 @@
+#include "renderers/scivis/SciVisScene.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "renderers/Error.h"
+
+namespace renderers {
+
+std::size_t BrickContent::bytes() const {
+  std::size_t total = 0;
+  for (const Volume& v : volumes) total += v.bytes();
+  for (const auto* set : {&particles, &ghostParticles})
+    for (const ParticlesDesc& p : *set) total += p.bytes();
+  for (const auto* set : {&meshes, &ghostMeshes})
+    for (const WorldMesh& m : *set)
+      total += m.mesh.positions.size() * sizeof(Vec3) +
+               m.mesh.triangles.size() * sizeof(m.mesh.triangles[0]);
+  return total;
+}
+
+std::vector<WorldMesh> worldMeshes(const SceneDesc& desc) {
+  std::vector<WorldMesh> out;
+  for (const Instance& inst : desc.instances) {
+    const Shape& s = desc.shapes.at(inst.shape);
+    if (s.isSpheres()) continue;
+    WorldMesh m;
+    m.material = inst.material;
+    m.mesh.triangles = s.mesh.triangles;
+    for (const Vec3& p : s.mesh.positions) m.mesh.positions.push_back(inst.transform.point(p));
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+BrickContent wholeScene(const SceneDesc& desc) {
+  BrickContent c;
+  for (const VolumeDesc& v : desc.volumes)
+    c.volumes.push_back(loadVolume(v.source, v.source.grid.wholeBox()));
+  c.particles = desc.particles;
+  // Sphere shapes of the path tracer's format are particle sets of one material each.
+  for (const Instance& inst : desc.instances) {
+    const Shape& s = desc.shapes.at(inst.shape);
+    if (!s.isSpheres()) continue;
+    ParticlesDesc p;
+    p.name = s.name;
+    for (const Vec3& centre : s.spheres.centers) p.centers.push_back(inst.transform.point(centre));
+    p.radii = s.spheres.radii;
+    p.material = inst.material;
+    c.particles.push_back(std::move(p));
+  }
+  c.meshes = worldMeshes(desc);
+  return c;
+}
+
+namespace {
+
+void embreeError(void* message, RTCError code, const char* text) {
+  if (code == RTC_ERROR_NONE) return;
+  auto* m = static_cast<std::string*>(message);
+  if (m->empty()) *m = text ? text : "unknown error";
+}
+
+RTCRay makeRay(Vec3 o, Vec3 d, float tNear, float tFar) {
+  RTCRay r;
+  r.org_x = o.x, r.org_y = o.y, r.org_z = o.z, r.tnear = tNear;
+  r.dir_x = d.x, r.dir_y = d.y, r.dir_z = d.z, r.time = 0;
+  r.tfar = tFar, r.mask = 0xFFFFFFFFu, r.id = 0, r.flags = 0;
+  return r;
+}
+
+}  // namespace
+
+struct SciVisScene::Embree {
+  struct Geometry {
+    const WorldMesh* mesh = nullptr;            // triangles, or
+    const ParticlesDesc* particles = nullptr;   // spheres
+    std::vector<Vec3> normals;                  // per triangle, unit
+  };
+  RTCDevice device = nullptr;
+  RTCScene camera = nullptr, shading = nullptr;
+  std::vector<Geometry> geometries;  // by geometry ID, the same in both scenes
+  std::string message;
+
+  ~Embree() {
+    if (camera) rtcReleaseScene(camera);
+    if (shading) rtcReleaseScene(shading);
+    if (device) rtcReleaseDevice(device);
+  }
+
+  void add(const WorldMesh* mesh, const ParticlesDesc* particles, bool seenByCamera) {
+    RTCGeometry g;
+    Geometry info;
+    if (mesh) {
+      g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+          g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+          mesh->mesh.positions.size()));
+      for (std::size_t i = 0; i < mesh->mesh.positions.size(); ++i) {
+        const Vec3 p = mesh->mesh.positions[i];
+        v[3 * i] = p.x, v[3 * i + 1] = p.y, v[3 * i + 2] = p.z;
+      }
+      auto* idx = static_cast<std::uint32_t*>(
+          rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                  3 * sizeof(std::uint32_t), mesh->mesh.triangles.size()));
+      for (std::size_t i = 0; i < mesh->mesh.triangles.size(); ++i) {
+        const auto& t = mesh->mesh.triangles[i];
+        if (t[0] >= mesh->mesh.positions.size() || t[1] >= mesh->mesh.positions.size() ||
+            t[2] >= mesh->mesh.positions.size()) {
+          rtcReleaseGeometry(g);
+          throw Error("a mesh has a vertex index out of range");
+        }
+        std::copy(t.begin(), t.end(), idx + 3 * i);
+        const Vec3 p0 = mesh->mesh.positions[t[0]];
+        const Vec3 n = cross(mesh->mesh.positions[t[1]] - p0, mesh->mesh.positions[t[2]] - p0);
+        info.normals.push_back(length(n) > 0 ? normalize(n) : Vec3{0, 0, 1});
+      }
+    } else {
+      g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+      const std::size_t n = particles->centers.size();
+      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                            RTC_FORMAT_FLOAT4, 4 * sizeof(float), n));
+      for (std::size_t i = 0; i < n; ++i) {
+        const Vec3 c = particles->centers[i];
+        v[4 * i] = c.x, v[4 * i + 1] = c.y, v[4 * i + 2] = c.z, v[4 * i + 3] = particles->radius(i);
+      }
+    }
+    info.mesh = mesh;
+    info.particles = particles;
+    rtcCommitGeometry(g);
+    const auto id = static_cast<unsigned>(geometries.size());
+    if (seenByCamera) rtcAttachGeometryByID(camera, g, id);
+    rtcAttachGeometryByID(shading, g, id);
+    rtcReleaseGeometry(g);
+    geometries.push_back(std::move(info));
+  }
+};
+
+SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickContent content)
+    : desc_(std::move(sceneDesc)), content_(std::move(content)), embree_(std::make_unique<Embree>()) {
+  const SceneDesc& desc = *desc_;
+  const SciVisSettings& settings = desc.scivis;
+  if (content_.volumes.size() != desc.volumes.size())
+    throw Error("a scivis brick needs one (possibly empty) volume per scene volume");
+  for (const auto* set : {&content_.particles, &content_.ghostParticles})
+    for (const ParticlesDesc& p : *set) {
+      if (p.material >= desc.materials.size()) throw Error("particles '" + p.name + "': no such material");
+      if (p.radii.size() != 1 && p.radii.size() != p.centers.size())
+        throw Error("particles '" + p.name + "': one radius, or one per particle");
+      if (!p.attribute.empty() && p.attribute.size() != p.centers.size())
+        throw Error("particles '" + p.name + "': one attribute per particle");
+    }
+  for (const auto* set : {&content_.meshes, &content_.ghostMeshes})
+    for (const WorldMesh& m : *set)
+      if (m.material >= desc.materials.size()) throw Error("a mesh has no such material");
+  for (const IsosurfaceDesc& iso : desc.isosurfaces)
+    if (iso.volume >= desc.volumes.size() || iso.material >= desc.materials.size())
+      throw Error("an isosurface names a volume or material that does not exist");
+
+  // Volumes: one sampling step for all (the finest spacing over the sampling rate), and each
+  // transfer function baked for that step.
+  float finest = 0;
+  for (const Volume& v : content_.volumes) {
+    const Vec3 s = v.grid.spacing;
+    const float m = std::min(s.x, std::min(s.y, s.z));
+    if (!(m > 0)) throw Error("a volume's spacing must be positive");
+    finest = finest > 0 ? std::min(finest, m) : m;
+  }
+  // Bricks must agree on the step with the whole scene: it comes from the scene's grids, not
+  // from what this brick holds.
+  finest = 0;
+  for (const VolumeDesc& v : desc.volumes) {
+    const Vec3 s = v.source.grid.spacing;
+    const float m = std::min(s.x, std::min(s.y, s.z));
+    finest = finest > 0 ? std::min(finest, m) : m;
+  }
+  step_ = finest > 0 ? finest / settings.samplingRate : 1.0f;
+  for (std::size_t i = 0; i < content_.volumes.size(); ++i) {
+    const Volume& v = content_.volumes[i];
+    const VolumeDesc& vd = desc.volumes[i];
+    VolumeLayer layer;
+    layer.visible = vd.visible;
+    if (!v.box.empty()) {
+      fields_.push_back(std::make_unique<VolumeField>(v));
+      layer.field = fields_.back().get();
+    }
+    const TransferFunction& tf = vd.transfer;
+    if (!(tf.valueMax > tf.valueMin))
+      throw Error("volume '" + vd.name + "': the transfer function's range is empty");
+    const Vec3 s = vd.source.grid.spacing;
+    const float unit = tf.unitDistance > 0 ? tf.unitDistance : std::min(s.x, std::min(s.y, s.z));
+    const float exponent = step_ / unit;
+    layer.valueMin = tf.valueMin;
+    layer.tableScale = static_cast<float>(kTableSize - 1) / (tf.valueMax - tf.valueMin);
+    layer.table.resize(4 * kTableSize);
+    layer.visibleUpTo.resize(kTableSize + 1);
+    for (int e = 0; e < kTableSize; ++e) {
+      const float value = tf.valueMin + static_cast<float>(e) / layer.tableScale;
+      const Vec3 c = tf.color(value);
+      const float a = std::clamp(tf.opacity(value), 0.0f, 1.0f);
+      // Opacity for the step: 1 - (1 - a)^(step / unit).
+      const float corrected = a >= 1.0f ? 1.0f : 1.0f - std::pow(1.0f - a, exponent);
+      float* t = &layer.table[4 * static_cast<std::size_t>(e)];
+      t[0] = c.x, t[1] = c.y, t[2] = c.z, t[3] = vd.visible ? corrected : 0.0f;
+      layer.visibleUpTo[static_cast<std::size_t>(e) + 1] =
+          layer.visibleUpTo[static_cast<std::size_t>(e)] + (t[3] > 0 ? 1u : 0u);
+    }
+    for (const IsosurfaceDesc& iso : desc.isosurfaces)
+      if (iso.volume == i) layer.isosurfaces.push_back(&iso);
+    volumes_.push_back(std::move(layer));
+  }
+
+  // Surfaces.
+  Embree& e = *embree_;
+  e.device = rtcNewDevice(nullptr);
+  if (!e.device) throw Error("Embree: cannot create a device");
+  rtcSetDeviceErrorFunction(e.device, embreeError, &e.message);
+  e.camera = rtcNewScene(e.device);
+  e.shading = rtcNewScene(e.device);
+  for (const WorldMesh& m : content_.meshes) e.add(&m, nullptr, true);
+  for (const ParticlesDesc& p : content_.particles) e.add(nullptr, &p, true);
+  for (const WorldMesh& m : content_.ghostMeshes) e.add(&m, nullptr, false);
+  for (const ParticlesDesc& p : content_.ghostParticles) e.add(nullptr, &p, false);
+  rtcCommitScene(e.camera);
+  rtcCommitScene(e.shading);
+  if (!e.message.empty()) throw Error("Embree: building the scivis scene: " + e.message);
+
+  // The scene's extent (for AO distances and ray offsets), from the descriptions, so every
+  // brick of a scene uses the same.
+  Box3 all{Vec3{Box3::kInf}, Vec3{-Box3::kInf}};
+  auto grow = [&](Vec3 p) {
+    all.lo = {std::min(all.lo.x, p.x), std::min(all.lo.y, p.y), std::min(all.lo.z, p.z)};
+    all.hi = {std::max(all.hi.x, p.x), std::max(all.hi.y, p.y), std::max(all.hi.z, p.z)};
+  };
+  for (const VolumeDesc& v : desc.volumes) {
+    Vec3 lo, hi;
+    v.source.grid.bounds(v.source.grid.wholeBox(), lo, hi);
+    grow(lo), grow(hi);
+  }
+  RTCBounds b;
+  rtcGetSceneBounds(e.shading, &b);
+  if (b.lower_x <= b.upper_x) grow({b.lower_x, b.lower_y, b.lower_z}), grow({b.upper_x, b.upper_y, b.upper_z});
+  extent_ = all.empty() ? 1.0f : std::max(1e-3f, maxComponent(all.hi - all.lo));
+  aoDistance_ = settings.aoDistance > 0 ? settings.aoDistance : 0.25f * extent_;
+
+  // Lights: as given, or an ambient light and a headlight along the scene camera's view.
+  if (desc.lights.empty()) {
+    lights_.push_back({LightDesc::Kind::Ambient, {}, {}, Vec3{0.25f}});
+    const Vec3 view = desc.camera.lookAt - desc.camera.position;
+    lights_.push_back({LightDesc::Kind::Directional,
+                       length(view) > 0 ? -normalize(view) : Vec3{0, 0, 1}, {}, Vec3{0.85f}});
+  } else {
+    for (const LightDesc& l : desc.lights)
+      lights_.push_back({l.kind, -l.direction, l.position, l.color * l.intensity});
+  }
+}
+
+SciVisScene::~SciVisScene() = default;
+
+bool SciVisScene::anythingIn(const VolumeLayer& v, float lo, float hi) {
+  for (const IsosurfaceDesc* iso : v.isosurfaces)
+    if (iso->value >= lo && iso->value <= hi) return true;
+  // Table entries whose interpolation reaches [lo, hi].
+  const float a = std::clamp((lo - v.valueMin) * v.tableScale, 0.0f, float(kTableSize - 1));
+  const float b = std::clamp((hi - v.valueMin) * v.tableScale, 0.0f, float(kTableSize - 1));
+  const auto first = static_cast<std::size_t>(a);
+  const auto last = std::min<std::size_t>(static_cast<std::size_t>(b) + 1, kTableSize - 1);
+  return v.visibleUpTo[last + 1] > v.visibleUpTo[first];
+}
+
+bool SciVisScene::intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFar,
+                                   SurfaceHit& hit) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh;
+  rh.ray = makeRay(origin, dir, tNear, tFar);
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(embree_->camera, &context, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  const Embree::Geometry& g = embree_->geometries[rh.hit.geomID];
+  const std::uint32_t prim = rh.hit.primID;
+  hit.t = rh.ray.tfar;
+  if (g.mesh) {
+    hit.material = &desc_->materials[g.mesh->material];
+    hit.normal = g.normals[prim];
+    hit.color = hit.material->color;
+  } else {
+    const ParticlesDesc& p = *g.particles;
+    hit.material = &desc_->materials[p.material];
+    hit.normal = normalize(origin + dir * hit.t - p.centers[prim]);
+    hit.color = p.attribute.empty() ? hit.material->color : p.colorMap.color(p.attribute[prim]);
+  }
+  return true;
+}
+
+bool SciVisScene::surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRay r = makeRay(origin, dir, tNear, tFar);
+  rtcOccluded1(embree_->shading, &context, &r);
+  return r.tfar < 0;
+}
+
+}  // namespace renderers

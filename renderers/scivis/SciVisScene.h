@@ -1,0 +1,105 @@
+#pragma once
+// What the scivis renderer traces: one brick of a scene (the whole scene is the one brick with
+// unbounded clip bounds). Camera rays see the brick's volumes, isosurfaces, particles and meshes
+// inside `bounds`; shading rays (shadows, ambient occlusion) also see the ghost data around it
+// (ghost voxels of its volumes, ghost particles and meshes), so a brick shades its points
+// exactly as the whole scene does when its ghosts hold what those rays can reach.
+//
+// Contracts: construction builds everything (Embree BVHs, macrocells) and throws
+// renderers::Error on invalid input; afterwards every const method is thread-safe.
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "renderers/SceneDesc.h"
+#include "renderers/scivis/Box.h"
+#include "renderers/scivis/Volume.h"
+#include "renderers/scivis/VolumeField.h"
+
+namespace renderers {
+
+// Triangles in world space with one material: a scene's mesh instance, or the part of one a
+// brick holds.
+struct WorldMesh {
+  TriangleMesh mesh;
+  std::uint32_t material = 0;
+};
+
+struct BrickContent {
+  Box3 bounds;  // camera rays are clipped to it
+  // One entry per SceneDesc::volumes, holding the voxels this brick has of it (an empty box:
+  // none). Voxels beyond `bounds` are ghost layers: shading rays and gradients see them.
+  std::vector<Volume> volumes;
+  std::vector<ParticlesDesc> particles, ghostParticles;
+  std::vector<WorldMesh> meshes, ghostMeshes;
+
+  std::size_t bytes() const;  // the data held: voxels, particles, triangles
+};
+
+// The whole scene as one brick: every volume loaded whole, every particle and mesh.
+BrickContent wholeScene(const SceneDesc& desc);
+// The scene's mesh instances (and sphere shapes, as particles) moved to world space.
+std::vector<WorldMesh> worldMeshes(const SceneDesc& desc);
+
+// A surface found by a ray: where, its shading normal (unit, any side) and what it looks like.
+struct SurfaceHit {
+  float t = 0;
+  Vec3 normal;
+  Vec3 color;
+  const Material* material = nullptr;
+};
+
+struct ResolvedLight {
+  LightDesc::Kind kind;
+  Vec3 direction;  // directional: towards the light (unit)
+  Vec3 position;
+  Vec3 radiance;  // color * intensity
+};
+
+class SciVisScene {
+ public:
+  SciVisScene(std::shared_ptr<const SceneDesc> desc, BrickContent content);
+  ~SciVisScene();
+  SciVisScene(const SciVisScene&) = delete;
+  SciVisScene& operator=(const SciVisScene&) = delete;
+
+  const SceneDesc& desc() const { return *desc_; }
+  const Box3& bounds() const { return content_.bounds; }
+  const BrickContent& content() const { return content_; }
+
+  // The closest surface (mesh or particle) along origin + t dir with t in [tNear, tFar], camera
+  // data only.
+  bool intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFar, SurfaceHit& hit) const;
+  // Whether any surface (camera or ghost data) blocks origin + t dir, t in [tNear, tFar].
+  bool surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const;
+
+  struct VolumeLayer {
+    const VolumeField* field = nullptr;  // null when this brick holds none of the volume
+    std::vector<float> table;            // kTableSize x RGBA, opacity per renderer step
+    std::vector<std::uint32_t> visibleUpTo;  // prefix counts of entries with opacity > 0
+    float valueMin = 0, tableScale = 0;
+    bool visible = true;
+    std::vector<const IsosurfaceDesc*> isosurfaces;
+  };
+  static constexpr int kTableSize = 4096;
+  const std::vector<VolumeLayer>& volumes() const { return volumes_; }
+  float volumeStep() const { return step_; }  // world distance between volume samples
+  // Whether the volume can show anything (opacity or an isosurface) in [lo, hi].
+  static bool anythingIn(const VolumeLayer& v, float lo, float hi);
+
+  const std::vector<ResolvedLight>& lights() const { return lights_; }
+  float aoDistance() const { return aoDistance_; }
+  float extent() const { return extent_; }
+
+ private:
+  std::shared_ptr<const SceneDesc> desc_;
+  BrickContent content_;
+  std::vector<std::unique_ptr<VolumeField>> fields_;
+  std::vector<VolumeLayer> volumes_;
+  std::vector<ResolvedLight> lights_;
+  float step_ = 1, aoDistance_ = 1, extent_ = 1;
+  struct Embree;
+  std::unique_ptr<Embree> embree_;
+};
+
+}  // namespace renderers

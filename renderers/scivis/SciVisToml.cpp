@@ -1,0 +1,189 @@
+#include "renderers/scivis/SciVisToml.h"
+
+#include <string>
+#include <vector>
+
+#include "renderers/scivis/Particles.h"
+#include "renderers/scivis/VolumeToml.h"
+
+namespace renderers {
+namespace {
+
+// Reads `key` as one number or an array of numbers.
+std::vector<float> numbers(const TomlReader& r, const toml::node& n, const std::string& what) {
+  std::vector<float> out;
+  if (const toml::array* a = n.as_array()) {
+    for (const toml::node& e : *a) out.push_back(r.number(e, what));
+  } else {
+    out.push_back(r.number(n, what));
+  }
+  return out;
+}
+
+void readIsosurfaces(const TomlReader& r, const toml::table& t, SceneDesc& d) {
+  const std::string what = "isosurface";
+  r.onlyKeys(t, what, {"volume", "value", "values", "material", "materials"});
+  const toml::node& vn = r.require(t, "volume", what);
+  const std::string volume = r.string(vn, what + ".volume");
+  std::uint32_t v = 0;
+  while (v < d.volumes.size() && d.volumes[v].name != volume) ++v;
+  if (v == d.volumes.size()) r.fail(vn, "volume '" + volume + "' of an isosurface is not defined");
+
+  if (t.get("value") && t.get("values")) r.fail(t, what + ": give value or values, not both");
+  const toml::node* valuesNode = t.get("values") ? t.get("values") : t.get("value");
+  if (!valuesNode) r.fail(t, what + ": missing field 'values'");
+  const std::vector<float> values = numbers(r, *valuesNode, what + ".values");
+  if (values.empty()) r.fail(*valuesNode, what + ".values must not be empty");
+
+  std::vector<std::uint32_t> materials;
+  if (const toml::node* ms = t.get("materials")) {
+    const toml::array* a = ms->as_array();
+    if (!a || a->size() != values.size())
+      r.fail(*ms, what + ".materials must be an array with one material per value");
+    for (const toml::node& m : *a) {
+      const std::string name = r.string(m, what + ".materials");
+      const int i = d.findMaterial(name);
+      if (i < 0) r.fail(m, "material '" + name + "' of an isosurface is not defined");
+      materials.push_back(static_cast<std::uint32_t>(i));
+    }
+  } else {
+    materials.assign(values.size(), r.material(d, t, what));
+  }
+  for (std::size_t i = 0; i < values.size(); ++i) d.isosurfaces.push_back({v, values[i], materials[i]});
+}
+
+void readParticles(const TomlReader& r, const toml::table& t, const std::filesystem::path& folder,
+                   SceneDesc& d) {
+  const std::string name = t.get("name") ? r.string(*t.get("name"), "particles.name") : "particles";
+  const std::string what = "particles '" + name + "'";
+  r.onlyKeys(t, what,
+             {"name", "material", "radius", "radii", "centers", "file", "layout", "generator",
+              "count", "seed", "center", "size", "attribute", "color_map"});
+  ParticlesDesc p;
+  p.name = name;
+  p.material = r.material(d, t, what);
+  const int sources = (t.get("centers") ? 1 : 0) + (t.get("file") ? 1 : 0) + (t.get("generator") ? 1 : 0);
+  if (sources != 1) r.fail(t, what + ": give exactly one of centers, file or generator");
+  const float radius = r.number(t, "radius", what, 0.0f);
+  if (t.get("radius") && !(radius > 0)) r.fail(*t.get("radius"), what + ".radius must be positive");
+
+  if (const toml::node* c = t.get("centers")) {
+    const toml::array* a = c->as_array();
+    if (!a) r.fail(*c, what + ".centers must be an array of [x, y, z]");
+    for (const toml::node& e : *a) p.centers.push_back(r.vec3(e, what + ".centers"));
+  } else if (const toml::node* f = t.get("file")) {
+    const std::string layout =
+        t.get("layout") ? r.string(*t.get("layout"), what + ".layout") : std::string("xyz");
+    try {
+      readParticleFile((folder / r.string(*f, what + ".file")).string(), layout, p);
+    } catch (const Error& e) {
+      r.fail(*f, what + ": " + e.what());
+    }
+  } else {
+    const toml::node& g = *t.get("generator");
+    if (r.string(g, what + ".generator") != "clusters")
+      r.fail(g, what + ".generator must be \"clusters\"");
+    const toml::node& countNode = r.require(t, "count", what);
+    const std::uint32_t count = r.index(countNode, what + ".count");
+    if (count == 0 || count > 100'000'000)
+      r.fail(countNode, what + ".count must be between 1 and 100000000");
+    const std::uint64_t seed = t.get("seed") ? r.index(*t.get("seed"), what + ".seed") : 1;
+    const float size = r.number(t, "size", what, 2.0f);
+    if (!(size > 0)) r.fail(*t.get("size"), what + ".size must be positive");
+    p = clusteredParticles(count, seed, r.vec3(t, "center", what, {}), size,
+                           radius > 0 ? radius : 0.002f * size);
+    p.name = name;
+    p.material = r.material(d, t, what);
+  }
+
+  if (const toml::node* rs = t.get("radii")) {
+    if (t.get("radius")) r.fail(*rs, what + ": give radius or radii, not both");
+    p.radii = numbers(r, *rs, what + ".radii");
+  } else if (radius > 0) {
+    p.radii = {radius};
+  }
+  if (p.radii.empty()) r.fail(t, what + ": missing field 'radius' (or 'radii', or 'r' in the layout)");
+  if (p.radii.size() != 1 && p.radii.size() != p.centers.size())
+    r.fail(*t.get("radii"), what + ".radii must have one radius per particle");
+  for (float x : p.radii)
+    if (!(x > 0)) r.fail(t.get("radii") ? *t.get("radii") : t, what + ": every radius must be positive");
+  if (const toml::node* a = t.get("attribute")) {
+    p.attribute = numbers(r, *a, what + ".attribute");
+    if (p.attribute.size() != p.centers.size())
+      r.fail(*a, what + ".attribute must have one value per particle");
+  }
+  if (const toml::node* cm = t.get("color_map")) {
+    p.colorMap = readTransferFunction(r, *cm, what + ".color_map");
+    if (p.attribute.empty()) r.fail(*cm, what + ".color_map needs an attribute per particle");
+  } else if (!p.attribute.empty()) {
+    float lo = p.attribute[0], hi = p.attribute[0];
+    for (float x : p.attribute) lo = std::min(lo, x), hi = std::max(hi, x);
+    p.colorMap = transferFunctionPreset("viridis", lo, hi > lo ? hi : lo + 1);
+  }
+  if (p.centers.empty()) r.fail(t, what + ": no particles");
+  d.particles.push_back(std::move(p));
+}
+
+LightDesc readLight(const TomlReader& r, const toml::table& t) {
+  const std::string what = "light";
+  r.onlyKeys(t, what, {"type", "direction", "position", "color", "intensity"});
+  LightDesc l;
+  const toml::node& typeNode = r.require(t, "type", what);
+  const std::string type = r.string(typeNode, what + ".type");
+  if (type == "directional") {
+    l.kind = LightDesc::Kind::Directional;
+    const toml::node& dn = r.require(t, "direction", what);
+    l.direction = r.vec3(dn, what + ".direction");
+    if (!(length(l.direction) > 0)) r.fail(dn, what + ".direction must not be zero");
+    l.direction = normalize(l.direction);
+  } else if (type == "point") {
+    l.kind = LightDesc::Kind::Point;
+    l.position = r.vec3(r.require(t, "position", what), what + ".position");
+  } else if (type == "ambient") {
+    l.kind = LightDesc::Kind::Ambient;
+  } else {
+    r.fail(typeNode, what + ".type must be directional, point or ambient");
+  }
+  l.color = r.vec3(t, "color", what, Vec3{1.0f});
+  l.intensity = r.number(t, "intensity", what, 1.0f);
+  if (!(l.intensity >= 0)) r.fail(*t.get("intensity"), what + ".intensity must not be negative");
+  return l;
+}
+
+void readSettings(const TomlReader& r, const toml::table& t, SciVisSettings& s) {
+  const std::string what = "scivis";
+  r.onlyKeys(t, what,
+             {"ao_samples", "ao_distance", "sampling_rate", "shadows", "min_transmittance"});
+  if (const toml::node* n = t.get("ao_samples")) {
+    const std::uint32_t v = r.index(*n, what + ".ao_samples");
+    if (v > 256) r.fail(*n, what + ".ao_samples must be at most 256");
+    s.aoSamples = static_cast<int>(v);
+  }
+  s.aoDistance = r.number(t, "ao_distance", what, s.aoDistance);
+  if (!(s.aoDistance >= 0)) r.fail(*t.get("ao_distance"), what + ".ao_distance must not be negative");
+  s.samplingRate = r.number(t, "sampling_rate", what, s.samplingRate);
+  if (!(s.samplingRate >= 0.01f && s.samplingRate <= 64))
+    r.fail(*t.get("sampling_rate"), what + ".sampling_rate must be in [0.01, 64]");
+  s.shadows = r.boolean(t, "shadows", what, s.shadows);
+  s.minTransmittance = r.number(t, "min_transmittance", what, s.minTransmittance);
+  if (!(s.minTransmittance >= 0 && s.minTransmittance < 1))
+    r.fail(*t.get("min_transmittance"), what + ".min_transmittance must be in [0, 1)");
+}
+
+}  // namespace
+
+void readSciVis(const TomlReader& r, const toml::table& root, const std::filesystem::path& folder,
+                SceneDesc& d) {
+  for (const toml::table* t : r.arrayOfTables(root, "volumes")) {
+    VolumeDesc v = readVolume(r, *t, folder);
+    for (const VolumeDesc& other : d.volumes)
+      if (other.name == v.name) r.fail(*t, "volume '" + v.name + "' is defined twice");
+    d.volumes.push_back(std::move(v));
+  }
+  for (const toml::table* t : r.arrayOfTables(root, "isosurfaces")) readIsosurfaces(r, *t, d);
+  for (const toml::table* t : r.arrayOfTables(root, "particles")) readParticles(r, *t, folder, d);
+  for (const toml::table* t : r.arrayOfTables(root, "lights")) d.lights.push_back(readLight(r, *t));
+  if (const toml::node* s = root.get("scivis")) readSettings(r, r.table(*s, "scivis"), d.scivis);
+}
+
+}  // namespace renderers

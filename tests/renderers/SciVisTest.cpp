@@ -1,0 +1,241 @@
+// Known answers of the scivis renderer: emission-absorption through a homogeneous cube, rays cut
+// into pieces that composite to the whole ray, a brick with ghost data shading as the whole
+// scene, isosurface hits on the analytic Marschner-Lobb level set, and image-parallel tiles.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+
+#include "renderers/BuiltinScenes.h"
+#include "renderers/RenderScene.h"
+#include "renderers/scivis/SciVisRenderer.h"
+#include "tests/renderers/RenderTestUtil.h"
+
+namespace renderers {
+namespace {
+
+// A volume of `n`³ voxels over [-1, 1]³, every voxel `value`.
+VolumeDesc constantVolume(int n, float value) {
+  VolumeDesc v;
+  v.name = "cube";
+  v.source.kind = VolumeSource::Kind::Wavelet;  // replaced by the voxels below
+  v.source.grid.dims = {n, n, n};
+  v.source.grid.origin = Vec3{-1.0f};
+  v.source.grid.spacing = Vec3{2.0f / static_cast<float>(n - 1)};
+  v.transfer.valueMin = 0, v.transfer.valueMax = 1;
+  (void)value;
+  return v;
+}
+
+Volume constantVoxels(const VolumeDesc& v, float value) {
+  Volume out;
+  out.grid = v.source.grid;
+  out.box = v.source.grid.wholeBox();
+  out.type = VoxelType::Float32;
+  out.voxels.resize(out.box.voxelCount() * sizeof(float));
+  for (std::size_t i = 0; i < out.box.voxelCount(); ++i)
+    std::memcpy(&out.voxels[i * sizeof(float)], &value, sizeof(float));
+  out.updateRange();
+  return out;
+}
+
+RenderSettings settingsFor(int w, int h) {
+  RenderSettings s;
+  s.width = w, s.height = h, s.seed = 5;
+  return s;
+}
+
+TEST(SciVis, HomogeneousCubeAbsorbsAsBeersLaw) {
+  // Extinction sigma and colour c: a chord of length L gives c (1 - exp(-sigma L)).
+  const float sigma = 1.3f, unit = 0.1f;
+  const Vec3 c{0.2f, 0.6f, 0.9f};
+  auto desc = std::make_shared<SceneDesc>();
+  VolumeDesc v = constantVolume(8, 0.5f);
+  v.transfer.colors = {{0.0f, c}, {1.0f, c}};
+  const float opacity = 1.0f - std::exp(-sigma * unit);
+  v.transfer.opacities = {{0.0f, opacity}, {1.0f, opacity}};
+  v.transfer.unitDistance = unit;
+  desc->volumes.push_back(v);
+  desc->scivis.samplingRate = 4;
+  desc->scivis.minTransmittance = 0;
+  BrickContent content;
+  content.volumes.push_back(constantVoxels(v, 0.5f));
+  const SciVisScene scene(desc, std::move(content));
+  const SciVisRenderer renderer(scene, settingsFor(8, 8));
+
+  struct Chord {
+    Vec3 origin, dir;
+  };
+  const Chord chords[] = {{{0, 0, -5}, {0, 0, 1}},
+                          {{0.3f, -0.2f, -5}, normalize(Vec3{0.05f, 0.1f, 1})},
+                          {{-4, -3, -2}, normalize(Vec3{4.2f, 3.1f, 2.05f})},
+                          {{-0.9f, -5, 0.4f}, normalize(Vec3{0.1f, 1, 0})}};
+  for (const Chord& chord : chords) {
+    float t0 = 0, t1 = Box3::kInf;
+    ASSERT_TRUE(clipToBox(Box3{Vec3{-1}, Vec3{1}}, chord.origin, reciprocal(chord.dir), t0, t1));
+    const float length = t1 - t0;
+    // The sample count along a chord is L / step on average over the jitter.
+    double sum[3] = {0, 0, 0};
+    const int n = 400;
+    for (int s = 0; s < n; ++s) {
+      const Fragment f = renderer.integrate(chord.origin, chord.dir, 0, Box3::kInf,
+                                            Sampler(1, 2, 3, 0, static_cast<std::uint32_t>(s)));
+      for (int k = 0; k < 3; ++k) sum[k] += f.rgba[k];
+    }
+    const float expected = 1.0f - std::exp(-sigma * length);
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(sum[k] / n, c[k] * expected, 0.005 * c[k] * expected)
+          << "channel " << k << ", chord length " << length;
+  }
+}
+
+// A small wavelet scene with a visible volume, a glassy and an opaque isosurface, particles and
+// a triangle: everything a ray can meet.
+std::shared_ptr<SceneDesc> mixedScene(int aoSamples) {
+  auto d = std::make_shared<SceneDesc>(waveletScene(40));
+  d->volumes[0].transfer.opacities = {{37.0f, 0.0f}, {120.0f, 0.05f}, {277.0f, 0.3f}};
+  d->scivis.aoSamples = aoSamples;
+  d->scivis.aoDistance = 0.3f;
+  d->scivis.minTransmittance = 0;
+  ParticlesDesc p;
+  p.name = "dots";
+  p.centers = {{0.5f, 0.5f, 0.5f}, {-0.6f, 0.2f, 0.7f}, {0.1f, -0.7f, -0.4f}};
+  p.radii = {0.15f};
+  p.material = 0;
+  d->particles.push_back(p);
+  Shape tri;
+  tri.name = "tri";
+  tri.mesh.positions = {{-1, -1, -0.2f}, {1, -1, -0.2f}, {0, 1, -0.2f}};
+  tri.mesh.triangles = {{0, 1, 2}};
+  d->shapes.push_back(tri);
+  d->instances.push_back({0, {}, 1});
+  return d;
+}
+
+TEST(SciVis, ARayCutInTwoCompositesToTheWholeRay) {
+  const auto desc = mixedScene(2);
+  const SciVisScene scene(desc, wholeScene(*desc));
+  const SciVisRenderer renderer(scene, settingsFor(64, 64));
+  Camera camera(desc->camera, 64, 64);
+  int compared = 0;
+  for (int y = 4; y < 64; y += 9)
+    for (int x = 3; x < 64; x += 7) {
+      const Sampler sampler(9, x, y, 0, 0);
+      Vec3 o, d;
+      camera.ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f, 0.5f, 0.5f, o, d);
+      float t0 = 0, t1 = Box3::kInf;
+      if (!clipToBox(Box3{Vec3{-1.2f}, Vec3{1.2f}}, o, reciprocal(d), t0, t1)) continue;
+      const Fragment whole = renderer.integrate(o, d, t0, t1, sampler);
+      for (float cut : {0.23f, 0.5f, 0.81f}) {
+        const float tc = t0 + cut * (t1 - t0);
+        const Fragment a = renderer.integrate(o, d, t0, tc, sampler);
+        const Fragment b = renderer.integrate(o, d, tc, t1, sampler);
+        for (int k = 0; k < 4; ++k) {
+          const float composite = a.rgba[k] + (1.0f - a.rgba[3]) * b.rgba[k];
+          EXPECT_NEAR(composite, whole.rgba[k], 1e-5f * std::max(1.0f, std::abs(whole.rgba[k])))
+              << "pixel " << x << "," << y << " cut at " << cut << " channel " << k;
+        }
+        ++compared;
+      }
+    }
+  EXPECT_GT(compared, 40);
+}
+
+TEST(SciVis, ABrickWithItsNeighbourAsGhostShadesLikeTheWholeScene) {
+  const auto desc = mixedScene(3);
+  const SciVisScene whole(desc, wholeScene(*desc));
+  // The brick: everything left of x = 0.1; its neighbour (the rest) as ghost data.
+  BrickContent brick = wholeScene(*desc);
+  brick.bounds = Box3{Vec3{-Box3::kInf}, Vec3{0.1f, Box3::kInf, Box3::kInf}};
+  ParticlesDesc inside = brick.particles[0], outside = brick.particles[0];
+  inside.centers.clear(), outside.centers.clear();
+  for (const Vec3& c : brick.particles[0].centers)
+    (c.x < 0.1f ? inside : outside).centers.push_back(c);
+  brick.particles = {inside};
+  brick.ghostParticles = {outside};
+  const SciVisScene part(desc, std::move(brick));
+  const RenderSettings s = settingsFor(48, 48);
+  const SciVisRenderer wholeRenderer(whole, s, {false}), brickRenderer(part, s, {false});
+  Camera camera(desc->camera, 48, 48);
+  int lit = 0;
+  for (int y = 0; y < 48; y += 3)
+    for (int x = 0; x < 48; x += 3) {
+      const Sampler sampler(4, x, y, 0, 1);
+      Vec3 o, d;
+      camera.ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f, 0.5f, 0.5f, o, d);
+      float t0 = 0, t1 = Box3::kInf;
+      if (!clipToBox(part.bounds(), o, reciprocal(d), t0, t1)) continue;
+      const Fragment a = wholeRenderer.integrate(o, d, t0, t1, sampler);
+      const Fragment b = brickRenderer.integrate(o, d, t0, t1, sampler);
+      for (int k = 0; k < 4; ++k) EXPECT_EQ(a.rgba[k], b.rgba[k]) << x << "," << y << " " << k;
+      if (a.rgba[3] > 0.1f) ++lit;
+    }
+  EXPECT_GT(lit, 20);
+}
+
+TEST(SciVis, MarschnerLobbIsosurfaceHitsLieOnTheLevelSet) {
+  const int n = 81;
+  auto desc = std::make_shared<SceneDesc>();
+  VolumeDesc v;
+  v.name = "ml";
+  v.source.kind = VolumeSource::Kind::MarschnerLobb;
+  v.source.grid.dims = {n, n, n};
+  v.source.grid.origin = Vec3{-1.0f};
+  const float spacing = 2.0f / static_cast<float>(n - 1);
+  v.source.grid.spacing = Vec3{spacing};
+  v.transfer.valueMin = 0, v.transfer.valueMax = 1;
+  v.transfer.colors = {{0.0f, Vec3{1}}};
+  v.transfer.opacities = {{0.0f, 0.0f}};
+  v.visible = false;
+  desc->volumes.push_back(v);
+  Material m;
+  m.name = "iso";
+  desc->materials = {m};
+  const float level = 0.5f;
+  desc->isosurfaces = {{0, level, 0}};
+  desc->camera = {{1.8f, 2.2f, 2.6f}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0, 0};
+  const SciVisScene scene(desc, wholeScene(*desc));
+  const SciVisRenderer renderer(scene, settingsFor(64, 64), {false});
+  Camera camera(desc->camera, 64, 64);
+  auto rho = [](Vec3 p) {
+    const float r = std::sqrt(p.x * p.x + p.y * p.y), a = 0.25f, f = 6.0f;
+    return (1 - std::sin(kPi * p.z / 2) + a * (1 + std::cos(2 * kPi * f * std::cos(kPi * r / 2)))) /
+           (2 * (1 + a));
+  };
+  int hits = 0;
+  float worst = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      Vec3 o, d;
+      camera.ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f, 0.5f, 0.5f, o, d);
+      const Fragment f = renderer.integrate(o, d, 0, Box3::kInf, Sampler(3, x, y, 0, 0));
+      if (!(f.depth < Box3::kInf)) continue;
+      ++hits;
+      // Distance to the analytic level set, to first order: |rho - level| / |grad rho|.
+      const Vec3 p = o + d * f.depth;
+      const float h = 1e-3f;
+      const Vec3 g{(rho(p + Vec3{h, 0, 0}) - rho(p - Vec3{h, 0, 0})) / (2 * h),
+                   (rho(p + Vec3{0, h, 0}) - rho(p - Vec3{0, h, 0})) / (2 * h),
+                   (rho(p + Vec3{0, 0, h}) - rho(p - Vec3{0, 0, h})) / (2 * h)};
+      const float distance = std::abs(rho(p) - level) / std::max(length(g), 1e-6f);
+      worst = std::max(worst, distance);
+      EXPECT_LE(distance, 0.5f * spacing) << "pixel " << x << "," << y;
+    }
+  EXPECT_GT(hits, 1000);
+  std::printf("Marschner-Lobb %d³: %d hits, farthest %.3f voxels from the level set\n", n, hits,
+              worst / spacing);
+}
+
+TEST(SciVis, TilesAndThreadsDoNotChangeAPixel) {
+  const RenderScene scene = buildRenderScene("scivis", *mixedScene(1));
+  const auto r = makeRenderer("scivis", scene, settingsFor(61, 47));
+  const auto a = test::renderImage(*r, 61, 47, 64, 1, 2);
+  const auto b = test::renderImage(*r, 61, 47, 17, 2, 2);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0);
+  for (std::size_t i = 3; i < a.size(); i += 4) ASSERT_EQ(a[i], 1.0f);  // background under all
+}
+
+}  // namespace
+}  // namespace renderers

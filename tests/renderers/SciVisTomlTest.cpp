@@ -1,0 +1,93 @@
+// The scivis parts of scene files: the shipped example reads, and every mistake names its file,
+// line and field.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "renderers/BuiltinScenes.h"
+#include "renderers/Error.h"
+
+namespace renderers {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string writeScene(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "dfbwall-scivis-toml";
+  fs::create_directories(dir);
+  const fs::path p = dir / name;
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+std::string errorOf(const std::string& path) {
+  try {
+    loadSceneDesc(path);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+const std::string kHeader = R"([camera]
+position = [0, 0, -5]
+look_at = [0, 0, 0]
+[materials.white]
+type = "diffuse"
+[[volumes]]
+name = "w"
+source = "wavelet"
+dims = [16, 16, 16]
+transfer_function = { preset = "grayscale", range = [37.0, 277.0] }
+)";  // 10 lines
+
+TEST(SciVisToml, TheShippedWaveletSceneReads) {
+  const SceneDesc d = loadSceneDesc(std::string(DFBWALL_SOURCE_DIR) + "/configs/scenes/wavelet.toml");
+  ASSERT_EQ(d.volumes.size(), 1u);
+  EXPECT_EQ(d.volumes[0].source.grid.dims, (Index3{96, 96, 96}));
+  ASSERT_EQ(d.isosurfaces.size(), 2u);
+  EXPECT_EQ(d.isosurfaces[1].value, 215.0f);
+  EXPECT_EQ(d.materials[d.isosurfaces[1].material].name, "core");
+  EXPECT_FLOAT_EQ(d.materials[d.isosurfaces[0].material].opacity, 0.3f);
+  ASSERT_EQ(d.particles.size(), 1u);
+  EXPECT_EQ(d.particles[0].centers.size(), 4u);
+  EXPECT_EQ(d.particles[0].attribute.size(), 4u);
+  ASSERT_EQ(d.lights.size(), 2u);
+  EXPECT_EQ(d.lights[1].kind, LightDesc::Kind::Directional);
+  EXPECT_EQ(d.scivis.aoSamples, 1);
+  EXPECT_EQ(d.instances.size(), 1u);
+}
+
+TEST(SciVisToml, MistakesNameFileLineAndField) {
+  struct Case {
+    std::string text, expected;
+  };
+  const Case cases[] = {
+      {"[[isosurfaces]]\nvolume = \"nope\"\nvalue = 1\nmaterial = \"white\"\n",
+       ":12: volume 'nope' of an isosurface is not defined"},
+      {"[[isosurfaces]]\nvolume = \"w\"\nvalues = [1, 2]\nmaterials = [\"white\"]\n",
+       ":14: isosurface.materials must be an array with one material per value"},
+      {"[[isosurfaces]]\nvolume = \"w\"\nvalue = nan\nmaterial = \"white\"\n",
+       ":13: isosurface.values must be a finite number"},
+      {"[[particles]]\nmaterial = \"white\"\ncenters = [[0, 0, 0]]\n",
+       "particles 'particles': missing field 'radius'"},
+      {"[[particles]]\nmaterial = \"white\"\nradius = -1\ncenters = [[0, 0, 0]]\n",
+       ":13: particles 'particles'.radius must be positive"},
+      {"[[particles]]\nmaterial = \"white\"\nradius = 1\ncentres = [[0, 0, 0]]\n",
+       ":14: unknown field 'centres' in particles 'particles'"},
+      {"[[lights]]\ntype = \"spot\"\n", ":12: light.type must be directional, point or ambient"},
+      {"[scivis]\nsampling_rate = 0\n", ":12: scivis.sampling_rate must be in [0.01, 64]"},
+      {"[scivis]\nshadows = 1\n", ":12: scivis.shadows must be true or false"},
+  };
+  int i = 0;
+  for (const Case& c : cases) {
+    const std::string path = writeScene("case" + std::to_string(i++) + ".toml", kHeader + c.text);
+    const std::string e = errorOf(path);
+    EXPECT_EQ(e.rfind(path + ":", 0), 0u) << e;
+    EXPECT_NE(e.find(c.expected), std::string::npos) << "got: " << e << "\nexpected: " << c.expected;
+  }
+}
+
+}  // namespace
+}  // namespace renderers
