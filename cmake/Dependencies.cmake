@@ -21,6 +21,21 @@ dfbwall_find_package(tomlplusplus libtomlplusplus-dev 3)
 dfbwall_find_package(CLI11 libcli11-dev CONFIG)
 dfbwall_find_package(embree libembree-dev 3)
 dfbwall_find_package(assimp libassimp-dev)
+# OpenVDB volumes. Not through the FindOpenVDB.cmake that libopenvdb-dev ships: it insists on
+# Boost.Iostreams (which the package does not pull in) and comes with its own FindTBB.cmake that
+# would shadow oneTBB's config for the whole project. The library needs only itself, oneTBB and
+# Imath (its half type) on the link line.
+find_path(OPENVDB_INCLUDE_DIR openvdb/openvdb.h)
+find_library(OPENVDB_LIBRARY openvdb)
+if(NOT OPENVDB_INCLUDE_DIR OR NOT OPENVDB_LIBRARY)
+  dfbwall_missing(OpenVDB libopenvdb-dev)
+endif()
+dfbwall_find_package(Imath libimath-dev CONFIG)
+add_library(OpenVDB::openvdb UNKNOWN IMPORTED)
+set_target_properties(OpenVDB::openvdb PROPERTIES
+  IMPORTED_LOCATION ${OPENVDB_LIBRARY}
+  INTERFACE_INCLUDE_DIRECTORIES ${OPENVDB_INCLUDE_DIR}
+  INTERFACE_LINK_LIBRARIES "TBB::tbb;Imath::Imath")
 # Wall presenters. The OpenGL lookup only checks the GL headers are there: no wall library links
 # libGL (GLFW loads it itself; the OSMesa presenter must not see it, see wall/CMakeLists.txt).
 dfbwall_find_package(glfw3 libglfw3-dev 3.3)

@@ -13,7 +13,8 @@ namespace renderers {
 struct TransferFunction {
   float valueMin = 0, valueMax = 1;
   // Control points as (value, colour) and (value, opacity in [0, 1]), ascending values; between
-  // points linear, outside the first/last point constant.
+  // points linear, outside the first/last point constant; two points with the same value make a
+  // step. No colour points: white; no opacity points: opaque.
   std::vector<std::pair<float, Vec3>> colors;
   std::vector<std::pair<float, float>> opacities;
   float unitDistance = 0;  // world distance the opacities are for; 0: the volume's smallest spacing
@@ -34,16 +35,21 @@ std::vector<std::string> transferFunctionPresetNames();
 class TransferTable {
  public:
   TransferTable() = default;
+  // Throws renderers::Error when tf's range is empty (valueMax <= valueMin). size >= 2.
   TransferTable(const TransferFunction& tf, int size = 1024);
   // RGB and opacity at `value` (clamped to the range).
   void lookup(float value, float rgba[4]) const;
   // The largest opacity over [lo, hi] (for empty-space skipping: 0 means nothing to see there).
+  // Conservative: never below the transfer function's opacity nor lookup()'s anywhere in [lo, hi]
+  // (clamped to the range), at most one entry's width wider. O(1). NaN bounds: the whole range.
   float maxOpacity(float lo, float hi) const;
   float valueMin() const { return valueMin_; }
   float valueMax() const { return valueMax_; }
 
  private:
   std::vector<float> rgba_;  // 4 per entry
+  // segmentMax_[l][e]: the largest opacity between entries e and e + 2^l (a sparse table).
+  std::vector<std::vector<float>> segmentMax_;
   float valueMin_ = 0, valueMax_ = 1, scale_ = 0;
   int size_ = 0;
 };

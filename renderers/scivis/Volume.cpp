@@ -1,0 +1,122 @@
+#include "renderers/scivis/Volume.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "renderers/Error.h"
+#include "renderers/Parallel.h"
+
+namespace renderers {
+
+std::size_t voxelBytes(VoxelType type) {
+  switch (type) {
+    case VoxelType::Float32:
+      return 4;
+    case VoxelType::UInt8:
+      return 1;
+    case VoxelType::UInt16:
+      return 2;
+  }
+  throw Error("unknown voxel type");
+}
+
+const char* voxelTypeName(VoxelType type) {
+  switch (type) {
+    case VoxelType::Float32:
+      return "float32";
+    case VoxelType::UInt8:
+      return "uint8";
+    case VoxelType::UInt16:
+      return "uint16";
+  }
+  return "unknown";
+}
+
+std::size_t VoxelBox::voxelCount() const {
+  if (empty()) return 0;
+  const Index3 s = size();
+  return static_cast<std::size_t>(s.x) * static_cast<std::size_t>(s.y) *
+         static_cast<std::size_t>(s.z);
+}
+
+bool VoxelBox::contains(const VoxelBox& other) const {
+  if (other.empty()) return true;
+  return lo.x <= other.lo.x && lo.y <= other.lo.y && lo.z <= other.lo.z && other.hi.x <= hi.x &&
+         other.hi.y <= hi.y && other.hi.z <= hi.z;
+}
+
+void GridGeometry::bounds(const VoxelBox& box, Vec3& lo, Vec3& hi) const {
+  const Vec3 a = worldOf(static_cast<float>(box.lo.x), static_cast<float>(box.lo.y),
+                         static_cast<float>(box.lo.z));
+  const Vec3 b = worldOf(static_cast<float>(box.hi.x - 1), static_cast<float>(box.hi.y - 1),
+                         static_cast<float>(box.hi.z - 1));
+  // min/max: a negative spacing (a mirrored grid) still gives lo <= hi.
+  lo = {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
+  hi = {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
+}
+
+namespace {
+
+std::size_t offsetOf(const VoxelBox& box, int i, int j, int k) {
+  const Index3 s = box.size();
+  return (static_cast<std::size_t>(k - box.lo.z) * static_cast<std::size_t>(s.y) +
+          static_cast<std::size_t>(j - box.lo.y)) *
+             static_cast<std::size_t>(s.x) +
+         static_cast<std::size_t>(i - box.lo.x);
+}
+
+// Voxel n of the held voxels as a float; the buffer is not necessarily aligned for the type.
+float valueAt(const std::byte* voxels, VoxelType type, std::size_t n) {
+  switch (type) {
+    case VoxelType::Float32: {
+      float f;
+      std::memcpy(&f, voxels + n * 4, 4);
+      return f;
+    }
+    case VoxelType::UInt8:
+      return static_cast<float>(static_cast<std::uint8_t>(voxels[n]));
+    case VoxelType::UInt16: {
+      std::uint16_t u;
+      std::memcpy(&u, voxels + n * 2, 2);
+      return static_cast<float>(u);
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+float Volume::at(int i, int j, int k) const {
+  return valueAt(voxels.data(), type, offsetOf(box, i, j, k));
+}
+
+void Volume::updateRange() {
+  const std::size_t count = box.voxelCount();
+  if (count == 0 || voxels.size() < count * voxelBytes(type)) {
+    valueMin = valueMax = 0;
+    return;
+  }
+  // One slab per task; NaN voxels (possible in float files) are left out so one bad voxel does
+  // not make the whole range NaN.
+  const std::size_t slab = count / static_cast<std::size_t>(box.size().z);
+  const std::size_t slabs = static_cast<std::size_t>(box.size().z);
+  std::vector<float> lo(slabs, std::numeric_limits<float>::infinity());
+  std::vector<float> hi(slabs, -std::numeric_limits<float>::infinity());
+  parallelFor(slabs, [&](std::size_t z) {
+    float l = lo[z], h = hi[z];
+    for (std::size_t n = z * slab, end = n + slab; n < end; ++n) {
+      const float v = valueAt(voxels.data(), type, n);
+      if (v < l) l = v;
+      if (v > h) h = v;
+    }
+    lo[z] = l;
+    hi[z] = h;
+  });
+  valueMin = *std::min_element(lo.begin(), lo.end());
+  valueMax = *std::max_element(hi.begin(), hi.end());
+  if (valueMin > valueMax) valueMin = valueMax = 0;  // every voxel NaN
+}
+
+}  // namespace renderers

@@ -1,0 +1,239 @@
+// [[volumes]] entries and transfer functions from TOML: what a valid entry gives, and errors that
+// name file:line and the field.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "renderers/Error.h"
+#include "renderers/scivis/VolumeToml.h"
+
+namespace renderers {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path testDir() {
+  const fs::path dir = fs::path(::testing::TempDir()) / "dfbwall-volume-toml-tests";
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::string writeFile(const std::string& name, const std::string& text) {
+  const fs::path p = testDir() / name;
+  std::ofstream(p, std::ios::binary) << text;
+  return p.string();
+}
+
+// The first [[volumes]] entry of the file.
+VolumeDesc readFirst(const std::string& path) {
+  const toml::table root = toml::parse_file(path);
+  const TomlReader r(path);
+  return readVolume(r, *root["volumes"][0].as_table(), fs::path(path).parent_path());
+}
+
+// "(no error)" or the message of the Error reading `text` (saved as `name`) throws; every
+// message is expected to start with "<path>:".
+std::string errorOf(const std::string& name, const std::string& text) {
+  const std::string path = writeFile(name, text);
+  try {
+    readFirst(path);
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    return m.rfind(path + ":", 0) == 0 ? m.substr(path.size()) : "(no file name) " + m;
+  }
+  return "(no error)";
+}
+
+TEST(VolumeToml, AWaveletEntryGivesItsGridParametersAndTransferFunction) {
+  const VolumeDesc d = readFirst(writeFile("wave.toml", R"([[volumes]]
+name = "wave"
+source = "wavelet"
+dims = [65, 33, 17]
+sigma = 0.25
+z_mag = 7
+transfer_function = { preset = "viridis", range = [40, 270], opacity = [[40, 0], [270, 0.4]], opacity_unit = 0.5 }
+)"));
+  EXPECT_EQ(d.name, "wave");
+  EXPECT_TRUE(d.visible);
+  EXPECT_EQ(d.source.kind, VolumeSource::Kind::Wavelet);
+  EXPECT_EQ(d.source.grid.dims, (Index3{65, 33, 17}));
+  // Longest side 2 world units, centred on 0.
+  EXPECT_EQ(d.source.grid.spacing, (Vec3{2.0f / 64}));
+  EXPECT_EQ(d.source.grid.origin, (Vec3{-1, -0.5f, -0.25f}));
+  EXPECT_EQ(d.source.wavelet.sigma, 0.25f);
+  EXPECT_EQ(d.source.wavelet.zMag, 7.0f);
+  EXPECT_EQ(d.source.wavelet.maximum, 255.0f);  // default
+  EXPECT_EQ(d.transfer.valueMin, 40.0f);
+  EXPECT_EQ(d.transfer.valueMax, 270.0f);
+  EXPECT_EQ(d.transfer.colors.size(), 65u);
+  EXPECT_NEAR(d.transfer.opacity(155), 0.2f, 1e-6f);
+  EXPECT_EQ(d.transfer.unitDistance, 0.5f);
+}
+
+TEST(VolumeToml, DefaultsFollowTheKnownFields) {
+  const VolumeDesc w = readFirst(writeFile("defaults.toml", R"([[volumes]]
+name = "w"
+source = "wavelet"
+spacing = [1, 2, 3]
+origin = [4, 5, 6]
+)"));
+  EXPECT_EQ(w.source.grid.dims, (Index3{21, 21, 21}));  // VTK's
+  EXPECT_EQ(w.source.grid.spacing, (Vec3{1, 2, 3}));
+  EXPECT_EQ(w.source.grid.origin, (Vec3{4, 5, 6}));
+  // No transfer function: cool-warm over VTK's range of the field.
+  EXPECT_NEAR(w.transfer.valueMin, 37.353f, 1e-3f);
+  EXPECT_NEAR(w.transfer.valueMax, 276.829f, 1e-3f);
+  EXPECT_NEAR(w.transfer.color(w.transfer.valueMin).x, 0.231373f, 1e-6f);
+
+  const VolumeDesc ml = readFirst(writeFile("ml.toml", R"([[volumes]]
+name = "ml"
+source = "marschner-lobb"
+visible = false
+alpha = 0.5
+transfer_function = { colors = [[0.2, 1, 0, 0], [0.8, 0, 0, 1]] }
+)"));
+  EXPECT_EQ(ml.source.grid.dims, (Index3{40, 40, 40}));
+  EXPECT_FALSE(ml.visible);
+  EXPECT_EQ(ml.source.marschnerLobb.alpha, 0.5f);
+  // The field's known range [0, 1] wins over the points' span; opacity: a 0 to 1 ramp.
+  EXPECT_EQ(ml.transfer.valueMin, 0.0f);
+  EXPECT_EQ(ml.transfer.valueMax, 1.0f);
+  EXPECT_EQ(ml.transfer.opacity(0.5f), 0.5f);
+}
+
+TEST(VolumeToml, RawFilesResolveAgainstTheSceneFolderAndAreCheckedWhenRead) {
+  std::ofstream(testDir() / "ct.raw", std::ios::binary) << std::string(6 + 4 * 3 * 2 * 2, 'x');
+  const VolumeDesc d = readFirst(writeFile("raw.toml", R"([[volumes]]
+name = "ct"
+source = "raw"
+file = "ct.raw"
+dims = [4, 3, 2]
+type = "uint16"
+byte_order = "big"
+header_bytes = 6
+transfer_function = { preset = "grayscale", range = [0, 4096], max_opacity = 0.25 }
+)"));
+  EXPECT_EQ(d.source.raw.path, (testDir() / "ct.raw").string());
+  EXPECT_EQ(d.source.type, VoxelType::UInt16);
+  EXPECT_TRUE(d.source.raw.bigEndian);
+  EXPECT_EQ(d.source.raw.headerBytes, 6u);
+  EXPECT_EQ(d.transfer.opacity(4096), 0.25f);
+
+  const std::string ct = (testDir() / "ct.raw").string();
+  EXPECT_EQ(errorOf("raw-size.toml", R"([[volumes]]
+name = "ct"
+source = "raw"
+file = "ct.raw"
+dims = [4, 3, 3]
+type = "uint16"
+header_bytes = 6
+transfer_function = { preset = "grayscale", range = [0, 4096] }
+)"),
+            ":4: volume 'ct'.file: " + ct +
+                ": raw volume file is 54 bytes, expected 78 bytes (4x3x3 uint16 voxels of 2 bytes "
+                "+ 6 header bytes)");
+  EXPECT_EQ(errorOf("raw-missing.toml", R"([[volumes]]
+name = "ct"
+source = "raw"
+file = "nothing.raw"
+dims = [4, 3, 3]
+type = "float32"
+transfer_function = { preset = "grayscale", range = [0, 1] }
+)"),
+            ":4: volume 'ct'.file: " + (testDir() / "nothing.raw").string() +
+                ": cannot open the raw volume file (No such file or directory); expected 144 bytes "
+                "(4x3x3 float32 voxels of 4 bytes + 0 header bytes)");
+  const std::string head = "[[volumes]]\nname = \"ct\"\nsource = \"raw\"\nfile = \"ct.raw\"\n";
+  EXPECT_EQ(errorOf("raw-nodims.toml", head + "type = \"uint8\"\n"),
+            ":1: volume 'ct': missing field 'dims'");
+  EXPECT_EQ(errorOf("raw-type.toml", head + "dims = [2, 2, 2]\ntype = \"int8\"\n"),
+            ":6: volume 'ct'.type must be \"float32\", \"uint8\" or \"uint16\"");
+  EXPECT_EQ(errorOf("raw-order.toml",
+                    head + "dims = [2, 2, 2]\ntype = \"uint8\"\nbyte_order = \"middle\"\n"),
+            ":7: volume 'ct'.byte_order must be \"little\" or \"big\"");
+  EXPECT_EQ(
+      errorOf("raw-header.toml", head + "dims = [2, 2, 2]\ntype = \"uint8\"\nheader_bytes = -1\n"),
+      ":7: volume 'ct'.header_bytes must be a non-negative integer");
+  // A file's values are unknown until it is read: a preset needs its range.
+  EXPECT_EQ(
+      errorOf("raw-norange.toml", head + "dims = [4, 3, 2]\ntype = \"uint16\"\nheader_bytes = 6\n"
+                                         "transfer_function = { preset = \"viridis\" }\n"),
+      ":8: volume 'ct'.transfer_function: missing field 'range' (the volume's values are not "
+      "known before reading it)");
+  EXPECT_EQ(
+      errorOf("raw-notf.toml", head + "dims = [4, 3, 2]\ntype = \"uint16\"\nheader_bytes = 6\n"),
+      ":1: volume 'ct': missing field 'transfer_function'");
+}
+
+TEST(VolumeToml, FieldErrorsNameFileLineAndField) {
+  const std::string w = "[[volumes]]\nname = \"w\"\nsource = \"wavelet\"\n";  // lines 1-3
+  EXPECT_EQ(errorOf("unknown.toml", w + "colour = 1\n"),
+            ":4: unknown field 'colour' in volume 'w'");
+  EXPECT_EQ(errorOf("other-source.toml", w + "f_m = 6\n"), ":4: unknown field 'f_m' in volume 'w'");
+  EXPECT_EQ(
+      errorOf("source.toml", "[[volumes]]\nname = \"w\"\nsource = \"noise\"\n"),
+      ":3: volume 'w'.source must be \"wavelet\", \"marschner-lobb\", \"raw\" or \"openvdb\", "
+      "not \"noise\"");
+  EXPECT_EQ(errorOf("dims-small.toml", w + "dims = [64, 1, 64]\n"),
+            ":4: volume 'w'.dims must be between 2 and 16384 per axis, not 1");
+  EXPECT_EQ(errorOf("dims-big.toml", w + "dims = [25600, 256, 256]\n"),
+            ":4: volume 'w'.dims must be between 2 and 16384 per axis, not 25600");
+  EXPECT_EQ(errorOf("dims-float.toml", w + "dims = [64, 64.5, 64]\n"),
+            ":4: volume 'w'.dims must be an array of 3 integers");
+  EXPECT_EQ(errorOf("spacing.toml", w + "spacing = [1, 0, 1]\n"),
+            ":4: volume 'w'.spacing must be positive");
+  EXPECT_EQ(errorOf("spacing-neg.toml", w + "spacing = -2\n"),
+            ":4: volume 'w'.spacing must be positive");
+  EXPECT_EQ(errorOf("sigma.toml", w + "sigma = 0\n"), ":4: volume 'w'.sigma must be positive");
+  EXPECT_EQ(errorOf("visible.toml", w + "visible = 1\n"),
+            ":4: volume 'w'.visible must be true or false");
+  EXPECT_EQ(errorOf("name.toml", "[[volumes]]\nsource = \"wavelet\"\n"),
+            ":1: volume: missing field 'name'");
+}
+
+TEST(VolumeToml, TransferFunctionErrorsNameFileLineAndField) {
+  const std::string w = "[[volumes]]\nname = \"w\"\nsource = \"wavelet\"\n";  // lines 1-3
+  const std::string tf = "volume 'w'.transfer_function";
+  auto error = [&](const std::string& name, const std::string& table) {
+    return errorOf(name, w + "[volumes.transfer_function]\n" + table);  // the table: line 4
+  };
+  EXPECT_EQ(error("tf-range.toml", "preset = \"viridis\"\nrange = [10, 10]\n"),
+            ":6: " + tf + ".range must have low < high");
+  EXPECT_EQ(error("tf-range-shape.toml", "preset = \"viridis\"\nrange = [10]\n"),
+            ":6: " + tf + ".range must be [low, high]");
+  EXPECT_EQ(error("tf-opacity.toml", "preset = \"viridis\"\nopacity = [[0, 0],\n  [10, 1.5]]\n"),
+            ":7: " + tf + ".opacity: [value, opacity] needs numbers in [0, 1] after the value");
+  EXPECT_EQ(error("tf-order.toml", "colors = [[0, 0, 0, 0],\n  [10, 1, 1, 1],\n  [5, 1, 0, 0]]\n"),
+            ":7: " + tf + ".colors: control point values must be ascending (5 after 10)");
+  EXPECT_EQ(error("tf-color-shape.toml", "colors = [[0, 0, 0]]\n"),
+            ":5: " + tf + ".colors: each point must be [value, r, g, b]");
+  EXPECT_EQ(error("tf-color-range.toml", "colors = [[0, 0, 2, 0]]\n"),
+            ":5: " + tf + ".colors: [value, r, g, b] needs numbers in [0, 1] after the value");
+  EXPECT_EQ(error("tf-empty.toml", "opacity = []\npreset = \"viridis\"\n"),
+            ":5: " + tf + ".opacity must be a non-empty array of [value, opacity]");
+  EXPECT_EQ(error("tf-both.toml", "preset = \"viridis\"\ncolors = [[0, 0, 0, 0]]\n"),
+            ":6: " + tf + ": give either 'preset' or 'colors', not both");
+  EXPECT_EQ(error("tf-none.toml", "opacity = [[0, 0], [1, 1]]\n"),
+            ":4: " + tf + ": missing field 'preset' or 'colors'");
+  EXPECT_EQ(error("tf-preset.toml", "preset = \"jet\"\n"),
+            ":5: " + tf +
+                ".preset: unknown transfer function preset 'jet' (presets: cool-warm, "
+                "viridis, inferno, grayscale, rainbow)");
+  EXPECT_EQ(error("tf-unknown.toml", "preset = \"viridis\"\ngamma = 2\n"),
+            ":6: unknown field 'gamma' in " + tf);
+  EXPECT_EQ(error("tf-unit.toml", "preset = \"viridis\"\nopacity_unit = 0\n"),
+            ":6: " + tf + ".opacity_unit must be positive");
+  EXPECT_EQ(error("tf-max.toml", "preset = \"viridis\"\nmax_opacity = 1.2\n"),
+            ":6: " + tf + ".max_opacity must be in [0, 1]");
+  EXPECT_EQ(error("tf-max-and-points.toml",
+                  "preset = \"viridis\"\nopacity = [[0, 0], [1, 1]]\nmax_opacity = 0.5\n"),
+            ":7: " + tf +
+                ".max_opacity shapes the default opacity ramp; with 'opacity' given, put "
+                "the peak there");
+  EXPECT_EQ(errorOf("tf-type.toml", w + "transfer_function = \"viridis\"\n"),
+            ":4: " + tf + " must be a table");
+}
+
+}  // namespace
+}  // namespace renderers
