@@ -40,7 +40,7 @@ inline void lookup(const SciVisScene::VolumeLayer& v, float value, float rgba[4]
 // regula falsi on the field itself; both ends must be inside the field's data.
 float refineCrossing(const VolumeField& field, Vec3 origin, Vec3 dir, float level, float ta,
                      float fa, float tb, float fb) {
-  for (int iteration = 0; iteration < 3; ++iteration) {
+  for (int iteration = 0; iteration < 6; ++iteration) {
     const float tm = ta + (tb - ta) * ((level - fa) / (fb - fa));
     float fm;
     if (!(tm > ta && tm < tb) || !field.sample(origin + dir * tm, fm)) break;
