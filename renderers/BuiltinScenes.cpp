@@ -127,15 +127,15 @@ SceneDesc waveletScene(int resolution) {
   // The field spans about 37..277; a faint cool-warm haze shows its lobes, and two isosurfaces
   // show its shape: a glassy outer one and an opaque core.
   v.transfer = transferFunctionPreset("cool-warm", 37.0f, 277.0f, 0.0f);
-  v.transfer.opacities = {{37.0f, 0.0f}, {150.0f, 0.0f}, {200.0f, 0.02f}, {277.0f, 0.08f}};
+  v.transfer.opacities = {{37.0f, 0.0f}, {190.0f, 0.0f}, {277.0f, 0.04f}};
   d.volumes.push_back(std::move(v));
-  Material glass = {"outer", MaterialType::Diffuse, {0.85f, 0.9f, 1.0f}, {}, 0, 1.5f};
-  glass.opacity = 0.3f;
+  Material glass = {"outer", MaterialType::Diffuse, {0.55f, 0.7f, 1.0f}, {}, 0, 1.5f};
+  glass.opacity = 0.18f;
   glass.specular = 0.4f;
   Material core = {"core", MaterialType::Diffuse, {1.0f, 0.55f, 0.2f}, {}, 0, 1.5f};
   core.specular = 0.3f;
   d.materials = {glass, core};
-  d.isosurfaces = {{0, 145.0f, 0}, {0, 215.0f, 1}};
+  d.isosurfaces = {{0, 160.0f, 0}, {0, 215.0f, 1}};
   d.camera = {{2.3f, 1.5f, 2.9f}, {0, -0.05f, 0}, {0, 1, 0}, 38.0f, 0, 0};
   d.environment.kind = Environment::Kind::Gradient;
   d.environment.bottom = {0.02f, 0.02f, 0.03f};

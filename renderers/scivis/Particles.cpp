@@ -31,7 +31,7 @@ ParticlesDesc clusteredParticles(std::size_t count, std::uint64_t seed, Vec3 cen
   // 1/kShrink the size of the one above. A particle walks down a random path and stops at a
   // random depth, so deep (dense) clumps hold the most particles per volume.
   constexpr int kTop = 12, kBranch = 4, kLevels = 6;
-  constexpr float kShrink = 2.2f, kBackground = 0.08f;
+  constexpr float kShrink = 2.2f, kBackground = 0.02f;
   const std::uint64_t base = mix64(seed ^ 0x5ca1ab1e0ddba11ull);
   ParticlesDesc p;
   p.name = "clusters";
