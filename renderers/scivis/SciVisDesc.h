@@ -57,8 +57,9 @@ struct SciVisSettings {
   float samplingRate = 1.0f;  // volume samples per voxel spacing along a ray
   bool shadows = true;        // shadow rays towards directional and point lights
   // A ray stops once less than this fraction of light gets through (early ray termination).
-  // The error it allows is at most this much of the background (and of anything behind).
-  float minTransmittance = 1e-4f;
+  // The error it allows is at most this much of the background (and of anything behind): 1e-3
+  // is below an 8-bit step. (VTK's fixed-point ray caster stops at 1/128.)
+  float minTransmittance = 1e-3f;
 };
 
 }  // namespace renderers

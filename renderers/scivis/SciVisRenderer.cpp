@@ -1,7 +1,6 @@
 #include "renderers/scivis/SciVisRenderer.h"
 
 #include <algorithm>
-#include <atomic>
 #include <bit>
 #include <cmath>
 
@@ -23,8 +22,6 @@ struct Accumulator {
     if (depth == kInf && transmittance <= 0.5f) depth = t;
   }
 };
-
-std::atomic<std::uint64_t> gVolumeSamples{0};
 
 // Table lookup with linear interpolation between entries.
 inline void lookup(const SciVisScene::VolumeLayer& v, float value, float rgba[4]) {
@@ -81,8 +78,6 @@ void SciVisRenderer::beginFrame(const dfb::FrameInfo& frame) {
   camera_ = Camera(frameCamera(scene_.desc().camera, settings_, frame.frameId), settings_.width,
                    settings_.height);
 }
-
-std::uint64_t SciVisRenderer::volumeSamples() const { return gVolumeSamples.load(); }
 
 bool SciVisRenderer::isosurfaceBetween(Vec3 origin, Vec3 dir, float tFar, float jitter) const {
   // Shading rays step one voxel (not the camera rays' finer step): they only ask yes or no.
@@ -223,9 +218,9 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, float t0, float t1,
     float previous[kMaxLayers], current[kMaxLayers];
     bool hadPrevious[kMaxLayers] = {}, hasCurrent[kMaxLayers] = {};
     const float jitter = sampler.get(2);
-    std::uint64_t samples = 0;
+    std::uint32_t samples = 0;
     float k = std::ceil(volumeStart / step - jitter);
-    float tPrevious = -kInf;
+    float tPrevious = -kInf, tCheck = -kInf;
     struct Crossing {
       float t;
       const IsosurfaceDesc* iso;
@@ -275,29 +270,36 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, float t0, float t1,
         ++samples;
       }
       // Empty space: when no volume can show anything in the macrocell here, jump to the last
-      // sample before its exit (the crossing test needs the value there).
+      // sample before its exit (the crossing test needs the value there). Macrocells are looked
+      // at only when the ray leaves the ones it was in, not at every sample.
       float skipTo = kInf;
-      bool skippable = true;
-      for (std::size_t i = 0; i < n && i < kMaxLayers && skippable; ++i) {
-        if (!layers[i].field) continue;
-        const int m = hasCurrent[i] ? layers[i].field->macroIndex(p) : -1;
-        if (m < 0) {
-          // Outside this volume's data: skip to where the ray enters it, if it does later.
+      bool skippable = false;
+      if (t >= tCheck) {
+        skippable = true;
+        float nextCheck = kInf;
+        for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) {
+          if (!layers[i].field) continue;
+          const int m = hasCurrent[i] ? layers[i].field->macroIndex(p) : -1;
           float a = t, b = kInf;
-          if (clipToBox(layers[i].field->dataBounds(), origin, invDir, a, b) && a > t)
-            skipTo = std::min(skipTo, a);
-          else if (!(a > t) && b > t)
-            skippable = false;  // inside but not sampled: leave it to the next step
-          continue;
-        }
-        if (SciVisScene::anythingIn(layers[i], layers[i].field->macroMin(m),
-                                    layers[i].field->macroMax(m))) {
-          skippable = false;
-        } else {
-          float a = t, b = kInf;
+          if (m < 0) {
+            // Outside this volume's data: skip to where the ray enters it, if it does later.
+            if (clipToBox(layers[i].field->dataBounds(), origin, invDir, a, b) && a > t) {
+              skipTo = std::min(skipTo, a);
+              nextCheck = std::min(nextCheck, a);
+            } else if (!(a > t) && b > t) {
+              skippable = false;  // inside but not sampled (an edge): look again next sample
+              nextCheck = t;
+            }
+            continue;
+          }
           clipToBox(layers[i].field->macroBounds(m), origin, invDir, a, b);
-          skipTo = std::min(skipTo, b);
+          nextCheck = std::min(nextCheck, b);
+          if (layers[i].emptyMacrocells[static_cast<std::size_t>(m)])
+            skipTo = std::min(skipTo, b);
+          else
+            skippable = false;
         }
+        tCheck = nextCheck;
       }
       for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) {
         previous[i] = current[i];
@@ -308,11 +310,12 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, float t0, float t1,
         const float last = std::floor(skipTo / step - jitter) - 1;  // one sample before the exit
         if (last > k) {
           k = last - 1;  // the loop's += 1 lands on `last`
+          tCheck = -kInf;
           for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) hadPrevious[i] = false;
         }
       }
     }
-    gVolumeSamples.fetch_add(samples, std::memory_order_relaxed);
+    out.volumeSamples = samples;
   }
   surfacesBefore(t1);
 
@@ -330,6 +333,7 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   const float inv = samples ? 1.0f / static_cast<float>(samples) : 0.0f;
   const Box3& bounds = scene_.bounds();
   const Environment& background = scene_.desc().environment;
+  std::uint64_t volumeSamples = 0;
   for (int y = region.y0; y < region.y1; ++y)
     for (int x = region.x0; x < region.x1; ++x) {
       float sum[4] = {0, 0, 0, 0};
@@ -347,11 +351,13 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
           f.rgba[0] += bg.x, f.rgba[1] += bg.y, f.rgba[2] += bg.z, f.rgba[3] = 1.0f;
         }
         for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
+        volumeSamples += f.volumeSamples;
       }
       float* px = &out.color[4 * (static_cast<std::size_t>(y - region.y0) * region.width() +
                                   static_cast<std::size_t>(x - region.x0))];
       for (int c = 0; c < 4; ++c) px[c] = sum[c] * inv;
     }
+  volumeSamples_.fetch_add(volumeSamples, std::memory_order_relaxed);
 }
 
 }  // namespace renderers

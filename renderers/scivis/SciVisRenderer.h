@@ -11,6 +11,7 @@
 // the pixel's random stream, and a surface is shaded with random numbers keyed by its distance,
 // so a ray cut into pieces samples and shades exactly what the whole ray does: composited front
 // to back, the pieces give the whole ray's colour up to float rounding.
+#include <atomic>
 #include <cstdint>
 
 #include "renderers/Camera.h"
@@ -25,6 +26,7 @@ namespace renderers {
 struct Fragment {
   float rgba[4] = {0, 0, 0, 0};
   float depth = Box3::kInf;
+  std::uint32_t volumeSamples = 0;  // taken inside [t0, t1), for benchmarks
 };
 
 struct SciVisOptions {
@@ -46,8 +48,8 @@ class SciVisRenderer final : public Renderer {
   // sample's stream (dimension 2 places the volume sample grid).
   Fragment integrate(Vec3 origin, Vec3 dir, float t0, float t1, const Sampler& sampler) const;
 
-  // Counters since construction (for benchmarks): volume samples taken by camera rays.
-  std::uint64_t volumeSamples() const;
+  // Volume samples taken by camera rays since construction (for benchmarks).
+  std::uint64_t volumeSamples() const { return volumeSamples_.load(); }
 
  private:
   struct March;
@@ -61,6 +63,7 @@ class SciVisRenderer final : public Renderer {
   SciVisOptions options_;
   Camera camera_;
   float epsilon_;
+  mutable std::atomic<std::uint64_t> volumeSamples_{0};  // added once per tile
 };
 
 }  // namespace renderers

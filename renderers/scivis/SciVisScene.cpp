@@ -210,6 +210,10 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
     }
     for (const IsosurfaceDesc& iso : desc.isosurfaces)
       if (iso.volume == i) layer.isosurfaces.push_back(&iso);
+    if (layer.field)
+      for (int m = 0; m < layer.field->macroCount(); ++m)
+        layer.emptyMacrocells.push_back(
+            anythingIn(layer, layer.field->macroMin(m), layer.field->macroMax(m)) ? 0 : 1);
     volumes_.push_back(std::move(layer));
   }
 

@@ -80,6 +80,9 @@ class SciVisScene {
     float valueMin = 0, tableScale = 0;
     bool visible = true;
     std::vector<const IsosurfaceDesc*> isosurfaces;
+    // Per macrocell of `field`: 1 when neither the transfer function nor an isosurface shows
+    // anything in its value range, so rays may jump over it.
+    std::vector<std::uint8_t> emptyMacrocells;
   };
   static constexpr int kTableSize = 4096;
   const std::vector<VolumeLayer>& volumes() const { return volumes_; }

@@ -16,7 +16,7 @@
 //   type = "directional" | "point" | "ambient"; direction / position; color; intensity
 //   [scivis]
 //   ao_samples = 4; ao_distance = 0.5; sampling_rate = 1.0; shadows = true
-//   min_transmittance = 1e-4
+//   min_transmittance = 1e-3
 #include <filesystem>
 
 #include "renderers/SceneDesc.h"

@@ -84,6 +84,7 @@ class VolumeField {
     const std::size_t o[8] = {0, 1, strideY_, strideY_ + 1, strideZ_, strideZ_ + 1,
                               strideZ_ + strideY_, strideZ_ + strideY_ + 1};
     switch (volume_->type) {
+      default:  // Float32 (the switch covers every type; GCC cannot tell)
       case VoxelType::Float32: {
         const float* v = reinterpret_cast<const float*>(volume_->voxels.data()) + i;
         for (int k = 0; k < 8; ++k) c[k] = v[o[k]];
