@@ -97,7 +97,8 @@ int main(int argc, char** argv) {
       for (std::size_t i = 0; i < rgba8.size(); ++i) {
         std::uint32_t p = 0;
         for (int c = 0; c < 4; ++c) {
-          const float v = c == 3 ? 1.0f : std::pow(std::clamp(image[4 * i + c], 0.0f, 1.0f), 1 / 2.2f);
+          // Colours as they are, clamped, no display encoding: VTK writes its colours so.
+          const float v = c == 3 ? 1.0f : std::clamp(image[4 * i + c], 0.0f, 1.0f);
           p |= static_cast<std::uint32_t>(std::lround(v * 255)) << (8 * c);
         }
         rgba8[i] = p;

@@ -3,7 +3,7 @@
 
    xvfb-run -a vtk_volume.py RESOLUTION SIZE THREADS FRAMES [OUT.png]
 
-vtkRTAnalyticSource over [0, RESOLUTION-1]^3 (the same field scivis_bench samples),
+vtkRTAnalyticSource over [0, RESOLUTION-1]^3 centred in it (the field scivis_bench samples),
 vtkFixedPointVolumeRayCastMapper with one sample per voxel (no automatic adjustment), colour
 blue-white-red over 37..277, opacity ramp 0..0.4 per voxel, ResetCamera's view turned by
 360/FRAMES degrees a frame. Prints one JSON line; the median frame excludes the first (set-up).
@@ -22,6 +22,10 @@ def main():
 
     source = vtk.vtkRTAnalyticSource()
     source.SetWholeExtent(0, resolution - 1, 0, resolution - 1, 0, resolution - 1)
+    # VTK centres the field at Center (default: the origin, a corner of this extent); ParaView's
+    # Wavelet centres it in its extent, as scivis_bench does.
+    half = (resolution - 1) / 2.0
+    source.SetCenter(half, half, half)
     source.Update()
 
     color = vtk.vtkColorTransferFunction()
