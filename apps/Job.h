@@ -32,8 +32,12 @@ struct FrameRecord {
   double renderMs = 0;                // slowest render rank: begin() .. last setTile()
   double compositeMs = 0;             // slowest render rank: last setTile() .. frame complete
   std::uint64_t rank0PixelBytes = 0;  // final pixels into rank 0 (the gather)
-  std::uint64_t wallBytesSent = 0;    // pieces sent to wall ranks, all render ranks
-  std::uint64_t tileBytesSent = 0;    // tile inputs between render ranks
+  // Pieces sent to wall ranks by all render ranks: bytes on the wire (after compression, with
+  // the messenger's envelope) and before compression; how many, how many to other hosts, and
+  // how many messages the render ranks' messengers compressed.
+  std::uint64_t wallBytesSent = 0, wallBytesRaw = 0;
+  std::uint64_t wallPieces = 0, wallPiecesToOtherHosts = 0, messagesCompressed = 0;
+  std::uint64_t tileBytesSent = 0;  // tile inputs between render ranks
   std::uint64_t tilesRendered = 0;
   std::uint64_t samples = 0;
   std::int64_t lastSetTileNs = 0;  // steady_clock, latest over render ranks

@@ -98,6 +98,9 @@ void writeStats(const Job& job, const std::vector<FrameRecord>& frames,
       }
       out << ", \"rank0_pixel_bytes_received\": " << f.rank0PixelBytes
           << ", \"wall_bytes_sent\": " << f.wallBytesSent
+          << ", \"wall_bytes_raw\": " << f.wallBytesRaw << ", \"wall_pieces\": " << f.wallPieces
+          << ", \"wall_pieces_to_other_hosts\": " << f.wallPiecesToOtherHosts
+          << ", \"messages_compressed\": " << f.messagesCompressed
           << ", \"tile_bytes_sent\": " << f.tileBytesSent
           << ", \"tiles_rendered\": " << f.tilesRendered << ", \"samples\": " << f.samples << "}"
           << (i + 1 < frames.size() ? "," : "") << "\n";

@@ -27,9 +27,10 @@ bool endsWith(const std::string& s, const std::string& suffix) {
 
 // Gather mode's relay, as Tide-like walls do it: rank 0 has the whole image and sends each
 // display its rectangle.
-std::uint64_t relayToDisplays(const Job& job, dfb::Messenger& messenger, std::uint32_t frameId,
-                              const std::vector<std::uint32_t>& image) {
-  std::uint64_t bytes = 0;
+wall::DisplayRoutingOp::Sent relayToDisplays(const Job& job, dfb::Messenger& messenger,
+                                             std::uint32_t frameId,
+                                             const std::vector<std::uint32_t>& image) {
+  wall::DisplayRoutingOp::Sent sent;
   const wall::Layout& layout = *job.layout;
   for (size_t d = 0; d < layout.displays.size(); ++d) {
     const dfb::Region& rect = layout.displays[d].rect;
@@ -37,10 +38,12 @@ std::uint64_t relayToDisplays(const Job& job, dfb::Messenger& messenger, std::ui
     dfb::Bytes piece = wall::packPiece(frameId, static_cast<int>(d),
                                        dfb::Region{0, 0, rect.width(), rect.height()}, image.data(),
                                        job.canvasWidth, rect.x0, rect.y0, messenger.compresses(to));
-    bytes += piece.size();
+    sent.bytes += piece.size();
+    sent.pieces++;
+    if (!messenger.sameHost(to)) sent.piecesToOtherHosts++;
     messenger.send(to, wall::kWallNodeObject, std::move(piece));
   }
-  return bytes;
+  return sent;
 }
 
 }  // namespace
@@ -108,6 +111,9 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
   auto lastProgress = Clock::now();
   const auto runStart = Clock::now();
   Clock::time_point previousStart;
+  constexpr int kCounts = 8;
+  std::uint64_t wallWireBefore = messenger.traffic(wall::kWallNodeObject).bytesSent;
+  std::uint64_t compressedBefore = messenger.counters().messagesCompressed;
   for (std::uint32_t frameId = 1; frameId <= static_cast<std::uint32_t>(o.frames); ++frameId) {
     if (credits)
       credits->waitForPresented(static_cast<std::int64_t>(frameId) - o.framesInFlight, timeout);
@@ -121,11 +127,15 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
 
     const renderers::FrameReport report = driver.renderFrame(dfb, frame);
     const dfb::FrameStats stats = dfb.stats();
-    std::uint64_t wallBytes = routing ? routing->takeBytesSent() : 0;
+    wall::DisplayRoutingOp::Sent sent;
+    if (routing) sent = routing->takeSent();
     const auto relayStart = Clock::now();
     if (hasWall && !route && job.worldRank == 0)
-      wallBytes += relayToDisplays(job, messenger, frameId, dfb.imageRgba8());
+      sent = relayToDisplays(job, messenger, frameId, dfb.imageRgba8());
     totals.stageMs[6] += msBetween(relayStart, Clock::now());
+    // What the pieces took on the wire: the messenger counts it per object, after compression.
+    const std::uint64_t wallWire = messenger.traffic(wall::kWallNodeObject).bytesSent;
+    const std::uint64_t compressed = messenger.counters().messagesCompressed;
     totals.stageMs[0] += report.renderMs;
     totals.stageMs[1] += stats.unpackMs;
     totals.stageMs[2] += stats.operationMs;
@@ -138,12 +148,19 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
 
     // One small reduction per frame for the statistics and the progress line.
     double localMs[2] = {report.renderMs, stats.lastSetTileToCompleteMs}, maxMs[2] = {0, 0};
-    std::uint64_t localCounts[4] = {wallBytes, stats.tileBytesSent,
-                                    static_cast<std::uint64_t>(report.tilesRendered),
-                                    report.samples};
-    std::uint64_t sums[4] = {0, 0, 0, 0};
+    std::uint64_t localCounts[kCounts] = {wallWire - wallWireBefore,
+                                          sent.bytes,
+                                          sent.pieces,
+                                          sent.piecesToOtherHosts,
+                                          compressed - compressedBefore,
+                                          stats.tileBytesSent,
+                                          static_cast<std::uint64_t>(report.tilesRendered),
+                                          report.samples};
+    wallWireBefore = wallWire;
+    compressedBefore = compressed;
+    std::uint64_t sums[kCounts] = {};
     MPI_Reduce(localMs, maxMs, 2, MPI_DOUBLE, MPI_MAX, 0, renderComm);
-    MPI_Reduce(localCounts, sums, 4, MPI_UINT64_T, MPI_SUM, 0, renderComm);
+    MPI_Reduce(localCounts, sums, kCounts, MPI_UINT64_T, MPI_SUM, 0, renderComm);
     std::int64_t lastSetTile = 0;
     MPI_Reduce(&stats.lastSetTileNs, &lastSetTile, 1, MPI_INT64_T, MPI_MAX, 0, renderComm);
     FrameRecord record;
@@ -152,9 +169,13 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
     record.compositeMs = maxMs[1];
     record.rank0PixelBytes = renderRank == 0 ? stats.pixelBytesReceived : 0;
     record.wallBytesSent = sums[0];
-    record.tileBytesSent = sums[1];
-    record.tilesRendered = sums[2];
-    record.samples = sums[3];
+    record.wallBytesRaw = sums[1];
+    record.wallPieces = sums[2];
+    record.wallPiecesToOtherHosts = sums[3];
+    record.messagesCompressed = sums[4];
+    record.tileBytesSent = sums[5];
+    record.tilesRendered = sums[6];
+    record.samples = sums[7];
     record.lastSetTileNs = lastSetTile;
     records.push_back(record);
 

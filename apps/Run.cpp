@@ -1,6 +1,7 @@
 #include "apps/Run.h"
 
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <string>
 
@@ -74,6 +75,14 @@ std::vector<RankTotals> collectTotals(const Job& job, RankTotals mine,
   return all;
 }
 
+// Other ranks may be inside a collective this rank will never join: end them all.
+[[noreturn]] void abortJob(int rank, const char* what) {
+  std::fprintf(stderr, "dfbwall: error on rank %d: %s\n", rank, what);
+  std::fflush(stderr);
+  MPI_Abort(MPI_COMM_WORLD, 1);
+  std::abort();  // MPI_Abort does not return
+}
+
 }  // namespace
 
 int run(int argc, char** argv) {
@@ -102,23 +111,26 @@ int run(int argc, char** argv) {
     messaging.compressWithinHost = job.options.compressWithinHost;
     messaging.quiesceTimeout = std::chrono::seconds(job.options.timeoutSeconds);
     dfb::Messenger messenger(MPI_COMM_WORLD, messaging);
-    RankTotals totals;
-    std::vector<FrameRecord> frames;
-    std::vector<std::int64_t> completeNs;
-    if (job.isWallRank())
-      completeNs = runWallRank(job, messenger, roleComm, totals);
-    else
-      frames = runRenderRank(job, messenger, roleComm, totals);
-    if (!job.options.statsFile.empty()) {
-      const std::vector<RankTotals> ranks = collectTotals(job, totals, frames, completeNs);
-      if (job.worldRank == 0) writeStats(job, frames, ranks);
+    try {
+      RankTotals totals;
+      std::vector<FrameRecord> frames;
+      std::vector<std::int64_t> completeNs;
+      if (job.isWallRank())
+        completeNs = runWallRank(job, messenger, roleComm, totals);
+      else
+        frames = runRenderRank(job, messenger, roleComm, totals);
+      if (!job.options.statsFile.empty()) {
+        const std::vector<RankTotals> ranks = collectTotals(job, totals, frames, completeNs);
+        if (job.worldRank == 0) writeStats(job, frames, ranks);
+      }
+      messenger.stop();
+    } catch (const std::exception& e) {
+      // Here, not after unwinding: the messenger's destructor would first wait up to --timeout
+      // for the other ranks to quiesce, so the message would come a whole timeout late.
+      abortJob(job.worldRank, e.what());
     }
-    messenger.stop();
   } catch (const std::exception& e) {
-    // Other ranks may be inside a collective this rank will never join: end them all.
-    std::fprintf(stderr, "dfbwall: error on rank %d: %s\n", job.worldRank, e.what());
-    std::fflush(stderr);
-    MPI_Abort(MPI_COMM_WORLD, 1);
+    abortJob(job.worldRank, e.what());
   }
   MPI_Comm_free(&roleComm);
   return 0;

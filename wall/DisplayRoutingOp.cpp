@@ -16,6 +16,7 @@ DisplayRoutingOp::DisplayRoutingOp(dfb::Messenger& messenger, const Layout& layo
     rankOfDisplay_.push_back(roles.rankOfProcess(d.process));
     // The filter only pays when Snappy follows it.
     planeDelta_.push_back(messenger.compresses(rankOfDisplay_.back()));
+    otherHost_.push_back(!messenger.sameHost(rankOfDisplay_.back()));
   }
 }
 
@@ -29,6 +30,8 @@ void DisplayRoutingOp::process(dfb::FinishedTile& tile) {
                   piece.canvas.x0 - tile.region.x0, piece.canvas.y0 - tile.region.y0,
                   planeDelta_[static_cast<size_t>(piece.display)]);
     bytesSent_ += bytes.size();
+    piecesSent_++;
+    if (otherHost_[static_cast<size_t>(piece.display)]) piecesToOtherHosts_++;
     const auto t1 = Clock::now();
     messenger_.send(rankOfDisplay_[static_cast<size_t>(piece.display)], kWallNodeObject,
                     std::move(bytes));

@@ -23,8 +23,15 @@ class DisplayRoutingOp : public dfb::PixelOp {
                    int tileSize);
   void process(dfb::FinishedTile& tile) override;
 
-  // Bytes handed to the messenger (headers included, before Snappy) since the last call.
-  std::uint64_t takeBytesSent() { return bytesSent_.exchange(0); }
+  // Pieces handed to the messenger since the last call: their bytes (piece headers included,
+  // before Snappy; the messenger's traffic() has them on the wire), how many, and how many went
+  // to a wall rank on another host (the ones the messenger compresses).
+  struct Sent {
+    std::uint64_t bytes = 0, pieces = 0, piecesToOtherHosts = 0;
+  };
+  Sent takeSent() {
+    return {bytesSent_.exchange(0), piecesSent_.exchange(0), piecesToOtherHosts_.exchange(0)};
+  }
   // Nanoseconds spent, summed over tiles, since the last call: cutting and packing pieces, and
   // handing them to the messenger (which compresses and copies them onto the wire there).
   struct StageNs {
@@ -37,7 +44,8 @@ class DisplayRoutingOp : public dfb::PixelOp {
   std::vector<std::vector<Piece>> piecesOfTile_;
   std::vector<int> rankOfDisplay_;
   std::vector<bool> planeDelta_;  // per display: pre-filter pieces for Snappy
-  std::atomic<std::uint64_t> bytesSent_{0};
+  std::vector<bool> otherHost_;   // per display: its wall rank is on another host
+  std::atomic<std::uint64_t> bytesSent_{0}, piecesSent_{0}, piecesToOtherHosts_{0};
   std::atomic<std::int64_t> cutNs_{0}, sendNs_{0};
 };
 

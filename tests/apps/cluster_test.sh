@@ -1,0 +1,221 @@
+#!/usr/bin/env bash
+# dfbwall across emulated hosts (scripts/cluster): one network namespace per host, TCP between
+# them over a bridge, every link capped at 1 Gbit/s both ways. One scenario per call:
+#   cluster_test.sh equals-single LAYOUT RENDER_HOSTS [dfbwall options for both runs...]
+#   cluster_test.sh compression   LAYOUT RENDER_HOSTS
+#   cluster_test.sh rank-killed   LAYOUT RENDER_HOSTS RANK
+#   cluster_test.sh link-cut      LAYOUT RENDER_HOSTS HOST TIMEOUT
+#   cluster_test.sh link-flap     LAYOUT RENDER_HOSTS HOST TIMEOUT
+# Needs DFBWALL, COMPARE (compare_captures), MPIEXEC and CLUSTER (scripts/cluster) in the
+# environment, root and CAP_NET_ADMIN; without them it exits 77 (CTest: skipped), saying why.
+# Every call claims a cluster id of its own (--id auto), so tests can run in parallel, and
+# removes its hosts on every way out.
+set -euo pipefail
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+work=$(mktemp -d)
+id="" job=""
+cleanup() {
+  [ -z "$job" ] || kill -9 "$job" 2>/dev/null || true
+  [ -z "$id" ] || "$CLUSTER" down --id "$id" >/dev/null 2>&1 || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+trap 'exit 143' TERM
+trap 'exit 130' INT
+
+skip() { echo "SKIPPED: $*"; exit 77; }
+fail() { echo "FAIL: $*"; [ ! -f "$work/log" ] || { echo "--- job output:"; cat "$work/log"; }; exit 1; }
+[ "$(id -u)" -eq 0 ] || skip "emulated hosts need root (network namespaces, veth pairs, tc); CI runs as root"
+command -v ip >/dev/null && command -v tc >/dev/null || skip "iproute2 is missing (scripts/setup installs it)"
+probe="dfbwprobe$$"
+if ! ip netns add "$probe" 2>"$work/probe"; then
+  skip "cannot create a network namespace, CAP_NET_ADMIN missing? ($(cat "$work/probe"))"
+fi
+ip netns del "$probe"
+
+build=$(cd "$(dirname "$DFBWALL")/.." && pwd)
+canvas() { "$COMPARE" --info "$1" | cut -d' ' -f2; }
+now() { date +%s.%N; }
+since() { awk -v a="$1" -v b="$(now)" 'BEGIN {printf "%.1f", b - a}'; }
+# Per-frame values of FIELD in a stats file, one per line.
+field() { grep -o "\"$2\": [0-9.]*" "$1" | awk '{print $2}'; }
+
+# up LAYOUT RENDER_HOSTS: the hosts of the layout plus the render hosts, 1 Gbit/s links.
+up() {
+  "$CLUSTER" up --id auto --holder $$ --build "$build" --wall "$1" --render-hosts "$2" --rate 1gbit \
+    >"$work/up" 2>&1 || { cat "$work/up"; fail "scripts/cluster up"; }
+  id=$(sed -n 's/^cluster \([0-9]*\):.*/\1/p' "$work/up")
+  mpirun=$(sed -n 's/^run: \([^ ]*\) .*/\1/p' "$work/up")
+  [ -n "$id" ] && [ -x "$mpirun" ] || { cat "$work/up"; fail "no cluster id or mpirun in the output of up"; }
+  cat "$work/up"
+}
+# The host of world rank RANK, and that rank's process id (in its host's namespace).
+host_of() { sed -n "$(($1 + 1))p" "$(dirname "$mpirun")/rank-hosts"; }
+pid_of_rank() {
+  local p
+  for p in $(ip netns pids "dfbw$id-$(host_of "$1")" 2>/dev/null); do
+    [ "$(cat "/proc/$p/comm" 2>/dev/null)" = dfbwall ] &&
+      tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx "OMPI_COMM_WORLD_RANK=$1" && echo "$p"
+  done
+  return 0
+}
+# Starts the job in the background (output in $work/log) and waits until every rank runs and
+# frames flow (rank 0's first progress line, a second in: every TCP connection is up by then).
+start() {
+  "$mpirun" "$DFBWALL" "$@" >"$work/log" 2>&1 &
+  job=$!
+  local ranks r
+  ranks=$(wc -l <"$(dirname "$mpirun")/rank-hosts")
+  for _ in $(seq 1 100); do
+    for ((r = 0; r < ranks; ++r)); do [ -n "$(pid_of_rank "$r")" ] || break; done
+    [ "$r" -eq "$ranks" ] && break
+    kill -0 "$job" 2>/dev/null || fail "the job ended while starting"
+    sleep 0.1
+  done
+  [ "$r" -eq "$ranks" ] || fail "not every rank was running 10 s after the start"
+  for _ in $(seq 1 300); do
+    grep -q '^frame [0-9]' "$work/log" && return
+    kill -0 "$job" 2>/dev/null || fail "the job ended before its first progress line"
+    sleep 0.1
+  done
+  fail "no frame 30 s after the start"
+}
+# Waits at most SECONDS for the job; sets `code` (124: still running, then killed).
+finish() {
+  local deadline
+  deadline=$(awk -v s="$1" -v t="$(now)" 'BEGIN {print t + s}')
+  while kill -0 "$job" 2>/dev/null && awk -v d="$deadline" -v t="$(now)" 'BEGIN {exit !(t < d)}'; do
+    sleep 0.1
+  done
+  if kill -0 "$job" 2>/dev/null; then
+    kill -9 "$job" 2>/dev/null || true
+    code=124
+  else
+    set +e
+    wait "$job"
+    code=$?
+    set -e
+  fi
+  job=""
+}
+
+scenario=$1; shift
+case "$scenario" in
+  equals-single)
+    # Invariant 2 across hosts: the captures equal a one-process render byte for byte.
+    layout=$1 hosts=$2; shift 2
+    common=(--frames 3 --spp 2 --seed 11 "$@")
+    up "$layout" "$hosts"
+    "$mpirun" "$DFBWALL" --wall "$layout" --offscreen --capture "$work/cap" --stats "$work/stats.json" \
+      --quiet "${common[@]}" >"$work/log" 2>&1 || fail "the wall run failed"
+    # The layout's hosts are the hosts' real names here: no host warning.
+    ! grep -q "warning" "$work/log" || fail "host warnings although every rank ran on its layout host"
+    # Every piece crossed hosts: this ran over TCP between namespaces, not shared memory.
+    [ "$(field "$work/stats.json" wall_pieces | sort -u)" = "$(field "$work/stats.json" wall_pieces_to_other_hosts | sort -u)" ] \
+      || fail "not every piece went to another host"
+    "$MPIEXEC" -n 1 "$DFBWALL" --size "$(canvas "$layout")" --image "$work/full.png" --quiet "${common[@]}"
+    "$COMPARE" "$layout" "$work/cap" "$work/full.png" 3
+    ;;
+  compression)
+    # Snappy engages on exactly the messages that leave a host: with every piece above the
+    # compression threshold, messages compressed = pieces to other hosts, every frame.
+    layout=$1 hosts=$2
+    up "$layout" "$hosts"
+    for variant in default within-host off; do
+      options=()
+      [ "$variant" = within-host ] && options=(--compress-within-host)
+      [ "$variant" = off ] && options=(--no-compress)
+      "$mpirun" "$DFBWALL" --wall "$layout" --offscreen --renderer pattern --tile-size 32 --frames 4 \
+        --stats "$work/$variant.json" --quiet ${options[@]+"${options[@]}"} >"$work/log" 2>&1 \
+        || fail "the $variant run failed"
+      paste <(field "$work/$variant.json" frame) <(field "$work/$variant.json" wall_pieces) \
+        <(field "$work/$variant.json" wall_pieces_to_other_hosts) \
+        <(field "$work/$variant.json" messages_compressed) \
+        <(field "$work/$variant.json" wall_bytes_sent) <(field "$work/$variant.json" wall_bytes_raw) \
+        >"$work/$variant.tsv"
+      [ "$(wc -l <"$work/$variant.tsv")" -eq 4 ] || fail "$variant: expected 4 frames in the stats"
+      while read -r frame pieces other compressed wire raw; do
+        echo "$variant frame $frame: $pieces pieces, $other to other hosts, $compressed compressed, $wire bytes on the wire, $raw raw"
+        [ "$other" -gt 0 ] && [ "$other" -lt "$pieces" ] || fail "frame $frame: the layout should send pieces both within and across hosts"
+        case "$variant" in
+          default)
+            [ "$compressed" -eq "$other" ] || fail "frame $frame: $compressed messages compressed, $other pieces crossed hosts"
+            [ "$wire" -lt "$raw" ] || fail "frame $frame: $wire bytes on the wire, not fewer than the raw $raw" ;;
+          within-host)
+            [ "$compressed" -eq "$pieces" ] || fail "frame $frame: --compress-within-host compressed $compressed of $pieces pieces" ;;
+          off)
+            [ "$compressed" -eq 0 ] || fail "frame $frame: --no-compress compressed $compressed messages"
+            # Uncompressed, the wire carries each piece plus the messenger's 16-byte envelope.
+            [ "$wire" -eq $((raw + 16 * pieces)) ] || fail "frame $frame: $wire wire bytes, expected $raw + 16 x $pieces" ;;
+        esac
+      done <"$work/$variant.tsv"
+    done
+    ;;
+  rank-killed)
+    # kill -9 of a rank on another host ends the job, naming the rank and its host, within 10 s.
+    layout=$1 hosts=$2 rank=$3
+    up "$layout" "$hosts"
+    start --wall "$layout" --offscreen --renderer pattern --frames 1000000 --timeout 30
+    host=$(host_of "$rank") victim=$(pid_of_rank "$rank")
+    t0=$(now)
+    kill -9 "$victim"
+    finish 20
+    elapsed=$(since "$t0")
+    cat "$work/log"
+    [ "$code" -ne 124 ] || fail "the job still ran 20 s after rank $rank was killed"
+    [ "$code" -ne 0 ] || fail "exit code 0 after rank $rank was killed"
+    awk -v e="$elapsed" 'BEGIN {exit !(e <= 10)}' || fail "the job took $elapsed s to end, more than 10"
+    grep -qE "rank $rank .*$host" "$work/log" || fail "no message naming rank $rank and host $host"
+    echo "killed rank $rank on $host: the job ended after $elapsed s with exit $code, naming both"
+    ;;
+  link-cut)
+    # A link cut longer than --timeout: a named error and the end of the job within
+    # --timeout + 3 s. The link returns once the error is out (at least --timeout after
+    # the cut): OpenMPI's mpirun cannot end a job while a host's daemon is unreachable (it
+    # waits for that daemon's ranks, which have ended with their own errors by then).
+    layout=$1 hosts=$2 host=$3 timeout=$4
+    up "$layout" "$hosts"
+    start --wall "$layout" --offscreen --renderer pattern --frames 1000000 --timeout "$timeout"
+    t0=$(now)
+    "$CLUSTER" link "$host" down --id "$id"
+    while kill -0 "$job" 2>/dev/null && { ! grep -q "dfbwall: error" "$work/log" ||
+      awk -v t="$(since "$t0")" -v l="$timeout" 'BEGIN {exit !(t < l)}'; } &&
+      awk -v t="$(since "$t0")" -v l="$((timeout + 3))" 'BEGIN {exit !(t < l)}'; do
+      sleep 0.1
+    done
+    down=$(since "$t0")
+    "$CLUSTER" link "$host" up --id "$id"
+    finish $((timeout + 10))
+    elapsed=$(since "$t0")
+    cat "$work/log"
+    [ "$code" -ne 124 ] || fail "the job still ran $((timeout + 10)) s after the cut"
+    [ "$code" -ne 0 ] || fail "exit code 0 after a cut longer than --timeout"
+    grep -qE "dfbwall: error on rank [0-9]+: .*(within|after) ${timeout}000 ms" "$work/log" \
+      || fail "no dfbwall error naming what did not arrive within --timeout"
+    awk -v e="$elapsed" -v l="$((timeout + 3))" 'BEGIN {exit !(e <= l)}' \
+      || fail "the job ended $elapsed s after the cut, more than --timeout + 3 = $((timeout + 3)) s"
+    echo "cut $host for $down s (--timeout $timeout): ended after $elapsed s with exit $code"
+    ;;
+  link-flap)
+    # A 1 s link flap, shorter than --timeout: the run goes on and its captures are right.
+    layout=$1 hosts=$2 host=$3 timeout=$4
+    frames=600  # about 3 s at full speed: the run outlasts the flap
+    up "$layout" "$hosts"
+    start --wall "$layout" --offscreen --renderer pattern --frames "$frames" --timeout "$timeout" \
+      --capture "$work/cap" --stats "$work/stats.json"
+    kill -0 "$job" 2>/dev/null || fail "the run ended before the flap; give it more frames"
+    "$CLUSTER" link "$host" down --id "$id"
+    sleep 1
+    "$CLUSTER" link "$host" up --id "$id"
+    finish 90
+    [ "$code" -eq 0 ] || fail "exit $code after a 1 s flap (--timeout $timeout)"
+    # The flap held a frame up: proof it hit the run, not the time before or after it.
+    stall=$(field "$work/stats.json" frame_ms | sort -g | tail -1)
+    awk -v s="$stall" 'BEGIN {exit !(s >= 500)}' || fail "no frame took 500 ms or more (longest $stall ms): the flap missed the run"
+    "$MPIEXEC" -n 1 "$DFBWALL" --renderer pattern --frames "$frames" --size "$(canvas "$layout")" \
+      --image "$work/full.png" --quiet
+    "$COMPARE" "$layout" "$work/cap" "$work/full.png" "$frames"
+    echo "1 s flap of $host: the run finished (longest frame $stall ms) and its captures are right"
+    ;;
+  *) echo "unknown scenario $scenario"; exit 2 ;;
+esac
