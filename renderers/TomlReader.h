@@ -47,7 +47,8 @@ class TomlReader {
     std::vector<const toml::table*> out;
     if (const toml::node* n = t.get(key)) {
       const toml::array* a = n->as_array();
-      if (!a) fail(*n, std::string(key) + " must be an array of tables ([[" + std::string(key) + "]])");
+      if (!a)
+        fail(*n, std::string(key) + " must be an array of tables ([[" + std::string(key) + "]])");
       for (const toml::node& e : *a) out.push_back(&table(e, std::string(key) + " entry"));
     }
     return out;

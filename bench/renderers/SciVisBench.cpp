@@ -28,7 +28,8 @@ using namespace renderers;
 SceneDesc benchScene(const std::string& mode, int resolution) {
   SceneDesc d = waveletScene(resolution);
   VolumeDesc& v = d.volumes[0];
-  v.transfer.colors = {{37.0f, {0.23f, 0.30f, 0.75f}}, {157.0f, {0.87f, 0.87f, 0.87f}},
+  v.transfer.colors = {{37.0f, {0.23f, 0.30f, 0.75f}},
+                       {157.0f, {0.87f, 0.87f, 0.87f}},
                        {277.0f, {0.71f, 0.02f, 0.15f}}};
   d.isosurfaces.clear();
   d.scivis = {};
@@ -110,7 +111,8 @@ int main(int argc, char** argv) {
         "\"load_s\": %.3f, \"median_frame_s\": %.4f, \"camera_rays_per_s\": %.4g, "
         "\"volume_samples_per_s\": %.4g, \"volume_samples_per_ray\": %.1f}\n",
         mode.c_str(), resolution, size, threads, frames, loadS, median,
-        double(size) * size * frames / total, samples / total, samples / (double(size) * size * frames));
+        double(size) * size * frames / total, samples / total,
+        samples / (double(size) * size * frames));
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "scivis_bench: %s\n", e.what());

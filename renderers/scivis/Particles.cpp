@@ -44,18 +44,20 @@ ParticlesDesc clusteredParticles(std::size_t count, std::uint64_t seed, Vec3 cen
       const std::uint64_t key = mix64(base + i * 0x9e3779b97f4a7c15ull);
       if (unitFloat(key) < kBackground) {
         p.centers[i] = center + Vec3{unitFloat(key + 11) - 0.5f, unitFloat(key + 12) - 0.5f,
-                                     unitFloat(key + 13) - 0.5f} * size;
+                                     unitFloat(key + 13) - 0.5f} *
+                                    size;
         p.attribute[i] = 0.0f;
         continue;
       }
       // The clump tree is a function of the seed alone: its node keys hash the path taken.
-      std::uint64_t node = mix64(base ^ (1 + static_cast<std::uint64_t>(
-                                                 unitFloat(key + 20) * kTop)));
+      std::uint64_t node =
+          mix64(base ^ (1 + static_cast<std::uint64_t>(unitFloat(key + 20) * kTop)));
       Vec3 c = center + inUnitBall(node) * (0.6f * half);
       float r = 0.35f * half;
       const int depth = 1 + static_cast<int>(unitFloat(key + 21) * kLevels);
       for (int level = 1; level < depth; ++level) {
-        const std::uint64_t branch = 1 + static_cast<std::uint64_t>(unitFloat(key + 30 + level) * kBranch);
+        const std::uint64_t branch =
+            1 + static_cast<std::uint64_t>(unitFloat(key + 30 + level) * kBranch);
         node = mix64(node * 31 + branch);
         c = c + inUnitBall(node) * r;
         r /= kShrink;
@@ -75,10 +77,15 @@ ParticlesDesc clusteredParticles(std::size_t count, std::uint64_t seed, Vec3 cen
 void readParticleFile(const std::string& path, const std::string& layout, ParticlesDesc& out) {
   int x = -1, y = -1, z = -1, r = -1, a = -1;
   for (std::size_t i = 0; i < layout.size(); ++i) {
-    int* slot = layout[i] == 'x' ? &x : layout[i] == 'y' ? &y : layout[i] == 'z' ? &z
-              : layout[i] == 'r' ? &r : layout[i] == 'a' ? &a : nullptr;
+    int* slot = layout[i] == 'x'   ? &x
+                : layout[i] == 'y' ? &y
+                : layout[i] == 'z' ? &z
+                : layout[i] == 'r' ? &r
+                : layout[i] == 'a' ? &a
+                                   : nullptr;
     if (!slot || *slot >= 0)
-      throw Error("layout '" + layout + "': use each of x, y, z, r, a at most once, and no other letter");
+      throw Error("layout '" + layout +
+                  "': use each of x, y, z, r, a at most once, and no other letter");
     *slot = static_cast<int>(i);
   }
   if (x < 0 || y < 0 || z < 0) throw Error("layout '" + layout + "' needs x, y and z");

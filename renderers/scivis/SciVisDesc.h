@@ -22,7 +22,7 @@ struct VolumeDesc {
 
 // One level set of a volume: a surface at `value`, shaded with a material, possibly transparent.
 struct IsosurfaceDesc {
-  std::uint32_t volume = 0;    // index into SceneDesc::volumes
+  std::uint32_t volume = 0;  // index into SceneDesc::volumes
   float value = 0;
   std::uint32_t material = 0;  // index into SceneDesc::materials (its color and opacity)
 };
@@ -52,8 +52,8 @@ struct LightDesc {
 };
 
 struct SciVisSettings {
-  int aoSamples = 0;         // ambient-occlusion rays per surface hit and sample; 0: none
-  float aoDistance = 0;      // world distance AO rays look; 0: 1/4 of the scene's extent
+  int aoSamples = 0;          // ambient-occlusion rays per surface hit and sample; 0: none
+  float aoDistance = 0;       // world distance AO rays look; 0: 1/4 of the scene's extent
   float samplingRate = 1.0f;  // volume samples per voxel spacing along a ray
   bool shadows = true;        // shadow rays towards directional and point lights
   // A ray stops once less than this fraction of light gets through (early ray termination).

@@ -49,7 +49,8 @@ void readIsosurfaces(const TomlReader& r, const toml::table& t, SceneDesc& d) {
   } else {
     materials.assign(values.size(), r.material(d, t, what));
   }
-  for (std::size_t i = 0; i < values.size(); ++i) d.isosurfaces.push_back({v, values[i], materials[i]});
+  for (std::size_t i = 0; i < values.size(); ++i)
+    d.isosurfaces.push_back({v, values[i], materials[i]});
 }
 
 void readParticles(const TomlReader& r, const toml::table& t, const std::filesystem::path& folder,
@@ -62,7 +63,8 @@ void readParticles(const TomlReader& r, const toml::table& t, const std::filesys
   ParticlesDesc p;
   p.name = name;
   p.material = r.material(d, t, what);
-  const int sources = (t.get("centers") ? 1 : 0) + (t.get("file") ? 1 : 0) + (t.get("generator") ? 1 : 0);
+  const int sources =
+      (t.get("centers") ? 1 : 0) + (t.get("file") ? 1 : 0) + (t.get("generator") ? 1 : 0);
   if (sources != 1) r.fail(t, what + ": give exactly one of centers, file or generator");
   const float radius = r.number(t, "radius", what, 0.0f);
   if (t.get("radius") && !(radius > 0)) r.fail(*t.get("radius"), what + ".radius must be positive");
@@ -102,11 +104,13 @@ void readParticles(const TomlReader& r, const toml::table& t, const std::filesys
   } else if (radius > 0) {
     p.radii = {radius};
   }
-  if (p.radii.empty()) r.fail(t, what + ": missing field 'radius' (or 'radii', or 'r' in the layout)");
+  if (p.radii.empty())
+    r.fail(t, what + ": missing field 'radius' (or 'radii', or 'r' in the layout)");
   if (p.radii.size() != 1 && p.radii.size() != p.centers.size())
     r.fail(*t.get("radii"), what + ".radii must have one radius per particle");
   for (float x : p.radii)
-    if (!(x > 0)) r.fail(t.get("radii") ? *t.get("radii") : t, what + ": every radius must be positive");
+    if (!(x > 0))
+      r.fail(t.get("radii") ? *t.get("radii") : t, what + ": every radius must be positive");
   if (const toml::node* a = t.get("attribute")) {
     p.attribute = numbers(r, *a, what + ".attribute");
     if (p.attribute.size() != p.centers.size())
@@ -160,7 +164,8 @@ void readSettings(const TomlReader& r, const toml::table& t, SciVisSettings& s) 
     s.aoSamples = static_cast<int>(v);
   }
   s.aoDistance = r.number(t, "ao_distance", what, s.aoDistance);
-  if (!(s.aoDistance >= 0)) r.fail(*t.get("ao_distance"), what + ".ao_distance must not be negative");
+  if (!(s.aoDistance >= 0))
+    r.fail(*t.get("ao_distance"), what + ".ao_distance must not be negative");
   s.samplingRate = r.number(t, "sampling_rate", what, s.samplingRate);
   if (!(s.samplingRate >= 0.01f && s.samplingRate <= 64))
     r.fail(*t.get("sampling_rate"), what + ".sampling_rate must be in [0.01, 64]");

@@ -54,7 +54,7 @@ struct Volume {
   GridGeometry grid;
   VoxelBox box;  // the held voxels (a sub-box of grid.wholeBox())
   VoxelType type = VoxelType::Float32;
-  std::vector<std::byte> voxels;  // box.voxelCount() * voxelBytes(type) bytes
+  std::vector<std::byte> voxels;     // box.voxelCount() * voxelBytes(type) bytes
   float valueMin = 0, valueMax = 0;  // over the held voxels
 
   // The value of voxel (i, j, k), given in whole-field indices inside `box`.

@@ -19,6 +19,7 @@
 #include "renderers/MeshImport.h"
 #include "renderers/Rng.h"
 #include "renderers/Scene.h"
+#include "tests/renderers/RenderTestUtil.h"
 
 namespace renderers {
 namespace {
@@ -201,10 +202,10 @@ TEST(Packet, EveryLaneEqualsItsSingleRayInTheCornellBox) {
   checkScene(scene, scene.desc().camera, 48, 48, {278, 274, 280}, 280);
 }
 
-// The benchmark's bunny (75 k triangles), as scripts/bench places it.
+// The benchmark's bunny (75 k triangles), from libcgal-demo (scripts/setup installs it).
 TEST(Packet, EveryLaneEqualsItsSingleRayOnTheStanfordBunny) {
-  const char* bunny = "/tmp/dfbwall-assets/data/meshes/bunny00.off";
-  if (!std::filesystem::exists(bunny)) GTEST_SKIP() << bunny << " not unpacked (libcgal-demo)";
+  const std::string bunny = test::cgalBunny();
+  ASSERT_FALSE(bunny.empty()) << "libcgal-demo is not installed (scripts/setup installs it)";
   SceneDesc d;
   d.materials = {{"white", MaterialType::Diffuse, Vec3{0.8f}, {}, 0, 1.5f}};
   Shape s;

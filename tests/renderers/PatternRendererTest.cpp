@@ -53,7 +53,8 @@ TEST(Renderers, MakeByNameAndPrimaryShading) {
     makeRenderer("raster", scene, s);
     FAIL();
   } catch (const Error& e) {
-    EXPECT_STREQ(e.what(), "unknown renderer 'raster' (choose pathtracer, primary or pattern)");
+    EXPECT_STREQ(e.what(),
+                 "unknown renderer 'raster' (choose pathtracer, primary, pattern or scivis)");
   }
 }
 

@@ -1,6 +1,11 @@
 #pragma once
 // Renders a whole canvas tile by tile, as the frame driver does, without the DFB.
+#include <unistd.h>
+
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <string>
 #include <vector>
 
 #include "dfb/Tile.h"
@@ -8,6 +13,29 @@
 #include "renderers/Renderer.h"
 
 namespace renderers::test {
+
+// The Stanford bunny (75 k triangles) from Debian's libcgal-demo, unpacked once per machine into
+// /tmp (each caller unpacks into a folder of its own and renames the file into place, so tests
+// running in parallel never read half a file). Empty when the package is missing.
+inline std::string cgalBunny() {
+  namespace fs = std::filesystem;
+  const fs::path target = "/tmp/dfbwall-assets/data/meshes/bunny00.off";
+  const fs::path archive = "/usr/share/doc/libcgal-dev/data.tar.gz";
+  if (fs::exists(target)) return target.string();
+  if (!fs::exists(archive)) return {};
+  const fs::path scratch =
+      fs::temp_directory_path() / ("dfbwall-bunny-" + std::to_string(::getpid()));
+  fs::create_directories(scratch);
+  fs::create_directories(target.parent_path());
+  const std::string command =
+      "tar -xzf " + archive.string() + " -C " + scratch.string() + " data/meshes/bunny00.off";
+  if (std::system(command.c_str()) == 0) {
+    std::error_code ec;
+    fs::rename(scratch / "data/meshes/bunny00.off", target, ec);
+  }
+  fs::remove_all(scratch);
+  return fs::exists(target) ? target.string() : std::string();
+}
 
 inline std::vector<float> renderImage(const Renderer& r, int width, int height, int tileSize,
                                       int threads, std::uint32_t spp,

@@ -8,6 +8,7 @@
 #include "renderers/MeshImport.h"
 #include "renderers/Scene.h"
 #include "renderers/SceneToml.h"
+#include "tests/renderers/RenderTestUtil.h"
 
 namespace renderers {
 namespace {
@@ -90,7 +91,8 @@ faces = [[0, 1, 3]]
 }
 
 TEST(SceneToml, UnknownBuiltinListsTheChoices) {
-  EXPECT_EQ(errorOf("builtin:teapot"), "unknown built-in scene 'teapot' (choose cornell, spheres)");
+  EXPECT_EQ(errorOf("builtin:teapot"),
+            "unknown built-in scene 'teapot' (choose cornell, spheres, wavelet, particles)");
 }
 
 TEST(SceneToml, CornellTomlEqualsTheBuiltin) {
@@ -175,9 +177,9 @@ material = "white"
   EXPECT_EQ(e.rfind(broken + ":12: mesh 'nothing': ", 0), 0u) << e;
 }
 
-TEST(SceneToml, StanfordBunnyFromCgalWhenInstalled) {
-  const char* bunny = "/tmp/dfbwall-assets/data/meshes/bunny00.off";
-  if (!fs::exists(bunny)) GTEST_SKIP() << bunny << " not unpacked (libcgal-demo)";
+TEST(SceneToml, StanfordBunnyFromCgal) {
+  const std::string bunny = test::cgalBunny();
+  ASSERT_FALSE(bunny.empty()) << "libcgal-demo is not installed (scripts/setup installs it)";
   const TriangleMesh m = importMesh(bunny);
   EXPECT_GT(m.triangles.size(), 50000u);
 }

@@ -43,7 +43,8 @@ transfer_function = { preset = "grayscale", range = [37.0, 277.0] }
 )";  // 10 lines
 
 TEST(SciVisToml, TheShippedWaveletSceneReads) {
-  const SceneDesc d = loadSceneDesc(std::string(DFBWALL_SOURCE_DIR) + "/configs/scenes/wavelet.toml");
+  const SceneDesc d =
+      loadSceneDesc(std::string(DFBWALL_SOURCE_DIR) + "/configs/scenes/wavelet.toml");
   ASSERT_EQ(d.volumes.size(), 1u);
   EXPECT_EQ(d.volumes[0].source.grid.dims, (Index3{96, 96, 96}));
   ASSERT_EQ(d.isosurfaces.size(), 2u);
@@ -85,7 +86,8 @@ TEST(SciVisToml, MistakesNameFileLineAndField) {
     const std::string path = writeScene("case" + std::to_string(i++) + ".toml", kHeader + c.text);
     const std::string e = errorOf(path);
     EXPECT_EQ(e.rfind(path + ":", 0), 0u) << e;
-    EXPECT_NE(e.find(c.expected), std::string::npos) << "got: " << e << "\nexpected: " << c.expected;
+    EXPECT_NE(e.find(c.expected), std::string::npos)
+        << "got: " << e << "\nexpected: " << c.expected;
   }
 }
 
