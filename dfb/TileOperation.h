@@ -46,5 +46,8 @@ TileOperationFactory accumulateOperation();
 // parents), then per pixel sorts fragments by depth and blends front to back. Colors are
 // premultiplied by alpha.
 TileOperationFactory alphaBlendOperation();
+// Sort-last compositing with progressive refinement: each frame's tree is alpha-blended, then the
+// composited tiles of the epoch are averaged (weighted by the root tile's `weight`).
+TileOperationFactory compositeAccumulateOperation();
 
 }  // namespace dfb

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "renderers/Error.h"
+#include "renderers/scivis/Bricks.h"
 
 namespace renderers {
 
@@ -232,22 +233,10 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   rtcCommitScene(e.shading);
   if (!e.message.empty()) throw Error("Embree: building the scivis scene: " + e.message);
 
-  // The scene's extent (for AO distances and ray offsets), from the descriptions, so every
-  // brick of a scene uses the same.
-  Box3 all{Vec3{Box3::kInf}, Vec3{-Box3::kInf}};
-  auto grow = [&](Vec3 p) {
-    all.lo = {std::min(all.lo.x, p.x), std::min(all.lo.y, p.y), std::min(all.lo.z, p.z)};
-    all.hi = {std::max(all.hi.x, p.x), std::max(all.hi.y, p.y), std::max(all.hi.z, p.z)};
-  };
-  for (const VolumeDesc& v : desc.volumes) {
-    Vec3 lo, hi;
-    v.source.grid.bounds(v.source.grid.wholeBox(), lo, hi);
-    grow(lo), grow(hi);
-  }
-  RTCBounds b;
-  rtcGetSceneBounds(e.shading, &b);
-  if (b.lower_x <= b.upper_x) grow({b.lower_x, b.lower_y, b.lower_z}), grow({b.upper_x, b.upper_y, b.upper_z});
-  extent_ = all.empty() ? 1.0f : std::max(1e-3f, maxComponent(all.hi - all.lo));
+  // The scene's extent (for AO distances and ray offsets) from the whole scene's description,
+  // not from what this brick holds: every brick offsets and reaches as the whole scene does.
+  const Box3 domain = sceneDomain(desc);
+  extent_ = std::max(1e-3f, maxComponent(domain.hi - domain.lo));
   aoDistance_ = settings.aoDistance > 0 ? settings.aoDistance : 0.25f * extent_;
 
   // Lights: as given, or an ambient light and a headlight along the scene camera's view.

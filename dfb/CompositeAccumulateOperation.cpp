@@ -1,0 +1,53 @@
+// Sort-last compositing with progressive refinement (paper 4.2 with 4.1): every frame the tile's
+// dependency tree is alpha-blended (alphaBlendOperation), and the composited tile is one input
+// of the accumulate operation, which averages the frames of the epoch. Compositing before
+// averaging is what a single renderer does per sample, so a still camera converges to the image
+// one process would make.
+#include "dfb/TileOperation.h"
+
+namespace dfb {
+namespace {
+
+class CompositeAccumulateOperation final : public TileOperation {
+ public:
+  explicit CompositeAccumulateOperation(const Region& region)
+      : blend_(alphaBlendOperation()(region)), accumulate_(accumulateOperation()(region)) {}
+
+  void newFrame(const FrameInfo& frame, std::uint32_t accumulationId,
+                int expectedInputs) override {
+    accumulationId_ = accumulationId;
+    weight_ = 1;
+    blend_->newFrame(frame, accumulationId, expectedInputs);
+    accumulate_->newFrame(frame, accumulationId, 1);
+  }
+
+  bool process(Tile&& input) override {
+    // The samples behind the frame: the root tile's (every input of a tree renders alike).
+    if (input.generation == 0) weight_ = input.weight;
+    if (!blend_->process(std::move(input))) return false;
+    Tile composited = blend_->finished();
+    composited.accumulationId = accumulationId_;
+    composited.sequence = 0;
+    composited.weight = weight_;
+    composited.generation = 0;
+    composited.children = 0;
+    return accumulate_->process(std::move(composited));
+  }
+
+  const Tile& finished() const override { return accumulate_->finished(); }
+  float error() const override { return accumulate_->error(); }
+
+ private:
+  std::unique_ptr<TileOperation> blend_, accumulate_;
+  std::uint32_t accumulationId_ = 0, weight_ = 1;
+};
+
+}  // namespace
+
+TileOperationFactory compositeAccumulateOperation() {
+  return [](const Region& region) {
+    return std::make_unique<CompositeAccumulateOperation>(region);
+  };
+}
+
+}  // namespace dfb

@@ -1,0 +1,231 @@
+#include "renderers/scivis/BrickFrameDriver.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "dfb/Timing.h"
+#include "renderers/Error.h"
+#include "renderers/Parallel.h"
+
+namespace renderers {
+namespace {
+
+constexpr float kInf = Box3::kInf;
+
+// The pixel rectangle covering `box` seen by `camera` on a width x height canvas, or nothing
+// (false) when a corner is behind or beside the camera's plane (then every tile may see it).
+bool projectBox(const CameraDesc& c, int width, int height, const Box3& box, float& x0, float& y0,
+                float& x1, float& y1) {
+  const Vec3 forward = normalize(c.lookAt - c.position);
+  const Vec3 right = normalize(cross(forward, c.up));
+  const Vec3 up = cross(right, forward);
+  const float halfHeight = std::tan(0.5f * c.fovY * kPi / 180.0f);
+  const float halfWidth = halfHeight * static_cast<float>(width) / static_cast<float>(height);
+  x0 = y0 = kInf;
+  x1 = y1 = -kInf;
+  for (int i = 0; i < 8; ++i) {
+    const Vec3 p{(i & 1) ? box.hi.x : box.lo.x, (i & 2) ? box.hi.y : box.lo.y,
+                 (i & 4) ? box.hi.z : box.lo.z};
+    const Vec3 v = p - c.position;
+    const float depth = dot(v, forward);
+    if (!(depth > 1e-6f * (1.0f + length(v)))) return false;
+    const float sx = dot(v, right) / (depth * halfWidth), sy = dot(v, up) / (depth * halfHeight);
+    const float px = (sx + 1) * 0.5f * static_cast<float>(width);
+    const float py = (1 - sy) * 0.5f * static_cast<float>(height);
+    x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py), y1 = std::max(y1, py);
+  }
+  return true;
+}
+
+// The distance to sort a brick's fragment of a pixel by: where the ray enters the brick, or, when
+// it misses (another sample of the pixel may hit), the distance to the brick's nearest point.
+float brickDepth(const Box3& b, Vec3 origin, Vec3 dir) {
+  float t0 = 0, t1 = kInf;
+  if (clipToBox(b, origin, reciprocal(dir), t0, t1)) return t0;
+  const Vec3 nearest{std::clamp(origin.x, b.lo.x, b.hi.x), std::clamp(origin.y, b.lo.y, b.hi.y),
+                     std::clamp(origin.z, b.lo.z, b.hi.z)};
+  return length(nearest - origin);
+}
+
+}  // namespace
+
+struct BrickFrameDriver::Impl {
+  std::shared_ptr<const SceneDesc> desc;
+  RenderSettings settings;
+  BrickDriverOptions options;
+  int rank = 0, ranks = 1;
+  ThreadLimit threads;
+  std::vector<BrickPlan> plans;
+  std::vector<std::vector<int>> holders;  // per brick
+  // This rank's bricks: scene and renderer (without background) per held brick id.
+  std::vector<std::unique_ptr<SciVisScene>> scenes;
+  std::vector<std::unique_ptr<SciVisRenderer>> renderers;  // by brick id; null when not held
+  std::size_t bytes = 0;
+  std::atomic<std::uint64_t> brickTiles{0};
+
+  Impl(std::shared_ptr<const SceneDesc> d, const RenderSettings& s, BrickDriverOptions o, int r,
+       int n)
+      : desc(std::move(d)), settings(s), options(std::move(o)), rank(r), ranks(n),
+        threads(options.threads) {}
+};
+
+BrickFrameDriver::BrickFrameDriver(std::shared_ptr<const SceneDesc> desc,
+                                   const RenderSettings& settings, BrickDriverOptions options,
+                                   int rank, int ranks)
+    : impl_(std::make_unique<Impl>(std::move(desc), settings, std::move(options), rank, ranks)) {
+  Impl& m = *impl_;
+  if (m.options.bricks < 1) throw Error("--bricks must be at least 1");
+  if (m.options.replication < 1) throw Error("--replication must be at least 1");
+  m.plans = splitScene(*m.desc, m.options.bricks);
+  const Box3 domain = sceneDomain(*m.desc);
+  const float ghost = ghostMargin(*m.desc, maxComponent(domain.hi - domain.lo));
+  m.renderers.resize(m.plans.size());
+  for (const BrickPlan& plan : m.plans) {
+    m.holders.push_back(brickHolders(plan.id, ranks, m.options.replication));
+    const auto& h = m.holders.back();
+    if (std::find(h.begin(), h.end(), rank) == h.end()) continue;
+    BrickContent content = loadBrick(*m.desc, plan, ghost);
+    m.bytes += content.bytes();
+    m.scenes.push_back(std::make_unique<SciVisScene>(m.desc, std::move(content)));
+    m.renderers[static_cast<std::size_t>(plan.id)] =
+        std::make_unique<SciVisRenderer>(*m.scenes.back(), settings, SciVisOptions{false});
+  }
+}
+
+BrickFrameDriver::~BrickFrameDriver() = default;
+
+void BrickFrameDriver::configure(dfb::DfbOptions& options) const {
+  options.operation = dfb::compositeAccumulateOperation();
+  const std::vector<bool> active = impl_->options.activeTiles;
+  options.expectedInputs = [active](int tile) {
+    return active.empty() || (tile >= 0 && static_cast<std::size_t>(tile) < active.size() &&
+                              active[static_cast<std::size_t>(tile)])
+               ? 1
+               : 0;
+  };
+}
+
+const std::vector<BrickPlan>& BrickFrameDriver::bricks() const { return impl_->plans; }
+std::size_t BrickFrameDriver::sceneBytes() const { return impl_->bytes; }
+std::uint64_t BrickFrameDriver::brickTilesRendered() const { return impl_->brickTiles.load(); }
+
+std::vector<int> BrickFrameDriver::heldBricks() const {
+  std::vector<int> out;
+  for (std::size_t b = 0; b < impl_->renderers.size(); ++b)
+    if (impl_->renderers[b]) out.push_back(static_cast<int>(b));
+  return out;
+}
+
+int BrickFrameDriver::tileBrickOwner(int tile, int brick) const {
+  const std::vector<int>& h = impl_->holders[static_cast<std::size_t>(brick)];
+  return h[static_cast<std::size_t>(tile + brick) % h.size()];
+}
+
+std::vector<int> BrickFrameDriver::bricksOfTile(const CameraDesc& camera,
+                                                const dfb::Region& region) const {
+  std::vector<int> out;
+  for (const BrickPlan& plan : impl_->plans) {
+    float x0, y0, x1, y1;
+    // A pixel's samples jitter within it: widen the projection by a pixel.
+    if (!projectBox(camera, impl_->settings.width, impl_->settings.height, plan.bounds, x0, y0,
+                    x1, y1) ||
+        (x0 - 1 < static_cast<float>(region.x1) && x1 + 1 > static_cast<float>(region.x0) &&
+         y0 - 1 < static_cast<float>(region.y1) && y1 + 1 > static_cast<float>(region.y0)))
+      out.push_back(plan.id);
+  }
+  return out;
+}
+
+FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
+                                          const dfb::FrameInfo& frame) {
+  using dfb::Clock;
+  const auto t0 = Clock::now();
+  Impl& m = *impl_;
+  const CameraDesc cameraDesc = frameCamera(m.desc->camera, m.settings, frame.frameId);
+  const Camera camera(cameraDesc, m.settings.width, m.settings.height);
+  for (auto& r : m.renderers)
+    if (r) r->beginFrame(frame);
+
+  // The plan: the same on every rank. A job is (tile, brick), brick -1 for the background.
+  struct Job {
+    int tile, brick, children;
+  };
+  std::vector<Job> jobs;
+  const dfb::TileGrid& grid = dfb.grid();
+  for (int t = 0; t < grid.tileCount(); ++t) {
+    if (!m.options.activeTiles.empty() && !m.options.activeTiles[static_cast<std::size_t>(t)])
+      continue;
+    const std::vector<int> needed = bricksOfTile(cameraDesc, grid.region(t));
+    if (dfb.ownerOf(t) == dfb.rank()) jobs.push_back({t, -1, static_cast<int>(needed.size())});
+    for (int b : needed)
+      if (tileBrickOwner(t, b) == dfb.rank()) jobs.push_back({t, b, 0});
+  }
+
+  dfb.begin(frame);
+  const auto t1 = Clock::now();
+  const std::uint32_t accumulationId = dfb.accumulationId();
+  const std::uint32_t spp = m.options.samplesPerPixel;
+  const float inv = 1.0f / static_cast<float>(spp);
+  const Environment& background = m.desc->environment;
+  parallelFor(jobs.size(), [&](std::size_t i) {
+    enableFlushToZero();
+    const Job& job = jobs[i];
+    const dfb::Region region = grid.region(job.tile);
+    dfb::Tile tile;
+    prepareTile(region, accumulationId, 0, spp, tile);
+    tile.depth.assign(static_cast<std::size_t>(region.pixelCount()), kInf);
+    tile.generation = job.brick < 0 ? 0 : 1;
+    tile.children = job.children;
+    tile.sequence = job.brick < 0 ? 0 : static_cast<std::uint32_t>(job.brick);
+    const SciVisRenderer* renderer =
+        job.brick < 0 ? nullptr : m.renderers[static_cast<std::size_t>(job.brick)].get();
+    const Box3 bounds = job.brick < 0 ? Box3{} : m.plans[static_cast<std::size_t>(job.brick)].bounds;
+    for (int y = region.y0; y < region.y1; ++y)
+      for (int x = region.x0; x < region.x1; ++x) {
+        float sum[4] = {0, 0, 0, 0};
+        for (std::uint32_t s = 0; s < spp; ++s) {
+          // The camera ray of SciVisRenderer::render, sample for sample.
+          const Sampler sampler(m.settings.seed, x, y, accumulationId, s);
+          Vec3 origin, dir;
+          camera.ray(static_cast<float>(x) + sampler.get(0),
+                     static_cast<float>(y) + sampler.get(1), 0.5f, 0.5f, origin, dir);
+          if (!renderer) {
+            const Vec3 bg = background.radiance(dir);
+            sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
+            continue;
+          }
+          float a = 0, b = kInf;
+          if (!clipToBox(bounds, origin, reciprocal(dir), a, b)) continue;
+          const Fragment f = renderer->integrate(origin, dir, a, b, sampler);
+          for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
+        }
+        const std::size_t p = static_cast<std::size_t>(y - region.y0) * region.width() +
+                              static_cast<std::size_t>(x - region.x0);
+        for (int c = 0; c < 4; ++c) tile.color[4 * p + static_cast<std::size_t>(c)] = sum[c] * inv;
+        if (renderer) {
+          // Sorted by the first sample's ray: with one sample a frame (the usual progressive
+          // case) every sample's fragments then composite in exactly its own ray's order, also
+          // in pixels that see a brick border edge-on.
+          const Sampler first(m.settings.seed, x, y, accumulationId, 0);
+          Vec3 origin, dir;
+          camera.ray(static_cast<float>(x) + first.get(0), static_cast<float>(y) + first.get(1),
+                     0.5f, 0.5f, origin, dir);
+          tile.depth[p] = brickDepth(bounds, origin, dir);
+        }
+      }
+    if (renderer) m.brickTiles.fetch_add(1, std::memory_order_relaxed);
+    dfb.setTile(std::move(tile));
+  });
+  const auto t2 = Clock::now();
+  dfb.end();
+  FrameReport report;
+  report.tilesRendered = static_cast<int>(jobs.size());
+  for (const Job& j : jobs)
+    if (j.brick >= 0) report.samples += std::uint64_t{spp} * grid.region(j.tile).pixelCount();
+  report.renderMs = dfb::msBetween(t1, t2);
+  report.frameMs = dfb::msBetween(t0, Clock::now());
+  return report;
+}
+
+}  // namespace renderers

@@ -1,0 +1,197 @@
+#include "renderers/scivis/Bricks.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "renderers/Error.h"
+
+namespace renderers {
+namespace {
+
+void grow(Box3& b, Vec3 lo, Vec3 hi) {
+  b.lo = {std::min(b.lo.x, lo.x), std::min(b.lo.y, lo.y), std::min(b.lo.z, lo.z)};
+  b.hi = {std::max(b.hi.x, hi.x), std::max(b.hi.y, hi.y), std::max(b.hi.z, hi.z)};
+}
+
+Box3 expanded(const Box3& b, float margin) {
+  return {b.lo - Vec3{margin}, b.hi + Vec3{margin}};
+}
+
+bool overlaps(const Box3& a, Vec3 lo, Vec3 hi) {
+  return lo.x <= a.hi.x && hi.x >= a.lo.x && lo.y <= a.hi.y && hi.y >= a.lo.y &&
+         lo.z <= a.hi.z && hi.z >= a.lo.z;
+}
+
+// Every particle set of the scene: its [[particles]] and the path tracer's sphere shapes.
+std::vector<const ParticlesDesc*> particleSets(const SceneDesc& desc,
+                                               std::vector<ParticlesDesc>& converted) {
+  for (const Instance& inst : desc.instances) {
+    const Shape& s = desc.shapes.at(inst.shape);
+    if (!s.isSpheres()) continue;
+    ParticlesDesc p;
+    p.name = s.name;
+    for (const Vec3& c : s.spheres.centers) p.centers.push_back(inst.transform.point(c));
+    p.radii = s.spheres.radii;
+    p.material = inst.material;
+    converted.push_back(std::move(p));
+  }
+  std::vector<const ParticlesDesc*> out;
+  for (const ParticlesDesc& p : desc.particles) out.push_back(&p);
+  for (const ParticlesDesc& p : converted) out.push_back(&p);
+  return out;
+}
+
+// The particles of `p` for which `keep(centre, radius)` holds, with their radii and attributes.
+template <class Keep>
+ParticlesDesc selectParticles(const ParticlesDesc& p, Keep keep) {
+  ParticlesDesc out;
+  out.name = p.name;
+  out.material = p.material;
+  out.colorMap = p.colorMap;
+  const bool perParticle = p.radii.size() != 1;
+  if (!perParticle) out.radii = p.radii;
+  for (std::size_t i = 0; i < p.centers.size(); ++i) {
+    if (!keep(p.centers[i], p.radius(i))) continue;
+    out.centers.push_back(p.centers[i]);
+    if (perParticle) out.radii.push_back(p.radii[i]);
+    if (!p.attribute.empty()) out.attribute.push_back(p.attribute[i]);
+  }
+  return out;
+}
+
+// The triangles of `m` for which `keep(lo, hi)` of their bounds holds, positions compacted.
+template <class Keep>
+WorldMesh selectTriangles(const WorldMesh& m, Keep keep) {
+  WorldMesh out;
+  out.material = m.material;
+  std::vector<std::uint32_t> remap(m.mesh.positions.size(), ~0u);
+  for (const auto& t : m.mesh.triangles) {
+    const Vec3 a = m.mesh.positions[t[0]], b = m.mesh.positions[t[1]], c = m.mesh.positions[t[2]];
+    const Vec3 lo{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})};
+    const Vec3 hi{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})};
+    if (!keep(lo, hi)) continue;
+    std::array<std::uint32_t, 3> tri;
+    for (int k = 0; k < 3; ++k) {
+      std::uint32_t& r = remap[t[static_cast<std::size_t>(k)]];
+      if (r == ~0u) {
+        r = static_cast<std::uint32_t>(out.mesh.positions.size());
+        out.mesh.positions.push_back(m.mesh.positions[t[static_cast<std::size_t>(k)]]);
+      }
+      tri[static_cast<std::size_t>(k)] = r;
+    }
+    out.mesh.triangles.push_back(tri);
+  }
+  return out;
+}
+
+void split(const Box3& box, int count, int& nextId, std::vector<BrickPlan>& out) {
+  if (count == 1) {
+    out.push_back({nextId++, box});
+    return;
+  }
+  const Vec3 size = box.hi - box.lo;
+  const int axis = size.x >= size.y && size.x >= size.z ? 0 : (size.y >= size.z ? 1 : 2);
+  const int left = count / 2;
+  const float lo = box.lo[axis], hi = box.hi[axis];
+  const float plane = lo + (hi - lo) * static_cast<float>(left) / static_cast<float>(count);
+  Box3 a = box, b = box;
+  (axis == 0 ? a.hi.x : axis == 1 ? a.hi.y : a.hi.z) = plane;
+  (axis == 0 ? b.lo.x : axis == 1 ? b.lo.y : b.lo.z) = plane;
+  split(a, left, nextId, out);
+  split(b, count - left, nextId, out);
+}
+
+}  // namespace
+
+Box3 sceneDomain(const SceneDesc& desc) {
+  Box3 domain{Vec3{Box3::kInf}, Vec3{-Box3::kInf}};
+  for (const VolumeDesc& v : desc.volumes) {
+    Vec3 lo, hi;
+    v.source.grid.bounds(v.source.grid.wholeBox(), lo, hi);
+    grow(domain, lo, hi);
+  }
+  std::vector<ParticlesDesc> converted;
+  for (const ParticlesDesc* p : particleSets(desc, converted))
+    for (std::size_t i = 0; i < p->centers.size(); ++i)
+      grow(domain, p->centers[i] - Vec3{p->radius(i)}, p->centers[i] + Vec3{p->radius(i)});
+  for (const WorldMesh& m : worldMeshes(desc))
+    for (const Vec3& v : m.mesh.positions) grow(domain, v, v);
+  if (domain.empty()) throw Error("the scene is empty: nothing to cut into bricks");
+  return domain;
+}
+
+std::vector<BrickPlan> splitScene(const SceneDesc& desc, int count) {
+  if (count < 1) throw Error("--bricks must be at least 1");
+  std::vector<BrickPlan> out;
+  int nextId = 0;
+  split(sceneDomain(desc), count, nextId, out);
+  return out;
+}
+
+std::vector<int> brickHolders(int brick, int ranks, int replication) {
+  const int k = std::clamp(replication, 1, ranks);
+  std::vector<int> holders;
+  for (int j = 0; j < k; ++j) holders.push_back((brick * k + j) % ranks);
+  std::sort(holders.begin(), holders.end());
+  return holders;
+}
+
+float ghostMargin(const SceneDesc& desc, float sceneExtent) {
+  if (desc.scivis.aoSamples <= 0) return 0.0f;
+  return desc.scivis.aoDistance > 0 ? desc.scivis.aoDistance : 0.25f * sceneExtent;
+}
+
+BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost) {
+  BrickContent c;
+  c.bounds = plan.bounds;
+  const Box3 reach = expanded(plan.bounds, ghost);
+  for (const VolumeDesc& v : desc.volumes) {
+    const GridGeometry& g = v.source.grid;
+    VoxelBox box;
+    bool empty = false;
+    for (int a = 0; a < 3; ++a) {
+      // Two voxels beyond the reach: the crossing test samples one step past a ray's end and
+      // gradients half a voxel around a hit.
+      const double lo = std::floor((double(reach.lo[a]) - g.origin[a]) / g.spacing[a]) - 2;
+      const double hi = std::ceil((double(reach.hi[a]) - g.origin[a]) / g.spacing[a]) + 3;
+      const int i0 = static_cast<int>(std::clamp(lo, 0.0, double(g.dims[a])));
+      const int i1 = static_cast<int>(std::clamp(hi, 0.0, double(g.dims[a])));
+      (a == 0 ? box.lo.x : a == 1 ? box.lo.y : box.lo.z) = i0;
+      (a == 0 ? box.hi.x : a == 1 ? box.hi.y : box.hi.z) = i1;
+      empty = empty || i1 - i0 < 2;
+    }
+    if (empty) {
+      Volume none;
+      none.grid = g;
+      none.type = v.source.type;
+      c.volumes.push_back(std::move(none));
+    } else {
+      c.volumes.push_back(loadVolume(v.source, box));
+    }
+  }
+  std::vector<ParticlesDesc> converted;
+  for (const ParticlesDesc* p : particleSets(desc, converted)) {
+    ParticlesDesc inside = selectParticles(*p, [&](Vec3 centre, float r) {
+      return overlaps(plan.bounds, centre - Vec3{r}, centre + Vec3{r});
+    });
+    ParticlesDesc near = selectParticles(*p, [&](Vec3 centre, float r) {
+      return !overlaps(plan.bounds, centre - Vec3{r}, centre + Vec3{r}) &&
+             overlaps(reach, centre - Vec3{r}, centre + Vec3{r});
+    });
+    if (!inside.centers.empty()) c.particles.push_back(std::move(inside));
+    if (!near.centers.empty()) c.ghostParticles.push_back(std::move(near));
+  }
+  for (const WorldMesh& m : worldMeshes(desc)) {
+    WorldMesh inside = selectTriangles(m, [&](Vec3 lo, Vec3 hi) {
+      return overlaps(plan.bounds, lo, hi);
+    });
+    WorldMesh near = selectTriangles(m, [&](Vec3 lo, Vec3 hi) {
+      return !overlaps(plan.bounds, lo, hi) && overlaps(reach, lo, hi);
+    });
+    if (!inside.mesh.triangles.empty()) c.meshes.push_back(std::move(inside));
+    if (!near.mesh.triangles.empty()) c.ghostMeshes.push_back(std::move(near));
+  }
+  return c;
+}
+
+}  // namespace renderers

@@ -1,0 +1,38 @@
+#pragma once
+// Data-parallel bricks of a scivis scene: the scene's domain cut by a k-d split, which ranks hold
+// which brick, and loading one brick's data — only its voxels (plus ghost layers), the particles
+// and triangles that reach into it, and the ghost data its shading rays can reach. Every function
+// is pure: every rank computes the same plan with no communication.
+#include <vector>
+
+#include "renderers/SceneDesc.h"
+#include "renderers/scivis/SciVisScene.h"
+
+namespace renderers {
+
+struct BrickPlan {
+  int id = 0;
+  Box3 bounds;  // bricks tile the domain; camera rays are clipped to them
+};
+
+// The bounds of everything in the scene (volumes' voxel centres, particles, meshes).
+Box3 sceneDomain(const SceneDesc& desc);
+
+// `count` bricks: the domain halved (in brick counts) along its longest axis, recursively, at
+// the plane that gives each side its share of the volume. Ids are 0 .. count-1 in k-d order.
+std::vector<BrickPlan> splitScene(const SceneDesc& desc, int count);
+
+// The ranks holding brick `brick`: `replication` consecutive slots of brick * replication, wrapped
+// over `ranks` (so every rank holds about count * replication / ranks bricks).
+std::vector<int> brickHolders(int brick, int ranks, int replication);
+
+// How far a brick's shading rays reach beyond it: the ambient-occlusion distance when AO is on.
+// (Shadow rays beyond that see only what the brick holds; docs/design.md.)
+float ghostMargin(const SceneDesc& desc, float sceneExtent);
+
+// The data of `plan`: per volume the voxels around its bounds, `ghost` world units and two
+// voxels beyond them; particles and mesh triangles reaching into the bounds (drawn, clipped to
+// them) and, as ghost data, those within `ghost` of them.
+BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost);
+
+}  // namespace renderers

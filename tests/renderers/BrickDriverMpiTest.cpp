@@ -1,0 +1,144 @@
+// Data- and mixed-parallel rendering through the real DFB: a scene cut into 4 bricks renders the
+// same bytes on 1, 2, 3 and 4 ranks and with every replication, and matches the unbricked
+// (image-parallel) render up to float summation order.
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "dfb/DistributedFrameBuffer.h"
+#include "renderers/BuiltinScenes.h"
+#include "renderers/RenderScene.h"
+#include "renderers/scivis/BrickFrameDriver.h"
+#include "tests/MpiTestUtil.h"
+#include "tests/renderers/RenderTestUtil.h"
+
+namespace renderers {
+namespace {
+
+constexpr int kWidth = 80, kHeight = 56, kTile = 16, kFrames = 2;
+
+// Everything a brick can cut: a volume with a glassy and an opaque isosurface, particles on the
+// brick borders, a triangle through the middle; AO within the bricks' ghost margin.
+std::shared_ptr<SceneDesc> scene() {
+  auto d = std::make_shared<SceneDesc>(waveletScene(36));
+  d->volumes[0].transfer.opacities = {{37.0f, 0.0f}, {120.0f, 0.03f}, {277.0f, 0.2f}};
+  d->scivis.aoSamples = 2;
+  d->scivis.aoDistance = 0.2f;
+  d->scivis.shadows = false;  // shadow rays leave a brick's ghost margin (docs/design.md)
+  d->scivis.minTransmittance = 0;
+  ParticlesDesc p;
+  p.name = "dots";
+  p.centers = {{0, 0, 0}, {0.5f, -0.02f, 0.3f}, {-0.7f, 0.4f, -0.01f}, {0.01f, 0.8f, 0.6f}};
+  p.radii = {0.12f};
+  p.material = 1;
+  d->particles.push_back(p);
+  Shape tri;
+  tri.name = "tri";
+  tri.mesh.positions = {{-1, -0.9f, -0.3f}, {1, -0.9f, 0.2f}, {0.1f, 0.9f, -0.1f}};
+  tri.mesh.triangles = {{0, 1, 2}};
+  d->shapes.push_back(tri);
+  d->instances.push_back({0, {}, 0});
+  return d;
+}
+
+RenderSettings settings() {
+  RenderSettings s;
+  s.width = kWidth, s.height = kHeight, s.seed = 17;
+  return s;
+}
+
+// The image of kFrames accumulated frames with `bricks` bricks on the first `ranks` ranks of the
+// world (rank 0's copy; empty elsewhere).
+std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int ranks, int bricks,
+                                int replication) {
+  MPI_Comm comm;
+  const int rank = testutil::worldRank();
+  MPI_Comm_split(MPI_COMM_WORLD, rank < ranks ? 0 : 1, rank, &comm);
+  std::vector<float> image;
+  if (rank < ranks) {
+    BrickDriverOptions bo;
+    bo.bricks = bricks;
+    bo.replication = replication;
+    bo.threads = 2;
+    BrickFrameDriver driver(desc, settings(), bo, rank, ranks);
+    dfb::Messenger messenger(comm);
+    dfb::DfbOptions options;
+    options.width = kWidth, options.height = kHeight, options.tileSize = kTile;
+    options.format = dfb::DisplayFormat::RGBAF32;
+    options.frameTimeout = std::chrono::milliseconds(30000);
+    driver.configure(options);
+    {
+      dfb::DistributedFrameBuffer fb(messenger, comm, options);
+      for (int f = 0; f < kFrames; ++f) driver.renderFrame(fb, {static_cast<std::uint32_t>(f), 0});
+      image = fb.imageRgbaF32();
+    }
+    messenger.stop();
+  }
+  MPI_Comm_free(&comm);
+  MPI_Barrier(MPI_COMM_WORLD);
+  return image;
+}
+
+TEST(BrickDriverMpi, EveryRankCountAndReplicationGivesTheSameBytes) {
+  const auto desc = scene();
+  const int size = testutil::worldSize();
+  const std::vector<float> reference = renderBricks(desc, 1, 4, 1);
+  for (int ranks = 1; ranks <= size; ++ranks)
+    for (int replication : {1, 2, 4}) {
+      if (replication > ranks || (ranks == 1 && replication > 1)) continue;
+      const std::vector<float> image = renderBricks(desc, ranks, 4, replication);
+      if (testutil::worldRank() != 0) continue;
+      ASSERT_EQ(image.size(), reference.size());
+      EXPECT_EQ(0, std::memcmp(image.data(), reference.data(), image.size() * sizeof(float)))
+          << ranks << " ranks, replication " << replication;
+    }
+}
+
+TEST(BrickDriverMpi, FourBricksMatchTheUnbrickedRender) {
+  const auto desc = scene();
+  const std::vector<float> bricked = renderBricks(desc, testutil::worldSize(), 4, 1);
+  const std::vector<float> one = renderBricks(desc, testutil::worldSize(), 1, 1);
+  if (testutil::worldRank() != 0) return;
+  // The image-parallel render: the frames' mean, as the accumulate operation makes it.
+  const RenderScene whole = buildRenderScene("scivis", *desc);
+  const auto renderer = makeRenderer("scivis", whole, settings());
+  std::vector<float> expected(bricked.size(), 0.0f);
+  for (int f = 0; f < kFrames; ++f) {
+    const auto frame = test::renderImage(*renderer, kWidth, kHeight, kTile, 2, 1,
+                                         static_cast<std::uint32_t>(f));
+    for (std::size_t i = 0; i < frame.size(); ++i) expected[i] += frame[i] / kFrames;
+  }
+  ASSERT_EQ(bricked.size(), expected.size());
+  float worst = 0, worstOne = 0;
+  int visible = 0;
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    worst = std::max(worst, std::abs(bricked[i] - expected[i]));
+    worstOne = std::max(worstOne, std::abs(one[i] - expected[i]));
+    if (i % 4 != 3 && std::abs(expected[i] - bricked[0]) > 0.05f) ++visible;
+  }
+  EXPECT_LE(worst, 1e-4f) << "4 bricks vs the unbricked render";
+  EXPECT_LE(worstOne, 1e-4f) << "1 brick vs the unbricked render";
+  EXPECT_GT(visible, 500) << "the scene should cover much of the image";
+  std::printf("largest difference per channel: 4 bricks %.3g, 1 brick %.3g\n", worst, worstOne);
+}
+
+TEST(BrickDriverMpi, EachRankHoldsOnlyItsBricks) {
+  const auto desc = scene();
+  const int size = testutil::worldSize(), rank = testutil::worldRank();
+  BrickDriverOptions bo;
+  bo.bricks = 4;
+  BrickFrameDriver split(desc, settings(), bo, rank, size);
+  bo.bricks = 1;
+  BrickFrameDriver whole(desc, settings(), bo, 0, 1);
+  EXPECT_EQ(split.heldBricks().size(), static_cast<std::size_t>((4 + size - 1 - rank) / size));
+  if (size == 4) {
+    // One brick of four, with its ghost layers: well under half the scene.
+    EXPECT_LT(split.sceneBytes(), whole.sceneBytes() / 2)
+        << split.sceneBytes() << " of " << whole.sceneBytes() << " bytes";
+  }
+}
+
+}  // namespace
+}  // namespace renderers
