@@ -2,6 +2,7 @@
 
 #include <toml++/toml.h>
 
+#include <cmath>
 #include <filesystem>
 #include <initializer_list>
 #include <string_view>
@@ -45,8 +46,12 @@ class Reader {
   }
 
   float number(const toml::node& n, const std::string& what) const {
-    if (auto v = n.value<double>(); v && (n.is_integer() || n.is_floating_point()))
-      return static_cast<float>(*v);
+    if (auto v = n.value<double>(); v && (n.is_integer() || n.is_floating_point())) {
+      // TOML spells nan and inf; no scene quantity means either (and a float overflows to inf).
+      const float f = static_cast<float>(*v);
+      if (!std::isfinite(f)) fail(n, what + " must be a finite number, got " + std::to_string(*v));
+      return f;
+    }
     fail(n, what + " must be a number");
   }
 
