@@ -87,8 +87,7 @@ Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted
     for (size_t i = 0; i < j; ++i) {
       const Display& a = layout.displays[i];
       if (!isTrusted(i) || a.rect.empty()) continue;
-      const dfb::Region o{std::max(a.rect.x0, b.rect.x0), std::max(a.rect.y0, b.rect.y0),
-                          std::min(a.rect.x1, b.rect.x1), std::min(a.rect.y1, b.rect.y1)};
+      const dfb::Region o = dfb::intersect(a.rect, b.rect);
       if (o.empty()) continue;
       add(lineOr(b.lines.origin, b), b, j, "origin",
           "overlaps " + subjectOf(a, i) + " (line " + std::to_string(a.lines.table) + ") in the " +
