@@ -2,10 +2,13 @@
 // once and no other pixel, and the per-display and per-tile views agree.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <string>
 #include <vector>
 
+#include "wall/Error.h"
 #include "wall/Layout.h"
+#include "wall/PieceMessage.h"
 #include "wall/Routing.h"
 
 namespace {
@@ -125,6 +128,25 @@ TEST(Routing, TilesBehindBezelsAreNotShown) {
   // Every tile of a gapless single display is shown.
   const std::vector<bool> all = wall::tilesShownByAnyDisplay(load("1x1.toml"), 64);
   EXPECT_EQ(all, std::vector<bool>(all.size(), true));
+}
+
+// Found by fuzz_piece: a piece rectangle whose int pixel count overflowed (UBSan) and could
+// then match the message's size. Now refused before any arithmetic.
+TEST(PieceMessage, RejectsARectangleWhoseSizeOverflows) {
+  const std::uint32_t pixels[4] = {1, 2, 3, 4};
+  dfb::Bytes bytes = wall::packPiece(1, 0, dfb::Region{0, 0, 2, 2}, pixels, 2, 0, 0, false);
+  wall::PieceHeader header;
+  std::memcpy(&header, bytes.data(), sizeof header);
+  header.x0 = -2000000000;
+  header.x1 = 2000000000;
+  std::memcpy(bytes.data(), &header, sizeof header);
+  EXPECT_THROW(wall::readPieceHeader(bytes), wall::Error);
+  // Each side within the cap, the product past an int (found on the second fuzz run).
+  header.x0 = 0;
+  header.x1 = 393216;
+  header.y1 = 262144;
+  std::memcpy(bytes.data(), &header, sizeof header);
+  EXPECT_THROW(wall::readPieceHeader(bytes), wall::Error);
 }
 
 }  // namespace
