@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "apps/Failure.h"
 #include "apps/Options.h"
 #include "dfb/Messenger.h"
 #include "renderers/RenderScene.h"
@@ -22,6 +23,15 @@ struct Job {
   int worldRank = 0;
   int canvasWidth = 0, canvasHeight = 0;
   renderers::RenderScene scene;  // render ranks only
+  // Where a failure during the frames goes. The frame loops catch into it while their objects
+  // still exist: unwinding first would unregister them, and a message arriving for one would
+  // then be reported instead of the real cause.
+  FailurePath* failure = nullptr;
+  // Test-only: DFBWALL_FAIL_AT=RANK:FRAME makes world rank RANK throw at frame FRAME, so the
+  // fault tests can check the failure path end to end (tests/apps/fault_test.sh).
+  int failAtRank = -1;
+  std::uint32_t failAtFrame = 0;
+  void failIfAsked(std::uint32_t frame) const;
   bool gatherMode() const { return options.mode == "gather"; }
   bool isWallRank() const { return roles.processOfRank(worldRank) >= 0; }
 };
@@ -41,43 +51,46 @@ struct FrameRecord {
   std::uint64_t tilesRendered = 0;
   std::uint64_t samples = 0;
   std::int64_t lastSetTileNs = 0;  // steady_clock, latest over render ranks
-  // steady_clock time the last display had every piece (wall ranks, filled on rank 0 at the end
-  // of the run); minus lastSetTileNs it is the compositing time. One host's clock: on a cluster
-  // the difference also holds the hosts' clock offset.
+  // steady_clock time the last display had every piece (from the wall's acknowledgement); minus
+  // lastSetTileNs it is the compositing time. One host's clock: on a cluster the difference
+  // also holds the hosts' clock offset. 0: no wall.
   std::int64_t displaysCompleteNs = 0;
 };
 
-// Where one rank's time went over the whole run, in milliseconds summed over tiles or frames,
-// and its peak resident memory. Render ranks fill the first stages, wall ranks the last.
-struct RankTotals {
-  static constexpr int kStages = 12;
-  static constexpr const char* kStageNames[kStages] = {
-      "render",       "tile_unpack",  "tile_operation", "tone_map",  "cut",     "send",
-      "gather_relay", "piece_unpack", "assemble",       "wall_wait", "barrier", "present"};
-  double stageMs[kStages] = {};
-  double peakRssKiB = 0;
-  double role = 0;  // 0: render, 1: wall (a double so the whole struct gathers as doubles)
+// Where one rank's time went over the whole run, in milliseconds summed over tiles or frames.
+// Render ranks fill the first seven stages, wall ranks the last five. Doubles only, so the
+// whole struct gathers as doubles.
+struct StageTimes {
+  double render = 0, tileUnpack = 0, tileOperation = 0, toneMap = 0, cut = 0, send = 0,
+         gatherRelay = 0;
+  double pieceUnpack = 0, assemble = 0, wallWait = 0, barrier = 0, present = 0;
 };
 
-// Render ranks: renders the frames, feeds the wall (route or gather), writes --image on rank 0.
-// Returns the records (complete on rank 0).
-std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger,
-                                       MPI_Comm renderComm, RankTotals& totals);
-// Wall ranks: assembles, swaps and presents the frames of this process's displays.
-// Returns, per frame, the steady_clock time its last piece arrived on this rank.
-std::vector<std::int64_t> runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm,
-                                      RankTotals& totals);
+struct RankTotals {
+  StageTimes stages;
+  double peakRssKiB = 0;
+  double role = 0;  // 0: render, 1: wall
+};
+static_assert(sizeof(RankTotals) % sizeof(double) == 0);
+
+class RunControl;
+class StatsStream;
+
+// Render ranks: renders the frames, feeds the wall (route or gather), writes --image on rank 0,
+// streams the statistics there. Returns the exit code agreed with rank 0 (0, or a stop's).
+int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm,
+                  RunControl& control, StatsStream* stats, RankTotals& totals);
+// Wall ranks: assembles, swaps and presents the frames of this process's displays until the
+// last frame (or the one rank 0 announces when the run stops early). Returns the exit code.
+int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, RunControl& control,
+                RankTotals& totals);
 
 // The peak resident set of this process (VmHWM), in KiB; 0 where /proc is missing.
 double peakRssKiB();
 
 // --dry-run on rank 0: canvas, displays, roles, and per display its tiles and their owners.
 void printDryRun(const Job& job);
-// --stats FILE.json on rank 0.
-// `ranks` has every rank's totals, by world rank.
-void writeStats(const Job& job, const std::vector<FrameRecord>& frames,
-                const std::vector<RankTotals>& ranks);
-// --image on rank 0: PNG from RGBA8 or PFM from linear RGBA float.
+// --image on rank 0: PNG from RGBA8 or PFM from linear RGBA float, written atomically.
 void writePfm(const std::string& path, const float* rgba, int width, int height);
 
 }  // namespace app

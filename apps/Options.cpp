@@ -3,7 +3,10 @@
 #include <CLI/CLI.hpp>
 
 #include <charconv>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 namespace app {
@@ -129,6 +132,18 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
   if (!o.image.empty() && !endsWith(o.image, ".png") && !endsWith(o.image, ".pfm"))
     return fail("--image " + o.image +
                 ": the name must end in .png (RGBA8) or .pfm (linear float)");
+  // CLI11's range checks let NaN through (every comparison with it is false).
+  if (!std::isfinite(o.exposure) || !std::isfinite(o.orbit))
+    return fail("--exposure and --orbit must be finite numbers");
+  if (!o.image.empty()) {
+    // The image reaches rank 0 in one MPI gather, whose counts are ints.
+    const std::uint64_t bytes =
+        std::uint64_t(o.width) * std::uint64_t(o.height) * (endsWith(o.image, ".pfm") ? 16u : 4u);
+    if (bytes > std::uint64_t(std::numeric_limits<int>::max()))
+      return fail("--image " + o.image + ": a " + std::to_string(o.width) + "x" +
+                  std::to_string(o.height) + " image is " + std::to_string(bytes) +
+                  " bytes; one gather carries at most 2^31-1 (use a smaller --size, or .png)");
+  }
   return -1;
 }
 

@@ -1,9 +1,17 @@
 // The render ranks' frame loop: pace against the wall, render through the DFB, feed the wall.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <deque>
+#include <optional>
 
+#include "apps/Collectives.h"
 #include "apps/Job.h"
+#include "apps/RunControl.h"
+#include "apps/Stats.h"
+#include "dfb/BoundedWait.h"
 #include "dfb/DistributedFrameBuffer.h"
+#include "dfb/Error.h"
 #include "dfb/Timing.h"
 #include "renderers/FrameDriver.h"
 #include "renderers/Renderer.h"
@@ -46,10 +54,61 @@ wall::DisplayRoutingOp::Sent relayToDisplays(const Job& job, dfb::Messenger& mes
   return sent;
 }
 
+// What rank 0 broadcasts before each frame: the frame, or the end of the run.
+struct FrameOrder {
+  dfb::FrameInfo frame;
+  std::int32_t stop;      // 1: no more frames (a graceful stop)
+  std::int32_t exitCode;  // of the stop
+};
+
+// One render rank's numbers of one frame, gathered to rank 0 for the statistics.
+struct RankFrame {
+  double renderMs, compositeMs;
+  // Pieces for the wall: bytes on the wire (after compression), bytes before, how many, how
+  // many to other hosts; messages this rank's messenger compressed.
+  std::uint64_t wallBytes, wallBytesRaw, wallPieces, wallPiecesToOtherHosts, messagesCompressed;
+  std::uint64_t tileBytes, tiles, samples;
+  std::int64_t lastSetTileNs;
+};
+
+std::vector<RankFrame> gatherRankFrames(const RankFrame& mine, MPI_Comm comm,
+                                        std::chrono::milliseconds timeout) {
+  int rank = 0, size = 0;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  std::vector<RankFrame> all(rank == 0 ? static_cast<size_t>(size) : 0);
+  MPI_Request request;
+  dfb::checkMpi(MPI_Igather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, 0,
+                            comm, &request),
+                "MPI_Igather");
+  dfb::waitWithDeadline(request, Clock::now() + timeout,
+                        "frame statistics: another render rank did not send them in time");
+  return all;
+}
+
+// The slowest rank's times, the sums of the counts, the latest setTile.
+FrameRecord combine(const std::vector<RankFrame>& all) {
+  FrameRecord r;
+  for (const RankFrame& f : all) {
+    r.renderMs = std::max(r.renderMs, f.renderMs);
+    r.compositeMs = std::max(r.compositeMs, f.compositeMs);
+    r.wallBytesSent += f.wallBytes;
+    r.wallBytesRaw += f.wallBytesRaw;
+    r.wallPieces += f.wallPieces;
+    r.wallPiecesToOtherHosts += f.wallPiecesToOtherHosts;
+    r.messagesCompressed += f.messagesCompressed;
+    r.tileBytesSent += f.tileBytes;
+    r.tilesRendered += f.tiles;
+    r.samples += f.samples;
+    r.lastSetTileNs = std::max(r.lastSetTileNs, f.lastSetTileNs);
+  }
+  return r;
+}
+
 }  // namespace
 
-std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger,
-                                       MPI_Comm renderComm, RankTotals& totals) {
+int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm,
+                  RunControl& control, StatsStream* statsStream, RankTotals& totals) {
   const Options& o = job.options;
   int renderRank = 0;
   MPI_Comm_rank(renderComm, &renderRank);
@@ -103,102 +162,136 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
   }
   std::unique_ptr<wall::FrameCredits> credits;
   if (hasWall && job.worldRank == 0) credits = std::make_unique<wall::FrameCredits>(messenger);
-  // Every object of every rank is registered before anyone sends.
-  MPI_Barrier(MPI_COMM_WORLD);
+  try {
+    // Every object of every rank is registered before anyone sends.
+    const auto timeout = std::chrono::seconds(o.timeoutSeconds);
+    boundedBarrier(MPI_COMM_WORLD, timeout, "start-up");
 
-  std::vector<FrameRecord> records;
-  const auto timeout = std::chrono::seconds(o.timeoutSeconds);
-  auto lastProgress = Clock::now();
-  const auto runStart = Clock::now();
-  Clock::time_point previousStart;
-  constexpr int kCounts = 8;
-  std::uint64_t wallWireBefore = messenger.traffic(wall::kWallNodeObject).bytesSent;
-  std::uint64_t compressedBefore = messenger.counters().messagesCompressed;
-  for (std::uint32_t frameId = 1; frameId <= static_cast<std::uint32_t>(o.frames); ++frameId) {
-    if (credits)
-      credits->waitForPresented(static_cast<std::int64_t>(frameId) - o.framesInFlight, timeout);
-    // A moving camera makes every frame its own accumulation epoch; the renderers compute the
-    // camera from the frame id, so no rank needs more than this broadcast.
-    dfb::FrameInfo frame{frameId, o.orbit != 0.0f ? frameId : 0u};
-    MPI_Bcast(&frame, sizeof frame, MPI_BYTE, 0, renderComm);
-    const auto start = Clock::now();
-    if (!records.empty()) records.back().frameMs = msBetween(previousStart, start);
-    previousStart = start;
+    // The statistics of a frame are written once its frame time (at the next frame's start) and
+    // its wall acknowledgement are known: at most frames-in-flight + 1 records wait here.
+    std::deque<FrameRecord> pending;
+    auto writeReady = [&](bool all) {
+      while (!pending.empty()) {
+        FrameRecord& f = pending.front();
+        if (f.frameMs <= 0 && !all) break;
+        if (credits) {
+          if (!all && credits->lastPresented() < f.frame) break;
+          f.displaysCompleteNs = credits->takeCompleteNs(f.frame).value_or(0);
+        }
+        if (statsStream) statsStream->writeFrame(f);
+        pending.pop_front();
+      }
+    };
 
-    const renderers::FrameReport report = driver.renderFrame(dfb, frame);
-    const dfb::FrameStats stats = dfb.stats();
-    wall::DisplayRoutingOp::Sent sent;
-    if (routing) sent = routing->takeSent();
-    const auto relayStart = Clock::now();
-    if (hasWall && !route && job.worldRank == 0)
-      sent = relayToDisplays(job, messenger, frameId, dfb.imageRgba8());
-    totals.stageMs[6] += msBetween(relayStart, Clock::now());
-    // What the pieces took on the wire: the messenger counts it per object, after compression.
-    const std::uint64_t wallWire = messenger.traffic(wall::kWallNodeObject).bytesSent;
-    const std::uint64_t compressed = messenger.counters().messagesCompressed;
-    totals.stageMs[0] += report.renderMs;
-    totals.stageMs[1] += stats.unpackMs;
-    totals.stageMs[2] += stats.operationMs;
-    totals.stageMs[3] += stats.toneMapMs;
-    if (routing) {
-      const auto ns = routing->takeStageNs();
-      totals.stageMs[4] += static_cast<double>(ns.cut) * 1e-6;
-      totals.stageMs[5] += static_cast<double>(ns.send) * 1e-6;
+    auto lastProgress = Clock::now();
+    const auto runStart = Clock::now();
+    // What the pieces take on the wire: the messenger counts it per object, after compression.
+    std::uint64_t wallWireBefore = messenger.traffic(wall::kWallNodeObject).bytesSent;
+    std::uint64_t compressedBefore = messenger.counters().messagesCompressed;
+    Clock::time_point previousStart;
+    std::uint32_t lastFrame = 0;  // the last frame every render rank completed
+    int exitCode = 0;
+    for (std::uint32_t frameId = 1; frameId <= static_cast<std::uint32_t>(o.frames); ++frameId) {
+      control.pollSignals();
+      if (credits)
+        credits->waitForPresented(static_cast<std::int64_t>(frameId) - o.framesInFlight, timeout);
+      // Rank 0 decides whether this frame happens (a stop asked for by a signal on any rank ends
+      // the run before it). A moving camera makes every frame its own accumulation epoch; the
+      // renderers compute the camera from the frame id, so no rank needs more than this.
+      FrameOrder order{{frameId, o.orbit != 0.0f ? frameId : 0u}, 0, 0};
+      if (job.worldRank == 0)
+        if (const std::optional<int> code = control.stopRequested())
+          order.stop = 1, order.exitCode = *code;
+      // Rank 0 may first wait for the wall's credit (up to the timeout): twice that is the bound.
+      boundedBcast(&order, sizeof order, renderComm, 2 * timeout,
+                   "frame " + std::to_string(frameId));
+      if (order.stop) {
+        exitCode = order.exitCode;
+        break;
+      }
+      const dfb::FrameInfo frame = order.frame;
+      const auto start = Clock::now();
+      if (!pending.empty()) pending.back().frameMs = msBetween(previousStart, start);
+      previousStart = start;
+      writeReady(false);
+
+      job.failIfAsked(frameId);
+      const renderers::FrameReport report = driver.renderFrame(dfb, frame);
+      const dfb::FrameStats stats = dfb.stats();
+      wall::DisplayRoutingOp::Sent sent;
+      if (routing) sent = routing->takeSent();
+      const auto relayStart = Clock::now();
+      if (hasWall && !route && job.worldRank == 0)
+        sent = relayToDisplays(job, messenger, frameId, dfb.imageRgba8());
+      const std::uint64_t wallWire = messenger.traffic(wall::kWallNodeObject).bytesSent;
+      const std::uint64_t compressed = messenger.counters().messagesCompressed;
+      StageTimes& t = totals.stages;
+      t.gatherRelay += msBetween(relayStart, Clock::now());
+      t.render += report.renderMs;
+      t.tileUnpack += stats.unpackMs;
+      t.tileOperation += stats.operationMs;
+      t.toneMap += stats.toneMapMs;
+      if (routing) {
+        const auto ns = routing->takeStageNs();
+        t.cut += static_cast<double>(ns.cut) * 1e-6;
+        t.send += static_cast<double>(ns.send) * 1e-6;
+      }
+      lastFrame = frameId;
+      wallWireBefore = wallWire;
+      compressedBefore = compressed;
+
+      if (!o.statsFile.empty()) {
+        // One small gather per frame, only when statistics are asked for.
+        RankFrame mine{report.renderMs,
+                       stats.lastSetTileToCompleteMs,
+                       wallWire - wallWireBefore,
+                       sent.bytes,
+                       sent.pieces,
+                       sent.piecesToOtherHosts,
+                       compressed - compressedBefore,
+                       stats.tileBytesSent,
+                       static_cast<std::uint64_t>(report.tilesRendered),
+                       report.samples,
+                       stats.lastSetTileNs};
+        const std::vector<RankFrame> all = gatherRankFrames(mine, renderComm, timeout);
+        if (job.worldRank == 0) {
+          FrameRecord record = combine(all);
+          record.frame = frameId;
+          record.rank0PixelBytes = stats.pixelBytesReceived;
+          pending.push_back(record);
+        }
+      }
+
+      if (job.worldRank == 0 && !o.quiet &&
+          (msBetween(lastProgress, Clock::now()) > 1000 ||
+           frameId == static_cast<std::uint32_t>(o.frames))) {
+        lastProgress = Clock::now();
+        const double seconds = msBetween(runStart, lastProgress) / 1000;
+        std::printf("frame %u/%d  %.2f fps  %u spp accumulated\n", frameId, o.frames,
+                    frameId / seconds, (dfb.accumulationId() + 1) * static_cast<unsigned>(o.spp));
+        std::fflush(stdout);
+      }
     }
-
-    // One small reduction per frame for the statistics and the progress line.
-    double localMs[2] = {report.renderMs, stats.lastSetTileToCompleteMs}, maxMs[2] = {0, 0};
-    std::uint64_t localCounts[kCounts] = {wallWire - wallWireBefore,
-                                          sent.bytes,
-                                          sent.pieces,
-                                          sent.piecesToOtherHosts,
-                                          compressed - compressedBefore,
-                                          stats.tileBytesSent,
-                                          static_cast<std::uint64_t>(report.tilesRendered),
-                                          report.samples};
-    wallWireBefore = wallWire;
-    compressedBefore = compressed;
-    std::uint64_t sums[kCounts] = {};
-    MPI_Reduce(localMs, maxMs, 2, MPI_DOUBLE, MPI_MAX, 0, renderComm);
-    MPI_Reduce(localCounts, sums, kCounts, MPI_UINT64_T, MPI_SUM, 0, renderComm);
-    std::int64_t lastSetTile = 0;
-    MPI_Reduce(&stats.lastSetTileNs, &lastSetTile, 1, MPI_INT64_T, MPI_MAX, 0, renderComm);
-    FrameRecord record;
-    record.frame = frameId;
-    record.renderMs = maxMs[0];
-    record.compositeMs = maxMs[1];
-    record.rank0PixelBytes = renderRank == 0 ? stats.pixelBytesReceived : 0;
-    record.wallBytesSent = sums[0];
-    record.wallBytesRaw = sums[1];
-    record.wallPieces = sums[2];
-    record.wallPiecesToOtherHosts = sums[3];
-    record.messagesCompressed = sums[4];
-    record.tileBytesSent = sums[5];
-    record.tilesRendered = sums[6];
-    record.samples = sums[7];
-    record.lastSetTileNs = lastSetTile;
-    records.push_back(record);
-
-    if (job.worldRank == 0 && !o.quiet &&
-        (msBetween(lastProgress, Clock::now()) > 1000 ||
-         frameId == static_cast<std::uint32_t>(o.frames))) {
-      lastProgress = Clock::now();
-      const double seconds = msBetween(runStart, lastProgress) / 1000;
-      std::printf("frame %u/%d  %.2f fps  %u spp accumulated\n", frameId, o.frames,
-                  frameId / seconds, (dfb.accumulationId() + 1) * static_cast<unsigned>(o.spp));
-      std::fflush(stdout);
+    if (job.worldRank == 0 && lastFrame < static_cast<std::uint32_t>(o.frames)) {
+      if (hasWall)
+        control.announceLastFrame(lastFrame, exitCode, job.roles.renderRanks,
+                                  job.roles.worldSize());
+      if (!o.quiet) std::printf("stopped after frame %u (signal)\n", lastFrame);
     }
-  }
-  if (credits) credits->waitForPresented(o.frames, timeout);
-  if (!records.empty()) records.back().frameMs = msBetween(previousStart, Clock::now());
+    if (credits) credits->waitForPresented(lastFrame, timeout);
+    if (!pending.empty()) pending.back().frameMs = msBetween(previousStart, Clock::now());
+    writeReady(true);
 
-  if (job.worldRank == 0 && !o.image.empty()) {
-    if (endsWith(o.image, ".png"))
-      wall::writePng(o.image, dfb.imageRgba8().data(), job.canvasWidth, job.canvasHeight);
-    else
-      writePfm(o.image, dfb.imageRgbaF32().data(), job.canvasWidth, job.canvasHeight);
+    if (job.worldRank == 0 && !o.image.empty() && lastFrame > 0) {
+      if (endsWith(o.image, ".png"))
+        wall::writePng(o.image, dfb.imageRgba8().data(), job.canvasWidth, job.canvasHeight);
+      else
+        writePfm(o.image, dfb.imageRgbaF32().data(), job.canvasWidth, job.canvasHeight);
+    }
+    return exitCode;
+  } catch (const std::exception& e) {
+    job.failure->fail(e.what());
   }
-  return records;
 }
 
 }  // namespace app

@@ -3,9 +3,18 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 #include <string>
 
+#include "apps/Collectives.h"
+#include "apps/Failure.h"
 #include "apps/Job.h"
+#include "apps/RunControl.h"
+#include "apps/Stats.h"
+#include "apps/StopSignals.h"
+#include "dfb/AtomicFile.h"
+#include "dfb/BoundedWait.h"
+#include "dfb/Error.h"
 #include "dfb/MpiSession.h"
 #include "renderers/BuiltinScenes.h"
 #include "wall/Error.h"
@@ -15,17 +24,57 @@ namespace {
 
 // Every rank calls this with its own verdict; the lowest failing rank prints its message, so a
 // problem every rank finds (a bad layout) is printed once. True when every rank is fine.
-bool agree(const std::string& problem, int rank) {
+bool agree(const std::string& problem, int rank, std::chrono::milliseconds timeout) {
   int failing = problem.empty() ? 1 << 30 : rank, first = 0;
-  MPI_Allreduce(&failing, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  boundedAllreduce(&failing, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD, timeout, "setup");
   if (first == rank) std::fprintf(stderr, "dfbwall: error: %s\n", problem.c_str());
   return first == 1 << 30;
 }
 
-std::string setUp(Job& job, int worldSize) {
+// FNV-1a of a file's bytes (0 when it cannot be read: the loaders report that themselves).
+std::uint64_t hashFile(const std::string& path) {
+  FILE* in = std::fopen(path.c_str(), "rb");
+  if (!in) return 0;
+  std::uint64_t hash = 0xcbf29ce484222325ull;
+  unsigned char buffer[65536];
+  for (size_t n; (n = std::fread(buffer, 1, sizeof buffer, in)) > 0;)
+    for (size_t i = 0; i < n; ++i) hash = (hash ^ buffer[i]) * 0x100000001b3ull;
+  std::fclose(in);
+  return hash;
+}
+
+struct InputHashes {
+  std::uint64_t layout = 0, scene = 0;
+};
+
+// Outputs are checked before any frame: a folder that cannot take files fails the setup, on
+// the rank that will write there, not after the last frame.
+std::string checkOutputs(const Job& job) {
+  const Options& o = job.options;
+  if (job.isWallRank() && !o.captureDir.empty()) {
+    for (int d : job.layout->displaysOfProcess(job.roles.processOfRank(job.worldRank))) {
+      const std::string folder =
+          (std::filesystem::path(o.captureDir) / job.layout->displays[static_cast<size_t>(d)].name)
+              .string();
+      if (std::string problem = dfb::checkWritableFolder(folder); !problem.empty())
+        return "--capture " + problem;
+    }
+  }
+  if (job.worldRank == 0 && !o.image.empty()) {
+    const std::string folder = std::filesystem::path(o.image).parent_path().string();
+    if (std::string problem = dfb::checkWritableFolder(folder.empty() ? "." : folder);
+        !problem.empty())
+      return "--image " + problem;
+  }
+  return {};
+}
+
+std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
+                  InputHashes& hashes) {
   try {
     Options& o = job.options;
     if (!o.wall.empty()) {
+      hashes.layout = hashFile(o.wall);
       job.layout = wall::loadLayout(o.wall);
       if (auto problem = wall::checkRankCount(*job.layout, worldSize)) return *problem;
       job.roles = wall::rankRoles(*job.layout, worldSize);
@@ -45,47 +94,64 @@ std::string setUp(Job& job, int worldSize) {
       job.canvasWidth = o.width;
       job.canvasHeight = o.height;
     }
-    if (!job.isWallRank() && !o.dryRun)
+    if (!job.isWallRank() && !o.dryRun) {
+      if (o.scene.rfind("builtin:", 0) != 0) hashes.scene = hashFile(o.scene);
       job.scene = renderers::buildRenderScene(o.renderer, renderers::loadSceneDesc(o.scene));
+    }
+    if (o.dryRun) return {};
+    if (std::string problem = checkOutputs(job); !problem.empty()) return problem;
+    if (job.worldRank == 0 && !o.statsFile.empty()) {
+      stats = std::make_unique<StatsStream>(o.statsFile);
+      stats->writeRun(job);
+    }
     return {};
   } catch (const std::exception& e) {
     return e.what();
   }
 }
 
-// Every rank's totals to rank 0, and the displays' completion times into rank 0's records.
-// Collective over MPI_COMM_WORLD; called by every rank when --stats is given.
+// Every rank must render and show the same layout and scene: a file that differs between hosts
+// (a stale copy on one node) is an error, not a wall whose displays disagree.
+std::string compareInputs(const Job& job, const InputHashes& mine,
+                          std::chrono::milliseconds timeout) {
+  std::uint64_t local[4] = {mine.layout, ~mine.layout, mine.scene, mine.scene ? ~mine.scene : 0};
+  std::uint64_t high[4] = {0, 0, 0, 0};
+  boundedAllreduce(local, high, 4, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD, timeout,
+                   "comparing inputs");
+  // max(h) == min(h) exactly when every rank's hash is the same; min(h) = ~max(~h).
+  if (high[0] != ~high[1])
+    return job.options.wall +
+           ": the ranks read different bytes from this file; every host "
+           "must see the same layout";
+  if (high[2] != (high[3] ? ~high[3] : 0))
+    return job.options.scene +
+           ": the render ranks read different bytes from this file; every "
+           "host must see the same scene";
+  return {};
+}
+
+// Every rank's totals to rank 0. Collective over MPI_COMM_WORLD; only with --stats.
 std::vector<RankTotals> collectTotals(const Job& job, RankTotals mine,
-                                      std::vector<FrameRecord>& frames,
-                                      const std::vector<std::int64_t>& completeNs) {
+                                      std::chrono::milliseconds timeout) {
   int size = 0;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   mine.peakRssKiB = peakRssKiB();
   std::vector<RankTotals> all(job.worldRank == 0 ? static_cast<size_t>(size) : 0);
-  static_assert(sizeof(RankTotals) == (RankTotals::kStages + 2) * sizeof(double));
-  MPI_Gather(&mine, RankTotals::kStages + 2, MPI_DOUBLE, all.data(), RankTotals::kStages + 2,
-             MPI_DOUBLE, 0, MPI_COMM_WORLD);
-  std::vector<std::int64_t> local(static_cast<size_t>(job.options.frames), 0),
-      latest(local.size(), 0);
-  for (size_t i = 0; i < completeNs.size() && i < local.size(); ++i) local[i] = completeNs[i];
-  MPI_Reduce(local.data(), latest.data(), static_cast<int>(local.size()), MPI_INT64_T, MPI_MAX, 0,
-             MPI_COMM_WORLD);
-  for (size_t i = 0; i < frames.size() && i < latest.size(); ++i)
-    frames[i].displaysCompleteNs = latest[i];
+  MPI_Request request;
+  dfb::checkMpi(MPI_Igather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, 0,
+                            MPI_COMM_WORLD, &request),
+                "MPI_Igather");
+  dfb::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
+                        "collecting statistics: another rank did not send its totals in time");
   return all;
 }
 
-// Other ranks may be inside a collective this rank will never join: end them all.
-[[noreturn]] void abortJob(int rank, const char* what) {
-  std::fprintf(stderr, "dfbwall: error on rank %d: %s\n", rank, what);
-  std::fflush(stderr);
-  MPI_Abort(MPI_COMM_WORLD, 1);
-  std::abort();  // MPI_Abort does not return
-}
 
 }  // namespace
 
 int run(int argc, char** argv) {
+  // Before MPI or any library starts a thread: the stop signals stay blocked in all of them.
+  StopSignals signals;
   std::unique_ptr<dfb::MpiSession> mpi;
   try {
     mpi = std::make_unique<dfb::MpiSession>(&argc, &argv);
@@ -95,45 +161,54 @@ int run(int argc, char** argv) {
   }
   Job job;
   job.worldRank = mpi->worldRank();
+  if (const char* at = std::getenv("DFBWALL_FAIL_AT"))
+    std::sscanf(at, "%d:%u", &job.failAtRank, &job.failAtFrame);
+  FailurePath failure(job.worldRank);
+  job.failure = &failure;
   const int parsed = parseOptions(argc, argv, job.options, job.worldRank == 0);
   if (parsed >= 0) return parsed;
-  if (!agree(setUp(job, mpi->worldSize()), job.worldRank)) return 1;
-  if (job.options.dryRun) {
-    if (job.worldRank == 0) printDryRun(job);
-    return 0;
-  }
+  const std::chrono::milliseconds timeout = std::chrono::seconds(job.options.timeoutSeconds);
 
-  MPI_Comm roleComm;
-  MPI_Comm_split(MPI_COMM_WORLD, job.isWallRank() ? 1 : 0, job.worldRank, &roleComm);
+  // From here on, whatever goes wrong on this rank ends the job through the failure path,
+  // before any destructor runs (a destructor could wait for a rank that is gone).
   try {
+    std::unique_ptr<StatsStream> stats;
+    InputHashes hashes;
+    if (!agree(setUp(job, mpi->worldSize(), stats, hashes), job.worldRank, timeout)) return 1;
+    if (!agree(compareInputs(job, hashes, timeout), job.worldRank, timeout)) return 1;
+    if (job.options.dryRun) {
+      if (job.worldRank == 0) printDryRun(job);
+      return 0;
+    }
+
+    MPI_Comm roleComm;
+    dfb::checkMpi(
+        MPI_Comm_split(MPI_COMM_WORLD, job.isWallRank() ? 1 : 0, job.worldRank, &roleComm),
+        "MPI_Comm_split");
     dfb::MessengerOptions messaging;
     messaging.compress = job.options.compress;
     messaging.compressWithinHost = job.options.compressWithinHost;
-    messaging.quiesceTimeout = std::chrono::seconds(job.options.timeoutSeconds);
+    messaging.quiesceTimeout = timeout;
     dfb::Messenger messenger(MPI_COMM_WORLD, messaging);
-    try {
-      RankTotals totals;
-      std::vector<FrameRecord> frames;
-      std::vector<std::int64_t> completeNs;
-      if (job.isWallRank())
-        completeNs = runWallRank(job, messenger, roleComm, totals);
-      else
-        frames = runRenderRank(job, messenger, roleComm, totals);
-      if (!job.options.statsFile.empty()) {
-        const std::vector<RankTotals> ranks = collectTotals(job, totals, frames, completeNs);
-        if (job.worldRank == 0) writeStats(job, frames, ranks);
-      }
-      messenger.stop();
-    } catch (const std::exception& e) {
-      // Here, not after unwinding: the messenger's destructor would first wait up to --timeout
-      // for the other ranks to quiesce, so the message would come a whole timeout late.
-      abortJob(job.worldRank, e.what());
+    // A message that cannot be handled (malformed, for nobody, a handler that threw) is a
+    // failure of the job now, not a frame that times out later under another name.
+    messenger.setErrorCallback([&failure](const std::string& m) { failure.fail(m); });
+    RunControl control(messenger, signals);
+    RankTotals totals;
+    const int exitCode =
+        job.isWallRank() ? runWallRank(job, messenger, roleComm, control, totals)
+                         : runRenderRank(job, messenger, roleComm, control, stats.get(), totals);
+    if (!job.options.statsFile.empty()) {
+      const std::vector<RankTotals> ranks = collectTotals(job, totals, timeout);
+      const bool stoppedEarly = control.stopRequested().has_value() || exitCode != 0;
+      if (stats) stats->writeEnd(ranks, stoppedEarly, exitCode);
     }
+    messenger.stop();
+    MPI_Comm_free(&roleComm);
+    return exitCode;
   } catch (const std::exception& e) {
-    abortJob(job.worldRank, e.what());
+    failure.fail(e.what());
   }
-  MPI_Comm_free(&roleComm);
-  return 0;
 }
 
 }  // namespace app

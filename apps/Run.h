@@ -2,10 +2,11 @@
 
 namespace app {
 
-// Initialises MPI, parses and checks the command line and the input files on every rank, agrees
-// on success (bad input: one precise message from one rank, every rank exits non-zero), then
-// runs this rank's role. A failure while frames are in flight aborts the whole job, so no rank
-// is left waiting.
+// Initialises MPI, parses and checks the command line, the input files and the outputs on every
+// rank, agrees on success (bad input: one precise message from one rank, every rank exits
+// non-zero), then runs this rank's role. A failure after that goes through the one failure path
+// (apps/Failure.h): cause printed once, the whole job aborted. A stop signal ends the run
+// gracefully (apps/RunControl.h). Returns the exit code.
 int run(int argc, char** argv);
 
 }  // namespace app

@@ -1,15 +1,18 @@
 // A wall rank: its displays' presenters and the wall node's frame loop.
+#include <cstdio>
 #include <optional>
 
+#include "apps/Collectives.h"
 #include "apps/Job.h"
+#include "apps/RunControl.h"
 #include "wall/GlfwPresenter.h"
 #include "wall/OsmesaPresenter.h"
 #include "wall/WallNode.h"
 
 namespace app {
 
-std::vector<std::int64_t> runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm,
-                                      RankTotals& totals) {
+int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, RunControl& control,
+                RankTotals& totals) {
   const Options& o = job.options;
   const wall::Layout& layout = *job.layout;
   const int process = job.roles.processOfRank(job.worldRank);
@@ -32,22 +35,43 @@ std::vector<std::int64_t> runWallRank(const Job& job, dfb::Messenger& messenger,
   options.captureEvery = o.captureEvery;
   options.lastFrame = static_cast<std::uint32_t>(o.frames);
   options.timeout = std::chrono::seconds(o.timeoutSeconds);
-  std::vector<std::int64_t> completeNs;
+  // Render rank 0 starts frame F once frame F - K is presented: pieces can be K + 1 frames
+  // ahead of this process's last presented frame, one more while it is between the swap
+  // barrier and noting the frame presented.
+  options.framesAhead = static_cast<std::uint32_t>(o.framesInFlight) + 2;
   {
     wall::WallNode node(messenger, layout, process, wallComm, std::move(presenters), options);
-    MPI_Barrier(MPI_COMM_WORLD);  // pairs with the render ranks' barrier: everyone registered
-    for (std::uint32_t frameId = 1; frameId <= static_cast<std::uint32_t>(o.frames); ++frameId) {
-      const wall::PresentReport r = node.presentFrame(frameId);
-      completeNs.push_back(r.completeNs);
-      totals.stageMs[7] += r.unpackMs;
-      totals.stageMs[8] += r.assembleMs;
-      totals.stageMs[9] += r.waitMs;
-      totals.stageMs[10] += r.barrierMs;
-      totals.stageMs[11] += r.presentMs;
+    control.onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
+    try {
+      // Pairs with the render ranks' barrier: every object of every rank is registered.
+      boundedBarrier(MPI_COMM_WORLD, options.timeout, "start-up");
+      bool closed = false;
+      for (std::uint32_t frameId = 1; frameId <= static_cast<std::uint32_t>(o.frames); ++frameId) {
+        control.pollSignals();
+        job.failIfAsked(frameId);
+        const wall::PresentReport r = node.presentFrame(frameId);
+        if (r.stopped) break;
+        if (!r.closedDisplay.empty() && !closed) {
+          closed = true;
+          std::fprintf(stderr, "dfbwall: the window of display '%s' was closed: stopping\n",
+                       r.closedDisplay.c_str());
+          control.askToStop(0);
+        }
+        StageTimes& t = totals.stages;
+        t.pieceUnpack += r.unpackMs;
+        t.assemble += r.assembleMs;
+        t.wallWait += r.waitMs;
+        t.barrier += r.barrierMs;
+        t.present += r.presentMs;
+      }
+      node.finish();  // the last frame's captures, when the run stopped early
+    } catch (const std::exception& e) {
+      job.failure->fail(e.what());
     }
+    control.onLastFrame({});
   }
   totals.role = 1;
-  return completeNs;
+  return control.exitCode();
 }
 
 }  // namespace app

@@ -19,6 +19,7 @@ dfbwall_find_package(TBB libtbb-dev COMPONENTS tbb)
 dfbwall_find_package(PNG libpng-dev)
 dfbwall_find_package(tomlplusplus libtomlplusplus-dev 3)
 dfbwall_find_package(CLI11 libcli11-dev CONFIG)
+dfbwall_find_package(nlohmann_json nlohmann-json3-dev 3 CONFIG)
 dfbwall_find_package(embree libembree-dev 3)
 dfbwall_find_package(assimp libassimp-dev)
 # OpenVDB volumes. Not through the FindOpenVDB.cmake that libopenvdb-dev ships: it insists on

@@ -7,6 +7,15 @@ if(DFBWALL_WERROR)
   target_compile_options(dfbwall_warnings INTERFACE -Werror)
 endif()
 
+if(DFBWALL_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "DFBWALL_FUZZ needs clang (Debian 'clang'): -DCMAKE_CXX_COMPILER=clang++")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
+                      -fno-sanitize-recover=all)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
 if(DFBWALL_SANITIZE)
   add_compile_options(-fsanitize=${DFBWALL_SANITIZE} -fno-omit-frame-pointer -fno-sanitize-recover=all)
   add_link_options(-fsanitize=${DFBWALL_SANITIZE})

@@ -25,6 +25,10 @@ void decompress(std::span<const std::byte> compressed, std::size_t rawSize, Byte
   if (!snappy::GetUncompressedLength(in, compressed.size(), &length) || length != rawSize)
     throw Error("corrupt compressed message: header says " + std::to_string(length) +
                 " bytes, expected " + std::to_string(rawSize));
+  // Snappy's validator walks the whole stream without writing: a stream that cannot produce
+  // `length` bytes is refused before that much memory is allocated for it.
+  if (!snappy::IsValidCompressedBuffer(in, compressed.size()))
+    throw Error("corrupt compressed message: Snappy's validator rejects it");
   out.resize(rawSize);
   if (!snappy::RawUncompress(in, compressed.size(), reinterpret_cast<char*>(out.data())))
     throw Error("corrupt compressed message: Snappy could not decode it");

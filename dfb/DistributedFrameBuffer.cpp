@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <condition_variable>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <string>
@@ -71,7 +73,8 @@ struct DistributedFrameBuffer::Impl {
   FrameStats lastStats;
 
   void processInput(int tileIndex, Tile&& input);
-  void completeTile(int tileIndex, OwnedTile& owned);
+  // Runs the pixel ops of a tile whose last input arrived, with the tile's mutex held.
+  void finishTile(int tileIndex, OwnedTile& owned);
   void deliver(Bytes&& bytes);
   void failInput(const std::string& message) {
     std::lock_guard lock(frameMutex);
@@ -89,8 +92,13 @@ DistributedFrameBuffer::DistributedFrameBuffer(Messenger& messenger, MPI_Comm co
   MPI_Comm_size(d.comm, &d.size);
   d.messengerRank.resize(static_cast<size_t>(d.size));
   int mine = messenger.rank();
-  checkMpi(MPI_Allgather(&mine, 1, MPI_INT, d.messengerRank.data(), 1, MPI_INT, d.comm),
-           "MPI_Allgather");
+  const auto deadline = Clock::now() + d.options.frameTimeout;
+  const std::string late = "creating the frame buffer: another rank did not join within " +
+                           std::to_string(d.options.frameTimeout.count()) + " ms";
+  MPI_Request request;
+  checkMpi(MPI_Iallgather(&mine, 1, MPI_INT, d.messengerRank.data(), 1, MPI_INT, d.comm, &request),
+           "MPI_Iallgather");
+  waitWithDeadline(request, deadline, late);
 
   const int count = d.grid.tileCount();
   d.owner.resize(static_cast<size_t>(count));
@@ -104,15 +112,14 @@ DistributedFrameBuffer::DistributedFrameBuffer(Messenger& messenger, MPI_Comm co
     d.owner[static_cast<size_t>(t)] = o;
     if (o == d.rank) {
       d.ownedTiles.push_back(t);
-      auto owned = std::make_unique<OwnedTile>();
-      owned->operation = d.options.operation(d.grid.region(t));
-      d.tiles[static_cast<size_t>(t)] = std::move(owned);
+      d.tiles[static_cast<size_t>(t)] = std::make_unique<OwnedTile>();
     }
   }
   d.pixelOps.push_back(std::make_shared<ToneMapOp>(d.options.toneMap));
   messenger.registerObject(d.options.objectId, this);
   // Nobody may send to this object before every rank has registered it.
-  checkMpi(MPI_Barrier(d.comm), "MPI_Barrier");
+  checkMpi(MPI_Ibarrier(d.comm, &request), "MPI_Ibarrier");
+  waitWithDeadline(request, deadline, late);
 }
 
 DistributedFrameBuffer::~DistributedFrameBuffer() {
@@ -149,6 +156,7 @@ void DistributedFrameBuffer::begin(const FrameInfo& frame) {
       owned.active = expected > 0;
       owned.complete = !owned.active;  // a tile nobody renders this frame is done already
       if (owned.active) {
+        if (!owned.operation) owned.operation = d.options.operation(d.grid.region(t));
         owned.operation->newFrame(frame, d.accumulationId, expected);
         ++d.remaining;
       }
@@ -214,6 +222,14 @@ void DistributedFrameBuffer::Impl::deliver(Bytes&& bytes) {
   unpackNs += nsBetween(start, Clock::now());
   {
     std::lock_guard lock(frameMutex);
+    if (static_cast<std::int64_t>(header.frameId) > activeFrame + options.framesAhead) {
+      inputErrors.push_back("rank " + std::to_string(rank) + " received an input for frame " +
+                            std::to_string(header.frameId) + ", more than " +
+                            std::to_string(options.framesAhead) + " frames past frame " +
+                            std::to_string(activeFrame));
+      frameDone.notify_all();
+      return;
+    }
     if (static_cast<std::int64_t>(header.frameId) > activeFrame) {
       early[header.frameId].push_back(std::move(bytes));
       return;
@@ -234,22 +250,30 @@ void DistributedFrameBuffer::Impl::deliver(Bytes&& bytes) {
 
 void DistributedFrameBuffer::Impl::processInput(int tileIndex, Tile&& input) {
   OwnedTile& owned = *tiles[static_cast<size_t>(tileIndex)];
+  bool done = false;
   try {
     std::lock_guard lock(owned.mutex);
-    if (owned.complete)
-      throw Error("tile " + std::to_string(tileIndex) + " got an input after it was complete");
+    if (owned.complete || !owned.operation)
+      throw Error("tile " + std::to_string(tileIndex) + " got an input " +
+                  (owned.complete ? "after it was complete" : "though it expects none"));
     const auto start = Clock::now();
-    const bool done = owned.operation->process(std::move(input));
+    done = owned.operation->process(std::move(input));
     operationNs += nsBetween(start, Clock::now());
-    if (done) completeTile(tileIndex, owned);
+    if (done) finishTile(tileIndex, owned);
   } catch (const std::exception& e) {
     failInput("frame " + std::to_string(frame.frameId) + ", tile " + std::to_string(tileIndex) +
               ": " + e.what());
+    return;
+  }
+  // The frame lock is taken only after the tile lock is released: begin() takes them in the
+  // other order (frame, then each tile).
+  if (done) {
+    std::lock_guard lock(frameMutex);
+    if (--remaining == 0) frameDone.notify_all();
   }
 }
 
-// Runs on the thread that delivered the last input, with the tile's mutex held.
-void DistributedFrameBuffer::Impl::completeTile(int tileIndex, OwnedTile& owned) {
+void DistributedFrameBuffer::Impl::finishTile(int tileIndex, OwnedTile& owned) {
   owned.complete = true;
   FinishedTile finished;
   finished.tileIndex = tileIndex;
@@ -268,17 +292,18 @@ void DistributedFrameBuffer::Impl::completeTile(int tileIndex, OwnedTile& owned)
   toneMapNs += nsBetween(start, now);
   for (size_t i = 1; i < pixelOps.size(); ++i) pixelOps[i]->process(finished);
   if (pixelOps.size() > 1) pixelOpsNs += nsBetween(now, Clock::now());
-  tileErrors[static_cast<size_t>(tileIndex)] = finished.error;
+  // NaN (from NaN pixels) would make the frame-end MAX reduction differ between ranks, and the
+  // ranks then plan the next frame differently; an unknown error counts as "needs samples".
+  tileErrors[static_cast<size_t>(tileIndex)] =
+      std::isnan(finished.error) ? std::numeric_limits<float>::infinity() : finished.error;
   tilesCompleted++;
-  std::lock_guard lock(frameMutex);
-  if (--remaining == 0) frameDone.notify_all();
 }
 
 void DistributedFrameBuffer::end() {
   Impl& d = *impl_;
   const auto deadline = Clock::now() + d.options.frameTimeout;
-  std::string failure;
   {
+    std::string failure;
     std::unique_lock lock(d.frameMutex);
     if (!d.inFrame) throw Error("end() without begin()");
     d.frameDone.wait_until(lock, deadline,
@@ -299,17 +324,20 @@ void DistributedFrameBuffer::end() {
                 " owned tiles still waiting for inputs (tiles" + missing +
                 (d.remaining > 8 ? " ..." : "") + ")";
     }
+    if (!failure.empty()) {
+      d.inFrame = false;
+      throw Error(failure);  // at once: no collective on a failure path
+    }
   }
 
-  // One reduction agrees that every rank's tiles are complete, shares the tiles' error estimates
-  // (each owner contributes its own, the rest are zero) and spreads a failure to every rank.
+  // One reduction agrees that every rank's tiles are complete and shares the tiles' error
+  // estimates (each owner contributes its own, never NaN; the rest are zero).
   const size_t count = d.tileErrors.size();
-  std::vector<float> local(count + 1), global(count + 1);
+  std::vector<float> local(count), global(count);
   for (int t : d.ownedTiles) local[static_cast<size_t>(t)] = d.tileErrors[static_cast<size_t>(t)];
-  local[count] = failure.empty() ? 0.0f : 1.0f;
   MPI_Request request;
-  checkMpi(MPI_Iallreduce(local.data(), global.data(), static_cast<int>(count + 1), MPI_FLOAT,
-                          MPI_MAX, d.comm, &request),
+  checkMpi(MPI_Iallreduce(local.data(), global.data(), static_cast<int>(count), MPI_FLOAT, MPI_MAX,
+                          d.comm, &request),
            "MPI_Iallreduce");
   waitWithDeadline(request, deadline + d.options.frameTimeout,
                    "frame " + std::to_string(d.frame.frameId) +
@@ -320,10 +348,7 @@ void DistributedFrameBuffer::end() {
     std::lock_guard lock(d.frameMutex);
     d.inFrame = false;
   }
-  if (!failure.empty()) throw Error(failure);
-  if (global[count] != 0.0f)
-    throw Error("frame " + std::to_string(d.frame.frameId) + " failed on another rank");
-  std::copy(global.begin(), global.end() - 1, d.tileErrors.begin());
+  d.tileErrors = std::move(global);
 
   FrameStats stats;
   stats.frameId = d.frame.frameId;
@@ -382,8 +407,9 @@ void DistributedFrameBuffer::end() {
       if (rgba8) return reinterpret_cast<const std::byte*>(owned.rgba8.data());
       return reinterpret_cast<const std::byte*>(owned.operation->finished().color.data());
     };
-    const GatherCounts counts = gatherImage(d.comm, d.grid, bytesPerPixel, d.options.compressGather,
-                                            d.ownedTiles, tilesOf, pixelsOf, image);
+    const GatherCounts counts =
+        gatherImage(d.comm, d.grid, bytesPerPixel, d.options.compressGather, d.ownedTiles, tilesOf,
+                    pixelsOf, image, Clock::now() + d.options.frameTimeout);
     stats.gatherBytesSent = counts.bytesSent;
     stats.gatherBytesReceived = counts.bytesReceived;
     stats.pixelBytesReceived = counts.pixelBytesReceived;

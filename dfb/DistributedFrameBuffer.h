@@ -14,7 +14,12 @@
 //  - Tile messages carry their frame: inputs for a frame a rank has not begun yet are held and
 //    applied at its begin(); inputs for a past frame are rejected and counted.
 //  - Every wait is bounded by DfbOptions::frameTimeout; a timeout is a dfb::Error naming the
-//    incomplete tiles, on every rank.
+//    incomplete tiles, on every rank. A rank that finds a problem itself (a timeout, a bad
+//    input) throws at once, without the frame-end collective, so the caller can end the job
+//    (docs/design.md, "Failures"); the others fail at their own deadline if they are not ended
+//    first.
+//  - A tile gets its TileOperation the first frame it expects inputs: tiles no frame uses (no
+//    display shows them) cost no memory.
 #include <mpi.h>
 
 #include <chrono>
@@ -54,6 +59,9 @@ struct DfbOptions {
   // Distinct per DFB sharing a messenger; the same on every rank.
   ObjectId objectId = 0xDFB0;
   std::chrono::milliseconds frameTimeout{60000};
+  // Inputs for a frame more than this many frames past the current one are an error instead of
+  // being held (a corrupt frame id would otherwise hold memory forever).
+  std::uint32_t framesAhead = 8;
 };
 
 struct FrameStats {

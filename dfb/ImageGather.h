@@ -4,6 +4,7 @@
 // single MPI_Gatherv and places them. Internal to the DFB.
 #include <mpi.h>
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -21,11 +22,13 @@ struct GatherCounts {
 
 // `bytesPerPixel` 4 (RGBA8) or 16 (RGBAF32). `ownedTiles` in ascending order on each rank;
 // `tilesOf(rank)` gives another rank's list on the root. `pixelsOf(tile)` points at the final
-// pixels of an owned tile. The root's `image` is width*height*bytesPerPixel bytes.
+// pixels of an owned tile. The root's `image` is width*height*bytesPerPixel bytes. Sizes are
+// 64-bit; MPI's int counts limit one rank's block, and the gathered total, to 2^31-1 bytes (a
+// dfb::Error says so). Throws dfb::Error when another rank does not join by `deadline`.
 GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel, bool compress,
                          const std::vector<int>& ownedTiles,
                          const std::function<std::vector<int>(int rank)>& tilesOf,
                          const std::function<const std::byte*(int tile)>& pixelsOf,
-                         std::byte* image);
+                         std::byte* image, std::chrono::steady_clock::time_point deadline);
 
 }  // namespace dfb

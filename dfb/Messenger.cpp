@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstring>
 #include <deque>
+#include <exception>
 #include <mutex>
 #include <thread>
 #include <unordered_map>
@@ -89,6 +90,21 @@ struct Messenger::Impl {
 
   std::thread mpiThread, inboxThread;
   bool stopped = false;
+  // Set when the messenger is abandoned during unwinding: the MPI thread leaves at once.
+  std::atomic<bool> abandon{false};
+  int uncaughtAtConstruction = 0;
+
+  // Sets the exit flag under both queues' mutexes: a thread that checked its wait predicate
+  // just before cannot miss the notification that follows.
+  void signalExit() {
+    {
+      std::lock_guard outboxLock(outboxMutex);
+      std::lock_guard inboxLock(inboxMutex);
+      exitThreads = true;
+    }
+    outboxCv.notify_all();
+    inboxCv.notify_all();
+  }
 
   void report(const std::string& message) {
     std::lock_guard lock(errorMutex);
@@ -104,6 +120,18 @@ struct Messenger::Impl {
       inbox.push_back(std::move(packet));
     }
     inboxCv.notify_one();
+  }
+
+  // With MPI_ERRORS_RETURN a failed call comes back here; the error callback hears of it
+  // (the app then ends the job). Returns whether the call succeeded.
+  bool mpiOk(int code, const char* call) {
+    if (code == MPI_SUCCESS) return true;
+    try {
+      checkMpi(code, call);
+    } catch (const std::exception& e) {
+      report(std::string("MPI thread: ") + e.what());
+    }
+    return false;
   }
 
   void mpiLoop();
@@ -129,8 +157,9 @@ void Messenger::Impl::mpiLoop() {
     }
     for (Packet& packet : fresh) {
       MPI_Request request;
-      MPI_Isend(packet.wire.data(), static_cast<int>(packet.wire.size()), MPI_BYTE, packet.rank,
-                kTag, p2p, &request);
+      mpiOk(MPI_Isend(packet.wire.data(), static_cast<int>(packet.wire.size()), MPI_BYTE,
+                      packet.rank, kTag, p2p, &request),
+            "MPI_Isend");
       sendRequests.push_back(request);
       sendBuffers.push_back(std::move(packet.wire));
       active = true;
@@ -140,8 +169,9 @@ void Messenger::Impl::mpiLoop() {
     if (!sendRequests.empty()) {
       int completed = 0;
       done.resize(sendRequests.size());
-      MPI_Testsome(static_cast<int>(sendRequests.size()), sendRequests.data(), &completed,
-                   done.data(), MPI_STATUSES_IGNORE);
+      mpiOk(MPI_Testsome(static_cast<int>(sendRequests.size()), sendRequests.data(), &completed,
+                         done.data(), MPI_STATUSES_IGNORE),
+            "MPI_Testsome");
       if (completed > 0 && completed != MPI_UNDEFINED) {
         size_t kept = 0;
         for (size_t i = 0; i < sendRequests.size(); ++i) {
@@ -163,21 +193,23 @@ void Messenger::Impl::mpiLoop() {
       int flag = 0;
       MPI_Message message;
       MPI_Status status;
-      MPI_Improbe(MPI_ANY_SOURCE, kTag, p2p, &flag, &message, &status);
-      if (!flag) break;
+      if (!mpiOk(MPI_Improbe(MPI_ANY_SOURCE, kTag, p2p, &flag, &message, &status), "MPI_Improbe") ||
+          !flag)
+        break;
       int count = 0;
       MPI_Get_count(&status, MPI_BYTE, &count);
       receiveBuffers.push_back(Packet{status.MPI_SOURCE, Bytes(static_cast<size_t>(count))});
       MPI_Request request;
-      MPI_Imrecv(receiveBuffers.back().wire.data(), count, MPI_BYTE, &message, &request);
+      mpiOk(MPI_Imrecv(receiveBuffers.back().wire.data(), count, MPI_BYTE, &message, &request),
+            "MPI_Imrecv");
       receiveRequests.push_back(request);
       active = true;
     }
 
     while (!receiveRequests.empty()) {
       int flag = 0;
-      MPI_Test(&receiveRequests.front(), &flag, MPI_STATUS_IGNORE);
-      if (!flag) break;
+      if (!mpiOk(MPI_Test(&receiveRequests.front(), &flag, MPI_STATUS_IGNORE), "MPI_Test") || !flag)
+        break;
       Packet packet = std::move(receiveBuffers.front());
       receiveRequests.pop_front();
       receiveBuffers.pop_front();
@@ -189,6 +221,15 @@ void Messenger::Impl::mpiLoop() {
       active = true;
     }
 
+    if (abandon) {
+      // Nobody will wait for these any more; MPI may still read the buffers, so they are
+      // handed over for good instead of freed.
+      for (MPI_Request& r : sendRequests) MPI_Request_free(&r);
+      for (MPI_Request& r : receiveRequests) MPI_Request_free(&r);
+      static_cast<void>(new std::vector<Bytes>(std::move(sendBuffers)));
+      static_cast<void>(new std::deque<Packet>(std::move(receiveBuffers)));
+      return;
+    }
     if (exitThreads && sendRequests.empty() && receiveRequests.empty()) {
       std::lock_guard lock(outboxMutex);
       if (outbox.empty()) break;
@@ -211,7 +252,7 @@ void Messenger::Impl::inboxLoop() {
     {
       std::unique_lock lock(inboxMutex);
       inboxCv.wait(lock, [&] { return !inbox.empty() || exitThreads.load(); });
-      if (inbox.empty()) return;
+      if (inbox.empty() || abandon) return;
       packet = std::move(inbox.front());
       inbox.pop_front();
       inboxBusy = true;
@@ -226,6 +267,10 @@ void Messenger::Impl::inboxLoop() {
 void Messenger::Impl::dispatch(Packet& packet) {
   try {
     const WireHeader header = readHeader(packet.wire);
+    if (header.rawBytes > options.maxMessageBytes)
+      throw Error("message of " + std::to_string(header.rawBytes) + " bytes to object id " +
+                  std::to_string(header.object) + ", more than the limit of " +
+                  std::to_string(options.maxMessageBytes));
     Bytes payload;
     if (header.flags & kCompressed) {
       decompress(std::span<const std::byte>(packet.wire.data(), packet.wire.size() - sizeof header),
@@ -275,6 +320,7 @@ void Messenger::Impl::waitLocallyIdle(Clock::time_point deadline) {
 
 Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_unique<Impl>()) {
   impl_->options = options;
+  impl_->uncaughtAtConstruction = std::uncaught_exceptions();
   checkMpi(MPI_Comm_dup(comm, &impl_->p2p), "MPI_Comm_dup");
   checkMpi(MPI_Comm_dup(comm, &impl_->control), "MPI_Comm_dup");
   MPI_Comm_rank(impl_->p2p, &impl_->rank);
@@ -301,16 +347,24 @@ Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_
 }
 
 Messenger::~Messenger() {
+  if (impl_->stopped) return;
+  if (std::uncaught_exceptions() > impl_->uncaughtAtConstruction) {
+    abandonThreads();
+    return;
+  }
   try {
     stop();
   } catch (const std::exception& e) {
     impl_->report(std::string("stopping: ") + e.what());
-    impl_->exitThreads = true;
-    impl_->outboxCv.notify_all();
-    impl_->inboxCv.notify_all();
-    if (impl_->mpiThread.joinable()) impl_->mpiThread.join();
-    if (impl_->inboxThread.joinable()) impl_->inboxThread.join();
+    abandonThreads();
   }
+}
+
+void Messenger::abandonThreads() {
+  impl_->abandon = true;
+  impl_->signalExit();
+  if (impl_->mpiThread.joinable()) impl_->mpiThread.join();
+  if (impl_->inboxThread.joinable()) impl_->inboxThread.join();
 }
 
 int Messenger::rank() const { return impl_->rank; }
@@ -401,9 +455,7 @@ void Messenger::stop() {
   if (impl_->stopped) return;
   quiesce();
   impl_->stopped = true;
-  impl_->exitThreads = true;
-  impl_->outboxCv.notify_all();
-  impl_->inboxCv.notify_all();
+  impl_->signalExit();
   impl_->mpiThread.join();
   impl_->inboxThread.join();
   MPI_Comm_free(&impl_->p2p);

@@ -14,6 +14,9 @@
 //    callback with both ids and counted; it never crashes and is never dropped silently.
 //    Register on every rank before anyone sends (a collective constructor does that).
 //  - quiesce() and stop() are collective over the communicator.
+//  - A messenger destroyed without stop() while an exception unwinds the stack is abandoned:
+//    no collective (another rank may never join one), its threads end at once, and buffers
+//    still on the wire are left to MPI. The process is expected to end soon (MPI_Abort).
 #include <mpi.h>
 
 #include <atomic>
@@ -47,6 +50,9 @@ struct MessengerOptions {
   std::chrono::microseconds maxIdleSleep{200};
   // quiesce()/stop() give up with an Error after this long.
   std::chrono::milliseconds quiesceTimeout{30000};
+  // The largest payload a message may announce once decompressed; a larger one is an error
+  // reported through the error callback, so a corrupt 20-byte header cannot allocate 4 GiB.
+  std::size_t maxMessageBytes = std::size_t{1} << 30;
 };
 
 struct MessengerCounters {
@@ -64,7 +70,7 @@ class Messenger {
   // Collective over `comm`, which it duplicates (twice: point-to-point traffic and its own
   // collectives never share a communicator with the caller's collectives).
   explicit Messenger(MPI_Comm comm, MessengerOptions options = {});
-  ~Messenger();  // stop()s if still running; collective then too.
+  ~Messenger();  // stop()s if still running (collective then too), unless unwinding (above).
   Messenger(const Messenger&) = delete;
   Messenger& operator=(const Messenger&) = delete;
 
@@ -101,6 +107,7 @@ class Messenger {
   void setErrorCallback(ErrorCallback callback);
 
  private:
+  void abandonThreads();
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

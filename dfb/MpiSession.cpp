@@ -38,6 +38,9 @@ MpiSession::MpiSession(int* argc, char*** argv) {
                 "; dfbwall's messaging thread needs MPI_THREAD_MULTIPLE (OpenMPI built with "
                 "thread support, as Debian's openmpi-bin is)");
   }
+  // Errors come back as return codes (checkMpi turns them into a dfb::Error naming the call)
+  // instead of MPI's own abort; communicators duplicated from the world inherit this.
+  MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
   MPI_Comm_size(MPI_COMM_WORLD, &size_);
 }

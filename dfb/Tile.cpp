@@ -13,6 +13,11 @@ Region intersect(const Region& a, const Region& b) {
   return r;
 }
 
+bool isSaneRegion(const Region& r, int maxSide) {
+  const std::int64_t w = std::int64_t{r.x1} - r.x0, h = std::int64_t{r.y1} - r.y0;
+  return w > 0 && h > 0 && w <= maxSide && h <= maxSide;
+}
+
 void Tile::reset(const Region& r, bool withDepth) {
   region = r;
   const size_t n = static_cast<size_t>(r.pixelCount());

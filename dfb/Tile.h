@@ -18,6 +18,10 @@ struct Region {
 
 Region intersect(const Region& a, const Region& b);
 
+// Whether a region read from the wire is non-empty with sides of at most `maxSide` pixels,
+// computed in 64 bits: width() and pixelCount() of an unchecked header can overflow an int.
+bool isSaneRegion(const Region& r, int maxSide);
+
 struct Tile {
   Region region;
   // Dependency tree (paper 3.1.1): this tile belongs to `generation` and announces `children`

@@ -72,7 +72,13 @@ Tile unpackTile(const Bytes& bytes, TileMessageHeader& header) {
   tile.accumulationId = header.accumulationId;
   tile.sequence = header.sequence;
   tile.weight = header.weight;
-  const size_t n = static_cast<size_t>(std::max(0, tile.region.pixelCount()));
+  // Tiles are at most 1024 pixels a side (the --tile-size cap); the fuzzer found headers whose
+  // width times height overflowed an int before this check.
+  constexpr int kMaxTileSide = 4096;
+  if (!isSaneRegion(tile.region, kMaxTileSide))
+    throw Error("tile message for tile " + std::to_string(header.tileIndex) +
+                " has an empty or oversized region");
+  const size_t n = static_cast<size_t>(tile.region.pixelCount());
   size_t floats = 4 * n;
   if (header.channels & kHasDepth) floats += n;
   if (header.channels & kHasNormal) floats += 3 * n;

@@ -2,7 +2,7 @@
 // Counter-based random numbers: every value is a pure function of (seed, canvas pixel,
 // accumulation id, sample index, dimension). Nothing depends on thread, rank, tile or the order
 // work is done in, which is what makes a wall render equal a single-process render bit for bit
-// (DESIGN.md, invariant 2).
+// (docs/design.md, invariant 2).
 #include <cstdint>
 
 namespace renderers {

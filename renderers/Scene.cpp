@@ -75,6 +75,16 @@ bool flattens(const Shape& s, const Affine& transform) {
 }  // namespace
 
 struct Scene::Impl {
+  Impl() = default;
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+  ~Impl() {
+    if (top) rtcReleaseScene(top);
+    for (RTCScene s : shapeScenes)
+      if (s) rtcReleaseScene(s);
+    if (device) rtcReleaseDevice(device);
+  }
+
   SceneDesc desc;
   RTCDevice device = nullptr;
   RTCScene top = nullptr;
@@ -231,12 +241,9 @@ Scene::Scene(SceneDesc desc) : impl_(std::make_unique<Impl>()) {
                          std::abs(b.upper_y), std::abs(b.lower_z), std::abs(b.upper_z), 1e-3f});
 }
 
-Scene::~Scene() {
-  if (impl_->top) rtcReleaseScene(impl_->top);
-  for (RTCScene s : impl_->shapeScenes)
-    if (s) rtcReleaseScene(s);
-  if (impl_->device) rtcReleaseDevice(impl_->device);
-}
+// The Embree handles are released by Impl, so a constructor that throws halfway (a bad mesh,
+// an Embree error) releases what it made too.
+Scene::~Scene() = default;
 
 const SceneDesc& Scene::desc() const { return impl_->desc; }
 int Scene::lightCount() const { return static_cast<int>(impl_->lights.size()); }

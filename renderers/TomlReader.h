@@ -76,7 +76,7 @@ class TomlReader {
       // nan and inf are valid TOML, and a float that overflows becomes inf: neither is a size,
       // a position or a colour.
       const float f = static_cast<float>(*v);
-      if (!std::isfinite(f)) fail(n, what + " must be a finite number");
+      if (!std::isfinite(f)) fail(n, what + " must be a finite number, got " + std::to_string(*v));
       return f;
     }
     fail(n, what + " must be a number");

@@ -8,9 +8,9 @@ namespace wall {
 DisplayRoutingOp::DisplayRoutingOp(dfb::Messenger& messenger, const Layout& layout,
                                    const RankRoles& roles, int tileSize)
     : messenger_(messenger) {
-  const CanvasTiles tiles(layout, tileSize);
-  piecesOfTile_.resize(static_cast<size_t>(tiles.count()));
-  for (int t = 0; t < tiles.count(); ++t)
+  const dfb::TileGrid tiles = canvasTiles(layout, tileSize);
+  piecesOfTile_.resize(static_cast<size_t>(tiles.tileCount()));
+  for (int t = 0; t < tiles.tileCount(); ++t)
     piecesOfTile_[static_cast<size_t>(t)] = piecesOf(layout, tiles.region(t));
   for (const Display& d : layout.displays) {
     rankOfDisplay_.push_back(roles.rankOfProcess(d.process));

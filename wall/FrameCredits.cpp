@@ -27,20 +27,46 @@ std::int64_t FrameCredits::lastPresented() const {
   return lastPresented_;
 }
 
-void FrameCredits::incoming(int, dfb::Bytes&& payload) {
-  std::uint32_t frameId = 0;
-  if (payload.size() != sizeof frameId) throw Error("malformed frame acknowledgement");
-  std::memcpy(&frameId, payload.data(), sizeof frameId);
+std::optional<std::int64_t> FrameCredits::takeCompleteNs(std::int64_t frameId) {
+  std::lock_guard lock(mutex_);
+  auto found = completeNs_.find(frameId);
+  if (found == completeNs_.end()) return std::nullopt;
+  const std::int64_t ns = found->second;
+  completeNs_.erase(completeNs_.begin(), std::next(found));  // older ones are never asked for
+  return ns;
+}
+
+namespace {
+struct Acknowledgement {
+  std::uint32_t frameId;
+  std::uint32_t reserved;
+  std::int64_t completeNs;
+};
+}  // namespace
+
+void FrameCredits::incoming(int fromRank, dfb::Bytes&& payload) {
+  Acknowledgement ack;
+  if (payload.size() != sizeof ack)
+    throw Error("malformed frame acknowledgement of " + std::to_string(payload.size()) +
+                " bytes from rank " + std::to_string(fromRank));
+  std::memcpy(&ack, payload.data(), sizeof ack);
   {
     std::lock_guard lock(mutex_);
-    lastPresented_ = std::max<std::int64_t>(lastPresented_, frameId);
+    if (ack.frameId != lastPresented_ + 1)
+      throw Error("frame acknowledgement for frame " + std::to_string(ack.frameId) + " from rank " +
+                  std::to_string(fromRank) + " after frame " + std::to_string(lastPresented_));
+    lastPresented_ = ack.frameId;
+    completeNs_[ack.frameId] = ack.completeNs;
+    // Kept only until the frame's statistics are written; a run without them never asks.
+    while (completeNs_.size() > 64) completeNs_.erase(completeNs_.begin());
   }
   presented_.notify_all();
 }
 
-void acknowledgeFrame(dfb::Messenger& messenger, std::uint32_t frameId) {
-  dfb::Bytes payload(sizeof frameId);
-  std::memcpy(payload.data(), &frameId, sizeof frameId);
+void acknowledgeFrame(dfb::Messenger& messenger, std::uint32_t frameId, std::int64_t completeNs) {
+  const Acknowledgement ack{frameId, 0, completeNs};
+  dfb::Bytes payload(sizeof ack);
+  std::memcpy(payload.data(), &ack, sizeof ack);
   messenger.send(0, kFrameCreditsObject, std::move(payload));
 }
 

@@ -6,7 +6,9 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <map>
 #include <mutex>
+#include <optional>
 
 #include "dfb/Messenger.h"
 
@@ -22,6 +24,9 @@ class FrameCredits : public dfb::MessageHandler {
   // once). Throws wall::Error after `timeout`.
   void waitForPresented(std::int64_t frameId, std::chrono::milliseconds timeout);
   std::int64_t lastPresented() const;
+  // When the last display had every piece of `frameId` (steady_clock ns, from the
+  // acknowledgement), taken once; nothing when that frame's acknowledgement has not come yet.
+  std::optional<std::int64_t> takeCompleteNs(std::int64_t frameId);
 
   void incoming(int fromRank, dfb::Bytes&& payload) override;
 
@@ -30,9 +35,11 @@ class FrameCredits : public dfb::MessageHandler {
   mutable std::mutex mutex_;
   std::condition_variable presented_;
   std::int64_t lastPresented_ = 0;
+  std::map<std::int64_t, std::int64_t> completeNs_;  // at most frames-in-flight + 1 entries
 };
 
-// Sent by wall process 0 to render rank 0 (world rank 0).
-void acknowledgeFrame(dfb::Messenger& messenger, std::uint32_t frameId);
+// Sent by wall process 0 to render rank 0 (world rank 0), with the time the last display had
+// every piece of the frame.
+void acknowledgeFrame(dfb::Messenger& messenger, std::uint32_t frameId, std::int64_t completeNs);
 
 }  // namespace wall

@@ -28,6 +28,12 @@ struct Display {
   } lines;
 };
 
+// Caps that keep every size computation small and exact (64-bit where it adds up): a layout past
+// them is refused with a message, never a crash or a hang.
+constexpr int kMaxDisplays = 1024;       // displays, hence also wall processes
+constexpr int kMaxCanvasSide = 1 << 20;  // canvas width and height, in pixels
+constexpr long long kMaxCanvasPixels = (1LL << 31) - 1;
+
 struct Layout {
   std::string file;  // path as given to the loader, used in every message
   int canvasWidth = 0;

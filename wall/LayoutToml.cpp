@@ -123,7 +123,12 @@ std::optional<int> readInt(const toml::node& n, Reporter& r, const std::string& 
 std::optional<double> readNumber(const toml::node& n, Reporter& r, const std::string& subject,
                                  std::string_view field) {
   if (n.is_integer()) return static_cast<double>(n.as_integer()->get());
-  if (n.is_floating_point()) return n.as_floating_point()->get();
+  if (n.is_floating_point()) {
+    const double v = n.as_floating_point()->get();
+    if (std::isfinite(v)) return v;
+    r.add(lineOf(n), subject, field, "expected a finite number, got " + std::to_string(v));
+    return std::nullopt;
+  }
   r.add(lineOf(n), subject, field, "expected a number, got " + typeName(n));
   return std::nullopt;
 }
@@ -238,6 +243,12 @@ void readDisplays(const toml::node& node, Layout& layout, std::vector<bool>& tru
   if (!a || !a->is_array_of_tables()) {
     r.add(lineOf(node), "", "display",
           "expected [[display]] tables (an array of tables), got " + typeName(node));
+    return;
+  }
+  if (a->size() > static_cast<size_t>(kMaxDisplays)) {
+    r.add(lineOf(node), "", "display",
+          std::to_string(a->size()) + " [[display]] tables: at most " +
+              std::to_string(kMaxDisplays) + " displays in a layout");
     return;
   }
   std::vector<bool> setsProcess;
@@ -384,6 +395,12 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
   }
   if (!ok) return;
 
+  if (int64_t{columns} * rows > kMaxDisplays) {
+    r.add(line, subject, "columns",
+          std::to_string(columns) + " x " + std::to_string(rows) + " panels: at most " +
+              std::to_string(kMaxDisplays) + " displays in a layout");
+    return;
+  }
   const int64_t pitchX = int64_t{w} + bezel[0] + bezel[1],
                 pitchY = int64_t{h} + bezel[2] + bezel[3];
   if (pitchX * columns > std::numeric_limits<int>::max() ||

@@ -72,9 +72,12 @@ Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted
           "duplicate name '" + d.name + "'; the display at line " +
               std::to_string(first.lines.table) + " has it already");
     }
-    if (d.process < 0)
+    if (d.process < 0 || d.process >= kMaxDisplays)
       add(lineOr(d.lines.process, d), d, i, "process",
-          "must be 0 or more, got " + std::to_string(d.process));
+          "must be from 0 to " + std::to_string(kMaxDisplays - 1) +
+              " (one wall process drives "
+              "at least one display), got " +
+              std::to_string(d.process));
   }
 
   // Overlaps: reported once per pair, on the later display, where the reader will look.
@@ -84,8 +87,7 @@ Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted
     for (size_t i = 0; i < j; ++i) {
       const Display& a = layout.displays[i];
       if (!isTrusted(i) || a.rect.empty()) continue;
-      const dfb::Region o{std::max(a.rect.x0, b.rect.x0), std::max(a.rect.y0, b.rect.y0),
-                          std::min(a.rect.x1, b.rect.x1), std::min(a.rect.y1, b.rect.y1)};
+      const dfb::Region o = dfb::intersect(a.rect, b.rect);
       if (o.empty()) continue;
       add(lineOr(b.lines.origin, b), b, j, "origin",
           "overlaps " + subjectOf(a, i) + " (line " + std::to_string(a.lines.table) + ") in the " +
@@ -102,15 +104,17 @@ Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted
       if (d.process >= 0) used.insert(d.process);
     int expected = 0;
     for (int p : used) {
-      for (; expected < p; ++expected) {
-        // Report on the first display (in file order) whose index lies past the gap.
+      if (expected < p && p < kMaxDisplays) {
+        // One message per gap, on the first display (in file order) whose index lies past it.
         size_t at = 0;
         while (layout.displays[at].process != p) ++at;
         const Display& d = layout.displays[at];
+        const std::string missing = p - expected == 1
+                                        ? std::to_string(expected)
+                                        : std::to_string(expected) + " to " + std::to_string(p - 1);
         add(lineOr(d.lines.process, d), d, at, "process",
-            "process indices must run from 0 without gaps, but no display has process " +
-                std::to_string(expected) + " (the highest is " + std::to_string(*used.rbegin()) +
-                ")");
+            "process indices must run from 0 without gaps, but no display has process " + missing +
+                " (the highest is " + std::to_string(*used.rbegin()) + ")");
       }
       expected = p + 1;
     }
@@ -123,10 +127,13 @@ Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted
       x0 = std::min<int64_t>(x0, d.rect.x0), y0 = std::min<int64_t>(y0, d.rect.y0);
       x1 = std::max<int64_t>(x1, d.rect.x1), y1 = std::max<int64_t>(y1, d.rect.y1);
     }
-    // Region::pixelCount is an int: the whole canvas must fit one.
-    if ((x1 - x0) * (y1 - y0) > std::numeric_limits<int>::max())
+    // Region::pixelCount is an int: the whole canvas must fit one. Each side is checked first,
+    // so the product cannot overflow even 64 bits (origins near -2^31 and +2^31).
+    if (x1 - x0 > kMaxCanvasSide || y1 - y0 > kMaxCanvasSide ||
+        (x1 - x0) * (y1 - y0) > kMaxCanvasPixels)
       out.push_back(layout.file + ":1: the canvas, " + std::to_string(x1 - x0) + "x" +
-                    std::to_string(y1 - y0) + " pixels, is too large (at most 2^31-1 pixels)");
+                    std::to_string(y1 - y0) + " pixels, is too large (at most " +
+                    std::to_string(kMaxCanvasSide) + " pixels a side and 2^31-1 in all)");
   }
   return out;
 }

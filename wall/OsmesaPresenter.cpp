@@ -13,7 +13,7 @@ namespace wall {
 namespace {
 
 // OSMesa's own entry points: with an OSMesa context current, GL calls resolved through GLVND's
-// libGL do nothing (MACHINE-NOTES), so every GL function comes from here.
+// libGL do nothing (docs/design.md, "Stack pitfalls"), so every GL function comes from here.
 GlProc osmesaProc(const char* name) { return OSMesaGetProcAddress(name); }
 
 class OsmesaPresenter : public Presenter {

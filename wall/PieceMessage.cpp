@@ -4,6 +4,7 @@
 #include <string>
 
 #include "wall/Error.h"
+#include "wall/Layout.h"
 
 namespace wall {
 
@@ -37,9 +38,12 @@ PieceHeader readPieceHeader(const dfb::Bytes& bytes) {
   if (bytes.size() < sizeof header) throw Error("piece message shorter than its header");
   std::memcpy(&header, bytes.data(), sizeof header);
   const dfb::Region local{header.x0, header.y0, header.x1, header.y1};
-  if (header.magic != kPieceMagic || local.empty())
-    throw Error("malformed piece message (bad magic or empty rectangle)");
-  const size_t count = static_cast<size_t>(local.pixelCount());
+  // Checked in 64 bits before width() or pixelCount() is used: the fuzzer found rectangles
+  // whose int product overflowed (and could then match the message size).
+  if (header.magic != kPieceMagic || !dfb::isSaneRegion(local, kMaxCanvasSide))
+    throw Error("malformed piece message (bad magic, or an empty or oversized rectangle)");
+  // Sides of up to 2^20 make a product past an int: the count is taken in 64 bits.
+  const size_t count = static_cast<size_t>(local.width()) * static_cast<size_t>(local.height());
   if (bytes.size() != sizeof header + 4 * count)
     throw Error("piece message for display " + std::to_string(header.display) + " has " +
                 std::to_string(bytes.size() - sizeof header) +

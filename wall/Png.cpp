@@ -1,8 +1,6 @@
 #include "wall/Png.h"
 
 #include <png.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <bit>
 #include <cerrno>
@@ -11,9 +9,13 @@
 #include <cstring>
 #include <filesystem>
 
+#include "dfb/AtomicFile.h"
 #include "wall/Error.h"
 
 namespace wall {
+namespace {
+void writeAtomically(const std::string& path, const std::uint32_t* rgba8, int width, int height);
+}  // namespace
 
 // libpng's PNG_FORMAT_RGBA is bytes R, G, B, A: our uint32 layout only on little-endian hosts.
 static_assert(std::endian::native == std::endian::little,
@@ -23,36 +25,36 @@ void writePng(const std::string& path, const std::uint32_t* rgba8, int width, in
   if (width <= 0 || height <= 0)
     throw Error(path + ": cannot write a " + std::to_string(width) + "x" + std::to_string(height) +
                 " PNG");
-  const std::filesystem::path target(path);
-  // Same folder as the target, so the rename is atomic; hidden and not ending in .png, so a
-  // glob for captures never picks it up.
-  std::string tmp =
-      (target.parent_path() / ("." + target.filename().string() + ".XXXXXX")).string();
-  const int fd = mkstemp(tmp.data());
-  if (fd < 0) throw Error(path + ": cannot create a temporary file: " + std::strerror(errno));
-  fchmod(fd, 0644);  // mkstemp makes it 0600; captures are for other users too
-  FILE* f = fdopen(fd, "wb");
-  if (!f) {
-    close(fd);
-    unlink(tmp.c_str());
-    throw Error(path + ": cannot open the temporary file: " + std::strerror(errno));
+  // wall/ reports wall::Error at its boundary; the atomic file speaks dfb::Error.
+  try {
+    writeAtomically(path, rgba8, width, height);
+  } catch (const Error&) {
+    throw;
+  } catch (const dfb::Error& e) {
+    throw Error(e.what());
   }
+}
+
+namespace {
+void writeAtomically(const std::string& path, const std::uint32_t* rgba8, int width, int height) {
+  dfb::AtomicFile file(path);
   png_image image;
   std::memset(&image, 0, sizeof image);
   image.version = PNG_IMAGE_VERSION;
   image.width = static_cast<png_uint_32>(width);
   image.height = static_cast<png_uint_32>(height);
   image.format = PNG_FORMAT_RGBA;
-  const int written = png_image_write_to_stdio(&image, f, 0, rgba8, 0, nullptr);
+  errno = 0;
+  const int written = png_image_write_to_stdio(&image, file.stream(), 0, rgba8, 0, nullptr);
+  const int error = errno;  // libpng says only "Write Error"; the cause (ENOSPC) is in errno
   const std::string message = image.message;
   png_image_free(&image);
-  const bool closed = std::fclose(f) == 0;
-  if (!written || !closed || std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = !written ? message : std::strerror(errno);
-    unlink(tmp.c_str());
-    throw Error(path + ": cannot write the PNG: " + why);
-  }
+  if (!written)
+    throw Error(path + ": cannot write the PNG: " + message +
+                (error ? std::string(": ") + std::strerror(error) : std::string()));
+  file.commit();  // a full disk shows here (dfb::Error, naming the path)
 }
+}  // namespace
 
 Image readPng(const std::string& path) {
   png_image image;

@@ -5,21 +5,11 @@
 #include "wall/Error.h"
 
 namespace wall {
-namespace {
-
-dfb::Region overlap(const dfb::Region& a, const dfb::Region& b) {
-  dfb::Region r{std::max(a.x0, b.x0), std::max(a.y0, b.y0), std::min(a.x1, b.x1),
-                std::min(a.y1, b.y1)};
-  return r.empty() ? dfb::Region{} : r;
-}
-
-}  // namespace
-
 std::vector<Piece> piecesOf(const Layout& layout, const dfb::Region& tile) {
   std::vector<Piece> out;
   for (size_t i = 0; i < layout.displays.size(); ++i) {
     const dfb::Region& d = layout.displays[i].rect;
-    const dfb::Region c = overlap(tile, d);
+    const dfb::Region c = dfb::intersect(tile, d);
     if (c.empty()) continue;
     out.push_back(
         Piece{static_cast<int>(i), c, {c.x0 - d.x0, c.y0 - d.y0, c.x1 - d.x0, c.y1 - d.y0}});
@@ -27,30 +17,21 @@ std::vector<Piece> piecesOf(const Layout& layout, const dfb::Region& tile) {
   return out;
 }
 
-CanvasTiles::CanvasTiles(const Layout& layout, int size)
-    : tileSize(size), width_(layout.canvasWidth), height_(layout.canvasHeight) {
-  if (size <= 0) throw Error("tile size must be positive, got " + std::to_string(size));
-  tilesX = (width_ + size - 1) / size;
-  tilesY = (height_ + size - 1) / size;
-}
-
-dfb::Region CanvasTiles::region(int tileIndex) const {
-  const int tx = tileIndex % tilesX, ty = tileIndex / tilesX;
-  return {tx * tileSize, ty * tileSize, std::min(width_, (tx + 1) * tileSize),
-          std::min(height_, (ty + 1) * tileSize)};
+dfb::TileGrid canvasTiles(const Layout& layout, int tileSize) {
+  return dfb::TileGrid(layout.canvasWidth, layout.canvasHeight, tileSize);
 }
 
 std::vector<DisplayTile> tilesOfDisplay(const Layout& layout, int display, int tileSize) {
-  const CanvasTiles tiles(layout, tileSize);
+  const dfb::TileGrid tiles = canvasTiles(layout, tileSize);
   const dfb::Region& d = layout.displays.at(static_cast<size_t>(display)).rect;
   std::vector<DisplayTile> out;
   if (d.empty()) return out;
   // Only the tiles under the display's rectangle, not the whole canvas.
   for (int ty = d.y0 / tileSize; ty <= (d.y1 - 1) / tileSize; ++ty) {
     for (int tx = d.x0 / tileSize; tx <= (d.x1 - 1) / tileSize; ++tx) {
-      const int index = ty * tiles.tilesX + tx;
+      const int index = ty * tiles.tilesX() + tx;
       const dfb::Region t = tiles.region(index);
-      const dfb::Region c = overlap(t, d);
+      const dfb::Region c = dfb::intersect(t, d);
       out.push_back(DisplayTile{
           index, t, Piece{display, c, {c.x0 - d.x0, c.y0 - d.y0, c.x1 - d.x0, c.y1 - d.y0}}});
     }
@@ -59,8 +40,8 @@ std::vector<DisplayTile> tilesOfDisplay(const Layout& layout, int display, int t
 }
 
 std::vector<bool> tilesShownByAnyDisplay(const Layout& layout, int tileSize) {
-  const CanvasTiles tiles(layout, tileSize);
-  std::vector<bool> shown(static_cast<size_t>(tiles.count()), false);
+  const dfb::TileGrid tiles = canvasTiles(layout, tileSize);
+  std::vector<bool> shown(static_cast<size_t>(tiles.tileCount()), false);
   for (size_t i = 0; i < layout.displays.size(); ++i)
     for (const DisplayTile& t : tilesOfDisplay(layout, static_cast<int>(i), tileSize))
       shown[static_cast<size_t>(t.tileIndex)] = true;

@@ -22,17 +22,9 @@ struct Piece {
 // only tile-grid ones.
 std::vector<Piece> piecesOf(const Layout& layout, const dfb::Region& tile);
 
-// Tiles of the canvas at `tileSize`, numbered row-major as dfb::TileGrid does
-// (index = ty * tilesX + tx, edge tiles partial).
-struct CanvasTiles {
-  int tileSize = 0, tilesX = 0, tilesY = 0;
-  CanvasTiles(const Layout& layout, int tileSize);
-  int count() const { return tilesX * tilesY; }
-  dfb::Region region(int tileIndex) const;
-
- private:
-  int width_ = 0, height_ = 0;
-};
+// The canvas's tiles at `tileSize`: the DFB's own grid (index = ty * tilesX + tx, edge tiles
+// partial), so wall ranks and tile owners number tiles alike.
+dfb::TileGrid canvasTiles(const Layout& layout, int tileSize);
 
 struct DisplayTile {
   int tileIndex = 0;

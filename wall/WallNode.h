@@ -33,6 +33,10 @@ struct WallNodeOptions {
   int captureEvery = 0;     // capture every K-th frame; 0: only the last
   std::uint32_t lastFrame = 0;
   std::chrono::milliseconds timeout{60000};
+  // Pieces of frames more than this far past the last presented one are refused (an error):
+  // the renderers run at most frames-in-flight ahead, so anything further is a corrupt or
+  // hostile message, and buffering it would hold a display buffer forever.
+  std::uint32_t framesAhead = 8;
 };
 
 struct PresentReport {
@@ -44,6 +48,12 @@ struct PresentReport {
   // the back buffers. completeNs: steady_clock time the last piece of this frame arrived.
   double unpackMs = 0, assembleMs = 0;
   std::int64_t completeNs = 0;
+  // The latest completeNs over every wall process (agreed in the swap barrier).
+  std::int64_t wallCompleteNs = 0;
+  // The frame was not presented: the run stops before it (see stopAfter).
+  bool stopped = false;
+  // The name of a display whose window an operator closed (empty: none).
+  std::string closedDisplay;
 };
 
 class WallNode : public dfb::MessageHandler {
@@ -55,20 +65,29 @@ class WallNode : public dfb::MessageHandler {
   ~WallNode() override;
 
   // Waits for frame `frameId` on this process's displays, joins the swap barrier, presents,
-  // captures when asked, and (process 0) acknowledges the frame. Throws wall::Error on timeout,
-  // a protocol error, or when an operator has closed one of this process's windows.
+  // captures when asked, and (process 0) acknowledges the frame. Throws wall::Error on timeout
+  // or a protocol error. A window an operator closed is reported, not thrown.
   PresentReport presentFrame(std::uint32_t frameId);
+  // Thread-safe: the run ends after frame `lastFrame`; a presentFrame for a later frame returns
+  // at once (or wakes up) with `stopped` set. Every wall process must be told the same frame.
+  void stopAfter(std::uint32_t lastFrame);
+  // Collective over the wall ranks, after the last presentFrame: captures the last presented
+  // frame when captures were asked for and it was not captured yet (a run stopped early).
+  void finish();
 
   void incoming(int fromRank, dfb::Bytes&& payload) override;
 
  private:
   struct Slot {
-    std::vector<Image> displays;  // by position in mine_
-    std::vector<int> received;
+    std::vector<Image> displays;             // by position in mine_
+    std::vector<int> received;               // pieces copied in, by position in mine_
+    std::vector<std::vector<bool>> claimed;  // by position, by expected piece: arrived once
     int displaysComplete = 0;
     std::int64_t completeNs = 0;
   };
   Slot& slotFor(std::uint32_t frameId);  // with mutex_ held
+  // Which of display `position`'s expected pieces `local` is, or -1 when it is none of them.
+  int expectedPieceIndex(size_t position, const dfb::Region& local) const;
   void capture(std::uint32_t frameId);
 
   dfb::Messenger& messenger_;
@@ -80,12 +99,21 @@ class WallNode : public dfb::MessageHandler {
   std::vector<int> mine_;               // display indices of this process
   std::vector<int> positionOfDisplay_;  // layout index -> position in mine_, or -1
   std::vector<int> expectedPieces_;     // by position in mine_
+  // By position: the display's pieces (display coordinates) in tilesOfDisplay order, and the
+  // tile-grid window they come from, so a piece finds its index without a search.
+  std::vector<std::vector<dfb::Region>> pieceRects_;
+  struct TileWindow {
+    int tx0 = 0, ty0 = 0, columns = 1;
+  };
+  std::vector<TileWindow> tileWindows_;
 
   std::mutex mutex_;
   std::condition_variable complete_;
   std::map<std::uint32_t, Slot> slots_;
   std::vector<Slot> spare_;  // buffers of presented frames, reused
   std::int64_t lastPresented_ = 0;
+  std::int64_t stopAfter_ = -1;  // -1: no early stop
+  std::int64_t lastCaptured_ = 0;
   std::string error_;
   std::uint64_t bytesReceived_ = 0;
   std::int64_t unpackNs_ = 0, assembleNs_ = 0;

@@ -1,5 +1,5 @@
 // compare_captures LAYOUT CAPTURE_DIR FULL_CANVAS_PNG FRAME   (or: compare_captures --info LAYOUT)
-// Invariant 2 of DESIGN.md: every display's capture of frame FRAME equals its rectangle cut out
+// Invariant 2 of docs/design.md: every display's capture of frame FRAME equals its rectangle cut out
 // of a single-process render of the whole canvas, byte for byte; the wall preview exists and
 // shows the same pixels. Exit 0 when all match, 1 with a message naming the first mismatch.
 #include <cstdio>

@@ -35,12 +35,13 @@ case "$scenario" in
     w=$(processes "$layout"); size=$(canvas "$layout")
     mpi $((renders + w)) "$DFBWALL" --wall "$layout" --offscreen --mode "$mode" --renderer pattern \
       --frames 4 --stats "$work/stats.json" --quiet
-    values=$(grep -o '"rank0_pixel_bytes_received": [0-9]*' "$work/stats.json" | awk '{print $2}' | sort -u)
-    frames=$(grep -c '"frame":' "$work/stats.json")
+    # JSON Lines: one object per line, frames, ranks, then the summary.
+    values=$(grep -o '"rank0_pixel_bytes_received":[0-9]*' "$work/stats.json" | cut -d: -f2 | sort -u)
+    frames=$(grep -c '^{"frame":' "$work/stats.json")
     [ "$frames" -eq 4 ] || { echo "stats have $frames frames, expected 4"; exit 1; }
     if [ "$mode" = route ]; then expected=0; else expected=$(( ${size%x*} * ${size#*x} * 4 )); fi
     [ "$values" = "$expected" ] || { echo "rank0_pixel_bytes_received: '$values', expected $expected every frame"; exit 1; }
-    grep -q '"median_frame_ms"' "$work/stats.json" || { echo "no summary in the stats"; exit 1; }
+    tail -n 1 "$work/stats.json" | grep -q '^{"summary":.*"median_frame_ms"' || { echo "no summary in the stats"; exit 1; }
     echo "$mode: rank 0 received $expected pixel bytes in each of 4 frames"
     ;;
   same-frames)

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 
@@ -162,6 +163,20 @@ TEST(TileMessage, PacksAndUnpacksEveryChannel) {
 
   Bytes truncated(bytes.begin(), bytes.end() - 4);
   EXPECT_THROW(unpackTile(truncated, header), Error);
+}
+
+// Found by fuzz_tile_message: a header whose region's width times height overflowed an int
+// (UBSan) and could then match the message's size. Now refused before any arithmetic.
+TEST(TileMessage, RejectsARegionWhoseSizeOverflows) {
+  Tile t;
+  t.reset(Region{0, 0, 2, 2});
+  Bytes bytes = packTile(t, 0, 1, 0);
+  TileMessageHeader header;
+  std::memcpy(&header, bytes.data(), sizeof header);
+  header.x0 = -2000000000;
+  header.x1 = 2000000000;
+  std::memcpy(bytes.data(), &header, sizeof header);
+  EXPECT_THROW(unpackTile(bytes, header), Error);
 }
 
 TEST(ToneMap, EncodesSrgbAndClamps) {

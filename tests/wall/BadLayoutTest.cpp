@@ -2,6 +2,7 @@
 // field, and what is wrong. Problems are all reported, not just the first.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <string>
 #include <vector>
 
@@ -137,12 +138,33 @@ TEST(BadLayout, ValidateLayoutOnACodeBuiltLayout) {
   l.displays.push_back({"x", {0, 0, 10, 10}, 0, "", 0, false, {}});
   l.displays.push_back({"x", {5, 5, 15, 15}, 3, "", 0, false, {}});
   const wall::Problems p = wall::validateLayout(l);
-  // Duplicate name, overlap, and processes 1 and 2 missing.
-  ASSERT_EQ(p.size(), 4u) << wall::joinProblems(p);
+  // Duplicate name, overlap, and processes 1 and 2 missing (one message per gap).
+  ASSERT_EQ(p.size(), 3u) << wall::joinProblems(p);
   EXPECT_NE(p[0].find("duplicate name 'x'"), std::string::npos);
   EXPECT_NE(p[1].find("overlaps"), std::string::npos);
-  EXPECT_NE(p[2].find("no display has process 1"), std::string::npos);
-  EXPECT_NE(p[3].find("no display has process 2"), std::string::npos);
+  EXPECT_NE(p[2].find("no display has process 1 to 2"), std::string::npos);
+}
+
+// Hostile layouts that used to hang, exhaust memory or crash every rank: each is one message,
+// at once.
+TEST(BadLayout, HugeGridIsRefusedBeforeExpanding) {
+  const auto start = std::chrono::steady_clock::now();
+  expectProblems("huge-grid.toml",
+                 {"2: grid: field 'columns': 3000 x 3000 panels: at most 1024 displays"});
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(1));
+}
+
+TEST(BadLayout, HugeProcessIndexIsOneMessage) {
+  expectProblems("huge-process.toml", {"6: display 'a': field 'process': must be from 0 to 1023"});
+}
+
+TEST(BadLayout, OriginsNearTheIntLimitsAreRefused) {
+  expectProblems("far-origins.toml", {"1: the canvas, 4294966100x4294966100 pixels, is too large"});
+}
+
+TEST(BadLayout, InfinitePixelPitchIsRefused) {
+  expectProblems("pitch-inf.toml",
+                 {"7: grid: field 'pixel_pitch_mm': expected a finite number, got inf"});
 }
 
 }  // namespace

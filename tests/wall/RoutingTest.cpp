@@ -2,10 +2,13 @@
 // once and no other pixel, and the per-display and per-tile views agree.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <string>
 #include <vector>
 
+#include "wall/Error.h"
 #include "wall/Layout.h"
+#include "wall/PieceMessage.h"
 #include "wall/Routing.h"
 
 namespace {
@@ -30,9 +33,9 @@ TEST(Routing, PiecesCoverEveryDisplayedPixelOnce) {
     }
     for (int tileSize : kTileSizes) {
       SCOPED_TRACE(std::string(name) + " tile " + std::to_string(tileSize));
-      const wall::CanvasTiles tiles(l, tileSize);
+      const dfb::TileGrid tiles = wall::canvasTiles(l, tileSize);
       std::vector<int> covered(owner.size(), 0);
-      for (int t = 0; t < tiles.count(); ++t) {
+      for (int t = 0; t < tiles.tileCount(); ++t) {
         const dfb::Region tile = tiles.region(t);
         for (const wall::Piece& p : wall::piecesOf(l, tile)) {
           const dfb::Region& d = l.displays[static_cast<size_t>(p.display)].rect;
@@ -63,14 +66,14 @@ TEST(Routing, TilesOfDisplayAgreeWithPiecesOf) {
     const wall::Layout l = load(name);
     for (int tileSize : kTileSizes) {
       SCOPED_TRACE(std::string(name) + " tile " + std::to_string(tileSize));
-      const wall::CanvasTiles tiles(l, tileSize);
+      const dfb::TileGrid tiles = wall::canvasTiles(l, tileSize);
       std::vector<std::vector<wall::DisplayTile>> perDisplay;
       for (size_t i = 0; i < l.displays.size(); ++i)
         perDisplay.push_back(wall::tilesOfDisplay(l, static_cast<int>(i), tileSize));
       const std::vector<bool> shown = wall::tilesShownByAnyDisplay(l, tileSize);
-      ASSERT_EQ(shown.size(), static_cast<size_t>(tiles.count()));
+      ASSERT_EQ(shown.size(), static_cast<size_t>(tiles.tileCount()));
       std::vector<size_t> next(l.displays.size(), 0);
-      for (int t = 0; t < tiles.count(); ++t) {
+      for (int t = 0; t < tiles.tileCount(); ++t) {
         const std::vector<wall::Piece> pieces = wall::piecesOf(l, tiles.region(t));
         EXPECT_EQ(shown[static_cast<size_t>(t)], !pieces.empty()) << "tile " << t;
         for (const wall::Piece& p : pieces) {
@@ -91,10 +94,10 @@ TEST(Routing, TilesOfDisplayAgreeWithPiecesOf) {
 
 TEST(Routing, ATileAcrossTheBezelCross) {
   const wall::Layout l = load("2x2.toml");  // panels at x 0 and 212, y 0 and 160
-  const wall::CanvasTiles tiles(l, 64);
-  EXPECT_EQ(tiles.tilesX, 7);  // 412 / 64 rounded up
-  EXPECT_EQ(tiles.tilesY, 5);  // 310 / 64 rounded up
-  const int t = 2 * tiles.tilesX + 3;
+  const dfb::TileGrid tiles = wall::canvasTiles(l, 64);
+  EXPECT_EQ(tiles.tilesX(), 7);  // 412 / 64 rounded up
+  EXPECT_EQ(tiles.tilesY(), 5);  // 310 / 64 rounded up
+  const int t = 2 * tiles.tilesX() + 3;
   EXPECT_EQ(tiles.region(t), (dfb::Region{192, 128, 256, 192}));
   const std::vector<wall::Piece> p = wall::piecesOf(l, tiles.region(t));
   ASSERT_EQ(p.size(), 4u);
@@ -103,28 +106,47 @@ TEST(Routing, ATileAcrossTheBezelCross) {
   EXPECT_EQ(p[2], (wall::Piece{2, {192, 160, 200, 192}, {192, 0, 200, 32}}));
   EXPECT_EQ(p[3], (wall::Piece{3, {212, 160, 256, 192}, {0, 0, 44, 32}}));
   // The last, partial tile.
-  EXPECT_EQ(tiles.region(tiles.count() - 1), (dfb::Region{384, 256, 412, 310}));
+  EXPECT_EQ(tiles.region(tiles.tileCount() - 1), (dfb::Region{384, 256, 412, 310}));
 }
 
 TEST(Routing, TilesBehindBezelsAreNotShown) {
   const wall::Layout l = load("3x2-bezels.toml");  // 45 px between columns: x 160..205
-  const wall::CanvasTiles tiles(l, 16);
+  const dfb::TileGrid tiles = wall::canvasTiles(l, 16);
   const std::vector<bool> shown = wall::tilesShownByAnyDisplay(l, 16);
   // Column tx = 11 spans x 176..192, wholly behind the first column gap; and 30 px between rows
   // (y 120..150) leave tile row ty = 8 (y 128..144) hidden.
   int hidden = 0;
-  for (int t = 0; t < tiles.count(); ++t) {
-    const int tx = t % tiles.tilesX, ty = t / tiles.tilesX;
+  for (int t = 0; t < tiles.tileCount(); ++t) {
+    const int tx = t % tiles.tilesX(), ty = t / tiles.tilesX();
     if (tx == 11 || ty == 8) {
       EXPECT_FALSE(shown[static_cast<size_t>(t)]) << tx << "," << ty;
     }
     hidden += !shown[static_cast<size_t>(t)];
   }
   // Hidden columns: 10, 11 (x 160..192) and 23, 24 (x 368..400, in the gap 365..410); row 8.
-  EXPECT_EQ(hidden, 4 * tiles.tilesY + tiles.tilesX - 4);
+  EXPECT_EQ(hidden, 4 * tiles.tilesY() + tiles.tilesX() - 4);
   // Every tile of a gapless single display is shown.
   const std::vector<bool> all = wall::tilesShownByAnyDisplay(load("1x1.toml"), 64);
   EXPECT_EQ(all, std::vector<bool>(all.size(), true));
+}
+
+// Found by fuzz_piece: a piece rectangle whose int pixel count overflowed (UBSan) and could
+// then match the message's size. Now refused before any arithmetic.
+TEST(PieceMessage, RejectsARectangleWhoseSizeOverflows) {
+  const std::uint32_t pixels[4] = {1, 2, 3, 4};
+  dfb::Bytes bytes = wall::packPiece(1, 0, dfb::Region{0, 0, 2, 2}, pixels, 2, 0, 0, false);
+  wall::PieceHeader header;
+  std::memcpy(&header, bytes.data(), sizeof header);
+  header.x0 = -2000000000;
+  header.x1 = 2000000000;
+  std::memcpy(bytes.data(), &header, sizeof header);
+  EXPECT_THROW(wall::readPieceHeader(bytes), wall::Error);
+  // Each side within the cap, the product past an int (found on the second fuzz run).
+  header.x0 = 0;
+  header.x1 = 393216;
+  header.y1 = 262144;
+  std::memcpy(bytes.data(), &header, sizeof header);
+  EXPECT_THROW(wall::readPieceHeader(bytes), wall::Error);
 }
 
 }  // namespace

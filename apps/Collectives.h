@@ -1,0 +1,18 @@
+#pragma once
+// The app's collectives, each with a deadline (docs/design.md, invariant 6): the non-blocking
+// MPI call completed by dfb::waitWithDeadline, so a rank that never joins turns into a
+// dfb::Error naming `what` on the others instead of a hang.
+#include <mpi.h>
+
+#include <chrono>
+#include <string>
+
+namespace app {
+
+void boundedBarrier(MPI_Comm comm, std::chrono::milliseconds timeout, const std::string& what);
+void boundedBcast(void* buffer, int bytes, MPI_Comm comm, std::chrono::milliseconds timeout,
+                  const std::string& what);
+void boundedAllreduce(const void* in, void* out, int count, MPI_Datatype type, MPI_Op op,
+                      MPI_Comm comm, std::chrono::milliseconds timeout, const std::string& what);
+
+}  // namespace app

@@ -1,0 +1,25 @@
+#include "apps/Failure.h"
+
+#include <mpi.h>
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace app {
+
+FailurePath::FailurePath(int worldRank) : rank_(worldRank) {
+  char name[MPI_MAX_PROCESSOR_NAME];
+  int length = 0;
+  if (MPI_Get_processor_name(name, &length) == MPI_SUCCESS)
+    host_.assign(name, static_cast<size_t>(length));
+}
+
+void FailurePath::fail(const std::string& what) {
+  mutex_.lock();  // never unlocked: the process ends below
+  std::fprintf(stderr, "dfbwall: error on rank %d (%s): %s\n", rank_, host_.c_str(), what.c_str());
+  std::fflush(stderr);
+  MPI_Abort(MPI_COMM_WORLD, 1);
+  std::_Exit(1);  // MPI_Abort does not return; if an MPI ever did, still no destructors
+}
+
+}  // namespace app
