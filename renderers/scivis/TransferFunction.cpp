@@ -79,6 +79,10 @@ TransferTable::TransferTable(const TransferFunction& tf, int size)
 }
 
 void TransferTable::lookup(float value, float rgba[4]) const {
+  if (size_ == 0) {  // a default-constructed table: nothing to see
+    std::fill_n(rgba, 4, 0.0f);
+    return;
+  }
   float t = (value - valueMin_) * scale_;
   if (!(t > 0)) t = 0;  // below the range, or NaN
   const float last = static_cast<float>(size_ - 1);

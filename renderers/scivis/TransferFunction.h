@@ -34,7 +34,7 @@ std::vector<std::string> transferFunctionPresetNames();
 // renderer's inner loop: colour and opacity with linear interpolation between entries.
 class TransferTable {
  public:
-  TransferTable() = default;
+  TransferTable() = default;  // empty: lookup gives 0, maxOpacity 0
   // Throws renderers::Error when tf's range is empty (valueMax <= valueMin). size >= 2.
   TransferTable(const TransferFunction& tf, int size = 1024);
   // RGB and opacity at `value` (clamped to the range).

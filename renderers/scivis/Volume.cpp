@@ -1,7 +1,10 @@
 #include "renderers/scivis/Volume.h"
 
+#include <sys/mman.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 
@@ -90,6 +93,21 @@ float valueAt(const std::byte* voxels, VoxelType type, std::size_t n) {
 
 float Volume::at(int i, int j, int k) const {
   return valueAt(voxels.data(), type, offsetOf(box, i, j, k));
+}
+
+std::vector<std::byte> allocateVoxelBytes(std::size_t bytes) {
+  std::vector<std::byte> v;
+  v.reserve(bytes);  // allocated, not touched yet
+  constexpr std::uintptr_t kHugePage = std::uintptr_t{2} << 20;
+  if (bytes >= 4 * kHugePage) {
+    const auto begin = reinterpret_cast<std::uintptr_t>(v.data());
+    const std::uintptr_t first = (begin + kHugePage - 1) & ~(kHugePage - 1);
+    const std::uintptr_t last = (begin + bytes) & ~(kHugePage - 1);
+    // Advice only: where the kernel has no huge pages this fails and nothing changes.
+    if (last > first) ::madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+  }
+  v.resize(bytes);
+  return v;
 }
 
 void Volume::updateRange() {

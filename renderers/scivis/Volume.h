@@ -64,4 +64,9 @@ struct Volume {
   void updateRange();
 };
 
+// `bytes` zeroed bytes for Volume::voxels. Large buffers ask the kernel for transparent huge
+// pages first (madvise): with 4 KiB pages the first-touch page faults were most of the time of
+// making a 256³ volume here (0.29 s of CPU against 0.10 s).
+std::vector<std::byte> allocateVoxelBytes(std::size_t bytes);
+
 }  // namespace renderers

@@ -281,7 +281,9 @@ VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
     }
     case VolumeSource::Kind::MarschnerLobb:
       s.marschnerLobb.fM = r.number(t, "f_m", what, s.marschnerLobb.fM);
-      s.marschnerLobb.alpha = readInRange(r, t, "alpha", what, s.marschnerLobb.alpha, 0.0f, 1e6f);
+      s.marschnerLobb.alpha = r.number(t, "alpha", what, s.marschnerLobb.alpha);
+      if (!(s.marschnerLobb.alpha >= 0))
+        r.fail(*t.get("alpha"), what + ".alpha must not be negative");
       break;
     case VolumeSource::Kind::RawFile:
       readRaw(r, t, what, folder, s);
@@ -308,9 +310,13 @@ VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
   }
 
   // Procedural fields know their range, so a preset needs none; files do not (unless invisible,
-  // when the transfer function is never used).
-  const std::optional<std::pair<float, float>> range = knownValueRange(s);
-  if (const toml::node* tf = t.get("transfer_function")) {
+  // when the transfer function is never used). The wavelet's range costs evaluations: only
+  // when the transfer function does not give one.
+  const toml::node* tf = t.get("transfer_function");
+  const bool rangeGiven = tf && tf->is_table() && tf->as_table()->get("range");
+  const std::optional<std::pair<float, float>> range =
+      rangeGiven ? std::nullopt : knownValueRange(s);
+  if (tf) {
     d.transfer = readTransferFunction(r, *tf, what + ".transfer_function", range);
   } else if (range) {
     d.transfer = transferFunctionPreset("cool-warm", range->first, range->second);

@@ -111,6 +111,10 @@ TEST(TransferTable, InterpolatesLinearlyAndClamps) {
   }
   tf.valueMax = 0;
   EXPECT_THROW(TransferTable{tf}, Error);
+  const TransferTable none;
+  none.lookup(3, rgba);
+  EXPECT_EQ(rgba[3], 0.0f);
+  EXPECT_EQ(none.maxOpacity(0, 10), 0.0f);
 }
 
 TEST(TransferTable, MaxOpacityIsNeverBelowTheTrueMaximum) {

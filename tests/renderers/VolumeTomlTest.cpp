@@ -186,6 +186,9 @@ TEST(VolumeToml, FieldErrorsNameFileLineAndField) {
   EXPECT_EQ(errorOf("spacing-neg.toml", w + "spacing = -2\n"),
             ":4: volume 'w'.spacing must be positive");
   EXPECT_EQ(errorOf("sigma.toml", w + "sigma = 0\n"), ":4: volume 'w'.sigma must be positive");
+  EXPECT_EQ(
+      errorOf("alpha.toml", "[[volumes]]\nname = \"m\"\nsource = \"marschner-lobb\"\nalpha = -1\n"),
+      ":4: volume 'm'.alpha must not be negative");
   EXPECT_EQ(errorOf("visible.toml", w + "visible = 1\n"),
             ":4: volume 'w'.visible must be true or false");
   EXPECT_EQ(errorOf("name.toml", "[[volumes]]\nsource = \"wavelet\"\n"),
