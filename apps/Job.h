@@ -69,7 +69,9 @@ struct StageTimes {
 struct RankTotals {
   StageTimes stages;
   double peakRssKiB = 0;
-  double role = 0;  // 0: render, 1: wall
+  double role = 0;        // 0: render, 1: wall
+  double sceneBytes = 0;  // render ranks: the scene data this rank holds (its bricks, or all)
+  double brickTiles = 0;  // render ranks with --bricks: brick tiles rendered over the run
 };
 static_assert(sizeof(RankTotals) % sizeof(double) == 0);
 

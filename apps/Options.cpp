@@ -62,6 +62,15 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
   cli.add_option("--distribution", o.distribution, "work distribution")
       ->check(CLI::IsMember({"static", "roundrobin", "dynamic"}))
       ->capture_default_str();
+  cli.add_option("--bricks", o.bricks,
+                 "scivis: cut the scene into N bricks, each rank loads only its own "
+                 "(data-parallel; 0: every rank holds the whole scene)")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
+  cli.add_option("--replication", o.replication,
+                 "with --bricks: ranks holding each brick (1: data-parallel, all: image-parallel)")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
   cli.add_option("--renderer", o.renderer, "renderer")
       ->check(CLI::IsMember({"pathtracer", "primary", "pattern", "scivis"}))
       ->capture_default_str();
@@ -125,6 +134,10 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
         "--image is for runs without --wall; use --capture DIR to save what the wall shows");
   if (o.wall.empty() && (o.offscreen || !o.captureDir.empty() || o.mode != "route" || o.dryRun))
     return fail("--offscreen, --capture, --mode and --dry-run need --wall FILE.toml");
+  if (o.bricks > 0 && o.renderer != "scivis")
+    return fail("--bricks distributes the scivis renderer's data: add --renderer scivis");
+  if (o.bricks > 0 && o.distribution == "dynamic")
+    return fail("--bricks: tiles are planned by brick; --distribution dynamic does not apply");
   if (o.renderer == "pattern" && o.distribution == "dynamic")
     return fail(
         "--distribution dynamic balances noisy tiles by averaging redundant inputs; the "

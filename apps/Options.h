@@ -22,7 +22,11 @@ struct Options {
   int maxDepth = 8;
   float exposure = 1.0f;
   bool filmic = false;
-  float orbit = 0.0f;  // degrees per frame about the look-at point; each frame a new epoch
+  float orbit = 0.0f;
+  // Data-parallel (scivis): the scene cut into this many bricks (0: every rank holds it whole),
+  // each held by `replication` ranks.
+  int bricks = 0;
+  int replication = 1;  // degrees per frame about the look-at point; each frame a new epoch
 
   // The wall.
   std::string wall;  // layout file; empty: no wall

@@ -16,6 +16,7 @@
 #include "renderers/FrameDriver.h"
 #include "renderers/Renderer.h"
 #include "renderers/WorkDistribution.h"
+#include "renderers/scivis/BrickFrameDriver.h"
 #include "wall/DisplayRoutingOp.h"
 #include "wall/FrameCredits.h"
 #include "wall/PieceMessage.h"
@@ -121,7 +122,11 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
   settings.seed = o.seed;
   settings.maxDepth = o.maxDepth;
   settings.orbitDegreesPerFrame = o.orbit;
-  const auto renderer = renderers::makeRenderer(o.renderer, job.scene, settings);
+  // Image-parallel: one renderer over the whole scene, tiles planned by the frame driver.
+  // Data-parallel (--bricks): this rank's bricks, tiles planned per brick.
+  const bool bricked = o.bricks > 0;
+  const auto renderer =
+      bricked ? nullptr : renderers::makeRenderer(o.renderer, job.scene, settings);
 
   renderers::FrameDriverOptions driving;
   driving.distribution = renderers::distributionFromName(o.distribution);
@@ -151,8 +156,29 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
   } else {
     dfbOptions.format = dfb::DisplayFormat::NONE;
   }
-  renderers::FrameDriver driver(*renderer, driving);
-  driver.configure(dfbOptions);
+  std::unique_ptr<renderers::FrameDriver> imageDriver;
+  std::unique_ptr<renderers::BrickFrameDriver> brickDriver;
+  if (bricked) {
+    int renderRanks = 1;
+    MPI_Comm_size(renderComm, &renderRanks);
+    renderers::BrickDriverOptions bricks;
+    bricks.bricks = o.bricks;
+    bricks.replication = o.replication;
+    bricks.samplesPerPixel = static_cast<std::uint32_t>(o.spp);
+    bricks.threads = o.threads;
+    bricks.activeTiles = driving.activeTiles;
+    brickDriver = std::make_unique<renderers::BrickFrameDriver>(job.scene.desc, settings, bricks,
+                                                                renderRank, renderRanks);
+    brickDriver->configure(dfbOptions);
+    totals.sceneBytes = static_cast<double>(brickDriver->sceneBytes());
+  } else {
+    imageDriver = std::make_unique<renderers::FrameDriver>(*renderer, driving);
+    imageDriver->configure(dfbOptions);
+    if (job.scene.scivis) totals.sceneBytes = static_cast<double>(job.scene.scivis->content().bytes());
+  }
+  auto renderFrame = [&](dfb::DistributedFrameBuffer& fb, const dfb::FrameInfo& frame) {
+    return brickDriver ? brickDriver->renderFrame(fb, frame) : imageDriver->renderFrame(fb, frame);
+  };
   dfb::DistributedFrameBuffer dfb(messenger, renderComm, dfbOptions);
   std::shared_ptr<wall::DisplayRoutingOp> routing;
   if (route) {
@@ -216,7 +242,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
       writeReady(false);
 
       job.failIfAsked(frameId);
-      const renderers::FrameReport report = driver.renderFrame(dfb, frame);
+      const renderers::FrameReport report = renderFrame(dfb, frame);
       const dfb::FrameStats stats = dfb.stats();
       wall::DisplayRoutingOp::Sent sent;
       if (routing) sent = routing->takeSent();
@@ -281,6 +307,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
     if (credits) credits->waitForPresented(lastFrame, timeout);
     if (!pending.empty()) pending.back().frameMs = msBetween(previousStart, Clock::now());
     writeReady(true);
+    if (brickDriver) totals.brickTiles = static_cast<double>(brickDriver->brickTilesRendered());
 
     if (job.worldRank == 0 && !o.image.empty() && lastFrame > 0) {
       if (endsWith(o.image, ".png"))

@@ -96,7 +96,8 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
     }
     if (!job.isWallRank() && !o.dryRun) {
       if (o.scene.rfind("builtin:", 0) != 0) hashes.scene = hashFile(o.scene);
-      job.scene = renderers::buildRenderScene(o.renderer, renderers::loadSceneDesc(o.scene));
+      job.scene = renderers::buildRenderScene(o.renderer, renderers::loadSceneDesc(o.scene),
+                                                 o.bricks > 0);
     }
     if (o.dryRun) return {};
     if (std::string problem = checkOutputs(job); !problem.empty()) return problem;

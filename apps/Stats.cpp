@@ -104,6 +104,7 @@ void StatsStream::writeLine(const std::string& json) {
 
 void StatsStream::writeRun(const Job& job) {
   const Options& o = job.options;
+  job_bricks_ = o.bricks;
   writeLine(Json{{"run",
                   {{"canvas", {job.canvasWidth, job.canvasHeight}},
                    {"mode", job.layout ? o.mode : "image"},
@@ -113,6 +114,8 @@ void StatsStream::writeRun(const Job& job) {
                    {"threads", o.threads},
                    {"orbit_degrees_per_frame", o.orbit},
                    {"spp", o.spp},
+                   {"bricks", o.bricks},
+                   {"replication", o.replication},
                    {"frames_asked", o.frames}}}}
                 .dump());
 }
@@ -148,11 +151,13 @@ void StatsStream::writeEnd(const std::vector<RankTotals>& ranks, bool stoppedEar
     const RankTotals& t = ranks[r];
     const int role = t.role > 0.5 ? 1 : 0;
     peak[role] = std::max(peak[role], t.peakRssKiB);
-    writeLine(Json{{"rank", r},
-                   {"role", role ? "wall" : "render"},
-                   {"peak_rss_kib", t.peakRssKiB},
-                   {"stages_ms", stagesOf(t)}}
-                  .dump());
+    Json line{{"rank", r},
+              {"role", role ? "wall" : "render"},
+              {"peak_rss_kib", t.peakRssKiB},
+              {"stages_ms", stagesOf(t)}};
+    if (!role) line["scene_bytes"] = t.sceneBytes;
+    if (!role && job_bricks_ > 0) line["brick_tiles_rendered"] = t.brickTiles;
+    writeLine(line.dump());
   }
   const double medianMs = frameMs_.median();
   Json summary{{"frames", frames_},

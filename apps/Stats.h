@@ -56,6 +56,7 @@ class StatsStream {
   int fd_ = -1;
   LogHistogram frameMs_{1e-3, 1e7}, compositeShare_{1e-6, 1e3};
   std::uint64_t frames_ = 0;
+  int job_bricks_ = 0;  // --bricks of the run (brick counts in the rank lines)
 };
 
 }  // namespace app

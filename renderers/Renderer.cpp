@@ -26,9 +26,10 @@ std::unique_ptr<Renderer> makeRenderer(const std::string& name, const Scene& sce
   throw Error("unknown renderer '" + name + "' (choose pathtracer, primary, pattern or scivis)");
 }
 
-RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc) {
+RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc, bool distributed) {
   RenderScene out;
   out.desc = std::make_shared<const SceneDesc>(std::move(desc));
+  if (distributed) return out;
   if (renderer == "scivis") {
     out.scivis = std::make_shared<const SciVisScene>(out.desc, wholeScene(*out.desc));
   } else if (renderer != "pattern") {
