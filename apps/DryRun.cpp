@@ -1,8 +1,11 @@
 // --dry-run: what the job would do, without rendering.
+#include <algorithm>
 #include <cstdio>
 
 #include "apps/Job.h"
+#include "renderers/BuiltinScenes.h"
 #include "renderers/FrameDriver.h"
+#include "renderers/scivis/Bricks.h"
 #include "wall/Routing.h"
 
 namespace app {
@@ -34,6 +37,21 @@ void printDryRun(const Job& job) {
       std::printf(" %d@r%d", t.tileIndex,
                   owner(t.tileIndex, static_cast<int>(active.size()), job.roles.renderRanks));
     std::printf("\n");
+  }
+  if (o.bricks > 0) {
+    // The data-parallel plan: every brick, its bounds and the render ranks that load it. A
+    // tile's brick is rendered by holder (tile + brick) mod K of the K holders.
+    const renderers::SceneDesc desc = renderers::loadSceneDesc(o.scene);
+    const auto bricks = renderers::splitScene(desc, o.bricks);
+    std::printf("bricks: %zu, each on %d render rank(s); tile-brick owner = holders[(tile + brick) %% K]\n",
+                bricks.size(), std::min(o.replication, job.roles.renderRanks));
+    for (const renderers::BrickPlan& b : bricks) {
+      std::printf("brick %d [%g %g %g]..[%g %g %g] on ranks", b.id, b.bounds.lo.x, b.bounds.lo.y,
+                  b.bounds.lo.z, b.bounds.hi.x, b.bounds.hi.y, b.bounds.hi.z);
+      for (int r : renderers::brickHolders(b.id, job.roles.renderRanks, o.replication))
+        std::printf(" %d", r);
+      std::printf("\n");
+    }
   }
 }
 
