@@ -62,7 +62,6 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
   settings.seed = o.seed;
   settings.maxDepth = o.maxDepth;
   settings.orbitDegreesPerFrame = o.orbit;
-  const auto renderer = renderers::makeRenderer(o.renderer, *job.scene, settings);
 
   renderers::FrameDriverOptions driving;
   driving.distribution = renderers::distributionFromName(o.distribution);
@@ -92,6 +91,10 @@ std::vector<FrameRecord> runRenderRank(const Job& job, dfb::Messenger& messenger
   } else {
     dfbOptions.format = dfb::DisplayFormat::NONE;
   }
+  // The pattern writes display pixels straight away, unless linear output is asked for.
+  if (o.renderer == "pattern" && dfbOptions.format != dfb::DisplayFormat::RGBAF32)
+    settings.displayPixels = dfbOptions.toneMap;
+  const auto renderer = renderers::makeRenderer(o.renderer, *job.scene, settings);
   renderers::FrameDriver driver(*renderer, driving);
   driver.configure(dfbOptions);
   dfb::DistributedFrameBuffer dfb(messenger, renderComm, dfbOptions);
