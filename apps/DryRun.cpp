@@ -43,8 +43,9 @@ void printDryRun(const Job& job) {
     // tile's brick is rendered by holder (tile + brick) mod K of the K holders.
     const renderers::SceneDesc desc = renderers::loadSceneDesc(o.scene);
     const auto bricks = renderers::splitScene(desc, o.bricks);
-    std::printf("bricks: %zu, each on %d render rank(s); tile-brick owner = holders[(tile + brick) %% K]\n",
-                bricks.size(), std::min(o.replication, job.roles.renderRanks));
+    std::printf(
+        "bricks: %zu, each on %d render rank(s); tile-brick owner = holders[(tile + brick) %% K]\n",
+        bricks.size(), std::min(o.replication, job.roles.renderRanks));
     for (const renderers::BrickPlan& b : bricks) {
       std::printf("brick %d [%g %g %g]..[%g %g %g] on ranks", b.id, b.bounds.lo.x, b.bounds.lo.y,
                   b.bounds.lo.z, b.bounds.hi.x, b.bounds.hi.y, b.bounds.hi.z);

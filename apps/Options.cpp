@@ -41,7 +41,9 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
       "out.png\n"
       "  wall:  mpirun -np R+W dfbwall --wall configs/walls/2x2.toml --offscreen --capture DIR"};
   std::string size;
-  cli.add_option("--scene", o.scene, "FILE.toml or builtin:NAME (cornell, spheres; for --renderer scivis: wavelet, particles)")
+  cli.add_option(
+         "--scene", o.scene,
+         "FILE.toml or builtin:NAME (cornell, spheres; for --renderer scivis: wavelet, particles)")
       ->capture_default_str();
   cli.add_option("--size", size, "image size WxH (not with --wall: the layout sets the canvas)");
   cli.add_option("--spp", o.spp, "samples per pixel per frame")

@@ -125,8 +125,6 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
   // Image-parallel: one renderer over the whole scene, tiles planned by the frame driver.
   // Data-parallel (--bricks): this rank's bricks, tiles planned per brick.
   const bool bricked = o.bricks > 0;
-  const auto renderer =
-      bricked ? nullptr : renderers::makeRenderer(o.renderer, job.scene, settings);
 
   renderers::FrameDriverOptions driving;
   driving.distribution = renderers::distributionFromName(o.distribution);
@@ -156,6 +154,11 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
   } else {
     dfbOptions.format = dfb::DisplayFormat::NONE;
   }
+  // The pattern writes display pixels straight away, unless linear output is asked for.
+  if (o.renderer == "pattern" && dfbOptions.format != dfb::DisplayFormat::RGBAF32)
+    settings.displayPixels = dfbOptions.toneMap;
+  const auto renderer =
+      bricked ? nullptr : renderers::makeRenderer(o.renderer, job.scene, settings);
   std::unique_ptr<renderers::FrameDriver> imageDriver;
   std::unique_ptr<renderers::BrickFrameDriver> brickDriver;
   if (bricked) {
@@ -174,7 +177,8 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
   } else {
     imageDriver = std::make_unique<renderers::FrameDriver>(*renderer, driving);
     imageDriver->configure(dfbOptions);
-    if (job.scene.scivis) totals.sceneBytes = static_cast<double>(job.scene.scivis->content().bytes());
+    if (job.scene.scivis)
+      totals.sceneBytes = static_cast<double>(job.scene.scivis->content().bytes());
   }
   auto renderFrame = [&](dfb::DistributedFrameBuffer& fb, const dfb::FrameInfo& frame) {
     return brickDriver ? brickDriver->renderFrame(fb, frame) : imageDriver->renderFrame(fb, frame);

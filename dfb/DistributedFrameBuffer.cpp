@@ -285,8 +285,11 @@ void DistributedFrameBuffer::Impl::finishTile(int tileIndex, OwnedTile& owned) {
   finished.error = owned.operation->error();
   const auto start = Clock::now();
   // Tone mapping comes first, but only when something reads its RGBA8: the display format or a
-  // later op. A linear-only frame (RGBAF32 or NONE without ops) skips the per-pixel work.
-  if (options.format == DisplayFormat::RGBA8 || pixelOps.size() > 1)
+  // later op. A linear-only frame (RGBAF32 or NONE without ops) skips the per-pixel work, and a
+  // tile that came as display pixels (Tile::rgba8) has them already.
+  if (finished.linear->rgba8.size() == static_cast<size_t>(finished.region.pixelCount()))
+    owned.rgba8 = finished.linear->rgba8;
+  else if (options.format == DisplayFormat::RGBA8 || pixelOps.size() > 1)
     pixelOps.front()->process(finished);
   const auto now = Clock::now();
   toneMapNs += nsBetween(start, now);

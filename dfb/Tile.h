@@ -39,6 +39,11 @@ struct Tile {
   std::vector<float> depth;   // one per pixel; empty means "at infinity"
   std::vector<float> normal;  // optional, 3 per pixel
   std::vector<float> albedo;  // optional, 3 per pixel
+  // Optional display pixels (sRGB RGBA8, R in the low byte) from a renderer that makes them
+  // directly (the pattern): with them, color may be empty and the owner skips tone mapping.
+  // Only the write operation takes such tiles; the pixels must be what tone mapping color with
+  // the DFB's settings would give (dfb::toneMapPixel), so every path agrees bit for bit.
+  std::vector<std::uint32_t> rgba8;
 
   // Sets the region and sizes color (and depth when `withDepth`) for it, zero-filled.
   void reset(const Region& r, bool withDepth = false);

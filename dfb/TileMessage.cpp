@@ -24,7 +24,11 @@ void take(const Bytes& in, size_t& at, std::vector<float>& channel, size_t count
 
 Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId, std::uint32_t epoch) {
   const size_t n = static_cast<size_t>(tile.pixelCount());
-  if (tile.color.size() != 4 * n)
+  const bool rgba8 = !tile.rgba8.empty();
+  if (rgba8 && tile.rgba8.size() != n)
+    throw Error("tile " + std::to_string(tileIndex) + " has " + std::to_string(tile.rgba8.size()) +
+                " RGBA8 pixels for " + std::to_string(n) + " pixels");
+  if (tile.color.size() != 4 * n && !(rgba8 && tile.color.empty()))
     throw Error("tile " + std::to_string(tileIndex) + " has " + std::to_string(tile.color.size()) +
                 " color floats for " + std::to_string(n) + " pixels");
   TileMessageHeader header{};
@@ -41,11 +45,14 @@ Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId, std::uint
   header.children = tile.children;
   header.sequence = tile.sequence;
   header.weight = tile.weight;
-  size_t floats = 4 * n;
+  size_t floats = tile.color.empty() ? 0 : 4 * n;
+  if (tile.color.empty()) header.channels |= kNoColor;
   if (tile.depth.size() == n) header.channels |= kHasDepth, floats += n;
   if (tile.normal.size() == 3 * n) header.channels |= kHasNormal, floats += 3 * n;
   if (tile.albedo.size() == 3 * n) header.channels |= kHasAlbedo, floats += 3 * n;
-  header.payloadBytes = static_cast<std::uint32_t>(floats * sizeof(float));
+  if (rgba8) header.channels |= kHasRgba8;
+  header.payloadBytes =
+      static_cast<std::uint32_t>(floats * sizeof(float) + (rgba8 ? n * sizeof(std::uint32_t) : 0));
 
   Bytes out;
   out.reserve(sizeof header + header.payloadBytes + Messenger::kSpareCapacity);
@@ -56,6 +63,7 @@ Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId, std::uint
   if (header.channels & kHasDepth) append(out, at, tile.depth);
   if (header.channels & kHasNormal) append(out, at, tile.normal);
   if (header.channels & kHasAlbedo) append(out, at, tile.albedo);
+  if (rgba8) std::memcpy(out.data() + at, tile.rgba8.data(), n * sizeof(std::uint32_t));
   return out;
 }
 
@@ -79,20 +87,28 @@ Tile unpackTile(const Bytes& bytes, TileMessageHeader& header) {
     throw Error("tile message for tile " + std::to_string(header.tileIndex) +
                 " has an empty or oversized region");
   const size_t n = static_cast<size_t>(tile.region.pixelCount());
-  size_t floats = 4 * n;
+  const bool noColor = header.channels & kNoColor, rgba8 = header.channels & kHasRgba8;
+  if (noColor && !rgba8)
+    throw Error("tile message for tile " + std::to_string(header.tileIndex) +
+                " has neither color nor RGBA8 pixels");
+  size_t floats = noColor ? 0 : 4 * n;
   if (header.channels & kHasDepth) floats += n;
   if (header.channels & kHasNormal) floats += 3 * n;
   if (header.channels & kHasAlbedo) floats += 3 * n;
-  if (header.payloadBytes != floats * sizeof(float) ||
-      bytes.size() != sizeof header + header.payloadBytes)
+  const size_t payload = floats * sizeof(float) + (rgba8 ? n * sizeof(std::uint32_t) : 0);
+  if (header.payloadBytes != payload || bytes.size() != sizeof header + header.payloadBytes)
     throw Error("tile message for tile " + std::to_string(header.tileIndex) + " has " +
                 std::to_string(bytes.size() - sizeof header) +
-                " payload bytes, its header implies " + std::to_string(floats * sizeof(float)));
+                " payload bytes, its header implies " + std::to_string(payload));
   size_t at = sizeof header;
-  take(bytes, at, tile.color, 4 * n);
+  if (!noColor) take(bytes, at, tile.color, 4 * n);
   if (header.channels & kHasDepth) take(bytes, at, tile.depth, n);
   if (header.channels & kHasNormal) take(bytes, at, tile.normal, 3 * n);
   if (header.channels & kHasAlbedo) take(bytes, at, tile.albedo, 3 * n);
+  if (rgba8) {
+    tile.rgba8.resize(n);
+    std::memcpy(tile.rgba8.data(), bytes.data() + at, n * sizeof(std::uint32_t));
+  }
   return tile;
 }
 

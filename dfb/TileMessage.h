@@ -18,7 +18,7 @@ struct TileMessageHeader {
   std::int32_t x0, y0, x1, y1;
   std::int32_t generation, children;
   std::uint32_t sequence, weight;
-  std::uint32_t channels;  // kHasDepth | kHasNormal | kHasAlbedo
+  std::uint32_t channels;  // kHasDepth | kHasNormal | kHasAlbedo | kHasRgba8 | kNoColor
   std::uint32_t payloadBytes;
   std::uint32_t reserved;
 };
@@ -26,6 +26,8 @@ static_assert(sizeof(TileMessageHeader) == 64, "the tile header is part of the p
 
 constexpr std::uint32_t kTileMagic = 0x54494C45;  // "TILE"
 constexpr std::uint32_t kHasDepth = 1, kHasNormal = 2, kHasAlbedo = 4;
+// Display pixels after the float channels; with kNoColor, no color floats (RGBA8 only).
+constexpr std::uint32_t kHasRgba8 = 8, kNoColor = 16;
 
 Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId, std::uint32_t epoch);
 // Throws dfb::Error when the bytes are not a well-formed tile message.

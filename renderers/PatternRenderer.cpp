@@ -36,13 +36,26 @@ bool labelInk(const std::string& text, int x, int y) {
   return (glyph[gy] >> (2 - gx)) & 1;
 }
 
-const Vec3 kBars[8] = {{0.75f, 0.75f, 0.75f}, {0.75f, 0.75f, 0}, {0, 0.75f, 0.75f}, {0, 0.75f, 0},
-                       {0.75f, 0, 0.75f},     {0.75f, 0, 0},     {0, 0, 0.75f},     {0, 0, 0}};
+// Every colour the pattern uses: a pixel is an index into this palette.
+enum Colour : std::uint8_t { kDark, kLight, kRing, kGrid, kInk, kBorder, kMarker, kBar0 };
+const Vec3 kPalette[kBar0 + 8] = {Vec3{0.05f},        Vec3{0.10f},           {0.3f, 0.3f, 0.6f},
+                                  Vec3{0.8f},         {1.0f, 0.9f, 0.2f},    {1.0f, 0.1f, 0.1f},
+                                  {0.1f, 1.0f, 0.1f}, {0.75f, 0.75f, 0.75f}, {0.75f, 0.75f, 0},
+                                  {0, 0.75f, 0.75f},  {0, 0.75f, 0},         {0.75f, 0, 0.75f},
+                                  {0.75f, 0, 0},      {0, 0, 0.75f},         {0, 0, 0}};
+constexpr int kColours = kBar0 + 8;
 
 }  // namespace
 
 PatternRenderer::PatternRenderer(const RenderSettings& settings)
-    : width_(settings.width), height_(settings.height) {}
+    : width_(settings.width), height_(settings.height) {
+  // Display pixels: each palette colour tone-mapped once, exactly as the DFB would per pixel.
+  if (settings.displayPixels)
+    for (int i = 0; i < kColours; ++i) {
+      const float rgba[4] = {kPalette[i].x, kPalette[i].y, kPalette[i].z, 1.0f};
+      displayPalette_.push_back(dfb::toneMapPixel(rgba, *settings.displayPixels));
+    }
+}
 
 void PatternRenderer::beginFrame(const dfb::FrameInfo& frame) { frameId_ = frame.frameId; }
 
@@ -50,35 +63,47 @@ void PatternRenderer::render(const dfb::Region& region, std::uint32_t accumulati
                              std::uint32_t firstSample, std::uint32_t samples,
                              dfb::Tile& out) const {
   prepareTile(region, accumulationId, firstSample, samples, out);
+  const bool display = !displayPalette_.empty();
+  if (display) {  // RGBA8 only: no float pixels to write, none to tone-map
+    out.color.clear();
+    out.rgba8.resize(static_cast<std::size_t>(region.pixelCount()));
+  }
   const int barTop = height_ - height_ / 8;
   const int markerSize = 32;
   const int markerX = static_cast<int>((frameId_ * 16u) % static_cast<unsigned>(width_));
   const int markerY = height_ / 2 - markerSize / 2;
   float* px = out.color.data();
+  std::uint32_t* px8 = out.rgba8.data();
   // The cell label, rebuilt only when the cell changes: a string per pixel made this renderer,
   // meant to cost nothing next to delivery, slower than tone mapping the whole canvas.
   std::string label;
   int labelCx = -1, labelCy = -1;
   for (int y = region.y0; y < region.y1; ++y) {
-    for (int x = region.x0; x < region.x1; ++x, px += 4) {
+    for (int x = region.x0; x < region.x1; ++x) {
       const int cx = x / kCell, cy = y / kCell, lx = x % kCell, ly = y % kCell;
-      Vec3 c = ((cx + cy) & 1) ? Vec3{0.10f} : Vec3{0.05f};
+      int c = ((cx + cy) & 1) ? kLight : kDark;
       const float dx = static_cast<float>(lx) - kCell / 2 + 0.5f;
       const float dy = static_cast<float>(ly) - kCell / 2 + 0.5f;
-      if (std::abs(std::sqrt(dx * dx + dy * dy) - 0.35f * kCell) < 1.0f) c = {0.3f, 0.3f, 0.6f};
-      if (lx < 2 || ly < 2) c = Vec3{0.8f};
+      if (std::abs(std::sqrt(dx * dx + dy * dy) - 0.35f * kCell) < 1.0f) c = kRing;
+      if (lx < 2 || ly < 2) c = kGrid;
       if (ly >= kMargin && ly < kMargin + 5 * kScale && lx >= kMargin) {
         if (cx != labelCx || cy != labelCy) {
           label = std::to_string(cx) + "." + std::to_string(cy);
           labelCx = cx, labelCy = cy;
         }
-        if (labelInk(label, lx - kMargin, ly - kMargin)) c = {1.0f, 0.9f, 0.2f};
+        if (labelInk(label, lx - kMargin, ly - kMargin)) c = kInk;
       }
-      if (y >= barTop) c = kBars[std::min(7, 8 * x / width_)];
-      if (x < 4 || y < 4 || x >= width_ - 4 || y >= height_ - 4) c = {1.0f, 0.1f, 0.1f};
+      if (y >= barTop) c = kBar0 + std::min(7, 8 * x / width_);
+      if (x < 4 || y < 4 || x >= width_ - 4 || y >= height_ - 4) c = kBorder;
       if (x >= markerX && x < markerX + markerSize && y >= markerY && y < markerY + markerSize)
-        c = {0.1f, 1.0f, 0.1f};
-      px[0] = c.x, px[1] = c.y, px[2] = c.z, px[3] = 1.0f;
+        c = kMarker;
+      if (display) {
+        *px8++ = displayPalette_[static_cast<std::size_t>(c)];
+      } else {
+        const Vec3& v = kPalette[c];
+        px[0] = v.x, px[1] = v.y, px[2] = v.z, px[3] = 1.0f;
+        px += 4;
+      }
     }
   }
 }

@@ -3,7 +3,11 @@
 // each cell (round rings mean the aspect ratio is right), a border, colour bars along the bottom
 // and a marker that moves with the frame id. Each pixel is a pure function of its canvas
 // coordinates and the frame, so a wall shows exactly where its displays and bezels cut the
-// canvas, and benchmarks make pixel delivery the bottleneck.
+// canvas, and benchmarks make pixel delivery the bottleneck. With RenderSettings::displayPixels
+// it writes RGBA8 display pixels straight away (a palette tone-mapped once), so neither float
+// pixels nor per-pixel tone mapping are spent on it.
+#include <vector>
+
 #include "renderers/Renderer.h"
 
 namespace renderers {
@@ -20,6 +24,7 @@ class PatternRenderer final : public Renderer {
  private:
   int width_, height_;
   std::uint32_t frameId_ = 0;
+  std::vector<std::uint32_t> displayPalette_;  // with RenderSettings::displayPixels
 };
 
 }  // namespace renderers

@@ -7,8 +7,10 @@
 // the thread or the rank. beginFrame() is called from one thread, between frames.
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
+#include "dfb/PixelOp.h"
 #include "dfb/Tile.h"
 #include "dfb/TileOperation.h"
 #include "renderers/Camera.h"
@@ -24,6 +26,11 @@ struct RenderSettings {
   // Camera orbit: frame F sees the scene's camera turned about its look-at point around its up
   // axis by orbitDegreesPerFrame * (F - 1). 0: a fixed camera.
   float orbitDegreesPerFrame = 0.0f;
+  // When set, a renderer that can produce display pixels directly (the pattern) fills
+  // Tile::rgba8, tone-mapped with these settings exactly as the DFB would, and no color: no
+  // float pixels, no tone mapping. Only for the DFB's write operation, and not for linear
+  // output (RGBAF32).
+  std::optional<dfb::ToneMapSettings> displayPixels = std::nullopt;
 };
 
 // The camera of frame `frameId` under the orbit in `settings`.

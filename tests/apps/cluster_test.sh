@@ -83,7 +83,7 @@ start() {
 # Waits at most SECONDS for the job; sets `code` (124: still running, then killed).
 finish() {
   local deadline
-  deadline=$(awk -v s="$1" -v t="$(now)" 'BEGIN {print t + s}')
+  deadline=$(awk -v s="$1" -v t="$(now)" 'BEGIN {printf "%.3f", t + s}')
   while kill -0 "$job" 2>/dev/null && awk -v d="$deadline" -v t="$(now)" 'BEGIN {exit !(t < d)}'; do
     sleep 0.1
   done

@@ -119,6 +119,34 @@ TEST_P(GatherRgba8, EqualsTheToneMappedReference) {
 
 INSTANTIATE_TEST_SUITE_P(Compression, GatherRgba8, ::testing::Bool());
 
+// Tiles that come as display pixels (Tile::rgba8, no color) travel to their owners and reach
+// the RGBA8 image exactly as given: nothing tone-maps them.
+TEST(Dfb, DisplayPixelTilesReachTheImageUntouched) {
+  Messenger messenger(MPI_COMM_WORLD);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::RGBA8));
+  const auto value = [](int x, int y) {
+    return 0x80000000u | (static_cast<std::uint32_t>(x * 131 + y * 7) & 0xffffffu);
+  };
+  for (std::uint32_t frame = 1; frame <= 2; ++frame) {
+    dfb.begin({frame, 0});
+    tbb::parallel_for(0, dfb.grid().tileCount(), [&](int t) {
+      if (!renders(t)) return;
+      Tile tile;
+      tile.region = dfb.grid().region(t);
+      for (int y = tile.region.y0; y < tile.region.y1; ++y)
+        for (int x = tile.region.x0; x < tile.region.x1; ++x) tile.rgba8.push_back(value(x, y));
+      dfb.setTile(std::move(tile));
+    });
+    dfb.end();
+    if (worldRank() != 0) continue;
+    const auto& image = dfb.imageRgba8();
+    ASSERT_EQ(image.size(), static_cast<size_t>(kWidth * kHeight));
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x)
+        ASSERT_EQ(image[static_cast<size_t>(y * kWidth + x)], value(x, y)) << x << "," << y;
+  }
+}
+
 TEST(Dfb, FormatNoneGathersNoPixelsToRankZero) {
   Messenger messenger(MPI_COMM_WORLD);
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::NONE));

@@ -163,6 +163,18 @@ TEST(TileMessage, PacksAndUnpacksEveryChannel) {
 
   Bytes truncated(bytes.begin(), bytes.end() - 4);
   EXPECT_THROW(unpackTile(truncated, header), Error);
+
+  // Display pixels only (the pattern renderer's RGBA8 path): no color floats on the wire.
+  Tile d;
+  d.region = kRegion;
+  for (int i = 0; i < kRegion.pixelCount(); ++i) d.rgba8.push_back(0xff000000u + i);
+  const Bytes small = packTile(d, 5, 99, 4);
+  EXPECT_EQ(small.size(), sizeof(TileMessageHeader) + 4 * d.rgba8.size());
+  const Tile dback = unpackTile(small, header);
+  EXPECT_TRUE(dback.color.empty());
+  EXPECT_EQ(dback.rgba8, d.rgba8);
+  d.rgba8.pop_back();
+  EXPECT_THROW(packTile(d, 5, 99, 4), Error);
 }
 
 // Found by fuzz_tile_message: a header whose region's width times height overflowed an int

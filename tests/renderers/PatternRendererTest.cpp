@@ -36,6 +36,29 @@ TEST(PatternRenderer, GridBorderBarsAndAMovingMarker) {
   EXPECT_EQ(pixel(f5, w, 90, h / 2)[1], 1.0f);
 }
 
+// Asked for display pixels, the pattern writes RGBA8 only, each pixel exactly what the DFB's
+// tone mapping of its float pixel gives, so both paths show the same wall bit for bit.
+TEST(PatternRenderer, DisplayPixelsEqualToneMappedFloatPixels) {
+  const int w = 300, h = 200;
+  dfb::ToneMapSettings toneMap;
+  toneMap.exposure = 1.3f;
+  toneMap.filmic = true;
+  RenderSettings floats{w, h, 0, 1};
+  RenderSettings display = floats;
+  display.displayPixels = toneMap;
+  PatternRenderer linear(floats), direct(display);
+  linear.beginFrame({3, 0});
+  direct.beginFrame({3, 0});
+  const dfb::Region region{40, 60, 104, 124};  // covers grid lines, a ring and a label
+  dfb::Tile a, b;
+  linear.render(region, 0, 0, 1, a);
+  direct.render(region, 0, 0, 1, b);
+  EXPECT_TRUE(b.color.empty());
+  ASSERT_EQ(b.rgba8.size(), static_cast<std::size_t>(region.pixelCount()));
+  for (std::size_t i = 0; i < b.rgba8.size(); ++i)
+    ASSERT_EQ(b.rgba8[i], dfb::toneMapPixel(&a.color[4 * i], toneMap)) << "pixel " << i;
+}
+
 TEST(Renderers, MakeByNameAndPrimaryShading) {
   const Scene scene(cornellBox());
   const RenderSettings s{32, 32, 1, 8};
