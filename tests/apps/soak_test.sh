@@ -14,7 +14,7 @@ trap '[ -n "$job" ] && kill -9 "$job" 2>/dev/null; rm -rf "$work"' EXIT
   --renderer pattern --frames "$frames" --quiet --timeout 30 --stats "$work/stats.jsonl" \
   >"$work/log" 2>&1 &
 job=$!
-frames_done() { grep -c '^{"frame":' "$work/stats.jsonl" 2>/dev/null || echo 0; }
+frames_done() { local n; n=$(grep -c '^{"frame":' "$work/stats.jsonl" 2>/dev/null || true); echo "${n:-0}"; }
 rss() {  # "pid:KiB ..." of every rank
   for p in $(pgrep -P "$job" -x dfbwall | sort -n); do
     echo -n "$p:$(awk '/^VmRSS:/ {print $2}' "/proc/$p/status" 2>/dev/null || echo 0) "
