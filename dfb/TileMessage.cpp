@@ -59,7 +59,7 @@ Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId, std::uint
   out.resize(sizeof header + header.payloadBytes);
   std::memcpy(out.data(), &header, sizeof header);
   size_t at = sizeof header;
-  append(out, at, tile.color);
+  if (!tile.color.empty()) append(out, at, tile.color);  // memcpy from null is undefined
   if (header.channels & kHasDepth) append(out, at, tile.depth);
   if (header.channels & kHasNormal) append(out, at, tile.normal);
   if (header.channels & kHasAlbedo) append(out, at, tile.albedo);

@@ -184,6 +184,7 @@ case "$scenario" in
       sleep 0.1
     done
     down=$(since "$t0")
+    errorAt=$down  # the loop left when the first error was out (or at the limit)
     "$CLUSTER" link "$host" up --id "$id"
     finish $((timeout + 10))
     elapsed=$(since "$t0")
@@ -192,9 +193,13 @@ case "$scenario" in
     [ "$code" -ne 0 ] || fail "exit code 0 after a cut longer than --timeout"
     grep -qE "dfbwall: error on rank [0-9]+: .*(within|after) ${timeout}000 ms" "$work/log" \
       || fail "no dfbwall error naming what did not arrive within --timeout"
-    awk -v e="$elapsed" -v l="$((timeout + 3))" 'BEGIN {exit !(e <= l)}' \
-      || fail "the job ended $elapsed s after the cut, more than --timeout + 3 = $((timeout + 3)) s"
-    echo "cut $host for $down s (--timeout $timeout): ended after $elapsed s with exit $code"
+    awk -v e="$errorAt" -v l="$((timeout + 3))" 'BEGIN {exit !(e <= l)}' \
+      || fail "the first error came $errorAt s after the cut, more than --timeout + 3 = $((timeout + 3)) s"
+    # mpirun's own exit waits for TCP to retransmit its abort to the host once the link is back
+    # (about 1-2 s on an idle machine, more under load): bounded, but not by our deadlines.
+    awk -v e="$elapsed" -v l="$((timeout + 6))" 'BEGIN {exit !(e <= l)}' \
+      || fail "the job ended $elapsed s after the cut, more than --timeout + 6 = $((timeout + 6)) s"
+    echo "cut $host (--timeout $timeout): first error after $errorAt s, job ended after $elapsed s, exit $code"
     ;;
   link-flap)
     # A 1 s link flap, shorter than --timeout: the run goes on and its captures are right.
