@@ -92,7 +92,10 @@ FrameRecord combine(const std::vector<RankFrame>& all) {
   FrameRecord r;
   for (const RankFrame& f : all) {
     r.renderMs = std::max(r.renderMs, f.renderMs);
-    r.compositeMs = std::max(r.compositeMs, f.compositeMs);
+    // The paper's compositing overhead: from the slowest rank's last tile to the finished
+    // frame, i.e. that rank's own last setTile -> complete. (The maximum over ranks would be the
+    // time the fastest rank waited for the others.)
+    if (f.lastSetTileNs >= r.lastSetTileNs) r.compositeMs = f.compositeMs;
     r.wallBytesSent += f.wallBytes;
     r.wallBytesRaw += f.wallBytesRaw;
     r.wallPieces += f.wallPieces;

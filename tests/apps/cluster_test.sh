@@ -38,7 +38,8 @@ canvas() { "$COMPARE" --info "$1" | cut -d' ' -f2; }
 now() { date +%s.%N; }
 since() { awk -v a="$1" -v b="$(now)" 'BEGIN {printf "%.1f", b - a}'; }
 # Per-frame values of FIELD in a stats file, one per line.
-field() { grep -o "\"$2\": [0-9.]*" "$1" | awk '{print $2}'; }
+# (JSON Lines as dfbwall streams them: no space after the colon; older files had one.)
+field() { grep -o "\"$2\": *[0-9.]*" "$1" | sed 's/.*: *//'; }
 
 # up LAYOUT RENDER_HOSTS: the hosts of the layout plus the render hosts, 1 Gbit/s links.
 up() {
@@ -191,7 +192,7 @@ case "$scenario" in
     cat "$work/log"
     [ "$code" -ne 124 ] || fail "the job still ran $((timeout + 10)) s after the cut"
     [ "$code" -ne 0 ] || fail "exit code 0 after a cut longer than --timeout"
-    grep -qE "dfbwall: error on rank [0-9]+: .*(within|after) ${timeout}000 ms" "$work/log" \
+    grep -qE "dfbwall: error on rank [0-9]+( \([^)]*\))?: .*(within|after) ${timeout}000 ms" "$work/log" \
       || fail "no dfbwall error naming what did not arrive within --timeout"
     awk -v e="$errorAt" -v l="$((timeout + 3))" 'BEGIN {exit !(e <= l)}' \
       || fail "the first error came $errorAt s after the cut, more than --timeout + 3 = $((timeout + 3)) s"
