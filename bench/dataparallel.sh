@@ -275,7 +275,7 @@ plot '$work/dp-mem-on.dat' using 2:(\$3 / 1048576) pt 7 lc rgb "#3070b0" title "
      '$work/dp-mem-on.dat' using 2:(\$4 / 1024) pt 9 lc rgb "#30a030" title "peak RSS, 4 bricks, AO on", \
      '$work/dp-mem-on.dat' using 2:(\$6 / 1024) pt 11 lc rgb "#c03030" title "peak RSS, whole scene"
 unset xlabel; set xrange [*:*]; set xtics autofreq
-set title "Skewed scene (brick 0 costs ${skewShare}%), 4 ranks, --bricks 4: K=1 / K=2 = ${ratio}x"
+set title "Skewed, 4 ranks, 4 bricks (brick 0: ${skewShare}% of render): K=1/K=2 = ${ratio}x"
 set ylabel "ms per frame"; set yrange [0:*]
 set style data histogram; set style histogram errorbars gap 1 lw 1
 plot '$skewDat' using 2:3:xtic(1) title "--replication K" lc rgb "#3070b0"
