@@ -270,8 +270,6 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
         t.send += static_cast<double>(ns.send) * 1e-6;
       }
       lastFrame = frameId;
-      wallWireBefore = wallWire;
-      compressedBefore = compressed;
 
       if (!o.statsFile.empty()) {
         // One small gather per frame, only when statistics are asked for.
@@ -294,6 +292,8 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
           pending.push_back(record);
         }
       }
+      wallWireBefore = wallWire;
+      compressedBefore = compressed;
 
       if (job.worldRank == 0 && !o.quiet &&
           (msBetween(lastProgress, Clock::now()) > 1000 ||
