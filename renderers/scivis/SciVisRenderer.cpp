@@ -72,9 +72,9 @@ std::uint64_t bitsOf(float t) { return std::bit_cast<std::uint32_t>(t); }
 // and composited one by one in order; those past the end or past opacity are dropped. Samples
 // in empty macrocells have zero opacity: skipping them changes no bit.
 template <class T>
-std::uint32_t marchOneVolume(const SciVisScene::VolumeLayer& v, Vec3 origin, Vec3 dir, float t0,
-                             float t1, float kStart, float volumeEnd, float step, float jitter,
-                             float minTransmittance, Accumulator& acc) {
+std::uint32_t marchOneVolume(const SciVisScene::VolumeLayer& v, Vec3 origin, Vec3 dir, Vec3 invDir,
+                             float t0, float t1, float kStart, float volumeEnd, float step,
+                             float jitter, float minTransmittance, Accumulator& acc) {
   const VolumeField& field = *v.field;
   const std::uint8_t* empty = v.emptyMacrocells.data();
   float k = std::max(kStart, std::ceil(t0 / step - jitter));
@@ -106,7 +106,7 @@ std::uint32_t marchOneVolume(const SciVisScene::VolumeLayer& v, Vec3 origin, Vec
       // Jump to one sample before the sample before the macrocell's exit, as the generic loop
       // does: the margin keeps rounding from skipping a sample of the next macrocell.
       float a = t[0], b = kInf;
-      clipToBox(field.macroBounds(macro0), origin, reciprocal(dir), a, b);
+      clipToBox(field.macroBounds(macro0), origin, invDir, a, b);
       const float last = std::floor(b / step - jitter) - 1;
       if (last > k + 4) {
         samples += 1;
@@ -261,11 +261,15 @@ Vec3 SciVisRenderer::shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, co
 
 Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, float t0, float t1,
                                    const Sampler& sampler) const {
+  return integrate(origin, dir, reciprocal(dir), t0, t1, sampler);
+}
+
+Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1,
+                                   const Sampler& sampler) const {
   Accumulator acc;
   Fragment out;
   if (!(t0 < t1)) return out;
   const float minTransmittance = scene_.desc().scivis.minTransmittance;
-  const Vec3 invDir = reciprocal(dir);
 
   // Surfaces come from Embree one at a time, in order; the next one waits in `surface`.
   SurfaceHit surface;
@@ -301,10 +305,11 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, float t0, float t1,
   const auto& layers = scene_.volumes();
   if (volumeStart <= volumeEnd && layers.size() == 1 && layers[0].visible &&
       layers[0].isosurfaces.empty() && (!haveSurface || surface.t > volumeEnd)) {
-    const float kStart = std::ceil(volumeStart / step - sampler.get(2));
+    const float jitter = sampler.get(2);
+    const float kStart = std::ceil(volumeStart / step - jitter);
     const auto march = [&]<class T>() {
-      return marchOneVolume<T>(layers[0], origin, dir, t0, t1, kStart, volumeEnd, step,
-                               sampler.get(2), minTransmittance, acc);
+      return marchOneVolume<T>(layers[0], origin, dir, invDir, t0, t1, kStart, volumeEnd, step,
+                               jitter, minTransmittance, acc);
     };
     switch (layers[0].field->volume().type) {
       default:
@@ -451,8 +456,9 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
                     0.5f, 0.5f, origin, dir);
         float t0 = 0, t1 = kInf;
         Fragment f;
-        if (clipToBox(bounds, origin, reciprocal(dir), t0, t1))
-          f = integrate(origin, dir, t0, t1, sampler);
+        const Vec3 invDir = reciprocal(dir);
+        if (clipToBox(bounds, origin, invDir, t0, t1))
+          f = integrate(origin, dir, invDir, t0, t1, sampler);
         if (options_.background) {
           const Vec3 bg = background.radiance(dir) * (1.0f - f.rgba[3]);
           f.rgba[0] += bg.x, f.rgba[1] += bg.y, f.rgba[2] += bg.z, f.rgba[3] = 1.0f;
