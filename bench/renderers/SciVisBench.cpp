@@ -1,7 +1,7 @@
 // The scivis renderer on the wavelet, one process: frame time, camera rays/s and volume
 // samples/s, with the image as a PNG to put beside VTK's (bench/renderers/vtk_volume.py renders
 // the same field, transfer function, camera and sample spacing).
-//   scivis_bench MODE RESOLUTION SIZE THREADS FRAMES [OUT.png]
+//   scivis_bench MODE RESOLUTION SIZE THREADS FRAMES [OUT.png | OUT.f32 (raw linear floats)]
 // MODE: "volume"  the wavelet as a volume (VTK's comparison: blue-white-red over 37..277,
 //                 opacity ramp 0..0.4 per voxel, one sample per voxel, no shading)
 //       "iso-ao"  two opaque isosurfaces with 4 ambient-occlusion rays and shadows per hit
@@ -94,6 +94,14 @@ int main(int argc, char** argv) {
       // Frame 1's view (the last frame rendered is frame `frames`, one step short of a turn).
       renderer->beginFrame({1, 1});
       image = test::renderImage(*renderer, size, size, 64, threads, 1);
+      const std::string out = argv[6];
+      if (out.size() > 4 && out.compare(out.size() - 4, 4, ".f32") == 0) {
+        // The linear floats as they are, to check that an optimisation changes no bit.
+        if (std::FILE* f = std::fopen(out.c_str(), "wb")) {
+          std::fwrite(image.data(), sizeof(float), image.size(), f);
+          std::fclose(f);
+        }
+      }
       std::vector<std::uint32_t> rgba8(static_cast<std::size_t>(size) * size);
       for (std::size_t i = 0; i < rgba8.size(); ++i) {
         std::uint32_t p = 0;
@@ -104,13 +112,15 @@ int main(int argc, char** argv) {
         }
         rgba8[i] = p;
       }
-      wall::writePng(argv[6], rgba8.data(), size, size);
+      if (out.size() > 4 && out.compare(out.size() - 4, 4, ".png") == 0)
+        wall::writePng(out, rgba8.data(), size, size);
     }
     std::printf(
         "{\"mode\": \"%s\", \"resolution\": %d, \"size\": %d, \"threads\": %d, \"frames\": %d, "
-        "\"load_s\": %.3f, \"median_frame_s\": %.4f, \"camera_rays_per_s\": %.4g, "
+        "\"load_s\": %.3f, \"median_frame_s\": %.4f, \"min_frame_s\": %.4f, \"camera_rays_per_s\": "
+        "%.4g, "
         "\"volume_samples_per_s\": %.4g, \"volume_samples_per_ray\": %.1f}\n",
-        mode.c_str(), resolution, size, threads, frames, loadS, median,
+        mode.c_str(), resolution, size, threads, frames, loadS, median, sorted.front(),
         double(size) * size * frames / total, samples / total,
         samples / (double(size) * size * frames));
     return 0;

@@ -53,6 +53,9 @@ class SciVisRenderer final : public Renderer {
 
  private:
   struct March;
+  // integrate() with 1 / dir, which the caller has already.
+  Fragment integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1,
+                     const Sampler& sampler) const;
   Vec3 shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, const Material& m,
              const Sampler& hitSampler) const;
   bool occluded(Vec3 origin, Vec3 dir, float tFar, const Sampler& s) const;

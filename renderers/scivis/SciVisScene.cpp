@@ -77,13 +77,14 @@ RTCRay makeRay(Vec3 o, Vec3 d, float tNear, float tFar) {
 
 struct SciVisScene::Embree {
   struct Geometry {
-    const WorldMesh* mesh = nullptr;            // triangles, or
-    const ParticlesDesc* particles = nullptr;   // spheres
-    std::vector<Vec3> normals;                  // per triangle, unit
+    const WorldMesh* mesh = nullptr;           // triangles, or
+    const ParticlesDesc* particles = nullptr;  // spheres
+    std::vector<Vec3> normals;                 // per triangle, unit
   };
   RTCDevice device = nullptr;
   RTCScene camera = nullptr, shading = nullptr;
   std::vector<Geometry> geometries;  // by geometry ID, the same in both scenes
+  std::size_t cameraGeometries = 0;  // none: no ray needs to ask Embree (a volume-only scene)
   std::string message;
 
   ~Embree() {
@@ -97,9 +98,9 @@ struct SciVisScene::Embree {
     Geometry info;
     if (mesh) {
       g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-          g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-          mesh->mesh.positions.size()));
+      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                            RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                            mesh->mesh.positions.size()));
       for (std::size_t i = 0; i < mesh->mesh.positions.size(); ++i) {
         const Vec3 p = mesh->mesh.positions[i];
         v[3 * i] = p.x, v[3 * i + 1] = p.y, v[3 * i + 2] = p.z;
@@ -122,8 +123,8 @@ struct SciVisScene::Embree {
     } else {
       g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
       const std::size_t n = particles->centers.size();
-      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                            RTC_FORMAT_FLOAT4, 4 * sizeof(float), n));
+      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+          g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), n));
       for (std::size_t i = 0; i < n; ++i) {
         const Vec3 c = particles->centers[i];
         v[4 * i] = c.x, v[4 * i + 1] = c.y, v[4 * i + 2] = c.z, v[4 * i + 3] = particles->radius(i);
@@ -133,7 +134,7 @@ struct SciVisScene::Embree {
     info.particles = particles;
     rtcCommitGeometry(g);
     const auto id = static_cast<unsigned>(geometries.size());
-    if (seenByCamera) rtcAttachGeometryByID(camera, g, id);
+    if (seenByCamera) rtcAttachGeometryByID(camera, g, id), ++cameraGeometries;
     rtcAttachGeometryByID(shading, g, id);
     rtcReleaseGeometry(g);
     geometries.push_back(std::move(info));
@@ -141,14 +142,17 @@ struct SciVisScene::Embree {
 };
 
 SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickContent content)
-    : desc_(std::move(sceneDesc)), content_(std::move(content)), embree_(std::make_unique<Embree>()) {
+    : desc_(std::move(sceneDesc)),
+      content_(std::move(content)),
+      embree_(std::make_unique<Embree>()) {
   const SceneDesc& desc = *desc_;
   const SciVisSettings& settings = desc.scivis;
   if (content_.volumes.size() != desc.volumes.size())
     throw Error("a scivis brick needs one (possibly empty) volume per scene volume");
   for (const auto* set : {&content_.particles, &content_.ghostParticles})
     for (const ParticlesDesc& p : *set) {
-      if (p.material >= desc.materials.size()) throw Error("particles '" + p.name + "': no such material");
+      if (p.material >= desc.materials.size())
+        throw Error("particles '" + p.name + "': no such material");
       if (p.radii.size() != 1 && p.radii.size() != p.centers.size())
         throw Error("particles '" + p.name + "': one radius, or one per particle");
       if (!p.attribute.empty() && p.attribute.size() != p.centers.size())
@@ -244,7 +248,9 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
     lights_.push_back({LightDesc::Kind::Ambient, {}, {}, Vec3{0.25f}});
     const Vec3 view = desc.camera.lookAt - desc.camera.position;
     lights_.push_back({LightDesc::Kind::Directional,
-                       length(view) > 0 ? -normalize(view) : Vec3{0, 0, 1}, {}, Vec3{0.85f}});
+                       length(view) > 0 ? -normalize(view) : Vec3{0, 0, 1},
+                       {},
+                       Vec3{0.85f}});
   } else {
     for (const LightDesc& l : desc.lights)
       lights_.push_back({l.kind, -l.direction, l.position, l.color * l.intensity});
@@ -266,6 +272,7 @@ bool SciVisScene::anythingIn(const VolumeLayer& v, float lo, float hi) {
 
 bool SciVisScene::intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFar,
                                    SurfaceHit& hit) const {
+  if (embree_->cameraGeometries == 0) return false;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit rh;
@@ -291,6 +298,7 @@ bool SciVisScene::intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFa
 }
 
 bool SciVisScene::surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const {
+  if (embree_->geometries.empty()) return false;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay r = makeRay(origin, dir, tNear, tFar);
