@@ -38,23 +38,8 @@ std::vector<WorldMesh> worldMeshes(const SceneDesc& desc) {
 }
 
 BrickContent wholeScene(const SceneDesc& desc) {
-  BrickContent c;
-  for (const VolumeDesc& v : desc.volumes)
-    c.volumes.push_back(loadVolume(v.source, v.source.grid.wholeBox()));
-  c.particles = desc.particles;
-  // Sphere shapes of the path tracer's format are particle sets of one material each.
-  for (const Instance& inst : desc.instances) {
-    const Shape& s = desc.shapes.at(inst.shape);
-    if (!s.isSpheres()) continue;
-    ParticlesDesc p;
-    p.name = s.name;
-    for (const Vec3& centre : s.spheres.centers) p.centers.push_back(inst.transform.point(centre));
-    p.radii = s.spheres.radii;
-    p.material = inst.material;
-    c.particles.push_back(std::move(p));
-  }
-  c.meshes = worldMeshes(desc);
-  return c;
+  // One brick without bounds: every voxel, particle and triangle, nothing as ghost.
+  return loadBrick(desc, BrickPlan{0, Box3{}}, 0.0f);
 }
 
 namespace {
