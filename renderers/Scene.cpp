@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 
+#include "renderers/EmbreeRays.h"
 #include "renderers/Error.h"
 
 namespace renderers {
@@ -32,12 +33,6 @@ struct InstanceData {
   // (5% of the bunny's time went there). Empty for spheres and instanced shapes.
   std::vector<Vec3> normals;
 };
-
-void embreeError(void* message, RTCError code, const char* text) {
-  if (code == RTC_ERROR_NONE) return;
-  auto* m = static_cast<std::string*>(message);
-  if (m->empty()) *m = text ? text : "unknown error";
-}
 
 void validate(const SceneDesc& d) {
   const auto nm = d.materials.size();
@@ -194,7 +189,7 @@ Scene::Scene(SceneDesc desc) : impl_(std::make_unique<Impl>()) {
   m.desc = std::move(desc);
   m.device = rtcNewDevice(nullptr);
   if (!m.device) throw Error("Embree: cannot create a device");
-  rtcSetDeviceErrorFunction(m.device, embreeError, &m.embreeMessage);
+  rtcSetDeviceErrorFunction(m.device, embree::keepFirstError, &m.embreeMessage);
   // A shape placed once goes into the top-level scene itself, moved to world space: Embree then
   // skips the instance step (a ray transform and a second BVH entry per ray), 13% of the
   // bunny's render time. Shapes placed more than once stay instances, so memory does not grow.
@@ -251,14 +246,6 @@ float Scene::lightPdfArea(int light) const { return impl_->lightPdf[light]; }
 float Scene::extent() const { return impl_->extent; }
 RTCScene Scene::embreeScene() const { return impl_->top; }
 
-static RTCRay makeRay(Vec3 o, Vec3 d, float tNear, float tFar) {
-  RTCRay r;
-  r.org_x = o.x, r.org_y = o.y, r.org_z = o.z, r.tnear = tNear;
-  r.dir_x = d.x, r.dir_y = d.y, r.dir_z = d.z, r.time = 0;
-  r.tfar = tFar, r.mask = 0xFFFFFFFFu, r.id = 0, r.flags = 0;
-  return r;
-}
-
 // The hit record of Embree's answer: instance (or flattened geometry), primitive and distance.
 void Scene::Impl::fillHit(std::uint32_t instID, std::uint32_t geomID, std::uint32_t prim, float t,
                           Vec3 origin, Vec3 direction, Hit& hit) const {
@@ -288,13 +275,7 @@ Vec3 Scene::Impl::normal(const InstanceData& inst, std::uint32_t prim, Vec3 posi
 }
 
 bool Scene::intersect(Vec3 origin, Vec3 direction, float tNear, float tFar, Hit& hit) const {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  RTCRayHit rh;
-  rh.ray = makeRay(origin, direction, tNear, tFar);
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(impl_->top, &context, &rh);
+  const RTCRayHit rh = embree::closestHit(impl_->top, origin, direction, tNear, tFar);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
   impl_->fillHit(rh.hit.instID[0], rh.hit.geomID, rh.hit.primID, rh.ray.tfar, origin, direction,
                  hit);
@@ -340,11 +321,7 @@ void Scene::intersect(const RayPacket& rays, PacketHits& out) const {
 }
 
 bool Scene::occluded(Vec3 origin, Vec3 direction, float tNear, float tFar) const {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  RTCRay r = makeRay(origin, direction, tNear, tFar);
-  rtcOccluded1(impl_->top, &context, &r);
-  return r.tfar < 0;  // Embree sets tfar to -inf on a hit
+  return embree::occluded(impl_->top, origin, direction, tNear, tFar);
 }
 
 LightSample Scene::sampleLight(float u0, float u1, float u2) const {

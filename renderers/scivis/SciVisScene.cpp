@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 
+#include "renderers/EmbreeRays.h"
 #include "renderers/Error.h"
 #include "renderers/scivis/Bricks.h"
 
@@ -41,24 +42,6 @@ BrickContent wholeScene(const SceneDesc& desc) {
   // One brick without bounds: every voxel, particle and triangle, nothing as ghost.
   return loadBrick(desc, BrickPlan{0, Box3{}}, 0.0f);
 }
-
-namespace {
-
-void embreeError(void* message, RTCError code, const char* text) {
-  if (code == RTC_ERROR_NONE) return;
-  auto* m = static_cast<std::string*>(message);
-  if (m->empty()) *m = text ? text : "unknown error";
-}
-
-RTCRay makeRay(Vec3 o, Vec3 d, float tNear, float tFar) {
-  RTCRay r;
-  r.org_x = o.x, r.org_y = o.y, r.org_z = o.z, r.tnear = tNear;
-  r.dir_x = d.x, r.dir_y = d.y, r.dir_z = d.z, r.time = 0;
-  r.tfar = tFar, r.mask = 0xFFFFFFFFu, r.id = 0, r.flags = 0;
-  return r;
-}
-
-}  // namespace
 
 struct SciVisScene::Embree {
   struct Geometry {
@@ -211,7 +194,7 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   Embree& e = *embree_;
   e.device = rtcNewDevice(nullptr);
   if (!e.device) throw Error("Embree: cannot create a device");
-  rtcSetDeviceErrorFunction(e.device, embreeError, &e.message);
+  rtcSetDeviceErrorFunction(e.device, embree::keepFirstError, &e.message);
   e.camera = rtcNewScene(e.device);
   e.shading = rtcNewScene(e.device);
   for (const WorldMesh& m : content_.meshes) e.add(&m, nullptr, true);
@@ -258,13 +241,7 @@ bool SciVisScene::anythingIn(const VolumeLayer& v, float lo, float hi) {
 bool SciVisScene::intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFar,
                                    SurfaceHit& hit) const {
   if (embree_->cameraGeometries == 0) return false;
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  RTCRayHit rh;
-  rh.ray = makeRay(origin, dir, tNear, tFar);
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(embree_->camera, &context, &rh);
+  const RTCRayHit rh = embree::closestHit(embree_->camera, origin, dir, tNear, tFar);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
   const Embree::Geometry& g = embree_->geometries[rh.hit.geomID];
   const std::uint32_t prim = rh.hit.primID;
@@ -284,11 +261,7 @@ bool SciVisScene::intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFa
 
 bool SciVisScene::surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const {
   if (embree_->geometries.empty()) return false;
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  RTCRay r = makeRay(origin, dir, tNear, tFar);
-  rtcOccluded1(embree_->shading, &context, &r);
-  return r.tfar < 0;
+  return embree::occluded(embree_->shading, origin, dir, tNear, tFar);
 }
 
 }  // namespace renderers
