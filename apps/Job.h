@@ -34,6 +34,8 @@ struct Job {
   void failIfAsked(std::uint32_t frame) const;
   bool gatherMode() const { return options.mode == "gather"; }
   bool isWallRank() const { return roles.processOfRank(worldRank) >= 0; }
+  // The whole-wall preview is assembled on rank 0 (apps/Preview.h).
+  bool previewWanted() const { return !options.previewFile.empty(); }
 };
 
 struct FrameRecord {
@@ -48,6 +50,7 @@ struct FrameRecord {
   std::uint64_t wallBytesSent = 0, wallBytesRaw = 0;
   std::uint64_t wallPieces = 0, wallPiecesToOtherHosts = 0, messagesCompressed = 0;
   std::uint64_t tileBytesSent = 0;  // tile inputs between render ranks
+  std::uint64_t previewBytes = 0;   // shrunk tiles for rank 0's preview (apps/Preview.h)
   std::uint64_t tilesRendered = 0;
   std::uint64_t samples = 0;
   std::int64_t lastSetTileNs = 0;  // steady_clock, latest over render ranks

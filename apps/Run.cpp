@@ -66,6 +66,12 @@ std::string checkOutputs(const Job& job) {
         !problem.empty())
       return "--image " + problem;
   }
+  if (job.worldRank == 0 && !o.previewFile.empty()) {
+    const std::string folder = std::filesystem::path(o.previewFile).parent_path().string();
+    if (std::string problem = dfb::checkWritableFolder(folder.empty() ? "." : folder);
+        !problem.empty())
+      return "--preview " + problem;
+  }
   return {};
 }
 

@@ -57,6 +57,13 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
                        r.closedDisplay.c_str());
           control.askToStop(0);
         }
+        for (wall::WallKey key : r.keys) {
+          if (key == wall::WallKey::Escape && !closed) {
+            closed = true;
+            std::fprintf(stderr, "dfbwall: Esc pressed on wall process %d: stopping\n", process);
+            control.askToStop(0);
+          }
+        }
         StageTimes& t = totals.stages;
         t.pieceUnpack += r.unpackMs;
         t.assemble += r.assembleMs;

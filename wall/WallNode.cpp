@@ -232,10 +232,13 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     const Image& image = slot->displays[i];
     presenters_[i]->present(image.pixels.data(), image.width, image.height);
   }
-  // An operator closing a window asks the whole job to stop; the app decides how (gracefully).
-  for (size_t i = 0; i < mine_.size(); ++i)
+  // An operator closing a window asks the whole job to stop, a key asks for a camera change or a
+  // stop; the app decides how.
+  for (size_t i = 0; i < mine_.size(); ++i) {
     if (presenters_[i]->closeRequested())
       report.closedDisplay = layout_.displays[static_cast<size_t>(mine_[i])].name;
+    for (WallKey k : presenters_[i]->takeKeys()) report.keys.push_back(k);
+  }
   const auto presented = Clock::now();
 
   bool last = frameId == options_.lastFrame;

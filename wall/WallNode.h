@@ -54,6 +54,8 @@ struct PresentReport {
   bool stopped = false;
   // The name of a display whose window an operator closed (empty: none).
   std::string closedDisplay;
+  // Keys pressed in this process's windows since the last frame, in order.
+  std::vector<WallKey> keys;
 };
 
 class WallNode : public dfb::MessageHandler {
