@@ -16,6 +16,8 @@
 
 namespace app {
 
+class Preview;
+
 struct Job {
   Options options;
   std::optional<wall::Layout> layout;
@@ -27,6 +29,9 @@ struct Job {
   // still exist: unwinding first would unregister them, and a message arriving for one would
   // then be reported instead of the real cause.
   FailurePath* failure = nullptr;
+  // Render ranks when previewWanted(): the preview's pixel op and (rank 0) assembler, made in
+  // run() so the control server can serve it (apps/Preview.h).
+  Preview* preview = nullptr;
   // Test-only: DFBWALL_FAIL_AT=RANK:FRAME makes world rank RANK throw at frame FRAME, so the
   // fault tests can check the failure path end to end (tests/apps/fault_test.sh).
   int failAtRank = -1;

@@ -2,16 +2,21 @@
 
 #include "dfb/Error.h"
 #include "wall/Png.h"
+#include "wall/Routing.h"
 
 namespace app {
 
-Preview::Preview(const Job& job, dfb::Messenger& messenger, std::vector<bool> activeTiles)
-    : job_(job) {
+Preview::Preview(const Job& job, dfb::Messenger& messenger) : job_(job) {
   const wall::PreviewGrid grid{job.canvasWidth, job.canvasHeight,
                                wall::previewFactor(job.canvasWidth, job.canvasHeight)};
   op_ = std::make_shared<wall::PreviewOp>(messenger, grid);
   if (job.worldRank != 0) return;
-  if (activeTiles.empty()) {
+  // The tiles that complete every frame: in route mode those some display shows (the render
+  // ranks render no other, runRenderRank), otherwise all.
+  std::vector<bool> activeTiles;
+  if (job.layout && !job.gatherMode()) {
+    activeTiles = wall::tilesShownByAnyDisplay(*job.layout, job.options.tileSize);
+  } else {
     const dfb::TileGrid tiles(job.canvasWidth, job.canvasHeight, job.options.tileSize);
     activeTiles.assign(static_cast<size_t>(tiles.tileCount()), true);
   }

@@ -17,9 +17,9 @@ namespace app {
 
 class Preview {
  public:
-  // Every render rank, before the start-up barrier. `activeTiles`: the tiles rendered each frame
-  // (empty: all of them).
-  Preview(const Job& job, dfb::Messenger& messenger, std::vector<bool> activeTiles);
+  // Every render rank, before the start-up barrier (and before the control server starts, which
+  // serves it). Lives until the messenger has stopped.
+  Preview(const Job& job, dfb::Messenger& messenger);
   std::shared_ptr<wall::PreviewOp> op() const { return op_; }
   // Render rank 0 only (nullptr elsewhere).
   wall::PreviewAssembler* assembler() const { return assembler_.get(); }

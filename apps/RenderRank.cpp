@@ -196,11 +196,8 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
         std::make_shared<wall::DisplayRoutingOp>(messenger, *job.layout, job.roles, o.tileSize);
     dfb.addPixelOp(routing);
   }
-  std::unique_ptr<Preview> preview;
-  if (job.previewWanted()) {
-    preview = std::make_unique<Preview>(job, messenger, driving.activeTiles);
-    dfb.addPixelOp(preview->op());
-  }
+  Preview* const preview = job.preview;
+  if (preview) dfb.addPixelOp(preview->op());
   std::unique_ptr<wall::FrameCredits> credits;
   if (hasWall && job.worldRank == 0) credits = std::make_unique<wall::FrameCredits>(messenger);
   try {

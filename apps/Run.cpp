@@ -9,6 +9,7 @@
 #include "apps/Collectives.h"
 #include "apps/Failure.h"
 #include "apps/Job.h"
+#include "apps/Preview.h"
 #include "apps/RunControl.h"
 #include "apps/Stats.h"
 #include "apps/StopSignals.h"
@@ -201,6 +202,11 @@ int run(int argc, char** argv) {
     // failure of the job now, not a frame that times out later under another name.
     messenger.setErrorCallback([&failure](const std::string& m) { failure.fail(m); });
     RunControl control(messenger, signals);
+    std::unique_ptr<Preview> preview;
+    if (!job.isWallRank() && job.previewWanted()) {
+      preview = std::make_unique<Preview>(job, messenger);
+      job.preview = preview.get();
+    }
     RankTotals totals;
     const int exitCode =
         job.isWallRank() ? runWallRank(job, messenger, roleComm, control, totals)
