@@ -3,7 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <fstream>
 #include <random>
+
+#include "wall/Png.h"
 
 namespace wall {
 namespace {
@@ -100,6 +104,21 @@ TEST(Preview, DecorationDarkensBezelsAndOutlinesDisplays) {
   EXPECT_EQ(shown.at(0, 0), rgba8(200, 200, 200));       // a's outline
   EXPECT_EQ(shown.at(10, 1), rgba8(200, 200, 200));      // b's left edge
   EXPECT_EQ(decoratePreview(raw, grid, nullptr).at(8, 2), rgba8(100, 150, 200, 255));
+}
+
+// What the control server sends: PNG bytes in memory that decode to the image.
+TEST(Preview, EncodedPngDecodesToTheImage) {
+  const Image image = randomImage(13, 8, 3);
+  const std::string bytes = encodePng(image);
+  ASSERT_GT(bytes.size(), 8u);
+  EXPECT_EQ(bytes.substr(1, 3), "PNG");
+  const std::string path = ::testing::TempDir() + "/encoded-preview.png";
+  {
+    std::ofstream out(path, std::ios::binary);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  }
+  EXPECT_EQ(readPng(path), image);
+  std::remove(path.c_str());
 }
 
 }  // namespace
