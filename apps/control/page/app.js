@@ -53,6 +53,8 @@ async function api(method, path, body) {
 // --- status -------------------------------------------------------------------------------
 let renderer = '';
 let stopped = false;
+let settingsShown = false;
+let contactLost = false;  // the sliders start where the wall is, then follow the user
 
 function setState(text, cls) {
   const s = $('state');
@@ -79,6 +81,10 @@ function showStatus(s) {
     return tr;
   });
   $('displays').tBodies[0].replaceChildren(...rows);
+  if (!settingsShown && s.settings) {
+    settingsShown = true;
+    showSettings(s.settings);
+  }
   const errors = s.errors || [];
   if (errors.length) showError('The wall reports: ' + errors.join('; '));
   setState(s.stopping ? 'stopping' : s.idle ? 'converged, idle' : 'running', 'ok');
@@ -86,10 +92,14 @@ function showStatus(s) {
 
 async function pollStatus() {
   try {
-    showStatus(await api('GET', '/api/status'));
+    const s = await api('GET', '/api/status');
+    if (contactLost) showError('');  // back in contact: the old message no longer holds
+    contactLost = false;
+    showStatus(s);
   } catch (e) {
     setState(stopped ? 'stopped' : 'no contact', 'bad');
     if (!stopped) showError(e.message);
+    contactLost = true;
   }
   setTimeout(pollStatus, 500);
 }
@@ -144,9 +154,12 @@ function queueCamera(change) {
 async function flushCamera() {
   if (sending) return;
   const requests = [];
-  if (pending.orbit) requests.push({ orbit: pending.orbit });
-  if (pending.pan[0] || pending.pan[1]) requests.push({ pan: pending.pan.slice() });
-  if (pending.dolly !== 1) requests.push({ dolly: pending.dolly });
+  // Within the API's ranges (orbit ±360°, pan ±10 view heights, dolly 0.01..100).
+  const clamp = (v, lo, hi) => Math.min(hi, Math.max(lo, v));
+  if (pending.orbit) requests.push({ orbit: clamp(pending.orbit, -360, 360) });
+  if (pending.pan[0] || pending.pan[1])
+    requests.push({ pan: pending.pan.map((v) => clamp(v, -10, 10)) });
+  if (pending.dolly !== 1) requests.push({ dolly: clamp(pending.dolly, 0.01, 100) });
   if (!requests.length) return;
   pending.orbit = 0; pending.pan = [0, 0]; pending.dolly = 1;
   sending = true;
@@ -187,12 +200,14 @@ stage.addEventListener('pointermove', (e) => {
   p.x = e.clientX; p.y = e.clientY;
   const width = stage.clientWidth || 1, height = stage.clientHeight || 1;
   if (pointers.size === 1) {
-    if (e.shiftKey) queueCamera({ pan: [dx / width, dy / height] });
+    // Pan is in view heights, camera right and up: the scene follows the finger.
+    if (e.shiftKey) queueCamera({ pan: [-dx / height, dy / height] });
     else queueCamera({ orbit: -dx * 180 / width });
   } else if (pointers.size === 2) {
     const [mid, spread] = midAndSpread();
-    queueCamera({ pan: [(mid[0] - lastMid[0]) / width, (mid[1] - lastMid[1]) / height] });
-    if (lastSpread > 0 && spread > 0) queueCamera({ dolly: lastSpread / spread });
+    queueCamera({ pan: [-(mid[0] - lastMid[0]) / height, (mid[1] - lastMid[1]) / height] });
+    // Fingers apart: closer (dolly divides the distance to the look-at point).
+    if (lastSpread > 0 && spread > 0) queueCamera({ dolly: spread / lastSpread });
     lastMid = mid; lastSpread = spread;
   }
 });
@@ -208,7 +223,7 @@ stage.addEventListener('pointercancel', release);
 stage.addEventListener('wheel', (e) => {
   e.preventDefault();
   const lines = e.deltaMode === 1 ? 20 : e.deltaMode === 2 ? 400 : 1;
-  queueCamera({ dolly: Math.exp(e.deltaY * lines * 0.0015) });
+  queueCamera({ dolly: Math.exp(-e.deltaY * lines * 0.0015) });  // wheel up: closer
 }, { passive: false });
 
 // --- settings, capture, stop ---------------------------------------------------------------
@@ -261,23 +276,19 @@ $('stop').addEventListener('click', async () => {
   }
 });
 
-// The sliders start where the wall is.
-async function loadSettings() {
-  try {
-    const s = await api('GET', '/api/settings');
-    if (typeof s.exposure === 'number') {
-      $('exposure').value = Math.log2(s.exposure);
-      $('exposure-value').textContent = s.exposure.toFixed(2);
-    }
-    if (typeof s.spp === 'number') {
-      $('spp-per-frame').value = s.spp;
-      $('spp-value').textContent = s.spp;
-    }
-    if (s.transfer_function) $('transfer-function').value = s.transfer_function;
-  } catch (e) { /* older servers: the sliders keep their defaults */ }
+// The sliders start where the wall is (the settings in the first status).
+function showSettings(s) {
+  if (typeof s.exposure === 'number') {
+    $('exposure').value = Math.log2(s.exposure);
+    $('exposure-value').textContent = s.exposure.toFixed(2);
+  }
+  if (typeof s.spp === 'number') {
+    $('spp-per-frame').value = s.spp;
+    $('spp-value').textContent = s.spp;
+  }
+  if (s.transfer_function) $('transfer-function').value = s.transfer_function;
 }
 
 drawOutlines();
-loadSettings();
 pollStatus();
 nextPreview();
