@@ -5,6 +5,7 @@
 #include "apps/Collectives.h"
 #include "apps/Job.h"
 #include "apps/RunControl.h"
+#include "apps/Steering.h"
 #include "wall/GlfwPresenter.h"
 #include "wall/OsmesaPresenter.h"
 #include "wall/WallNode.h"
@@ -12,7 +13,7 @@
 namespace app {
 
 int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, RunControl& control,
-                RankTotals& totals) {
+                Steering& steering, RankTotals& totals) {
   const Options& o = job.options;
   const wall::Layout& layout = *job.layout;
   const int process = job.roles.processOfRank(job.worldRank);
@@ -42,11 +43,21 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
   {
     wall::WallNode node(messenger, layout, process, wallComm, std::move(presenters), options);
     control.onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
+    // While the renderers idle (a converged wall), rank 0 tells the walls to keep waiting; a
+    // capture asked for through the control API names its frame.
+    steering.onKeepWaiting([&node, &messenger] {
+      node.keepWaiting();
+      messenger.setResting(true);  // ends by itself with the next frame's first piece
+    });
+    steering.onCapture([&node](std::uint32_t frameId, std::uint64_t sequence) {
+      node.requestCapture(frameId, sequence);
+    });
     try {
       // Pairs with the render ranks' barrier: every object of every rank is registered.
       boundedBarrier(MPI_COMM_WORLD, options.timeout, "start-up");
       bool closed = false;
-      for (std::uint32_t frameId = 1; frameId <= static_cast<std::uint32_t>(o.frames); ++frameId) {
+      const std::uint32_t frames = static_cast<std::uint32_t>(o.frames);  // 0: until stopped
+      for (std::uint32_t frameId = 1; frames == 0 || frameId <= frames; ++frameId) {
         control.pollSignals();
         job.failIfAsked(frameId);
         const wall::PresentReport r = node.presentFrame(frameId);
@@ -69,6 +80,8 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
       job.failure->fail(e.what());
     }
     control.onLastFrame({});
+    steering.onKeepWaiting({});
+    steering.onCapture({});
   }
   totals.role = 1;
   return control.exitCode();
