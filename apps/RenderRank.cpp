@@ -53,7 +53,8 @@ DirectorOptions directorOptions(const Job& job, const FrameView& initial) {
   DirectorOptions d;
   d.initial = initial;
   d.orbitDegrees = job.options.orbit;
-  d.maxSpp = job.options.maxSpp;
+  // The pattern draws a new picture every frame (its marker moves): it never converges.
+  d.maxSpp = job.options.renderer == "pattern" ? 0 : job.options.maxSpp;
   if (job.cameraPath) {
     const CameraPath path = *job.cameraPath;
     d.path = [path](std::uint32_t frameId) { return path.at(frameId); };
@@ -262,6 +263,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
     now.lastRequestFrame = director->lastRequestFrame();
     status->publish(std::move(now));
   };
+  publish(0, false);  // the control server may answer before the first frame
   try {
     // Every object of every rank is registered before anyone sends.
     const auto timeout = std::chrono::seconds(o.timeoutSeconds);

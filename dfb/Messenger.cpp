@@ -218,9 +218,10 @@ void Messenger::Impl::mpiLoop() {
       wireBytesReceived += packet.wire.size();
       if (packet.wire.size() >= sizeof(WireHeader))
         countTraffic(readHeader(packet.wire).object, 0, packet.wire.size());
+      // Before the handler can run: a handler may rest the messenger again (a heartbeat).
+      resting = false;
       pushInbox(std::move(packet));
       active = true;
-      resting = false;
     }
 
     if (abandon) {
