@@ -28,11 +28,12 @@ void addPageRoutes(ControlServer& server, const Job& job, const Preview& preview
   layout["displays"] = nlohmann::json::array();
   if (job.layout)
     for (const wall::Display& d : job.layout->displays)
-      layout["displays"].push_back(
-          {{"name", d.name},
-           {"rect", {d.rect.x0, d.rect.y0, d.rect.x1, d.rect.y1}},
-           {"process", d.process}});
-  server.addGet("/api/layout", [body = layout.dump()] { return HttpReply{200, "application/json", body}; });
+      layout["displays"].push_back({{"name", d.name},
+                                    {"rect", {d.rect.x0, d.rect.y0, d.rect.x1, d.rect.y1}},
+                                    {"process", d.process}});
+  server.addGet("/api/layout", [body = layout.dump()] {
+    return HttpReply{200, "application/json", body};
+  });
 }
 
 }  // namespace app

@@ -88,20 +88,28 @@ def wait_for(what, predicate, seconds):
     fail(f'{what}: not within {seconds} s')
 
 
+def first_display_folder():
+    """The first display's capture folder (captures/<display>/), once it exists."""
+    if not os.path.isdir(captures):
+        return None
+    folders = sorted(f for f in os.listdir(captures) if os.path.isdir(os.path.join(captures, f)))
+    return os.path.join(captures, folders[0]) if folders else None
+
+
 def capture():
     """Asks for a capture and returns the new PNG of the first display, as bytes."""
-    folder = os.path.join(captures, sorted(os.listdir(captures))[0]) if os.path.isdir(captures) else None
+    folder = first_display_folder()
     before = set(os.listdir(folder)) if folder else set()
     api('POST', '/api/capture', {})
 
     def new_file():
-        d = os.path.join(captures, sorted(os.listdir(captures))[0]) if os.path.isdir(captures) else None
+        d = first_display_folder()
         if not d:
             return None
+        # Captures are written to a temporary name and renamed: a .png name is a whole file.
         fresh = sorted(f for f in set(os.listdir(d)) - before if f.endswith('.png'))
         return os.path.join(d, fresh[-1]) if fresh else None
     path = wait_for('a capture', new_file, 30)
-    time.sleep(0.2)  # written atomically (renamed into place): whole once visible
     with open(path, 'rb') as f:
         return path, f.read()
 

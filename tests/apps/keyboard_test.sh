@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # A keyboard on the wall (issue 12): under Xvfb, real X key events (xdotool, through XTEST, into
 # the focused window of a display) steer a running job: the right arrow orbits the camera
-# (/api/status reports another camera), '+' dollies, Esc stops the job gracefully (exit 0, the
-# statistics end with their summary).
+# (/api/status reports another camera) even while the converged wall idles, '+' dollies, Esc
+# stops the job gracefully (exit 0, the statistics end with their summary).
 #   keyboard_test.sh LAYOUT RENDER_RANKS     (DFBWALL, COMPARE, MPIEXEC in the environment)
 set -euo pipefail
 if [ -z "${KEYBOARD_TEST_INNER:-}" ]; then
@@ -22,7 +22,7 @@ cleanup() {
 trap cleanup EXIT
 
 "$MPIEXEC" -n $((renders + w)) --oversubscribe --bind-to none -x DISPLAY -x XAUTHORITY \
-  "$DFBWALL" --wall "$layout" --renderer primary --frames 0 --control 127.0.0.1:0 \
+  "$DFBWALL" --wall "$layout" --renderer primary --frames 0 --max-spp 4 --control 127.0.0.1:0 \
   --stats "$work/stats.json" --quiet >"$work/out.txt" 2>&1 &
 job=$!
 
@@ -47,6 +47,8 @@ name=$(/usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)["displa
 window=$(xdotool search --sync --name "^$name\$" | head -n1)
 xdotool windowfocus --sync "$window"
 
+# Converged (4 samples per pixel): the renderers idle, the wall waits, and still hears its keys.
+wait_until 60 "the idle, converged wall" sh -c "curl -sf '$base/api/status' | grep -q '\"idle\": *true'"
 before=$(camera)
 xdotool key --delay 100 Right Right
 wait_until 20 "a new camera after the right arrow" sh -c "[ \"\$(curl -sf '$base/api/status' | /usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)[\"camera\"])')\" != \"$before\" ]"

@@ -1,0 +1,142 @@
+#pragma once
+// A wall process: receives the pieces of its displays' frames, assembles them in per-frame back
+// buffers, and presents a frame only when every display of every wall process has it complete
+// (swap barrier among the wall ranks only), then acknowledges it to the renderers.
+//
+// The layout says exactly which pieces each display gets per frame (one per canvas tile that
+// touches it, or one whole-display piece in gather mode), so completion is counted in pieces,
+// never in pixels, and a duplicate is an error rather than a miscount.
+//
+// Threading: incoming() runs on the messenger's inbox thread; everything else on the thread that
+// made the node, which owns the presenters (GL contexts).
+#include <mpi.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "dfb/Messenger.h"
+#include "wall/Image.h"
+#include "wall/Layout.h"
+#include "wall/Presenter.h"
+
+namespace wall {
+
+struct WallNodeOptions {
+  int tileSize = 64;
+  bool gatherMode = false;  // one whole-display piece per frame from rank 0
+  std::string captureDir;   // empty: no captures
+  int captureEvery = 0;     // capture every K-th frame; 0: only the last
+  std::uint32_t lastFrame = 0;
+  std::chrono::milliseconds timeout{60000};
+  // Pieces of frames more than this far past the last presented one are refused (an error):
+  // the renderers run at most frames-in-flight ahead, so anything further is a corrupt or
+  // hostile message, and buffering it would hold a display buffer forever.
+  std::uint32_t framesAhead = 8;
+  // Windows: keys pressed in this process's windows go here, on the calling (main) thread, as
+  // they come, also while presentFrame waits for a frame (every `eventPoll` then: a converged,
+  // idle wall still hears its keyboard). Empty: keys are ignored.
+  std::function<void(const std::vector<WallKey>&)> onKeys;
+  std::chrono::milliseconds eventPoll{50};
+};
+
+struct PresentReport {
+  double waitMs = 0;     // until every piece of this process's displays had arrived
+  double barrierMs = 0;  // in the swap barrier
+  double presentMs = 0;  // drawing on every display
+  std::uint64_t bytesReceived = 0;
+  // Since the previous presentFrame, on the inbox thread: unpacking pieces and copying them into
+  // the back buffers. completeNs: steady_clock time the last piece of this frame arrived.
+  double unpackMs = 0, assembleMs = 0;
+  std::int64_t completeNs = 0;
+  // The latest completeNs over every wall process (agreed in the swap barrier).
+  std::int64_t wallCompleteNs = 0;
+  // The frame was not presented: the run stops before it (see stopAfter).
+  bool stopped = false;
+  // The name of a display whose window an operator closed (empty: none).
+  std::string closedDisplay;
+};
+
+class WallNode : public dfb::MessageHandler {
+ public:
+  // Collective over `wallComm` (the wall ranks). `presenters` has one per display of `process`,
+  // in layout.displaysOfProcess(process) order.
+  WallNode(dfb::Messenger& messenger, const Layout& layout, int process, MPI_Comm wallComm,
+           std::vector<std::unique_ptr<Presenter>> presenters, WallNodeOptions options);
+  ~WallNode() override;
+
+  // Waits for frame `frameId` on this process's displays, joins the swap barrier, presents,
+  // captures when asked, and (process 0) acknowledges the frame. Throws wall::Error on timeout
+  // or a protocol error. A window an operator closed is reported, not thrown.
+  PresentReport presentFrame(std::uint32_t frameId);
+  // Thread-safe: the run ends after frame `lastFrame`; a presentFrame for a later frame returns
+  // at once (or wakes up) with `stopped` set. Every wall process must be told the same frame.
+  void stopAfter(std::uint32_t lastFrame);
+  // Thread-safe: the renderers idle (a converged wall waits for a change), so the wait for the
+  // next frame's pieces starts over: its deadline is `timeout` from now. Render rank 0 repeats
+  // this well within the timeout while it idles; a rank that dies still ends the wait.
+  void keepWaiting();
+  // Thread-safe: capture frame `frameId` or, when it is presented already, the first frame
+  // after it; `sequence` numbers the requests (1, 2, ...). Every wall process captures the same
+  // frame: the swap barrier agrees on the highest sequence any process has been asked for.
+  void requestCapture(std::uint32_t frameId, std::uint64_t sequence);
+  // Collective over the wall ranks, after the last presentFrame: captures the last presented
+  // frame when captures were asked for and it was not captured yet (a run stopped early).
+  void finish();
+
+  void incoming(int fromRank, dfb::Bytes&& payload) override;
+
+ private:
+  // Handles window events and hands pressed keys to options_.onKeys (main thread, unlocked).
+  void pollWindows();
+  struct Slot {
+    std::vector<Image> displays;             // by position in mine_
+    std::vector<int> received;               // pieces copied in, by position in mine_
+    std::vector<std::vector<bool>> claimed;  // by position, by expected piece: arrived once
+    int displaysComplete = 0;
+    std::int64_t completeNs = 0;
+  };
+  Slot& slotFor(std::uint32_t frameId);  // with mutex_ held
+  // Which of display `position`'s expected pieces `local` is, or -1 when it is none of them.
+  int expectedPieceIndex(size_t position, const dfb::Region& local) const;
+  void capture(std::uint32_t frameId);
+
+  dfb::Messenger& messenger_;
+  const Layout& layout_;
+  int process_;
+  MPI_Comm comm_ = MPI_COMM_NULL;
+  std::vector<std::unique_ptr<Presenter>> presenters_;
+  WallNodeOptions options_;
+  std::vector<int> mine_;               // display indices of this process
+  std::vector<int> positionOfDisplay_;  // layout index -> position in mine_, or -1
+  std::vector<int> expectedPieces_;     // by position in mine_
+  // By position: the display's pieces (display coordinates) in tilesOfDisplay order, and the
+  // tile-grid window they come from, so a piece finds its index without a search.
+  std::vector<std::vector<dfb::Region>> pieceRects_;
+  struct TileWindow {
+    int tx0 = 0, ty0 = 0, columns = 1;
+  };
+  std::vector<TileWindow> tileWindows_;
+
+  std::mutex mutex_;
+  std::condition_variable complete_;
+  std::map<std::uint32_t, Slot> slots_;
+  std::vector<Slot> spare_;  // buffers of presented frames, reused
+  std::int64_t lastPresented_ = 0;
+  std::int64_t stopAfter_ = -1;  // -1: no early stop
+  std::int64_t lastCaptured_ = 0;
+  std::chrono::steady_clock::time_point waitFrom_{};  // keepWaiting: deadlines count from here
+  std::uint64_t captureAsked_ = 0;                    // highest requested sequence
+  std::uint32_t captureAskedFrame_ = 0;               // ... for this frame or later
+  std::uint64_t captureDone_ = 0;  // highest sequence captured (the same on every process)
+  std::string error_;
+  std::uint64_t bytesReceived_ = 0;
+  std::int64_t unpackNs_ = 0, assembleNs_ = 0;
+};
+
+}  // namespace wall
