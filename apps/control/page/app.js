@@ -69,7 +69,7 @@ function showStatus(s) {
   $('renderer').textContent = s.renderer || '–';
   if (s.renderer !== renderer) {
     renderer = s.renderer;
-    $('tf-row').hidden = renderer !== 'scivis';
+    $('scivis-controls').hidden = renderer !== 'scivis';
   }
   const rows = (s.displays || []).map((d) => {
     const tr = document.createElement('tr');
@@ -252,6 +252,11 @@ $('spp-per-frame').addEventListener('input', () => {
   $('spp-value').textContent = spp;
   sendSettings({ spp });
 });
+$('opacity-scale').addEventListener('input', () => {
+  const scale = Number($('opacity-scale').value);
+  $('opacity-value').textContent = scale.toFixed(2);
+  sendSettings({ opacity_scale: scale });
+});
 $('transfer-function').addEventListener('change', () =>
   postSettings({ transfer_function: $('transfer-function').value }));
 
@@ -287,6 +292,10 @@ function showSettings(s) {
     $('spp-value').textContent = s.spp;
   }
   if (s.transfer_function) $('transfer-function').value = s.transfer_function;
+  if (typeof s.opacity_scale === 'number') {
+    $('opacity-scale').value = s.opacity_scale;
+    $('opacity-value').textContent = s.opacity_scale.toFixed(2);
+  }
 }
 
 drawOutlines();
