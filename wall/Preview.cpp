@@ -83,11 +83,25 @@ Image decoratePreview(const Image& raw, const PreviewGrid& grid, const Layout* l
       const dfb::Region c = grid.cellPixels(cx, cy);
       if (!shown((c.x0 + c.x1) / 2, (c.y0 + c.y1) / 2)) out.at(cx, cy) = kBezel;
     }
+  // Outlines half over the picture: on a small canvas a cell is a lot of it.
+  auto outline = [&](int x, int y) {
+    const std::uint32_t p = out.at(x, y);
+    std::uint32_t mixed = 0xff000000u;
+    for (int c = 0; c < 3; ++c)
+      mixed |= (((p >> (8 * c) & 0xff) + (kOutline >> (8 * c) & 0xff) + 1) / 2) << (8 * c);
+    out.at(x, y) = mixed;
+  };
   for (const Display& d : layout->displays) {
     const dfb::Region r = dfb::intersect(grid.cellsOf(d.rect), {0, 0, out.width, out.height});
     if (r.empty()) continue;
-    for (int x = r.x0; x < r.x1; ++x) out.at(x, r.y0) = out.at(x, r.y1 - 1) = kOutline;
-    for (int y = r.y0; y < r.y1; ++y) out.at(r.x0, y) = out.at(r.x1 - 1, y) = kOutline;
+    for (int x = r.x0; x < r.x1; ++x) {
+      outline(x, r.y0);
+      if (r.y1 - 1 > r.y0) outline(x, r.y1 - 1);
+    }
+    for (int y = r.y0 + 1; y < r.y1 - 1; ++y) {
+      outline(r.x0, y);
+      if (r.x1 - 1 > r.x0) outline(r.x1 - 1, y);
+    }
   }
   return out;
 }

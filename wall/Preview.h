@@ -38,7 +38,8 @@ std::vector<std::uint32_t> downsample(const PreviewGrid& grid, const dfb::Region
 Image downsample(const PreviewGrid& grid, const Image& canvas);
 
 // What the controller page shows: the raw preview with every cell whose centre no display
-// shows (bezels, gaps) drawn dark, opaque, and each display's outline drawn in light grey.
+// shows (bezels, gaps) drawn dark, opaque, and each display's outline (its edge cells) mixed
+// half and half with light grey.
 Image decoratePreview(const Image& raw, const PreviewGrid& grid, const Layout* layout);
 
 }  // namespace wall

@@ -101,8 +101,9 @@ TEST(Preview, DecorationDarkensBezelsAndOutlinesDisplays) {
   const Image shown = decoratePreview(raw, grid, &layout);
   EXPECT_EQ(shown.at(3, 2), rgba8(100, 150, 200, 255));  // inside a: opaque picture
   EXPECT_EQ(shown.at(8, 2), rgba8(24, 24, 28));          // bezel
-  EXPECT_EQ(shown.at(0, 0), rgba8(200, 200, 200));       // a's outline
-  EXPECT_EQ(shown.at(10, 1), rgba8(200, 200, 200));      // b's left edge
+  EXPECT_EQ(shown.at(0, 0), rgba8(150, 175, 200));       // a's outline, half grey
+  EXPECT_EQ(shown.at(10, 1), rgba8(150, 175, 200));      // b's left edge
+  EXPECT_EQ(shown.at(7, 3), rgba8(150, 175, 200));       // a's bottom-right corner, mixed once
   EXPECT_EQ(decoratePreview(raw, grid, nullptr).at(8, 2), rgba8(100, 150, 200, 255));
 }
 
