@@ -13,6 +13,10 @@ CameraPath CameraPath::load(const std::string& path, const renderers::CameraDesc
   try {
     root = toml::parse_file(path);
   } catch (const toml::parse_error& e) {
+    // Line 0: the file could not be read at all.
+    if (e.source().begin.line == 0)
+      throw renderers::Error(path + ": cannot read the camera path (" +
+                             std::string(e.description()) + ")");
     throw renderers::Error(path + ":" + std::to_string(e.source().begin.line) + ": " +
                            std::string(e.description()));
   }

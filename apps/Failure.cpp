@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "dfb/Error.h"
+
 namespace app {
 
 FailurePath::FailurePath(int worldRank) : rank_(worldRank) {
@@ -12,6 +14,26 @@ FailurePath::FailurePath(int worldRank) : rank_(worldRank) {
   int length = 0;
   if (MPI_Get_processor_name(name, &length) == MPI_SUCCESS)
     host_.assign(name, static_cast<size_t>(length));
+}
+
+void FailurePath::setWhoIsSilent(std::function<std::string()> whoIsSilent) {
+  std::lock_guard lock(mutex_);
+  whoIsSilent_ = std::move(whoIsSilent);
+}
+
+void FailurePath::fail(const std::exception& e) {
+  std::string what = e.what();
+  if (dynamic_cast<const dfb::DeadlineError*>(&e)) {
+    std::function<std::string()> ask;
+    {
+      std::lock_guard lock(mutex_);
+      ask = whoIsSilent_;
+    }
+    if (ask)
+      if (const std::string silent = ask(); !silent.empty())
+        what += " [not answering: " + silent + "]";
+  }
+  fail(what);
 }
 
 void FailurePath::fail(const std::string& what) {

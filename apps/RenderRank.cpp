@@ -456,7 +456,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
     }
     return exitCode;
   } catch (const std::exception& e) {
-    job.failure->fail(e.what());
+    job.failure->fail(e);
   }
 }
 

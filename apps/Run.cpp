@@ -1,5 +1,6 @@
 #include "apps/Run.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -36,14 +37,35 @@ bool agree(const std::string& problem, int rank, std::chrono::milliseconds timeo
   return first == 1 << 30;
 }
 
-// FNV-1a of a file's bytes (0 when it cannot be read: the loaders report that themselves).
-std::uint64_t hashFile(const std::string& path) {
+// FNV-1a of a file's bytes, continuing from `hash` (unchanged when the file cannot be read: the
+// loaders report that themselves). A file over kWholeHashBytes (a raw volume that ranks read
+// brick by brick) contributes its size and its first and last MiB: reading all of it on every
+// rank would cost more than the check is worth.
+constexpr long kWholeHashBytes = 64L << 20, kSampleBytes = 1L << 20;
+std::uint64_t hashFile(const std::string& path, std::uint64_t hash = 0xcbf29ce484222325ull) {
   FILE* in = std::fopen(path.c_str(), "rb");
-  if (!in) return 0;
-  std::uint64_t hash = 0xcbf29ce484222325ull;
-  unsigned char buffer[65536];
-  for (size_t n; (n = std::fread(buffer, 1, sizeof buffer, in)) > 0;)
-    for (size_t i = 0; i < n; ++i) hash = (hash ^ buffer[i]) * 0x100000001b3ull;
+  if (!in) return hash;
+  auto mix = [&hash](const unsigned char* bytes, size_t n) {
+    for (size_t i = 0; i < n; ++i) hash = (hash ^ bytes[i]) * 0x100000001b3ull;
+  };
+  auto mixRange = [&](long from, long bytes) {
+    std::fseek(in, from, SEEK_SET);
+    unsigned char buffer[65536];
+    for (size_t n;
+         bytes > 0 &&
+         (n = std::fread(buffer, 1, std::min(sizeof buffer, static_cast<size_t>(bytes)), in)) > 0;
+         bytes -= static_cast<long>(n))
+      mix(buffer, n);
+  };
+  std::fseek(in, 0, SEEK_END);
+  const long size = std::ftell(in);
+  if (size <= kWholeHashBytes) {
+    mixRange(0, size);
+  } else {
+    mixRange(0, kSampleBytes);
+    mixRange(size - kSampleBytes, kSampleBytes);
+  }
+  mix(reinterpret_cast<const unsigned char*>(&size), sizeof size);
   std::fclose(in);
   return hash;
 }
@@ -106,9 +128,13 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
       job.canvasHeight = o.height;
     }
     if (!job.isWallRank() && !o.dryRun) {
-      if (o.scene.rfind("builtin:", 0) != 0) hashes.scene = hashFile(o.scene);
-      job.scene =
-          renderers::buildRenderScene(o.renderer, renderers::loadSceneDesc(o.scene), o.bricks > 0);
+      renderers::SceneDesc desc = renderers::loadSceneDesc(o.scene);
+      if (o.scene.rfind("builtin:", 0) != 0) {
+        hashes.scene = hashFile(o.scene);
+        for (const std::string& file : desc.inputFiles())
+          hashes.scene = hashFile(file, hashes.scene);
+      }
+      job.scene = renderers::buildRenderScene(o.renderer, std::move(desc), o.bricks > 0);
       if (job.worldRank == 0 && !o.cameraPath.empty())
         job.cameraPath = CameraPath::load(o.cameraPath, job.scene.desc->camera);
     }
@@ -142,7 +168,8 @@ std::string compareInputs(const Job& job, const InputHashes& mine,
            "must see the same layout";
   if (high[2] != (high[3] ? ~high[3] : 0))
     return job.options.scene +
-           ": the render ranks read different bytes from this file; every "
+           ": the render ranks read different bytes from this file or the files it refers to; "
+           "every "
            "host must see the same scene";
   return {};
 }
@@ -211,6 +238,15 @@ int run(int argc, char** argv) {
     // A message that cannot be handled (malformed, for nobody, a handler that threw) is a
     // failure of the job now, not a frame that times out later under another name.
     messenger.setErrorCallback([&failure](const std::string& m) { failure.fail(m); });
+    // Half a second for every rank's inbox thread to answer: a frame on a loaded host is slower,
+    // but an answer is a few microseconds of work.
+    failure.setWhoIsSilent(
+        [&messenger] { return messenger.probePeers(std::chrono::milliseconds(500)); });
+    // Unwinding destroys the messenger before the catch below: the question goes first.
+    struct Forget {
+      FailurePath& failure;
+      ~Forget() { failure.setWhoIsSilent({}); }
+    } forget{failure};
     RunControl control(messenger, signals);
     std::unique_ptr<Preview> preview;
     if (!job.isWallRank() && job.previewWanted()) {
@@ -244,7 +280,7 @@ int run(int argc, char** argv) {
     MPI_Comm_free(&roleComm);
     return exitCode;
   } catch (const std::exception& e) {
-    failure.fail(e.what());
+    failure.fail(e);
   }
 }
 

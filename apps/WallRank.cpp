@@ -96,7 +96,7 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
       }
       node.finish();  // the last frame's captures, when the run stopped early
     } catch (const std::exception& e) {
-      job.failure->fail(e.what());
+      job.failure->fail(e);
     }
     control.onLastFrame({});
     steering.onKeepWaiting({});

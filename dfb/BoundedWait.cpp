@@ -19,7 +19,7 @@ void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_poin
   for (int done = 0;;) {
     checkMpi(MPI_Test(&request, &done, MPI_STATUS_IGNORE), "MPI_Test");
     if (done) return;
-    if (std::chrono::steady_clock::now() > deadline) throw Error(timeoutMessage);
+    if (std::chrono::steady_clock::now() > deadline) throw DeadlineError(timeoutMessage);
     std::this_thread::sleep_for(sleep);
     sleep = std::min(sleep * 2, maxSleep);
   }

@@ -1,6 +1,6 @@
 #pragma once
 // Every wait has a bound (docs/design.md, invariant 6): completes a non-blocking MPI request,
-// polling gently, or throws dfb::Error with `timeoutMessage` once `deadline` has passed. A rank
+// polling gently, or throws dfb::DeadlineError with `timeoutMessage` once `deadline` has passed. A rank
 // that never joins a collective then turns into an error here instead of a hang.
 #include <mpi.h>
 

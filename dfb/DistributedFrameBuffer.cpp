@@ -314,6 +314,7 @@ void DistributedFrameBuffer::end() {
   const auto deadline = Clock::now() + d.options.frameTimeout;
   {
     std::string failure;
+    bool late = false;
     std::unique_lock lock(d.frameMutex);
     if (!d.inFrame) throw Error("end() without begin()");
     d.frameDone.wait_until(lock, deadline,
@@ -321,6 +322,7 @@ void DistributedFrameBuffer::end() {
     if (!d.inputErrors.empty()) {
       failure = d.inputErrors.front();
     } else if (d.remaining > 0) {
+      late = true;
       std::string missing;
       int listed = 0;
       for (int t : d.ownedTiles)
@@ -336,7 +338,8 @@ void DistributedFrameBuffer::end() {
     }
     if (!failure.empty()) {
       d.inFrame = false;
-      throw Error(failure);  // at once: no collective on a failure path
+      if (late) throw DeadlineError(failure);  // at once: no collective on a failure path
+      throw Error(failure);
     }
   }
 

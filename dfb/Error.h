@@ -10,6 +10,13 @@ class Error : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A wait passed its deadline: another rank did not do its part in time. Kept apart so the app
+// can find out which rank before it ends the job (Messenger::probePeers).
+class DeadlineError : public Error {
+ public:
+  using Error::Error;
+};
+
 // Turns an MPI return code into an Error naming the call; MPI_SUCCESS passes through.
 void checkMpi(int code, const char* call);
 

@@ -12,49 +12,41 @@
 #include <vector>
 
 #include "dfb/BoundedWait.h"
+#include "dfb/Envelope.h"
 #include "dfb/Error.h"
 
 namespace dfb {
 namespace {
 
 constexpr int kTag = 7;
-constexpr std::uint32_t kCompressed = 1;
-
-// The message's envelope travels as a trailer after the payload, not a header before it: the
-// payload vector becomes the wire buffer by appending 16 bytes (free when the producer reserved
-// them, see Messenger::kSpareCapacity) and becomes the payload again by dropping them, so neither
-// side copies the body.
-struct WireHeader {
-  std::uint64_t object;
-  std::uint32_t rawBytes;
-  std::uint32_t flags;
-};
-static_assert(sizeof(WireHeader) == 16, "the wire header is part of the protocol");
-static_assert(sizeof(WireHeader) == Messenger::kSpareCapacity);
+// The messenger's own objects: probePeers() asks, every rank's inbox thread answers.
+constexpr ObjectId kProbeRequestObject = 0xFFFF'FFFF'FFFF'FF01ull;
+constexpr ObjectId kProbeAnswerObject = 0xFFFF'FFFF'FFFF'FF02ull;
 
 struct Packet {
   int rank;  // destination when outgoing, source when incoming
   Bytes wire;
 };
 
-WireHeader readHeader(const Bytes& wire) {
-  WireHeader header;
-  if (wire.size() < sizeof header)
-    throw Error("truncated message of " + std::to_string(wire.size()) + " bytes");
-  std::memcpy(&header, wire.data() + wire.size() - sizeof header, sizeof header);
-  return header;
-}
-
 using Clock = std::chrono::steady_clock;
 
 }  // namespace
 
 struct Messenger::Impl {
+  Messenger* owner = nullptr;
   MPI_Comm p2p = MPI_COMM_NULL;
   MPI_Comm control = MPI_COMM_NULL;
   int rank = 0, size = 1;
   MessengerOptions options;
   std::vector<bool> sameHost;  // by rank of p2p
+  std::vector<std::string> hosts;
+
+  // probePeers(): the round asked for and who answered it (by rank).
+  std::mutex probeMutex;
+  std::condition_variable probeCv;
+  std::uint64_t probeRound = 0;
+  std::vector<bool> probeAnswered;
+  void handleProbe(int fromRank, ObjectId object, const Bytes& payload);
 
   std::mutex outboxMutex;
   std::condition_variable outboxCv;
@@ -216,8 +208,9 @@ void Messenger::Impl::mpiLoop() {
       receiveBuffers.pop_front();
       messagesReceived++;
       wireBytesReceived += packet.wire.size();
-      if (packet.wire.size() >= sizeof(WireHeader))
-        countTraffic(readHeader(packet.wire).object, 0, packet.wire.size());
+
+      if (packet.wire.size() >= kEnvelopeBytes)
+        countTraffic(peekEnvelope(packet.wire).object, 0, packet.wire.size());
       // Before the handler can run: a handler may rest the messenger again (a heartbeat).
       resting = false;
       pushInbox(std::move(packet));
@@ -269,20 +262,13 @@ void Messenger::Impl::inboxLoop() {
 
 void Messenger::Impl::dispatch(Packet& packet) {
   try {
-    const WireHeader header = readHeader(packet.wire);
-    if (header.rawBytes > options.maxMessageBytes)
-      throw Error("message of " + std::to_string(header.rawBytes) + " bytes to object id " +
-                  std::to_string(header.object) + ", more than the limit of " +
-                  std::to_string(options.maxMessageBytes));
     Bytes payload;
-    if (header.flags & kCompressed) {
-      decompress(std::span<const std::byte>(packet.wire.data(), packet.wire.size() - sizeof header),
-                 header.rawBytes, payload);
-    } else {
-      payload = std::move(packet.wire);
-      payload.resize(payload.size() - sizeof header);
-    }
+    const Envelope header = openEnvelope(std::move(packet.wire), options.maxMessageBytes, payload);
     rawBytesReceived += payload.size();
+    if (header.object == kProbeRequestObject || header.object == kProbeAnswerObject) {
+      handleProbe(packet.rank, header.object, payload);
+      return;
+    }
 
     std::lock_guard dispatching(dispatchMutex);
     MessageHandler* handler = nullptr;
@@ -323,6 +309,7 @@ void Messenger::Impl::waitLocallyIdle(Clock::time_point deadline) {
 
 Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_unique<Impl>()) {
   impl_->options = options;
+  impl_->owner = this;
   impl_->uncaughtAtConstruction = std::uncaught_exceptions();
   checkMpi(MPI_Comm_dup(comm, &impl_->p2p), "MPI_Comm_dup");
   checkMpi(MPI_Comm_dup(comm, &impl_->control), "MPI_Comm_dup");
@@ -344,6 +331,17 @@ Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_
   MPI_Group_free(&hostGroup);
   MPI_Group_free(&allGroup);
   MPI_Comm_free(&host);
+  char name[MPI_MAX_PROCESSOR_NAME] = {};
+  int length = 0;
+  MPI_Get_processor_name(name, &length);
+  std::vector<char> names(static_cast<size_t>(impl_->size) * MPI_MAX_PROCESSOR_NAME);
+  checkMpi(MPI_Allgather(name, MPI_MAX_PROCESSOR_NAME, MPI_CHAR, names.data(),
+                         MPI_MAX_PROCESSOR_NAME, MPI_CHAR, impl_->p2p),
+           "MPI_Allgather");
+  for (int r = 0; r < impl_->size; ++r) {
+    const char* n = names.data() + static_cast<size_t>(r) * MPI_MAX_PROCESSOR_NAME;
+    impl_->hosts.emplace_back(n, strnlen(n, MPI_MAX_PROCESSOR_NAME));
+  }
   impl_->mpiThread = std::thread([this] { impl_->mpiLoop(); });
   impl_->inboxThread = std::thread([this] { impl_->inboxLoop(); });
   impl_->inboxThreadId = impl_->inboxThread.get_id();
@@ -394,20 +392,13 @@ void Messenger::send(int toRank, ObjectId id, Bytes payload) {
   if (toRank < 0 || toRank >= impl_->size)
     throw Error("send to rank " + std::to_string(toRank) + " of a messenger with " +
                 std::to_string(impl_->size) + " ranks");
-  WireHeader header{id, static_cast<std::uint32_t>(payload.size()), 0};
   const size_t rawBytes = payload.size();
-  Bytes wire;
   const bool remote = toRank != impl_->rank;
-  if (compresses(toRank) && payload.size() >= impl_->options.compressMinBytes &&
-      compressIfSmaller(payload, wire)) {
-    header.flags |= kCompressed;
-    impl_->messagesCompressed++;
-  } else {
-    wire = std::move(payload);
-  }
-  const size_t bodyBytes = wire.size();
-  wire.resize(bodyBytes + sizeof header);
-  std::memcpy(wire.data() + bodyBytes, &header, sizeof header);
+  bool compressed = false;
+  Bytes wire =
+      sealEnvelope(std::move(payload), id,
+                   compresses(toRank) && rawBytes >= impl_->options.compressMinBytes, &compressed);
+  if (compressed) impl_->messagesCompressed++;
 
   impl_->messagesSent++;
   impl_->rawBytesSent += rawBytes;
@@ -428,6 +419,53 @@ void Messenger::send(int toRank, ObjectId id, Bytes payload) {
 void Messenger::setResting(bool resting) { impl_->resting = resting; }
 
 bool Messenger::sameHost(int rank) const { return impl_->sameHost.at(static_cast<size_t>(rank)); }
+
+const std::string& Messenger::hostOf(int rank) const {
+  return impl_->hosts.at(static_cast<size_t>(rank));
+}
+
+std::string Messenger::probePeers(std::chrono::milliseconds wait) {
+  Impl& i = *impl_;
+  // The inbox thread answers probes: asking from it would wait for itself.
+  if (std::this_thread::get_id() == i.inboxThreadId || i.exitThreads) return {};
+  std::uint64_t round = 0;
+  {
+    std::lock_guard lock(i.probeMutex);
+    round = ++i.probeRound;
+    i.probeAnswered.assign(static_cast<size_t>(i.size), false);
+    i.probeAnswered[static_cast<size_t>(i.rank)] = true;
+  }
+  for (int r = 0; r < i.size; ++r)
+    if (r != i.rank) {
+      Bytes ask(sizeof round);
+      std::memcpy(ask.data(), &round, sizeof round);
+      send(r, kProbeRequestObject, std::move(ask));
+    }
+  std::unique_lock lock(i.probeMutex);
+  i.probeCv.wait_for(lock, wait, [&] {
+    return std::all_of(i.probeAnswered.begin(), i.probeAnswered.end(), [](bool a) { return a; });
+  });
+  std::string silent;
+  for (int r = 0; r < i.size; ++r)
+    if (!i.probeAnswered[static_cast<size_t>(r)])
+      silent += (silent.empty() ? "rank " : ", rank ") + std::to_string(r) + " (" + hostOf(r) + ")";
+  return silent;
+}
+
+void Messenger::Impl::handleProbe(int fromRank, ObjectId object, const Bytes& payload) {
+  std::uint64_t round = 0;
+  if (payload.size() != sizeof round) throw Error("malformed probe");
+  std::memcpy(&round, payload.data(), sizeof round);
+  if (object == kProbeRequestObject) {
+    owner->send(fromRank, kProbeAnswerObject, Bytes(payload));
+    return;
+  }
+  {
+    std::lock_guard lock(probeMutex);
+    if (round == probeRound) probeAnswered.at(static_cast<size_t>(fromRank)) = true;
+  }
+  probeCv.notify_all();
+}
 
 bool Messenger::compresses(int toRank) const {
   return impl_->options.compress && toRank != impl_->rank &&

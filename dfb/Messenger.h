@@ -27,10 +27,9 @@
 #include <string>
 
 #include "dfb/Compression.h"
+#include "dfb/Envelope.h"
 
 namespace dfb {
-
-using ObjectId = std::uint64_t;
 
 class MessageHandler {
  public:
@@ -84,7 +83,7 @@ class Messenger {
 
   // A payload with this much spare capacity (reserve(size + kSpareCapacity)) goes out without
   // being copied.
-  static constexpr std::size_t kSpareCapacity = 16;
+  static constexpr std::size_t kSpareCapacity = kEnvelopeBytes;
   void send(int toRank, ObjectId id, Bytes payload);
   // Whether `rank` shares this rank's host (MPI_COMM_TYPE_SHARED), and whether a message to it
   // is compressed (so a producer can choose a pre-filter that only pays before compression).
@@ -95,6 +94,13 @@ class Messenger {
   // rank uses (nearly) no CPU. Sending wakes the thread at once as always; the first message
   // received ends the rest (it is found within one resting sleep).
   void setResting(bool resting);
+  // The host `rank` runs on (MPI_Get_processor_name, exchanged at construction).
+  const std::string& hostOf(int rank) const;
+  // For an error about a deadline: asks every other rank for a sign of life (answered by its
+  // inbox thread, whatever its main thread waits for) and waits up to `wait` for the answers.
+  // Returns the ranks that did not answer, with their hosts ("rank 5 (wall1)"), comma-separated;
+  // empty when all did. A stopped rank, or one behind a cut link, is found this way.
+  std::string probePeers(std::chrono::milliseconds wait);
 
   // Returns once every message sent by any rank before it entered quiesce() (and every message
   // those sent while being handled) has been handled. Throws Error on timeout.

@@ -17,6 +17,19 @@ int SceneDesc::findMaterial(const std::string& name) const {
   return -1;
 }
 
+std::vector<std::string> SceneDesc::inputFiles() const {
+  std::vector<std::string> files;
+  for (const Shape& s : shapes)
+    if (!s.file.empty()) files.push_back(s.file);
+  for (const ParticlesDesc& p : particles)
+    if (!p.file.empty()) files.push_back(p.file);
+  for (const VolumeDesc& v : volumes) {
+    if (v.source.kind == VolumeSource::Kind::RawFile) files.push_back(v.source.raw.path);
+    if (v.source.kind == VolumeSource::Kind::OpenVdb) files.push_back(v.source.vdb.path);
+  }
+  return files;
+}
+
 namespace {
 
 struct LightTriangle {

@@ -26,6 +26,7 @@ struct SphereSet {
 // Geometry in object space: a triangle mesh or a set of spheres (exactly one is non-empty).
 struct Shape {
   std::string name;
+  std::string file;  // the mesh file it was read from; empty when given inline
   TriangleMesh mesh;
   SphereSet spheres;
   // Optional material per primitive (indices into SceneDesc::materials); when empty the
@@ -71,6 +72,9 @@ struct SceneDesc {
 
   // Index of the material called `name`, or -1.
   int findMaterial(const std::string& name) const;
+  // Every file the description refers to besides the scene file itself (meshes, particle and
+  // volume files): a cluster checks that every host reads the same bytes from them.
+  std::vector<std::string> inputFiles() const;
 };
 
 }  // namespace renderers

@@ -137,6 +137,7 @@ SceneDesc readSceneToml(const std::string& path) {
       const std::filesystem::path file = folder / r.string(*f, what + ".file");
       try {
         s.mesh = importMesh(file.string());
+        s.file = file.string();
       } catch (const Error& e) {
         r.fail(*f, what + ": " + e.what());
       }

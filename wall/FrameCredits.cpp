@@ -17,9 +17,9 @@ FrameCredits::~FrameCredits() { messenger_.unregisterObject(kFrameCreditsObject)
 void FrameCredits::waitForPresented(std::int64_t frameId, std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
   if (!presented_.wait_for(lock, timeout, [&] { return lastPresented_ >= frameId; }))
-    throw Error("the wall did not present frame " + std::to_string(frameId) + " within " +
-                std::to_string(timeout.count()) +
-                " ms (last presented: " + std::to_string(lastPresented_) + ")");
+    throw dfb::DeadlineError("the wall did not present frame " + std::to_string(frameId) +
+                             " within " + std::to_string(timeout.count()) +
+                             " ms (last presented: " + std::to_string(lastPresented_) + ")");
 }
 
 std::int64_t FrameCredits::lastPresented() const {

@@ -240,9 +240,10 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
           missing += " '" + layout_.displays[static_cast<size_t>(mine_[i])].name + "' has " +
                      std::to_string(got) + "/" + std::to_string(expectedPieces_[i]) + " pieces;";
       }
-      throw Error("frame " + std::to_string(frameId) + " not complete on wall process " +
-                  std::to_string(process_) + " after " + std::to_string(options_.timeout.count()) +
-                  " ms:" + missing);
+      throw dfb::DeadlineError("frame " + std::to_string(frameId) +
+                               " not complete on wall process " + std::to_string(process_) +
+                               " after " + std::to_string(options_.timeout.count()) +
+                               " ms:" + missing);
     }
     slot = &slots_.at(frameId);
     report.bytesReceived = bytesReceived_;

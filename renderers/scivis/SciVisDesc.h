@@ -31,6 +31,7 @@ struct IsosurfaceDesc {
 // when attributes are given, else by the material's colour.
 struct ParticlesDesc {
   std::string name;
+  std::string file;  // the particle file they were read from; empty when inline or generated
   std::vector<Vec3> centers;
   std::vector<float> radii;      // 1 (shared) or centers.size()
   std::vector<float> attribute;  // empty or centers.size()

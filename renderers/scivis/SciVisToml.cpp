@@ -77,7 +77,8 @@ void readParticles(const TomlReader& r, const toml::table& t, const std::filesys
     const std::string layout =
         t.get("layout") ? r.string(*t.get("layout"), what + ".layout") : std::string("xyz");
     try {
-      readParticleFile((folder / r.string(*f, what + ".file")).string(), layout, p);
+      p.file = (folder / r.string(*f, what + ".file")).string();
+      readParticleFile(p.file, layout, p);
     } catch (const Error& e) {
       r.fail(*f, what + ": " + e.what());
     }

@@ -194,6 +194,14 @@ case "$scenario" in
     [ "$code" -ne 0 ] || fail "exit code 0 after a cut longer than --timeout"
     grep -qE "dfbwall: error on rank [0-9]+( \([^)]*\))?: .*(within|after) ${timeout}000 ms" "$work/log" \
       || fail "no dfbwall error naming what did not arrive within --timeout"
+    # The cause names who is cut off: ranks behind the link from one side, or the other side's
+    # ranks from a rank on the cut host.
+    first=$(grep -m1 'dfbwall: error on rank' "$work/log")
+    if grep -q "^dfbwall: error on rank [0-9]* ($host)" <<<"$first"; then
+      grep -q "not answering: rank" <<<"$first" || fail "the error names no rank as not answering"
+    else
+      grep -q "not answering: .*($host)" <<<"$first" || fail "the error does not name a rank on $host as not answering"
+    fi
     awk -v e="$errorAt" -v l="$((timeout + 3))" 'BEGIN {exit !(e <= l)}' \
       || fail "the first error came $errorAt s after the cut, more than --timeout + 3 = $((timeout + 3)) s"
     # mpirun's own exit waits for TCP to retransmit its abort to the host once the link is back

@@ -5,6 +5,10 @@
 #   fault_test.sh sigstop                SIGSTOP of a wall rank; gone within --timeout + 3 s
 #   fault_test.sh disk-full              captures into a full tmpfs; gone within 3 s
 #   fault_test.sh signal SIG             SIG to mpirun: stats and captures whole, in 5 s
+#   fault_test.sh window-close           a real GLFW window under Xvfb asked to close (as a
+#                                        window manager does): graceful stop, exit 0, in 5 s
+#   fault_test.sh stale-mesh             two render ranks whose mesh files differ (a stale copy on
+#                                        one host): one error naming the scene, before any frame
 # Needs DFBWALL, MPIEXEC and LAYOUT (a 2x2 layout) in the environment.
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
@@ -78,16 +82,20 @@ case "$scenario" in
     wait_running "$work/stats.jsonl"
     victim=$(pgrep -P "$job" -x dfbwall | sort -n | tail -n 1 || true)
     [ -n "$victim" ] || fail "no rank to stop"
+    rank=$(tr '\0' '\n' <"/proc/$victim/environ" | sed -n 's/^OMPI_COMM_WORLD_RANK=//p')
     kill -STOP "$victim"
     stopped=$(now)
     ended=$(wait_end 20)
     code=$(exit_code)
     [ "$code" -ne 0 ] || fail "exit code 0"
     grep -q 'dfbwall: error on rank' "$work/log" || fail "no error message"
+    # Whichever rank's deadline passes first, the cause names the stopped one.
+    grep 'dfbwall: error on rank' "$work/log" | grep -q "not answering: rank $rank (" ||
+      fail "the error does not name the stopped rank $rank as not answering"
     took=$(elapsed "$stopped" "$ended")
     awk -v t="$took" -v l=$((timeout + 3)) 'BEGIN {exit !(t <= l)}' ||
       fail "the job took ${took} s to end after SIGSTOP (limit: --timeout $timeout + 3 s)"
-    echo "wall rank $victim stopped: job gone ${took} s later (--timeout $timeout), exit $code"
+    echo "wall rank $rank (pid $victim) stopped: job gone ${took} s later (--timeout $timeout), exit $code"
     grep 'dfbwall: error' "$work/log"
     ;;
   disk-full)
@@ -141,6 +149,85 @@ PY
     [ -z "$(find "$work/cap" -name '.*')" ] || fail "temporary files left behind"
     ! grep -q 'dfbwall: error' "$work/log" || fail "an error on a graceful stop"
     echo "SIG$sig: job gone ${took} s later, exit $code, last frame $last captured on every display"
+    ;;
+  window-close)
+    # Xvfb runs no window manager: close_window.py sends the WM_DELETE_WINDOW client message a
+    # window manager's close button would.
+    # Everything runs inside one xvfb-run.
+    cat >"$work/inside.sh" <<'SH'
+set -u
+"$MPIEXEC" -n 6 --oversubscribe --bind-to none -x DISPLAY -x XAUTHORITY "$DFBWALL" \
+  --wall "$LAYOUT" --renderer pattern --frames 100000000 --quiet --timeout 20 \
+  --stats "$WORK/stats.jsonl" --capture "$WORK/cap" >"$WORK/log" 2>&1 &
+job=$!
+for ((i = 0; i < 600; i++)); do grep -q '"frame":' "$WORK/stats.jsonl" 2>/dev/null && break; sleep 0.05; done
+sleep 1
+date +%s.%N >"$WORK/sent"
+"$CLOSE_WINDOW" r1c0 10 &
+closer=$!
+for ((i = 0; i < 100; i++)); do kill -0 $job 2>/dev/null || break; sleep 0.05; done
+date +%s.%N >"$WORK/ended"
+kill -0 $job 2>/dev/null && { kill -9 $job; exit 4; }
+wait $closer || exit 3
+wait $job
+SH
+    set +e
+    WORK="$work" CLOSE_WINDOW="$(dirname "$0")/close_window.py" \
+      xvfb-run -a -n $((300 + RANDOM % 500)) -s "-screen 0 1280x1024x24" bash "$work/inside.sh"
+    code=$?
+    set -e
+    [ "$code" -ne 3 ] || fail "no window titled r1c0 appeared"
+    [ "$code" -ne 4 ] || fail "the job was still running 5 s after the window was closed"
+    [ "$code" -eq 0 ] || fail "exit code $code after closing a window"
+    took=$(elapsed "$(cat "$work/sent")" "$(cat "$work/ended")")
+    grep -q "the window of display 'r1c0' was closed: stopping" "$work/log" || fail "no line naming the closed display"
+    ! grep -q 'dfbwall: error' "$work/log" || fail "an error on a graceful stop"
+    /usr/bin/python3 - "$work/stats.jsonl" <<'PY' || fail "statistics are not whole"
+import json, sys
+lines = [json.loads(l) for l in open(sys.argv[1])]
+summary = [l["summary"] for l in lines if "summary" in l]
+assert summary and summary[0]["stopped_early"] and summary[0]["exit_code"] == 0, summary
+PY
+    echo "window r1c0 closed: job gone ${took} s later, exit 0, statistics whole"
+    ;;
+  stale-mesh)
+    # Two folders with the same scene text; the mesh one of them refers to is one vertex off,
+    # as a stale copy on one host would be. Each render rank reads its own folder (MPMD).
+    for host in a b; do
+      mkdir -p "$work/$host"
+      cat >"$work/$host/scene.toml" <<'TOML'
+[camera]
+position = [0, 0, 3]
+look_at = [0, 0, 0]
+[materials.white]
+type = "diffuse"
+color = [0.8, 0.8, 0.8]
+[[meshes]]
+name = "triangle"
+material = "white"
+file = "triangle.obj"
+TOML
+    done
+    printf 'v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n' >"$work/a/triangle.obj"
+    printf 'v -1 -1 0\nv 1 -1 0\nv 0 1.01 0\nf 1 2 3\n' >"$work/b/triangle.obj"
+    common=(--size 64x64 --frames 2 --quiet --timeout 10)
+    "$MPIEXEC" --oversubscribe --bind-to none -n 1 "$DFBWALL" --scene "$work/a/scene.toml" \
+      "${common[@]}" : -n 1 "$DFBWALL" --scene "$work/b/scene.toml" "${common[@]}" \
+      >"$work/log" 2>&1 &
+    job=$!
+    ended=$(wait_end 20)
+    code=$(exit_code)
+    [ "$code" -ne 0 ] || fail "exit code 0 with different meshes on the two ranks"
+    grep -q "scene.toml: the render ranks read different bytes from this file or the files it refers to" \
+      "$work/log" || fail "no error naming the scene"
+    [ "$(grep -c 'different bytes' "$work/log")" -eq 1 ] || fail "expected the cause once"
+    ! grep -q 'core dumped\|Segmentation fault' "$work/log" || fail "crash"
+    # The same files on both ranks run.
+    cp "$work/a/triangle.obj" "$work/b/triangle.obj"
+    "$MPIEXEC" --oversubscribe --bind-to none -n 1 "$DFBWALL" --scene "$work/a/scene.toml" \
+      "${common[@]}" : -n 1 "$DFBWALL" --scene "$work/b/scene.toml" "${common[@]}" \
+      >"$work/log" 2>&1 || fail "identical copies refused"
+    echo "a mesh differing between the render ranks is refused before any frame, exit $code"
     ;;
   *) echo "unknown scenario $scenario"; exit 2 ;;
 esac

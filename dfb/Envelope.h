@@ -1,0 +1,35 @@
+#pragma once
+// The messenger's envelope: which object a message is for, its size before compression and
+// whether it is compressed. It travels as a 16-byte trailer after the payload, not a header
+// before it: the payload vector becomes the wire buffer by appending 16 bytes (free when the
+// producer reserved them, see Messenger::kSpareCapacity) and becomes the payload again by
+// dropping them, so neither side copies the body. Kept apart from the messenger so the parser
+// of bytes from other ranks can be unit-tested and fuzzed on its own.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "dfb/Compression.h"
+
+namespace dfb {
+
+using ObjectId = std::uint64_t;
+
+struct Envelope {
+  ObjectId object = 0;
+  std::uint32_t rawBytes = 0;  // the payload's size before compression
+  std::uint32_t flags = 0;
+};
+inline constexpr std::size_t kEnvelopeBytes = 16;
+
+// Turns `payload` into a wire buffer for object `object`: Snappy-compressed when `compress`
+// and that makes it smaller (then `*compressed` is set). Payloads of 4 GiB or more are refused.
+Bytes sealEnvelope(Bytes payload, ObjectId object, bool compress, bool* compressed = nullptr);
+// The envelope of a wire buffer without opening it; throws dfb::Error when it is too short.
+Envelope peekEnvelope(const Bytes& wire);
+// Checks the envelope of `wire` (size limit `maxPayloadBytes`, flags, sizes) and returns it with
+// the payload moved into `payload` (decompressed when needed). Throws dfb::Error naming what is
+// wrong; never allocates more than `maxPayloadBytes` for a hostile size.
+Envelope openEnvelope(Bytes&& wire, std::size_t maxPayloadBytes, Bytes& payload);
+
+}  // namespace dfb

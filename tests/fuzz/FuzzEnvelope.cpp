@@ -1,0 +1,30 @@
+// libFuzzer target: a whole wire buffer as another rank could send it (body + envelope trailer).
+// Opening it either yields a payload of exactly the announced size or throws dfb::Error; a
+// hostile size never allocates more than the limit; sealing the payload again and reopening it
+// gives the same payload back.
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+
+#include "dfb/Envelope.h"
+#include "dfb/Error.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  constexpr std::size_t kLimit = std::size_t{1} << 20;
+  const auto* bytes = reinterpret_cast<const std::byte*>(data);
+  dfb::Bytes payload;
+  dfb::Envelope envelope;
+  try {
+    envelope = dfb::openEnvelope(dfb::Bytes(bytes, bytes + size), kLimit, payload);
+  } catch (const dfb::Error&) {
+    return 0;
+  }
+  if (payload.size() != envelope.rawBytes || payload.size() > kLimit) std::abort();
+  for (const bool compress : {false, true}) {
+    dfb::Bytes again;
+    const dfb::Envelope reopened =
+        dfb::openEnvelope(dfb::sealEnvelope(payload, envelope.object, compress), kLimit, again);
+    if (again != payload || reopened.object != envelope.object) std::abort();
+  }
+  return 0;
+}
