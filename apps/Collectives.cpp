@@ -6,10 +6,12 @@
 namespace app {
 namespace {
 
-void finish(MPI_Request& request, std::chrono::milliseconds timeout, const std::string& what) {
+void finish(MPI_Request& request, std::chrono::milliseconds timeout, const std::string& what,
+            std::chrono::microseconds maxSleep = std::chrono::microseconds(20)) {
   dfb::waitWithDeadline(
       request, std::chrono::steady_clock::now() + timeout,
-      what + ": another rank did not join within " + std::to_string(timeout.count()) + " ms");
+      what + ": another rank did not join within " + std::to_string(timeout.count()) + " ms",
+      maxSleep);
 }
 
 }  // namespace
@@ -21,10 +23,10 @@ void boundedBarrier(MPI_Comm comm, std::chrono::milliseconds timeout, const std:
 }
 
 void boundedBcast(void* buffer, int bytes, MPI_Comm comm, std::chrono::milliseconds timeout,
-                  const std::string& what) {
+                  const std::string& what, std::chrono::microseconds maxSleep) {
   MPI_Request request;
   dfb::checkMpi(MPI_Ibcast(buffer, bytes, MPI_BYTE, 0, comm, &request), "MPI_Ibcast");
-  finish(request, timeout, what);
+  finish(request, timeout, what, maxSleep);
 }
 
 void boundedAllreduce(const void* in, void* out, int count, MPI_Datatype type, MPI_Op op,

@@ -10,8 +10,11 @@
 namespace app {
 
 void boundedBarrier(MPI_Comm comm, std::chrono::milliseconds timeout, const std::string& what);
+// `maxSleep`: the longest sleep between polls (dfb::waitWithDeadline); long for a rank that
+// idles until the next order.
 void boundedBcast(void* buffer, int bytes, MPI_Comm comm, std::chrono::milliseconds timeout,
-                  const std::string& what);
+                  const std::string& what,
+                  std::chrono::microseconds maxSleep = std::chrono::microseconds(20));
 void boundedAllreduce(const void* in, void* out, int count, MPI_Datatype type, MPI_Op op,
                       MPI_Comm comm, std::chrono::milliseconds timeout, const std::string& what);
 

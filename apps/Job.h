@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "apps/CameraPath.h"
 #include "apps/Failure.h"
 #include "apps/Options.h"
 #include "dfb/Messenger.h"
@@ -16,17 +17,23 @@
 
 namespace app {
 
+class Preview;
+
 struct Job {
   Options options;
   std::optional<wall::Layout> layout;
   wall::RankRoles roles;  // without a wall: every rank renders
   int worldRank = 0;
   int canvasWidth = 0, canvasHeight = 0;
-  renderers::RenderScene scene;  // render ranks only
+  renderers::RenderScene scene;          // render ranks only
+  std::optional<CameraPath> cameraPath;  // render rank 0, with --camera-path
   // Where a failure during the frames goes. The frame loops catch into it while their objects
   // still exist: unwinding first would unregister them, and a message arriving for one would
   // then be reported instead of the real cause.
   FailurePath* failure = nullptr;
+  // Render ranks when previewWanted(): the preview's pixel op and (rank 0) assembler, made in
+  // run() so the control server can serve it (apps/Preview.h).
+  Preview* preview = nullptr;
   // Test-only: DFBWALL_FAIL_AT=RANK:FRAME makes world rank RANK throw at frame FRAME, so the
   // fault tests can check the failure path end to end (tests/apps/fault_test.sh).
   int failAtRank = -1;
@@ -34,6 +41,8 @@ struct Job {
   void failIfAsked(std::uint32_t frame) const;
   bool gatherMode() const { return options.mode == "gather"; }
   bool isWallRank() const { return roles.processOfRank(worldRank) >= 0; }
+  // The whole-wall preview is assembled on rank 0 (apps/Preview.h).
+  bool previewWanted() const { return !options.previewFile.empty() || !options.control.empty(); }
 };
 
 struct FrameRecord {
@@ -48,6 +57,7 @@ struct FrameRecord {
   std::uint64_t wallBytesSent = 0, wallBytesRaw = 0;
   std::uint64_t wallPieces = 0, wallPiecesToOtherHosts = 0, messagesCompressed = 0;
   std::uint64_t tileBytesSent = 0;  // tile inputs between render ranks
+  std::uint64_t previewBytes = 0;   // shrunk tiles for rank 0's preview (apps/Preview.h)
   std::uint64_t tilesRendered = 0;
   std::uint64_t samples = 0;
   std::int64_t lastSetTileNs = 0;  // steady_clock, latest over render ranks
@@ -55,6 +65,12 @@ struct FrameRecord {
   // lastSetTileNs it is the compositing time. One host's clock: on a cluster the difference
   // also holds the hosts' clock offset. 0: no wall.
   std::int64_t displaysCompleteNs = 0;
+  // Steering (issue 12): the frame's accumulation epoch; the last request it applies (0: none),
+  // when the first of them reached rank 0 and the last frame every display had presented then;
+  // when rank 0 learnt every display presented this frame. All on rank 0's steady_clock.
+  std::uint32_t epoch = 0;
+  std::uint64_t requestId = 0;
+  std::int64_t requestNs = 0, presentedAtRequest = 0, displaysPresentedNs = 0;
 };
 
 // Where one rank's time went over the whole run, in milliseconds summed over tiles or frames.
@@ -77,15 +93,19 @@ static_assert(sizeof(RankTotals) % sizeof(double) == 0);
 
 class RunControl;
 class StatsStream;
+class StatusBoard;
+class Steering;
 
 // Render ranks: renders the frames, feeds the wall (route or gather), writes --image on rank 0,
 // streams the statistics there. Returns the exit code agreed with rank 0 (0, or a stop's).
+// `status`: rank 0 with a control server, what it reports (else null).
 int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm,
-                  RunControl& control, StatsStream* stats, RankTotals& totals);
+                  RunControl& control, Steering& steering, StatusBoard* status, StatsStream* stats,
+                  RankTotals& totals);
 // Wall ranks: assembles, swaps and presents the frames of this process's displays until the
 // last frame (or the one rank 0 announces when the run stops early). Returns the exit code.
 int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, RunControl& control,
-                RankTotals& totals);
+                Steering& steering, RankTotals& totals);
 
 // The peak resident set of this process (VmHWM), in KiB; 0 where /proc is missing.
 double peakRssKiB();

@@ -49,8 +49,8 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
   cli.add_option("--spp", o.spp, "samples per pixel per frame")
       ->check(CLI::Range(1, 1 << 16))
       ->capture_default_str();
-  cli.add_option("--frames", o.frames, "frames to render, accumulated")
-      ->check(CLI::Range(1, 1 << 30))
+  cli.add_option("--frames", o.frames, "frames to render, accumulated (0: until stopped)")
+      ->check(CLI::Range(0, 1 << 30))
       ->capture_default_str();
   cli.add_option("--seed", o.seed, "random seed")->capture_default_str();
   cli.add_option("--image", o.image,
@@ -96,6 +96,10 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
   cli.add_option("--capture-every", o.captureEvery, "capture every K-th frame too")
       ->check(CLI::Range(0, 1 << 30));
   cli.add_option("--stats", o.statsFile, "write per-frame statistics as JSON");
+  cli.add_option("--preview", o.previewFile,
+                 "assemble the small whole-wall preview on rank 0 from tiles shrunk 1/8 a side "
+                 "on their owners (as the control server does) and write the last one to "
+                 "FILE.png");
   cli.add_option("--mode", o.mode,
                  "route: tiles go straight to the displays; gather: through rank 0")
       ->check(CLI::IsMember({"route", "gather"}))
@@ -111,6 +115,19 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
       ->check(CLI::Range(1, 86400))
       ->capture_default_str();
   cli.add_flag("--quiet", o.quiet, "no progress line");
+  cli.add_option("--control", o.control,
+                 "[ADDR:]PORT: serve the JSON control API on render rank 0 (default address "
+                 "127.0.0.1; any other needs a token)");
+  cli.add_option("--control-token", o.controlToken,
+                 "token clients must send (Authorization: Bearer TOKEN); generated and printed "
+                 "when --control binds beyond loopback without one");
+  cli.add_option("--max-spp", o.maxSpp,
+                 "with --frames 0: samples per pixel after which a still wall stops rendering "
+                 "until something changes (0: never)")
+      ->check(CLI::Range(0, 1 << 30))
+      ->capture_default_str();
+  cli.add_option("--camera-path", o.cameraPath,
+                 "FILE.toml: camera keyframes (time -> camera) for a reproducible fly-through");
 
   try {
     cli.parse(argc, argv);
@@ -136,6 +153,10 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
         "--image is for runs without --wall; use --capture DIR to save what the wall shows");
   if (o.wall.empty() && (o.offscreen || !o.captureDir.empty() || o.mode != "route" || o.dryRun))
     return fail("--offscreen, --capture, --mode and --dry-run need --wall FILE.toml");
+  if (!o.cameraPath.empty() && o.orbit != 0.0f)
+    return fail("--camera-path and --orbit both move the camera: choose one");
+  if (!o.controlToken.empty() && o.control.empty())
+    return fail("--control-token needs --control [ADDR:]PORT");
   if (o.bricks > 0 && o.renderer != "scivis")
     return fail("--bricks distributes the scivis renderer's data: add --renderer scivis");
   if (o.bricks > 0 && o.distribution == "dynamic")
@@ -144,6 +165,8 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
     return fail(
         "--distribution dynamic balances noisy tiles by averaging redundant inputs; the "
         "pattern renderer draws a new picture every frame: use static or roundrobin");
+  if (!o.previewFile.empty() && !endsWith(o.previewFile, ".png"))
+    return fail("--preview " + o.previewFile + ": the name must end in .png");
   if (!o.image.empty() && !endsWith(o.image, ".png") && !endsWith(o.image, ".pfm"))
     return fail("--image " + o.image +
                 ": the name must end in .png (RGBA8) or .pfm (linear float)");

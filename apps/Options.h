@@ -12,7 +12,7 @@ struct Options {
   int width = 512, height = 512;
   bool sizeGiven = false;
   int spp = 1;
-  int frames = 1;
+  int frames = 1;  // 0: until stopped (a signal, POST /api/stop, a closed window)
   std::uint64_t seed = 0;
   std::string image;  // .png: tone-mapped RGBA8; .pfm: linear radiance
   int tileSize = 64;
@@ -34,6 +34,7 @@ struct Options {
   std::string captureDir;
   int captureEvery = 0;
   std::string statsFile;
+  std::string previewFile;  // .png: the last whole-wall preview, assembled on rank 0
   std::string mode = "route";  // route | gather
   bool dryRun = false;
   int framesInFlight = 2;
@@ -41,6 +42,12 @@ struct Options {
   bool compressWithinHost = false;
   int timeoutSeconds = 60;
   bool quiet = false;
+
+  // Steering (issue 12).
+  std::string control;         // [ADDR:]PORT of the control server on render rank 0; empty: none
+  std::string controlToken;    // required from clients; generated when binding beyond loopback
+  std::int64_t maxSpp = 1024;  // with --frames 0: idle once an epoch has this many samples
+  std::string cameraPath;      // FILE.toml: keyframes (apps/CameraPath.h)
 };
 
 // Parses argv. Returns an exit code to stop with (0 after --help) or -1 to go on; messages go to

@@ -5,10 +5,16 @@
 #include <deque>
 #include <optional>
 
+#include "apps/CameraPath.h"
 #include "apps/Collectives.h"
+#include "apps/FrameDirector.h"
+#include "apps/FrameOrder.h"
 #include "apps/Job.h"
+#include "apps/Preview.h"
 #include "apps/RunControl.h"
 #include "apps/Stats.h"
+#include "apps/StatusBoard.h"
+#include "apps/Steering.h"
 #include "dfb/BoundedWait.h"
 #include "dfb/DistributedFrameBuffer.h"
 #include "dfb/Error.h"
@@ -28,6 +34,34 @@ namespace {
 
 using dfb::Clock;
 using dfb::msBetween;
+
+// Rank 0, idle: how often it looks at signals while waiting for a request.
+constexpr auto kSignalPoll = std::chrono::milliseconds(100);
+// The other render ranks, idle: the longest sleep between polls of the next frame order.
+constexpr auto kIdlePoll = std::chrono::microseconds(10000);
+
+// The first frame's camera and settings, from the scene and the command line.
+FrameView initialView(const Options& o, const renderers::CameraDesc& sceneCamera) {
+  FrameView v;
+  v.camera = sceneCamera;
+  v.exposure = o.exposure;
+  v.spp = o.spp;
+  v.maxDepth = o.maxDepth;
+  return v;
+}
+
+DirectorOptions directorOptions(const Job& job, const FrameView& initial) {
+  DirectorOptions d;
+  d.initial = initial;
+  d.orbitDegrees = job.options.orbit;
+  // The pattern draws a new picture every frame (its marker moves): it never converges.
+  d.maxSpp = job.options.renderer == "pattern" ? 0 : job.options.maxSpp;
+  if (job.cameraPath) {
+    const CameraPath path = *job.cameraPath;
+    d.path = [path](std::uint32_t frameId) { return path.at(frameId); };
+  }
+  return d;
+}
 
 bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() &&
@@ -55,13 +89,6 @@ wall::DisplayRoutingOp::Sent relayToDisplays(const Job& job, dfb::Messenger& mes
   return sent;
 }
 
-// What rank 0 broadcasts before each frame: the frame, or the end of the run.
-struct FrameOrder {
-  dfb::FrameInfo frame;
-  std::int32_t stop;      // 1: no more frames (a graceful stop)
-  std::int32_t exitCode;  // of the stop
-};
-
 // One render rank's numbers of one frame, gathered to rank 0 for the statistics.
 struct RankFrame {
   double renderMs, compositeMs;
@@ -70,6 +97,7 @@ struct RankFrame {
   std::uint64_t wallBytes, wallBytesRaw, wallPieces, wallPiecesToOtherHosts, messagesCompressed;
   std::uint64_t tileBytes, tiles, samples;
   std::int64_t lastSetTileNs;
+  std::uint64_t previewBytes;
 };
 
 std::vector<RankFrame> gatherRankFrames(const RankFrame& mine, MPI_Comm comm,
@@ -102,6 +130,7 @@ FrameRecord combine(const std::vector<RankFrame>& all) {
     r.wallPiecesToOtherHosts += f.wallPiecesToOtherHosts;
     r.messagesCompressed += f.messagesCompressed;
     r.tileBytesSent += f.tileBytes;
+    r.previewBytes += f.previewBytes;
     r.tilesRendered += f.tiles;
     r.samples += f.samples;
     r.lastSetTileNs = std::max(r.lastSetTileNs, f.lastSetTileNs);
@@ -112,7 +141,8 @@ FrameRecord combine(const std::vector<RankFrame>& all) {
 }  // namespace
 
 int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm,
-                  RunControl& control, StatsStream* statsStream, RankTotals& totals) {
+                  RunControl& control, Steering& steering, StatusBoard* status,
+                  StatsStream* statsStream, RankTotals& totals) {
   const Options& o = job.options;
   int renderRank = 0;
   MPI_Comm_rank(renderComm, &renderRank);
@@ -124,7 +154,6 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
   settings.height = job.canvasHeight;
   settings.seed = o.seed;
   settings.maxDepth = o.maxDepth;
-  settings.orbitDegreesPerFrame = o.orbit;
   // Image-parallel: one renderer over the whole scene, tiles planned by the frame driver.
   // Data-parallel (--bricks): this rank's bricks, tiles planned per brick.
   const bool bricked = o.bricks > 0;
@@ -183,8 +212,10 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
     if (job.scene.scivis)
       totals.sceneBytes = static_cast<double>(job.scene.scivis->content().bytes());
   }
-  auto renderFrame = [&](dfb::DistributedFrameBuffer& fb, const dfb::FrameInfo& frame) {
-    return brickDriver ? brickDriver->renderFrame(fb, frame) : imageDriver->renderFrame(fb, frame);
+  auto renderFrame = [&](dfb::DistributedFrameBuffer& fb, const dfb::FrameInfo& frame,
+                         const renderers::CameraDesc& camera) {
+    return brickDriver ? brickDriver->renderFrame(fb, frame, camera)
+                       : imageDriver->renderFrame(fb, frame, camera);
   };
   dfb::DistributedFrameBuffer dfb(messenger, renderComm, dfbOptions);
   std::shared_ptr<wall::DisplayRoutingOp> routing;
@@ -193,8 +224,51 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
         std::make_shared<wall::DisplayRoutingOp>(messenger, *job.layout, job.roles, o.tileSize);
     dfb.addPixelOp(routing);
   }
+  Preview* const preview = job.preview;
+  if (preview) dfb.addPixelOp(preview->op());
   std::unique_ptr<wall::FrameCredits> credits;
   if (hasWall && job.worldRank == 0) credits = std::make_unique<wall::FrameCredits>(messenger);
+
+  // What every rank renders with now; each frame order may change it (steering).
+  FrameView current = initialView(o, job.scene.desc->camera);
+  auto applyView = [&](const FrameView& next) {
+    if (next.exposure != current.exposure) {
+      dfb::ToneMapSettings toneMap = dfbOptions.toneMap;
+      toneMap.exposure = next.exposure;
+      dfb.setToneMap(toneMap);
+    }
+    if (next.maxDepth != current.maxDepth || next.transferFunction != current.transferFunction ||
+        next.opacityScale != current.opacityScale) {
+      const renderers::LiveSettings live{next.maxDepth, next.transferFunction, next.opacityScale};
+      if (brickDriver) brickDriver->setLiveSettings(live);
+      if (renderer) renderer->setLiveSettings(live);
+    }
+    if (next.spp != current.spp) {
+      if (brickDriver) brickDriver->setSamplesPerPixel(static_cast<std::uint32_t>(next.spp));
+      if (imageDriver) imageDriver->setSamplesPerPixel(static_cast<std::uint32_t>(next.spp));
+    }
+    current = next;
+  };
+  // Rank 0 decides every frame; the others learn it from the broadcast.
+  std::optional<FrameDirector> director;
+  if (job.worldRank == 0) director.emplace(directorOptions(job, current));
+  if (credits) steering.setPresentedProbe([&credits] { return credits->lastPresented(); });
+  // Rank 0: what GET /api/status shows.
+  auto publish = [&](std::uint32_t frame, bool idle) {
+    if (!status || !director) return;
+    for (std::string& e : director->takeErrors()) status->addError(std::move(e));
+    RunStatus now;
+    now.frame = frame;
+    now.presented = credits ? credits->lastPresented() : 0;
+    now.spp = director->epochSpp();
+    now.epoch = director->epoch();
+    now.idle = idle;
+    now.view = current;
+    now.lastRequest = director->lastRequest();
+    now.lastRequestFrame = director->lastRequestFrame();
+    status->publish(std::move(now));
+  };
+  publish(0, false);  // the control server may answer before the first frame
   try {
     // Every object of every rank is registered before anyone sends.
     const auto timeout = std::chrono::seconds(o.timeoutSeconds);
@@ -209,7 +283,10 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
         if (f.frameMs <= 0 && !all) break;
         if (credits) {
           if (!all && credits->lastPresented() < f.frame) break;
-          f.displaysCompleteNs = credits->takeCompleteNs(f.frame).value_or(0);
+          if (const auto times = credits->takeTimes(f.frame)) {
+            f.displaysCompleteNs = times->completeNs;
+            f.displaysPresentedNs = times->acknowledgedNs;
+          }
         }
         if (statsStream) statsStream->writeFrame(f);
         pending.pop_front();
@@ -224,32 +301,76 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
     Clock::time_point previousStart;
     std::uint32_t lastFrame = 0;  // the last frame every render rank completed
     int exitCode = 0;
-    for (std::uint32_t frameId = 1; frameId <= static_cast<std::uint32_t>(o.frames); ++frameId) {
+    bool stopped = false, idling = false;
+    const std::uint32_t frames = static_cast<std::uint32_t>(o.frames);  // 0: until stopped
+    // While idle, rank 0 sends an order at least this often: the other ranks' waits are bounded
+    // by the timeout (invariant 6), and a rank that died is still noticed.
+    const auto heartbeat =
+        std::min<std::chrono::milliseconds>(std::chrono::seconds(1), timeout / 4);
+    for (std::uint32_t frameId = 1; frames == 0 || frameId <= frames;) {
       control.pollSignals();
       if (credits)
         credits->waitForPresented(static_cast<std::int64_t>(frameId) - o.framesInFlight, timeout);
-      // Rank 0 decides whether this frame happens (a stop asked for by a signal on any rank ends
-      // the run before it). A moving camera makes every frame its own accumulation epoch; the
-      // renderers compute the camera from the frame id, so no rank needs more than this.
-      FrameOrder order{{frameId, o.orbit != 0.0f ? frameId : 0u}, 0, 0};
-      if (job.worldRank == 0)
+      // Rank 0 decides whether this frame happens, with which camera and settings (a stop asked
+      // for by a signal or a request on any rank ends the run before it).
+      FrameOrder order;
+      if (job.worldRank == 0) {
+        std::vector<SteeringRequest> requests = steering.take();
+        if (requests.empty() && frames == 0 && director->converged() && !control.stopRequested()) {
+          // Converged: wait for a change without spinning, looking at signals now and then.
+          // The last frame's time ends here, not when the wall wakes up.
+          if (!pending.empty() && pending.back().frameMs <= 0)
+            pending.back().frameMs = msBetween(previousStart, Clock::now());
+          const auto until = Clock::now() + heartbeat;
+          while (Clock::now() < until && !control.stopRequested()) {
+            if (steering.waitForRequest(std::min(until, Clock::now() + kSignalPoll))) break;
+            control.pollSignals();
+          }
+          requests = steering.take();
+          order.idle = requests.empty() ? 1 : 0;
+        }
+        for (const SteeringRequest& r : requests)
+          if (r.kind == SteeringRequest::kStop) control.askToStop(r.exitCode);
+        if (!order.idle) order = director->next(frameId, requests);
         if (const std::optional<int> code = control.stopRequested())
-          order.stop = 1, order.exitCode = *code;
-      // Rank 0 may first wait for the wall's credit (up to the timeout): twice that is the bound.
+          order.stop = 1, order.exitCode = *code, order.idle = 0;
+      }
+      // Rank 0 may first wait for the wall's credit (up to the timeout) or idle: twice that is
+      // the bound. After an idle order the wait is long, so it backs off to (nearly) no CPU.
       boundedBcast(&order, sizeof order, renderComm, 2 * timeout,
-                   "frame " + std::to_string(frameId));
+                   "frame " + std::to_string(frameId),
+                   idling ? kIdlePoll : std::chrono::microseconds(20));
       if (order.stop) {
         exitCode = order.exitCode;
+        stopped = true;
         break;
       }
+      if (order.idle) {
+        if (!idling) {
+          messenger.setResting(true);
+          idling = true;
+        }
+        if (job.worldRank == 0 && hasWall)
+          steering.tellWallsKeepWaiting(job.roles.renderRanks, job.roles.worldSize());
+        writeReady(false);
+        publish(lastFrame, true);
+        continue;
+      }
+      if (idling) messenger.setResting(false);
+      idling = false;
+      applyView(order.view);
+      if (job.worldRank == 0 && hasWall && order.captureSequence > 0)
+        steering.tellWallsCapture(frameId, order.captureSequence, job.roles.renderRanks,
+                                  job.roles.worldSize());
       const dfb::FrameInfo frame = order.frame;
       const auto start = Clock::now();
-      if (!pending.empty()) pending.back().frameMs = msBetween(previousStart, start);
+      if (!pending.empty() && pending.back().frameMs <= 0)
+        pending.back().frameMs = msBetween(previousStart, start);
       previousStart = start;
       writeReady(false);
 
       job.failIfAsked(frameId);
-      const renderers::FrameReport report = renderFrame(dfb, frame);
+      const renderers::FrameReport report = renderFrame(dfb, frame, order.view.camera);
       const dfb::FrameStats stats = dfb.stats();
       wall::DisplayRoutingOp::Sent sent;
       if (routing) sent = routing->takeSent();
@@ -283,36 +404,47 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
                        stats.tileBytesSent,
                        static_cast<std::uint64_t>(report.tilesRendered),
                        report.samples,
-                       stats.lastSetTileNs};
+                       stats.lastSetTileNs,
+                       preview ? preview->op()->takeBytesSent() : 0};
         const std::vector<RankFrame> all = gatherRankFrames(mine, renderComm, timeout);
         if (job.worldRank == 0) {
           FrameRecord record = combine(all);
           record.frame = frameId;
+          record.epoch = frame.epoch;
+          record.requestId = order.requestId;
+          record.requestNs = order.requestNs;
+          record.presentedAtRequest = order.presentedAtRequest;
           record.rank0PixelBytes = stats.pixelBytesReceived;
           pending.push_back(record);
         }
       }
       wallWireBefore = wallWire;
       compressedBefore = compressed;
+      publish(frameId, false);
 
       if (job.worldRank == 0 && !o.quiet &&
-          (msBetween(lastProgress, Clock::now()) > 1000 ||
-           frameId == static_cast<std::uint32_t>(o.frames))) {
+          (msBetween(lastProgress, Clock::now()) > 1000 || frameId == frames)) {
         lastProgress = Clock::now();
         const double seconds = msBetween(runStart, lastProgress) / 1000;
-        std::printf("frame %u/%d  %.2f fps  %u spp accumulated\n", frameId, o.frames,
-                    frameId / seconds, (dfb.accumulationId() + 1) * static_cast<unsigned>(o.spp));
+        std::printf("frame %u/%s  %.2f fps  %u spp accumulated\n", frameId,
+                    frames ? std::to_string(frames).c_str() : "-", frameId / seconds,
+                    (dfb.accumulationId() + 1) * static_cast<unsigned>(current.spp));
         std::fflush(stdout);
       }
+      ++frameId;
     }
-    if (job.worldRank == 0 && lastFrame < static_cast<std::uint32_t>(o.frames)) {
+    if (idling) messenger.setResting(false);
+    steering.setPresentedProbe({});  // the credits go with this function
+    if (job.worldRank == 0 && stopped) {
       if (hasWall)
         control.announceLastFrame(lastFrame, exitCode, job.roles.renderRanks,
                                   job.roles.worldSize());
-      if (!o.quiet) std::printf("stopped after frame %u (signal)\n", lastFrame);
+      if (!o.quiet) std::printf("stopped after frame %u\n", lastFrame);
     }
     if (credits) credits->waitForPresented(lastFrame, timeout);
-    if (!pending.empty()) pending.back().frameMs = msBetween(previousStart, Clock::now());
+    if (preview) preview->finish(lastFrame, timeout);
+    if (!pending.empty() && pending.back().frameMs <= 0)
+      pending.back().frameMs = msBetween(previousStart, Clock::now());
     writeReady(true);
     if (brickDriver) totals.brickTiles = static_cast<double>(brickDriver->brickTilesRendered());
 

@@ -8,10 +8,15 @@
 #include <string>
 
 #include "apps/Collectives.h"
+#include "apps/ControlServer.h"
 #include "apps/Failure.h"
 #include "apps/Job.h"
+#include "apps/Preview.h"
+#include "apps/control/PageRoutes.h"
 #include "apps/RunControl.h"
 #include "apps/Stats.h"
+#include "apps/StatusBoard.h"
+#include "apps/Steering.h"
 #include "apps/StopSignals.h"
 #include "dfb/AtomicFile.h"
 #include "dfb/BoundedWait.h"
@@ -88,11 +93,17 @@ std::string checkOutputs(const Job& job) {
         !problem.empty())
       return "--image " + problem;
   }
+  if (job.worldRank == 0 && !o.previewFile.empty()) {
+    const std::string folder = std::filesystem::path(o.previewFile).parent_path().string();
+    if (std::string problem = dfb::checkWritableFolder(folder.empty() ? "." : folder);
+        !problem.empty())
+      return "--preview " + problem;
+  }
   return {};
 }
 
 std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
-                  InputHashes& hashes) {
+                  std::unique_ptr<ControlServer>& server, InputHashes& hashes) {
   try {
     Options& o = job.options;
     if (!o.wall.empty()) {
@@ -124,6 +135,8 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
           hashes.scene = hashFile(file, hashes.scene);
       }
       job.scene = renderers::buildRenderScene(o.renderer, std::move(desc), o.bricks > 0);
+      if (job.worldRank == 0 && !o.cameraPath.empty())
+        job.cameraPath = CameraPath::load(o.cameraPath, job.scene.desc->camera);
     }
     if (o.dryRun) return {};
     if (std::string problem = checkOutputs(job); !problem.empty()) return problem;
@@ -131,6 +144,9 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
       stats = std::make_unique<StatsStream>(o.statsFile);
       stats->writeRun(job);
     }
+    // Bound now, so a port in use is a setup error on every rank; served once frames start.
+    if (job.worldRank == 0 && !o.control.empty())
+      server = std::make_unique<ControlServer>(o.control, o.controlToken);
     return {};
   } catch (const std::exception& e) {
     return e.what();
@@ -200,8 +216,10 @@ int run(int argc, char** argv) {
   // before any destructor runs (a destructor could wait for a rank that is gone).
   try {
     std::unique_ptr<StatsStream> stats;
+    std::unique_ptr<ControlServer> server;
     InputHashes hashes;
-    if (!agree(setUp(job, mpi->worldSize(), stats, hashes), job.worldRank, timeout)) return 1;
+    if (!agree(setUp(job, mpi->worldSize(), stats, server, hashes), job.worldRank, timeout))
+      return 1;
     if (!agree(compareInputs(job, hashes, timeout), job.worldRank, timeout)) return 1;
     if (job.options.dryRun) {
       if (job.worldRank == 0) printDryRun(job);
@@ -230,15 +248,34 @@ int run(int argc, char** argv) {
       ~Forget() { failure.setWhoIsSilent({}); }
     } forget{failure};
     RunControl control(messenger, signals);
+    std::unique_ptr<Preview> preview;
+    if (!job.isWallRank() && job.previewWanted()) {
+      preview = std::make_unique<Preview>(job, messenger);
+      job.preview = preview.get();
+    }
+    Steering steering(messenger);
+    std::unique_ptr<StatusBoard> status;
+    if (server) {
+      status = std::make_unique<StatusBoard>();
+      addPageRoutes(*server, job, *preview);  // the controller page and the preview (issue 12)
+      server->start(job, steering, *status);
+      // One line a script can read: where the API is, and the token when one is needed.
+      std::printf("dfbwall: control API on http://%s:%d/%s%s\n", server->host().c_str(),
+                  server->port(),
+                  server->token().empty() ? "" : "  token: ", server->token().c_str());
+      std::fflush(stdout);
+    }
     RankTotals totals;
-    const int exitCode =
-        job.isWallRank() ? runWallRank(job, messenger, roleComm, control, totals)
-                         : runRenderRank(job, messenger, roleComm, control, stats.get(), totals);
+    const int exitCode = job.isWallRank()
+                             ? runWallRank(job, messenger, roleComm, control, steering, totals)
+                             : runRenderRank(job, messenger, roleComm, control, steering,
+                                             status.get(), stats.get(), totals);
     if (!job.options.statsFile.empty()) {
       const std::vector<RankTotals> ranks = collectTotals(job, totals, timeout);
       const bool stoppedEarly = control.stopRequested().has_value() || exitCode != 0;
       if (stats) stats->writeEnd(ranks, stoppedEarly, exitCode);
     }
+    if (server) server->stop();
     messenger.stop();
     MPI_Comm_free(&roleComm);
     return exitCode;

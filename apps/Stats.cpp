@@ -116,7 +116,10 @@ void StatsStream::writeRun(const Job& job) {
                    {"spp", o.spp},
                    {"bricks", o.bricks},
                    {"replication", o.replication},
-                   {"frames_asked", o.frames}}}}
+                   {"frames_asked", o.frames},
+                   {"frames_in_flight", o.framesInFlight},
+                   {"max_spp", o.maxSpp},
+                   {"control", !o.control.empty()}}}}
                 .dump());
 }
 
@@ -138,8 +141,23 @@ void StatsStream::writeFrame(const FrameRecord& f) {
   line["wall_pieces_to_other_hosts"] = f.wallPiecesToOtherHosts;
   line["messages_compressed"] = f.messagesCompressed;
   line["tile_bytes_sent"] = f.tileBytesSent;
+  line["preview_bytes"] = f.previewBytes;
   line["tiles_rendered"] = f.tilesRendered;
   line["samples"] = f.samples;
+  line["epoch"] = f.epoch;
+  if (f.requestId > 0) {
+    // A steering request reached every display with this frame: how long after it arrived, and
+    // how many frames the displays presented in between (this one included).
+    line["request_id"] = f.requestId;
+    if (f.displaysPresentedNs > 0) {
+      const double ms = static_cast<double>(f.displaysPresentedNs - f.requestNs) * 1e-6;
+      const std::int64_t frames = static_cast<std::int64_t>(f.frame) - f.presentedAtRequest;
+      line["request_to_displays_ms"] = ms;
+      line["request_to_displays_frames"] = frames;
+      requestMs_.add(ms);
+      maxRequestFrames_ = std::max(maxRequestFrames_, frames);
+    }
+  }
   writeLine(line.dump());
   frameMs_.add(f.frameMs);
   ++frames_;
@@ -167,6 +185,11 @@ void StatsStream::writeEnd(const std::vector<RankTotals>& ranks, bool stoppedEar
                {"mad_frame_ms", frameMs_.mad()},
                {"fps", medianMs > 0 ? 1000.0 / medianMs : 0.0},
                {"peak_rss_kib", {{"render", peak[0]}, {"wall", peak[1]}}}};
+  if (requestMs_.count() > 0) {
+    summary["requests_applied"] = requestMs_.count();
+    summary["median_request_to_displays_ms"] = requestMs_.median();
+    summary["max_request_to_displays_frames"] = maxRequestFrames_;
+  }
   if (compositeShare_.count() > 0) {
     summary["median_composite_share"] = compositeShare_.median();
     summary["mad_composite_share"] = compositeShare_.mad();

@@ -54,7 +54,8 @@ class StatsStream {
   void writeLine(const std::string& json);
   std::string path_;
   int fd_ = -1;
-  LogHistogram frameMs_{1e-3, 1e7}, compositeShare_{1e-6, 1e3};
+  LogHistogram frameMs_{1e-3, 1e7}, compositeShare_{1e-6, 1e3}, requestMs_{1e-3, 1e7};
+  std::int64_t maxRequestFrames_ = 0;
   std::uint64_t frames_ = 0;
   int job_bricks_ = 0;  // --bricks of the run (brick counts in the rank lines)
 };

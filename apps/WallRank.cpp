@@ -1,10 +1,13 @@
 // A wall rank: its displays' presenters and the wall node's frame loop.
 #include <cstdio>
 #include <optional>
+#include <utility>
 
 #include "apps/Collectives.h"
 #include "apps/Job.h"
 #include "apps/RunControl.h"
+#include "apps/Steering.h"
+#include "apps/WallKeys.h"
 #include "wall/GlfwPresenter.h"
 #include "wall/OsmesaPresenter.h"
 #include "wall/WallNode.h"
@@ -12,7 +15,7 @@
 namespace app {
 
 int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, RunControl& control,
-                RankTotals& totals) {
+                Steering& steering, RankTotals& totals) {
   const Options& o = job.options;
   const wall::Layout& layout = *job.layout;
   const int process = job.roles.processOfRank(job.worldRank);
@@ -39,14 +42,41 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
   // ahead of this process's last presented frame, one more while it is between the swap
   // barrier and noting the frame presented.
   options.framesAhead = static_cast<std::uint32_t>(o.framesInFlight) + 2;
+  // A keyboard on the wall: keys become steering requests for render rank 0, applied at its next
+  // frame boundary like the control API's; Esc asks for the graceful stop (once).
+  bool escaped = false;
+  if (!o.offscreen)
+    options.onKeys = [&steering, &escaped, process](const std::vector<wall::WallKey>& keys) {
+      for (wall::WallKey key : keys) {
+        if (key == wall::WallKey::Escape) {
+          if (std::exchange(escaped, true)) continue;
+          std::fprintf(stderr, "dfbwall: Esc pressed on wall process %d: stopping\n", process);
+          SteeringRequest stop;
+          stop.kind = SteeringRequest::kStop;
+          steering.submit(stop);
+        } else if (const std::optional<SteeringRequest> r = requestForKey(key)) {
+          steering.submit(*r);
+        }
+      }
+    };
   {
     wall::WallNode node(messenger, layout, process, wallComm, std::move(presenters), options);
     control.onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
+    // While the renderers idle (a converged wall), rank 0 tells the walls to keep waiting; a
+    // capture asked for through the control API names its frame.
+    steering.onKeepWaiting([&node, &messenger] {
+      node.keepWaiting();
+      messenger.setResting(true);  // ends by itself with the next frame's first piece
+    });
+    steering.onCapture([&node](std::uint32_t frameId, std::uint64_t sequence) {
+      node.requestCapture(frameId, sequence);
+    });
     try {
       // Pairs with the render ranks' barrier: every object of every rank is registered.
       boundedBarrier(MPI_COMM_WORLD, options.timeout, "start-up");
       bool closed = false;
-      for (std::uint32_t frameId = 1; frameId <= static_cast<std::uint32_t>(o.frames); ++frameId) {
+      const std::uint32_t frames = static_cast<std::uint32_t>(o.frames);  // 0: until stopped
+      for (std::uint32_t frameId = 1; frames == 0 || frameId <= frames; ++frameId) {
         control.pollSignals();
         job.failIfAsked(frameId);
         const wall::PresentReport r = node.presentFrame(frameId);
@@ -69,6 +99,8 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
       job.failure->fail(e);
     }
     control.onLastFrame({});
+    steering.onKeepWaiting({});
+    steering.onCapture({});
   }
   totals.role = 1;
   return control.exitCode();

@@ -48,6 +48,12 @@ pkg_check_modules(OSMESA QUIET IMPORTED_TARGET osmesa)
 if(NOT OSMESA_FOUND)
   dfbwall_missing("OSMesa (pkg-config module osmesa)" libosmesa6-dev)
 endif()
+# The control server (apps/ControlServer.cpp): Debian's compiled cpp-httplib. Its pkg-config
+# flags carry the library's build options (OpenSSL, zlib, Brotli), which the header must match.
+pkg_check_modules(HTTPLIB QUIET IMPORTED_TARGET cpp-httplib)
+if(NOT HTTPLIB_FOUND)
+  dfbwall_missing("cpp-httplib (pkg-config module cpp-httplib)" libcpp-httplib-dev)
+endif()
 if(DFBWALL_BUILD_TESTS)
   dfbwall_find_package(GTest libgtest-dev)
 endif()

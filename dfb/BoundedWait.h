@@ -11,5 +11,9 @@ namespace dfb {
 
 void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_point deadline,
                       const std::string& timeoutMessage);
+// The same for a wait that is expected to be long (a rank idling until the next order): the
+// sleeps between polls double from 20 us up to `maxSleep`, so the wait costs (nearly) no CPU.
+void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_point deadline,
+                      const std::string& timeoutMessage, std::chrono::microseconds maxSleep);
 
 }  // namespace dfb

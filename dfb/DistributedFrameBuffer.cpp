@@ -131,6 +131,13 @@ void DistributedFrameBuffer::addPixelOp(std::shared_ptr<PixelOp> op) {
   impl_->pixelOps.push_back(std::move(op));
 }
 
+void DistributedFrameBuffer::setToneMap(const ToneMapSettings& toneMap) {
+  // The tone map is the first op of every chain (the constructor put it there); between frames
+  // no tile is in a chain, so replacing it races with nothing.
+  impl_->options.toneMap = toneMap;
+  impl_->pixelOps.front() = std::make_shared<ToneMapOp>(toneMap);
+}
+
 void DistributedFrameBuffer::begin(const FrameInfo& frame) {
   Impl& d = *impl_;
   std::vector<Bytes> held;

@@ -91,6 +91,9 @@ class DistributedFrameBuffer final : public MessageHandler {
 
   // Appended to the chain after tone mapping; call between frames.
   void addPixelOp(std::shared_ptr<PixelOp> op);
+  // Between frames (after end(), before begin()): tone mapping from the next frame on, e.g. an
+  // operator changed the exposure. Every rank must set the same.
+  void setToneMap(const ToneMapSettings& toneMap);
 
   void begin(const FrameInfo& frame);
   // Takes the tile by value: move it in and a tile its owner processes here is never copied.

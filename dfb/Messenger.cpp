@@ -66,6 +66,7 @@ struct Messenger::Impl {
   ErrorCallback onError;
 
   std::atomic<bool> exitThreads{false};
+  std::atomic<bool> resting{false};
   std::atomic<std::uint64_t> sendsInFlight{0};
   std::atomic<std::uint64_t> messagesSent{0}, messagesReceived{0}, messagesHandled{0},
       rawBytesSent{0}, wireBytesSent{0}, rawBytesReceived{0}, wireBytesReceived{0},
@@ -210,6 +211,8 @@ void Messenger::Impl::mpiLoop() {
 
       if (packet.wire.size() >= kEnvelopeBytes)
         countTraffic(peekEnvelope(packet.wire).object, 0, packet.wire.size());
+      // Before the handler can run: a handler may rest the messenger again (a heartbeat).
+      resting = false;
       pushInbox(std::move(packet));
       active = true;
     }
@@ -234,7 +237,7 @@ void Messenger::Impl::mpiLoop() {
       // new outgoing message wakes it at once.
       std::unique_lock lock(outboxMutex);
       outboxCv.wait_for(lock, idleSleep, [&] { return !outbox.empty() || exitThreads.load(); });
-      idleSleep = std::min(idleSleep * 2, options.maxIdleSleep);
+      idleSleep = std::min(idleSleep * 2, resting ? options.restingSleep : options.maxIdleSleep);
     }
   }
 }
@@ -412,6 +415,8 @@ void Messenger::send(int toRank, ObjectId id, Bytes payload) {
   }
   impl_->outboxCv.notify_one();
 }
+
+void Messenger::setResting(bool resting) { impl_->resting = resting; }
 
 bool Messenger::sameHost(int rank) const { return impl_->sameHost.at(static_cast<size_t>(rank)); }
 

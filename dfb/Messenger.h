@@ -47,6 +47,7 @@ struct MessengerOptions {
   std::size_t compressMinBytes = 2048;
   // Longest sleep of an idle MPI thread; bounds the added receive latency.
   std::chrono::microseconds maxIdleSleep{200};
+  std::chrono::microseconds restingSleep{10000};  // see setResting
   // quiesce()/stop() give up with an Error after this long.
   std::chrono::milliseconds quiesceTimeout{30000};
   // The largest payload a message may announce once decompressed; a larger one is an error
@@ -88,6 +89,11 @@ class Messenger {
   // is compressed (so a producer can choose a pre-filter that only pays before compression).
   bool sameHost(int rank) const;
   bool compresses(int toRank) const;
+  // A hint that nothing is expected for a while (the application idles: a converged wall): the
+  // MPI thread's idle sleeps may then grow to `restingSleep` instead of maxIdleSleep, so an idle
+  // rank uses (nearly) no CPU. Sending wakes the thread at once as always; the first message
+  // received ends the rest (it is found within one resting sleep).
+  void setResting(bool resting);
   // The host `rank` runs on (MPI_Get_processor_name, exchanged at construction).
   const std::string& hostOf(int rank) const;
   // For an error about a deadline: asks every other rank for a sign of life (answered by its

@@ -69,8 +69,12 @@ void FrameDriver::configure(dfb::DfbOptions& options) const {
 
 const WorkPlan& FrameDriver::lastPlan() const { return *impl_->plan; }
 
-FrameReport FrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
-                                     const dfb::FrameInfo& frame) {
+void FrameDriver::setSamplesPerPixel(std::uint32_t samples) {
+  impl_->options.samplesPerPixel = samples;
+}
+
+FrameReport FrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb, const dfb::FrameInfo& frame,
+                                     const CameraDesc& camera) {
   using dfb::Clock;
   const auto t0 = Clock::now();
   Impl& m = *impl_;
@@ -81,7 +85,7 @@ FrameReport FrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
   } else {
     *m.plan = planActiveTiles(m.options, grid.tileCount(), dfb.ranks(), dfb.tileErrors());
   }
-  m.renderer.beginFrame(frame);
+  m.renderer.beginFrame(frame, camera);
   dfb.begin(frame);
   const auto t1 = Clock::now();
   const std::uint32_t accumulationId = dfb.accumulationId();

@@ -46,7 +46,12 @@ class FrameDriver {
   // must outlive that DFB.
   void configure(dfb::DfbOptions& options) const;
 
-  FrameReport renderFrame(dfb::DistributedFrameBuffer& dfb, const dfb::FrameInfo& frame);
+  // `camera`: the frame's camera, the same on every rank (it comes with the frame order).
+  FrameReport renderFrame(dfb::DistributedFrameBuffer& dfb, const dfb::FrameInfo& frame,
+                          const CameraDesc& camera);
+  // Samples per pixel per frame from the next frame on (the same on every rank; a steering
+  // change, applied at a frame boundary with a new epoch).
+  void setSamplesPerPixel(std::uint32_t samples);
 
   const WorkPlan& lastPlan() const;
 

@@ -25,12 +25,11 @@ float powerHeuristic(float a, float b) {
 PathTracer::PathTracer(const Scene& scene, const RenderSettings& settings)
     : scene_(scene),
       settings_(settings),
-      camera_(frameCamera(scene.desc().camera, settings, 1), settings.width, settings.height),
+      camera_(scene.desc().camera, settings.width, settings.height),
       epsilon_(1e-4f * scene.extent()) {}
 
-void PathTracer::beginFrame(const dfb::FrameInfo& frame) {
-  camera_ = Camera(frameCamera(scene_.desc().camera, settings_, frame.frameId), settings_.width,
-                   settings_.height);
+void PathTracer::beginFrame(const dfb::FrameInfo& /*frame*/, const CameraDesc& camera) {
+  camera_ = Camera(camera, settings_.width, settings_.height);
 }
 
 Vec3 PathTracer::radiance(Vec3 origin, Vec3 direction, const Sampler& sampler) const {

@@ -13,7 +13,8 @@ class PathTracer final : public Renderer {
  public:
   PathTracer(const Scene& scene, const RenderSettings& settings);
   // Moves the camera along the orbit of RenderSettings (a no-op without one).
-  void beginFrame(const dfb::FrameInfo& frame) override;
+  void beginFrame(const dfb::FrameInfo& frame, const CameraDesc& camera) override;
+  void setLiveSettings(const LiveSettings& live) override { settings_.maxDepth = live.maxDepth; }
   void render(const dfb::Region& region, std::uint32_t accumulationId, std::uint32_t firstSample,
               std::uint32_t samples, dfb::Tile& out) const override;
   // Radiance along one camera ray; public for known-answer tests.

@@ -57,7 +57,9 @@ PatternRenderer::PatternRenderer(const RenderSettings& settings)
     }
 }
 
-void PatternRenderer::beginFrame(const dfb::FrameInfo& frame) { frameId_ = frame.frameId; }
+void PatternRenderer::beginFrame(const dfb::FrameInfo& frame, const CameraDesc& /*camera*/) {
+  frameId_ = frame.frameId;
+}
 
 void PatternRenderer::render(const dfb::Region& region, std::uint32_t accumulationId,
                              std::uint32_t firstSample, std::uint32_t samples,

@@ -15,7 +15,7 @@ namespace renderers {
 class PatternRenderer final : public Renderer {
  public:
   explicit PatternRenderer(const RenderSettings& settings);
-  void beginFrame(const dfb::FrameInfo& frame) override;
+  void beginFrame(const dfb::FrameInfo& frame, const CameraDesc& camera) override;
   void render(const dfb::Region& region, std::uint32_t accumulationId, std::uint32_t firstSample,
               std::uint32_t samples, dfb::Tile& out) const override;
 

@@ -12,11 +12,10 @@ namespace renderers {
 PrimaryRenderer::PrimaryRenderer(const Scene& scene, const RenderSettings& settings)
     : scene_(scene),
       settings_(settings),
-      camera_(frameCamera(scene.desc().camera, settings, 1), settings.width, settings.height) {}
+      camera_(scene.desc().camera, settings.width, settings.height) {}
 
-void PrimaryRenderer::beginFrame(const dfb::FrameInfo& frame) {
-  camera_ = Camera(frameCamera(scene_.desc().camera, settings_, frame.frameId), settings_.width,
-                   settings_.height);
+void PrimaryRenderer::beginFrame(const dfb::FrameInfo& /*frame*/, const CameraDesc& camera) {
+  camera_ = Camera(camera, settings_.width, settings_.height);
 }
 
 void PrimaryRenderer::render(const dfb::Region& region, std::uint32_t accumulationId,

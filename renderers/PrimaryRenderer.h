@@ -11,7 +11,7 @@ class PrimaryRenderer final : public Renderer {
  public:
   PrimaryRenderer(const Scene& scene, const RenderSettings& settings);
   // Moves the camera along the orbit of RenderSettings (a no-op without one).
-  void beginFrame(const dfb::FrameInfo& frame) override;
+  void beginFrame(const dfb::FrameInfo& frame, const CameraDesc& camera) override;
   void render(const dfb::Region& region, std::uint32_t accumulationId, std::uint32_t firstSample,
               std::uint32_t samples, dfb::Tile& out) const override;
 

@@ -55,15 +55,6 @@ std::unique_ptr<Renderer> makeRenderer(const std::string& name, const RenderScen
   return makeRenderer(name, *scene.surfaces, settings);
 }
 
-CameraDesc frameCamera(const CameraDesc& base, const RenderSettings& settings,
-                       std::uint32_t frameId) {
-  if (settings.orbitDegreesPerFrame == 0.0f || frameId == 0) return base;
-  // In double and reduced to one turn, so long runs keep the angle exact enough.
-  const double degrees =
-      std::fmod(double(settings.orbitDegreesPerFrame) * double(frameId - 1), 360.0);
-  return orbitCamera(base, static_cast<float>(degrees));
-}
-
 void prepareTile(const dfb::Region& region, std::uint32_t accumulationId, std::uint32_t firstSample,
                  std::uint32_t samples, dfb::Tile& out) {
   // Not Tile::reset: this must not need more of dfb than its headers.

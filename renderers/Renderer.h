@@ -3,8 +3,12 @@
 //
 // Contracts: render() is const and thread-safe (tiles render concurrently from TBB workers);
 // a pixel's value depends only on its canvas coordinates, the accumulation id, the sample
-// indices, the seed and the frame given to beginFrame(), never on the tile it is rendered in,
-// the thread or the rank. beginFrame() is called from one thread, between frames.
+// indices, the seed and the frame and camera given to beginFrame(), never on the tile it is
+// rendered in, the thread or the rank. beginFrame() is called from one thread, between frames.
+//
+// The camera comes with the frame (render rank 0 decides it and broadcasts it with the frame
+// order), so no rank can render a frame with another rank's camera, whatever moves it: an
+// orbit, a camera path, an operator steering the wall.
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -23,9 +27,6 @@ struct RenderSettings {
   int width = 0, height = 0;  // the whole canvas, in pixels
   std::uint64_t seed = 0;
   int maxDepth = 8;  // path segments (camera ray included), as Embree's --max-path-length
-  // Camera orbit: frame F sees the scene's camera turned about its look-at point around its up
-  // axis by orbitDegreesPerFrame * (F - 1). 0: a fixed camera.
-  float orbitDegreesPerFrame = 0.0f;
   // When set, a renderer that can produce display pixels directly (the pattern) fills
   // Tile::rgba8, tone-mapped with these settings exactly as the DFB would, and no color: no
   // float pixels, no tone mapping. Only for the DFB's write operation, and not for linear
@@ -33,14 +34,21 @@ struct RenderSettings {
   std::optional<dfb::ToneMapSettings> displayPixels = std::nullopt;
 };
 
-// The camera of frame `frameId` under the orbit in `settings`.
-CameraDesc frameCamera(const CameraDesc& base, const RenderSettings& settings,
-                       std::uint32_t frameId);
+// Settings an operator may change while the wall runs (steering, issue 12). Set between frames,
+// the same on every rank (they come with the frame order); a renderer ignores what it lacks.
+struct LiveSettings {
+  int maxDepth = 8;           // the path tracer's path length
+  int transferFunction = -1;  // scivis: preset index in transferFunctionPresetNames(); -1: own
+  float opacityScale = 1.0f;  // scivis: every volume's opacity times this
+};
 
 class Renderer {
  public:
   virtual ~Renderer() = default;
-  virtual void beginFrame(const dfb::FrameInfo& /*frame*/) {}
+  // `camera` is the frame's camera (the pattern ignores it).
+  virtual void beginFrame(const dfb::FrameInfo& /*frame*/, const CameraDesc& /*camera*/) {}
+  // Between frames, from one thread.
+  virtual void setLiveSettings(const LiveSettings& /*settings*/) {}
   // Fills `out` for `region`: color is the MEAN RGBA over samples firstSample ..
   // firstSample + samples - 1 (alpha 1), weight = samples, sequence = firstSample,
   // accumulationId = accumulationId.

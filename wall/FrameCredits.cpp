@@ -27,13 +27,13 @@ std::int64_t FrameCredits::lastPresented() const {
   return lastPresented_;
 }
 
-std::optional<std::int64_t> FrameCredits::takeCompleteNs(std::int64_t frameId) {
+std::optional<FrameCredits::AckTimes> FrameCredits::takeTimes(std::int64_t frameId) {
   std::lock_guard lock(mutex_);
-  auto found = completeNs_.find(frameId);
-  if (found == completeNs_.end()) return std::nullopt;
-  const std::int64_t ns = found->second;
-  completeNs_.erase(completeNs_.begin(), std::next(found));  // older ones are never asked for
-  return ns;
+  auto found = times_.find(frameId);
+  if (found == times_.end()) return std::nullopt;
+  const AckTimes times = found->second;
+  times_.erase(times_.begin(), std::next(found));  // older ones are never asked for
+  return times;
 }
 
 namespace {
@@ -56,9 +56,10 @@ void FrameCredits::incoming(int fromRank, dfb::Bytes&& payload) {
       throw Error("frame acknowledgement for frame " + std::to_string(ack.frameId) + " from rank " +
                   std::to_string(fromRank) + " after frame " + std::to_string(lastPresented_));
     lastPresented_ = ack.frameId;
-    completeNs_[ack.frameId] = ack.completeNs;
+    times_[ack.frameId] = {ack.completeNs,
+                           std::chrono::steady_clock::now().time_since_epoch().count()};
     // Kept only until the frame's statistics are written; a run without them never asks.
-    while (completeNs_.size() > 64) completeNs_.erase(completeNs_.begin());
+    while (times_.size() > 64) times_.erase(times_.begin());
   }
   presented_.notify_all();
 }

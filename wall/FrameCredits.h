@@ -24,9 +24,13 @@ class FrameCredits : public dfb::MessageHandler {
   // once). Throws wall::Error after `timeout`.
   void waitForPresented(std::int64_t frameId, std::chrono::milliseconds timeout);
   std::int64_t lastPresented() const;
-  // When the last display had every piece of `frameId` (steady_clock ns, from the
-  // acknowledgement), taken once; nothing when that frame's acknowledgement has not come yet.
-  std::optional<std::int64_t> takeCompleteNs(std::int64_t frameId);
+  struct AckTimes {
+    std::int64_t completeNs = 0;      // the last display had every piece (from the ack)
+    std::int64_t acknowledgedNs = 0;  // the ack reached this rank: every display presented
+  };
+  // Those times of `frameId` (steady_clock ns), taken once; nothing when that frame's
+  // acknowledgement has not come yet.
+  std::optional<AckTimes> takeTimes(std::int64_t frameId);
 
   void incoming(int fromRank, dfb::Bytes&& payload) override;
 
@@ -35,7 +39,7 @@ class FrameCredits : public dfb::MessageHandler {
   mutable std::mutex mutex_;
   std::condition_variable presented_;
   std::int64_t lastPresented_ = 0;
-  std::map<std::int64_t, std::int64_t> completeNs_;  // at most frames-in-flight + 1 entries
+  std::map<std::int64_t, AckTimes> times_;  // at most frames-in-flight + 1 entries
 };
 
 // Sent by wall process 0 to render rank 0 (world rank 0), with the time the last display had

@@ -174,26 +174,64 @@ void WallNode::stopAfter(std::uint32_t lastFrame) {
   complete_.notify_all();
 }
 
+void WallNode::keepWaiting() {
+  std::lock_guard lock(mutex_);
+  waitFrom_ = Clock::now();
+  complete_.notify_all();
+}
+
+void WallNode::requestCapture(std::uint32_t frameId, std::uint64_t sequence) {
+  std::lock_guard lock(mutex_);
+  if (sequence > captureAsked_) {
+    captureAsked_ = sequence;
+    captureAskedFrame_ = frameId;
+  }
+}
+
+void WallNode::pollWindows() {
+  if (!options_.onKeys) return;
+  std::vector<WallKey> keys;
+  for (auto& presenter : presenters_) {
+    presenter->pollEvents();
+    for (WallKey k : presenter->takeKeys()) keys.push_back(k);
+  }
+  if (!keys.empty()) options_.onKeys(keys);
+}
+
 PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   PresentReport report;
   const auto start = Clock::now();
-  const auto deadline = start + options_.timeout;
+  auto deadline = start + options_.timeout;
   Slot* slot = nullptr;
   {
     std::unique_lock lock(mutex_);
     const auto stopsBefore = [&] { return stopAfter_ >= 0 && frameId > stopAfter_; };
-    const bool ready = complete_.wait_until(lock, deadline, [&] {
+    const auto ready = [&] {
       if (!error_.empty() || stopsBefore()) return true;
       auto found = slots_.find(frameId);
       return found != slots_.end() &&
              found->second.displaysComplete == static_cast<int>(mine_.size());
-    });
+    };
+    // keepWaiting() moves the deadline while the renderers idle.
+    while (!ready()) {
+      deadline = std::max(start, waitFrom_) + options_.timeout;
+      if (Clock::now() >= deadline) break;
+      if (!options_.onKeys) {
+        complete_.wait_until(lock, deadline);
+        continue;
+      }
+      complete_.wait_until(lock, std::min(deadline, Clock::now() + options_.eventPoll));
+      if (ready()) break;
+      lock.unlock();  // GLFW's callbacks run in here; pieces keep arriving meanwhile
+      pollWindows();
+      lock.lock();
+    }
     if (!error_.empty()) throw Error("wall process " + std::to_string(process_) + ": " + error_);
     if (stopsBefore()) {
       report.stopped = true;
       return report;
     }
-    if (!ready) {
+    if (!ready()) {
       std::string missing;
       auto found = slots_.find(frameId);
       for (size_t i = 0; i < mine_.size(); ++i) {
@@ -220,23 +258,36 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   // The swap barrier: no display shows frame F before every display has it. It is a reduction
   // rather than a plain barrier so every wall process also learns when the last display had
   // the frame complete (for the statistics), at no extra round trip.
+  // The capture requests ride along: the highest sequence any process was asked for (for this
+  // frame or an earlier one), so every process captures the same frame.
+  std::int64_t mine[2] = {report.completeNs, 0}, agreed[2] = {0, 0};
+  {
+    std::lock_guard lock(mutex_);
+    if (captureAsked_ > captureDone_ && frameId >= captureAskedFrame_)
+      mine[1] = static_cast<std::int64_t>(captureAsked_);
+  }
   MPI_Request barrier;
-  dfb::checkMpi(MPI_Iallreduce(&report.completeNs, &report.wallCompleteNs, 1, MPI_INT64_T, MPI_MAX,
-                               comm_, &barrier),
+  dfb::checkMpi(MPI_Iallreduce(mine, agreed, 2, MPI_INT64_T, MPI_MAX, comm_, &barrier),
                 "MPI_Iallreduce");
   dfb::waitWithDeadline(barrier, deadline,
                         "swap barrier of frame " + std::to_string(frameId) +
                             ": another wall process did not complete it within " +
                             std::to_string(options_.timeout.count()) + " ms");
   const auto released = Clock::now();
+  report.wallCompleteNs = agreed[0];
+  const bool asked = agreed[1] > static_cast<std::int64_t>(captureDone_);
+  if (asked) captureDone_ = static_cast<std::uint64_t>(agreed[1]);
   for (size_t i = 0; i < mine_.size(); ++i) {
     const Image& image = slot->displays[i];
     presenters_[i]->present(image.pixels.data(), image.width, image.height);
   }
-  // An operator closing a window asks the whole job to stop; the app decides how (gracefully).
-  for (size_t i = 0; i < mine_.size(); ++i)
+  // An operator closing a window asks the whole job to stop, a key asks for a camera change or a
+  // stop; the app decides how.
+  for (size_t i = 0; i < mine_.size(); ++i) {
     if (presenters_[i]->closeRequested())
       report.closedDisplay = layout_.displays[static_cast<size_t>(mine_[i])].name;
+  }
+  pollWindows();
   const auto presented = Clock::now();
 
   bool last = frameId == options_.lastFrame;
@@ -244,10 +295,10 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     std::lock_guard lock(mutex_);
     last = last || frameId == stopAfter_;
   }
-  const bool captureThis =
-      !options_.captureDir.empty() &&
-      (last || (options_.captureEvery > 0 &&
-                frameId % static_cast<std::uint32_t>(options_.captureEvery) == 0));
+  const bool captureThis = !options_.captureDir.empty() &&
+                           (last || asked ||
+                            (options_.captureEvery > 0 &&
+                             frameId % static_cast<std::uint32_t>(options_.captureEvery) == 0));
   if (captureThis) capture(frameId);
 
   {

@@ -13,6 +13,7 @@
 
 #include <chrono>
 #include <condition_variable>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -37,6 +38,11 @@ struct WallNodeOptions {
   // the renderers run at most frames-in-flight ahead, so anything further is a corrupt or
   // hostile message, and buffering it would hold a display buffer forever.
   std::uint32_t framesAhead = 8;
+  // Windows: keys pressed in this process's windows go here, on the calling (main) thread, as
+  // they come, also while presentFrame waits for a frame (every `eventPoll` then: a converged,
+  // idle wall still hears its keyboard). Empty: keys are ignored.
+  std::function<void(const std::vector<WallKey>&)> onKeys;
+  std::chrono::milliseconds eventPoll{50};
 };
 
 struct PresentReport {
@@ -71,6 +77,14 @@ class WallNode : public dfb::MessageHandler {
   // Thread-safe: the run ends after frame `lastFrame`; a presentFrame for a later frame returns
   // at once (or wakes up) with `stopped` set. Every wall process must be told the same frame.
   void stopAfter(std::uint32_t lastFrame);
+  // Thread-safe: the renderers idle (a converged wall waits for a change), so the wait for the
+  // next frame's pieces starts over: its deadline is `timeout` from now. Render rank 0 repeats
+  // this well within the timeout while it idles; a rank that dies still ends the wait.
+  void keepWaiting();
+  // Thread-safe: capture frame `frameId` or, when it is presented already, the first frame
+  // after it; `sequence` numbers the requests (1, 2, ...). Every wall process captures the same
+  // frame: the swap barrier agrees on the highest sequence any process has been asked for.
+  void requestCapture(std::uint32_t frameId, std::uint64_t sequence);
   // Collective over the wall ranks, after the last presentFrame: captures the last presented
   // frame when captures were asked for and it was not captured yet (a run stopped early).
   void finish();
@@ -78,6 +92,8 @@ class WallNode : public dfb::MessageHandler {
   void incoming(int fromRank, dfb::Bytes&& payload) override;
 
  private:
+  // Handles window events and hands pressed keys to options_.onKeys (main thread, unlocked).
+  void pollWindows();
   struct Slot {
     std::vector<Image> displays;             // by position in mine_
     std::vector<int> received;               // pieces copied in, by position in mine_
@@ -114,6 +130,10 @@ class WallNode : public dfb::MessageHandler {
   std::int64_t lastPresented_ = 0;
   std::int64_t stopAfter_ = -1;  // -1: no early stop
   std::int64_t lastCaptured_ = 0;
+  std::chrono::steady_clock::time_point waitFrom_{};  // keepWaiting: deadlines count from here
+  std::uint64_t captureAsked_ = 0;                    // highest requested sequence
+  std::uint32_t captureAskedFrame_ = 0;               // ... for this frame or later
+  std::uint64_t captureDone_ = 0;  // highest sequence captured (the same on every process)
   std::string error_;
   std::uint64_t bytesReceived_ = 0;
   std::int64_t unpackNs_ = 0, assembleNs_ = 0;

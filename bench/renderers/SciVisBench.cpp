@@ -72,14 +72,17 @@ int main(int argc, char** argv) {
     RenderSettings settings;
     settings.width = settings.height = size;
     settings.seed = 1;
-    settings.orbitDegreesPerFrame = 360.0f / static_cast<float>(frames);
+    // One turn over the frames, as dfbwall's --orbit 360/FRAMES.
+    const float orbitDegreesPerFrame = 360.0f / static_cast<float>(frames);
     auto renderer = makeRenderer("scivis", scene, settings);
     const auto* scivis = dynamic_cast<const SciVisRenderer*>(renderer.get());
     std::vector<double> seconds;
     std::vector<float> image;
     const std::uint64_t samplesBefore = scivis->volumeSamples();
     for (int f = 1; f <= frames; ++f) {
-      renderer->beginFrame({static_cast<std::uint32_t>(f), static_cast<std::uint32_t>(f)});
+      renderer->beginFrame(
+          {static_cast<std::uint32_t>(f), static_cast<std::uint32_t>(f)},
+          orbitCamera(scene.desc->camera, orbitDegreesPerFrame * static_cast<float>(f - 1)));
       const auto a = Clock::now();
       image = test::renderImage(*renderer, size, size, 64, threads, 1);
       seconds.push_back(std::chrono::duration<double>(Clock::now() - a).count());
@@ -92,7 +95,7 @@ int main(int argc, char** argv) {
     const double median = sorted[sorted.size() / 2];
     if (argc > 6) {
       // Frame 1's view (the last frame rendered is frame `frames`, one step short of a turn).
-      renderer->beginFrame({1, 1});
+      renderer->beginFrame({1, 1}, scene.desc->camera);
       image = test::renderImage(*renderer, size, size, 64, threads, 1);
       const std::string out = argv[6];
       if (out.size() > 4 && out.compare(out.size() - 4, 4, ".f32") == 0) {

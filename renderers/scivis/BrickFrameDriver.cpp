@@ -137,15 +137,24 @@ std::vector<int> BrickFrameDriver::bricksOfTile(const CameraDesc& camera,
   return out;
 }
 
+void BrickFrameDriver::setSamplesPerPixel(std::uint32_t samples) {
+  impl_->options.samplesPerPixel = samples;
+}
+
+void BrickFrameDriver::setLiveSettings(const LiveSettings& live) {
+  for (auto& r : impl_->renderers)
+    if (r) r->setLiveSettings(live);
+}
+
 FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
-                                          const dfb::FrameInfo& frame) {
+                                          const dfb::FrameInfo& frame,
+                                          const CameraDesc& cameraDesc) {
   using dfb::Clock;
   const auto t0 = Clock::now();
   Impl& m = *impl_;
-  const CameraDesc cameraDesc = frameCamera(m.desc->camera, m.settings, frame.frameId);
   const Camera camera(cameraDesc, m.settings.width, m.settings.height);
   for (auto& r : m.renderers)
-    if (r) r->beginFrame(frame);
+    if (r) r->beginFrame(frame, cameraDesc);
 
   // The plan: the same on every rank. A job is (tile, brick), brick -1 for the background.
   struct Job {

@@ -39,7 +39,11 @@ class BrickFrameDriver {
 
   // The composite-then-accumulate operation; one root input per active tile.
   void configure(dfb::DfbOptions& options) const;
-  FrameReport renderFrame(dfb::DistributedFrameBuffer& dfb, const dfb::FrameInfo& frame);
+  // `camera`: the frame's camera, the same on every rank (it comes with the frame order).
+  FrameReport renderFrame(dfb::DistributedFrameBuffer& dfb, const dfb::FrameInfo& frame,
+                          const CameraDesc& camera);
+  void setSamplesPerPixel(std::uint32_t samples);  // from the next frame on, on every rank
+  void setLiveSettings(const LiveSettings& live);  // the same
 
   const std::vector<BrickPlan>& bricks() const;
   std::vector<int> heldBricks() const;  // ids, on this rank

@@ -161,17 +161,30 @@ SciVisRenderer::SciVisRenderer(const SciVisScene& scene, const RenderSettings& s
     : scene_(scene),
       settings_(settings),
       options_(options),
-      camera_(frameCamera(scene.desc().camera, settings, 1), settings.width, settings.height),
+      layers_(&scene.volumes()),
+      camera_(scene.desc().camera, settings.width, settings.height),
       epsilon_(1e-4f * scene.extent() + 0.05f * scene.volumeStep()) {}
 
-void SciVisRenderer::beginFrame(const dfb::FrameInfo& frame) {
-  camera_ = Camera(frameCamera(scene_.desc().camera, settings_, frame.frameId), settings_.width,
-                   settings_.height);
+void SciVisRenderer::beginFrame(const dfb::FrameInfo& /*frame*/, const CameraDesc& camera) {
+  camera_ = Camera(camera, settings_.width, settings_.height);
+}
+
+void SciVisRenderer::setLiveSettings(const LiveSettings& live) {
+  if (live.transferFunction == live_.transferFunction && live.opacityScale == live_.opacityScale)
+    return;
+  live_ = live;
+  if (live.transferFunction < 0 && live.opacityScale == 1.0f) {
+    layers_ = &scene_.volumes();
+    retuned_.clear();
+    return;
+  }
+  retuned_ = scene_.retunedVolumes(live.transferFunction, live.opacityScale);
+  layers_ = &retuned_;
 }
 
 bool SciVisRenderer::isosurfaceBetween(Vec3 origin, Vec3 dir, float tFar, float jitter) const {
   // Shading rays step one voxel (not the camera rays' finer step): they only ask yes or no.
-  for (const SciVisScene::VolumeLayer& v : scene_.volumes()) {
+  for (const SciVisScene::VolumeLayer& v : *layers_) {
     if (!v.field || v.isosurfaces.empty()) continue;
     float t0 = 0, t1 = tFar;
     if (!clipToBox(v.field->dataBounds(), origin, reciprocal(dir), t0, t1)) continue;
@@ -295,14 +308,14 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
   // samples just outside [t0, t1) find the isosurface crossings near its ends.
   const float step = scene_.volumeStep();
   float volumeStart = kInf, volumeEnd = -kInf;
-  for (const SciVisScene::VolumeLayer& v : scene_.volumes()) {
+  for (const SciVisScene::VolumeLayer& v : *layers_) {
     if (!v.field) continue;
     float a = t0 - step, b = t1 + step;
     if (clipToBox(v.field->dataBounds(), origin, invDir, a, b))
       volumeStart = std::min(volumeStart, a), volumeEnd = std::max(volumeEnd, b);
   }
 
-  const auto& layers = scene_.volumes();
+  const auto& layers = *layers_;
   if (volumeStart <= volumeEnd && layers.size() == 1 && layers[0].visible &&
       layers[0].isosurfaces.empty() && (!haveSurface || surface.t > volumeEnd)) {
     const float jitter = sampler.get(2);

@@ -40,7 +40,10 @@ class SciVisRenderer final : public Renderer {
   SciVisRenderer(const SciVisScene& scene, const RenderSettings& settings,
                  SciVisOptions options = {});
 
-  void beginFrame(const dfb::FrameInfo& frame) override;
+  void beginFrame(const dfb::FrameInfo& frame, const CameraDesc& camera) override;
+  // Another transfer-function preset or opacity scale: the volume tables are baked again here
+  // (the scene stays shared and unchanged).
+  void setLiveSettings(const LiveSettings& live) override;
   void render(const dfb::Region& region, std::uint32_t accumulationId, std::uint32_t firstSample,
               std::uint32_t samples, dfb::Tile& out) const override;
 
@@ -64,6 +67,10 @@ class SciVisRenderer final : public Renderer {
   const SciVisScene& scene_;
   RenderSettings settings_;
   SciVisOptions options_;
+  // The volume layers rays read: the scene's own, or retuned_ after setLiveSettings.
+  std::vector<SciVisScene::VolumeLayer> retuned_;
+  const std::vector<SciVisScene::VolumeLayer>* layers_;
+  LiveSettings live_;
   Camera camera_;
   float epsilon_;
   mutable std::atomic<std::uint64_t> volumeSamples_{0};  // added once per tile

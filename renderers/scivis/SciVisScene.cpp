@@ -9,6 +9,7 @@
 #include "renderers/EmbreeRays.h"
 #include "renderers/Error.h"
 #include "renderers/scivis/Bricks.h"
+#include "renderers/scivis/TransferFunction.h"
 
 namespace renderers {
 
@@ -160,33 +161,9 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
       fields_.push_back(std::make_unique<VolumeField>(v));
       layer.field = fields_.back().get();
     }
-    const TransferFunction& tf = vd.transfer;
-    if (!(tf.valueMax > tf.valueMin))
-      throw Error("volume '" + vd.name + "': the transfer function's range is empty");
-    const Vec3 s = vd.source.grid.spacing;
-    const float unit = tf.unitDistance > 0 ? tf.unitDistance : std::min(s.x, std::min(s.y, s.z));
-    const float exponent = step_ / unit;
-    layer.valueMin = tf.valueMin;
-    layer.tableScale = static_cast<float>(kTableSize - 1) / (tf.valueMax - tf.valueMin);
-    layer.table.resize(4 * kTableSize);
-    layer.visibleUpTo.resize(kTableSize + 1);
-    for (int e = 0; e < kTableSize; ++e) {
-      const float value = tf.valueMin + static_cast<float>(e) / layer.tableScale;
-      const Vec3 c = tf.color(value);
-      const float a = std::clamp(tf.opacity(value), 0.0f, 1.0f);
-      // Opacity for the step: 1 - (1 - a)^(step / unit).
-      const float corrected = a >= 1.0f ? 1.0f : 1.0f - std::pow(1.0f - a, exponent);
-      float* t = &layer.table[4 * static_cast<std::size_t>(e)];
-      t[0] = c.x, t[1] = c.y, t[2] = c.z, t[3] = vd.visible ? corrected : 0.0f;
-      layer.visibleUpTo[static_cast<std::size_t>(e) + 1] =
-          layer.visibleUpTo[static_cast<std::size_t>(e)] + (t[3] > 0 ? 1u : 0u);
-    }
     for (const IsosurfaceDesc& iso : desc.isosurfaces)
       if (iso.volume == i) layer.isosurfaces.push_back(&iso);
-    if (layer.field)
-      for (int m = 0; m < layer.field->macroCount(); ++m)
-        layer.emptyMacrocells.push_back(
-            anythingIn(layer, layer.field->macroMin(m), layer.field->macroMax(m)) ? 0 : 1);
+    bake(layer, vd, vd.transfer, 1.0f);
     volumes_.push_back(std::move(layer));
   }
 
@@ -226,6 +203,55 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
 }
 
 SciVisScene::~SciVisScene() = default;
+
+void SciVisScene::bake(VolumeLayer& layer, const VolumeDesc& vd, const TransferFunction& tf,
+                       float opacityScale) const {
+  if (!(tf.valueMax > tf.valueMin))
+    throw Error("volume '" + vd.name + "': the transfer function's range is empty");
+  const Vec3 s = vd.source.grid.spacing;
+  const float unit = tf.unitDistance > 0 ? tf.unitDistance : std::min(s.x, std::min(s.y, s.z));
+  const float exponent = step_ / unit;
+  layer.valueMin = tf.valueMin;
+  layer.tableScale = static_cast<float>(kTableSize - 1) / (tf.valueMax - tf.valueMin);
+  layer.table.assign(4 * kTableSize, 0.0f);
+  layer.visibleUpTo.assign(kTableSize + 1, 0);
+  for (int e = 0; e < kTableSize; ++e) {
+    const float value = tf.valueMin + static_cast<float>(e) / layer.tableScale;
+    const Vec3 c = tf.color(value);
+    const float a = std::clamp(tf.opacity(value) * opacityScale, 0.0f, 1.0f);
+    // Opacity for the step: 1 - (1 - a)^(step / unit).
+    const float corrected = a >= 1.0f ? 1.0f : 1.0f - std::pow(1.0f - a, exponent);
+    float* t = &layer.table[4 * static_cast<std::size_t>(e)];
+    t[0] = c.x, t[1] = c.y, t[2] = c.z, t[3] = vd.visible ? corrected : 0.0f;
+    layer.visibleUpTo[static_cast<std::size_t>(e) + 1] =
+        layer.visibleUpTo[static_cast<std::size_t>(e)] + (t[3] > 0 ? 1u : 0u);
+  }
+  layer.emptyMacrocells.clear();
+  if (layer.field)
+    for (int m = 0; m < layer.field->macroCount(); ++m)
+      layer.emptyMacrocells.push_back(
+          anythingIn(layer, layer.field->macroMin(m), layer.field->macroMax(m)) ? 0 : 1);
+}
+
+std::vector<SciVisScene::VolumeLayer> SciVisScene::retunedVolumes(int preset,
+                                                                  float opacityScale) const {
+  std::vector<VolumeLayer> out = volumes_;
+  const std::vector<std::string> names = transferFunctionPresetNames();
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const VolumeDesc& vd = desc_->volumes[i];
+    TransferFunction tf = vd.transfer;
+    if (preset >= 0 && preset < static_cast<int>(names.size())) {
+      float peak = 0;
+      for (const auto& [value, opacity] : tf.opacities) peak = std::max(peak, opacity);
+      if (tf.opacities.empty()) peak = 1;
+      tf = transferFunctionPreset(names[static_cast<std::size_t>(preset)], vd.transfer.valueMin,
+                                  vd.transfer.valueMax, peak);
+      tf.unitDistance = vd.transfer.unitDistance;
+    }
+    bake(out[i], vd, tf, opacityScale);
+  }
+  return out;
+}
 
 bool SciVisScene::anythingIn(const VolumeLayer& v, float lo, float hi) {
   for (const IsosurfaceDesc* iso : v.isosurfaces)

@@ -74,8 +74,8 @@ class SciVisScene {
   bool surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const;
 
   struct VolumeLayer {
-    const VolumeField* field = nullptr;  // null when this brick holds none of the volume
-    std::vector<float> table;            // kTableSize x RGBA, opacity per renderer step
+    const VolumeField* field = nullptr;      // null when this brick holds none of the volume
+    std::vector<float> table;                // kTableSize x RGBA, opacity per renderer step
     std::vector<std::uint32_t> visibleUpTo;  // prefix counts of entries with opacity > 0
     float valueMin = 0, tableScale = 0;
     bool visible = true;
@@ -86,6 +86,10 @@ class SciVisScene {
   };
   static constexpr int kTableSize = 4096;
   const std::vector<VolumeLayer>& volumes() const { return volumes_; }
+  // The volume layers with another transfer function: preset `preset` (an index in
+  // transferFunctionPresetNames(); -1: each volume's own) over each volume's value range and
+  // with its peak opacity, every opacity times `opacityScale` (steering, issue 12).
+  std::vector<VolumeLayer> retunedVolumes(int preset, float opacityScale) const;
   float volumeStep() const { return step_; }  // world distance between volume samples
   // Whether the volume can show anything (opacity or an isosurface) in [lo, hi].
   static bool anythingIn(const VolumeLayer& v, float lo, float hi);
@@ -95,6 +99,11 @@ class SciVisScene {
   float extent() const { return extent_; }
 
  private:
+  // Fills layer's table, visibility counts and empty macrocells for `tf` (opacities times
+  // `opacityScale`) at this scene's step.
+  void bake(VolumeLayer& layer, const VolumeDesc& vd, const TransferFunction& tf,
+            float opacityScale) const;
+
   std::shared_ptr<const SceneDesc> desc_;
   BrickContent content_;
   std::vector<std::unique_ptr<VolumeField>> fields_;

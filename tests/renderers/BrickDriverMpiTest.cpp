@@ -71,7 +71,8 @@ std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int rank
     driver.configure(options);
     {
       dfb::DistributedFrameBuffer fb(messenger, comm, options);
-      for (int f = 0; f < kFrames; ++f) driver.renderFrame(fb, {static_cast<std::uint32_t>(f), 0});
+      for (int f = 0; f < kFrames; ++f)
+        driver.renderFrame(fb, {static_cast<std::uint32_t>(f), 0}, desc->camera);
       image = fb.imageRgbaF32();
     }
     messenger.stop();

@@ -40,7 +40,8 @@ DfbRun renderThroughDfb(const Scene& scene, Distribution distribution, int frame
   {
     dfb::DistributedFrameBuffer fb(messenger, MPI_COMM_WORLD, options);
     for (int f = 0; f < frames; ++f) {
-      const FrameReport report = driver.renderFrame(fb, {static_cast<std::uint32_t>(f), 0});
+      const FrameReport report =
+          driver.renderFrame(fb, {static_cast<std::uint32_t>(f), 0}, scene.desc().camera);
       EXPECT_EQ(report.tilesRendered,
                 static_cast<int>(driver.lastPlan().perRank[fb.rank()].size()));
     }

@@ -16,7 +16,7 @@ const float* pixel(const std::vector<float>& img, int w, int x, int y) {
 TEST(PatternRenderer, GridBorderBarsAndAMovingMarker) {
   const int w = 320, h = 256;
   PatternRenderer p({w, h, 0, 1});
-  p.beginFrame({0, 0});
+  p.beginFrame({0, 0}, {});
   const auto f0 = test::renderImage(p, w, h, 64, 2, 1);
   const auto tiled = test::renderImage(p, w, h, 48, 1, 1);
   EXPECT_EQ(f0, tiled);                        // a pure function of canvas coordinates
@@ -30,7 +30,7 @@ TEST(PatternRenderer, GridBorderBarsAndAMovingMarker) {
   EXPECT_EQ(pixel(f0, w, 8 + 1, 8 + 1)[2], 0.2f);
   // The marker sits at x = 16 * frame, mid-height, and moves.
   EXPECT_EQ(pixel(f0, w, 10, h / 2)[1], 1.0f);
-  p.beginFrame({5, 0});
+  p.beginFrame({5, 0}, {});
   const auto f5 = test::renderImage(p, w, h, 64, 2, 1);
   EXPECT_NE(pixel(f5, w, 10, h / 2)[1], 1.0f);
   EXPECT_EQ(pixel(f5, w, 90, h / 2)[1], 1.0f);
@@ -47,8 +47,8 @@ TEST(PatternRenderer, DisplayPixelsEqualToneMappedFloatPixels) {
   RenderSettings display = floats;
   display.displayPixels = toneMap;
   PatternRenderer linear(floats), direct(display);
-  linear.beginFrame({3, 0});
-  direct.beginFrame({3, 0});
+  linear.beginFrame({3, 0}, {});
+  direct.beginFrame({3, 0}, {});
   const dfb::Region region{40, 60, 104, 124};  // covers grid lines, a ring and a label
   dfb::Tile a, b;
   linear.render(region, 0, 0, 1, a);

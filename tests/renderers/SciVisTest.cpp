@@ -243,5 +243,23 @@ TEST(SciVis, TilesAndThreadsDoNotChangeAPixel) {
   for (std::size_t i = 3; i < a.size(); i += 4) ASSERT_EQ(a[i], 1.0f);  // background under all
 }
 
+// Steering (issue 12): another transfer-function preset or opacity scale changes the picture
+// without rebuilding the scene, and going back to the scene's own gives it back bit for bit.
+TEST(SciVis, LiveTransferFunctionChangesAndRestores) {
+  const RenderScene scene = buildRenderScene("scivis", *mixedScene(1));
+  const auto r = makeRenderer("scivis", scene, settingsFor(48, 40));
+  const auto own = test::renderImage(*r, 48, 40, 16, 2, 1);
+  r->setLiveSettings({8, 1, 1.0f});  // preset 1
+  const auto preset = test::renderImage(*r, 48, 40, 16, 2, 1);
+  r->setLiveSettings({8, -1, 3.0f});
+  const auto denser = test::renderImage(*r, 48, 40, 16, 2, 1);
+  r->setLiveSettings({8, -1, 1.0f});
+  const auto back = test::renderImage(*r, 48, 40, 16, 2, 1);
+  const auto bytes = own.size() * sizeof(float);
+  EXPECT_NE(std::memcmp(own.data(), preset.data(), bytes), 0);
+  EXPECT_NE(std::memcmp(own.data(), denser.data(), bytes), 0);
+  EXPECT_EQ(std::memcmp(own.data(), back.data(), bytes), 0);
+}
+
 }  // namespace
 }  // namespace renderers

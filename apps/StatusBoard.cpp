@@ -1,0 +1,36 @@
+#include "apps/StatusBoard.h"
+
+namespace app {
+
+void StatusBoard::publish(RunStatus status) {
+  const auto now = std::chrono::steady_clock::now();
+  std::lock_guard lock(mutex_);
+  if (status.frame != status_.frame) {
+    frameTimes_.push_back(now);
+    if (frameTimes_.size() > 16) frameTimes_.pop_front();
+  }
+  if (status.idle) frameTimes_.clear();
+  status.fps = 0;
+  if (frameTimes_.size() >= 2) {
+    const double seconds =
+        std::chrono::duration<double>(frameTimes_.back() - frameTimes_.front()).count();
+    if (seconds > 0) status.fps = static_cast<double>(frameTimes_.size() - 1) / seconds;
+  }
+  status.errors.clear();
+  status_ = std::move(status);
+}
+
+void StatusBoard::addError(std::string message) {
+  std::lock_guard lock(mutex_);
+  errors_.push_back(std::move(message));
+  if (errors_.size() > 20) errors_.pop_front();
+}
+
+RunStatus StatusBoard::snapshot() const {
+  std::lock_guard lock(mutex_);
+  RunStatus out = status_;
+  out.errors.assign(errors_.begin(), errors_.end());
+  return out;
+}
+
+}  // namespace app

@@ -1,0 +1,43 @@
+#pragma once
+// What the control server reports (GET /api/status): render rank 0's frame loop publishes it
+// after every frame and while it idles, the server's threads read a copy.
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "apps/FrameOrder.h"
+
+namespace app {
+
+struct RunStatus {
+  std::uint32_t frame = 0;     // the last frame rendered
+  std::int64_t presented = 0;  // the last frame every display presented (0: no wall)
+  double fps = 0;              // frames per second over the last few frames; 0 while idle
+  std::int64_t spp = 0;        // samples per pixel accumulated in the current epoch
+  std::uint32_t epoch = 0;
+  bool idle = false;  // converged: nothing is rendered until something changes
+  FrameView view;
+  std::uint64_t lastRequest = 0;       // the last steering request applied ...
+  std::uint32_t lastRequestFrame = 0;  // ... first shown by this frame
+  std::vector<std::string> errors;     // the latest last
+};
+
+class StatusBoard {
+ public:
+  // After frame `status.frame` (or an idle heartbeat): keeps the errors, computes fps.
+  void publish(RunStatus status);
+  // Something an operator should read (a request that could not be applied); the last 20 kept.
+  void addError(std::string message);
+  RunStatus snapshot() const;
+
+ private:
+  mutable std::mutex mutex_;
+  RunStatus status_;
+  std::deque<std::string> errors_;
+  std::deque<std::chrono::steady_clock::time_point> frameTimes_;  // of the last frames
+};
+
+}  // namespace app
