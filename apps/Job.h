@@ -17,6 +17,8 @@
 
 namespace app {
 
+class Preview;
+
 struct Job {
   Options options;
   std::optional<wall::Layout> layout;
@@ -29,6 +31,9 @@ struct Job {
   // still exist: unwinding first would unregister them, and a message arriving for one would
   // then be reported instead of the real cause.
   FailurePath* failure = nullptr;
+  // Render ranks when previewWanted(): the preview's pixel op and (rank 0) assembler, made in
+  // run() so the control server can serve it (apps/Preview.h).
+  Preview* preview = nullptr;
   // Test-only: DFBWALL_FAIL_AT=RANK:FRAME makes world rank RANK throw at frame FRAME, so the
   // fault tests can check the failure path end to end (tests/apps/fault_test.sh).
   int failAtRank = -1;
@@ -36,6 +41,8 @@ struct Job {
   void failIfAsked(std::uint32_t frame) const;
   bool gatherMode() const { return options.mode == "gather"; }
   bool isWallRank() const { return roles.processOfRank(worldRank) >= 0; }
+  // The whole-wall preview is assembled on rank 0 (apps/Preview.h).
+  bool previewWanted() const { return !options.previewFile.empty() || !options.control.empty(); }
 };
 
 struct FrameRecord {
@@ -50,6 +57,7 @@ struct FrameRecord {
   std::uint64_t wallBytesSent = 0, wallBytesRaw = 0;
   std::uint64_t wallPieces = 0, wallPiecesToOtherHosts = 0, messagesCompressed = 0;
   std::uint64_t tileBytesSent = 0;  // tile inputs between render ranks
+  std::uint64_t previewBytes = 0;   // shrunk tiles for rank 0's preview (apps/Preview.h)
   std::uint64_t tilesRendered = 0;
   std::uint64_t samples = 0;
   std::int64_t lastSetTileNs = 0;  // steady_clock, latest over render ranks

@@ -96,6 +96,10 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
   cli.add_option("--capture-every", o.captureEvery, "capture every K-th frame too")
       ->check(CLI::Range(0, 1 << 30));
   cli.add_option("--stats", o.statsFile, "write per-frame statistics as JSON");
+  cli.add_option("--preview", o.previewFile,
+                 "assemble the small whole-wall preview on rank 0 from tiles shrunk 1/8 a side "
+                 "on their owners (as the control server does) and write the last one to "
+                 "FILE.png");
   cli.add_option("--mode", o.mode,
                  "route: tiles go straight to the displays; gather: through rank 0")
       ->check(CLI::IsMember({"route", "gather"}))
@@ -161,6 +165,8 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
     return fail(
         "--distribution dynamic balances noisy tiles by averaging redundant inputs; the "
         "pattern renderer draws a new picture every frame: use static or roundrobin");
+  if (!o.previewFile.empty() && !endsWith(o.previewFile, ".png"))
+    return fail("--preview " + o.previewFile + ": the name must end in .png");
   if (!o.image.empty() && !endsWith(o.image, ".png") && !endsWith(o.image, ".pfm"))
     return fail("--image " + o.image +
                 ": the name must end in .png (RGBA8) or .pfm (linear float)");

@@ -34,6 +34,7 @@ struct Options {
   std::string captureDir;
   int captureEvery = 0;
   std::string statsFile;
+  std::string previewFile;  // .png: the last whole-wall preview, assembled on rank 0
   std::string mode = "route";  // route | gather
   bool dryRun = false;
   int framesInFlight = 2;

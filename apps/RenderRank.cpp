@@ -10,6 +10,7 @@
 #include "apps/FrameDirector.h"
 #include "apps/FrameOrder.h"
 #include "apps/Job.h"
+#include "apps/Preview.h"
 #include "apps/RunControl.h"
 #include "apps/Stats.h"
 #include "apps/StatusBoard.h"
@@ -96,6 +97,7 @@ struct RankFrame {
   std::uint64_t wallBytes, wallBytesRaw, wallPieces, wallPiecesToOtherHosts, messagesCompressed;
   std::uint64_t tileBytes, tiles, samples;
   std::int64_t lastSetTileNs;
+  std::uint64_t previewBytes;
 };
 
 std::vector<RankFrame> gatherRankFrames(const RankFrame& mine, MPI_Comm comm,
@@ -128,6 +130,7 @@ FrameRecord combine(const std::vector<RankFrame>& all) {
     r.wallPiecesToOtherHosts += f.wallPiecesToOtherHosts;
     r.messagesCompressed += f.messagesCompressed;
     r.tileBytesSent += f.tileBytes;
+    r.previewBytes += f.previewBytes;
     r.tilesRendered += f.tiles;
     r.samples += f.samples;
     r.lastSetTileNs = std::max(r.lastSetTileNs, f.lastSetTileNs);
@@ -221,6 +224,8 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
         std::make_shared<wall::DisplayRoutingOp>(messenger, *job.layout, job.roles, o.tileSize);
     dfb.addPixelOp(routing);
   }
+  Preview* const preview = job.preview;
+  if (preview) dfb.addPixelOp(preview->op());
   std::unique_ptr<wall::FrameCredits> credits;
   if (hasWall && job.worldRank == 0) credits = std::make_unique<wall::FrameCredits>(messenger);
 
@@ -399,7 +404,8 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
                        stats.tileBytesSent,
                        static_cast<std::uint64_t>(report.tilesRendered),
                        report.samples,
-                       stats.lastSetTileNs};
+                       stats.lastSetTileNs,
+                       preview ? preview->op()->takeBytesSent() : 0};
         const std::vector<RankFrame> all = gatherRankFrames(mine, renderComm, timeout);
         if (job.worldRank == 0) {
           FrameRecord record = combine(all);
@@ -436,6 +442,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
       if (!o.quiet) std::printf("stopped after frame %u\n", lastFrame);
     }
     if (credits) credits->waitForPresented(lastFrame, timeout);
+    if (preview) preview->finish(lastFrame, timeout);
     if (!pending.empty() && pending.back().frameMs <= 0)
       pending.back().frameMs = msBetween(previousStart, Clock::now());
     writeReady(true);

@@ -11,6 +11,8 @@
 #include "apps/ControlServer.h"
 #include "apps/Failure.h"
 #include "apps/Job.h"
+#include "apps/Preview.h"
+#include "apps/control/PageRoutes.h"
 #include "apps/RunControl.h"
 #include "apps/Stats.h"
 #include "apps/StatusBoard.h"
@@ -90,6 +92,12 @@ std::string checkOutputs(const Job& job) {
     if (std::string problem = dfb::checkWritableFolder(folder.empty() ? "." : folder);
         !problem.empty())
       return "--image " + problem;
+  }
+  if (job.worldRank == 0 && !o.previewFile.empty()) {
+    const std::string folder = std::filesystem::path(o.previewFile).parent_path().string();
+    if (std::string problem = dfb::checkWritableFolder(folder.empty() ? "." : folder);
+        !problem.empty())
+      return "--preview " + problem;
   }
   return {};
 }
@@ -240,10 +248,16 @@ int run(int argc, char** argv) {
       ~Forget() { failure.setWhoIsSilent({}); }
     } forget{failure};
     RunControl control(messenger, signals);
+    std::unique_ptr<Preview> preview;
+    if (!job.isWallRank() && job.previewWanted()) {
+      preview = std::make_unique<Preview>(job, messenger);
+      job.preview = preview.get();
+    }
     Steering steering(messenger);
     std::unique_ptr<StatusBoard> status;
     if (server) {
       status = std::make_unique<StatusBoard>();
+      addPageRoutes(*server, job, *preview);  // the controller page and the preview (issue 12)
       server->start(job, steering, *status);
       // One line a script can read: where the API is, and the token when one is needed.
       std::printf("dfbwall: control API on http://%s:%d/%s%s\n", server->host().c_str(),

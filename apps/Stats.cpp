@@ -141,6 +141,7 @@ void StatsStream::writeFrame(const FrameRecord& f) {
   line["wall_pieces_to_other_hosts"] = f.wallPiecesToOtherHosts;
   line["messages_compressed"] = f.messagesCompressed;
   line["tile_bytes_sent"] = f.tileBytesSent;
+  line["preview_bytes"] = f.previewBytes;
   line["tiles_rendered"] = f.tilesRendered;
   line["samples"] = f.samples;
   line["epoch"] = f.epoch;

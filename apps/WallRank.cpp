@@ -1,11 +1,13 @@
 // A wall rank: its displays' presenters and the wall node's frame loop.
 #include <cstdio>
 #include <optional>
+#include <utility>
 
 #include "apps/Collectives.h"
 #include "apps/Job.h"
 #include "apps/RunControl.h"
 #include "apps/Steering.h"
+#include "apps/WallKeys.h"
 #include "wall/GlfwPresenter.h"
 #include "wall/OsmesaPresenter.h"
 #include "wall/WallNode.h"
@@ -40,6 +42,23 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
   // ahead of this process's last presented frame, one more while it is between the swap
   // barrier and noting the frame presented.
   options.framesAhead = static_cast<std::uint32_t>(o.framesInFlight) + 2;
+  // A keyboard on the wall: keys become steering requests for render rank 0, applied at its next
+  // frame boundary like the control API's; Esc asks for the graceful stop (once).
+  bool escaped = false;
+  if (!o.offscreen)
+    options.onKeys = [&steering, &escaped, process](const std::vector<wall::WallKey>& keys) {
+      for (wall::WallKey key : keys) {
+        if (key == wall::WallKey::Escape) {
+          if (std::exchange(escaped, true)) continue;
+          std::fprintf(stderr, "dfbwall: Esc pressed on wall process %d: stopping\n", process);
+          SteeringRequest stop;
+          stop.kind = SteeringRequest::kStop;
+          steering.submit(stop);
+        } else if (const std::optional<SteeringRequest> r = requestForKey(key)) {
+          steering.submit(*r);
+        }
+      }
+    };
   {
     wall::WallNode node(messenger, layout, process, wallComm, std::move(presenters), options);
     control.onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });

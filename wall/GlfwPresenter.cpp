@@ -7,6 +7,7 @@
 
 #include <bit>
 #include <optional>
+#include <utility>
 
 #include "wall/Error.h"
 #include "wall/GlFrameDrawer.h"
@@ -100,6 +101,8 @@ class GlfwPresenter : public Presenter {
                   "context: " +
                   glfwProblem());
     if (!monitor && o.x >= 0 && o.y >= 0) glfwSetWindowPos(window_, o.x, o.y);
+    glfwSetWindowUserPointer(window_, this);
+    glfwSetKeyCallback(window_, &GlfwPresenter::onKey);
     glfwShowWindow(window_);
     try {
       glfwMakeContextCurrent(window_);
@@ -137,14 +140,54 @@ class GlfwPresenter : public Presenter {
 
   bool closeRequested() const override { return glfwWindowShouldClose(window_); }
 
+  std::vector<WallKey> takeKeys() override { return std::exchange(keys_, {}); }
+  void pollEvents() override { glfwPollEvents(); }
+
   std::string describe() const override {
     return "GLFW window '" + title_ + "', OpenGL " + drawer_->version() + ", " +
            drawer_->renderer();
   }
 
  private:
+  // Called by glfwPollEvents on this (the main) thread. Keys by their meaning on a US layout
+  // and the keypad; '+' is shift-'=' there, so '=' counts as plus too.
+  static void onKey(GLFWwindow* window, int key, int /*scancode*/, int action, int /*mods*/) {
+    if (action == GLFW_RELEASE) return;
+    auto* self = static_cast<GlfwPresenter*>(glfwGetWindowUserPointer(window));
+    std::optional<WallKey> k;
+    switch (key) {
+      case GLFW_KEY_LEFT:
+        k = WallKey::Left;
+        break;
+      case GLFW_KEY_RIGHT:
+        k = WallKey::Right;
+        break;
+      case GLFW_KEY_UP:
+        k = WallKey::Up;
+        break;
+      case GLFW_KEY_DOWN:
+        k = WallKey::Down;
+        break;
+      case GLFW_KEY_EQUAL:
+      case GLFW_KEY_KP_ADD:
+        k = WallKey::Plus;
+        break;
+      case GLFW_KEY_MINUS:
+      case GLFW_KEY_KP_SUBTRACT:
+        k = WallKey::Minus;
+        break;
+      case GLFW_KEY_ESCAPE:
+        if (action == GLFW_PRESS) k = WallKey::Escape;
+        break;
+      default:
+        break;
+    }
+    if (k && self->keys_.size() < 256) self->keys_.push_back(*k);  // bounded if nobody takes
+  }
+
   std::string title_;
   GLFWwindow* window_ = nullptr;
+  std::vector<WallKey> keys_;
   std::optional<GlFrameDrawer> drawer_;
   int lastWidth_ = 0, lastHeight_ = 0;
 };

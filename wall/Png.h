@@ -14,6 +14,9 @@ inline void writePng(const std::string& path, const Image& image) {
   writePng(path, image.pixels.data(), image.width, image.height);
 }
 
+// The PNG file's bytes in memory (for a server to send), or throws wall::Error.
+std::string encodePng(const Image& image);
+
 // Any PNG, converted to RGBA8.
 Image readPng(const std::string& path);
 

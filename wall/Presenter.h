@@ -7,10 +7,15 @@
 // displays); each call switches to its own context.
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "wall/Image.h"
 
 namespace wall {
+
+// Keys an operator pressed in a display's window, for a wall with a keyboard attached: the app
+// turns them into camera changes and a graceful stop.
+enum class WallKey { Left, Right, Up, Down, Plus, Minus, Escape };
 
 class Presenter {
  public:
@@ -29,6 +34,11 @@ class Presenter {
 
   // The user closed the window (always false offscreen).
   virtual bool closeRequested() const { return false; }
+  // Keys pressed (and repeated while held) since the last call, in order (none offscreen).
+  virtual std::vector<WallKey> takeKeys() { return {}; }
+  // Handles window events (keys, close) without presenting: a wall waiting for its next frame
+  // still hears its keyboard.
+  virtual void pollEvents() {}
 
   // For logs: the kind of presenter and the GL_VERSION / GL_RENDERER strings of its context.
   virtual std::string describe() const = 0;

@@ -188,6 +188,16 @@ void WallNode::requestCapture(std::uint32_t frameId, std::uint64_t sequence) {
   }
 }
 
+void WallNode::pollWindows() {
+  if (!options_.onKeys) return;
+  std::vector<WallKey> keys;
+  for (auto& presenter : presenters_) {
+    presenter->pollEvents();
+    for (WallKey k : presenter->takeKeys()) keys.push_back(k);
+  }
+  if (!keys.empty()) options_.onKeys(keys);
+}
+
 PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   PresentReport report;
   const auto start = Clock::now();
@@ -206,7 +216,15 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     while (!ready()) {
       deadline = std::max(start, waitFrom_) + options_.timeout;
       if (Clock::now() >= deadline) break;
-      complete_.wait_until(lock, deadline);
+      if (!options_.onKeys) {
+        complete_.wait_until(lock, deadline);
+        continue;
+      }
+      complete_.wait_until(lock, std::min(deadline, Clock::now() + options_.eventPoll));
+      if (ready()) break;
+      lock.unlock();  // GLFW's callbacks run in here; pieces keep arriving meanwhile
+      pollWindows();
+      lock.lock();
     }
     if (!error_.empty()) throw Error("wall process " + std::to_string(process_) + ": " + error_);
     if (stopsBefore()) {
@@ -263,10 +281,13 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     const Image& image = slot->displays[i];
     presenters_[i]->present(image.pixels.data(), image.width, image.height);
   }
-  // An operator closing a window asks the whole job to stop; the app decides how (gracefully).
-  for (size_t i = 0; i < mine_.size(); ++i)
+  // An operator closing a window asks the whole job to stop, a key asks for a camera change or a
+  // stop; the app decides how.
+  for (size_t i = 0; i < mine_.size(); ++i) {
     if (presenters_[i]->closeRequested())
       report.closedDisplay = layout_.displays[static_cast<size_t>(mine_[i])].name;
+  }
+  pollWindows();
   const auto presented = Clock::now();
 
   bool last = frameId == options_.lastFrame;

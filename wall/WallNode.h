@@ -13,6 +13,7 @@
 
 #include <chrono>
 #include <condition_variable>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -37,6 +38,11 @@ struct WallNodeOptions {
   // the renderers run at most frames-in-flight ahead, so anything further is a corrupt or
   // hostile message, and buffering it would hold a display buffer forever.
   std::uint32_t framesAhead = 8;
+  // Windows: keys pressed in this process's windows go here, on the calling (main) thread, as
+  // they come, also while presentFrame waits for a frame (every `eventPoll` then: a converged,
+  // idle wall still hears its keyboard). Empty: keys are ignored.
+  std::function<void(const std::vector<WallKey>&)> onKeys;
+  std::chrono::milliseconds eventPoll{50};
 };
 
 struct PresentReport {
@@ -86,6 +92,8 @@ class WallNode : public dfb::MessageHandler {
   void incoming(int fromRank, dfb::Bytes&& payload) override;
 
  private:
+  // Handles window events and hands pressed keys to options_.onKeys (main thread, unlocked).
+  void pollWindows();
   struct Slot {
     std::vector<Image> displays;             // by position in mine_
     std::vector<int> received;               // pieces copied in, by position in mine_

@@ -1,8 +1,11 @@
 // compare_captures LAYOUT CAPTURE_DIR FULL_CANVAS_PNG FRAME   (or: compare_captures --info LAYOUT)
-// Invariant 2 of docs/design.md: every display's capture of frame FRAME equals its rectangle cut out
-// of a single-process render of the whole canvas, byte for byte; the wall preview exists and
+//                  --preview LAYOUT PREVIEW_PNG FULL_CANVAS_PNG
+// Invariant 2 of docs/design.md: every display's capture of frame FRAME equals its rectangle cut
+// out of a single-process render of the whole canvas, byte for byte; the wall preview exists and
 // shows the same pixels. Exit 0 when all match, 1 with a message naming the first mismatch.
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <string>
@@ -11,6 +14,55 @@
 #include "wall/Image.h"
 #include "wall/Layout.h"
 #include "wall/Png.h"
+#include "wall/Preview.h"
+
+namespace {
+
+// --preview: dfbwall's assembled preview (--preview FILE.png, decorated) against the box filter
+// of a single-process render of the canvas: every cell that lies wholly inside a display and off
+// its outline must match within rounding (exactly when the tile size is a multiple of 8).
+int comparePreview(const wall::Layout& layout, const wall::Image& preview,
+                   const wall::Image& full) {
+  const wall::PreviewGrid grid{layout.canvasWidth, layout.canvasHeight,
+                               wall::previewFactor(layout.canvasWidth, layout.canvasHeight)};
+  if (preview.width != grid.width() || preview.height != grid.height()) {
+    std::fprintf(stderr, "preview is %dx%d, expected %dx%d\n", preview.width, preview.height,
+                 grid.width(), grid.height());
+    return 1;
+  }
+  const wall::Image expected = wall::downsample(grid, full);
+  int checked = 0, worst = 0, exact = 0;
+  for (const wall::Display& d : layout.displays) {
+    const dfb::Region cells = grid.cellsOf(d.rect);
+    for (int cy = cells.y0 + 1; cy < cells.y1 - 1; ++cy)
+      for (int cx = cells.x0 + 1; cx < cells.x1 - 1; ++cx) {
+        if (dfb::intersect(grid.cellPixels(cx, cy), d.rect) != grid.cellPixels(cx, cy)) continue;
+        int diff = 0;
+        for (int c = 0; c < 3; ++c)
+          diff = std::max(diff, std::abs(static_cast<int>(preview.at(cx, cy) >> (8 * c) & 0xff) -
+                                         static_cast<int>(expected.at(cx, cy) >> (8 * c) & 0xff)));
+        if (diff > 1) {
+          std::fprintf(stderr, "display %s, preview cell (%d, %d): 0x%08x, box filter 0x%08x\n",
+                       d.name.c_str(), cx, cy, preview.at(cx, cy), expected.at(cx, cy));
+          return 1;
+        }
+        worst = std::max(worst, diff);
+        exact += diff == 0;
+        ++checked;
+      }
+  }
+  if (checked == 0) {
+    std::fprintf(stderr, "no preview cell lies wholly inside a display\n");
+    return 1;
+  }
+  std::printf(
+      "%d preview cells (%d exact) equal the single-process render's box filter "
+      "within %d\n",
+      checked, exact, worst);
+  return 0;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   if (argc == 3 && std::string(argv[1]) == "--info") {  // "W WIDTHxHEIGHT" for the test script
@@ -18,6 +70,15 @@ int main(int argc, char** argv) {
       const wall::Layout layout = wall::loadLayout(argv[2]);
       std::printf("%d %dx%d\n", layout.processCount, layout.canvasWidth, layout.canvasHeight);
       return 0;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "compare_captures: %s\n", e.what());
+      return 1;
+    }
+  }
+  if (argc == 5 && std::string(argv[1]) == "--preview") {
+    try {
+      return comparePreview(wall::loadLayout(argv[2]), wall::readPng(argv[3]),
+                            wall::readPng(argv[4]));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "compare_captures: %s\n", e.what());
       return 1;

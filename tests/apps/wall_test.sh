@@ -8,6 +8,7 @@
 #   wall_test.sh dry-run       LAYOUT RENDER_RANKS
 #   wall_test.sh rank-dies     LAYOUT RENDER_RANKS
 #   wall_test.sh ranks-equal   RANKS [dfbwall options...]   (--image on RANKS ranks == on 1)
+#   wall_test.sh preview       LAYOUT RENDER_RANKS MODE [options for both runs...]
 # Needs DFBWALL (the executable), COMPARE (compare_captures) and MPIEXEC in the environment.
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
@@ -43,6 +44,32 @@ case "$scenario" in
     [ "$values" = "$expected" ] || { echo "rank0_pixel_bytes_received: '$values', expected $expected every frame"; exit 1; }
     tail -n 1 "$work/stats.json" | grep -q '^{"summary":.*"median_frame_ms"' || { echo "no summary in the stats"; exit 1; }
     echo "$mode: rank 0 received $expected pixel bytes in each of 4 frames"
+    ;;
+  preview)
+    # The whole-wall preview assembled on rank 0 from tiles shrunk on their owners equals the
+    # box filter of a single-process render; its bytes are counted apart, about 1/64 of the
+    # pieces', and in route mode rank 0 still receives no full-size pixel.
+    layout=$1 renders=$2 mode=$3; shift 3
+    w=$(processes "$layout"); size=$(canvas "$layout")
+    common=(--frames 3 --spp 2 --seed 11 "$@")
+    mpi $((renders + w)) "$DFBWALL" --wall "$layout" --offscreen --mode "$mode" \
+      --preview "$work/preview.png" --stats "$work/stats.json" --quiet "${common[@]}"
+    mpi 1 "$DFBWALL" --size "$size" --image "$work/full.png" --quiet "${common[@]}"
+    "$COMPARE" --preview "$layout" "$work/preview.png" "$work/full.png"
+    /usr/bin/python3 - "$work/stats.json" "$mode" "$size" <<'PY'
+import json, sys
+w, h = map(int, sys.argv[3].split('x'))
+frames = [l for l in map(json.loads, open(sys.argv[1])) if 'frame' in l]
+assert len(frames) == 3, f'{len(frames)} frame lines'
+for f in frames:
+    p, raw, rank0 = f['preview_bytes'], f['wall_bytes_raw'], f['rank0_pixel_bytes_received']
+    assert p > 0, f'frame {f["frame"]}: no preview bytes'
+    # Cells are 1/64 of the canvas's pixels at most; 24-byte headers per tile add a little.
+    assert p * 48 < w * h * 4, f'frame {f["frame"]}: preview {p} bytes, canvas {w}x{h}'
+    if sys.argv[2] == 'route':
+        assert rank0 == 0, f'frame {f["frame"]}: rank 0 received {rank0} pixel bytes'
+print(f'preview bytes per frame: {frames[-1]["preview_bytes"]}, pieces {frames[-1]["wall_bytes_raw"]}, canvas {w * h * 4}')
+PY
     ;;
   same-frames)
     layout=$1 renders=$2

@@ -1,0 +1,46 @@
+#pragma once
+// The whole-wall preview in the app (issue 12): every render rank runs the preview's pixel op,
+// render rank 0 assembles the shrunk tiles (wall/PreviewAssembler.h). Wanted when the control
+// server runs (it serves /api/preview.png) or with --preview FILE.png (written at the end).
+#include <chrono>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "apps/Job.h"
+#include "dfb/Messenger.h"
+#include "wall/PreviewAssembler.h"
+#include "wall/PreviewOp.h"
+
+namespace app {
+
+class Preview {
+ public:
+  // Every render rank, before the start-up barrier (and before the control server starts, which
+  // serves it). Lives until the messenger has stopped.
+  Preview(const Job& job, dfb::Messenger& messenger);
+  std::shared_ptr<wall::PreviewOp> op() const { return op_; }
+  // Render rank 0 only (nullptr elsewhere).
+  wall::PreviewAssembler* assembler() const { return assembler_.get(); }
+
+  // Rank 0: the latest preview as PNG bytes, decorated (bezels dark, display outlines), and its
+  // frame. Encoded once per frame, whatever the number of readers. Thread-safe.
+  struct Png {
+    std::uint32_t frame = 0;
+    std::shared_ptr<const std::string> bytes;
+  };
+  Png png() const;
+  // Rank 0 at the end of the run: waits (up to `timeout`) until the last frame's preview is in,
+  // so no preview message is still travelling when the assembler goes, then writes --preview.
+  void finish(std::uint32_t lastFrame, std::chrono::milliseconds timeout) const;
+
+ private:
+  const Job& job_;
+  std::shared_ptr<wall::PreviewOp> op_;
+  std::unique_ptr<wall::PreviewAssembler> assembler_;
+  mutable std::mutex pngMutex_;
+  mutable Png png_;
+};
+
+}  // namespace app

@@ -1,0 +1,19 @@
+#pragma once
+// The controller page's routes on the control server (issue 12): the page itself ("/" and its
+// files, embedded by cmake/EmbedFiles.cmake), the latest whole-wall preview as PNG, and the
+// layout the page draws the display outlines and names from.
+//
+//   GET /, /index.html, /app.js, /style.css
+//   GET /api/preview.png   the assembled preview (bezels dark, outlines), canvas / factor
+//   GET /api/layout        {"canvas": [w, h], "preview": {"size": [w, h], "factor": f},
+//                           "displays": [{"name", "rect": [x0, y0, x1, y1], "process"}]}
+namespace app {
+
+class ControlServer;
+class Preview;
+struct Job;
+
+// Before the server starts. `preview` must outlive the server.
+void addPageRoutes(ControlServer& server, const Job& job, const Preview& preview);
+
+}  // namespace app
