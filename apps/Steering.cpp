@@ -101,13 +101,13 @@ std::uint64_t Steering::submit(SteeringRequest request) {
 }
 
 std::uint64_t Steering::enqueue(SteeringRequest request) {
-  std::function<std::int64_t()> probe;
+  std::int64_t presented = 0;
   {
-    std::lock_guard lock(mutex_);
-    probe = presentedProbe_;
+    // Its own lock, held while the probe runs: setPresentedProbe({}) then waits for a probe in
+    // progress before the frame credits it reads go away.
+    std::lock_guard probing(probeMutex_);
+    if (presentedProbe_) presented = presentedProbe_();
   }
-  // Outside the lock: the probe takes the frame credits' own lock.
-  const std::int64_t presented = probe ? probe() : 0;
   std::lock_guard lock(mutex_);
   request.id = nextId_++;
   request.receivedNs = nowNs();
@@ -138,7 +138,7 @@ void Steering::wake() {
 }
 
 void Steering::setPresentedProbe(std::function<std::int64_t()> probe) {
-  std::lock_guard lock(mutex_);
+  std::lock_guard lock(probeMutex_);
   presentedProbe_ = std::move(probe);
 }
 

@@ -111,6 +111,7 @@ class Steering : public dfb::MessageHandler {
   std::deque<SteeringRequest> queue_;
   std::uint64_t nextId_ = 1;
   bool woken_ = false;
+  std::mutex probeMutex_;  // guards presentedProbe_ (also while it runs)
   std::function<std::int64_t()> presentedProbe_;
   std::function<void()> keepWaiting_;
   std::function<void(std::uint32_t, std::uint64_t)> capture_;
