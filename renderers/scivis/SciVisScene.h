@@ -66,6 +66,8 @@ class SciVisScene {
   const SceneDesc& desc() const { return *desc_; }
   const Box3& bounds() const { return content_.bounds; }
   const BrickContent& content() const { return content_; }
+  // Moves the data out, for a new scene version that keeps it; destroy the scene next.
+  BrickContent release() { return std::move(content_); }
 
   // The closest surface (mesh or particle) along origin + t dir with t in [tNear, tFar], camera
   // data only.
@@ -74,8 +76,8 @@ class SciVisScene {
   bool surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const;
 
   struct VolumeLayer {
-    const VolumeField* field = nullptr;  // null when this brick holds none of the volume
-    std::vector<float> table;            // kTableSize x RGBA, opacity per renderer step
+    const VolumeField* field = nullptr;      // null when this brick holds none of the volume
+    std::vector<float> table;                // kTableSize x RGBA, opacity per renderer step
     std::vector<std::uint32_t> visibleUpTo;  // prefix counts of entries with opacity > 0
     float valueMin = 0, tableScale = 0;
     bool visible = true;

@@ -59,10 +59,9 @@ std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int rank
   std::vector<float> image;
   if (rank < ranks) {
     BrickDriverOptions bo;
-    bo.bricks = bricks;
-    bo.replication = replication;
     bo.threads = 2;
-    BrickFrameDriver driver(desc, settings(), bo, rank, ranks);
+    BrickFrameDriver driver(desc, settings(), bo,
+                            loadOwnBricks(*desc, bricks, replication, rank, ranks), comm);
     dfb::Messenger messenger(comm);
     dfb::DfbOptions options;
     options.width = kWidth, options.height = kHeight, options.tileSize = kTile;
@@ -106,8 +105,8 @@ TEST(BrickDriverMpi, FourBricksMatchTheUnbrickedRender) {
   const auto renderer = makeRenderer("scivis", whole, settings());
   std::vector<float> expected(bricked.size(), 0.0f);
   for (int f = 0; f < kFrames; ++f) {
-    const auto frame = test::renderImage(*renderer, kWidth, kHeight, kTile, 2, 1,
-                                         static_cast<std::uint32_t>(f));
+    const auto frame =
+        test::renderImage(*renderer, kWidth, kHeight, kTile, 2, 1, static_cast<std::uint32_t>(f));
     for (std::size_t i = 0; i < frame.size(); ++i) expected[i] += frame[i] / kFrames;
   }
   ASSERT_EQ(bricked.size(), expected.size());
@@ -127,11 +126,10 @@ TEST(BrickDriverMpi, FourBricksMatchTheUnbrickedRender) {
 TEST(BrickDriverMpi, EachRankHoldsOnlyItsBricks) {
   const auto desc = scene();
   const int size = testutil::worldSize(), rank = testutil::worldRank();
-  BrickDriverOptions bo;
-  bo.bricks = 4;
-  BrickFrameDriver split(desc, settings(), bo, rank, size);
-  bo.bricks = 1;
-  BrickFrameDriver whole(desc, settings(), bo, 0, 1);
+  BrickFrameDriver split(desc, settings(), {}, loadOwnBricks(*desc, 4, 1, rank, size),
+                         MPI_COMM_WORLD);
+  BrickFrameDriver whole(desc, settings(), {}, loadOwnBricks(*desc, 1, 1, 0, 1), MPI_COMM_SELF);
+  EXPECT_EQ(split.bricks().size(), 4u);
   EXPECT_EQ(split.heldBricks().size(), static_cast<std::size_t>((4 + size - 1 - rank) / size));
   if (size == 4) {
     // One brick of four, with its ghost layers: well under half the scene.
