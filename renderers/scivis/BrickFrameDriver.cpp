@@ -39,6 +39,30 @@ bool projectBox(const CameraDesc& c, int width, int height, const Box3& box, flo
   return true;
 }
 
+// The camera ray of sample `s` of pixel (x, y): exactly the ray the brick renderers trace.
+void sampleRay(const Camera& camera, std::uint64_t seed, int x, int y, std::uint32_t accumulationId,
+               std::uint32_t s, Vec3& origin, Vec3& dir) {
+  const Sampler sampler(seed, x, y, accumulationId, s);
+  camera.ray(static_cast<float>(x) + sampler.get(0), static_cast<float>(y) + sampler.get(1), 0.5f,
+             0.5f, origin, dir);
+}
+
+// Whether any camera ray of `region` this frame enters or leaves `box` (the same test the brick's
+// renderer clips with, so a brick counted here is one some sample renders, and one not counted
+// is one no sample sees). A ray from inside the box leaves it: a camera inside a brick counts it.
+bool raysMeetBox(const Camera& camera, std::uint64_t seed, const dfb::Region& region,
+                 std::uint32_t accumulationId, std::uint32_t spp, const Box3& box) {
+  for (int y = region.y0; y < region.y1; ++y)
+    for (int x = region.x0; x < region.x1; ++x)
+      for (std::uint32_t s = 0; s < spp; ++s) {
+        Vec3 origin, dir;
+        sampleRay(camera, seed, x, y, accumulationId, s, origin, dir);
+        float a = 0, b = kInf;
+        if (clipToBox(box, origin, reciprocal(dir), a, b)) return true;
+      }
+  return false;
+}
+
 // The distance to sort a brick's fragment of a pixel by: where the ray enters the brick, or, when
 // it misses (another sample of the pixel may hit), the distance to the brick's nearest point.
 float brickDepth(const Box3& b, Vec3 origin, Vec3 dir) {
@@ -155,20 +179,32 @@ int BrickFrameDriver::tileBrickOwner(int tile, int brick) const {
   return h[static_cast<std::size_t>(tile + brick) % h.size()];
 }
 
-std::vector<int> BrickFrameDriver::bricksOfTile(const CameraDesc& camera,
-                                                const dfb::Region& region) const {
+std::vector<int> BrickFrameDriver::candidateBricks(const CameraDesc& camera,
+                                                   const dfb::Region& region) const {
   std::vector<int> out;
   const std::vector<BrickPlan>& plans = impl_->directory.bricks;
   for (std::size_t b = 0; b < plans.size(); ++b) {
-    const BrickPlan& plan = plans[b];
     float x0, y0, x1, y1;
     // A pixel's samples jitter within it: widen the projection by a pixel.
-    if (!projectBox(camera, impl_->settings.width, impl_->settings.height, plan.bounds, x0, y0, x1,
-                    y1) ||
+    if (!projectBox(camera, impl_->settings.width, impl_->settings.height, plans[b].bounds, x0, y0,
+                    x1, y1) ||
         (x0 - 1 < static_cast<float>(region.x1) && x1 + 1 > static_cast<float>(region.x0) &&
          y0 - 1 < static_cast<float>(region.y1) && y1 + 1 > static_cast<float>(region.y0)))
       out.push_back(static_cast<int>(b));
   }
+  return out;
+}
+
+std::vector<int> BrickFrameDriver::bricksOfTile(const CameraDesc& cameraDesc,
+                                                const dfb::Region& region,
+                                                std::uint32_t accumulationId) const {
+  const Camera camera(cameraDesc, impl_->settings.width, impl_->settings.height);
+  std::vector<int> out;
+  for (int b : candidateBricks(cameraDesc, region))
+    if (raysMeetBox(camera, impl_->settings.seed, region, accumulationId,
+                    impl_->options.samplesPerPixel,
+                    impl_->directory.bricks[static_cast<std::size_t>(b)].bounds))
+      out.push_back(b);
   return out;
 }
 
@@ -187,24 +223,40 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
   for (auto& r : m.renderers)
     if (r) r->beginFrame(frame);
 
-  // The plan: the same on every rank. A job is (tile, brick), brick -1 for the background.
-  struct Job {
-    int tile, brick, children;
-  };
-  std::vector<Job> jobs;
-  const dfb::TileGrid& grid = dfb.grid();
-  for (int t = 0; t < grid.tileCount(); ++t) {
-    if (!m.options.activeTiles.empty() && !m.options.activeTiles[static_cast<std::size_t>(t)])
-      continue;
-    const std::vector<int> needed = bricksOfTile(cameraDesc, grid.region(t));
-    if (dfb.ownerOf(t) == dfb.rank()) jobs.push_back({t, -1, static_cast<int>(needed.size())});
-    for (int b : needed)
-      if (tileBrickOwner(t, b) == dfb.rank()) jobs.push_back({t, b, 0});
-  }
-
   dfb.begin(frame);
   const auto t1 = Clock::now();
   const std::uint32_t accumulationId = dfb.accumulationId();
+
+  // The plan: what every rank would decide, worked out here only where it concerns this rank
+  // (the tiles it owns, the tile-bricks it renders). Candidates come from the bricks' screen
+  // projections, and each candidate is confirmed by the tile's own sample rays (raysMeetBox),
+  // which every rank traces identically. A job is (tile, brick index), brick -1 the background.
+  struct Job {
+    int tile, brick, children;
+  };
+  const dfb::TileGrid& grid = dfb.grid();
+  std::vector<std::vector<Job>> perTile(static_cast<std::size_t>(grid.tileCount()));
+  parallelFor(perTile.size(), [&](std::size_t i) {
+    const int t = static_cast<int>(i);
+    if (!m.options.activeTiles.empty() && !m.options.activeTiles[i]) return;
+    const bool owner = dfb.ownerOf(t) == dfb.rank();
+    const dfb::Region region = grid.region(t);
+    int children = 0;
+    std::vector<Job>& mine = perTile[i];
+    if (owner) mine.push_back({t, -1, 0});
+    for (int b : candidateBricks(cameraDesc, region)) {
+      const bool renders = tileBrickOwner(t, b) == dfb.rank();
+      if (!owner && !renders) continue;
+      if (!raysMeetBox(camera, m.settings.seed, region, accumulationId, m.options.samplesPerPixel,
+                       m.directory.bricks[static_cast<std::size_t>(b)].bounds))
+        continue;
+      ++children;
+      if (renders) mine.push_back({t, b, 0});
+    }
+    if (owner) mine.front().children = children;
+  });
+  std::vector<Job> jobs;
+  for (const auto& tileJobs : perTile) jobs.insert(jobs.end(), tileJobs.begin(), tileJobs.end());
   const std::uint32_t spp = m.options.samplesPerPixel;
   const float inv = 1.0f / static_cast<float>(spp);
   const Environment& background = m.desc->environment;
@@ -250,23 +302,22 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
           // Sorted by the first sample's ray: with one sample a frame (the usual progressive
           // case) every sample's fragments then composite in exactly its own ray's order, also
           // in pixels that see a brick border edge-on.
-          const Sampler first(m.settings.seed, x, y, accumulationId, 0);
           Vec3 origin, dir;
-          camera.ray(static_cast<float>(x) + first.get(0), static_cast<float>(y) + first.get(1),
-                     0.5f, 0.5f, origin, dir);
+          sampleRay(camera, m.settings.seed, x, y, accumulationId, 0, origin, dir);
           tile.depth[p] = brickDepth(bounds, origin, dir);
         }
       }
     if (renderer) m.brickTiles.fetch_add(1, std::memory_order_relaxed);
     dfb.setTile(std::move(tile));
   });
-  const auto t2 = Clock::now();
+  const auto t3 = Clock::now();
   dfb.end();
   FrameReport report;
   report.tilesRendered = static_cast<int>(jobs.size());
   for (const Job& j : jobs)
     if (j.brick >= 0) report.samples += std::uint64_t{spp} * grid.region(j.tile).pixelCount();
-  report.renderMs = dfb::msBetween(t1, t2);
+  // Planning (the tiles' ray tests) included: it is this rank's work before its last tile.
+  report.renderMs = dfb::msBetween(t1, t3);
   report.frameMs = dfb::msBetween(t0, Clock::now());
   return report;
 }

@@ -65,9 +65,14 @@ class BrickFrameDriver {
   // The holder of brick `brick` that renders it for tile `tile` (round robin over its holders,
   // offset by the tile, so neighbouring tiles of one brick go to different ranks).
   int tileBrickOwner(int tile, int brick) const;
-  // The bricks (indices) tile `region` needs under `camera` (screen projection of their
-  // bounds; every brick when the camera is inside or beside one).
-  std::vector<int> bricksOfTile(const CameraDesc& camera, const dfb::Region& region) const;
+  // The bricks (indices) that may reach tile `region` under `camera`: the screen projection of
+  // their bounds, widened by a pixel (every brick when the camera is inside or beside one).
+  std::vector<int> candidateBricks(const CameraDesc& camera, const dfb::Region& region) const;
+  // The bricks (indices) tile `region` needs in the frame of `accumulationId`: the candidates
+  // that some sample ray of the tile enters or leaves (the rays every rank traces identically,
+  // so every rank agrees; a camera inside a brick counts it).
+  std::vector<int> bricksOfTile(const CameraDesc& camera, const dfb::Region& region,
+                                std::uint32_t accumulationId) const;
 
  private:
   struct Impl;
