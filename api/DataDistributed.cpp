@@ -79,6 +79,7 @@ struct Session::Impl {
   std::uint32_t frameId = 0, epoch = 0;
 
   bool isWall() const { return roles.processOfRank(rank) >= 0; }
+  void setUp();  // the layout, roles and canvas; throws on bad input
   void commit();
   void startRendering();
 };
@@ -95,28 +96,26 @@ Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make
   dfb::checkMpi(MPI_Comm_dup(comm, &m.own), "MPI_Comm_dup");
   MPI_Comm_rank(m.own, &m.rank);
   MPI_Comm_size(m.own, &m.size);
-  // Setup problems: every rank finds the same ones (same files), so each throws its own.
-  if (!options.wall.empty()) {
-    m.layout = wall::loadLayout(options.wall);
-    if (auto problem = wall::checkRankCount(*m.layout, m.size)) throw std::runtime_error(*problem);
-    m.roles = wall::rankRoles(*m.layout, m.size);
-    m.width = m.layout->canvasWidth;
-    m.height = m.layout->canvasHeight;
-  } else {
-    if (options.width < 1 || options.height < 1)
-      throw std::runtime_error("dfbwall: SessionOptions width and height must be positive");
-    m.roles = wall::RankRoles{m.size, 0};
-    m.width = options.width;
-    m.height = options.height;
+  // Setup problems (a bad layout, a rank count it does not fit, a capture folder a wall rank
+  // cannot write) may show on some ranks only: the ranks agree before anything else, so every
+  // rank throws (the one that found it with its message) instead of some waiting forever.
+  std::string problem;
+  try {
+    m.setUp();
+  } catch (const std::exception& e) {
+    problem = e.what();
   }
-  if (m.isWall() && !options.captureDir.empty())
-    for (int d : m.layout->displaysOfProcess(m.roles.processOfRank(m.rank)))
-      if (std::string problem =
-              dfb::checkWritableFolder((std::filesystem::path(options.captureDir) /
-                                        m.layout->displays[static_cast<std::size_t>(d)].name)
-                                           .string());
-          !problem.empty())
-        throw std::runtime_error("dfbwall: capture folder " + problem);
+  int failing = problem.empty() ? m.size : m.rank, first = 0;
+  MPI_Request request;
+  dfb::checkMpi(MPI_Iallreduce(&failing, &first, 1, MPI_INT, MPI_MIN, m.own, &request),
+                "MPI_Iallreduce");
+  bounded(request, m.timeout, "dfbwall session setup");
+  if (first < m.size) {
+    MPI_Comm_free(&m.own);
+    throw std::runtime_error(problem.empty() ? "dfbwall: rank " + std::to_string(first) +
+                                                   " could not set up the session (it says why)"
+                                             : problem);
+  }
   dfb::checkMpi(MPI_Comm_split(m.own, m.isWall() ? 1 : 0, m.rank, &m.role), "MPI_Comm_split");
   dfb::MessengerOptions messaging;
   messaging.quiesceTimeout = m.timeout;
@@ -160,6 +159,30 @@ void Session::Impl::startRendering() {
   MPI_Request request;
   dfb::checkMpi(MPI_Ibarrier(own, &request), "MPI_Ibarrier");
   bounded(request, timeout, "dfbwall session start-up");
+}
+
+void Session::Impl::setUp() {
+  if (!options.wall.empty()) {
+    layout = wall::loadLayout(options.wall);
+    if (auto problem = wall::checkRankCount(*layout, size)) throw std::runtime_error(*problem);
+    roles = wall::rankRoles(*layout, size);
+    width = layout->canvasWidth;
+    height = layout->canvasHeight;
+  } else {
+    if (options.width < 1 || options.height < 1)
+      throw std::runtime_error("dfbwall: SessionOptions width and height must be positive");
+    roles = wall::RankRoles{size, 0};
+    width = options.width;
+    height = options.height;
+  }
+  if (isWall() && !options.captureDir.empty())
+    for (int d : layout->displaysOfProcess(roles.processOfRank(rank)))
+      if (std::string problem =
+              dfb::checkWritableFolder((std::filesystem::path(options.captureDir) /
+                                        layout->displays[static_cast<std::size_t>(d)].name)
+                                           .string());
+          !problem.empty())
+        throw std::runtime_error("dfbwall: capture folder " + problem);
 }
 
 Session::~Session() {

@@ -34,4 +34,19 @@ cmp "$work/one.png" "$work/three.png"
 colors=$("$COMPARE" --colors "$work/one.png")
 echo "the last frame has $colors colours"
 if [ "$colors" -lt 500 ]; then echo "FAIL: the image is (nearly) blank"; exit 1; fi
+# Bad input through the API: one message naming the cause, a non-zero exit, no hang — also when
+# only the wall ranks find the problem (a capture folder they cannot write).
+expect_failure() {  # expect_failure TEXT NP ARGS...
+  local text=$1 np=$2; shift 2
+  local start=$SECONDS status=0
+  timeout 60 "$MPIEXEC" -np "$np" "$insitu" "${args[@]}" "$@" >"$work/out" 2>&1 || status=$?
+  if [ $status -eq 0 ] || [ $status -eq 124 ] || ! grep -q -- "$text" "$work/out"; then
+    echo "FAIL: expected a failure naming '$text' (exit $status):"; cat "$work/out"; exit 1
+  fi
+  echo "fails as it should in $((SECONDS - start)) s: $(grep -m1 -- "$text" "$work/out")"
+}
+touch "$work/not-a-folder"
+expect_failure "not-a-folder" 6 --wall "$layout" --capture "$work/not-a-folder"
+expect_failure "2x2.toml" 3 --wall "$layout"
+
 echo "PASS: the installed package builds the example, and its wall shows the one-rank image"
