@@ -197,13 +197,16 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
     int renderRanks = 1;
     MPI_Comm_size(renderComm, &renderRanks);
     renderers::BrickDriverOptions bricks;
-    bricks.bricks = o.bricks;
-    bricks.replication = o.replication;
     bricks.samplesPerPixel = static_cast<std::uint32_t>(o.spp);
     bricks.threads = o.threads;
     bricks.activeTiles = driving.activeTiles;
-    brickDriver = std::make_unique<renderers::BrickFrameDriver>(job.scene.desc, settings, bricks,
-                                                                renderRank, renderRanks);
+    bricks.timeout = std::chrono::seconds(o.timeoutSeconds);
+    // Each rank loads only its own bricks; the ranks then exchange their bounds, as programs
+    // that bring their own data do (api/DataDistributed.h).
+    brickDriver = std::make_unique<renderers::BrickFrameDriver>(
+        job.scene.desc, settings, bricks,
+        renderers::loadOwnBricks(*job.scene.desc, o.bricks, o.replication, renderRank, renderRanks),
+        renderComm);
     brickDriver->configure(dfbOptions);
     totals.sceneBytes = static_cast<double>(brickDriver->sceneBytes());
   } else {

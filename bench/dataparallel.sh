@@ -234,7 +234,7 @@ EOF
            "load_average_before": "$load0", "load_average_after": "$load1",
            "scaling_scene": "wavelet ${res}^3 (faint cool-warm volume, isosurfaces 160 and 215), AO 1 ray up to 0.3 (domain 2), camera of builtin:wavelet",
            "skewed_scene": "1e6 translucent particles (opacity 0.35, radius 0.006, 2 AO rays up to 0.1) clumped inside brick 0 (x<0, y<0); invisible 32^3 volume spans [-1,1]^3",
-           "composite_share": "composite_ms / frame_ms as in --stats (max over ranks of last setTile -> frame complete, so it includes waiting for slower ranks); not_rendering_share = (frame_ms - render_ms) / frame_ms, an upper bound of the compositing tail after the slowest rank's last tile"},
+           "composite_share": "composite_ms / frame_ms as in --stats (from the slowest rank's last setTile to the frame complete on all ranks: the paper's compositing overhead); not_rendering_share = (frame_ms - render_ms) / frame_ms, an upper bound of the compositing tail after the slowest rank's last tile"},
  "strong_scaling": [$scaleRows
  ],
  "compositing": {"target": "median composite_ms / frame_ms <= 10% on 2 and 4 ranks: $compGoal", "results": [$compRows

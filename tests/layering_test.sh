@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The layering of docs/design.md, checked on every include: dfb/ includes nothing of ours;
-# renderers/ and wall/ use dfb/ but not each other (nor apps/); only apps/ ties them together.
+# renderers/ and wall/ use dfb/ but not each other (nor apps/, api/); only apps/ and api/ (the
+# data-distributed API) tie them together, and neither includes the other.
 # (Includes are written from the repository root, so one include path serves every library;
 # this test is what keeps a library from reaching into another.)
 set -euo pipefail
@@ -14,8 +15,15 @@ forbid() {  # forbid FOLDER PATTERN...
     fi
   done
 }
-forbid dfb renderers wall apps
-forbid renderers wall apps
-forbid wall renderers apps
-[ $status -eq 0 ] && echo "dfb/ -> nothing; renderers/, wall/ -> dfb/ only: holds"
+forbid dfb renderers wall apps api
+forbid renderers wall apps api
+forbid wall renderers apps api
+forbid api apps
+forbid apps api
+# The API's public header is all an installed program sees: MPI and the standard library only.
+if hits=$(grep -nE '#include +"' "$root/api/DataDistributed.h"); then
+  echo "FAIL: api/DataDistributed.h must include only <mpi.h> and standard headers:"; echo "$hits"
+  status=1
+fi
+[ $status -eq 0 ] && echo "dfb/ -> nothing; renderers/, wall/ -> dfb/ only; api/ self-contained: holds"
 exit $status

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <string>
 
 #include "dfb/Timing.h"
 #include "renderers/Error.h"
@@ -38,6 +39,30 @@ bool projectBox(const CameraDesc& c, int width, int height, const Box3& box, flo
   return true;
 }
 
+// The camera ray of sample `s` of pixel (x, y): exactly the ray the brick renderers trace.
+void sampleRay(const Camera& camera, std::uint64_t seed, int x, int y, std::uint32_t accumulationId,
+               std::uint32_t s, Vec3& origin, Vec3& dir) {
+  const Sampler sampler(seed, x, y, accumulationId, s);
+  camera.ray(static_cast<float>(x) + sampler.get(0), static_cast<float>(y) + sampler.get(1), 0.5f,
+             0.5f, origin, dir);
+}
+
+// Whether any camera ray of `region` this frame enters or leaves `box` (the same test the brick's
+// renderer clips with, so a brick counted here is one some sample renders, and one not counted
+// is one no sample sees). A ray from inside the box leaves it: a camera inside a brick counts it.
+bool raysMeetBox(const Camera& camera, std::uint64_t seed, const dfb::Region& region,
+                 std::uint32_t accumulationId, std::uint32_t spp, const Box3& box) {
+  for (int y = region.y0; y < region.y1; ++y)
+    for (int x = region.x0; x < region.x1; ++x)
+      for (std::uint32_t s = 0; s < spp; ++s) {
+        Vec3 origin, dir;
+        sampleRay(camera, seed, x, y, accumulationId, s, origin, dir);
+        float a = 0, b = kInf;
+        if (clipToBox(box, origin, reciprocal(dir), a, b)) return true;
+      }
+  return false;
+}
+
 // The distance to sort a brick's fragment of a pixel by: where the ray enters the brick, or, when
 // it misses (another sample of the pixel may hit), the distance to the brick's nearest point.
 float brickDepth(const Box3& b, Vec3 origin, Vec3 dir) {
@@ -56,49 +81,65 @@ struct BrickFrameDriver::Impl {
   BrickDriverOptions options;
   int rank = 0, ranks = 1;
   ThreadLimit threads;
-  std::vector<BrickPlan> plans;
-  std::vector<std::vector<int>> holders;  // per brick
-  // This rank's bricks: scene and renderer (without background) per held brick id.
-  std::vector<std::unique_ptr<SciVisScene>> scenes;
-  std::vector<std::unique_ptr<SciVisRenderer>> renderers;  // by brick id; null when not held
+  BrickDirectory directory;  // every brick by id, and its holders
+  // This rank's bricks: scene and renderer (without background) per held brick.
+  std::vector<std::unique_ptr<SciVisScene>> scenes;        // by brick index; null: not held
+  std::vector<std::unique_ptr<SciVisRenderer>> renderers;  // the same
   std::size_t bytes = 0;
   std::atomic<std::uint64_t> brickTiles{0};
 
   Impl(std::shared_ptr<const SceneDesc> d, const RenderSettings& s, BrickDriverOptions o, int r,
        int n)
-      : desc(std::move(d)), settings(s), options(std::move(o)), rank(r), ranks(n),
+      : desc(std::move(d)),
+        settings(s),
+        options(std::move(o)),
+        rank(r),
+        ranks(n),
         threads(options.threads) {}
 };
 
 BrickFrameDriver::BrickFrameDriver(std::shared_ptr<const SceneDesc> desc,
                                    const RenderSettings& settings, BrickDriverOptions options,
-                                   int rank, int ranks)
-    : impl_(std::make_unique<Impl>(std::move(desc), settings, std::move(options), rank, ranks)) {
+                                   std::vector<HeldBrick> mine, MPI_Comm comm)
+    : impl_(std::make_unique<Impl>(std::move(desc), settings, std::move(options), 0, 1)) {
   Impl& m = *impl_;
-  if (m.options.bricks < 1) throw Error("--bricks must be at least 1");
-  if (m.options.replication < 1) throw Error("--replication must be at least 1");
-  m.plans = splitScene(*m.desc, m.options.bricks);
-  const Box3 domain = sceneDomain(*m.desc);
-  const float ghost = ghostMargin(*m.desc, maxComponent(domain.hi - domain.lo));
-  m.renderers.resize(m.plans.size());
-  for (const BrickPlan& plan : m.plans) {
-    m.holders.push_back(brickHolders(plan.id, ranks, m.options.replication));
-    const auto& h = m.holders.back();
-    if (std::find(h.begin(), h.end(), rank) == h.end()) continue;
-    BrickContent content = loadBrick(*m.desc, plan, ghost);
-    m.bytes += content.bytes();
-    m.scenes.push_back(std::make_unique<SciVisScene>(m.desc, std::move(content)));
-    m.renderers[static_cast<std::size_t>(plan.id)] =
-        std::make_unique<SciVisRenderer>(*m.scenes.back(), settings, SciVisOptions{false});
+  MPI_Comm_rank(comm, &m.rank);
+  MPI_Comm_size(comm, &m.ranks);
+  std::vector<BrickPlan> held;
+  for (const HeldBrick& b : mine) {
+    if (b.content.volumes.size() != m.desc->volumes.size())
+      throw Error("brick " + std::to_string(b.id) + " has " +
+                  std::to_string(b.content.volumes.size()) + " volumes, the scene " +
+                  std::to_string(m.desc->volumes.size()));
+    for (const BrickPlan& p : held)
+      if (p.id == b.id)
+        throw Error("brick " + std::to_string(b.id) + " is added twice on render rank " +
+                    std::to_string(m.rank));
+    held.push_back({b.id, b.content.bounds});
+  }
+  m.directory = exchangeBricks(held, comm, m.options.timeout);
+  m.scenes.resize(m.directory.bricks.size());
+  m.renderers.resize(m.directory.bricks.size());
+  for (HeldBrick& b : mine) {
+    const auto i =
+        static_cast<std::size_t>(std::find_if(m.directory.bricks.begin(), m.directory.bricks.end(),
+                                              [&](const BrickPlan& p) { return p.id == b.id; }) -
+                                 m.directory.bricks.begin());
+    m.bytes += b.content.bytes();
+    m.scenes[i] = std::make_unique<SciVisScene>(m.desc, std::move(b.content));
+    m.renderers[i] = std::make_unique<SciVisRenderer>(*m.scenes[i], settings, SciVisOptions{false});
   }
 }
 
 BrickFrameDriver::~BrickFrameDriver() = default;
 
 void BrickFrameDriver::configure(dfb::DfbOptions& options) const {
+  configureBrickDfb(options, impl_->options.activeTiles);
+}
+
+void configureBrickDfb(dfb::DfbOptions& options, std::vector<bool> active) {
   options.operation = dfb::compositeAccumulateOperation();
-  const std::vector<bool> active = impl_->options.activeTiles;
-  options.expectedInputs = [active](int tile) {
+  options.expectedInputs = [active = std::move(active)](int tile) {
     return active.empty() || (tile >= 0 && static_cast<std::size_t>(tile) < active.size() &&
                               active[static_cast<std::size_t>(tile)])
                ? 1
@@ -106,33 +147,50 @@ void BrickFrameDriver::configure(dfb::DfbOptions& options) const {
   };
 }
 
-const std::vector<BrickPlan>& BrickFrameDriver::bricks() const { return impl_->plans; }
+const std::vector<BrickPlan>& BrickFrameDriver::bricks() const { return impl_->directory.bricks; }
+const std::vector<int>& BrickFrameDriver::holders(int brick) const {
+  return impl_->directory.holders.at(static_cast<std::size_t>(brick));
+}
 std::size_t BrickFrameDriver::sceneBytes() const { return impl_->bytes; }
 std::uint64_t BrickFrameDriver::brickTilesRendered() const { return impl_->brickTiles.load(); }
+
+std::vector<HeldBrick> BrickFrameDriver::releaseBricks() {
+  Impl& m = *impl_;
+  std::vector<HeldBrick> out;
+  for (std::size_t b = 0; b < m.renderers.size(); ++b) {
+    if (!m.renderers[b]) continue;
+    out.push_back({m.directory.bricks[b].id, m.scenes[b]->release()});
+  }
+  m.renderers.clear();
+  m.scenes.clear();
+  m.bytes = 0;
+  return out;
+}
 
 std::vector<int> BrickFrameDriver::heldBricks() const {
   std::vector<int> out;
   for (std::size_t b = 0; b < impl_->renderers.size(); ++b)
-    if (impl_->renderers[b]) out.push_back(static_cast<int>(b));
+    if (impl_->renderers[b]) out.push_back(impl_->directory.bricks[b].id);
   return out;
 }
 
 int BrickFrameDriver::tileBrickOwner(int tile, int brick) const {
-  const std::vector<int>& h = impl_->holders[static_cast<std::size_t>(brick)];
+  const std::vector<int>& h = impl_->directory.holders[static_cast<std::size_t>(brick)];
   return h[static_cast<std::size_t>(tile + brick) % h.size()];
 }
 
-std::vector<int> BrickFrameDriver::bricksOfTile(const CameraDesc& camera,
-                                                const dfb::Region& region) const {
+std::vector<int> BrickFrameDriver::candidateBricks(const CameraDesc& camera,
+                                                   const dfb::Region& region) const {
   std::vector<int> out;
-  for (const BrickPlan& plan : impl_->plans) {
+  const std::vector<BrickPlan>& plans = impl_->directory.bricks;
+  for (std::size_t b = 0; b < plans.size(); ++b) {
     float x0, y0, x1, y1;
     // A pixel's samples jitter within it: widen the projection by a pixel.
-    if (!projectBox(camera, impl_->settings.width, impl_->settings.height, plan.bounds, x0, y0,
+    if (!projectBox(camera, impl_->settings.width, impl_->settings.height, plans[b].bounds, x0, y0,
                     x1, y1) ||
         (x0 - 1 < static_cast<float>(region.x1) && x1 + 1 > static_cast<float>(region.x0) &&
          y0 - 1 < static_cast<float>(region.y1) && y1 + 1 > static_cast<float>(region.y0)))
-      out.push_back(plan.id);
+      out.push_back(static_cast<int>(b));
   }
   return out;
 }
@@ -146,6 +204,19 @@ void BrickFrameDriver::setLiveSettings(const LiveSettings& live) {
     if (r) r->setLiveSettings(live);
 }
 
+std::vector<int> BrickFrameDriver::bricksOfTile(const CameraDesc& cameraDesc,
+                                                const dfb::Region& region,
+                                                std::uint32_t accumulationId) const {
+  const Camera camera(cameraDesc, impl_->settings.width, impl_->settings.height);
+  std::vector<int> out;
+  for (int b : candidateBricks(cameraDesc, region))
+    if (raysMeetBox(camera, impl_->settings.seed, region, accumulationId,
+                    impl_->options.samplesPerPixel,
+                    impl_->directory.bricks[static_cast<std::size_t>(b)].bounds))
+      out.push_back(b);
+  return out;
+}
+
 FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
                                           const dfb::FrameInfo& frame,
                                           const CameraDesc& cameraDesc) {
@@ -156,24 +227,40 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
   for (auto& r : m.renderers)
     if (r) r->beginFrame(frame, cameraDesc);
 
-  // The plan: the same on every rank. A job is (tile, brick), brick -1 for the background.
-  struct Job {
-    int tile, brick, children;
-  };
-  std::vector<Job> jobs;
-  const dfb::TileGrid& grid = dfb.grid();
-  for (int t = 0; t < grid.tileCount(); ++t) {
-    if (!m.options.activeTiles.empty() && !m.options.activeTiles[static_cast<std::size_t>(t)])
-      continue;
-    const std::vector<int> needed = bricksOfTile(cameraDesc, grid.region(t));
-    if (dfb.ownerOf(t) == dfb.rank()) jobs.push_back({t, -1, static_cast<int>(needed.size())});
-    for (int b : needed)
-      if (tileBrickOwner(t, b) == dfb.rank()) jobs.push_back({t, b, 0});
-  }
-
   dfb.begin(frame);
   const auto t1 = Clock::now();
   const std::uint32_t accumulationId = dfb.accumulationId();
+
+  // The plan: what every rank would decide, worked out here only where it concerns this rank
+  // (the tiles it owns, the tile-bricks it renders). Candidates come from the bricks' screen
+  // projections, and each candidate is confirmed by the tile's own sample rays (raysMeetBox),
+  // which every rank traces identically. A job is (tile, brick index), brick -1 the background.
+  struct Job {
+    int tile, brick, children;
+  };
+  const dfb::TileGrid& grid = dfb.grid();
+  std::vector<std::vector<Job>> perTile(static_cast<std::size_t>(grid.tileCount()));
+  parallelFor(perTile.size(), [&](std::size_t i) {
+    const int t = static_cast<int>(i);
+    if (!m.options.activeTiles.empty() && !m.options.activeTiles[i]) return;
+    const bool owner = dfb.ownerOf(t) == dfb.rank();
+    const dfb::Region region = grid.region(t);
+    int children = 0;
+    std::vector<Job>& mine = perTile[i];
+    if (owner) mine.push_back({t, -1, 0});
+    for (int b : candidateBricks(cameraDesc, region)) {
+      const bool renders = tileBrickOwner(t, b) == dfb.rank();
+      if (!owner && !renders) continue;
+      if (!raysMeetBox(camera, m.settings.seed, region, accumulationId, m.options.samplesPerPixel,
+                       m.directory.bricks[static_cast<std::size_t>(b)].bounds))
+        continue;
+      ++children;
+      if (renders) mine.push_back({t, b, 0});
+    }
+    if (owner) mine.front().children = children;
+  });
+  std::vector<Job> jobs;
+  for (const auto& tileJobs : perTile) jobs.insert(jobs.end(), tileJobs.begin(), tileJobs.end());
   const std::uint32_t spp = m.options.samplesPerPixel;
   const float inv = 1.0f / static_cast<float>(spp);
   const Environment& background = m.desc->environment;
@@ -186,10 +273,13 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     tile.depth.assign(static_cast<std::size_t>(region.pixelCount()), kInf);
     tile.generation = job.brick < 0 ? 0 : 1;
     tile.children = job.children;
-    tile.sequence = job.brick < 0 ? 0 : static_cast<std::uint32_t>(job.brick);
+    const BrickPlan* plan =
+        job.brick < 0 ? nullptr : &m.directory.bricks[static_cast<std::size_t>(job.brick)];
+    // Fragments of one depth composite by brick id: the same order whoever rendered them.
+    tile.sequence = plan ? static_cast<std::uint32_t>(plan->id) : 0;
     const SciVisRenderer* renderer =
         job.brick < 0 ? nullptr : m.renderers[static_cast<std::size_t>(job.brick)].get();
-    const Box3 bounds = job.brick < 0 ? Box3{} : m.plans[static_cast<std::size_t>(job.brick)].bounds;
+    const Box3 bounds = plan ? plan->bounds : Box3{};
     for (int y = region.y0; y < region.y1; ++y)
       for (int x = region.x0; x < region.x1; ++x) {
         float sum[4] = {0, 0, 0, 0};
@@ -197,8 +287,8 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
           // The camera ray of SciVisRenderer::render, sample for sample.
           const Sampler sampler(m.settings.seed, x, y, accumulationId, s);
           Vec3 origin, dir;
-          camera.ray(static_cast<float>(x) + sampler.get(0),
-                     static_cast<float>(y) + sampler.get(1), 0.5f, 0.5f, origin, dir);
+          camera.ray(static_cast<float>(x) + sampler.get(0), static_cast<float>(y) + sampler.get(1),
+                     0.5f, 0.5f, origin, dir);
           if (!renderer) {
             const Vec3 bg = background.radiance(dir);
             sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
@@ -216,23 +306,22 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
           // Sorted by the first sample's ray: with one sample a frame (the usual progressive
           // case) every sample's fragments then composite in exactly its own ray's order, also
           // in pixels that see a brick border edge-on.
-          const Sampler first(m.settings.seed, x, y, accumulationId, 0);
           Vec3 origin, dir;
-          camera.ray(static_cast<float>(x) + first.get(0), static_cast<float>(y) + first.get(1),
-                     0.5f, 0.5f, origin, dir);
+          sampleRay(camera, m.settings.seed, x, y, accumulationId, 0, origin, dir);
           tile.depth[p] = brickDepth(bounds, origin, dir);
         }
       }
     if (renderer) m.brickTiles.fetch_add(1, std::memory_order_relaxed);
     dfb.setTile(std::move(tile));
   });
-  const auto t2 = Clock::now();
+  const auto t3 = Clock::now();
   dfb.end();
   FrameReport report;
   report.tilesRendered = static_cast<int>(jobs.size());
   for (const Job& j : jobs)
     if (j.brick >= 0) report.samples += std::uint64_t{spp} * grid.region(j.tile).pixelCount();
-  report.renderMs = dfb::msBetween(t1, t2);
+  // Planning (the tiles' ray tests) included: it is this rank's work before its last tile.
+  report.renderMs = dfb::msBetween(t1, t3);
   report.frameMs = dfb::msBetween(t0, Clock::now());
   return report;
 }

@@ -8,9 +8,13 @@
 // so the result never depends on who rendered what) and averages the composited frames.
 // One brick per rank is data-parallel, every brick everywhere image-parallel, between mixed.
 //
-// Contracts: construction loads this rank's bricks (no communication: every rank plans the
-// same); renderFrame() is collective over the DFB's communicator like begin()/end(); the DFB
-// must be built with options from configure().
+// Contracts: construction takes this rank's bricks and is collective over `comm` (the render
+// ranks, the DFB's communicator): the ranks exchange their bricks' ids and bounds once
+// (exchangeBricks), so a new scene (new data) is a new driver. renderFrame() is collective over
+// the DFB's communicator like begin()/end(); the DFB must be built with options from configure().
+#include <mpi.h>
+
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -24,20 +28,26 @@
 namespace renderers {
 
 struct BrickDriverOptions {
-  int bricks = 1;
-  int replication = 1;  // ranks holding each brick (clamped to the rank count)
   std::uint32_t samplesPerPixel = 1;
   int threads = 0;
-  std::vector<bool> activeTiles;  // as FrameDriverOptions::activeTiles; empty: all
+  std::vector<bool> activeTiles;             // as FrameDriverOptions::activeTiles; empty: all
+  std::chrono::milliseconds timeout{60000};  // for the bounds exchange
 };
+
+// The DFB options every brick driver needs (the composite-then-accumulate operation, one root
+// input per active tile): a DFB set up once serves every scene version's driver.
+void configureBrickDfb(dfb::DfbOptions& options, std::vector<bool> activeTiles);
 
 class BrickFrameDriver {
  public:
+  // `desc` gives everything but the bricks' data: materials, transfer functions, isosurfaces,
+  // lights, background, the camera and the renderer's settings; its volumes' grids place the
+  // bricks' voxels (BrickContent::volumes has one entry per desc->volumes).
   BrickFrameDriver(std::shared_ptr<const SceneDesc> desc, const RenderSettings& settings,
-                   BrickDriverOptions options, int rank, int ranks);
+                   BrickDriverOptions options, std::vector<HeldBrick> mine, MPI_Comm comm);
   ~BrickFrameDriver();
 
-  // The composite-then-accumulate operation; one root input per active tile.
+  // configureBrickDfb with this driver's active tiles.
   void configure(dfb::DfbOptions& options) const;
   // `camera`: the frame's camera, the same on every rank (it comes with the frame order).
   FrameReport renderFrame(dfb::DistributedFrameBuffer& dfb, const dfb::FrameInfo& frame,
@@ -45,16 +55,25 @@ class BrickFrameDriver {
   void setSamplesPerPixel(std::uint32_t samples);  // from the next frame on, on every rank
   void setLiveSettings(const LiveSettings& live);  // the same
 
+  // Every brick of the job by ascending id (from the exchange); "brick" below is an index here.
   const std::vector<BrickPlan>& bricks() const;
-  std::vector<int> heldBricks() const;  // ids, on this rank
-  std::size_t sceneBytes() const;       // the brick data this rank holds
+  const std::vector<int>& holders(int brick) const;  // render ranks, ascending
+  std::vector<int> heldBricks() const;               // ids, on this rank
+  std::size_t sceneBytes() const;                    // the brick data this rank holds
+  // This rank's bricks, moved out for the next scene version; the driver is spent afterwards.
+  std::vector<HeldBrick> releaseBricks();
   std::uint64_t brickTilesRendered() const;
   // The holder of brick `brick` that renders it for tile `tile` (round robin over its holders,
   // offset by the tile, so neighbouring tiles of one brick go to different ranks).
   int tileBrickOwner(int tile, int brick) const;
-  // The bricks tile `region` needs under `camera` (screen projection of their bounds; every
-  // brick when the camera is inside or beside one).
-  std::vector<int> bricksOfTile(const CameraDesc& camera, const dfb::Region& region) const;
+  // The bricks (indices) that may reach tile `region` under `camera`: the screen projection of
+  // their bounds, widened by a pixel (every brick when the camera is inside or beside one).
+  std::vector<int> candidateBricks(const CameraDesc& camera, const dfb::Region& region) const;
+  // The bricks (indices) tile `region` needs in the frame of `accumulationId`: the candidates
+  // that some sample ray of the tile enters or leaves (the rays every rank traces identically,
+  // so every rank agrees; a camera inside a brick counts it).
+  std::vector<int> bricksOfTile(const CameraDesc& camera, const dfb::Region& region,
+                                std::uint32_t accumulationId) const;
 
  private:
   struct Impl;

@@ -2,7 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <map>
+#include <string>
 
+#include "dfb/BoundedWait.h"
+#include "dfb/Error.h"
 #include "renderers/Error.h"
 
 namespace renderers {
@@ -13,13 +18,11 @@ void grow(Box3& b, Vec3 lo, Vec3 hi) {
   b.hi = {std::max(b.hi.x, hi.x), std::max(b.hi.y, hi.y), std::max(b.hi.z, hi.z)};
 }
 
-Box3 expanded(const Box3& b, float margin) {
-  return {b.lo - Vec3{margin}, b.hi + Vec3{margin}};
-}
+Box3 expanded(const Box3& b, float margin) { return {b.lo - Vec3{margin}, b.hi + Vec3{margin}}; }
 
 bool overlaps(const Box3& a, Vec3 lo, Vec3 hi) {
-  return lo.x <= a.hi.x && hi.x >= a.lo.x && lo.y <= a.hi.y && hi.y >= a.lo.y &&
-         lo.z <= a.hi.z && hi.z >= a.lo.z;
+  return lo.x <= a.hi.x && hi.x >= a.lo.x && lo.y <= a.hi.y && hi.y >= a.lo.y && lo.z <= a.hi.z &&
+         hi.z >= a.lo.z;
 }
 
 // Every particle set of the scene: its [[particles]] and the path tracer's sphere shapes.
@@ -182,9 +185,8 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost
     if (!near.centers.empty()) c.ghostParticles.push_back(std::move(near));
   }
   for (const WorldMesh& m : worldMeshes(desc)) {
-    WorldMesh inside = selectTriangles(m, [&](Vec3 lo, Vec3 hi) {
-      return overlaps(plan.bounds, lo, hi);
-    });
+    WorldMesh inside =
+        selectTriangles(m, [&](Vec3 lo, Vec3 hi) { return overlaps(plan.bounds, lo, hi); });
     WorldMesh near = selectTriangles(m, [&](Vec3 lo, Vec3 hi) {
       return !overlaps(plan.bounds, lo, hi) && overlaps(reach, lo, hi);
     });
@@ -192,6 +194,90 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost
     if (!near.mesh.triangles.empty()) c.ghostMeshes.push_back(std::move(near));
   }
   return c;
+}
+
+std::vector<HeldBrick> loadOwnBricks(const SceneDesc& desc, int bricks, int replication, int rank,
+                                     int ranks) {
+  const std::vector<BrickPlan> plans = splitScene(desc, bricks);
+  if (replication < 1) throw Error("--replication must be at least 1");
+  const Box3 domain = sceneDomain(desc);
+  const float ghost = ghostMargin(desc, maxComponent(domain.hi - domain.lo));
+  std::vector<HeldBrick> out;
+  for (const BrickPlan& plan : plans) {
+    const std::vector<int> h = brickHolders(plan.id, ranks, replication);
+    if (std::find(h.begin(), h.end(), rank) != h.end())
+      out.push_back({plan.id, loadBrick(desc, plan, ghost)});
+  }
+  return out;
+}
+
+namespace {
+
+// One brick on the wire: plain numbers, the same layout on every rank of a job.
+struct WireBrick {
+  std::int32_t id;
+  float lo[3], hi[3];
+};
+
+void finish(MPI_Request& request, std::chrono::milliseconds timeout) {
+  dfb::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
+                        "exchanging brick bounds: another render rank did not join within " +
+                            std::to_string(timeout.count()) + " ms");
+}
+
+}  // namespace
+
+BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
+                              std::chrono::milliseconds timeout) {
+  int ranks = 1;
+  MPI_Comm_size(comm, &ranks);
+  std::vector<WireBrick> local;
+  for (const BrickPlan& b : mine) {
+    if (b.id < 0) throw Error("brick id " + std::to_string(b.id) + " is negative");
+    local.push_back({b.id,
+                     {b.bounds.lo.x, b.bounds.lo.y, b.bounds.lo.z},
+                     {b.bounds.hi.x, b.bounds.hi.y, b.bounds.hi.z}});
+  }
+  const int bytes = static_cast<int>(local.size() * sizeof(WireBrick));
+  std::vector<int> counts(static_cast<std::size_t>(ranks)), offsets(counts.size());
+  MPI_Request request;
+  dfb::checkMpi(MPI_Iallgather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, comm, &request),
+                "MPI_Iallgather");
+  finish(request, timeout);
+  int total = 0;
+  for (std::size_t r = 0; r < counts.size(); ++r) offsets[r] = total, total += counts[r];
+  std::vector<WireBrick> all(static_cast<std::size_t>(total) / sizeof(WireBrick));
+  dfb::checkMpi(MPI_Iallgatherv(local.data(), bytes, MPI_BYTE, all.data(), counts.data(),
+                                offsets.data(), MPI_BYTE, comm, &request),
+                "MPI_Iallgatherv");
+  finish(request, timeout);
+
+  std::map<int, std::pair<Box3, std::vector<int>>> byId;
+  for (int r = 0; r < ranks; ++r) {
+    const std::size_t first =
+        static_cast<std::size_t>(offsets[static_cast<std::size_t>(r)]) / sizeof(WireBrick);
+    const std::size_t n =
+        static_cast<std::size_t>(counts[static_cast<std::size_t>(r)]) / sizeof(WireBrick);
+    for (std::size_t i = first; i < first + n; ++i) {
+      const WireBrick& w = all[i];
+      const Box3 bounds{{w.lo[0], w.lo[1], w.lo[2]}, {w.hi[0], w.hi[1], w.hi[2]}};
+      auto [it, fresh] = byId.try_emplace(w.id, bounds, std::vector<int>{});
+      if (!fresh && !(it->second.first == bounds))
+        throw Error("brick " + std::to_string(w.id) + ": render rank " + std::to_string(r) +
+                    " gives it other bounds than render rank " +
+                    std::to_string(it->second.second.front()) +
+                    " (ranks holding one brick id must hold the same brick)");
+      if (it->second.second.empty() || it->second.second.back() != r)
+        it->second.second.push_back(r);
+    }
+  }
+  if (byId.empty()) throw Error("no render rank holds any brick: nothing to render");
+  BrickDirectory out;
+  for (auto& [id, entry] : byId) {
+    out.bricks.push_back({id, entry.first});
+    out.holders.push_back(std::move(entry.second));
+  }
+  return out;
 }
 
 }  // namespace renderers

@@ -2,7 +2,14 @@
 // Data-parallel bricks of a scivis scene: the scene's domain cut by a k-d split, which ranks hold
 // which brick, and loading one brick's data — only its voxels (plus ghost layers), the particles
 // and triangles that reach into it, and the ghost data its shading rays can reach. Every function
-// is pure: every rank computes the same plan with no communication.
+// but exchangeBricks is pure.
+//
+// Who holds what is never planned globally: each rank says which bricks it holds (from
+// loadOwnBricks, or a program's own data through api/DataDistributed.h) and exchangeBricks
+// tells every rank every brick's bounds and holders, once per scene change.
+#include <mpi.h>
+
+#include <chrono>
 #include <vector>
 
 #include "renderers/SceneDesc.h"
@@ -34,5 +41,29 @@ float ghostMargin(const SceneDesc& desc, float sceneExtent);
 // voxels beyond them; particles and mesh triangles reaching into the bounds (drawn, clipped to
 // them) and, as ghost data, those within `ghost` of them.
 BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost);
+
+// One brick a rank holds: its id (every rank holding an id holds the same data) and its data;
+// content.bounds are the brick's clip bounds.
+struct HeldBrick {
+  int id = 0;
+  BrickContent content;
+};
+
+// --bricks N --replication K: the bricks of `desc` that render rank `rank` of `ranks` holds,
+// loaded (only their own voxels, particles and triangles).
+std::vector<HeldBrick> loadOwnBricks(const SceneDesc& desc, int bricks, int replication, int rank,
+                                     int ranks);
+
+// Every brick of the job, by ascending id, and the ranks of `comm` holding each (ascending).
+struct BrickDirectory {
+  std::vector<BrickPlan> bricks;
+  std::vector<std::vector<int>> holders;  // per entry of `bricks`
+};
+
+// Collective over `comm`: every rank gives the bricks it holds (id and clip bounds), every rank
+// gets the whole directory (one MPI_Iallgatherv, bounded by `timeout`). Throws renderers::Error
+// when ranks disagree about a brick's bounds, an id is negative, or no rank holds any brick.
+BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
+                              std::chrono::milliseconds timeout);
 
 }  // namespace renderers

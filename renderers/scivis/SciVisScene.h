@@ -66,6 +66,8 @@ class SciVisScene {
   const SceneDesc& desc() const { return *desc_; }
   const Box3& bounds() const { return content_.bounds; }
   const BrickContent& content() const { return content_; }
+  // Moves the data out, for a new scene version that keeps it; destroy the scene next.
+  BrickContent release() { return std::move(content_); }
 
   // The closest surface (mesh or particle) along origin + t dir with t in [tNear, tFar], camera
   // data only.

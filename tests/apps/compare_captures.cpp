@@ -1,5 +1,7 @@
 // compare_captures LAYOUT CAPTURE_DIR FULL_CANVAS_PNG FRAME   (or: compare_captures --info LAYOUT)
 //                  --preview LAYOUT PREVIEW_PNG FULL_CANVAS_PNG
+//                  --colors PNG: how many distinct colours the image has, to tell a picture
+//                  from a blank
 // Invariant 2 of docs/design.md: every display's capture of frame FRAME equals its rectangle cut
 // out of a single-process render of the whole canvas, byte for byte; the wall preview exists and
 // shows the same pixels. Exit 0 when all match, 1 with a message naming the first mismatch.
@@ -8,6 +10,7 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <set>
 #include <string>
 
 #include "wall/Capture.h"
@@ -79,6 +82,17 @@ int main(int argc, char** argv) {
     try {
       return comparePreview(wall::loadLayout(argv[2]), wall::readPng(argv[3]),
                             wall::readPng(argv[4]));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "compare_captures: %s\n", e.what());
+      return 1;
+    }
+  }
+  if (argc == 3 && std::string(argv[1]) == "--colors") {
+    try {
+      const wall::Image image = wall::readPng(argv[2]);
+      std::set<std::uint32_t> colors(image.pixels.begin(), image.pixels.end());
+      std::printf("%zu\n", colors.size());
+      return 0;
     } catch (const std::exception& e) {
       std::fprintf(stderr, "compare_captures: %s\n", e.what());
       return 1;

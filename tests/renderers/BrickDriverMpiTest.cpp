@@ -59,10 +59,9 @@ std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int rank
   std::vector<float> image;
   if (rank < ranks) {
     BrickDriverOptions bo;
-    bo.bricks = bricks;
-    bo.replication = replication;
     bo.threads = 2;
-    BrickFrameDriver driver(desc, settings(), bo, rank, ranks);
+    BrickFrameDriver driver(desc, settings(), bo,
+                            loadOwnBricks(*desc, bricks, replication, rank, ranks), comm);
     dfb::Messenger messenger(comm);
     dfb::DfbOptions options;
     options.width = kWidth, options.height = kHeight, options.tileSize = kTile;
@@ -97,8 +96,48 @@ TEST(BrickDriverMpi, EveryRankCountAndReplicationGivesTheSameBytes) {
     }
 }
 
-TEST(BrickDriverMpi, FourBricksMatchTheUnbrickedRender) {
+// Every rank count gives rank 1's bytes, and 4 bricks match the image-parallel render of `desc`.
+void checkAgainstUnbricked(const std::shared_ptr<SceneDesc>& desc);
+
+TEST(BrickDriverMpi, FourBricksMatchTheUnbrickedRender) { checkAgainstUnbricked(scene()); }
+
+// The camera inside a brick: its rays leave that brick (counted: they exit it) and enter others.
+TEST(BrickDriverMpi, CameraInsideABrick) {
   const auto desc = scene();
+  desc->camera.position = {0.45f, 0.35f, -0.4f};
+  desc->camera.lookAt = {-0.5f, -0.2f, 0.6f};
+  desc->camera.fovY = 70;
+  int inside = 0;
+  for (const BrickPlan& b : splitScene(*desc, 4))
+    inside += b.bounds.contains(desc->camera.position);
+  ASSERT_EQ(inside, 1);
+  {
+    // The screen projection cannot place a brick with a corner behind the camera (it is a
+    // candidate for every tile); the tiles' rays can: each tile needs the brick around the
+    // camera, and fewer tile-bricks are needed than the projections suggest.
+    const BrickFrameDriver driver(desc, settings(), {}, loadOwnBricks(*desc, 4, 1, 0, 1),
+                                  MPI_COMM_SELF);
+    std::size_t candidates = 0, needed = 0;
+    for (int y = 0; y < kHeight; y += kTile)
+      for (int x = 0; x < kWidth; x += kTile) {
+        const dfb::Region r{x, y, std::min(x + kTile, kWidth), std::min(y + kTile, kHeight)};
+        const auto tileNeeds = driver.bricksOfTile(desc->camera, r, 0);
+        candidates += driver.candidateBricks(desc->camera, r).size();
+        needed += tileNeeds.size();
+        EXPECT_GE(tileNeeds.size(), 1u);
+      }
+    EXPECT_LT(needed, candidates);
+  }
+  const std::vector<float> one = renderBricks(desc, 1, 4, 1);
+  const std::vector<float> all = renderBricks(desc, testutil::worldSize(), 4, 2);
+  if (testutil::worldRank() == 0) {
+    ASSERT_EQ(one.size(), all.size());
+    EXPECT_EQ(0, std::memcmp(one.data(), all.data(), one.size() * sizeof(float)));
+  }
+  checkAgainstUnbricked(desc);
+}
+
+void checkAgainstUnbricked(const std::shared_ptr<SceneDesc>& desc) {
   const std::vector<float> bricked = renderBricks(desc, testutil::worldSize(), 4, 1);
   const std::vector<float> one = renderBricks(desc, testutil::worldSize(), 1, 1);
   if (testutil::worldRank() != 0) return;
@@ -107,8 +146,8 @@ TEST(BrickDriverMpi, FourBricksMatchTheUnbrickedRender) {
   const auto renderer = makeRenderer("scivis", whole, settings());
   std::vector<float> expected(bricked.size(), 0.0f);
   for (int f = 0; f < kFrames; ++f) {
-    const auto frame = test::renderImage(*renderer, kWidth, kHeight, kTile, 2, 1,
-                                         static_cast<std::uint32_t>(f));
+    const auto frame =
+        test::renderImage(*renderer, kWidth, kHeight, kTile, 2, 1, static_cast<std::uint32_t>(f));
     for (std::size_t i = 0; i < frame.size(); ++i) expected[i] += frame[i] / kFrames;
   }
   ASSERT_EQ(bricked.size(), expected.size());
@@ -128,11 +167,10 @@ TEST(BrickDriverMpi, FourBricksMatchTheUnbrickedRender) {
 TEST(BrickDriverMpi, EachRankHoldsOnlyItsBricks) {
   const auto desc = scene();
   const int size = testutil::worldSize(), rank = testutil::worldRank();
-  BrickDriverOptions bo;
-  bo.bricks = 4;
-  BrickFrameDriver split(desc, settings(), bo, rank, size);
-  bo.bricks = 1;
-  BrickFrameDriver whole(desc, settings(), bo, 0, 1);
+  BrickFrameDriver split(desc, settings(), {}, loadOwnBricks(*desc, 4, 1, rank, size),
+                         MPI_COMM_WORLD);
+  BrickFrameDriver whole(desc, settings(), {}, loadOwnBricks(*desc, 1, 1, 0, 1), MPI_COMM_SELF);
+  EXPECT_EQ(split.bricks().size(), 4u);
   EXPECT_EQ(split.heldBricks().size(), static_cast<std::size_t>((4 + size - 1 - rank) / size));
   if (size == 4) {
     // One brick of four, with its ghost layers: well under half the scene.

@@ -1,0 +1,373 @@
+// The data-distributed API: a program's bricks rendered by renderers::BrickFrameDriver through
+// the DFB, onto a wall (route mode, wall ranks at the end of the program's communicator) or into
+// an image on render rank 0. The same path as `dfbwall --bricks` (apps/RenderRank.cpp), which
+// loads its bricks from a scene file instead.
+#include "api/DataDistributed.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+
+#include "api/SceneStyle.h"
+#include "api/WallStop.h"
+#include "dfb/AtomicFile.h"
+#include "dfb/BoundedWait.h"
+#include "dfb/DistributedFrameBuffer.h"
+#include "dfb/Error.h"
+#include "dfb/Messenger.h"
+#include "renderers/FrameDriver.h"
+#include "renderers/scivis/BrickFrameDriver.h"
+#include "wall/DisplayRoutingOp.h"
+#include "wall/FrameCredits.h"
+#include "wall/GlfwPresenter.h"
+#include "wall/Layout.h"
+#include "wall/OsmesaPresenter.h"
+#include "wall/Png.h"
+#include "wall/Ranks.h"
+#include "wall/Routing.h"
+#include "wall/WallNode.h"
+
+namespace dfbwall {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+void bounded(MPI_Request& request, std::chrono::milliseconds timeout, const std::string& what) {
+  dfb::waitWithDeadline(
+      request, Clock::now() + timeout,
+      what + ": another rank did not join within " + std::to_string(timeout.count()) + " ms");
+}
+
+// What render rank 0 decides for every frame: the camera (so every rank renders the same).
+struct FrameOrder {
+  std::int32_t changed;  // any rank changed its bricks or the style: a new scene version
+  float camera[10];
+};
+
+}  // namespace
+
+struct Session::Impl {
+  SessionOptions options;
+  std::chrono::milliseconds timeout;
+  MPI_Comm own = MPI_COMM_NULL;   // the program's communicator, duplicated: our collectives
+  MPI_Comm role = MPI_COMM_NULL;  // render ranks or wall ranks
+  int rank = 0, size = 1;
+  std::optional<wall::Layout> layout;
+  wall::RankRoles roles;
+  int width = 0, height = 0;
+  std::unique_ptr<dfb::Messenger> messenger;
+  std::unique_ptr<WallStop> wallStop;
+  bool closed = false;
+
+  // Render ranks.
+  std::vector<bool> activeTiles;
+  dfb::DfbOptions dfbOptions;
+  std::unique_ptr<dfb::DistributedFrameBuffer> fb;
+  std::shared_ptr<wall::DisplayRoutingOp> routing;
+  std::unique_ptr<wall::FrameCredits> credits;
+  std::unique_ptr<renderers::BrickFrameDriver> driver;
+  Style style;
+  bool styleSet = false, dirty = false, replacing = false;
+  std::vector<renderers::HeldBrick> pending;  // bricks added since the last frame
+  Camera camera, lastCamera;
+  bool haveCamera = false;
+  std::uint32_t frameId = 0, epoch = 0;
+
+  bool isWall() const { return roles.processOfRank(rank) >= 0; }
+  void setUp();  // the layout, roles and canvas; throws on bad input
+  void commit();
+  void startRendering();
+};
+
+Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.options = options;
+  m.timeout = std::chrono::seconds(std::max(1, options.timeoutSeconds));
+  int level = 0;
+  MPI_Query_thread(&level);
+  if (level < MPI_THREAD_MULTIPLE)
+    throw std::runtime_error(
+        "dfbwall: MPI must be initialised with MPI_Init_thread(..., MPI_THREAD_MULTIPLE, ...)");
+  dfb::checkMpi(MPI_Comm_dup(comm, &m.own), "MPI_Comm_dup");
+  MPI_Comm_rank(m.own, &m.rank);
+  MPI_Comm_size(m.own, &m.size);
+  // Setup problems (a bad layout, a rank count it does not fit, a capture folder a wall rank
+  // cannot write) may show on some ranks only: the ranks agree before anything else, so every
+  // rank throws (the one that found it with its message) instead of some waiting forever.
+  std::string problem;
+  try {
+    m.setUp();
+  } catch (const std::exception& e) {
+    problem = e.what();
+  }
+  int failing = problem.empty() ? m.size : m.rank, first = 0;
+  MPI_Request request;
+  dfb::checkMpi(MPI_Iallreduce(&failing, &first, 1, MPI_INT, MPI_MIN, m.own, &request),
+                "MPI_Iallreduce");
+  bounded(request, m.timeout, "dfbwall session setup");
+  if (first < m.size) {
+    MPI_Comm_free(&m.own);
+    throw std::runtime_error(problem.empty() ? "dfbwall: rank " + std::to_string(first) +
+                                                   " could not set up the session (it says why)"
+                                             : problem);
+  }
+  dfb::checkMpi(MPI_Comm_split(m.own, m.isWall() ? 1 : 0, m.rank, &m.role), "MPI_Comm_split");
+  dfb::MessengerOptions messaging;
+  messaging.quiesceTimeout = m.timeout;
+  m.messenger = std::make_unique<dfb::Messenger>(m.own, messaging);
+  // A message that cannot be handled arrives on the messaging thread, where nothing can throw to
+  // the program: it ends the job, as it does the dfbwall executable (docs/design.md, Failures).
+  m.messenger->setErrorCallback([rank = m.rank](const std::string& message) {
+    std::fprintf(stderr, "dfbwall: error on rank %d: %s\n", rank, message.c_str());
+    MPI_Abort(MPI_COMM_WORLD, 1);
+  });
+  m.wallStop = std::make_unique<WallStop>(*m.messenger);
+  if (!m.isWall()) m.startRendering();
+}
+
+void Session::Impl::startRendering() {
+  const bool route = layout.has_value();
+  dfbOptions.width = width;
+  dfbOptions.height = height;
+  dfbOptions.tileSize = options.tileSize;
+  dfbOptions.frameTimeout = timeout;
+  dfbOptions.compressGather = !messenger->sameHost(0);
+  dfbOptions.toneMap.exposure = options.exposure;
+  if (route) {
+    // Tiles no display shows are never rendered; the rest are owned where they are rendered.
+    activeTiles = wall::tilesShownByAnyDisplay(*layout, options.tileSize);
+    dfbOptions.ownership = renderers::activeTileOwnership(activeTiles);
+    dfbOptions.format = dfb::DisplayFormat::NONE;
+  } else {
+    dfbOptions.format = dfb::DisplayFormat::RGBA8;
+  }
+  // The driver's operation (composite, then accumulate): the same for every scene version.
+  renderers::configureBrickDfb(dfbOptions, activeTiles);
+  fb = std::make_unique<dfb::DistributedFrameBuffer>(*messenger, role, dfbOptions);
+  if (route) {
+    routing =
+        std::make_shared<wall::DisplayRoutingOp>(*messenger, *layout, roles, options.tileSize);
+    fb->addPixelOp(routing);
+    if (rank == 0) credits = std::make_unique<wall::FrameCredits>(*messenger);
+  }
+  // Pairs with runWall's: every object of every rank is registered before anyone sends.
+  MPI_Request request;
+  dfb::checkMpi(MPI_Ibarrier(own, &request), "MPI_Ibarrier");
+  bounded(request, timeout, "dfbwall session start-up");
+}
+
+void Session::Impl::setUp() {
+  if (!options.wall.empty()) {
+    layout = wall::loadLayout(options.wall);
+    if (auto problem = wall::checkRankCount(*layout, size)) throw std::runtime_error(*problem);
+    roles = wall::rankRoles(*layout, size);
+    width = layout->canvasWidth;
+    height = layout->canvasHeight;
+  } else {
+    if (options.width < 1 || options.height < 1)
+      throw std::runtime_error("dfbwall: SessionOptions width and height must be positive");
+    roles = wall::RankRoles{size, 0};
+    width = options.width;
+    height = options.height;
+  }
+  if (isWall() && !options.captureDir.empty())
+    for (int d : layout->displaysOfProcess(roles.processOfRank(rank)))
+      if (std::string problem =
+              dfb::checkWritableFolder((std::filesystem::path(options.captureDir) /
+                                        layout->displays[static_cast<std::size_t>(d)].name)
+                                           .string());
+          !problem.empty())
+        throw std::runtime_error("dfbwall: capture folder " + problem);
+}
+
+Session::~Session() {
+  if (!impl_ || impl_->closed) return;
+  if (std::uncaught_exceptions() > 0) return;  // a failing job: MPI_Abort ends it, not us
+  try {
+    if (impl_->isWall()) return;  // runWall() closes on wall ranks
+    close();
+  } catch (const std::exception&) {
+    // A destructor must not throw; the program's own error path reports what went wrong.
+  }
+}
+
+bool Session::isWallRank() const { return impl_->isWall(); }
+MPI_Comm Session::renderComm() const { return impl_->isWall() ? MPI_COMM_NULL : impl_->role; }
+int Session::canvasWidth() const { return impl_->width; }
+int Session::canvasHeight() const { return impl_->height; }
+
+void Session::runWall() {
+  Impl& m = *impl_;
+  if (!m.isWall()) throw std::logic_error("dfbwall: runWall() on a render rank");
+  const int process = m.roles.processOfRank(m.rank);
+  std::optional<wall::GlfwSession> glfw;
+  if (!m.options.offscreen) glfw.emplace();
+  std::vector<std::unique_ptr<wall::Presenter>> presenters;
+  for (int d : m.layout->displaysOfProcess(process)) {
+    const wall::Display& display = m.layout->displays[static_cast<std::size_t>(d)];
+    presenters.push_back(
+        m.options.offscreen ? wall::makeOsmesaPresenter(display.rect.width(), display.rect.height())
+                            : wall::makeGlfwPresenter(*glfw, wall::windowOptionsFor(display)));
+  }
+  wall::WallNodeOptions options;
+  options.tileSize = m.options.tileSize;
+  options.captureDir = m.options.captureDir;
+  options.captureEvery = m.options.captureEvery;
+  options.lastFrame = 0;  // unknown: the render ranks announce it when they close
+  options.timeout = m.timeout;
+  options.framesAhead = static_cast<std::uint32_t>(m.options.framesInFlight) + 2;
+  {
+    wall::WallNode node(*m.messenger, *m.layout, process, m.role, std::move(presenters), options);
+    m.wallStop->onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
+    MPI_Request request;
+    dfb::checkMpi(MPI_Ibarrier(m.own, &request), "MPI_Ibarrier");
+    bounded(request, m.timeout, "dfbwall session start-up");
+    for (std::uint32_t frameId = 1;; ++frameId)
+      if (node.presentFrame(frameId).stopped) break;
+    node.finish();  // captures the last frame
+    m.wallStop->onLastFrame({});
+  }
+  m.wallStop.reset();
+  m.messenger->stop();
+  MPI_Comm_free(&m.role);
+  MPI_Comm_free(&m.own);
+  m.closed = true;
+}
+
+void Session::setStyle(const Style& style) {
+  impl_->style = style;
+  impl_->styleSet = true;
+  impl_->dirty = true;
+}
+
+void Session::addBrick(const Brick& brick) {
+  Impl& m = *impl_;
+  if (!m.styleSet) throw std::logic_error("dfbwall: addBrick() before setStyle()");
+  if (!m.replacing) m.pending.clear();
+  m.replacing = true;
+  m.dirty = true;
+  m.pending.push_back({brick.id, brickContent(m.style, brick)});
+}
+
+void Session::clearBricks() {
+  impl_->pending.clear();
+  impl_->replacing = true;
+  impl_->dirty = true;
+}
+
+void Session::setCamera(const Camera& camera) {
+  impl_->camera = camera;
+  impl_->haveCamera = true;
+}
+
+void Session::Impl::commit() {
+  // This rank's bricks: the ones added since the last frame, or the ones it had.
+  std::vector<renderers::HeldBrick> bricks =
+      replacing ? std::move(pending)
+                : (driver ? driver->releaseBricks() : std::vector<renderers::HeldBrick>{});
+  pending.clear();
+  replacing = false;
+  driver.reset();
+  renderers::RenderSettings settings;
+  settings.width = width;
+  settings.height = height;
+  settings.seed = style.seed;
+  auto desc = std::make_shared<renderers::SceneDesc>(sceneDesc(style, bricks, role, timeout));
+  renderers::BrickDriverOptions driving;
+  driving.samplesPerPixel = static_cast<std::uint32_t>(std::max(1, style.samplesPerPixel));
+  driving.threads = options.threads;
+  driving.activeTiles = activeTiles;
+  driving.timeout = timeout;
+  driver = std::make_unique<renderers::BrickFrameDriver>(std::move(desc), settings, driving,
+                                                         std::move(bricks), role);
+}
+
+void Session::renderFrame() {
+  Impl& m = *impl_;
+  if (m.isWall()) throw std::logic_error("dfbwall: renderFrame() on a wall rank");
+  if (m.closed) throw std::logic_error("dfbwall: renderFrame() after close()");
+  const std::uint32_t frameId = m.frameId + 1;
+  // Frames in flight: rank 0 starts frame F once the wall presented F - K.
+  if (m.credits)
+    m.credits->waitForPresented(static_cast<std::int64_t>(frameId) - m.options.framesInFlight,
+                                m.timeout);
+  FrameOrder order{};
+  order.changed = m.dirty || !m.driver ? 1 : 0;
+  const Camera& c = m.camera;
+  const float camera[10] = {c.position[0], c.position[1], c.position[2], c.lookAt[0], c.lookAt[1],
+                            c.lookAt[2],   c.up[0],       c.up[1],       c.up[2],     c.fovY};
+  std::memcpy(order.camera, camera, sizeof camera);
+  int changed = order.changed, anyChanged = 0;
+  MPI_Request request;
+  dfb::checkMpi(MPI_Iallreduce(&changed, &anyChanged, 1, MPI_INT, MPI_MAX, m.role, &request),
+                "MPI_Iallreduce");
+  bounded(request, 2 * m.timeout, "frame " + std::to_string(frameId));
+  dfb::checkMpi(MPI_Ibcast(order.camera, sizeof order.camera, MPI_BYTE, 0, m.role, &request),
+                "MPI_Ibcast");
+  bounded(request, m.timeout, "frame " + std::to_string(frameId));
+  if (anyChanged) {
+    if (!m.styleSet) throw std::logic_error("dfbwall: renderFrame() before setStyle()");
+    m.commit();
+    m.dirty = false;
+    ++m.epoch;
+  }
+  Camera used;
+  std::memcpy(used.position.data(), order.camera, 3 * sizeof(float));
+  std::memcpy(used.lookAt.data(), order.camera + 3, 3 * sizeof(float));
+  std::memcpy(used.up.data(), order.camera + 6, 3 * sizeof(float));
+  used.fovY = order.camera[9];
+  if (!anyChanged && std::memcmp(&used, &m.lastCamera, sizeof used) != 0) ++m.epoch;
+  m.lastCamera = used;
+  renderers::CameraDesc cd;
+  cd.position = {used.position[0], used.position[1], used.position[2]};
+  cd.lookAt = {used.lookAt[0], used.lookAt[1], used.lookAt[2]};
+  cd.up = {used.up[0], used.up[1], used.up[2]};
+  cd.fovY = used.fovY;
+  m.driver->renderFrame(*m.fb, {frameId, m.epoch}, cd);
+  m.frameId = frameId;
+}
+
+std::uint32_t Session::framesRendered() const { return impl_->frameId; }
+
+std::vector<std::uint8_t> Session::image() const {
+  const Impl& m = *impl_;
+  if (m.isWall() || m.layout || m.rank != 0 || m.frameId == 0) return {};
+  const std::vector<std::uint32_t>& pixels = m.fb->imageRgba8();
+  std::vector<std::uint8_t> out(pixels.size() * 4);
+  std::memcpy(out.data(), pixels.data(), out.size());
+  return out;
+}
+
+void Session::writeImage(const std::string& path) const {
+  const Impl& m = *impl_;
+  if (m.isWall() || m.layout || m.rank != 0 || m.frameId == 0) return;
+  wall::writePng(path, m.fb->imageRgba8().data(), m.width, m.height);
+}
+
+std::size_t Session::sceneBytes() const { return impl_->driver ? impl_->driver->sceneBytes() : 0; }
+
+void Session::close() {
+  Impl& m = *impl_;
+  if (m.closed) return;
+  if (m.isWall()) throw std::logic_error("dfbwall: close() on a wall rank (runWall() returns)");
+  if (m.rank == 0 && m.layout) {
+    m.wallStop->announceLastFrame(m.frameId, m.roles.renderRanks, m.roles.worldSize());
+    if (m.credits) m.credits->waitForPresented(m.frameId, m.timeout);
+  }
+  m.driver.reset();
+  m.credits.reset();
+  m.fb.reset();
+  m.routing.reset();
+  m.wallStop.reset();
+  m.messenger->stop();
+  MPI_Comm_free(&m.role);
+  MPI_Comm_free(&m.own);
+  m.closed = true;
+}
+
+}  // namespace dfbwall

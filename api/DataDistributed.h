@@ -1,0 +1,190 @@
+#pragma once
+// dfbwall's data-distributed API (Usher et al., EuroVis 2019, section 5): for MPI programs that
+// already own distributed data (a simulation, an analysis tool). Each render rank adds the
+// bricks it holds — a sub-box of a volume in whole-field voxel coordinates, particles, triangles,
+// each brick with the bounds camera rays are clipped to and any ghost data around them — and
+// renders frames of them with the scivis renderer through the Distributed FrameBuffer: sort-last
+// compositing per tile, on a display wall or into an image on render rank 0.
+//
+// Ranks. The program gives its communicator. Without a wall every rank renders. With a wall
+// layout of W wall processes the LAST W ranks of the communicator drive the displays: on them
+// isWallRank() is true and the program calls runWall(), which presents frames until the render
+// ranks close the session, and does nothing else with them. The program simulates on
+// renderComm() (the first size - W ranks).
+//
+// Scene versions. setStyle() and the bricks (addBrick / clearBricks) make a scene version; the
+// next renderFrame() after any render rank changed either is the new version: the ranks then
+// exchange their bricks' ids and bounds (one allgather) and, for volumes whose range is not
+// given, the value range. Frames of one version with one camera accumulate (progressive
+// refinement); a new version or camera starts the average afresh. The same brick id on several
+// ranks must be the same data (replication: either rank may render it).
+//
+// Every call but the accessors is collective over the render ranks (renderFrame, close; setStyle,
+// addBrick, clearBricks and setCamera are local and take effect at the next renderFrame). Every
+// wait is bounded by SessionOptions::timeoutSeconds: a rank that stops answering (or a program
+// that takes longer between frames than that, with a wall waiting) is an error, thrown as
+// std::runtime_error naming the cause; after one the session is unusable (end the job with
+// MPI_Abort). MPI must be initialised with MPI_THREAD_MULTIPLE (the messaging runs on its own
+// thread).
+#include <mpi.h>
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace dfbwall {
+
+using Vec3f = std::array<float, 3>;
+using Index3 = std::array<int, 3>;
+
+enum class VoxelType { Float32, UInt8, UInt16 };
+
+// One volume's whole field: its grid and where it sits in the world. Voxel (i, j, k) is at
+// origin + spacing * (i, j, k) (vertex-centred, as VTK image data).
+struct FieldGrid {
+  Index3 dims{2, 2, 2};
+  Vec3f origin{0, 0, 0};
+  Vec3f spacing{1, 1, 1};
+};
+
+// How a volume looks. The transfer function is a preset ("cool-warm", "viridis", "grayscale",
+// "inferno", "rainbow") over [valueMin, valueMax] with opacity rising linearly from 0 to
+// maxOpacity (per voxel spacing of world distance); autoRange takes the range of the voxels all
+// ranks hold at each scene version instead.
+struct VolumeStyle {
+  std::string name = "volume";
+  FieldGrid grid;
+  std::string transferFunction = "cool-warm";
+  float maxOpacity = 0.1f;
+  bool autoRange = true;
+  float valueMin = 0, valueMax = 1;
+  bool visible = true;  // false: only its isosurfaces show
+};
+
+struct Isosurface {
+  int volume = 0;  // index into Style::volumes
+  float value = 0;
+  Vec3f color{0.8f, 0.8f, 0.8f};
+  float opacity = 1;
+};
+
+struct Light {
+  enum class Kind { Directional, Point, Ambient };
+  Kind kind = Kind::Directional;
+  Vec3f direction{0, -1, 0};  // directional: the way the light travels
+  Vec3f position{0, 0, 0};    // point
+  Vec3f color{1, 1, 1};
+  float intensity = 1;
+};
+
+// Everything but the data, the same on every render rank.
+struct Style {
+  std::vector<VolumeStyle> volumes;
+  std::vector<Isosurface> isosurfaces;
+  Vec3f particleColor{0.9f, 0.6f, 0.2f};
+  float particleOpacity = 1;
+  Vec3f meshColor{0.7f, 0.7f, 0.7f};
+  float meshOpacity = 1;
+  std::vector<Light> lights;  // empty: an ambient light and a headlight
+  int aoSamples = 0;          // ambient-occlusion rays per hit and sample
+  float aoDistance = 0;       // how far they look (world units; > 0 when aoSamples > 0)
+  bool shadows = false;       // shadow rays see only the brick and its ghost data
+  float samplingRate = 1;     // volume samples per voxel spacing
+  Vec3f background{0.1f, 0.1f, 0.12f};
+  int samplesPerPixel = 1;  // per frame
+  std::uint64_t seed = 0;
+};
+
+// A brick's part of one volume: the voxels [lo, hi) of the whole field (x fastest, then y, then
+// z), copied by addBrick. For seams that match the whole field exactly the box covers the clip
+// bounds plus 2 voxels below and 3 above on each axis (where the field has them), and for
+// ambient occlusion the AO distance beyond. lo == hi: this brick has none of the volume.
+struct VolumePart {
+  Index3 lo{0, 0, 0}, hi{0, 0, 0};
+  VoxelType type = VoxelType::Float32;
+  const void* voxels = nullptr;
+};
+
+struct Particles {
+  std::vector<Vec3f> centers;
+  std::vector<float> radii;  // one for all, or one per particle
+};
+
+struct Mesh {
+  std::vector<Vec3f> positions;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+};
+
+struct Brick {
+  int id = 0;                                  // >= 0; the same id on two ranks: the same data
+  Vec3f boundsLo{0, 0, 0}, boundsHi{0, 0, 0};  // camera rays are clipped to these bounds
+  std::vector<VolumePart> volumes;             // one per Style::volumes (or none: no volume data)
+  Particles particles, ghostParticles;         // ghost: seen by shading rays only
+  Mesh mesh, ghostMesh;
+};
+
+struct Camera {
+  Vec3f position{0, 0, -5};
+  Vec3f lookAt{0, 0, 0};
+  Vec3f up{0, 1, 0};
+  float fovY = 45;  // degrees
+};
+
+struct SessionOptions {
+  int width = 800, height = 600;  // without a wall; with one the layout's canvas
+  std::string wall;               // wall layout TOML (empty: no wall, image() on render rank 0)
+  bool offscreen = true;          // OSMesa; false: GLFW windows
+  std::string captureDir;         // wall captures DIR/<display>/frame-NNNNNN.png, DIR/wall-*.png
+  int captureEvery = 0;           // every K-th frame; 0: the last one only
+  int tileSize = 64;
+  int threads = 0;           // TBB threads per render rank; 0: all cores
+  int framesInFlight = 2;    // frames rendered ahead of the wall
+  int timeoutSeconds = 300;  // bound of every wait (see above)
+  float exposure = 1;        // tone mapping: linear radiance times this, then sRGB
+};
+
+class Session {
+ public:
+  // Collective over `comm` (not freed, not kept: the session duplicates what it needs). Throws
+  // std::runtime_error (on every rank) for a bad layout, a rank count the layout does not fit,
+  // a capture folder that cannot be written, or MPI without MPI_THREAD_MULTIPLE.
+  Session(MPI_Comm comm, const SessionOptions& options);
+  ~Session();  // close()s when the program did not (not while an exception unwinds)
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  bool isWallRank() const;
+  MPI_Comm renderComm() const;  // the render ranks; MPI_COMM_NULL on wall ranks
+  int canvasWidth() const;
+  int canvasHeight() const;
+
+  // Wall ranks: presents frames until the render ranks close the session, then returns.
+  void runWall();
+
+  // Render ranks.
+  void setStyle(const Style& style);
+  void addBrick(const Brick& brick);
+  void clearBricks();
+  void setCamera(const Camera& camera);  // render rank 0's camera is the one used
+  void renderFrame();
+  std::uint32_t framesRendered() const;
+  // Render rank 0 without a wall: the last frame, RGBA8, rows top to bottom (elsewhere: empty).
+  std::vector<std::uint8_t> image() const;
+  // Render rank 0 without a wall: writes the last frame as a PNG (atomically); elsewhere nothing.
+  void writeImage(const std::string& path) const;
+  // The bytes of brick data this rank holds in the current scene version (its bricks' voxels,
+  // particles and triangles).
+  std::size_t sceneBytes() const;
+  // Render ranks: ends the wall's run after the last frame (waiting until it is presented and
+  // captured) and releases the session's communicators. Collective over the whole `comm`
+  // together with runWall() returning on the wall ranks.
+  void close();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace dfbwall

@@ -1,0 +1,195 @@
+#include "api/SceneStyle.h"
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "dfb/BoundedWait.h"
+#include "dfb/Error.h"
+#include "renderers/scivis/TransferFunction.h"
+
+namespace dfbwall {
+namespace {
+
+renderers::Vec3 vec(const Vec3f& v) { return {v[0], v[1], v[2]}; }
+
+renderers::GridGeometry geometry(const FieldGrid& g) {
+  renderers::GridGeometry out;
+  out.dims = {g.dims[0], g.dims[1], g.dims[2]};
+  out.origin = vec(g.origin);
+  out.spacing = vec(g.spacing);
+  return out;
+}
+
+renderers::VoxelType voxelType(VoxelType t) {
+  switch (t) {
+    case VoxelType::UInt8:
+      return renderers::VoxelType::UInt8;
+    case VoxelType::UInt16:
+      return renderers::VoxelType::UInt16;
+    case VoxelType::Float32:
+      break;
+  }
+  return renderers::VoxelType::Float32;
+}
+
+[[noreturn]] void fail(const Brick& brick, const std::string& what) {
+  throw std::runtime_error("dfbwall: brick " + std::to_string(brick.id) + ": " + what);
+}
+
+renderers::ParticlesDesc particles(const Brick& brick, const Particles& p, const char* field) {
+  if (!(p.radii.size() == 1 || p.radii.size() == p.centers.size()) && !p.centers.empty())
+    fail(brick, std::string(field) + ".radii has " + std::to_string(p.radii.size()) +
+                    " entries: give 1 or one per centre (" + std::to_string(p.centers.size()) +
+                    ")");
+  renderers::ParticlesDesc out;
+  out.name = field;
+  out.material = 0;
+  for (const Vec3f& c : p.centers) out.centers.push_back(vec(c));
+  out.radii = p.radii;
+  return out;
+}
+
+renderers::WorldMesh mesh(const Brick& brick, const Mesh& m, const char* field) {
+  renderers::WorldMesh out;
+  out.material = 1;
+  for (const Vec3f& v : m.positions) out.mesh.positions.push_back(vec(v));
+  for (const auto& t : m.triangles) {
+    for (std::uint32_t i : t)
+      if (i >= m.positions.size())
+        fail(brick, std::string(field) + ": a triangle refers to vertex " + std::to_string(i) +
+                        " of " + std::to_string(m.positions.size()));
+    out.mesh.triangles.push_back(t);
+  }
+  return out;
+}
+
+}  // namespace
+
+renderers::BrickContent brickContent(const Style& style, const Brick& brick) {
+  if (brick.id < 0) fail(brick, "the id must not be negative");
+  renderers::BrickContent c;
+  c.bounds = {vec(brick.boundsLo), vec(brick.boundsHi)};
+  if (!brick.volumes.empty() && brick.volumes.size() != style.volumes.size())
+    fail(brick, "volumes has " + std::to_string(brick.volumes.size()) + " entries; the style has " +
+                    std::to_string(style.volumes.size()) +
+                    " volumes (give one part each, or none)");
+  for (std::size_t v = 0; v < style.volumes.size(); ++v) {
+    renderers::Volume volume;
+    volume.grid = geometry(style.volumes[v].grid);
+    const VolumePart* part = brick.volumes.empty() ? nullptr : &brick.volumes[v];
+    if (part) volume.type = voxelType(part->type);
+    if (part && part->lo != part->hi) {
+      renderers::VoxelBox box{{part->lo[0], part->lo[1], part->lo[2]},
+                              {part->hi[0], part->hi[1], part->hi[2]}};
+      const std::string name = "volume '" + style.volumes[v].name + "'";
+      if (box.empty() || !volume.grid.wholeBox().contains(box))
+        fail(brick, name + ": the voxel box is empty or outside the field's dims");
+      for (int a = 0; a < 3; ++a)
+        if (box.hi[a] - box.lo[a] < 2) fail(brick, name + ": the voxel box is under 2 voxels wide");
+      if (!part->voxels) fail(brick, name + ": voxels is null");
+      volume.box = box;
+      const std::size_t bytes = box.voxelCount() * renderers::voxelBytes(volume.type);
+      volume.voxels = renderers::allocateVoxelBytes(bytes);
+      std::memcpy(volume.voxels.data(), part->voxels, bytes);
+      volume.updateRange();
+    }
+    c.volumes.push_back(std::move(volume));
+  }
+  if (!brick.particles.centers.empty())
+    c.particles.push_back(particles(brick, brick.particles, "particles"));
+  if (!brick.ghostParticles.centers.empty())
+    c.ghostParticles.push_back(particles(brick, brick.ghostParticles, "ghostParticles"));
+  if (!brick.mesh.triangles.empty()) c.meshes.push_back(mesh(brick, brick.mesh, "mesh"));
+  if (!brick.ghostMesh.triangles.empty())
+    c.ghostMeshes.push_back(mesh(brick, brick.ghostMesh, "ghostMesh"));
+  return c;
+}
+
+renderers::SceneDesc sceneDesc(const Style& style, const std::vector<renderers::HeldBrick>& mine,
+                               MPI_Comm renderComm, std::chrono::milliseconds timeout) {
+  renderers::SceneDesc d;
+  renderers::Material particle, surface;
+  particle.name = "particles";
+  particle.color = vec(style.particleColor);
+  particle.opacity = style.particleOpacity;
+  particle.specular = 0.25f;
+  surface.name = "meshes";
+  surface.color = vec(style.meshColor);
+  surface.opacity = style.meshOpacity;
+  d.materials = {particle, surface};
+
+  // The value ranges every rank colours by: min of -max and of min in one reduction.
+  const std::size_t n = style.volumes.size();
+  std::vector<float> local(2 * n, -std::numeric_limits<float>::max()), global(2 * n);
+  for (const renderers::HeldBrick& b : mine)
+    for (std::size_t v = 0; v < n && v < b.content.volumes.size(); ++v) {
+      const renderers::Volume& vol = b.content.volumes[v];
+      if (vol.voxels.empty()) continue;
+      local[2 * v] = std::max(local[2 * v], -vol.valueMin);
+      local[2 * v + 1] = std::max(local[2 * v + 1], vol.valueMax);
+    }
+  const bool anyAuto = std::any_of(style.volumes.begin(), style.volumes.end(),
+                                   [](const VolumeStyle& v) { return v.autoRange; });
+  if (anyAuto && n > 0) {
+    MPI_Request request;
+    dfb::checkMpi(MPI_Iallreduce(local.data(), global.data(), static_cast<int>(2 * n), MPI_FLOAT,
+                                 MPI_MAX, renderComm, &request),
+                  "MPI_Iallreduce");
+    dfb::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
+                          "value ranges of a new scene version: another render rank did not "
+                          "join in time");
+  }
+  for (std::size_t v = 0; v < n; ++v) {
+    const VolumeStyle& s = style.volumes[v];
+    float lo = s.valueMin, hi = s.valueMax;
+    if (s.autoRange) {
+      lo = -global[2 * v], hi = global[2 * v + 1];
+      if (!(hi > lo)) hi = lo + 1;  // a constant field (or none anywhere): any non-empty range
+    }
+    renderers::VolumeDesc vd;
+    vd.name = s.name;
+    vd.source.grid = geometry(s.grid);
+    vd.transfer = renderers::transferFunctionPreset(s.transferFunction, lo, hi, s.maxOpacity);
+    vd.visible = s.visible;
+    d.volumes.push_back(std::move(vd));
+  }
+  for (const Isosurface& iso : style.isosurfaces) {
+    if (iso.volume < 0 || static_cast<std::size_t>(iso.volume) >= n)
+      throw std::runtime_error("dfbwall: an isosurface refers to volume " +
+                               std::to_string(iso.volume) + " of " + std::to_string(n));
+    renderers::Material m;
+    m.name = "isosurface" + std::to_string(d.isosurfaces.size());
+    m.color = vec(iso.color);
+    m.opacity = iso.opacity;
+    m.specular = 0.3f;
+    d.isosurfaces.push_back({static_cast<std::uint32_t>(iso.volume), iso.value,
+                             static_cast<std::uint32_t>(d.materials.size())});
+    d.materials.push_back(m);
+  }
+  for (const Light& l : style.lights) {
+    renderers::LightDesc ld;
+    ld.kind = l.kind == Light::Kind::Point     ? renderers::LightDesc::Kind::Point
+              : l.kind == Light::Kind::Ambient ? renderers::LightDesc::Kind::Ambient
+                                               : renderers::LightDesc::Kind::Directional;
+    ld.direction = vec(l.direction);
+    ld.position = vec(l.position);
+    ld.color = vec(l.color);
+    ld.intensity = l.intensity;
+    d.lights.push_back(ld);
+  }
+  d.environment.color = vec(style.background);
+  if (style.aoSamples > 0 && !(style.aoDistance > 0))
+    throw std::runtime_error(
+        "dfbwall: Style.aoDistance must be positive with aoSamples (a brick cannot know the "
+        "whole scene's extent)");
+  d.scivis.aoSamples = style.aoSamples;
+  d.scivis.aoDistance = style.aoDistance;
+  d.scivis.shadows = style.shadows;
+  d.scivis.samplingRate = style.samplingRate;
+  return d;
+}
+
+}  // namespace dfbwall

@@ -1,0 +1,22 @@
+# `cmake --install build [--prefix P]`: the libraries, the API's header and a CMake package, so
+# a program does find_package(dfbwall) and links dfbwall::dfbwall (examples/insitu does).
+# The libraries are static; their dependencies come back through find_dependency in
+# dfbwallConfig.cmake (cmake/dfbwallConfig.cmake.in).
+include(GNUInstallDirs)
+include(CMakePackageConfigHelpers)
+
+set(DFBWALL_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/dfbwall)
+install(TARGETS dfbwall_api dfb renderers wall wall_glfw dfbwall_warnings
+  EXPORT dfbwallTargets
+  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  INCLUDES DESTINATION include/dfbwall)
+install(FILES ${PROJECT_SOURCE_DIR}/api/DataDistributed.h DESTINATION include/dfbwall/api)
+install(EXPORT dfbwallTargets NAMESPACE dfbwall:: DESTINATION ${DFBWALL_CMAKE_DIR})
+configure_package_config_file(${CMAKE_CURRENT_LIST_DIR}/dfbwallConfig.cmake.in
+  ${CMAKE_CURRENT_BINARY_DIR}/dfbwallConfig.cmake INSTALL_DESTINATION ${DFBWALL_CMAKE_DIR})
+write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/dfbwallConfigVersion.cmake
+  COMPATIBILITY SameMinorVersion)
+install(FILES ${CMAKE_CURRENT_BINARY_DIR}/dfbwallConfig.cmake
+              ${CMAKE_CURRENT_BINARY_DIR}/dfbwallConfigVersion.cmake
+        DESTINATION ${DFBWALL_CMAKE_DIR})

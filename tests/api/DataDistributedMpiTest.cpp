@@ -1,0 +1,207 @@
+// The data-distributed API on real ranks: a program's own bricks (a wavelet field cut by the
+// program into 4 sub-boxes with ghost layers, particles, a triangle) render the same bytes on any
+// number of ranks, match the whole field given as one brick up to float summation order, keep a
+// rank's bricks when only another rank changes its data, and bad input fails on every rank.
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include "api/DataDistributed.h"
+#include "renderers/scivis/VolumeSource.h"
+#include "tests/MpiTestUtil.h"
+
+namespace {
+
+constexpr int kN = 33;  // voxels per axis of the field
+
+// The whole field, as the program would have it (here made once per rank, for the test).
+const renderers::Volume& field() {
+  static const renderers::Volume v = [] {
+    renderers::VolumeSource s;
+    s.kind = renderers::VolumeSource::Kind::Wavelet;
+    s.grid.dims = {kN, kN, kN};
+    s.grid.origin = {-1, -1, -1};
+    s.grid.spacing = renderers::Vec3{2.0f / (kN - 1)};
+    return renderers::loadVolume(s, s.grid.wholeBox());
+  }();
+  return v;
+}
+
+dfbwall::Style style() {
+  dfbwall::Style st;
+  dfbwall::VolumeStyle v;
+  v.grid.dims = {kN, kN, kN};
+  v.grid.origin = {-1, -1, -1};
+  const float h = 2.0f / (kN - 1);
+  v.grid.spacing = {h, h, h};
+  v.maxOpacity = 0.2f;
+  st.volumes.push_back(v);
+  st.isosurfaces.push_back({0, 190, {0.9f, 0.5f, 0.2f}, 0.5f});
+  st.isosurfaces.push_back({0, 240, {0.9f, 0.9f, 0.9f}, 1});
+  st.aoSamples = 1;
+  st.aoDistance = 0.15f;  // under the 3 ghost voxels (0.1875) each brick carries
+  st.seed = 11;
+  return st;
+}
+
+// Brick `b` of `count` slabs along x (count 1: the whole field), with 2 + 3 ghost voxels, and
+// the particles whose centres lie in its slab (a particle reaching over the border is drawn by
+// both: each clipped to its own bounds).
+dfbwall::Brick brick(int b, int count, std::vector<float>& storage) {
+  const float h = 2.0f / (kN - 1);
+  const int x0 = (kN - 1) * b / count, x1 = (kN - 1) * (b + 1) / count;  // planes of the bounds
+  dfbwall::Brick out;
+  out.id = b;
+  out.boundsLo = {-1 + h * x0, -1, -1};
+  out.boundsHi = {-1 + h * x1, 1, 1};
+  // AO looks 0.15 (2.4 voxels) beyond the bounds: 2 + 3 ghost voxels cover it and the seams.
+  const int lo = std::max(0, x0 - 5), hi = std::min(kN, x1 + 6);
+  storage.clear();
+  for (int z = 0; z < kN; ++z)
+    for (int y = 0; y < kN; ++y)
+      for (int x = lo; x < hi; ++x) storage.push_back(field().at(x, y, z));
+  dfbwall::VolumePart part;
+  part.lo = {lo, 0, 0};
+  part.hi = {hi, kN, kN};
+  part.voxels = storage.data();
+  out.volumes.push_back(part);
+  const dfbwall::Vec3f centres[] = {{-0.6f, 0.5f, -0.2f}, {0.02f, -0.4f, 0.1f}, {0.7f, 0.1f, 0.3f}};
+  for (const auto& c : centres)
+    if (c[0] >= out.boundsLo[0] - 0.2f && c[0] <= out.boundsHi[0] + 0.2f)
+      out.particles.centers.push_back(c);
+  out.particles.radii = {0.15f};
+  return out;
+}
+
+dfbwall::Camera camera() {
+  dfbwall::Camera c;
+  c.position = {1.6f, 1.1f, -2.4f};
+  c.fovY = 40;
+  return c;
+}
+
+// The image rendered on the first `ranks` ranks, bricks b = rank, rank + ranks, ... of `count`.
+// Frames: `frames` with one scene version; with `touchOne`, a second version where only rank 0
+// gives its bricks again.
+std::vector<std::uint8_t> render(int ranks, int count, int frames, bool touchOne = false) {
+  const int rank = testutil::worldRank();
+  MPI_Comm comm;
+  MPI_Comm_split(MPI_COMM_WORLD, rank < ranks ? 0 : 1, rank, &comm);
+  std::vector<std::uint8_t> image;
+  if (rank < ranks) {
+    dfbwall::SessionOptions o;
+    o.width = 96, o.height = 72, o.tileSize = 16, o.threads = 2, o.timeoutSeconds = 60;
+    dfbwall::Session session(comm, o);
+    EXPECT_FALSE(session.isWallRank());
+    session.setStyle(style());
+    session.setCamera(camera());
+    std::vector<float> storage;
+    for (int b = rank; b < count; b += ranks) session.addBrick(brick(b, count, storage));
+    for (int f = 0; f < frames; ++f) session.renderFrame();
+    if (touchOne) {
+      if (rank == 0) {
+        session.clearBricks();
+        for (int b = rank; b < count; b += ranks) session.addBrick(brick(b, count, storage));
+      }
+      for (int f = 0; f < frames; ++f) session.renderFrame();
+    }
+    image = session.image();
+    if (rank == 0) {
+      EXPECT_EQ(image.size(), 96u * 72u * 4u);
+    }
+    session.close();
+  }
+  MPI_Comm_free(&comm);
+  return image;
+}
+
+TEST(DataDistributedApi, AnyRankCountGivesTheSameBytes) {
+  const std::vector<std::uint8_t> one = render(1, 4, 2);
+  for (int ranks = 2; ranks <= testutil::worldSize(); ++ranks) {
+    const std::vector<std::uint8_t> image = render(ranks, 4, 2);
+    if (testutil::worldRank() == 0) {
+      EXPECT_EQ(image, one) << ranks << " ranks";
+    }
+  }
+  if (testutil::worldRank() != 0) return;
+  int lit = 0;  // a picture, not the background
+  for (std::size_t p = 0; p < one.size(); p += 4)
+    if (std::abs(int(one[p]) - int(one[0])) > 20 || std::abs(int(one[p + 2]) - int(one[2])) > 20)
+      ++lit;
+  EXPECT_GT(lit, 96 * 72 / 5);
+}
+
+TEST(DataDistributedApi, FourBricksMatchTheWholeFieldAsOneBrick) {
+  const std::vector<std::uint8_t> four = render(testutil::worldSize(), 4, 1);
+  const std::vector<std::uint8_t> whole = render(1, 1, 1);
+  if (testutil::worldRank() != 0) return;
+  ASSERT_EQ(four.size(), whole.size());
+  int worst = 0;
+  for (std::size_t i = 0; i < four.size(); ++i)
+    worst = std::max(worst, std::abs(int(four[i]) - int(whole[i])));
+  // Float summation order only: at most one 8-bit step.
+  EXPECT_LE(worst, 1);
+}
+
+TEST(DataDistributedApi, ARankThatAddsNothingKeepsItsBricks) {
+  // The second scene version starts the average afresh with the same samples: the same image,
+  // only if every other rank still holds its bricks.
+  const std::vector<std::uint8_t> once = render(testutil::worldSize(), 4, 1);
+  const std::vector<std::uint8_t> twice = render(testutil::worldSize(), 4, 1, true);
+  if (testutil::worldRank() == 0) {
+    EXPECT_EQ(once, twice);
+  }
+}
+
+TEST(DataDistributedApi, BricksThatDisagreeFailOnEveryRank) {
+  ASSERT_GE(testutil::worldSize(), 2) << "run with 3 ranks (tests/api/CMakeLists.txt)";
+  dfbwall::SessionOptions o;
+  o.width = 32, o.height = 32, o.timeoutSeconds = 20;
+  dfbwall::Session session(MPI_COMM_WORLD, o);
+  session.setStyle(style());
+  std::vector<float> storage;
+  dfbwall::Brick b = brick(0, 2, storage);
+  if (testutil::worldRank() == 1) b.boundsHi[0] += 0.1f;  // "the same brick", other bounds
+  session.addBrick(b);
+  try {
+    session.renderFrame();
+    ADD_FAILURE() << "no error";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("brick 0: render rank 1 gives it other bounds"),
+              std::string::npos)
+        << e.what();
+  }
+  session.close();
+}
+
+TEST(DataDistributedApi, BadBrickDataIsRefusedNamingTheBrick) {
+  dfbwall::SessionOptions o;
+  o.width = 32, o.height = 32;
+  dfbwall::Session session(MPI_COMM_SELF, o);
+  session.setStyle(style());
+  std::vector<float> storage;
+  dfbwall::Brick b = brick(0, 1, storage);
+  b.id = 7;
+  b.volumes[0].hi[2] = kN + 1;
+  EXPECT_THROW(
+      {
+        try {
+          session.addBrick(b);
+        } catch (const std::runtime_error& e) {
+          EXPECT_NE(std::string(e.what()).find("brick 7: volume 'volume'"), std::string::npos);
+          throw;
+        }
+      },
+      std::runtime_error);
+  b = brick(0, 1, storage);
+  b.particles.radii = {0.1f, 0.2f};
+  EXPECT_THROW(session.addBrick(b), std::runtime_error);
+  session.close();
+}
+
+}  // namespace
