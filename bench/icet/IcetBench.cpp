@@ -27,7 +27,9 @@
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bench/icet/BrickImage.h"
@@ -215,7 +217,16 @@ int run(int argc, char** argv) {
   if (withDfb && tilesX * tilesY != 1)
     throw std::runtime_error("the DFB's tiled case is dfbwall --wall (wall ranks present tiles)");
 
-  const auto desc = std::make_shared<const renderers::SceneDesc>(renderers::loadSceneDesc(o.scene));
+  renderers::SceneDesc loaded = renderers::loadSceneDesc(o.scene);
+  renderers::Environment& environment = loaded.environment;
+  if (environment.kind != renderers::Environment::Kind::Constant) {
+    // IceT blends one background colour under the image: both sides get the gradient's middle.
+    environment.color = (environment.bottom + environment.top) * 0.5f;
+    environment.kind = renderers::Environment::Kind::Constant;
+    if (rank == 0)
+      std::fprintf(stderr, "icet_bench: the scene's gradient background replaced by its middle\n");
+  }
+  const auto desc = std::make_shared<const renderers::SceneDesc>(std::move(loaded));
   renderers::RenderSettings settings;
   settings.width = width, settings.height = height, settings.seed = o.seed;
 
@@ -242,8 +253,6 @@ int run(int argc, char** argv) {
   setup.blend = blend;
   setup.width = width, setup.height = height, setup.tilesX = tilesX, setup.tilesY = tilesY;
   const renderers::Vec3 bg = desc->environment.color;
-  if (desc->environment.kind != renderers::Environment::Kind::Constant)
-    throw std::runtime_error("IceT blends one background colour: give the scene a constant one");
   if (blend) {
     setup.background = {bg.x, bg.y, bg.z, 1.0f};
   } else {
@@ -375,7 +384,10 @@ int main(int argc, char** argv) {
     return run(argc, argv);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "icet_bench: error: %s\n", e.what());
-    MPI_Abort(MPI_COMM_WORLD, 1);
+    // The session may have finalized MPI while unwinding: then exiting non-zero is enough.
+    int finalized = 0;
+    MPI_Finalized(&finalized);
+    if (!finalized) MPI_Abort(MPI_COMM_WORLD, 1);
     return 1;
   }
 }
