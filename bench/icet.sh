@@ -1,6 +1,7 @@
 # Figure "icet" of scripts/bench (sourced by it; uses its helpers and variables).
-# The DFB against IceT (bench/icet/README.md) on the same bricks of VTK's wavelet, one brick per
-# rank: icet_bench runs dfb, icet-reduce and icet-radixk interleaved frame by frame and prints
+# The DFB against IceT (bench/icet/README.md) on the same bricks, one brick per rank: VTK's
+# wavelet volume blended in visibility order (transparent), and the many-spheres scene
+# z-composited (opaque; z-compositing drops what lies behind, so it needs opaque fragments): icet_bench runs dfb, icet-reduce and icet-radixk interleaved frame by frame and prints
 # one JSON line per frame and variant; here the medians of total and compositing overhead per
 # point, and the largest image difference from the DFB's. IceT is not a Debian package: it is
 # built from the tarball ICET_TARBALL names (IceT commit 088aa5a, e.g. GitLab's source archive
@@ -22,22 +23,24 @@ fig_icet() {
     -DDFBWALL_ICET_DIR="$icet/lib" >/dev/null
   cmake --build "$ibuild" -j "$(nproc)" --target icet_bench >/dev/null
   local bench="$ibuild/bench/icet/icet_bench" points=""
-  echo "== icet: DFB vs IceT on wavelet bricks, one per rank, $frames frames"
+  echo "== icet: DFB vs IceT on the same bricks, one per rank, $frames frames"
   for mode in "${modes[@]}"; do
     for size in "${sizes[@]}"; do
       for n in "${ranks[@]}"; do
         local out="$work/icet-$mode-$size-$n.jsonl" images="$work/icet-$mode-$size-$n"
         mkdir -p "$images"
-        mpi "$n" "$bench" --scene builtin:wavelet --mode "$mode" --size "${size}x${size}" \
+        local scene=builtin:wavelet
+        [ "$mode" = opaque ] && scene=builtin:spheres
+        mpi "$n" "$bench" --scene "$scene" --mode "$mode" --size "${size}x${size}" \
           --frames "$frames" --images "$images" >"$out" 2>/dev/null
         local point
-        point=$(/usr/bin/python3 - "$out" <<'PY'
+        point=$(/usr/bin/python3 - "$out" "$scene" <<'PY'
 import json, statistics, sys
 lines = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
 frames = [l for l in lines if "variant" in l and not l["warmup"]]
 checks = {l["image_check"]["variant"]: l["image_check"] for l in lines if "image_check" in l}
 first = frames[0]
-point = {"ranks": first["ranks"], "size": f'{first["width"]}x{first["height"]}',
+point = {"scene": sys.argv[2], "ranks": first["ranks"], "size": f'{first["width"]}x{first["height"]}',
          "mode": first["mode"], "frames": len(frames) // 3, "variants": {}}
 for v in ("dfb", "icet-reduce", "icet-radixk"):
     mine = [l for l in frames if l["variant"] == v]
@@ -59,7 +62,7 @@ PY
   done
   cat >"$results/icet.json" <<JSON
 {"figure": "icet", "machine": $machine,
- "setup": {"scene": "builtin:wavelet (gradient background replaced by its middle colour)",
+ "setup": {"scenes": "transparent: builtin:wavelet, opaque: builtin:spheres (gradient backgrounds replaced by their middle colour)",
            "bricks": "one per rank", "icet": "commit 088aa5a, REDUCE strategy, reduce = default single-image strategy",
            "overhead": "slowest rank's last local render -> finished image on rank 0 (paper 6.2.1)"},
  "points": [$points

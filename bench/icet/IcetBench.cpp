@@ -11,8 +11,9 @@
 //
 // One brick per rank. transparent: premultiplied float RGBA, the DFB's RGBAF32 image vs IceT's
 // ordered float blending (icetCompositeOrder = the bricks' visibility order); opaque: the DFB's
-// RGBA8 image vs IceT's z-buffer compositing of RGBA8 + depth. Either way the finished image
-// ends on the display rank(s), as the DFB's gather brings it to rank 0.
+// RGBA8 image vs IceT's z-buffer compositing of RGBA8 + depth (the nearest brick's fragment
+// wins, so only a scene of opaque surfaces, e.g. builtin:spheres, gives the DFB's image). Either
+// way the finished image ends on the display rank(s), as the DFB's gather brings it to rank 0.
 //
 // Per frame and variant rank 0 prints one JSON line: total_ms (barrier → finished image on the
 // last display rank), render_ms (slowest rank's local rendering), overhead_ms (the paper's
