@@ -47,9 +47,11 @@ GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel,
     }
   }
   const Bytes& payload = header.compressed ? body : raw;
-  Bytes block(sizeof header + payload.size());
-  std::memcpy(block.data(), &header, sizeof header);
-  std::memcpy(block.data() + sizeof header, payload.data(), payload.size());
+  // Appended rather than memcpy'd into a sized vector: GCC 12 at -O3 (Release) takes the
+  // latter for a possible null dereference (-Wnull-dereference), which -Werror fails on.
+  const auto* headerBytes = reinterpret_cast<const std::byte*>(&header);
+  Bytes block(headerBytes, headerBytes + sizeof header);
+  block.insert(block.end(), payload.begin(), payload.end());
   counts.bytesSent = rank == 0 ? 0 : block.size();
 
   constexpr std::uint64_t kMaxCount = std::numeric_limits<int>::max();
