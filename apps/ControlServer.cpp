@@ -283,6 +283,8 @@ void ControlServer::start(const Job& job, Steering& steering, StatusBoard& statu
         if (const std::string problem = checkRequest(r); !problem.empty())
           throw BadRequest(problem);
         // Checked against the camera shown now (rank 0 checks again when applying).
+        if (!status.waitForFirstPublish(std::chrono::seconds(30)))
+          return json(503, Json{{"error", "the wall is still starting; try again"}});
         FrameView view = status.snapshot().view;
         if (!steerView(view, view.camera, r))
           throw BadRequest("the camera would be unusable: look_at equal to position, or along up");

@@ -18,6 +18,13 @@ void StatusBoard::publish(RunStatus status) {
   }
   status.errors.clear();
   status_ = std::move(status);
+  everPublished_ = true;
+  published_.notify_all();
+}
+
+bool StatusBoard::waitForFirstPublish(std::chrono::milliseconds wait) const {
+  std::unique_lock lock(mutex_);
+  return published_.wait_for(lock, wait, [this] { return everPublished_; });
 }
 
 void StatusBoard::addError(std::string message) {

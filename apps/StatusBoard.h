@@ -2,6 +2,7 @@
 // What the control server reports (GET /api/status): render rank 0's frame loop publishes it
 // after every frame and while it idles, the server's threads read a copy.
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <mutex>
@@ -32,9 +33,14 @@ class StatusBoard {
   // Something an operator should read (a request that could not be applied); the last 20 kept.
   void addError(std::string message);
   RunStatus snapshot() const;
+  // The server starts before the scene is loaded; a request checked against the view must wait
+  // for the first publish, or it is checked against a default camera. False after `wait`.
+  bool waitForFirstPublish(std::chrono::milliseconds wait) const;
 
  private:
   mutable std::mutex mutex_;
+  mutable std::condition_variable published_;
+  bool everPublished_ = false;
   RunStatus status_;
   std::deque<std::string> errors_;
   std::deque<std::chrono::steady_clock::time_point> frameTimes_;  // of the last frames
