@@ -60,6 +60,34 @@ TEST(SciVisToml, TheShippedWaveletSceneReads) {
   EXPECT_EQ(d.instances.size(), 1u);
 }
 
+// scripts/bench paraview hands these to ParaView too (bench/paraview_wavelet.py maps the same
+// fields): the 256^3 wavelet on [-1, 1]^3, one sample per voxel, VTK's stopping threshold.
+TEST(SciVisToml, TheParaViewComparisonScenesRead) {
+  for (const char* name : {"wavelet256-volume", "wavelet256-contours"}) {
+    SCOPED_TRACE(name);
+    const SceneDesc d =
+        loadSceneDesc(std::string(DFBWALL_SOURCE_DIR) + "/configs/scenes/" + name + ".toml");
+    ASSERT_EQ(d.volumes.size(), 1u);
+    const VolumeDesc& v = d.volumes[0];
+    EXPECT_EQ(v.source.grid.dims, (Index3{256, 256, 256}));
+    EXPECT_FLOAT_EQ(v.source.grid.origin.x, -1.0f);
+    EXPECT_FLOAT_EQ(v.source.grid.spacing.x, 2.0f / 255.0f);
+    ASSERT_EQ(v.transfer.colors.size(), 3u);
+    EXPECT_EQ(v.transfer.colors[1].first, 157.0f);
+    EXPECT_EQ(d.scivis.samplingRate, 1.0f);
+    EXPECT_EQ(d.scivis.minTransmittance, 1.0f / 128.0f);
+    EXPECT_EQ(d.scivis.aoSamples, 0);
+    EXPECT_FALSE(d.scivis.shadows);
+    EXPECT_EQ(d.camera.fovY, 30.0f);
+  }
+  const SceneDesc c =
+      loadSceneDesc(std::string(DFBWALL_SOURCE_DIR) + "/configs/scenes/wavelet256-contours.toml");
+  EXPECT_FALSE(c.volumes[0].visible);
+  ASSERT_EQ(c.isosurfaces.size(), 2u);
+  EXPECT_EQ(c.isosurfaces[0].value, 160.0f);
+  EXPECT_EQ(c.isosurfaces[1].value, 215.0f);
+}
+
 TEST(SciVisToml, MistakesNameFileLineAndField) {
   struct Case {
     std::string text, expected;
