@@ -79,7 +79,10 @@ struct FrameRecord {
 struct StageTimes {
   double render = 0, tileUnpack = 0, tileOperation = 0, toneMap = 0, cut = 0, send = 0,
          gatherRelay = 0;
-  double pieceUnpack = 0, assemble = 0, wallWait = 0, barrier = 0, present = 0;
+  // Wall ranks: wallWait includes upload (pieces go to the textures as they arrive); draw is
+  // before the swap barrier, present (the swap) after it.
+  double pieceUnpack = 0, assemble = 0, wallWait = 0, upload = 0, draw = 0, barrier = 0,
+         present = 0;
 };
 
 struct RankTotals {
@@ -88,6 +91,9 @@ struct RankTotals {
   double role = 0;        // 0: render, 1: wall
   double sceneBytes = 0;  // render ranks: the scene data this rank holds (its bricks, or all)
   double brickTiles = 0;  // render ranks with --bricks: brick tiles rendered over the run
+  // Wall ranks: how far apart the wall processes' swaps of one frame ended (agreed, so the same
+  // on every wall rank), the largest and the sum over the frames it is known for.
+  double swapSpreadMaxMs = 0, swapSpreadSumMs = 0, swapSpreadFrames = 0;
 };
 static_assert(sizeof(RankTotals) % sizeof(double) == 0);
 

@@ -26,6 +26,8 @@ Json stagesOf(const RankTotals& t) {
     return Json{{"piece_unpack", s.pieceUnpack},
                 {"assemble", s.assemble},
                 {"wall_wait", s.wallWait},
+                {"upload", s.upload},
+                {"draw", s.draw},
                 {"barrier", s.barrier},
                 {"present", s.present}};
   return Json{{"render", s.render},
@@ -174,6 +176,9 @@ void StatsStream::writeEnd(const std::vector<RankTotals>& ranks, bool stoppedEar
               {"peak_rss_kib", t.peakRssKiB},
               {"stages_ms", stagesOf(t)}};
     if (!role) line["scene_bytes"] = t.sceneBytes;
+    if (role && t.swapSpreadFrames > 0)
+      line["swap_spread_ms"] = {{"max", t.swapSpreadMaxMs},
+                                {"mean", t.swapSpreadSumMs / t.swapSpreadFrames}};
     if (!role && job_bricks_ > 0) line["brick_tiles_rendered"] = t.brickTiles;
     writeLine(line.dump());
   }
