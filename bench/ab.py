@@ -68,7 +68,7 @@ def main():
     common = a.common[1:] if a.common[:1] == ["--"] else a.common
     load_before = os.getloadavg()
     results = {name: {"frames": [], "stages": {}, "cpu_s": 0.0, "frame_count": 0,
-                      "swap_spread": []}
+                      "swap_spread": [], "cpu_ms_per_frame_by_run": []}
                for name, _ in a.variant}
     with tempfile.TemporaryDirectory() as work:
         for rep in range(a.reps):
@@ -81,6 +81,7 @@ def main():
                 r["frames"] += frames[1:]
                 r["frame_count"] += len(frames)
                 r["cpu_s"] += cpu
+                r["cpu_ms_per_frame_by_run"].append(1000 * cpu / max(1, len(frames)))
                 for k, v in stages.items():
                     r["stages"][k] = r["stages"].get(k, 0.0) + v
     load_after = os.getloadavg()
@@ -93,6 +94,7 @@ def main():
         n = max(1, r["frame_count"])
         row = {"name": name, "command": command, "median_frame_ms": med, "mad_frame_ms": mad,
                "frames": len(r["frames"]), "cpu_ms_per_frame": 1000 * r["cpu_s"] / n,
+               "cpu_ms_per_frame_by_run": r["cpu_ms_per_frame_by_run"],
                "stages_ms_per_frame": {k: v / n for k, v in sorted(r["stages"].items())}}
         if r["swap_spread"]:  # builds that measure it: per run (max, mean)
             row["swap_spread_ms_max"] = max(m for m, _ in r["swap_spread"])
@@ -110,7 +112,8 @@ def main():
         print(f"{row['name']}: frame {row['median_frame_ms']:.1f} ms (MAD "
               f"{row['mad_frame_ms']:.1f}, {row['frames']} frames, x"
               f"{row['frame_ms_ratio_to_first']:.3f}), CPU {row['cpu_ms_per_frame']:.1f} ms/frame "
-              f"(x{row['cpu_ratio_to_first']:.3f})")
+              f"(x{row['cpu_ratio_to_first']:.3f}; runs: "
+              + " ".join(f"{c:.0f}" for c in row["cpu_ms_per_frame_by_run"]) + ")")
         if "swap_spread_ms_max" in row:
             print(f"   swaps of one frame across wall ranks: mean spread "
                   f"{row['swap_spread_ms_mean']:.2f} ms, max {row['swap_spread_ms_max']:.2f} ms")

@@ -21,6 +21,10 @@ using dfb::Clock;
 using dfb::msBetween;
 using dfb::nsBetween;
 
+// While a frame's pieces arrive, the presenting thread is woken to upload them this many times
+// (and once more when the frame is complete).
+constexpr size_t kUploadBatches = 8;
+
 }  // namespace
 
 WallNode::WallNode(dfb::Messenger& messenger, const Layout& layout, int process, MPI_Comm wallComm,
@@ -52,9 +56,11 @@ WallNode::WallNode(dfb::Messenger& messenger, const Layout& layout, int process,
                 (rect.x1 - 1) / tileSize - rect.x0 / tileSize + 1};
     }
     expectedPieces_.push_back(static_cast<int>(rects.size()));
+    uploadBatch_ += rects.size();
     pieceRects_.push_back(std::move(rects));
     tileWindows_.push_back(window);
   }
+  uploadBatch_ = std::max<size_t>(1, uploadBatch_ / kUploadBatches);
   dfb::checkMpi(MPI_Comm_dup(wallComm, &comm_), "MPI_Comm_dup");
   messenger_.registerObject(kWallNodeObject, this);
   MPI_Request barrier;
@@ -161,7 +167,9 @@ void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
     Slot& slot = slots_.at(h.frameId);
     const int got = ++slot.received[at];
     slot.toUpload.emplace_back(position, piece);
-    bool wake = slot.toUpload.size() == 1;  // the presenting thread drains the list when it wakes
+    // The presenting thread drains the list when it wakes: woken once per batch, not per piece
+    // (a wake-up costs about what uploading a few pieces does).
+    bool wake = slot.toUpload.size() == uploadBatch_;
     if (got == expectedPieces_[at] && ++slot.displaysComplete == static_cast<int>(mine_.size())) {
       slot.completeNs = nsBetween(Clock::time_point{}, assembled);
       wake = true;
@@ -205,13 +213,24 @@ void WallNode::pollWindows() {
 }
 
 void WallNode::upload(const Slot& slot, std::vector<std::pair<int, int>>& batch) {
-  // By display, so a process with several windows switches GL contexts once per display.
+  // By display, so a process with several windows switches GL contexts once per display, and
+  // neighbours in a tile row (consecutive indices, same rows) merged into one upload.
   std::sort(batch.begin(), batch.end());
-  for (const auto& [position, piece] : batch) {
-    const size_t at = static_cast<size_t>(position);
+  for (size_t i = 0; i < batch.size();) {
+    const size_t at = static_cast<size_t>(batch[i].first);
+    const std::vector<dfb::Region>& rects = pieceRects_[at];
+    dfb::Region run = rects[static_cast<size_t>(batch[i].second)];
+    size_t next = i + 1;
+    for (; next < batch.size() && batch[next].first == batch[i].first &&
+           batch[next].second == batch[next - 1].second + 1;
+         ++next) {
+      const dfb::Region& r = rects[static_cast<size_t>(batch[next].second)];
+      if (r.x0 != run.x1 || r.y0 != run.y0 || r.y1 != run.y1) break;
+      run.x1 = r.x1;
+    }
     const Image& image = slot.displays[at];
-    presenters_[at]->upload(image.pixels.data(), image.width,
-                            pieceRects_[at][static_cast<size_t>(piece)]);
+    presenters_[at]->upload(image.pixels.data(), image.width, run);
+    i = next;
   }
   batch.clear();
 }

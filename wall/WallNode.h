@@ -146,6 +146,7 @@ class WallNode : public dfb::MessageHandler {
   std::map<std::uint32_t, Slot> slots_;
   std::vector<Slot> spare_;                     // buffers of presented frames, reused
   std::vector<std::pair<int, int>> uploading_;  // main thread: the batch being uploaded
+  size_t uploadBatch_ = 0;  // pieces queued for upload that wake the presenting thread
   std::int64_t lastPresented_ = 0;
   std::int64_t stopAfter_ = -1;  // -1: no early stop
   std::int64_t lastCaptured_ = 0;
