@@ -12,8 +12,9 @@
 // touches it, or one whole-display piece in gather mode), so completion is counted in pieces,
 // never in pixels, and a duplicate is an error rather than a miscount.
 //
-// Threading: incoming() runs on the messenger's inbox thread; everything else on the thread that
-// made the node, which owns the presenters (GL contexts).
+// Threading: incoming() runs on the messenger's handler threads, several pieces at once (each is
+// checked and claimed under the lock, then copied unlocked: claimed pieces are disjoint);
+// everything else on the thread that made the node, which owns the presenters (GL contexts).
 #include <mpi.h>
 
 #include <chrono>
@@ -103,6 +104,7 @@ class WallNode : public dfb::MessageHandler {
   void finish();
 
   void incoming(int fromRank, dfb::Bytes&& payload) override;
+  bool concurrent() const override { return true; }
 
  private:
   // Handles window events and hands pressed keys to options_.onKeys (main thread, unlocked).
