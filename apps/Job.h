@@ -53,9 +53,11 @@ struct FrameRecord {
   std::uint64_t rank0PixelBytes = 0;  // final pixels into rank 0 (the gather)
   // Pieces sent to wall ranks by all render ranks: bytes on the wire (after compression, with
   // the messenger's envelope) and before compression; how many, how many to other hosts, and
-  // how many messages the render ranks' messengers compressed.
+  // how many messages the render ranks' messengers compressed. wallMessages: MPI messages to
+  // the wall node, which equals wallPieces (a piece is never cut into several messages).
   std::uint64_t wallBytesSent = 0, wallBytesRaw = 0;
   std::uint64_t wallPieces = 0, wallPiecesToOtherHosts = 0, messagesCompressed = 0;
+  std::uint64_t wallMessages = 0;
   std::uint64_t tileBytesSent = 0;  // tile inputs between render ranks
   std::uint64_t previewBytes = 0;   // shrunk tiles for rank 0's preview (apps/Preview.h)
   std::uint64_t tilesRendered = 0;

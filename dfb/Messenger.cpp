@@ -93,6 +93,8 @@ struct Messenger::Impl {
     ObjectTraffic& t = traffic[id];
     t.bytesSent += sent;
     t.bytesReceived += received;
+    t.messagesSent += sent > 0 ? 1 : 0;
+    t.messagesReceived += received > 0 ? 1 : 0;
   }
 
   std::thread mpiThread, inboxThread;

@@ -125,9 +125,11 @@ class Messenger {
 
   MessengerCounters counters() const;
   // Traffic of one distributed object between ranks, on the wire (after compression, headers
-  // included): what this rank sent to that id on other ranks, and what it received for it.
+  // included): what this rank sent to that id on other ranks, and what it received for it, in
+  // bytes and in MPI messages (one per send(), however large: nothing is cut into fragments).
   struct ObjectTraffic {
     std::uint64_t bytesSent = 0, bytesReceived = 0;
+    std::uint64_t messagesSent = 0, messagesReceived = 0;
   };
   ObjectTraffic traffic(ObjectId id) const;
   // Default: print to stderr with the rank.

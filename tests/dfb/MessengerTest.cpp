@@ -325,5 +325,28 @@ TEST(Messenger, ConcurrentHandlersRunTogetherAndNeverCrossSerialOnes) {
   messenger.stop();
 }
 
+// A message is one MPI message however large: a wall piece or a gathered display is never cut
+// into many small sends (issue 13), on the sender's side nor the receiver's.
+TEST(Messenger, ALargeMessageIsOneMpiMessage) {
+  if (worldSize() < 2) GTEST_SKIP() << "needs two ranks";
+  Messenger messenger(MPI_COMM_WORLD);
+  Recorder recorder;
+  messenger.registerObject(93, &recorder);
+  MPI_Barrier(MPI_COMM_WORLD);
+  constexpr size_t kBytes = 1920 * 1080 * 4;  // a whole 1080p display of RGBA8
+  const MessengerCounters before = messenger.counters();
+  const int to = (worldRank() + 1) % worldSize();
+  messenger.send(to, 93, makePayload(worldRank(), to, 0, kBytes, false));
+  messenger.quiesce();
+  const MessengerCounters after = messenger.counters();
+  EXPECT_EQ(after.messagesSent - before.messagesSent, 1u);
+  EXPECT_EQ(after.messagesReceived - before.messagesReceived, 1u);
+  EXPECT_EQ(after.wireBytesSent - before.wireBytesSent, kBytes + Messenger::kSpareCapacity);
+  ASSERT_EQ(recorder.received.size(), 1u);
+  const int from = (worldRank() + worldSize() - 1) % worldSize();
+  EXPECT_EQ(recorder.received[0].second, makePayload(from, worldRank(), 0, kBytes, false));
+  messenger.stop();
+}
+
 }  // namespace
 }  // namespace dfb
