@@ -53,9 +53,11 @@ struct FrameRecord {
   std::uint64_t rank0PixelBytes = 0;  // final pixels into rank 0 (the gather)
   // Pieces sent to wall ranks by all render ranks: bytes on the wire (after compression, with
   // the messenger's envelope) and before compression; how many, how many to other hosts, and
-  // how many messages the render ranks' messengers compressed.
+  // how many messages the render ranks' messengers compressed. wallMessages: MPI messages to
+  // the wall node, which equals wallPieces (a piece is never cut into several messages).
   std::uint64_t wallBytesSent = 0, wallBytesRaw = 0;
   std::uint64_t wallPieces = 0, wallPiecesToOtherHosts = 0, messagesCompressed = 0;
+  std::uint64_t wallMessages = 0;
   std::uint64_t tileBytesSent = 0;  // tile inputs between render ranks
   std::uint64_t previewBytes = 0;   // shrunk tiles for rank 0's preview (apps/Preview.h)
   std::uint64_t tilesRendered = 0;
@@ -79,7 +81,10 @@ struct FrameRecord {
 struct StageTimes {
   double render = 0, tileUnpack = 0, tileOperation = 0, toneMap = 0, cut = 0, send = 0,
          gatherRelay = 0;
-  double pieceUnpack = 0, assemble = 0, wallWait = 0, barrier = 0, present = 0;
+  // Wall ranks: wallWait includes upload (pieces go to the textures as they arrive); draw is
+  // before the swap barrier, present (the swap) after it.
+  double pieceUnpack = 0, assemble = 0, wallWait = 0, upload = 0, draw = 0, barrier = 0,
+         present = 0;
 };
 
 struct RankTotals {
@@ -88,6 +93,9 @@ struct RankTotals {
   double role = 0;        // 0: render, 1: wall
   double sceneBytes = 0;  // render ranks: the scene data this rank holds (its bricks, or all)
   double brickTiles = 0;  // render ranks with --bricks: brick tiles rendered over the run
+  // Wall ranks: how far apart the wall processes' swaps of one frame ended (agreed, so the same
+  // on every wall rank), the largest and the sum over the frames it is known for.
+  double swapSpreadMaxMs = 0, swapSpreadSumMs = 0, swapSpreadFrames = 0;
 };
 static_assert(sizeof(RankTotals) % sizeof(double) == 0);
 

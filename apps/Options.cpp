@@ -111,6 +111,11 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
   cli.add_flag("!--no-compress", o.compress, "send tiles and pieces uncompressed");
   cli.add_flag("--compress-within-host", o.compressWithinHost,
                "compress messages between ranks of one host too (default: only across hosts)");
+  cli.add_option("--handler-threads", o.handlerThreads,
+                 "threads that decompress and handle received tiles and pieces at once, "
+                 "the messenger's inbox thread included (0: the cores; 1: the inbox thread alone)")
+      ->check(CLI::Range(0, 256))
+      ->capture_default_str();
   cli.add_option("--timeout", o.timeoutSeconds, "seconds before a stalled frame is an error")
       ->check(CLI::Range(1, 86400))
       ->capture_default_str();

@@ -34,12 +34,13 @@ struct Options {
   std::string captureDir;
   int captureEvery = 0;
   std::string statsFile;
-  std::string previewFile;  // .png: the last whole-wall preview, assembled on rank 0
+  std::string previewFile;     // .png: the last whole-wall preview, assembled on rank 0
   std::string mode = "route";  // route | gather
   bool dryRun = false;
   int framesInFlight = 2;
   bool compress = true;
   bool compressWithinHost = false;
+  int handlerThreads = 0;  // threads handling received tiles and pieces at once; 0: the cores
   int timeoutSeconds = 60;
   bool quiet = false;
 

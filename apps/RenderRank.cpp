@@ -95,6 +95,7 @@ struct RankFrame {
   // Pieces for the wall: bytes on the wire (after compression), bytes before, how many, how
   // many to other hosts; messages this rank's messenger compressed.
   std::uint64_t wallBytes, wallBytesRaw, wallPieces, wallPiecesToOtherHosts, messagesCompressed;
+  std::uint64_t wallMessages;  // MPI messages to the wall node
   std::uint64_t tileBytes, tiles, samples;
   std::int64_t lastSetTileNs;
   std::uint64_t previewBytes;
@@ -128,6 +129,7 @@ FrameRecord combine(const std::vector<RankFrame>& all) {
     r.wallBytesRaw += f.wallBytesRaw;
     r.wallPieces += f.wallPieces;
     r.wallPiecesToOtherHosts += f.wallPiecesToOtherHosts;
+    r.wallMessages += f.wallMessages;
     r.messagesCompressed += f.messagesCompressed;
     r.tileBytesSent += f.tileBytes;
     r.previewBytes += f.previewBytes;
@@ -299,7 +301,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
     auto lastProgress = Clock::now();
     const auto runStart = Clock::now();
     // What the pieces take on the wire: the messenger counts it per object, after compression.
-    std::uint64_t wallWireBefore = messenger.traffic(wall::kWallNodeObject).bytesSent;
+    dfb::Messenger::ObjectTraffic wallBefore = messenger.traffic(wall::kWallNodeObject);
     std::uint64_t compressedBefore = messenger.counters().messagesCompressed;
     Clock::time_point previousStart;
     std::uint32_t lastFrame = 0;  // the last frame every render rank completed
@@ -380,7 +382,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
       const auto relayStart = Clock::now();
       if (hasWall && !route && job.worldRank == 0)
         sent = relayToDisplays(job, messenger, frameId, dfb.imageRgba8());
-      const std::uint64_t wallWire = messenger.traffic(wall::kWallNodeObject).bytesSent;
+      const dfb::Messenger::ObjectTraffic wallNow = messenger.traffic(wall::kWallNodeObject);
       const std::uint64_t compressed = messenger.counters().messagesCompressed;
       StageTimes& t = totals.stages;
       t.gatherRelay += msBetween(relayStart, Clock::now());
@@ -399,11 +401,12 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
         // One small gather per frame, only when statistics are asked for.
         RankFrame mine{report.renderMs,
                        stats.lastSetTileToCompleteMs,
-                       wallWire - wallWireBefore,
+                       wallNow.bytesSent - wallBefore.bytesSent,
                        sent.bytes,
                        sent.pieces,
                        sent.piecesToOtherHosts,
                        compressed - compressedBefore,
+                       wallNow.messagesSent - wallBefore.messagesSent,
                        stats.tileBytesSent,
                        static_cast<std::uint64_t>(report.tilesRendered),
                        report.samples,
@@ -421,7 +424,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
           pending.push_back(record);
         }
       }
-      wallWireBefore = wallWire;
+      wallBefore = wallNow;
       compressedBefore = compressed;
       publish(frameId, false);
 

@@ -233,6 +233,7 @@ int run(int argc, char** argv) {
     dfb::MessengerOptions messaging;
     messaging.compress = job.options.compress;
     messaging.compressWithinHost = job.options.compressWithinHost;
+    messaging.handlerThreads = job.options.handlerThreads;
     messaging.quiesceTimeout = timeout;
     dfb::Messenger messenger(MPI_COMM_WORLD, messaging);
     // A message that cannot be handled (malformed, for nobody, a handler that threw) is a

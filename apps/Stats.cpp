@@ -26,6 +26,8 @@ Json stagesOf(const RankTotals& t) {
     return Json{{"piece_unpack", s.pieceUnpack},
                 {"assemble", s.assemble},
                 {"wall_wait", s.wallWait},
+                {"upload", s.upload},
+                {"draw", s.draw},
                 {"barrier", s.barrier},
                 {"present", s.present}};
   return Json{{"render", s.render},
@@ -139,6 +141,7 @@ void StatsStream::writeFrame(const FrameRecord& f) {
   line["wall_bytes_raw"] = f.wallBytesRaw;
   line["wall_pieces"] = f.wallPieces;
   line["wall_pieces_to_other_hosts"] = f.wallPiecesToOtherHosts;
+  line["wall_messages"] = f.wallMessages;
   line["messages_compressed"] = f.messagesCompressed;
   line["tile_bytes_sent"] = f.tileBytesSent;
   line["preview_bytes"] = f.previewBytes;
@@ -174,6 +177,9 @@ void StatsStream::writeEnd(const std::vector<RankTotals>& ranks, bool stoppedEar
               {"peak_rss_kib", t.peakRssKiB},
               {"stages_ms", stagesOf(t)}};
     if (!role) line["scene_bytes"] = t.sceneBytes;
+    if (role && t.swapSpreadFrames > 0)
+      line["swap_spread_ms"] = {{"max", t.swapSpreadMaxMs},
+                                {"mean", t.swapSpreadSumMs / t.swapSpreadFrames}};
     if (!role && job_bricks_ > 0) line["brick_tiles_rendered"] = t.brickTiles;
     writeLine(line.dump());
   }

@@ -1,4 +1,5 @@
 // A wall rank: its displays' presenters and the wall node's frame loop.
+#include <algorithm>
 #include <cstdio>
 #include <optional>
 #include <utility>
@@ -91,8 +92,15 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
         t.pieceUnpack += r.unpackMs;
         t.assemble += r.assembleMs;
         t.wallWait += r.waitMs;
+        t.upload += r.uploadMs;
+        t.draw += r.drawMs;
         t.barrier += r.barrierMs;
         t.present += r.presentMs;
+        if (r.previousSwapSpreadMs >= 0) {
+          totals.swapSpreadMaxMs = std::max(totals.swapSpreadMaxMs, r.previousSwapSpreadMs);
+          totals.swapSpreadSumMs += r.previousSwapSpreadMs;
+          totals.swapSpreadFrames += 1;
+        }
       }
       node.finish();  // the last frame's captures, when the run stopped early
     } catch (const std::exception& e) {

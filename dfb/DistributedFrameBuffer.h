@@ -116,6 +116,9 @@ class DistributedFrameBuffer final : public MessageHandler {
   FrameStats stats() const;  // of the last frame, this rank
 
   void incoming(int fromRank, Bytes&& payload) override;
+  // Tile inputs are combined in any order, under each tile's own lock (as from the renderers'
+  // threads), so the messenger hands several to this frame buffer at once.
+  bool concurrent() const override { return true; }
 
  private:
   struct Impl;

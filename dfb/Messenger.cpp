@@ -7,9 +7,14 @@
 #include <deque>
 #include <exception>
 #include <mutex>
+#include <shared_mutex>
 #include <thread>
 #include <unordered_map>
 #include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "dfb/BoundedWait.h"
 #include "dfb/Envelope.h"
@@ -29,6 +34,10 @@ struct Packet {
 };
 
 using Clock = std::chrono::steady_clock;
+
+// Handler calls in progress on this thread (any messenger's): unregisterObject() and
+// probePeers() from inside a handler must not wait for handlers to finish.
+thread_local int handlerDepth = 0;
 
 }  // namespace
 
@@ -59,8 +68,13 @@ struct Messenger::Impl {
 
   std::mutex registryMutex;
   std::unordered_map<ObjectId, MessageHandler*> handlers;
-  std::mutex dispatchMutex;  // held while a handler runs, so unregister can wait for it
+  // Held shared while a handler runs, so unregister can wait for every call in progress.
+  std::shared_mutex dispatchMutex;
   std::thread::id inboxThreadId;
+  // Where concurrent handlers run (null: handlerThreads is 1). Made here, initialised by the
+  // inbox thread on first use, so its tasks run with that thread's floating-point settings
+  // (TBB arenas capture them): a tile input is combined the same way on whichever thread.
+  std::unique_ptr<tbb::task_arena> arena;
 
   std::mutex errorMutex;
   ErrorCallback onError;
@@ -79,6 +93,8 @@ struct Messenger::Impl {
     ObjectTraffic& t = traffic[id];
     t.bytesSent += sent;
     t.bytesReceived += received;
+    t.messagesSent += sent > 0 ? 1 : 0;
+    t.messagesReceived += received > 0 ? 1 : 0;
   }
 
   std::thread mpiThread, inboxThread;
@@ -129,6 +145,8 @@ struct Messenger::Impl {
 
   void mpiLoop();
   void inboxLoop();
+  bool isConcurrent(const Packet& packet);
+  void handleTogether(std::vector<Packet*>& packets);
   void dispatch(Packet& packet);
   void waitLocallyIdle(Clock::time_point deadline);
 };
@@ -243,21 +261,65 @@ void Messenger::Impl::mpiLoop() {
 }
 
 void Messenger::Impl::inboxLoop() {
+  std::deque<Packet> batch;
+  std::vector<Packet*> together;
   while (true) {
-    Packet packet;
     {
       std::unique_lock lock(inboxMutex);
       inboxCv.wait(lock, [&] { return !inbox.empty() || exitThreads.load(); });
       if (inbox.empty() || abandon) return;
-      packet = std::move(inbox.front());
-      inbox.pop_front();
+      batch.swap(inbox);  // every message waiting: the more, the more can be handled at once
       inboxBusy = true;
     }
-    dispatch(packet);
-    messagesHandled++;
+    // Runs of messages for concurrent handlers are handled together; a message for a serial
+    // handler waits for the run before it and is handled alone, here, before anything after it.
+    for (Packet& packet : batch) {
+      if (abandon) break;
+      if (isConcurrent(packet)) {
+        together.push_back(&packet);
+        continue;
+      }
+      handleTogether(together);
+      dispatch(packet);
+      messagesHandled++;
+    }
+    if (!abandon) handleTogether(together);
+    together.clear();
+    batch.clear();
     std::lock_guard lock(inboxMutex);
     inboxBusy = false;
   }
+}
+
+bool Messenger::Impl::isConcurrent(const Packet& packet) {
+  if (packet.wire.size() < kEnvelopeBytes) return false;  // dispatch() reports it
+  const ObjectId object = peekEnvelope(packet.wire).object;
+  std::lock_guard lock(registryMutex);
+  auto found = handlers.find(object);
+  return found != handlers.end() && found->second->concurrent();
+}
+
+void Messenger::Impl::handleTogether(std::vector<Packet*>& packets) {
+  if (packets.size() > 1 && arena) {
+    // The inbox thread joins the arena and works on the messages with its workers; each message
+    // is isolated, so a thread waiting inside a handler (a nested parallel loop) never picks up
+    // another message whose handler may need a lock the first one holds.
+    arena->execute([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, packets.size(), 1),
+                        [&](const tbb::blocked_range<size_t>& range) {
+                          for (size_t i = range.begin(); i != range.end(); ++i) {
+                            tbb::this_task_arena::isolate([&] { dispatch(*packets[i]); });
+                            messagesHandled++;
+                          }
+                        });
+    });
+  } else {
+    for (Packet* packet : packets) {
+      dispatch(*packet);
+      messagesHandled++;
+    }
+  }
+  packets.clear();
 }
 
 void Messenger::Impl::dispatch(Packet& packet) {
@@ -270,7 +332,7 @@ void Messenger::Impl::dispatch(Packet& packet) {
       return;
     }
 
-    std::lock_guard dispatching(dispatchMutex);
+    std::shared_lock dispatching(dispatchMutex);
     MessageHandler* handler = nullptr;
     {
       std::lock_guard lock(registryMutex);
@@ -284,6 +346,10 @@ void Messenger::Impl::dispatch(Packet& packet) {
              ", which has no object registered under that id; message discarded");
       return;
     }
+    ++handlerDepth;
+    struct Leave {
+      ~Leave() { --handlerDepth; }
+    } leave;
     handler->incoming(packet.rank, std::move(payload));
   } catch (const std::exception& e) {
     handlerErrors++;
@@ -342,6 +408,10 @@ Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_
     const char* n = names.data() + static_cast<size_t>(r) * MPI_MAX_PROCESSOR_NAME;
     impl_->hosts.emplace_back(n, strnlen(n, MPI_MAX_PROCESSOR_NAME));
   }
+  const int handlerThreads =
+      options.handlerThreads > 0 ? options.handlerThreads : tbb::info::default_concurrency();
+  // One slot for the inbox thread, which joins the arena for every run of messages.
+  if (handlerThreads > 1) impl_->arena = std::make_unique<tbb::task_arena>(handlerThreads, 1);
   impl_->mpiThread = std::thread([this] { impl_->mpiLoop(); });
   impl_->inboxThread = std::thread([this] { impl_->inboxLoop(); });
   impl_->inboxThreadId = impl_->inboxThread.get_id();
@@ -383,8 +453,8 @@ void Messenger::unregisterObject(ObjectId id) {
     std::lock_guard lock(impl_->registryMutex);
     impl_->handlers.erase(id);
   }
-  if (std::this_thread::get_id() != impl_->inboxThreadId) {
-    std::lock_guard wait(impl_->dispatchMutex);
+  if (handlerDepth == 0) {
+    std::unique_lock wait(impl_->dispatchMutex);
   }
 }
 
@@ -427,7 +497,7 @@ const std::string& Messenger::hostOf(int rank) const {
 std::string Messenger::probePeers(std::chrono::milliseconds wait) {
   Impl& i = *impl_;
   // The inbox thread answers probes: asking from it would wait for itself.
-  if (std::this_thread::get_id() == i.inboxThreadId || i.exitThreads) return {};
+  if (std::this_thread::get_id() == i.inboxThreadId || handlerDepth > 0 || i.exitThreads) return {};
   std::uint64_t round = 0;
   {
     std::lock_guard lock(i.probeMutex);

@@ -2,14 +2,21 @@
 // Asynchronous point-to-point messaging between distributed objects (paper, section 3.2).
 //
 // An object registers a handler under a global id on every rank that takes part; a message goes
-// to (rank, id). Two threads do the work: the MPI thread owns every MPI call on the messenger's
-// own duplicated communicator (non-blocking send, matched probe, receive, test) and backs off
-// when idle instead of spinning; the inbox thread decompresses received messages and hands them
-// to their handler, one at a time. Messages to one's own rank never touch MPI.
+// to (rank, id). The MPI thread owns every MPI call on the messenger's own duplicated
+// communicator (non-blocking send, matched probe, receive, test) and backs off when idle instead
+// of spinning; it hands what it received to the inbox thread. The inbox thread takes every
+// message waiting at once and hands each to its handler: messages for objects that accept them
+// concurrently (tile inputs, wall pieces) go to a TBB task arena, several decompressed and
+// handled at once, as OSPRay hands its messages to its tasking system; the others are handled on
+// the inbox thread one at a time. Messages to one's own rank never touch MPI.
 //
 // Contracts:
 //  - send() is thread-safe and never blocks on the network; the messenger owns the payload.
-//  - Handlers run on the inbox thread only, serially. A handler may send.
+//  - A handler whose concurrent() is false runs on the inbox thread only, serially, and sees its
+//    messages in arrival order (per sender: send order). One whose concurrent() is true may run
+//    on several threads at once and sees its messages in any order. Either way, every message
+//    received before one for a serial handler is handled before it, and every one received
+//    after it, after it. A handler may send.
 //  - A message to an id not registered on the receiver is an error reported through the error
 //    callback with both ids and counted; it never crashes and is never dropped silently.
 //    Register on every rank before anyone sends (a collective constructor does that).
@@ -35,6 +42,8 @@ class MessageHandler {
  public:
   virtual ~MessageHandler() = default;
   virtual void incoming(int fromRank, Bytes&& payload) = 0;
+  // True when incoming() may run on several threads at once and in any order of arrival.
+  virtual bool concurrent() const { return false; }
 };
 
 struct MessengerOptions {
@@ -50,6 +59,10 @@ struct MessengerOptions {
   std::chrono::microseconds restingSleep{10000};  // see setResting
   // quiesce()/stop() give up with an Error after this long.
   std::chrono::milliseconds quiesceTimeout{30000};
+  // Threads that decompress and handle messages for concurrent handlers at once, the inbox
+  // thread included (a TBB arena; its workers come from the process's TBB pool, so a cap on
+  // TBB's parallelism caps these too). 0: TBB's default (the cores); 1: the inbox thread alone.
+  int handlerThreads = 0;
   // The largest payload a message may announce once decompressed; a larger one is an error
   // reported through the error callback, so a corrupt 20-byte header cannot allocate 4 GiB.
   std::size_t maxMessageBytes = std::size_t{1} << 30;
@@ -78,7 +91,8 @@ class Messenger {
   int size() const;
 
   void registerObject(ObjectId id, MessageHandler* handler);
-  // Waits for a handler call in progress on another thread to finish first.
+  // Waits for handler calls in progress on other threads to finish first (called from inside a
+  // handler, it does not wait).
   void unregisterObject(ObjectId id);
 
   // A payload with this much spare capacity (reserve(size + kSpareCapacity)) goes out without
@@ -98,6 +112,7 @@ class Messenger {
   const std::string& hostOf(int rank) const;
   // For an error about a deadline: asks every other rank for a sign of life (answered by its
   // inbox thread, whatever its main thread waits for) and waits up to `wait` for the answers.
+  // From inside a handler it returns at once with nothing (the answers would wait for it).
   // Returns the ranks that did not answer, with their hosts ("rank 5 (wall1)"), comma-separated;
   // empty when all did. A stopped rank, or one behind a cut link, is found this way.
   std::string probePeers(std::chrono::milliseconds wait);
@@ -110,9 +125,11 @@ class Messenger {
 
   MessengerCounters counters() const;
   // Traffic of one distributed object between ranks, on the wire (after compression, headers
-  // included): what this rank sent to that id on other ranks, and what it received for it.
+  // included): what this rank sent to that id on other ranks, and what it received for it, in
+  // bytes and in MPI messages (one per send(), however large: nothing is cut into fragments).
   struct ObjectTraffic {
     std::uint64_t bytesSent = 0, bytesReceived = 0;
+    std::uint64_t messagesSent = 0, messagesReceived = 0;
   };
   ObjectTraffic traffic(ObjectId id) const;
   // Default: print to stderr with the rank.

@@ -5,6 +5,7 @@
 #include <GL/glcorearb.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdio>
 #include <string>
 
@@ -172,22 +173,39 @@ GlFrameDrawer::~GlFrameDrawer() {
   if (impl_->program) gl.glDeleteProgram(impl_->program);
 }
 
-void GlFrameDrawer::draw(const std::uint32_t* rgba8, int width, int height, int drawableWidth,
-                         int drawableHeight) {
+void GlFrameDrawer::resize(int width, int height) {
+  Impl& m = *impl_;
+  if (width == m.textureWidth && height == m.textureHeight) return;
+  const GlFunctions& gl = m.gl;
+  gl.glActiveTexture(GL_TEXTURE0);
+  gl.glBindTexture(GL_TEXTURE_2D, m.texture);
+  gl.glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+  m.check("allocating the frame's texture");
+  m.textureWidth = width;
+  m.textureHeight = height;
+}
+
+void GlFrameDrawer::upload(const std::uint32_t* frame, int stride, int x, int y, int w, int h) {
   Impl& m = *impl_;
   const GlFunctions& gl = m.gl;
   gl.glActiveTexture(GL_TEXTURE0);
   gl.glBindTexture(GL_TEXTURE_2D, m.texture);
   gl.glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-  gl.glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+  gl.glPixelStorei(GL_UNPACK_ROW_LENGTH, stride);
   // Bytes R, G, B, A in memory (wall/Image.h) are GL_RGBA + GL_UNSIGNED_BYTE.
-  if (width != m.textureWidth || height != m.textureHeight) {
-    gl.glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba8);
-    m.textureWidth = width;
-    m.textureHeight = height;
-  } else {
-    gl.glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba8);
-  }
+  const std::uint32_t* first =
+      frame + static_cast<std::ptrdiff_t>(y) * stride + static_cast<std::ptrdiff_t>(x);
+  gl.glTexSubImage2D(GL_TEXTURE_2D, 0, x, y, w, h, GL_RGBA, GL_UNSIGNED_BYTE, first);
+  gl.glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+  m.check("uploading pixels");
+}
+
+void GlFrameDrawer::draw(int drawableWidth, int drawableHeight) {
+  Impl& m = *impl_;
+  const GlFunctions& gl = m.gl;
+  const int width = m.textureWidth, height = m.textureHeight;
+  gl.glActiveTexture(GL_TEXTURE0);
+  gl.glBindTexture(GL_TEXTURE_2D, m.texture);
   gl.glViewport(0, 0, drawableWidth, drawableHeight);
   gl.glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
   gl.glClear(GL_COLOR_BUFFER_BIT);

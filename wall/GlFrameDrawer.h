@@ -24,10 +24,15 @@ class GlFrameDrawer {
   GlFrameDrawer(const GlFrameDrawer&) = delete;
   GlFrameDrawer& operator=(const GlFrameDrawer&) = delete;
 
-  // Draws the frame with its top-left at the drawable's top-left; the rest of the drawable is
+  // Makes the texture `width` x `height` (reallocated only when the size changes; its contents
+  // are then undefined until uploaded).
+  void resize(int width, int height);
+  // Copies the `w` x `h` pixels at (x, y) of a frame into the texture at (x, y): `frame` points
+  // at the frame's pixel (0, 0), rows `stride` pixels apart. Row 0 is the frame's top.
+  void upload(const std::uint32_t* frame, int stride, int x, int y, int w, int h);
+  // Draws the texture with its top-left at the drawable's top-left; the rest of the drawable is
   // cleared to black. Waits for nothing; call finish() or swap to be sure it is drawn.
-  void draw(const std::uint32_t* rgba8, int width, int height, int drawableWidth,
-            int drawableHeight);
+  void draw(int drawableWidth, int drawableHeight);
   // glFinish.
   void finish();
   // The top-left `width` x `height` pixels of the drawable, rows top first. `frontBuffer` reads

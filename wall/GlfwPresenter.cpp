@@ -121,19 +121,36 @@ class GlfwPresenter : public Presenter {
     glfwDestroyWindow(window_);
   }
 
-  void present(const std::uint32_t* rgba8, int width, int height) override {
-    glfwMakeContextCurrent(window_);
-    int fbWidth = 0, fbHeight = 0;
-    glfwGetFramebufferSize(window_, &fbWidth, &fbHeight);
-    drawer_->draw(rgba8, width, height, fbWidth, fbHeight);
-    glfwSwapBuffers(window_);
-    glfwPollEvents();
+  void beginFrame(int width, int height) override {
+    makeCurrent();
+    drawer_->resize(width, height);
     lastWidth_ = width;
     lastHeight_ = height;
   }
 
+  void upload(const std::uint32_t* frame, int stride, const dfb::Region& rect) override {
+    makeCurrent();
+    drawer_->upload(frame, stride, rect.x0, rect.y0, rect.width(), rect.height());
+  }
+
+  // Into the back buffer, finished: the swap after the wall's barrier then only exchanges
+  // buffers, so the displays change together.
+  void draw() override {
+    makeCurrent();
+    int fbWidth = 0, fbHeight = 0;
+    glfwGetFramebufferSize(window_, &fbWidth, &fbHeight);
+    drawer_->draw(fbWidth, fbHeight);
+    drawer_->finish();
+  }
+
+  void swap() override {
+    makeCurrent();
+    glfwSwapBuffers(window_);
+    glfwPollEvents();
+  }
+
   Image readBack() override {
-    glfwMakeContextCurrent(window_);
+    makeCurrent();
     drawer_->finish();
     return readWindow(window_, title_, lastWidth_, lastHeight_);
   }
@@ -149,6 +166,11 @@ class GlfwPresenter : public Presenter {
   }
 
  private:
+  // Uploads come piece by piece: switch contexts only when another window's is current.
+  void makeCurrent() {
+    if (glfwGetCurrentContext() != window_) glfwMakeContextCurrent(window_);
+  }
+
   // Called by glfwPollEvents on this (the main) thread. Keys by their meaning on a US layout
   // and the keypad; '+' is shift-'=' there, so '=' counts as plus too.
   static void onKey(GLFWwindow* window, int key, int /*scancode*/, int action, int /*mods*/) {

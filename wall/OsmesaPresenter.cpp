@@ -54,14 +54,28 @@ class OsmesaPresenter : public Presenter {
     OSMesaDestroyContext(context_);
   }
 
-  void present(const std::uint32_t* rgba8, int width, int height) override {
+  void beginFrame(int width, int height) override {
     if (width != width_ || height != height_)
       resize(width, height);
     else
       makeCurrent();
-    drawer_->draw(rgba8, width, height, width_, height_);
+    drawer_->resize(width, height);
+  }
+
+  void upload(const std::uint32_t* frame, int stride, const dfb::Region& rect) override {
+    makeCurrent();
+    drawer_->upload(frame, stride, rect.x0, rect.y0, rect.width(), rect.height());
+  }
+
+  // The drawable is the buffer itself (no front buffer): drawn and finished here, so swap() has
+  // nothing left to do.
+  void draw() override {
+    makeCurrent();
+    drawer_->draw(width_, height_);
     drawer_->finish();
   }
+
+  void swap() override {}
 
   Image readBack() override {
     makeCurrent();
@@ -74,6 +88,9 @@ class OsmesaPresenter : public Presenter {
 
  private:
   void makeCurrent() {
+    // Uploads come piece by piece: skip the switch when this context is current already (only
+    // this presenter ever binds its buffer, so the buffer is ours then too).
+    if (OSMesaGetCurrentContext() == context_) return;
     if (!OSMesaMakeCurrent(context_, buffer_.data(), GL_UNSIGNED_BYTE, width_, height_))
       throw Error("OSMesaMakeCurrent failed");
   }
@@ -82,7 +99,9 @@ class OsmesaPresenter : public Presenter {
     width_ = width;
     height_ = height;
     buffer_.assign(static_cast<size_t>(width) * height, 0);
-    makeCurrent();
+    // A new buffer: bind it even when the context is current.
+    if (!OSMesaMakeCurrent(context_, buffer_.data(), GL_UNSIGNED_BYTE, width_, height_))
+      throw Error("OSMesaMakeCurrent failed");
   }
 
   OSMesaContext context_ = nullptr;

@@ -1,5 +1,6 @@
 #include "wall/WallNode.h"
 
+#include <algorithm>
 #include <limits>
 #include <string>
 
@@ -19,6 +20,10 @@ namespace {
 using dfb::Clock;
 using dfb::msBetween;
 using dfb::nsBetween;
+
+// While a frame's pieces arrive, the presenting thread is woken to upload them this many times
+// (and once more when the frame is complete).
+constexpr size_t kUploadBatches = 8;
 
 }  // namespace
 
@@ -51,9 +56,11 @@ WallNode::WallNode(dfb::Messenger& messenger, const Layout& layout, int process,
                 (rect.x1 - 1) / tileSize - rect.x0 / tileSize + 1};
     }
     expectedPieces_.push_back(static_cast<int>(rects.size()));
+    uploadBatch_ += rects.size();
     pieceRects_.push_back(std::move(rects));
     tileWindows_.push_back(window);
   }
+  uploadBatch_ = std::max<size_t>(1, uploadBatch_ / kUploadBatches);
   dfb::checkMpi(MPI_Comm_dup(wallComm, &comm_), "MPI_Comm_dup");
   messenger_.registerObject(kWallNodeObject, this);
   MPI_Request barrier;
@@ -85,6 +92,7 @@ WallNode::Slot& WallNode::slotFor(std::uint32_t frameId) {
   slot.claimed.resize(mine_.size());
   for (size_t i = 0; i < mine_.size(); ++i)
     slot.claimed[i].assign(static_cast<size_t>(expectedPieces_[i]), false);
+  slot.toUpload.clear();
   slot.displaysComplete = 0;
   return slots_.emplace(frameId, std::move(slot)).first->second;
 }
@@ -120,6 +128,7 @@ void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
     const dfb::Region local{h.x0, h.y0, h.x1, h.y1};
     const std::string& name = layout_.displays[static_cast<size_t>(h.display)].name;
     Image* image = nullptr;
+    int piece = -1;
     {
       // Everything about the piece is checked, and the piece claimed, before a pixel is copied:
       // a duplicate or a stray rectangle never touches a buffer the presenter may be reading.
@@ -132,7 +141,7 @@ void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
                     std::to_string(h.frameId) + ", more than " +
                     std::to_string(options_.framesAhead) + " frames past the last presented (" +
                     std::to_string(lastPresented_) + ")");
-      const int piece = expectedPieceIndex(at, local);
+      piece = expectedPieceIndex(at, local);
       if (piece < 0)
         throw Error("rank " + std::to_string(fromRank) + " sent display '" + name + "' a piece [" +
                     std::to_string(local.x0) + ", " + std::to_string(local.x1) + ") x [" +
@@ -157,10 +166,15 @@ void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
     assembleNs_ += nsBetween(unpacked, assembled);
     Slot& slot = slots_.at(h.frameId);
     const int got = ++slot.received[at];
+    slot.toUpload.emplace_back(position, piece);
+    // The presenting thread drains the list when it wakes: woken once per batch, not per piece
+    // (a wake-up costs about what uploading a few pieces does).
+    bool wake = slot.toUpload.size() == uploadBatch_;
     if (got == expectedPieces_[at] && ++slot.displaysComplete == static_cast<int>(mine_.size())) {
       slot.completeNs = nsBetween(Clock::time_point{}, assembled);
-      complete_.notify_all();
+      wake = true;
     }
+    if (wake) complete_.notify_all();
   } catch (const std::exception& e) {
     std::lock_guard lock(mutex_);
     if (error_.empty()) error_ = e.what();
@@ -198,10 +212,39 @@ void WallNode::pollWindows() {
   if (!keys.empty()) options_.onKeys(keys);
 }
 
+void WallNode::upload(const Slot& slot, std::vector<std::pair<int, int>>& batch) {
+  // By display, so a process with several windows switches GL contexts once per display, and
+  // neighbours in a tile row (consecutive indices, same rows) merged into one upload.
+  std::sort(batch.begin(), batch.end());
+  for (size_t i = 0; i < batch.size();) {
+    const size_t at = static_cast<size_t>(batch[i].first);
+    const std::vector<dfb::Region>& rects = pieceRects_[at];
+    dfb::Region run = rects[static_cast<size_t>(batch[i].second)];
+    size_t next = i + 1;
+    for (; next < batch.size() && batch[next].first == batch[i].first &&
+           batch[next].second == batch[next - 1].second + 1;
+         ++next) {
+      const dfb::Region& r = rects[static_cast<size_t>(batch[next].second)];
+      if (r.x0 != run.x1 || r.y0 != run.y0 || r.y1 != run.y1) break;
+      run.x1 = r.x1;
+    }
+    const Image& image = slot.displays[at];
+    presenters_[at]->upload(image.pixels.data(), image.width, run);
+    i = next;
+  }
+  batch.clear();
+}
+
 PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   PresentReport report;
   const auto start = Clock::now();
   auto deadline = start + options_.timeout;
+  std::int64_t uploadNs = 0;
+  // The textures are free: the previous frame was drawn before its swap.
+  for (size_t i = 0; i < mine_.size(); ++i) {
+    const dfb::Region& r = layout_.displays[static_cast<size_t>(mine_[i])].rect;
+    presenters_[i]->beginFrame(r.width(), r.height());
+  }
   Slot* slot = nullptr;
   {
     std::unique_lock lock(mutex_);
@@ -210,10 +253,26 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
       if (!error_.empty() || stopsBefore()) return true;
       auto found = slots_.find(frameId);
       return found != slots_.end() &&
-             found->second.displaysComplete == static_cast<int>(mine_.size());
+             found->second.displaysComplete == static_cast<int>(mine_.size()) &&
+             found->second.toUpload.empty();
     };
-    // keepWaiting() moves the deadline while the renderers idle.
-    while (!ready()) {
+    // Pieces that arrived are uploaded while the rest are still on their way; keepWaiting()
+    // moves the deadline while the renderers idle.
+    while (true) {
+      if (error_.empty() && !stopsBefore()) {
+        auto found = slots_.find(frameId);
+        if (found != slots_.end() && !found->second.toUpload.empty()) {
+          uploading_.swap(found->second.toUpload);
+          const Slot& arriving = found->second;  // map nodes stay put; only this thread erases
+          lock.unlock();                         // pieces keep arriving meanwhile
+          const auto uploadStart = Clock::now();
+          upload(arriving, uploading_);
+          uploadNs += nsBetween(uploadStart, Clock::now());
+          lock.lock();
+          continue;
+        }
+      }
+      if (ready()) break;
       deadline = std::max(start, waitFrom_) + options_.timeout;
       if (Clock::now() >= deadline) break;
       if (!options_.onKeys) {
@@ -221,8 +280,8 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
         continue;
       }
       complete_.wait_until(lock, std::min(deadline, Clock::now() + options_.eventPoll));
-      if (ready()) break;
-      lock.unlock();  // GLFW's callbacks run in here; pieces keep arriving meanwhile
+      if (ready()) continue;  // upload what came, then leave
+      lock.unlock();          // GLFW's callbacks run in here; pieces keep arriving meanwhile
       pollWindows();
       lock.lock();
     }
@@ -254,20 +313,25 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     report.completeNs = slot->completeNs;
   }
   const auto arrived = Clock::now();
+  // Every display draws the frame into its back buffer before the barrier, so what follows the
+  // barrier is only the swap: the displays change at (nearly) the same moment.
+  for (auto& presenter : presenters_) presenter->draw();
+  const auto drawn = Clock::now();
 
-  // The swap barrier: no display shows frame F before every display has it. It is a reduction
-  // rather than a plain barrier so every wall process also learns when the last display had
-  // the frame complete (for the statistics), at no extra round trip.
+  // The swap barrier: no display shows frame F before every display has it drawn. It is a
+  // reduction rather than a plain barrier so every wall process also learns when the last
+  // display had the frame complete (for the statistics), at no extra round trip.
   // The capture requests ride along: the highest sequence any process was asked for (for this
-  // frame or an earlier one), so every process captures the same frame.
-  std::int64_t mine[2] = {report.completeNs, 0}, agreed[2] = {0, 0};
+  // frame or an earlier one), so every process captures the same frame. So do the previous
+  // frame's swap times (latest and, negated, earliest): how far apart the displays changed.
+  std::int64_t mine[4] = {report.completeNs, 0, lastSwapNs_, -lastSwapNs_}, agreed[4] = {};
   {
     std::lock_guard lock(mutex_);
     if (captureAsked_ > captureDone_ && frameId >= captureAskedFrame_)
       mine[1] = static_cast<std::int64_t>(captureAsked_);
   }
   MPI_Request barrier;
-  dfb::checkMpi(MPI_Iallreduce(mine, agreed, 2, MPI_INT64_T, MPI_MAX, comm_, &barrier),
+  dfb::checkMpi(MPI_Iallreduce(mine, agreed, 4, MPI_INT64_T, MPI_MAX, comm_, &barrier),
                 "MPI_Iallreduce");
   dfb::waitWithDeadline(barrier, deadline,
                         "swap barrier of frame " + std::to_string(frameId) +
@@ -275,12 +339,12 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
                             std::to_string(options_.timeout.count()) + " ms");
   const auto released = Clock::now();
   report.wallCompleteNs = agreed[0];
+  if (lastSwapNs_ != 0)
+    report.previousSwapSpreadMs = static_cast<double>(agreed[2] + agreed[3]) * 1e-6;
   const bool asked = agreed[1] > static_cast<std::int64_t>(captureDone_);
   if (asked) captureDone_ = static_cast<std::uint64_t>(agreed[1]);
-  for (size_t i = 0; i < mine_.size(); ++i) {
-    const Image& image = slot->displays[i];
-    presenters_[i]->present(image.pixels.data(), image.width, image.height);
-  }
+  for (auto& presenter : presenters_) presenter->swap();
+  lastSwapNs_ = nsBetween(Clock::time_point{}, Clock::now());
   // An operator closing a window asks the whole job to stop, a key asks for a camera change or a
   // stop; the app decides how.
   for (size_t i = 0; i < mine_.size(); ++i) {
@@ -309,7 +373,9 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   }
   if (process_ == 0) acknowledgeFrame(messenger_, frameId, report.wallCompleteNs);
   report.waitMs = msBetween(start, arrived);
-  report.barrierMs = msBetween(arrived, released);
+  report.uploadMs = static_cast<double>(uploadNs) * 1e-6;
+  report.drawMs = msBetween(arrived, drawn);
+  report.barrierMs = msBetween(drawn, released);
   report.presentMs = msBetween(released, presented);
   return report;
 }

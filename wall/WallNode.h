@@ -3,12 +3,18 @@
 // buffers, and presents a frame only when every display of every wall process has it complete
 // (swap barrier among the wall ranks only), then acknowledges it to the renderers.
 //
+// Tide's order, so the displays change together: while frame F's pieces arrive, each is
+// uploaded to its display's texture as soon as the presenting thread is free; once all are in,
+// every display draws F into its back buffer (finished); then the swap barrier; then every
+// display swaps, which is all that is left between the barrier and the frame being visible.
+//
 // The layout says exactly which pieces each display gets per frame (one per canvas tile that
 // touches it, or one whole-display piece in gather mode), so completion is counted in pieces,
 // never in pixels, and a duplicate is an error rather than a miscount.
 //
-// Threading: incoming() runs on the messenger's inbox thread; everything else on the thread that
-// made the node, which owns the presenters (GL contexts).
+// Threading: incoming() runs on the messenger's handler threads, several pieces at once (each is
+// checked and claimed under the lock, then copied unlocked: claimed pieces are disjoint);
+// everything else on the thread that made the node, which owns the presenters (GL contexts).
 #include <mpi.h>
 
 #include <chrono>
@@ -18,6 +24,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dfb/Messenger.h"
@@ -46,9 +53,12 @@ struct WallNodeOptions {
 };
 
 struct PresentReport {
-  double waitMs = 0;     // until every piece of this process's displays had arrived
+  double waitMs = 0;     // until every piece of this process's displays had arrived (and was
+                         // uploaded: uploads happen while waiting)
+  double uploadMs = 0;   // of waitMs, uploading pieces to the displays' textures
+  double drawMs = 0;     // drawing every display's back buffer, before the barrier
   double barrierMs = 0;  // in the swap barrier
-  double presentMs = 0;  // drawing on every display
+  double presentMs = 0;  // swapping every display (after the barrier), window events
   std::uint64_t bytesReceived = 0;
   // Since the previous presentFrame, on the inbox thread: unpacking pieces and copying them into
   // the back buffers. completeNs: steady_clock time the last piece of this frame arrived.
@@ -56,6 +66,10 @@ struct PresentReport {
   std::int64_t completeNs = 0;
   // The latest completeNs over every wall process (agreed in the swap barrier).
   std::int64_t wallCompleteNs = 0;
+  // The previous frame's swaps: latest minus earliest end of a swap over every wall process
+  // (agreed in this frame's barrier; one host's clock, meaningful where the wall ranks share
+  // one). Negative: not known (the first frame).
+  double previousSwapSpreadMs = -1;
   // The frame was not presented: the run stops before it (see stopAfter).
   bool stopped = false;
   // The name of a display whose window an operator closed (empty: none).
@@ -90,6 +104,7 @@ class WallNode : public dfb::MessageHandler {
   void finish();
 
   void incoming(int fromRank, dfb::Bytes&& payload) override;
+  bool concurrent() const override { return true; }
 
  private:
   // Handles window events and hands pressed keys to options_.onKeys (main thread, unlocked).
@@ -98,6 +113,8 @@ class WallNode : public dfb::MessageHandler {
     std::vector<Image> displays;             // by position in mine_
     std::vector<int> received;               // pieces copied in, by position in mine_
     std::vector<std::vector<bool>> claimed;  // by position, by expected piece: arrived once
+    // Pieces copied in but not yet uploaded to their display's texture: (position, piece).
+    std::vector<std::pair<int, int>> toUpload;
     int displaysComplete = 0;
     std::int64_t completeNs = 0;
   };
@@ -105,6 +122,9 @@ class WallNode : public dfb::MessageHandler {
   // Which of display `position`'s expected pieces `local` is, or -1 when it is none of them.
   int expectedPieceIndex(size_t position, const dfb::Region& local) const;
   void capture(std::uint32_t frameId);
+  // Uploads the pieces in `batch` of `slot` (main thread, unlocked): they are counted, so no
+  // thread writes them any more.
+  void upload(const Slot& slot, std::vector<std::pair<int, int>>& batch);
 
   dfb::Messenger& messenger_;
   const Layout& layout_;
@@ -126,7 +146,9 @@ class WallNode : public dfb::MessageHandler {
   std::mutex mutex_;
   std::condition_variable complete_;
   std::map<std::uint32_t, Slot> slots_;
-  std::vector<Slot> spare_;  // buffers of presented frames, reused
+  std::vector<Slot> spare_;                     // buffers of presented frames, reused
+  std::vector<std::pair<int, int>> uploading_;  // main thread: the batch being uploaded
+  size_t uploadBatch_ = 0;  // pieces queued for upload that wake the presenting thread
   std::int64_t lastPresented_ = 0;
   std::int64_t stopAfter_ = -1;  // -1: no early stop
   std::int64_t lastCaptured_ = 0;
@@ -134,6 +156,7 @@ class WallNode : public dfb::MessageHandler {
   std::uint64_t captureAsked_ = 0;                    // highest requested sequence
   std::uint32_t captureAskedFrame_ = 0;               // ... for this frame or later
   std::uint64_t captureDone_ = 0;  // highest sequence captured (the same on every process)
+  std::int64_t lastSwapNs_ = 0;    // steady_clock time the last frame's swaps ended here
   std::string error_;
   std::uint64_t bytesReceived_ = 0;
   std::int64_t unpackNs_ = 0, assembleNs_ = 0;

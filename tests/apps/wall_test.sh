@@ -43,7 +43,12 @@ case "$scenario" in
     if [ "$mode" = route ]; then expected=0; else expected=$(( ${size%x*} * ${size#*x} * 4 )); fi
     [ "$values" = "$expected" ] || { echo "rank0_pixel_bytes_received: '$values', expected $expected every frame"; exit 1; }
     tail -n 1 "$work/stats.json" | grep -q '^{"summary":.*"median_frame_ms"' || { echo "no summary in the stats"; exit 1; }
-    echo "$mode: rank 0 received $expected pixel bytes in each of 4 frames"
+    # One MPI message per piece, however large (gather mode sends whole displays): never cut up.
+    pieces=$(grep -o '"wall_pieces":[0-9]*' "$work/stats.json" | cut -d: -f2 | tr '\n' ' ')
+    messages=$(grep -o '"wall_messages":[0-9]*' "$work/stats.json" | cut -d: -f2 | tr '\n' ' ')
+    [ -n "${pieces// /}" ] && [ "${pieces%% *}" -gt 0 ] && [ "$pieces" = "$messages" ] \
+      || { echo "wall_pieces per frame '$pieces', wall_messages '$messages': expected equal"; exit 1; }
+    echo "$mode: rank 0 received $expected pixel bytes in each of 4 frames; pieces = messages ($pieces)"
     ;;
   preview)
     # The whole-wall preview assembled on rank 0 from tiles shrunk on their owners equals the

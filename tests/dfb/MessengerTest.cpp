@@ -6,12 +6,16 @@
 
 #include <sys/resource.h>
 
+#include <tbb/global_control.h>
+
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <mutex>
 #include <random>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -218,6 +222,130 @@ TEST(Messenger, StopWithMessagesInFlightLosesNothing) {
   int total = 0, mine = counter.count.load();
   MPI_Allreduce(&mine, &total, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
   EXPECT_EQ(total, worldSize() * kMessages);
+}
+
+// What a concurrent handler and a serial one saw: the serial one in send order per sender, the
+// concurrent one several at once, and neither overtaking the other (dfb/Messenger.h).
+struct Ordering {
+  std::mutex mutex;
+  std::map<int, std::vector<int>> serialSeen;  // per sender: the sequence numbers, in order
+  std::map<int, int> concurrentDone;           // per sender: handled so far
+  std::map<int, int> serialDone;               // per sender
+  std::vector<std::string> problems;
+  std::atomic<int> inFlight{0}, maxInFlight{0};
+};
+
+// Payload: [sequence, serial messages sent before it, concurrent messages sent before it].
+struct Sent {
+  int sequence, serialBefore, concurrentBefore;
+};
+
+struct ConcurrentSide : MessageHandler {
+  Ordering* o = nullptr;
+  bool concurrent() const override { return true; }
+  void incoming(int from, Bytes&& payload) override {
+    const int now = ++o->inFlight;
+    for (int seen = o->maxInFlight.load();
+         now > seen && !o->maxInFlight.compare_exchange_weak(seen, now);) {
+    }
+    Sent m{};
+    std::memcpy(&m, payload.data(), sizeof m);
+    {
+      std::lock_guard lock(o->mutex);
+      // Every serial message sent before this one was handled first, none sent after it.
+      if (o->serialDone[from] != m.serialBefore)
+        o->problems.push_back("concurrent message " + std::to_string(m.sequence) + " from rank " +
+                              std::to_string(from) + " saw " + std::to_string(o->serialDone[from]) +
+                              " serial ones handled, not " + std::to_string(m.serialBefore));
+    }
+    std::this_thread::sleep_for(std::chrono::microseconds(500));  // time to overlap
+    std::lock_guard lock(o->mutex);
+    ++o->concurrentDone[from];
+    --o->inFlight;
+  }
+};
+
+struct SerialSide : MessageHandler {
+  Ordering* o = nullptr;
+  void incoming(int from, Bytes&& payload) override {
+    Sent m{};
+    std::memcpy(&m, payload.data(), sizeof m);
+    std::lock_guard lock(o->mutex);
+    if (o->concurrentDone[from] != m.concurrentBefore || o->inFlight.load() != 0)
+      o->problems.push_back("serial message " + std::to_string(m.sequence) + " from rank " +
+                            std::to_string(from) + " ran with " +
+                            std::to_string(o->concurrentDone[from]) +
+                            " concurrent ones done, not " + std::to_string(m.concurrentBefore));
+    o->serialSeen[from].push_back(m.sequence);
+    ++o->serialDone[from];
+  }
+};
+
+TEST(Messenger, ConcurrentHandlersRunTogetherAndNeverCrossSerialOnes) {
+  // Room for TBB workers whatever the machine (a 1-core CI box would have none by default).
+  tbb::global_control workers(tbb::global_control::max_allowed_parallelism, 4);
+  MessengerOptions options;
+  options.handlerThreads = 4;
+  Messenger messenger(MPI_COMM_WORLD, options);
+  Ordering ordering;
+  ConcurrentSide concurrent;
+  SerialSide serial;
+  concurrent.o = serial.o = &ordering;
+  messenger.registerObject(91, &concurrent);
+  messenger.registerObject(92, &serial);
+  MPI_Barrier(MPI_COMM_WORLD);
+  // To every rank: runs of 40 concurrent messages, each run followed by a serial one.
+  constexpr int kRuns = 4, kRun = 40;
+  for (int to = 0; to < worldSize(); ++to) {
+    int sequence = 0, serialSent = 0, concurrentSent = 0;
+    for (int run = 0; run < kRuns; ++run) {
+      for (int i = 0; i < kRun; ++i) {
+        const Sent m{sequence++, serialSent, concurrentSent++};
+        Bytes payload(sizeof m);
+        std::memcpy(payload.data(), &m, sizeof m);
+        messenger.send(to, 91, std::move(payload));
+      }
+      const Sent m{sequence++, serialSent++, concurrentSent};
+      Bytes payload(sizeof m);
+      std::memcpy(payload.data(), &m, sizeof m);
+      messenger.send(to, 92, std::move(payload));
+    }
+  }
+  messenger.quiesce();
+  for (const std::string& p : ordering.problems) ADD_FAILURE() << p;
+  for (int from = 0; from < worldSize(); ++from) {
+    EXPECT_EQ(ordering.concurrentDone[from], kRuns * kRun) << "from rank " << from;
+    std::vector<int> expected;
+    for (int run = 0; run < kRuns; ++run) expected.push_back(run * (kRun + 1) + kRun);
+    EXPECT_EQ(ordering.serialSeen[from], expected) << "from rank " << from;
+  }
+  // Each rank sent itself 160 messages of 0.5 ms at once: the arena handled some together.
+  EXPECT_GE(ordering.maxInFlight.load(), 2);
+  std::printf("concurrent handler: up to %d messages at once\n", ordering.maxInFlight.load());
+  messenger.stop();
+}
+
+// A message is one MPI message however large: a wall piece or a gathered display is never cut
+// into many small sends (issue 13), on the sender's side nor the receiver's.
+TEST(Messenger, ALargeMessageIsOneMpiMessage) {
+  if (worldSize() < 2) GTEST_SKIP() << "needs two ranks";
+  Messenger messenger(MPI_COMM_WORLD);
+  Recorder recorder;
+  messenger.registerObject(93, &recorder);
+  MPI_Barrier(MPI_COMM_WORLD);
+  constexpr size_t kBytes = 1920 * 1080 * 4;  // a whole 1080p display of RGBA8
+  const MessengerCounters before = messenger.counters();
+  const int to = (worldRank() + 1) % worldSize();
+  messenger.send(to, 93, makePayload(worldRank(), to, 0, kBytes, false));
+  messenger.quiesce();
+  const MessengerCounters after = messenger.counters();
+  EXPECT_EQ(after.messagesSent - before.messagesSent, 1u);
+  EXPECT_EQ(after.messagesReceived - before.messagesReceived, 1u);
+  EXPECT_EQ(after.wireBytesSent - before.wireBytesSent, kBytes + Messenger::kSpareCapacity);
+  ASSERT_EQ(recorder.received.size(), 1u);
+  const int from = (worldRank() + worldSize() - 1) % worldSize();
+  EXPECT_EQ(recorder.received[0].second, makePayload(from, worldRank(), 0, kBytes, false));
+  messenger.stop();
 }
 
 }  // namespace

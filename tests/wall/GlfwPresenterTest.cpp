@@ -3,6 +3,7 @@
 // one window per display.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <string>
 
@@ -64,6 +65,28 @@ TEST_F(GlfwPresenter, OneProcessTwoWindows) {
     a->present(ia.pixels.data(), 180, 100);
     b->present(ib.pixels.data(), 180, 70);
   }
+  EXPECT_TRUE(a->readBack() == ia);
+  EXPECT_TRUE(b->readBack() == ib);
+}
+
+// A wall process's order: pieces of both windows uploaded interleaved (so the GL context
+// switches between uploads), both drawn, then both swapped.
+TEST_F(GlfwPresenter, PiecesOfTwoWindowsThenDrawThenSwap) {
+  auto a = wall::makeGlfwPresenter(session_, {"left", 150, 90, false, 0, false, 0, 0});
+  auto b = wall::makeGlfwPresenter(session_, {"right", 150, 90, false, 0, false, 300, 0});
+  const wall::Image ia = opaqueNoise(150, 90, 5), ib = opaqueNoise(150, 90, 6);
+  a->beginFrame(150, 90);
+  b->beginFrame(150, 90);
+  for (int y = 0; y < 90; y += 40)
+    for (int x = 0; x < 150; x += 64) {
+      const dfb::Region piece{x, y, std::min(x + 64, 150), std::min(y + 40, 90)};
+      a->upload(ia.pixels.data(), 150, piece);
+      b->upload(ib.pixels.data(), 150, piece);
+    }
+  a->draw();
+  b->draw();
+  a->swap();
+  b->swap();
   EXPECT_TRUE(a->readBack() == ia);
   EXPECT_TRUE(b->readBack() == ib);
 }

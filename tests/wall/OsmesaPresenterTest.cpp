@@ -2,9 +2,11 @@
 // odd sizes, for a size change, and for two presenters taking turns on one thread.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <random>
+#include <vector>
 
 #include "wall/OsmesaPresenter.h"
 
@@ -55,6 +57,40 @@ TEST(OsmesaPresenter, TwoPresentersOnOneThread) {
   b->present(ib.pixels.data(), 180, 70);
   EXPECT_TRUE(a->readBack() == ia);
   EXPECT_TRUE(b->readBack() == ib);
+}
+
+// As a wall uploads: piece by piece in any order, from a frame buffer that is only partly
+// filled at each upload, two displays interleaved, drawn both before swapping both.
+TEST(OsmesaPresenter, PiecesUploadedInAnyOrderShowTheWholeFrame) {
+  constexpr int kW = 203, kH = 151, kTile = 32;
+  auto a = wall::makeOsmesaPresenter(kW, kH);
+  auto b = wall::makeOsmesaPresenter(kW, kH);
+  for (unsigned frame = 0; frame < 2; ++frame) {
+    const wall::Image ia = noise(kW, kH, 10 + frame), ib = noise(kW, kH, 20 + frame);
+    wall::Image bufferA(kW, kH), bufferB(kW, kH);  // filled piece by piece, like a wall slot
+    std::vector<dfb::Region> pieces;
+    for (int y = 0; y < kH; y += kTile)
+      for (int x = 0; x < kW; x += kTile)
+        pieces.push_back({x, y, std::min(x + kTile, kW), std::min(y + kTile, kH)});
+    std::shuffle(pieces.begin(), pieces.end(), std::mt19937(frame));
+    a->beginFrame(kW, kH);
+    b->beginFrame(kW, kH);
+    for (const dfb::Region& r : pieces) {
+      for (int y = r.y0; y < r.y1; ++y)
+        for (int x = r.x0; x < r.x1; ++x) {
+          bufferA.at(x, y) = ia.at(x, y);
+          bufferB.at(x, y) = ib.at(x, y);
+        }
+      a->upload(bufferA.pixels.data(), kW, r);
+      b->upload(bufferB.pixels.data(), kW, r);
+    }
+    a->draw();
+    b->draw();
+    a->swap();
+    b->swap();
+    EXPECT_TRUE(a->readBack() == ia) << "frame " << frame;
+    EXPECT_TRUE(b->readBack() == ib) << "frame " << frame;
+  }
 }
 
 TEST(OsmesaPresenter, RejectsAnEmptyDrawable) {
