@@ -294,10 +294,16 @@ void DistributedFrameBuffer::Impl::finishTile(int tileIndex, OwnedTile& owned) {
   const std::int64_t start = threadCpuNs();
   // Tone mapping comes first, but only when something reads its RGBA8: the display format or a
   // later op. A linear-only frame (RGBAF32 or NONE without ops) skips the per-pixel work, and a
-  // tile that came as display pixels (Tile::rgba8) has them already.
-  if (finished.linear->rgba8.size() == static_cast<size_t>(finished.region.pixelCount()))
-    owned.rgba8 = finished.linear->rgba8;
-  else if (options.format == DisplayFormat::RGBA8 || pixelOps.size() > 1)
+  // tile that came as display pixels (Tile::rgba8) has them already: they move over (a copy was
+  // a third of the pattern renderer's per-pixel CPU on its owner).
+  const size_t pixels = static_cast<size_t>(finished.region.pixelCount());
+  if (finished.linear->rgba8.size() == pixels) {
+    std::vector<std::uint32_t> taken = owned.operation->takeDisplayPixels();
+    if (taken.size() == pixels)
+      owned.rgba8 = std::move(taken);
+    else
+      owned.rgba8 = finished.linear->rgba8;
+  } else if (options.format == DisplayFormat::RGBA8 || pixelOps.size() > 1)
     pixelOps.front()->process(finished);
   const std::int64_t now = threadCpuNs();
   toneMapNs += now - start;

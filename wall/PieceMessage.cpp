@@ -20,16 +20,28 @@ dfb::Bytes packPiece(std::uint32_t frameId, int display, const dfb::Region& loca
   out.resize(sizeof header + pixelBytes);
   std::memcpy(out.data(), &header, sizeof header);
   std::byte* pixels = out.data() + sizeof header;
-  for (int y = 0; y < local.height(); ++y)
-    std::memcpy(pixels + static_cast<size_t>(y) * rowBytes,
-                source + static_cast<size_t>(sourceY + y) * static_cast<size_t>(sourceWidth) +
-                    static_cast<size_t>(sourceX),
-                rowBytes);
-  if (planeDelta) {  // only where Snappy follows: it makes smooth 8-bit pixels compressible
-    dfb::Bytes filtered;
-    dfb::planeDeltaEncode(std::span<const std::byte>(pixels, pixelBytes), 4, filtered);
-    std::memcpy(pixels, filtered.data(), pixelBytes);
+  const auto row = [&](int y) {
+    return reinterpret_cast<const std::byte*>(
+        source + static_cast<size_t>(sourceY + y) * static_cast<size_t>(sourceWidth) +
+        static_cast<size_t>(sourceX));
+  };
+  if (!planeDelta) {
+    for (int y = 0; y < local.height(); ++y)
+      std::memcpy(pixels + static_cast<size_t>(y) * rowBytes, row(y), rowBytes);
+    return out;
   }
+  // The filter (only where Snappy follows: it makes smooth 8-bit pixels compressible) reads the
+  // piece's pixels in one run: the tile's own rows when the piece is as wide as the tile (most
+  // are), else the rows gathered into this thread's scratch buffer first.
+  const std::byte* run = row(0);
+  if (local.width() != sourceWidth) {
+    thread_local dfb::Bytes scratch;
+    scratch.resize(pixelBytes);
+    for (int y = 0; y < local.height(); ++y)
+      std::memcpy(scratch.data() + static_cast<size_t>(y) * rowBytes, row(y), rowBytes);
+    run = scratch.data();
+  }
+  dfb::planeDeltaEncode(std::span<const std::byte>(run, pixelBytes), 4, pixels);
   return out;
 }
 
@@ -60,10 +72,11 @@ void copyPiece(const dfb::Bytes& bytes, const PieceHeader& header, Image& displa
                 std::to_string(display.height));
   const std::span<const std::byte> body(bytes.data() + sizeof header,
                                         4 * static_cast<size_t>(local.pixelCount()));
-  dfb::Bytes decoded;
   const std::byte* pixels = body.data();
-  if (header.planeDelta) {
-    dfb::planeDeltaDecode(body, 4, decoded);
+  if (header.planeDelta) {  // into this thread's scratch buffer, then row by row as unfiltered
+    thread_local dfb::Bytes decoded;
+    decoded.resize(body.size());
+    dfb::planeDeltaDecode(body, 4, decoded.data());
     pixels = decoded.data();
   }
   const size_t rowBytes = 4 * static_cast<size_t>(local.width());

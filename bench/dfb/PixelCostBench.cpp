@@ -28,11 +28,13 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dfb/Envelope.h"
 #include "dfb/PixelOp.h"
 #include "dfb/TileOperation.h"
+#include "dfb/ToneMapKernel.h"
 #include "renderers/PatternRenderer.h"
 #include "wall/Layout.h"
 #include "wall/PieceMessage.h"
@@ -75,11 +77,12 @@ std::vector<dfb::Tile> makeInputs(const dfb::TileGrid& grid, bool floatNoisy) {
   return op.finished();
 }
 
-[[gnu::noinline]] void stageToneMap(dfb::ToneMapOp& toneMap, dfb::FinishedTile& finished,
+[[gnu::noinline]] void stageToneMap(dfb::ToneMapOp& toneMap, dfb::TileOperation& op,
+                                    dfb::FinishedTile& finished,
                                     std::vector<std::uint32_t>& rgba8) {
   // As DistributedFrameBuffer::finishTile: display pixels are taken as they came.
   if (finished.linear->rgba8.size() == static_cast<size_t>(finished.region.pixelCount()))
-    rgba8 = finished.linear->rgba8;
+    rgba8 = op.takeDisplayPixels();
   else
     toneMap.process(finished);
 }
@@ -164,7 +167,7 @@ Result run(const wall::Layout& layout, int tileSize, int frames, bool floatNoisy
       finished.linear = &finishedTile;
       finished.rgba8 = &rgba8[static_cast<size_t>(t)];
       a = threadCpuNs();
-      stageToneMap(toneMap, finished, rgba8[static_cast<size_t>(t)]);
+      stageToneMap(toneMap, op, finished, rgba8[static_cast<size_t>(t)]);
       b = threadCpuNs();
       frameNs["tone_map"] += b - a;
       for (const wall::Piece& piece : pieces[static_cast<size_t>(t)]) {
@@ -221,6 +224,23 @@ Result run(const wall::Layout& layout, int tileSize, int frames, bool floatNoisy
   return r;
 }
 
+// The tone-mapping kernels alone on one noisy 64x64 float tile, over and over (cache-resident):
+// ns per pixel of the scalar kernel and of the AVX2 one (0 where the CPU has none).
+std::pair<double, double> toneMapKernelsNs() {
+  const dfb::TileGrid grid(64, 64, 64);
+  const std::vector<dfb::Tile> tile = makeInputs(grid, true);
+  const std::vector<float>& rgba = tile.front().color;
+  std::vector<std::uint32_t> out(4096);
+  constexpr int kRepeats = 2000;
+  const auto time = [&](auto kernel) {
+    const std::int64_t start = threadCpuNs();
+    for (int i = 0; i < kRepeats; ++i) kernel(rgba.data(), out.size(), out.data(), {});
+    return static_cast<double>(threadCpuNs() - start) / (kRepeats * 4096.0);
+  };
+  const double scalar = time(dfb::toneMapPixelsScalar);
+  return {scalar, dfb::toneMapAvx2Available() ? time(dfb::toneMapPixelsAvx2) : 0.0};
+}
+
 // The cost of one clock read, subtracted from every span (each span holds one).
 double clockReadNs() {
   constexpr int kReads = 200000;
@@ -264,6 +284,7 @@ int main(int argc, char** argv) {
   }
   const wall::Layout layout = wall::loadLayout(wallFile);
   const double clockNs = clockReadNs();
+  const auto [toneScalar, toneAvx2] = toneMapKernelsNs();
   std::vector<Result> results;
   for (const bool floatNoisy : {false, true}) {
     if (content != "all" && content != (floatNoisy ? "float-noisy" : "pattern")) continue;
@@ -298,12 +319,16 @@ int main(int argc, char** argv) {
     rows += buffer;
     rows += stages + "}}";
   }
+  std::printf("  tone-mapping kernels on a cache-resident tile: scalar %.3f, AVX2 %.3f ns/pixel\n",
+              toneScalar, toneAvx2);
   if (!json.empty()) {
     std::ofstream out(json);
     out << "{\"figure\": \"pixel_cost\", \"unit\": \"CPU ns per delivered pixel, one thread\","
         << " \"wall\": \"" << wallFile << "\", \"canvas\": [" << layout.canvasWidth << ", "
         << layout.canvasHeight << "], \"tile_size\": " << tileSize << ", \"frames\": " << frames
         << ", \"clock_read_ns\": " << clockNs
+        << ",\n \"tone_map_kernel_ns_per_pixel\": {\"scalar\": " << toneScalar
+        << ", \"avx2\": " << toneAvx2 << "}"
         << ",\n \"render_stages\": [\"tile_operation\", \"tone_map\", \"cut\", \"seal\"],"
         << " \"wall_stages\": [\"open\", \"piece_unpack\", \"assemble\"],\n \"results\": [" << rows
         << "\n ]}\n";
