@@ -3,7 +3,9 @@
 # wire (GL excluded) on the wall side, per stage, three ways:
 #  1. the app: the 2x2 1080p wall, 2 render + 4 wall ranks over shared memory; the per-pixel
 #     stages are thread-CPU timers (dfb/Timing.h), and the rest of each process's CPU over the
-#     frames is reported beside them ("other": the messenger's MPI and inbox threads, MPI's
+#     frames is reported beside them. Each figure is a difference between a long and a short run
+#     (steady state: the first frames' page faults on fresh display images and buffers, tens of
+#     ms here, cancel out) ("other": the messenger's MPI and inbox threads, MPI's
 #     copies, waiting) — render ranks less their render() calls, wall ranks less their main
 #     thread (waits, swap barrier, GL calls) and the GL driver's threads;
 #  2. pixel_cost_bench: the same stages' code on one thread, thread CPU clock, same-host and
@@ -12,27 +14,35 @@
 # fig_cluster runs it too (its single-host part). The goal: <= 5 ns per side.
 
 fig_pixelcost() {
-  local frames=6 ptframes=4 reps=2 benchFrames=5
-  [ $quick = 1 ] && frames=4 ptframes=3 reps=1 benchFrames=2
+  # Frames of the short and the long run of each renderer.
+  local short=3 long=9 ptshort=2 ptlong=5 reps=2 benchFrames=5
+  [ $quick = 1 ] && long=6 ptlong=4 reps=1 benchFrames=2
   local pixels=$((3840 * 2160)) appRows="" benchRows="" irRows="" dat="$work/pc.dat"
   pixelcost_goals=()
   : >"$dat"
   echo "== pixelcost (one host): CPU ns per delivered pixel, 2x2 1080p wall; load $(cut -d' ' -f1-3 /proc/loadavg)"
-  local rep v r f
+  local rep v r f fs fl len s
   for rep in $(seq "$reps"); do
-    for v in "pattern $frames" "pathtracer $ptframes"; do
-      read -r r f <<<"$v"
-      mpi 6 "$dfbwall" --wall "$wall2x2" --offscreen --scene "$orbit_scene" --orbit $orbit --renderer "$r" \
-        --spp 1 --frames "$f" --quiet --stats "$work/pc-$r-$rep.json"
+    for v in "pattern $short $long" "pathtracer $ptshort $ptlong"; do
+      read -r r fs fl <<<"$v"
+      for len in short long; do
+        f=$fs
+        [ $len = long ] && f=$fl
+        mpi 6 "$dfbwall" --wall "$wall2x2" --offscreen --scene "$orbit_scene" --orbit $orbit --renderer "$r" \
+          --spp 1 --frames "$f" --quiet --stats "$work/pc-$r-$len-$rep.json"
+      done
     done
   done
-  for v in "pattern $frames" "pathtracer $ptframes"; do
-    read -r r f <<<"$v"
-    local n=$((f * reps)) stages="" s role
-    ns_of() {  # ns_of ROLE FIELD: summed milliseconds in ns per delivered pixel
-      local file
-      for file in "$work"/pc-$r-*.json; do stage_sum "$file" "$1" "$2"; done |
-        awk -v p=$pixels -v n=$n '{t += $1} END {printf "%.4g", t * 1e6 / (n * p)}'
+  for v in "pattern $short $long" "pathtracer $ptshort $ptlong"; do
+    read -r r fs fl <<<"$v"
+    local n=$(((fl - fs) * reps)) stages="" role
+    ns_of() {  # ns_of ROLE FIELD: milliseconds of the long runs less the short ones, in ns/pixel
+      local file sign
+      for file in "$work"/pc-$r-*.json; do
+        sign=1
+        case "$file" in *-short-*) sign=-1 ;; esac
+        echo "$sign $(stage_sum "$file" "$1" "$2")"
+      done | awk -v p=$pixels -v n=$n '{t += $1 * $2} END {printf "%.4g", t * 1e6 / (n * p)}'
     }
     local renderStages=0 wallStages=0 x
     for s in tile_unpack tile_operation tone_map cut send; do
@@ -64,7 +74,7 @@ fig_pixelcost() {
     echo "  app, $r: render side $renderStages ns/px in the stages + $otherR other = $renderAll;" \
       "wall side $wallStages + $otherW other = $wallAll (render() $renderCpu, wall main thread $mainW, GL threads $glW)"
     appRows+="${appRows:+,}
-    {\"renderer\": \"$r\", \"frames\": $n, \"stages\": {$stages},
+    {\"renderer\": \"$r\", \"frames\": $n, \"frames_short_long\": [$fs, $fl], \"stages\": {$stages},
      \"render.stages_total\": $renderStages, \"render.other\": $otherR, \"render.total\": $renderAll,
      \"render.process_cpu\": $processR, \"render.render_cpu\": $renderCpu,
      \"wall.stages_total\": $wallStages, \"wall.other\": $otherW, \"wall.total\": $wallAll,
@@ -112,7 +122,8 @@ fig_pixelcost() {
   cat >"$results/pixelcost.json" <<EOF
 {"figure": "pixelcost", "machine": $machine, "load_average_at_start": "$(cut -d' ' -f1-3 /proc/loadavg)",
  "setup": {"wall": "2x2 x 1920x1080 (3840x2160), one host, 2 render + 4 wall ranks, shared memory (nothing compressed)",
-           "frames_per_run": {"pattern": $frames, "pathtracer": $ptframes}, "runs": $reps,
+           "frames_short_and_long_run": {"pattern": [$short, $long], "pathtracer": [$ptshort, $ptlong]}, "runs": $reps,
+           "steady_state": "every app figure is (long runs - short runs) / (frames difference x 3840 x 2160): start-up costs cancel",
            "unit": "CPU ns per delivered pixel (3840 x 2160 per frame), summed over the side's ranks and threads",
            "stages": "thread CPU clock per stage (dfb/Timing.h); render side after render(), wall side after the wire",
            "other": "render: process CPU over the frames - render() CPU - stages; wall: process CPU - main thread (waits, swap barrier, GL calls) - GL driver threads (llvmpipe) - stages. Mostly the messenger's MPI and inbox threads (MPI copies, polling, decompression, dispatch)"},
