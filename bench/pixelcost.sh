@@ -101,8 +101,8 @@ fig_pixelcost() {
         local irs=""
         for s in TileOperation ToneMap Cut Seal Open PieceUnpack Assemble; do
           local ir
-          ir=$(callgrind_annotate --inclusive=yes "$out" 2>/dev/null | grep "::stage$s(" | head -1 |
-            awk '{gsub(",", "", $1); print $1}')
+          ir=$({ callgrind_annotate --inclusive=yes --threshold=100 "$out" 2>/dev/null || true; } |
+            awk -v f="::stage$s(" 'index($0, f) {gsub(",", "", $1); print $1; exit}')
           ir=$(awk -v i="${ir:-0}" -v p=$pixels 'BEGIN {printf "%.4g", i / (2 * p)}')
           irs+="${irs:+, }\"$s\": $ir"
         done
