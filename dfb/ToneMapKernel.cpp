@@ -114,8 +114,9 @@ bool toneMapAvx2Available() { return __builtin_cpu_supports("avx2"); }
 namespace {
 
 struct Avx2Constants {
-  __m256 scale;        // exposure in the colour lanes, 1 in the alpha lanes
-  __m256i alphaLanes;  // all ones in the alpha lanes
+  __m256 scale;         // exposure in the colour lanes, 1 in the alpha lanes
+  __m256i alphaLanes;   // all ones in the alpha lanes
+  __m256i colourLanes;  // the others: only they gather (alpha lanes are blended away)
   bool filmic;
   const int* buckets;  // the encoder's bucket bytes, read 4 at a time
   const float* above;  // threshold of the next step: thresholds() + 1
@@ -144,9 +145,11 @@ __attribute__((target("avx2"), always_inline)) inline __m256i codesAvx2(const fl
   const __m256 positive = _mm256_cmp_ps(colour, zero, _CMP_GT_OQ);
   const __m256 clipped = _mm256_and_ps(_mm256_min_ps(colour, one), positive);
   const __m256i bucket = _mm256_srli_epi32(_mm256_castps_si256(clipped), 16);
-  const __m256i step =
-      _mm256_and_si256(_mm256_i32gather_epi32(k.buckets, bucket, 1), _mm256_set1_epi32(0xFF));
-  const __m256 next = _mm256_i32gather_ps(k.above, step, 4);
+  const __m256i step = _mm256_and_si256(
+      _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), k.buckets, bucket, k.colourLanes, 1),
+      _mm256_set1_epi32(0xFF));
+  const __m256 next = _mm256_mask_i32gather_ps(_mm256_setzero_ps(), k.above, step,
+                                               _mm256_castsi256_ps(k.colourLanes), 4);
   const __m256i reached = _mm256_castps_si256(_mm256_cmp_ps(clipped, next, _CMP_GE_OQ));
   const __m256i code =
       _mm256_and_si256(_mm256_sub_epi32(step, reached), _mm256_castps_si256(positive));
@@ -164,9 +167,10 @@ __attribute__((target("avx2"))) void toneMapPixelsAvx2(const float* rgba, std::s
                                                        const ToneMapSettings& settings) {
   const SrgbEncoder& encoder = srgbEncoder();
   const float e = settings.exposure;
-  const Avx2Constants k{_mm256_setr_ps(e, e, e, 1.0f, e, e, e, 1.0f),
-                        _mm256_setr_epi32(0, 0, 0, -1, 0, 0, 0, -1), settings.filmic,
-                        reinterpret_cast<const int*>(encoder.buckets()), encoder.thresholds() + 1};
+  const Avx2Constants k{
+      _mm256_setr_ps(e, e, e, 1.0f, e, e, e, 1.0f),    _mm256_setr_epi32(0, 0, 0, -1, 0, 0, 0, -1),
+      _mm256_setr_epi32(-1, -1, -1, 0, -1, -1, -1, 0), settings.filmic,
+      reinterpret_cast<const int*>(encoder.buckets()), encoder.thresholds() + 1};
   // packus interleaves 128-bit lanes: the bytes come out as pixels 0 2 4 6 1 3 5 7.
   const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
   std::size_t p = 0;
