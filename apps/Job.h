@@ -76,8 +76,13 @@ struct FrameRecord {
 };
 
 // Where one rank's time went over the whole run, in milliseconds summed over tiles or frames.
-// Render ranks fill the first seven stages, wall ranks the last five. Doubles only, so the
-// whole struct gathers as doubles.
+// Render ranks fill the first seven stages, wall ranks the next five. render, wallWait, barrier,
+// present and gatherRelay are elapsed time; the per-pixel stages (tileUnpack .. send,
+// pieceUnpack, assemble) are CPU time of the threads doing them (dfb/Timing.h). The CPU totals
+// over the frames (start-up barrier .. last frame) let the bench tell the rest apart: render
+// ranks: the renderer's render() calls, the whole process; wall ranks: the whole process, its
+// main thread (waits, swap barrier, GL calls), the GL driver's own threads (apps/ThreadCpu.h).
+// Doubles only, so the whole struct gathers as doubles.
 struct StageTimes {
   double render = 0, tileUnpack = 0, tileOperation = 0, toneMap = 0, cut = 0, send = 0,
          gatherRelay = 0;
@@ -85,6 +90,7 @@ struct StageTimes {
   // before the swap barrier, present (the swap) after it.
   double pieceUnpack = 0, assemble = 0, wallWait = 0, upload = 0, draw = 0, barrier = 0,
          present = 0;
+  double renderCpu = 0, processCpu = 0, mainThreadCpu = 0, glThreadsCpu = 0;
 };
 
 struct RankTotals {

@@ -278,6 +278,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
     // Every object of every rank is registered before anyone sends.
     const auto timeout = std::chrono::seconds(o.timeoutSeconds);
     boundedBarrier(MPI_COMM_WORLD, timeout, "start-up");
+    const std::int64_t cpuAtStart = dfb::processCpuNs();
 
     // The statistics of a frame are written once its frame time (at the next frame's start) and
     // its wall acknowledgement are known: at most frames-in-flight + 1 records wait here.
@@ -387,6 +388,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
       StageTimes& t = totals.stages;
       t.gatherRelay += msBetween(relayStart, Clock::now());
       t.render += report.renderMs;
+      t.renderCpu += report.renderCpuMs;
       t.tileUnpack += stats.unpackMs;
       t.tileOperation += stats.operationMs;
       t.toneMap += stats.toneMapMs;
@@ -449,6 +451,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
     }
     if (credits) credits->waitForPresented(lastFrame, timeout);
     if (preview) preview->finish(lastFrame, timeout);
+    totals.stages.processCpu = static_cast<double>(dfb::processCpuNs() - cpuAtStart) * 1e-6;
     if (!pending.empty() && pending.back().frameMs <= 0)
       pending.back().frameMs = msBetween(previousStart, Clock::now());
     writeReady(true);

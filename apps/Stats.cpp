@@ -29,14 +29,19 @@ Json stagesOf(const RankTotals& t) {
                 {"upload", s.upload},
                 {"draw", s.draw},
                 {"barrier", s.barrier},
-                {"present", s.present}};
+                {"present", s.present},
+                {"process_cpu", s.processCpu},
+                {"main_thread_cpu", s.mainThreadCpu},
+                {"gl_threads_cpu", s.glThreadsCpu}};
   return Json{{"render", s.render},
               {"tile_unpack", s.tileUnpack},
               {"tile_operation", s.tileOperation},
               {"tone_map", s.toneMap},
               {"cut", s.cut},
               {"send", s.send},
-              {"gather_relay", s.gatherRelay}};
+              {"gather_relay", s.gatherRelay},
+              {"render_cpu", s.renderCpu},
+              {"process_cpu", s.processCpu}};
 }
 
 }  // namespace

@@ -8,12 +8,20 @@
 #include "apps/Job.h"
 #include "apps/RunControl.h"
 #include "apps/Steering.h"
+#include "apps/ThreadCpu.h"
 #include "apps/WallKeys.h"
+#include "dfb/Timing.h"
 #include "wall/GlfwPresenter.h"
 #include "wall/OsmesaPresenter.h"
 #include "wall/WallNode.h"
 
 namespace app {
+namespace {
+
+// Mesa's software rasterizer threads (OSMesa and GLX on llvmpipe): GL's CPU, not the wall's.
+constexpr const char* kGlThreadPrefix = "llvmpipe";
+
+}  // namespace
 
 int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, RunControl& control,
                 Steering& steering, RankTotals& totals) {
@@ -75,6 +83,8 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
     try {
       // Pairs with the render ranks' barrier: every object of every rank is registered.
       boundedBarrier(MPI_COMM_WORLD, options.timeout, "start-up");
+      const std::int64_t cpuAtStart = dfb::processCpuNs(), mainAtStart = dfb::threadCpuNs(),
+                         glAtStart = cpuNsOfThreadsNamed(kGlThreadPrefix);
       bool closed = false;
       const std::uint32_t frames = static_cast<std::uint32_t>(o.frames);  // 0: until stopped
       for (std::uint32_t frameId = 1; frames == 0 || frameId <= frames; ++frameId) {
@@ -102,6 +112,10 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
           totals.swapSpreadFrames += 1;
         }
       }
+      StageTimes& t = totals.stages;
+      t.processCpu = static_cast<double>(dfb::processCpuNs() - cpuAtStart) * 1e-6;
+      t.mainThreadCpu = static_cast<double>(dfb::threadCpuNs() - mainAtStart) * 1e-6;
+      t.glThreadsCpu = static_cast<double>(cpuNsOfThreadsNamed(kGlThreadPrefix) - glAtStart) * 1e-6;
       node.finish();  // the last frame's captures, when the run stopped early
     } catch (const std::exception& e) {
       job.failure->fail(e);

@@ -18,7 +18,11 @@ void decompress(std::span<const std::byte> compressed, std::size_t rawSize, Byte
 
 // Reorders interleaved `channels`-byte pixels into planes (all R, all G, ...) and replaces each
 // byte by its difference from the previous one in its plane. Lossless; size unchanged.
+// (dfb/PlaneDelta.cpp; SSSE3 for 4 channels where the CPU has it, same bytes.)
 void planeDeltaEncode(std::span<const std::byte> pixels, int channels, Bytes& out);
 void planeDeltaDecode(std::span<const std::byte> encoded, int channels, Bytes& out);
+// The same into `out`, which holds as many bytes as the input (no allocation; not overlapping).
+void planeDeltaEncode(std::span<const std::byte> pixels, int channels, std::byte* out);
+void planeDeltaDecode(std::span<const std::byte> encoded, int channels, std::byte* out);
 
 }  // namespace dfb

@@ -76,9 +76,9 @@ struct FrameStats {
   double lastSetTileToCompleteMs = 0;  // last local setTile → frame complete on all ranks
   double frameMs = 0;                  // begin → end returned
   std::int64_t lastSetTileNs = 0;      // steady_clock time of the last local setTile; 0: none
-  // Where the owner's time went, summed over tiles (threads overlap, so these can exceed the
-  // frame): unpacking tile messages, the tile operation, tone mapping, the rest of the pixel-op
-  // chain (e.g. a wall's routing: cutting and sending).
+  // Where the owner's CPU time went (each thread's CPU clock, summed over tiles): unpacking tile
+  // messages, the tile operation, tone mapping, the rest of the pixel-op chain (e.g. a wall's
+  // routing: cutting and sending).
   double unpackMs = 0, operationMs = 0, toneMapMs = 0, pixelOpsMs = 0;
 };
 

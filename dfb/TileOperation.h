@@ -32,6 +32,9 @@ class TileOperation {
   virtual const Tile& finished() const = 0;
   // An estimate of the remaining error in the tile (0 when the operation keeps none).
   virtual float error() const { return 0.0f; }
+  // Moves the completed tile's display pixels (Tile::rgba8) out, so the owner keeps them without
+  // a copy; finished().rgba8 is empty afterwards. Operations that never take them return none.
+  virtual std::vector<std::uint32_t> takeDisplayPixels() { return {}; }
 };
 
 using TileOperationFactory = std::function<std::unique_ptr<TileOperation>(const Region& region)>;

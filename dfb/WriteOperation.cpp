@@ -23,6 +23,7 @@ class WriteOperation final : public TileOperation {
   }
 
   const Tile& finished() const override { return finished_; }
+  std::vector<std::uint32_t> takeDisplayPixels() override { return std::move(finished_.rgba8); }
 
  private:
   Region region_;

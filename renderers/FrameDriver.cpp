@@ -1,5 +1,7 @@
 #include "renderers/FrameDriver.h"
 
+#include <atomic>
+
 #include "dfb/Timing.h"
 #include "renderers/Parallel.h"
 
@@ -91,10 +93,15 @@ FrameReport FrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb, const dfb
   const std::uint32_t accumulationId = dfb.accumulationId();
   const std::vector<Assignment>& mine = m.plan->perRank[dfb.rank()];
   FrameReport report;
+  // Rendering alone, in CPU time: setTile() may do the owner's per-pixel work (tone mapping,
+  // routing) on this thread too, and the DFB times that itself.
+  std::atomic<std::int64_t> renderCpuNs{0};
   parallelFor(mine.size(), [&](std::size_t i) {
     dfb::Tile tile;
     const Assignment& a = mine[i];
+    const std::int64_t cpu = dfb::threadCpuNs();
     m.renderer.render(grid.region(a.tile), accumulationId, a.firstSample, a.samples, tile);
+    renderCpuNs += dfb::threadCpuNs() - cpu;
     dfb.setTile(std::move(tile));
   });
   const auto t2 = Clock::now();
@@ -103,6 +110,7 @@ FrameReport FrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb, const dfb
   for (const Assignment& a : mine)
     report.samples += std::uint64_t{a.samples} * grid.region(a.tile).pixelCount();
   report.renderMs = dfb::msBetween(t1, t2);
+  report.renderCpuMs = static_cast<double>(renderCpuNs.load()) * 1e-6;
   report.frameMs = dfb::msBetween(t0, Clock::now());
   return report;
 }

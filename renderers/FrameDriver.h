@@ -34,6 +34,7 @@ struct FrameReport {
   int tilesRendered = 0;      // on this rank (inputs, counting redundant ones)
   std::uint64_t samples = 0;  // pixel samples rendered on this rank
   double renderMs = 0;        // begin() returned .. last setTile() returned
+  double renderCpuMs = 0;     // CPU of the renderer's render() calls, summed over threads
   double frameMs = 0;         // plan .. end() returned
 };
 

@@ -21,10 +21,9 @@ DisplayRoutingOp::DisplayRoutingOp(dfb::Messenger& messenger, const Layout& layo
 }
 
 void DisplayRoutingOp::process(dfb::FinishedTile& tile) {
-  using dfb::Clock;
   const auto& pieces = piecesOfTile_.at(static_cast<size_t>(tile.tileIndex));
   for (const Piece& piece : pieces) {
-    const auto t0 = Clock::now();
+    const std::int64_t t0 = dfb::threadCpuNs();
     dfb::Bytes bytes =
         packPiece(tile.frameId, piece.display, piece.local, tile.rgba8->data(), tile.region.width(),
                   piece.canvas.x0 - tile.region.x0, piece.canvas.y0 - tile.region.y0,
@@ -32,11 +31,11 @@ void DisplayRoutingOp::process(dfb::FinishedTile& tile) {
     bytesSent_ += bytes.size();
     piecesSent_++;
     if (otherHost_[static_cast<size_t>(piece.display)]) piecesToOtherHosts_++;
-    const auto t1 = Clock::now();
+    const std::int64_t t1 = dfb::threadCpuNs();
     messenger_.send(rankOfDisplay_[static_cast<size_t>(piece.display)], kWallNodeObject,
                     std::move(bytes));
-    cutNs_ += dfb::nsBetween(t0, t1);
-    sendNs_ += dfb::nsBetween(t1, Clock::now());
+    cutNs_ += t1 - t0;
+    sendNs_ += dfb::threadCpuNs() - t1;
   }
 }
 

@@ -32,8 +32,9 @@ class DisplayRoutingOp : public dfb::PixelOp {
   Sent takeSent() {
     return {bytesSent_.exchange(0), piecesSent_.exchange(0), piecesToOtherHosts_.exchange(0)};
   }
-  // Nanoseconds spent, summed over tiles, since the last call: cutting and packing pieces, and
-  // handing them to the messenger (which compresses and copies them onto the wire there).
+  // CPU nanoseconds of the calling threads, summed over tiles, since the last call: cutting and
+  // packing pieces, and handing them to the messenger (which compresses them there when they
+  // leave the host; MPI's copies happen later, on the messenger's thread).
   struct StageNs {
     std::int64_t cut = 0, send = 0;
   };

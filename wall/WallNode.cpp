@@ -113,9 +113,9 @@ int WallNode::expectedPieceIndex(size_t position, const dfb::Region& local) cons
 
 void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
   try {
-    const auto start = Clock::now();
+    const std::int64_t start = dfb::threadCpuNs();  // stage CPU time (dfb/Timing.h)
     const PieceHeader h = readPieceHeader(payload);
-    const auto unpacked = Clock::now();
+    const std::int64_t unpacked = dfb::threadCpuNs();
     const int position =
         h.display >= 0 && static_cast<size_t>(h.display) < positionOfDisplay_.size()
             ? positionOfDisplay_[static_cast<size_t>(h.display)]
@@ -160,10 +160,11 @@ void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
     // Claimed pieces are disjoint, and the presenting thread reads a slot only once every piece
     // is counted below, so this copy needs no lock.
     copyPiece(payload, h, *image);
+    const std::int64_t assembledCpu = dfb::threadCpuNs();
     const auto assembled = Clock::now();
     std::lock_guard lock(mutex_);
-    unpackNs_ += nsBetween(start, unpacked);
-    assembleNs_ += nsBetween(unpacked, assembled);
+    unpackNs_ += unpacked - start;
+    assembleNs_ += assembledCpu - unpacked;
     Slot& slot = slots_.at(h.frameId);
     const int got = ++slot.received[at];
     slot.toUpload.emplace_back(position, piece);

@@ -60,8 +60,9 @@ struct PresentReport {
   double barrierMs = 0;  // in the swap barrier
   double presentMs = 0;  // swapping every display (after the barrier), window events
   std::uint64_t bytesReceived = 0;
-  // Since the previous presentFrame, on the inbox thread: unpacking pieces and copying them into
-  // the back buffers. completeNs: steady_clock time the last piece of this frame arrived.
+  // Since the previous presentFrame, CPU time of the thread that received the pieces: unpacking
+  // them and copying them into the back buffers. completeNs: steady_clock time the last piece
+  // of this frame arrived.
   double unpackMs = 0, assembleMs = 0;
   std::int64_t completeNs = 0;
   // The latest completeNs over every wall process (agreed in the swap barrier).
