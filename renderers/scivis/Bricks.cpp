@@ -139,8 +139,17 @@ std::vector<int> brickHolders(int brick, int ranks, int replication) {
   return holders;
 }
 
-float ghostMargin(const SceneDesc& desc, float sceneExtent) {
-  if (desc.scivis.aoSamples <= 0) return 0.0f;
+const char* ghostModeName(GhostMode mode) { return mode == GhostMode::Layer ? "layer" : "reach"; }
+
+GhostMode ghostModeFromName(const std::string& name) {
+  if (name == "reach") return GhostMode::Reach;
+  if (name == "layer") return GhostMode::Layer;
+  throw Error("ghost mode '" + name + "': choose reach (shading rays see what they reach) or " +
+              "layer (one ghost layer of voxels)");
+}
+
+float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode) {
+  if (mode == GhostMode::Layer || desc.scivis.aoSamples <= 0) return 0.0f;
   return desc.scivis.aoDistance > 0 ? desc.scivis.aoDistance : 0.25f * sceneExtent;
 }
 
@@ -197,11 +206,11 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost
 }
 
 std::vector<HeldBrick> loadOwnBricks(const SceneDesc& desc, int bricks, int replication, int rank,
-                                     int ranks) {
+                                     int ranks, GhostMode ghosts) {
   const std::vector<BrickPlan> plans = splitScene(desc, bricks);
   if (replication < 1) throw Error("--replication must be at least 1");
   const Box3 domain = sceneDomain(desc);
-  const float ghost = ghostMargin(desc, maxComponent(domain.hi - domain.lo));
+  const float ghost = ghostMargin(desc, maxComponent(domain.hi - domain.lo), ghosts);
   std::vector<HeldBrick> out;
   for (const BrickPlan& plan : plans) {
     const std::vector<int> h = brickHolders(plan.id, ranks, replication);

@@ -52,7 +52,7 @@ RenderSettings settings() {
 // The image of kFrames accumulated frames with `bricks` bricks on the first `ranks` ranks of the
 // world (rank 0's copy; empty elsewhere).
 std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int ranks, int bricks,
-                                int replication) {
+                                int replication, GhostMode ghosts = GhostMode::Reach) {
   MPI_Comm comm;
   const int rank = testutil::worldRank();
   MPI_Comm_split(MPI_COMM_WORLD, rank < ranks ? 0 : 1, rank, &comm);
@@ -61,7 +61,7 @@ std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int rank
     BrickDriverOptions bo;
     bo.threads = 2;
     BrickFrameDriver driver(desc, settings(), bo,
-                            loadOwnBricks(*desc, bricks, replication, rank, ranks), comm);
+                            loadOwnBricks(*desc, bricks, replication, rank, ranks, ghosts), comm);
     dfb::Messenger messenger(comm);
     dfb::DfbOptions options;
     options.width = kWidth, options.height = kHeight, options.tileSize = kTile;
@@ -81,19 +81,72 @@ std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int rank
   return image;
 }
 
-TEST(BrickDriverMpi, EveryRankCountAndReplicationGivesTheSameBytes) {
-  const auto desc = scene();
+// 4 bricks on 1 .. world size ranks, every replication, give the bytes of 1 rank.
+void checkEveryRankCountAndReplication(const std::shared_ptr<SceneDesc>& desc, GhostMode ghosts) {
   const int size = testutil::worldSize();
-  const std::vector<float> reference = renderBricks(desc, 1, 4, 1);
+  const std::vector<float> reference = renderBricks(desc, 1, 4, 1, ghosts);
   for (int ranks = 1; ranks <= size; ++ranks)
     for (int replication : {1, 2, 4}) {
       if (replication > ranks || (ranks == 1 && replication > 1)) continue;
-      const std::vector<float> image = renderBricks(desc, ranks, 4, replication);
+      const std::vector<float> image = renderBricks(desc, ranks, 4, replication, ghosts);
       if (testutil::worldRank() != 0) continue;
       ASSERT_EQ(image.size(), reference.size());
       EXPECT_EQ(0, std::memcmp(image.data(), reference.data(), image.size() * sizeof(float)))
-          << ranks << " ranks, replication " << replication;
+          << ranks << " ranks, replication " << replication << ", ghost " << ghostModeName(ghosts);
     }
+}
+
+TEST(BrickDriverMpi, EveryRankCountAndReplicationGivesTheSameBytes) {
+  checkEveryRankCountAndReplication(scene(), GhostMode::Reach);
+}
+
+// One ghost layer: what a brick's AO rays see depends on the brick plan only, so the image is
+// still a function of the plan, whoever renders which brick.
+TEST(BrickDriverMpi, LayerGhostsGiveTheSameBytesOnEveryRankCountAndReplication) {
+  checkEveryRankCountAndReplication(scene(), GhostMode::Layer);
+}
+
+// Without AO and shadows no shading ray leaves a brick, so both ghost modes load the same data
+// and render the same bytes.
+TEST(BrickDriverMpi, LayerGhostsEqualReachWithoutAoAndShadows) {
+  const auto desc = scene();
+  desc->scivis.aoSamples = 0;
+  desc->scivis.shadows = false;
+  const int ranks = testutil::worldSize();
+  const std::vector<float> reach = renderBricks(desc, ranks, 4, 1, GhostMode::Reach);
+  const std::vector<float> layer = renderBricks(desc, ranks, 4, 1, GhostMode::Layer);
+  if (testutil::worldRank() != 0) return;
+  ASSERT_EQ(reach.size(), layer.size());
+  EXPECT_EQ(0, std::memcmp(reach.data(), layer.data(), reach.size() * sizeof(float)));
+}
+
+// With AO on, one ghost layer holds less than the AO reach, and the AO of points near brick
+// faces no longer sees the neighbour's data: the image differs from the unbricked one there.
+TEST(BrickDriverMpi, LayerGhostsHoldLessAndChangeAoNearBrickFaces) {
+  const auto desc = scene();
+  ASSERT_GT(desc->scivis.aoSamples, 0);
+  std::size_t reachBytes = 0, layerBytes = 0;
+  for (const HeldBrick& b : loadOwnBricks(*desc, 4, 1, 0, 1, GhostMode::Reach))
+    reachBytes += b.content.bytes();
+  for (const HeldBrick& b : loadOwnBricks(*desc, 4, 1, 0, 1, GhostMode::Layer))
+    layerBytes += b.content.bytes();
+  EXPECT_LT(layerBytes, reachBytes);
+  const int ranks = testutil::worldSize();
+  const std::vector<float> whole = renderBricks(desc, ranks, 1, 1, GhostMode::Layer);
+  const std::vector<float> layer = renderBricks(desc, ranks, 4, 1, GhostMode::Layer);
+  if (testutil::worldRank() != 0) return;
+  ASSERT_EQ(whole.size(), layer.size());
+  float worst = 0;
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < whole.size(); ++i) {
+    worst = std::max(worst, std::abs(whole[i] - layer[i]));
+    differing += std::abs(whole[i] - layer[i]) > 1e-4f;
+  }
+  EXPECT_GT(worst, 1e-4f) << "AO rays near brick faces should miss the neighbours' data";
+  std::printf(
+      "4 bricks, ghost layer: %zu vs %zu bytes (reach); %zu of %zu channels differ from "
+      "the unbricked render by more than 1e-4, at most %.3g\n",
+      layerBytes, reachBytes, differing, whole.size(), worst);
 }
 
 // Every rank count gives rank 1's bytes, and 4 bricks match the image-parallel render of `desc`.
