@@ -6,8 +6,9 @@
 #     report it, and (frame_ms - render_ms) / frame_ms, everything but the slowest rank's rendering.
 #  3. Memory: scene_bytes and peak RSS per rank on 1, 2, 4 ranks with --bricks 4 against the
 #     whole scene on every rank (--bricks 1 --replication RANKS), ambient occlusion on and off,
-#     for both ghost modes: --ghost reach (the AO distance + 2 voxels around each brick, images
-#     equal the whole scene's) and --ghost layer (2 voxels; AO near brick faces differs).
+#     for both ghost modes: --ghost reach (2 voxels densely around each brick, and as far as AO
+#     reaches the macrocells holding an isovalue, sparsely; images equal the whole scene's) and
+#     --ghost layer (2 voxels; AO near brick faces differs).
 #  4. Mixed vs pure data-parallel on a skewed scene (a dense, translucent particle cluster inside
 #     brick 0; the rest of the domain is an invisible volume): --bricks 4 on 4 ranks with
 #     --replication 2 vs 1.
