@@ -53,9 +53,11 @@ GhostMode ghostModeFromName(const std::string& name);
 // beyond that see only what the brick holds; docs/design.md.)
 float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode = GhostMode::Reach);
 
-// The data of `plan`: per volume the voxels around its bounds, `ghost` world units and two
-// voxels beyond them; particles and mesh triangles reaching into the bounds (drawn, clipped to
-// them) and, as ghost data, those within `ghost` of them.
+// The data of `plan`: per volume the voxels around its bounds and two beyond them (dense), and
+// as far as `ghost` world units beyond, for shading rays, a ShadingShell (sparse: only
+// macrocells holding an isovalue) or the dense box when that is smaller; particles and mesh
+// triangles reaching into the bounds (drawn, clipped to them) and, as ghost data, those within
+// `ghost` of them.
 BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost);
 
 // One brick a rank holds: its id (every rank holding an id holds the same data) and its data;
