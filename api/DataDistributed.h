@@ -98,9 +98,12 @@ struct Style {
 };
 
 // A brick's part of one volume: the voxels [lo, hi) of the whole field (x fastest, then y, then
-// z), copied by addBrick. For seams that match the whole field exactly the box covers the clip
-// bounds plus 2 voxels below and 3 above on each axis (where the field has them), and for
-// ambient occlusion the AO distance beyond. lo == hi: this brick has none of the volume.
+// z), copied by addBrick. Shading rays see exactly the voxels given, so the box is the program's
+// choice of ghost data (dfbwall --ghost offers the same two): for seams that match the whole
+// field exactly it covers the clip bounds plus 2 voxels below and 3 above on each axis (where
+// the field has them) — one ghost layer, the least memory, but ambient occlusion near the
+// brick's faces sees only the brick — and for AO that equals the whole field's, the AO distance
+// beyond that too. lo == hi: this brick has none of the volume.
 struct VolumePart {
   Index3 lo{0, 0, 0}, hi{0, 0, 0};
   VoxelType type = VoxelType::Float32;

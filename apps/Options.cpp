@@ -73,6 +73,13 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
                  "with --bricks: ranks holding each brick (1: data-parallel, all: image-parallel)")
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
+  auto* ghost =
+      cli.add_option("--ghost", o.ghost,
+                     "with --bricks: ghost data around each brick. reach: all that shading rays "
+                     "(AO) reach, images equal the unbricked render; layer: one voxel layer for "
+                     "interpolation, less memory, AO differs near brick faces")
+          ->check(CLI::IsMember({"reach", "layer"}))
+          ->capture_default_str();
   cli.add_option("--renderer", o.renderer, "renderer")
       ->check(CLI::IsMember({"pathtracer", "primary", "pattern", "scivis"}))
       ->capture_default_str();
@@ -164,6 +171,8 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
     return fail("--control-token needs --control [ADDR:]PORT");
   if (o.bricks > 0 && o.renderer != "scivis")
     return fail("--bricks distributes the scivis renderer's data: add --renderer scivis");
+  if (ghost->count() > 0 && o.bricks == 0)
+    return fail("--ghost chooses the ghost data of bricks: add --bricks N");
   if (o.bricks > 0 && o.distribution == "dynamic")
     return fail("--bricks: tiles are planned by brick; --distribution dynamic does not apply");
   if (o.renderer == "pattern" && o.distribution == "dynamic")

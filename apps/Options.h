@@ -26,7 +26,10 @@ struct Options {
   // Data-parallel (scivis): the scene cut into this many bricks (0: every rank holds it whole),
   // each held by `replication` ranks.
   int bricks = 0;
-  int replication = 1;  // degrees per frame about the look-at point; each frame a new epoch
+  int replication = 1;
+  // How much ghost data each brick loads: "reach" (as far as shading rays reach: bricked images
+  // equal the whole scene's) or "layer" (one voxel layer: less memory, AO seams at brick faces).
+  std::string ghost = "reach";
 
   // The wall.
   std::string wall;  // layout file; empty: no wall

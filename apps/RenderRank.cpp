@@ -207,7 +207,8 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
     // that bring their own data do (api/DataDistributed.h).
     brickDriver = std::make_unique<renderers::BrickFrameDriver>(
         job.scene.desc, settings, bricks,
-        renderers::loadOwnBricks(*job.scene.desc, o.bricks, o.replication, renderRank, renderRanks),
+        renderers::loadOwnBricks(*job.scene.desc, o.bricks, o.replication, renderRank, renderRanks,
+                                 renderers::ghostModeFromName(o.ghost)),
         renderComm);
     brickDriver->configure(dfbOptions);
     totals.sceneBytes = static_cast<double>(brickDriver->sceneBytes());

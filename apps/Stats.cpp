@@ -123,6 +123,7 @@ void StatsStream::writeRun(const Job& job) {
                    {"spp", o.spp},
                    {"bricks", o.bricks},
                    {"replication", o.replication},
+                   {"ghost", o.ghost},
                    {"frames_asked", o.frames},
                    {"frames_in_flight", o.framesInFlight},
                    {"max_spp", o.maxSpp},

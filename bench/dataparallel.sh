@@ -5,8 +5,10 @@
 #  2. Compositing overhead per frame on 2 and 4 ranks: composite_ms / frame_ms as the statistics
 #     report it, and (frame_ms - render_ms) / frame_ms, everything but the slowest rank's rendering.
 #  3. Memory: scene_bytes and peak RSS per rank on 1, 2, 4 ranks with --bricks 4 against the
-#     whole scene on every rank (--bricks 1 --replication RANKS), ambient occlusion on and off
-#     (the ghost margin is the AO distance + 2 voxels).
+#     whole scene on every rank (--bricks 1 --replication RANKS), ambient occlusion on and off,
+#     for both ghost modes: --ghost reach (2 voxels densely around each brick, and as far as AO
+#     reaches the macrocells holding an isovalue, sparsely; images equal the whole scene's) and
+#     --ghost layer (2 voxels; AO near brick faces differs).
 #  4. Mixed vs pure data-parallel on a skewed scene (a dense, translucent particle cluster inside
 #     brick 0; the rest of the domain is an invisible volume): --bricks 4 on 4 ranks with
 #     --replication 2 vs 1.
@@ -121,17 +123,31 @@ EOF
         --frames "$frames" --stats "$work/dp-skew-k$k-$rep.json"
     done
   done
-  # 3: memory, one small frame per run: 4 bricks vs the whole scene on every rank, AO on/off.
-  local ao scene
+  # 3: memory, one small frame per run: 4 bricks (both ghost modes) vs the whole scene on every
+  # rank, AO on/off.
+  local ao scene g
   for ao in on off; do
     scene=$wave
     [ $ao = on ] || scene=$waveNoAo
     for n in "${counts[@]}"; do
-      mpi "$n" "${run[@]}" --scene "$scene" --size $memsize --bricks 4 --frames 1 \
-        --stats "$work/dp-mem-$ao-b4-n$n.json"
+      for g in reach layer; do
+        mpi "$n" "${run[@]}" --scene "$scene" --size $memsize --bricks 4 --ghost $g --frames 1 \
+          --stats "$work/dp-mem-$ao-b4$g-n$n.json"
+      done
       mpi "$n" "${run[@]}" --scene "$scene" --size $memsize --bricks 1 --replication "$n" \
         --frames 1 --stats "$work/dp-mem-$ao-b1-n$n.json"
     done
+  done
+  # The AO seams of --ghost layer: the largest difference per channel (linear radiance, .pfm)
+  # of 4 bricks against the unbricked render, both ghost modes, one rank, same seed, shadows
+  # off (shadow rays leave a brick's ghost data in both modes), $seamFrames frames accumulated.
+  local seam="$work/dp-wavelet-seam.toml" seamFrames=8
+  sed 's/^ao_distance = .*/&\nshadows = false/' "$wave" >"$seam"
+  mpi 1 "${run[@]}" --scene "$seam" --size $memsize --bricks 1 --frames $seamFrames \
+    --image "$work/dp-seam-whole.pfm"
+  for g in reach layer; do
+    mpi 1 "${run[@]}" --scene "$seam" --size $memsize --bricks 4 --ghost $g --frames $seamFrames \
+      --image "$work/dp-seam-$g.pfm"
   done
   # The two scenes' images (the README's and the plot's reference), 2 threads, one rank.
   mpi 1 "$dfbwall" --renderer scivis --quiet --scene "$skew" --size $memsize --image "$work/dp-skew.png"
@@ -174,32 +190,61 @@ EOF
   done
 
   # ---- Memory. ----
-  local memRows="" memDat="$work/dp-mem.dat" whole wholeNoAo memGoal=missed
+  local memRows="" memDat="$work/dp-mem.dat" whole wholeNoAo memGoal=missed memGoalReach=missed
   : >"$memDat"; : >"$work/dp-mem-on.dat"; : >"$work/dp-mem-off.dat"
   whole=$(dp_ranks "$work/dp-mem-on-b1-n1.json" scene_bytes | head -1)
   wholeNoAo=$(dp_ranks "$work/dp-mem-off-b1-n1.json" scene_bytes | head -1)
   for ao in on off; do
     for n in "${counts[@]}"; do
-      local sb4 rss4 sb1 rss1 max4 share
-      sb4=$(dp_ranks "$work/dp-mem-$ao-b4-n$n.json" scene_bytes | dp_json_list)
-      rss4=$(dp_ranks "$work/dp-mem-$ao-b4-n$n.json" peak_rss_kib | dp_json_list)
+      local ref=$whole row="" dat="$ao $n" sb1 rss1
+      [ $ao = on ] || ref=$wholeNoAo
+      for g in reach layer; do
+        local f="$work/dp-mem-$ao-b4$g-n$n.json" sb4 rss4 max4 share
+        sb4=$(dp_ranks "$f" scene_bytes | dp_json_list)
+        rss4=$(dp_ranks "$f" peak_rss_kib | dp_json_list)
+        max4=$(dp_ranks "$f" scene_bytes | sort -g | tail -1)
+        share=$(awk -v a="$max4" -v b="$ref" 'BEGIN {printf "%.3g", 100 * a / b}')
+        if [ $ao = on ] && [ "$n" = 4 ] && awk -v s="$share" 'BEGIN {exit !(s <= 30)}'; then
+          [ $g = layer ] && memGoal=met || memGoalReach=met
+        fi
+        row+=" \"bricks_4_ghost_$g\": {\"scene_bytes\": $sb4, \"peak_rss_kib\": $rss4, \"max_scene_bytes_percent_of_whole\": $share},"
+        echo "  AO $ao, $n rank(s), --bricks 4 --ghost $g: scene_bytes/rank $sb4 (max ${share}% of the whole scene), peak RSS KiB $rss4"
+        dat+=" $max4 $(dp_ranks "$f" peak_rss_kib | sort -g | tail -1) $share"
+      done
       sb1=$(dp_ranks "$work/dp-mem-$ao-b1-n$n.json" scene_bytes | dp_json_list)
       rss1=$(dp_ranks "$work/dp-mem-$ao-b1-n$n.json" peak_rss_kib | dp_json_list)
-      max4=$(dp_ranks "$work/dp-mem-$ao-b4-n$n.json" scene_bytes | sort -g | tail -1)
-      local ref=$whole
-      [ $ao = on ] || ref=$wholeNoAo
-      share=$(awk -v a="$max4" -v b="$ref" 'BEGIN {printf "%.3g", 100 * a / b}')
-      [ $ao = on ] && [ "$n" = 4 ] && awk -v s="$share" 'BEGIN {exit !(s <= 30)}' && memGoal=met
+      echo "  AO $ao, $n rank(s), whole scene on every rank: scene_bytes $sb1, peak RSS KiB $rss1"
       memRows+="${memRows:+,}
-    {\"ao\": \"$ao\", \"ranks\": $n, \"bricks_4\": {\"scene_bytes\": $sb4, \"peak_rss_kib\": $rss4, \"max_scene_bytes_percent_of_whole\": $share},
+    {\"ao\": \"$ao\", \"ranks\": $n,$row
      \"whole_scene_every_rank\": {\"scene_bytes\": $sb1, \"peak_rss_kib\": $rss1}}"
-      echo "  AO $ao, $n rank(s): --bricks 4 scene_bytes/rank $sb4 (max ${share}% of the whole scene), peak RSS KiB $rss4; whole scene: RSS KiB $rss1"
-      printf '%s %s %s %s %s %s\n' "$ao" "$n" "$max4" \
-        "$(dp_ranks "$work/dp-mem-$ao-b4-n$n.json" peak_rss_kib | sort -g | tail -1)" \
-        "$(dp_ranks "$work/dp-mem-$ao-b1-n$n.json" scene_bytes | sort -g | tail -1)" \
-        "$(dp_ranks "$work/dp-mem-$ao-b1-n$n.json" peak_rss_kib | sort -g | tail -1)" | tee -a "$work/dp-mem-$ao.dat" >>"$memDat"
+      # ao ranks | reach: max scene_bytes, max RSS, share | layer: the same | whole: bytes, RSS
+      echo "$dat $(dp_ranks "$work/dp-mem-$ao-b1-n$n.json" scene_bytes | sort -g | tail -1) $(dp_ranks "$work/dp-mem-$ao-b1-n$n.json" peak_rss_kib | sort -g | tail -1)" |
+        tee -a "$work/dp-mem-$ao.dat" >>"$memDat"
     done
   done
+  # AO seams: largest per-channel difference against the unbricked render, and how many
+  # channels differ by more than 1e-4.
+  local seams
+  seams=$(/usr/bin/python3 - "$work/dp-seam-whole.pfm" "$work/dp-seam-reach.pfm" "$work/dp-seam-layer.pfm" <<'PY'
+import array, sys
+def pfm(path):
+    with open(path, 'rb') as f:
+        f.readline(), f.readline()
+        scale = float(f.readline())
+        data = array.array('f', f.read())
+    if (scale < 0) != (sys.byteorder == 'little'):
+        data.byteswap()
+    return data
+whole = pfm(sys.argv[1])
+out = []
+for name, path in (('reach', sys.argv[2]), ('layer', sys.argv[3])):
+    d = [abs(a - b) for a, b in zip(pfm(path), whole)]
+    out.append('"%s": {"max_abs_difference": %.4g, "channels_over_1e-4": %d, "channels": %d}' %
+               (name, max(d), sum(x > 1e-4 for x in d), len(d)))
+print(', '.join(out))
+PY
+)
+  echo "  AO seams, 4 bricks vs the unbricked render ($memsize, $seamFrames frames, shadows off): {$seams}"
 
   # ---- Skewed scene: replication 2 vs 1. ----
   local skewRows="" skewDat="$work/dp-skew.dat" m1 m2 ratio skewGoal
@@ -223,7 +268,7 @@ EOF
   skewShare=$(for f in "$work"/dp-skew-k1-*.json; do dp_ranks "$f" render | awk '{s += $1; if (NR == 1) z = $1} END {print z, s}'; done |
     awk '{z += $1; s += $2} END {printf "%.3g", 100 * z / s}')
   echo "  skewed: replication 2 is ${ratio}x faster than replication 1 (goal >= 1.3x: $skewGoal); brick 0's rank did ${skewShare}% of the render time with replication 1"
-  echo "  compositing share goal (<= 10% median): $compGoal; memory goal (4 bricks on 4 ranks, AO on, <= 30% of the whole scene): $memGoal"
+  echo "  compositing share goal (<= 10% median): $compGoal; memory goal (4 bricks on 4 ranks, AO on, <= 30% of the whole scene): --ghost layer $memGoal, --ghost reach $memGoalReach"
 
   local load1
   load1=$(cut -d' ' -f1-3 /proc/loadavg)
@@ -240,7 +285,8 @@ EOF
  "compositing": {"target": "median composite_ms / frame_ms <= 10% on 2 and 4 ranks: $compGoal", "results": [$compRows
  ]},
  "memory": {"whole_scene_bytes": {"ao_on": $whole, "ao_off": $wholeNoAo},
-            "target": "with 4 bricks on 4 ranks each rank's scene_bytes <= 30% of the whole scene (AO on): $memGoal",
+            "target": "with 4 bricks on 4 ranks each rank's scene_bytes <= 30% of the whole scene (AO on): --ghost layer $memGoal, --ghost reach $memGoalReach",
+            "ao_seams_vs_unbricked": {"setup": "$memsize, $seamFrames frames accumulated, shadows off, linear radiance per channel", $seams},
             "results": [$memRows
  ]},
  "skewed": {"replication_2_over_1": $ratio, "brick0_rank_share_of_render_ms_replication_1_percent": $skewShare,
@@ -269,11 +315,13 @@ plot '$work/dp-comp-2.dat' using 0:2 pt 7 lc rgb "#3070b0" title "2 ranks: compo
 unset xlabel
 set title "Memory per rank (max over ranks), ${res}^3 wavelet"; set ylabel "MiB"; set yrange [0:*]
 set xrange [0.5:4.5]; set xtics (1, 2, 4); set xlabel "ranks"
-plot '$work/dp-mem-on.dat' using 2:(\$3 / 1048576) pt 7 lc rgb "#3070b0" title "scene_bytes, 4 bricks, AO on", \
-     '$work/dp-mem-off.dat' using 2:(\$3 / 1048576) pt 6 dt 2 lc rgb "#3070b0" title "scene_bytes, 4 bricks, AO off", \
-     '$work/dp-mem-on.dat' using 2:(\$5 / 1048576) pt 5 lc rgb "#c08030" title "scene_bytes, whole scene", \
-     '$work/dp-mem-on.dat' using 2:(\$4 / 1024) pt 9 lc rgb "#30a030" title "peak RSS, 4 bricks, AO on", \
-     '$work/dp-mem-on.dat' using 2:(\$6 / 1024) pt 11 lc rgb "#c03030" title "peak RSS, whole scene"
+plot '$work/dp-mem-on.dat' using 2:(\$3 / 1048576) pt 7 lc rgb "#3070b0" title "scene_bytes, 4 bricks, ghost reach, AO on", \
+     '$work/dp-mem-on.dat' using 2:(\$6 / 1048576) pt 5 lc rgb "#60a0e0" title "scene_bytes, 4 bricks, ghost layer, AO on", \
+     '$work/dp-mem-off.dat' using 2:(\$3 / 1048576) pt 6 dt 2 lc rgb "#3070b0" title "scene_bytes, 4 bricks, AO off (both modes)", \
+     '$work/dp-mem-on.dat' using 2:(\$9 / 1048576) pt 13 lc rgb "#c08030" title "scene_bytes, whole scene", \
+     '$work/dp-mem-on.dat' using 2:(\$4 / 1024) pt 9 lc rgb "#30a030" title "peak RSS, 4 bricks, ghost reach", \
+     '$work/dp-mem-on.dat' using 2:(\$7 / 1024) pt 8 lc rgb "#80d080" title "peak RSS, 4 bricks, ghost layer", \
+     '$work/dp-mem-on.dat' using 2:(\$10 / 1024) pt 11 lc rgb "#c03030" title "peak RSS, whole scene"
 unset xlabel; set xrange [*:*]; set xtics autofreq
 set title "Skewed, 4 ranks, 4 bricks (brick 0: ${skewShare}% of render): K=1/K=2 = ${ratio}x"
 set ylabel "ms per frame"; set yrange [0:*]

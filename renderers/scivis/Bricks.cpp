@@ -139,8 +139,17 @@ std::vector<int> brickHolders(int brick, int ranks, int replication) {
   return holders;
 }
 
-float ghostMargin(const SceneDesc& desc, float sceneExtent) {
-  if (desc.scivis.aoSamples <= 0) return 0.0f;
+const char* ghostModeName(GhostMode mode) { return mode == GhostMode::Layer ? "layer" : "reach"; }
+
+GhostMode ghostModeFromName(const std::string& name) {
+  if (name == "reach") return GhostMode::Reach;
+  if (name == "layer") return GhostMode::Layer;
+  throw Error("ghost mode '" + name + "': choose reach (shading rays see what they reach) or " +
+              "layer (one ghost layer of voxels)");
+}
+
+float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode) {
+  if (mode == GhostMode::Layer || desc.scivis.aoSamples <= 0) return 0.0f;
   return desc.scivis.aoDistance > 0 ? desc.scivis.aoDistance : 0.25f * sceneExtent;
 }
 
@@ -148,28 +157,50 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost
   BrickContent c;
   c.bounds = plan.bounds;
   const Box3 reach = expanded(plan.bounds, ghost);
-  for (const VolumeDesc& v : desc.volumes) {
+  for (std::size_t i = 0; i < desc.volumes.size(); ++i) {
+    const VolumeDesc& v = desc.volumes[i];
     const GridGeometry& g = v.source.grid;
-    VoxelBox box;
-    bool empty = false;
-    for (int a = 0; a < 3; ++a) {
-      // Two voxels beyond the reach: the crossing test samples one step past a ray's end and
-      // gradients half a voxel around a hit.
-      const double lo = std::floor((double(reach.lo[a]) - g.origin[a]) / g.spacing[a]) - 2;
-      const double hi = std::ceil((double(reach.hi[a]) - g.origin[a]) / g.spacing[a]) + 3;
-      const int i0 = static_cast<int>(std::clamp(lo, 0.0, double(g.dims[a])));
-      const int i1 = static_cast<int>(std::clamp(hi, 0.0, double(g.dims[a])));
-      (a == 0 ? box.lo.x : a == 1 ? box.lo.y : box.lo.z) = i0;
-      (a == 0 ? box.hi.x : a == 1 ? box.hi.y : box.hi.z) = i1;
-      empty = empty || i1 - i0 < 2;
-    }
-    if (empty) {
+    // The voxels around `region`, two beyond it: the crossing test samples one step past a
+    // ray's end and gradients half a voxel around a hit. Empty: fewer than 2 voxels on an axis.
+    auto voxelsAround = [&](const Box3& region, VoxelBox& box) {
+      bool empty = false;
+      for (int a = 0; a < 3; ++a) {
+        const double lo = std::floor((double(region.lo[a]) - g.origin[a]) / g.spacing[a]) - 2;
+        const double hi = std::ceil((double(region.hi[a]) - g.origin[a]) / g.spacing[a]) + 3;
+        const int i0 = static_cast<int>(std::clamp(lo, 0.0, double(g.dims[a])));
+        const int i1 = static_cast<int>(std::clamp(hi, 0.0, double(g.dims[a])));
+        (a == 0 ? box.lo.x : a == 1 ? box.lo.y : box.lo.z) = i0;
+        (a == 0 ? box.hi.x : a == 1 ? box.hi.y : box.hi.z) = i1;
+        empty = empty || i1 - i0 < 2;
+      }
+      return !empty;
+    };
+    // Dense: the voxels camera rays and gradients use (the brick and one ghost layer).
+    VoxelBox core;
+    const bool haveCore = voxelsAround(plan.bounds, core);
+    if (haveCore) {
+      c.volumes.push_back(loadVolume(v.source, core));
+    } else {
       Volume none;
       none.grid = g;
       none.type = v.source.type;
       c.volumes.push_back(std::move(none));
-    } else {
-      c.volumes.push_back(loadVolume(v.source, box));
+    }
+    // Beyond, what shading rays can reach (only isosurfaces stop them in a volume): sparse, or
+    // dense when the sparse shell would not be smaller (small fields, isosurfaces everywhere).
+    std::vector<float> isovalues;
+    for (const IsosurfaceDesc& iso : desc.isosurfaces)
+      if (iso.volume == i) isovalues.push_back(iso.value);
+    VoxelBox shell;
+    c.shells.emplace_back();
+    if (ghost > 0 && !isovalues.empty() && voxelsAround(reach, shell) && !(shell == core)) {
+      ShadingShell sparse =
+          ShadingShell::load(v.source, shell, haveCore ? core : VoxelBox{}, isovalues);
+      const std::size_t dense = shell.voxelCount() * voxelBytes(v.source.type);
+      if (sparse.bytes() + c.volumes.back().bytes() < dense)
+        c.shells.back() = std::move(sparse);
+      else
+        c.volumes.back() = loadVolume(v.source, shell);
     }
   }
   std::vector<ParticlesDesc> converted;
@@ -197,11 +228,11 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost
 }
 
 std::vector<HeldBrick> loadOwnBricks(const SceneDesc& desc, int bricks, int replication, int rank,
-                                     int ranks) {
+                                     int ranks, GhostMode ghosts) {
   const std::vector<BrickPlan> plans = splitScene(desc, bricks);
   if (replication < 1) throw Error("--replication must be at least 1");
   const Box3 domain = sceneDomain(desc);
-  const float ghost = ghostMargin(desc, maxComponent(domain.hi - domain.lo));
+  const float ghost = ghostMargin(desc, maxComponent(domain.hi - domain.lo), ghosts);
   std::vector<HeldBrick> out;
   for (const BrickPlan& plan : plans) {
     const std::vector<int> h = brickHolders(plan.id, ranks, replication);

@@ -10,6 +10,7 @@
 #include <mpi.h>
 
 #include <chrono>
+#include <string>
 #include <vector>
 
 #include "renderers/SceneDesc.h"
@@ -33,13 +34,30 @@ std::vector<BrickPlan> splitScene(const SceneDesc& desc, int count);
 // over `ranks` (so every rank holds about count * replication / ranks bricks).
 std::vector<int> brickHolders(int brick, int ranks, int replication);
 
-// How far a brick's shading rays reach beyond it: the ambient-occlusion distance when AO is on.
-// (Shadow rays beyond that see only what the brick holds; docs/design.md.)
-float ghostMargin(const SceneDesc& desc, float sceneExtent);
+// How much ghost data a brick loads around its bounds (--ghost).
+enum class GhostMode {
+  // Everything its shading rays can reach (the ambient-occlusion distance): a brick shades its
+  // points exactly as the whole scene does, at the price of a shell as deep as that distance.
+  Reach,
+  // One ghost layer: only the voxels that interpolation, gradients and the crossing test need
+  // at the brick's faces, no ghost particles or triangles. Shading rays see the brick's own data
+  // and that layer (as OSPRay's distributed renderer), so AO near brick faces differs (seams).
+  Layer,
+};
+// "reach" / "layer"; ghostModeFromName throws renderers::Error naming the choices otherwise.
+const char* ghostModeName(GhostMode mode);
+GhostMode ghostModeFromName(const std::string& name);
 
-// The data of `plan`: per volume the voxels around its bounds, `ghost` world units and two
-// voxels beyond them; particles and mesh triangles reaching into the bounds (drawn, clipped to
-// them) and, as ghost data, those within `ghost` of them.
+// How far a brick's ghost data reaches beyond its bounds (world units; the voxel layer comes on
+// top): with GhostMode::Reach the ambient-occlusion distance when AO is on, else 0. (Shadow rays
+// beyond that see only what the brick holds; docs/design.md.)
+float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode = GhostMode::Reach);
+
+// The data of `plan`: per volume the voxels around its bounds and two beyond them (dense), and
+// as far as `ghost` world units beyond, for shading rays, a ShadingShell (sparse: only
+// macrocells holding an isovalue) or the dense box when that is smaller; particles and mesh
+// triangles reaching into the bounds (drawn, clipped to them) and, as ghost data, those within
+// `ghost` of them.
 BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost);
 
 // One brick a rank holds: its id (every rank holding an id holds the same data) and its data;
@@ -49,10 +67,10 @@ struct HeldBrick {
   BrickContent content;
 };
 
-// --bricks N --replication K: the bricks of `desc` that render rank `rank` of `ranks` holds,
-// loaded (only their own voxels, particles and triangles).
+// --bricks N --replication K --ghost MODE: the bricks of `desc` that render rank `rank` of
+// `ranks` holds, loaded (only their own voxels, particles and triangles, and `ghosts` around).
 std::vector<HeldBrick> loadOwnBricks(const SceneDesc& desc, int bricks, int replication, int rank,
-                                     int ranks);
+                                     int ranks, GhostMode ghosts = GhostMode::Reach);
 
 // Every brick of the job, by ascending id, and the ranks of `comm` holding each (ascending).
 struct BrickDirectory {

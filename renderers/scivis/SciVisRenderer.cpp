@@ -182,42 +182,67 @@ void SciVisRenderer::setLiveSettings(const LiveSettings& live) {
   layers_ = &retuned_;
 }
 
-bool SciVisRenderer::isosurfaceBetween(Vec3 origin, Vec3 dir, float tFar, float jitter) const {
+namespace {
+
+// Whether one of `isosurfaces` lies on origin + t dir, t in [0, tFar], in a field of geometry
+// `field` (a VolumeField, or a brick's ShadingShell: the same macrocells, so the same samples)
+// whose values sample(p, value) gives.
+template <class Sample>
+bool crossesIsosurface(const FieldGeometry& field, Sample sample,
+                       const std::vector<const IsosurfaceDesc*>& isosurfaces, Vec3 origin, Vec3 dir,
+                       float tFar, float jitter) {
+  float t0 = 0, t1 = tFar;
+  if (!clipToBox(field.dataBounds(), origin, reciprocal(dir), t0, t1)) return false;
   // Shading rays step one voxel (not the camera rays' finer step): they only ask yes or no.
-  for (const SciVisScene::VolumeLayer& v : *layers_) {
-    if (!v.field || v.isosurfaces.empty()) continue;
-    float t0 = 0, t1 = tFar;
-    if (!clipToBox(v.field->dataBounds(), origin, reciprocal(dir), t0, t1)) continue;
-    const float step = v.field->minSpacing();
-    float previous = 0;
-    bool havePrevious = false;
-    for (float k = std::floor(t0 / step - jitter);; k += 1) {
-      const float t = (k + jitter) * step;
-      if (t > t1) break;
-      if (t < t0) continue;
-      const Vec3 p = origin + dir * t;
-      // Skip macrocells that hold no isosurface.
-      const int m = v.field->macroIndex(p);
-      if (m < 0) break;
-      bool any = false;
-      for (const IsosurfaceDesc* iso : v.isosurfaces)
-        any = any || (iso->value >= v.field->macroMin(m) && iso->value <= v.field->macroMax(m));
-      if (!any) {
-        float e0 = t, e1 = kInf;
-        clipToBox(v.field->macroBounds(m), origin, reciprocal(dir), e0, e1);
-        const float next = std::floor(e1 / step - jitter);
-        if (next > k) k = next;  // the loop's += 1 steps into the next macrocell
-        havePrevious = false;
-        continue;
-      }
-      float value;
-      if (!v.field->sample(p, value)) break;
-      if (havePrevious)
-        for (const IsosurfaceDesc* iso : v.isosurfaces)
-          if (crosses(previous, value, iso->value)) return true;
-      previous = value;
-      havePrevious = true;
+  const float step = field.minSpacing();
+  float previous = 0;
+  bool havePrevious = false;
+  for (float k = std::floor(t0 / step - jitter);; k += 1) {
+    const float t = (k + jitter) * step;
+    if (t > t1) break;
+    if (t < t0) continue;
+    const Vec3 p = origin + dir * t;
+    // Skip macrocells that hold no isosurface.
+    const int m = field.macroIndex(p);
+    if (m < 0) break;
+    bool any = false;
+    for (const IsosurfaceDesc* iso : isosurfaces)
+      any = any || (iso->value >= field.macroMin(m) && iso->value <= field.macroMax(m));
+    if (!any) {
+      float e0 = t, e1 = kInf;
+      clipToBox(field.macroBounds(m), origin, reciprocal(dir), e0, e1);
+      const float next = std::floor(e1 / step - jitter);
+      if (next > k) k = next;  // the loop's += 1 steps into the next macrocell
+      havePrevious = false;
+      continue;
     }
+    float value;
+    if (!sample(p, value)) break;
+    if (havePrevious)
+      for (const IsosurfaceDesc* iso : isosurfaces)
+        if (crosses(previous, value, iso->value)) return true;
+    previous = value;
+    havePrevious = true;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool SciVisRenderer::isosurfaceBetween(Vec3 origin, Vec3 dir, float tFar, float jitter) const {
+  for (const SciVisScene::VolumeLayer& v : *layers_) {
+    if (v.isosurfaces.empty()) continue;
+    const VolumeField* core = v.field;
+    const bool crossed =
+        v.shell
+            ? crossesIsosurface(
+                  *v.shell, [&](Vec3 p, float& value) { return v.shell->sample(p, value, core); },
+                  v.isosurfaces, origin, dir, tFar, jitter)
+        : core ? crossesIsosurface(
+                     *core, [&](Vec3 p, float& value) { return core->sample(p, value); },
+                     v.isosurfaces, origin, dir, tFar, jitter)
+               : false;
+    if (crossed) return true;
   }
   return false;
 }

@@ -16,6 +16,7 @@ namespace renderers {
 std::size_t BrickContent::bytes() const {
   std::size_t total = 0;
   for (const Volume& v : volumes) total += v.bytes();
+  for (const ShadingShell& s : shells) total += s.bytes();
   for (const auto* set : {&particles, &ghostParticles})
     for (const ParticlesDesc& p : *set) total += p.bytes();
   for (const auto* set : {&meshes, &ghostMeshes})
@@ -161,6 +162,8 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
       fields_.push_back(std::make_unique<VolumeField>(v));
       layer.field = fields_.back().get();
     }
+    if (i < content_.shells.size() && !content_.shells[i].empty())
+      layer.shell = &content_.shells[i];
     for (const IsosurfaceDesc& iso : desc.isosurfaces)
       if (iso.volume == i) layer.isosurfaces.push_back(&iso);
     bake(layer, vd, vd.transfer, 1.0f);

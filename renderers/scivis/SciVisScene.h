@@ -13,6 +13,7 @@
 
 #include "renderers/SceneDesc.h"
 #include "renderers/scivis/Box.h"
+#include "renderers/scivis/ShadingShell.h"
 #include "renderers/scivis/Volume.h"
 #include "renderers/scivis/VolumeField.h"
 
@@ -30,6 +31,9 @@ struct BrickContent {
   // One entry per SceneDesc::volumes, holding the voxels this brick has of it (an empty box:
   // none). Voxels beyond `bounds` are ghost layers: shading rays and gradients see them.
   std::vector<Volume> volumes;
+  // Per volume (or none at all): the sparse ghost shell shading rays test isosurfaces in, when
+  // it reaches beyond `volumes` (--ghost reach); an empty one: shading rays use `volumes`.
+  std::vector<ShadingShell> shells;
   std::vector<ParticlesDesc> particles, ghostParticles;
   std::vector<WorldMesh> meshes, ghostMeshes;
 
@@ -77,6 +81,7 @@ class SciVisScene {
 
   struct VolumeLayer {
     const VolumeField* field = nullptr;      // null when this brick holds none of the volume
+    const ShadingShell* shell = nullptr;     // what shading rays test instead of `field`, if set
     std::vector<float> table;                // kTableSize x RGBA, opacity per renderer step
     std::vector<std::uint32_t> visibleUpTo;  // prefix counts of entries with opacity > 0
     float valueMin = 0, tableScale = 0;

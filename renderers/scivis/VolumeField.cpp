@@ -7,16 +7,13 @@
 #include "renderers/Parallel.h"
 
 namespace renderers {
-namespace {
-constexpr int kMacro = 1 << VolumeField::kMacroShift;
-}
-
-VolumeField::VolumeField(const Volume& volume) : volume_(&volume) {
-  const Index3 n = volume.box.size();
+FieldGeometry::FieldGeometry(const GridGeometry& grid, const VoxelBox& box)
+    : grid_(grid), box_(box) {
+  const Index3 n = box.size();
   if (n.x < 2 || n.y < 2 || n.z < 2)
     throw Error("a volume brick needs at least 2 voxels per axis to interpolate");
-  const GridGeometry& g = volume.grid;
-  const VoxelBox& b = volume.box;
+  const GridGeometry& g = grid;
+  const VoxelBox& b = box;
   origin_ = g.origin;
   invSpacing_ = {1.0f / g.spacing.x, 1.0f / g.spacing.y, 1.0f / g.spacing.z};
   first_ = b.lo;
@@ -35,16 +32,30 @@ VolumeField::VolumeField(const Volume& volume) : volume_(&volume) {
   macroFirst_ = {b.lo.x / kMacro, b.lo.y / kMacro, b.lo.z / kMacro};
   macroCells_ = {lastCell_.x / kMacro - macroFirst_.x + 1, lastCell_.y / kMacro - macroFirst_.y + 1,
                  lastCell_.z / kMacro - macroFirst_.z + 1};
-  const std::size_t count =
-      static_cast<std::size_t>(macroCells_.x) * macroCells_.y * macroCells_.z;
+  const std::size_t count = static_cast<std::size_t>(macroCells_.x) * macroCells_.y * macroCells_.z;
   macroMin_.assign(count, 0.0f);
   macroMax_.assign(count, 0.0f);
+}
+
+Index3 FieldGeometry::macroOrigin(int m) const {
+  const int mx = m % macroCells_.x, my = (m / macroCells_.x) % macroCells_.y,
+            mz = m / (macroCells_.x * macroCells_.y);
+  return {(macroFirst_.x + mx) * kMacro, (macroFirst_.y + my) * kMacro,
+          (macroFirst_.z + mz) * kMacro};
+}
+
+VolumeField::VolumeField(const Volume& volume)
+    : FieldGeometry(volume.grid, volume.box), volume_(&volume) {
+  const VoxelBox& b = volume.box;
   parallelFor(static_cast<std::size_t>(macroCells_.z), [&](std::size_t zIndex) {
     const int mz = static_cast<int>(zIndex);
     for (int my = 0; my < macroCells_.y; ++my)
       for (int mx = 0; mx < macroCells_.x; ++mx) {
-        const Index3 c0{(macroFirst_.x + mx) * kMacro, (macroFirst_.y + my) * kMacro,
-                        (macroFirst_.z + mz) * kMacro};
+        const std::size_t m =
+            static_cast<std::size_t>(mx) +
+            static_cast<std::size_t>(macroCells_.x) *
+                (static_cast<std::size_t>(my) + static_cast<std::size_t>(macroCells_.y) * mz);
+        const Index3 c0 = macroOrigin(static_cast<int>(m));
         float lo = std::numeric_limits<float>::infinity(), hi = -lo;
         for (int z = std::max(c0.z, b.lo.z); z <= std::min(c0.z + kMacro, b.hi.z - 1); ++z)
           for (int y = std::max(c0.y, b.lo.y); y <= std::min(c0.y + kMacro, b.hi.y - 1); ++y)
@@ -52,16 +63,12 @@ VolumeField::VolumeField(const Volume& volume) : volume_(&volume) {
               const float v = volume.at(x, y, z);
               lo = std::min(lo, v), hi = std::max(hi, v);
             }
-        const std::size_t m = static_cast<std::size_t>(mx) +
-                              static_cast<std::size_t>(macroCells_.x) *
-                                  (static_cast<std::size_t>(my) +
-                                   static_cast<std::size_t>(macroCells_.y) * mz);
         macroMin_[m] = lo, macroMax_[m] = hi;
       }
   });
 }
 
-int VolumeField::macroIndex(Vec3 p) const {
+int FieldGeometry::macroIndex(Vec3 p) const {
   const float fx = (p.x - origin_.x) * invSpacing_.x, fy = (p.y - origin_.y) * invSpacing_.y,
               fz = (p.z - origin_.z) * invSpacing_.z;
   if (!(fx >= lo_.x && fy >= lo_.y && fz >= lo_.z && fx <= hi_.x && fy <= hi_.y && fz <= hi_.z))
@@ -72,10 +79,10 @@ int VolumeField::macroIndex(Vec3 p) const {
   return mx + macroCells_.x * (my + macroCells_.y * mz);
 }
 
-Box3 VolumeField::macroBounds(int m) const {
+Box3 FieldGeometry::macroBounds(int m) const {
   const int mx = m % macroCells_.x, my = (m / macroCells_.x) % macroCells_.y,
             mz = m / (macroCells_.x * macroCells_.y);
-  const GridGeometry& g = volume_->grid;
+  const GridGeometry& g = grid_;
   // Clamped to the held voxels: outside them the field is not here at all.
   auto lo = [&](int cell, int first) { return static_cast<float>(std::max(cell * kMacro, first)); };
   auto hi = [&](int cell, int last) {

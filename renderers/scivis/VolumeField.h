@@ -17,16 +17,20 @@
 
 namespace renderers {
 
-class VolumeField {
+// Where a held box of a field lies and how world points map onto it: cells, macrocells on the
+// whole field's grid and their value ranges. The part of a field that does not depend on how
+// the voxels are stored, shared by the dense VolumeField and the sparse ShadingShell, so both
+// locate a point with the same arithmetic (the same bits).
+class FieldGeometry {
  public:
   static constexpr int kMacroShift = 3;  // macrocells of 8 x 8 x 8 voxel cells
+  static constexpr int kMacro = 1 << kMacroShift;
 
-  explicit VolumeField(const Volume& volume);
-
-  const Volume& volume() const { return *volume_; }
+  const GridGeometry& grid() const { return grid_; }
+  const VoxelBox& box() const { return box_; }
   const Box3& dataBounds() const { return bounds_; }
   float minSpacing() const {
-    const Vec3 s = volume_->grid.spacing;
+    const Vec3 s = grid_.spacing;
     return std::min(s.x, std::min(s.y, s.z));
   }
 
@@ -59,6 +63,54 @@ class VolumeField {
     return true;
   }
 
+  // The trilinear value at (fx, fy, fz) of a cell whose corner values are c: c0 c1 along x,
+  // then y (c2 c3), then z (c4 .. c7).
+  static float trilinear(const float c[8], float fx, float fy, float fz) {
+    const float x00 = c[0] + fx * (c[1] - c[0]), x10 = c[2] + fx * (c[3] - c[2]);
+    const float x01 = c[4] + fx * (c[5] - c[4]), x11 = c[6] + fx * (c[7] - c[6]);
+    const float y0 = x00 + fy * (x10 - x00), y1 = x01 + fy * (x11 - x01);
+    return y0 + fz * (y1 - y0);
+  }
+
+  // Macrocells: the value range of the voxels a block of cells interpolates between.
+  int macroIndex(Vec3 p) const;  // -1 outside dataBounds()
+  // The macrocell of a located cell: what macroIndex() gives for the same point.
+  int macroIndexOf(const Cell& c) const {
+    return (c.ix >> kMacroShift) - macroFirst_.x +
+           macroCells_.x * ((c.iy >> kMacroShift) - macroFirst_.y +
+                            macroCells_.y * ((c.iz >> kMacroShift) - macroFirst_.z));
+  }
+  float macroMin(int m) const { return macroMin_[static_cast<std::size_t>(m)]; }
+  float macroMax(int m) const { return macroMax_[static_cast<std::size_t>(m)]; }
+  Box3 macroBounds(int m) const;
+  int macroCount() const { return static_cast<int>(macroMin_.size()); }
+  // The first voxel (whole-field indices) of macrocell m.
+  Index3 macroOrigin(int m) const;
+
+ protected:
+  FieldGeometry() = default;
+  // The geometry of `box` of `grid` (at least 2 voxels per axis; throws renderers::Error
+  // otherwise), voxels stored densely over the box; macrocell ranges all zero.
+  FieldGeometry(const GridGeometry& grid, const VoxelBox& box);
+
+  GridGeometry grid_;
+  VoxelBox box_;
+  Vec3 origin_, invSpacing_;  // of the whole field's grid
+  Vec3 lo_, hi_;              // the held voxels' first and last index, as floats
+  Index3 first_, lastCell_;   // the first held voxel; the last cell's first voxel
+  std::size_t strideY_ = 0, strideZ_ = 0;
+  Box3 bounds_;
+  Index3 macroFirst_, macroCells_;
+  std::vector<float> macroMin_, macroMax_;
+};
+
+// A field whose held box is stored densely: a Volume (which must outlive it).
+class VolumeField : public FieldGeometry {
+ public:
+  explicit VolumeField(const Volume& volume);
+
+  const Volume& volume() const { return *volume_; }
+
   // The trilinear value in cell c, with the voxels read as T (the volume's voxel type).
   template <class T>
   float interpolate(const Cell& cell) const {
@@ -71,11 +123,7 @@ class VolumeField {
                         static_cast<float>(v[strideZ_ + 1]),
                         static_cast<float>(v[strideZ_ + strideY_]),
                         static_cast<float>(v[strideZ_ + strideY_ + 1])};
-    const float fx = cell.fx, fy = cell.fy, fz = cell.fz;
-    const float x00 = c[0] + fx * (c[1] - c[0]), x10 = c[2] + fx * (c[3] - c[2]);
-    const float x01 = c[4] + fx * (c[5] - c[4]), x11 = c[6] + fx * (c[7] - c[6]);
-    const float y0 = x00 + fy * (x10 - x00), y1 = x01 + fy * (x11 - x01);
-    return y0 + fz * (y1 - y0);
+    return trilinear(c, cell.fx, cell.fy, cell.fz);
   }
 
   // The trilinear value at world point p; false (value untouched) outside dataBounds().
@@ -176,19 +224,6 @@ class VolumeField {
     return g;
   }
 
-  // Macrocells: the value range of the voxels a block of cells interpolates between.
-  int macroIndex(Vec3 p) const;  // -1 outside dataBounds()
-  // The macrocell of a located cell: what macroIndex() gives for the same point.
-  int macroIndexOf(const Cell& c) const {
-    return (c.ix >> kMacroShift) - macroFirst_.x +
-           macroCells_.x * ((c.iy >> kMacroShift) - macroFirst_.y +
-                            macroCells_.y * ((c.iz >> kMacroShift) - macroFirst_.z));
-  }
-  float macroMin(int m) const { return macroMin_[static_cast<std::size_t>(m)]; }
-  float macroMax(int m) const { return macroMax_[static_cast<std::size_t>(m)]; }
-  Box3 macroBounds(int m) const;
-  int macroCount() const { return static_cast<int>(macroMin_.size()); }
-
  private:
   // The cell's 8 voxels from its first, v: (c0 c1 c2 c3) and (c4 c5 c6 c7) in interpolate()'s
   // order.
@@ -208,13 +243,6 @@ class VolumeField {
   }
 
   const Volume* volume_;
-  Vec3 origin_, invSpacing_;  // of the whole field's grid
-  Vec3 lo_, hi_;              // the held voxels' first and last index, as floats
-  Index3 first_, lastCell_;   // the first held voxel; the last cell's first voxel
-  std::size_t strideY_ = 0, strideZ_ = 0;
-  Box3 bounds_;
-  Index3 macroFirst_, macroCells_;
-  std::vector<float> macroMin_, macroMax_;
 };
 
 }  // namespace renderers

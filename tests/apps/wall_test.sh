@@ -9,6 +9,7 @@
 #   wall_test.sh rank-dies     LAYOUT RENDER_RANKS
 #   wall_test.sh ranks-equal   RANKS [dfbwall options...]   (--image on RANKS ranks == on 1)
 #   wall_test.sh preview       LAYOUT RENDER_RANKS MODE [options for both runs...]
+#   wall_test.sh scene-bytes   RANKS BRICKS MAX_PERCENT [dfbwall options...]
 # Needs DFBWALL (the executable), COMPARE (compare_captures) and MPIEXEC in the environment.
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
@@ -159,6 +160,25 @@ PY
     mpi "$n" "$DFBWALL" --image "$work/many.png" --quiet "$@"
     cmp "$work/one.png" "$work/many.png" || { echo "FAIL: $n ranks differ from 1 rank"; exit 1; }
     echo "$n ranks wrote the 1-rank image byte for byte ($(stat -c %s "$work/one.png") bytes)"
+    ;;
+  scene-bytes)
+    # Memory: with --bricks BRICKS on RANKS ranks every render rank's scene_bytes (the brick data
+    # it holds, from --stats) is at most MAX_PERCENT of the whole scene's (one brick, one rank).
+    n=$1 bricks=$2 percent=$3; shift 3
+    mpi "$n" "$DFBWALL" --bricks "$bricks" --stats "$work/split.json" --quiet "$@"
+    mpi 1 "$DFBWALL" --bricks 1 --stats "$work/whole.json" --quiet "$@"
+    /usr/bin/python3 - "$work/split.json" "$work/whole.json" "$n" "$percent" <<'PY'
+import json, sys
+def held(path):
+    return [l['scene_bytes'] for l in map(json.loads, open(path)) if l.get('role') == 'render']
+split, (whole,), n, percent = held(sys.argv[1]), held(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4])
+assert len(split) == n, f'{len(split)} render ranks in the stats, expected {n}'
+shares = [100 * b / whole for b in split]
+print('scene_bytes per rank: ' + ', '.join(f'{b:.0f} ({s:.1f}%)' for b, s in zip(split, shares)) +
+      f' of {whole:.0f} bytes (the whole scene)')
+assert whole > 0 and min(split) > 0, 'a rank holds nothing'
+assert max(shares) <= percent, f'a rank holds {max(shares):.1f}% of the scene, more than {percent}%'
+PY
     ;;
   *) echo "unknown scenario $scenario"; exit 2 ;;
 esac

@@ -21,8 +21,8 @@ constexpr int kWidth = 80, kHeight = 56, kTile = 16, kFrames = 2;
 
 // Everything a brick can cut: a volume with a glassy and an opaque isosurface, particles on the
 // brick borders, a triangle through the middle; AO within the bricks' ghost margin.
-std::shared_ptr<SceneDesc> scene() {
-  auto d = std::make_shared<SceneDesc>(waveletScene(36));
+std::shared_ptr<SceneDesc> scene(int resolution = 36) {
+  auto d = std::make_shared<SceneDesc>(waveletScene(resolution));
   d->volumes[0].transfer.opacities = {{37.0f, 0.0f}, {120.0f, 0.03f}, {277.0f, 0.2f}};
   d->scivis.aoSamples = 2;
   d->scivis.aoDistance = 0.2f;
@@ -49,51 +49,111 @@ RenderSettings settings() {
   return s;
 }
 
+// The image of kFrames accumulated frames of the bricks `held` on the ranks of `comm` (rank 0's
+// copy; empty elsewhere).
+std::vector<float> renderHeld(const std::shared_ptr<SceneDesc>& desc, std::vector<HeldBrick> held,
+                              MPI_Comm comm) {
+  BrickDriverOptions bo;
+  bo.threads = 2;
+  BrickFrameDriver driver(desc, settings(), bo, std::move(held), comm);
+  dfb::Messenger messenger(comm);
+  dfb::DfbOptions options;
+  options.width = kWidth, options.height = kHeight, options.tileSize = kTile;
+  options.format = dfb::DisplayFormat::RGBAF32;
+  options.frameTimeout = std::chrono::milliseconds(30000);
+  driver.configure(options);
+  std::vector<float> image;
+  {
+    dfb::DistributedFrameBuffer fb(messenger, comm, options);
+    for (int f = 0; f < kFrames; ++f)
+      driver.renderFrame(fb, {static_cast<std::uint32_t>(f), 0}, desc->camera);
+    image = fb.imageRgbaF32();
+  }
+  messenger.stop();
+  return image;
+}
+
 // The image of kFrames accumulated frames with `bricks` bricks on the first `ranks` ranks of the
 // world (rank 0's copy; empty elsewhere).
 std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int ranks, int bricks,
-                                int replication) {
+                                int replication, GhostMode ghosts = GhostMode::Reach) {
   MPI_Comm comm;
   const int rank = testutil::worldRank();
   MPI_Comm_split(MPI_COMM_WORLD, rank < ranks ? 0 : 1, rank, &comm);
   std::vector<float> image;
-  if (rank < ranks) {
-    BrickDriverOptions bo;
-    bo.threads = 2;
-    BrickFrameDriver driver(desc, settings(), bo,
-                            loadOwnBricks(*desc, bricks, replication, rank, ranks), comm);
-    dfb::Messenger messenger(comm);
-    dfb::DfbOptions options;
-    options.width = kWidth, options.height = kHeight, options.tileSize = kTile;
-    options.format = dfb::DisplayFormat::RGBAF32;
-    options.frameTimeout = std::chrono::milliseconds(30000);
-    driver.configure(options);
-    {
-      dfb::DistributedFrameBuffer fb(messenger, comm, options);
-      for (int f = 0; f < kFrames; ++f)
-        driver.renderFrame(fb, {static_cast<std::uint32_t>(f), 0}, desc->camera);
-      image = fb.imageRgbaF32();
-    }
-    messenger.stop();
-  }
+  if (rank < ranks)
+    image = renderHeld(desc, loadOwnBricks(*desc, bricks, replication, rank, ranks, ghosts), comm);
   MPI_Comm_free(&comm);
   MPI_Barrier(MPI_COMM_WORLD);
   return image;
 }
 
-TEST(BrickDriverMpi, EveryRankCountAndReplicationGivesTheSameBytes) {
-  const auto desc = scene();
+// 4 bricks on 1 .. world size ranks, every replication, give the bytes of 1 rank.
+void checkEveryRankCountAndReplication(const std::shared_ptr<SceneDesc>& desc, GhostMode ghosts) {
   const int size = testutil::worldSize();
-  const std::vector<float> reference = renderBricks(desc, 1, 4, 1);
+  const std::vector<float> reference = renderBricks(desc, 1, 4, 1, ghosts);
   for (int ranks = 1; ranks <= size; ++ranks)
     for (int replication : {1, 2, 4}) {
       if (replication > ranks || (ranks == 1 && replication > 1)) continue;
-      const std::vector<float> image = renderBricks(desc, ranks, 4, replication);
+      const std::vector<float> image = renderBricks(desc, ranks, 4, replication, ghosts);
       if (testutil::worldRank() != 0) continue;
       ASSERT_EQ(image.size(), reference.size());
       EXPECT_EQ(0, std::memcmp(image.data(), reference.data(), image.size() * sizeof(float)))
-          << ranks << " ranks, replication " << replication;
+          << ranks << " ranks, replication " << replication << ", ghost " << ghostModeName(ghosts);
     }
+}
+
+TEST(BrickDriverMpi, EveryRankCountAndReplicationGivesTheSameBytes) {
+  checkEveryRankCountAndReplication(scene(), GhostMode::Reach);
+}
+
+// One ghost layer: what a brick's AO rays see depends on the brick plan only, so the image is
+// still a function of the plan, whoever renders which brick.
+TEST(BrickDriverMpi, LayerGhostsGiveTheSameBytesOnEveryRankCountAndReplication) {
+  checkEveryRankCountAndReplication(scene(), GhostMode::Layer);
+}
+
+// Without AO and shadows no shading ray leaves a brick, so both ghost modes load the same data
+// and render the same bytes.
+TEST(BrickDriverMpi, LayerGhostsEqualReachWithoutAoAndShadows) {
+  const auto desc = scene();
+  desc->scivis.aoSamples = 0;
+  desc->scivis.shadows = false;
+  const int ranks = testutil::worldSize();
+  const std::vector<float> reach = renderBricks(desc, ranks, 4, 1, GhostMode::Reach);
+  const std::vector<float> layer = renderBricks(desc, ranks, 4, 1, GhostMode::Layer);
+  if (testutil::worldRank() != 0) return;
+  ASSERT_EQ(reach.size(), layer.size());
+  EXPECT_EQ(0, std::memcmp(reach.data(), layer.data(), reach.size() * sizeof(float)));
+}
+
+// With AO on, one ghost layer holds less than the AO reach, and the AO of points near brick
+// faces no longer sees the neighbour's data: the image differs from the unbricked one there.
+TEST(BrickDriverMpi, LayerGhostsHoldLessAndChangeAoNearBrickFaces) {
+  const auto desc = scene();
+  ASSERT_GT(desc->scivis.aoSamples, 0);
+  std::size_t reachBytes = 0, layerBytes = 0;
+  for (const HeldBrick& b : loadOwnBricks(*desc, 4, 1, 0, 1, GhostMode::Reach))
+    reachBytes += b.content.bytes();
+  for (const HeldBrick& b : loadOwnBricks(*desc, 4, 1, 0, 1, GhostMode::Layer))
+    layerBytes += b.content.bytes();
+  EXPECT_LT(layerBytes, reachBytes);
+  const int ranks = testutil::worldSize();
+  const std::vector<float> whole = renderBricks(desc, ranks, 1, 1, GhostMode::Layer);
+  const std::vector<float> layer = renderBricks(desc, ranks, 4, 1, GhostMode::Layer);
+  if (testutil::worldRank() != 0) return;
+  ASSERT_EQ(whole.size(), layer.size());
+  float worst = 0;
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < whole.size(); ++i) {
+    worst = std::max(worst, std::abs(whole[i] - layer[i]));
+    differing += std::abs(whole[i] - layer[i]) > 1e-4f;
+  }
+  EXPECT_GT(worst, 1e-4f) << "AO rays near brick faces should miss the neighbours' data";
+  std::printf(
+      "4 bricks, ghost layer: %zu vs %zu bytes (reach); %zu of %zu channels differ from "
+      "the unbricked render by more than 1e-4, at most %.3g\n",
+      layerBytes, reachBytes, differing, whole.size(), worst);
 }
 
 // Every rank count gives rank 1's bytes, and 4 bricks match the image-parallel render of `desc`.
@@ -162,6 +222,49 @@ void checkAgainstUnbricked(const std::shared_ptr<SceneDesc>& desc) {
   EXPECT_LE(worstOne, 1e-4f) << "1 brick vs the unbricked render";
   EXPECT_GT(visible, 500) << "the scene should cover much of the image";
   std::printf("largest difference per channel: 4 bricks %.3g, 1 brick %.3g\n", worst, worstOne);
+}
+
+// --ghost reach on a field large enough for sparse ghost shells (ShadingShell: beyond one
+// ghost layer only the macrocells whose range holds an isovalue): shading rays see the bits
+// they see with the whole reach held densely (so the image is the dense reach's, which the
+// tests above hold to the unbricked render), and the bricks hold less.
+TEST(BrickDriverMpi, SparseShellsShadeAsTheDenseReach) {
+  const auto desc = scene(160);
+  desc->scivis.aoDistance = 0.4f;  // 32 voxels: a shell of several macrocells
+  std::vector<HeldBrick> sparse = loadOwnBricks(*desc, 4, 1, 0, 1, GhostMode::Reach);
+  std::vector<HeldBrick> dense = sparse, unshelled = sparse;
+  for (HeldBrick& b : unshelled) b.content.shells.clear();
+  std::size_t sparseBytes = 0, denseBytes = 0, shells = 0;
+  for (HeldBrick& b : dense) {
+    sparseBytes += b.content.bytes();
+    for (std::size_t v = 0; v < b.content.shells.size(); ++v) {
+      const ShadingShell& shell = b.content.shells[v];
+      if (shell.empty()) continue;
+      ++shells;
+      b.content.volumes[v] = loadVolume(desc->volumes[v].source, shell.box());
+      b.content.shells[v] = ShadingShell();
+    }
+    denseBytes += b.content.bytes();
+  }
+  // (Where isosurfaces fill most macrocells of a shell, a brick keeps it dense: here 2 of 4.)
+  ASSERT_GE(shells, 1u) << "a brick should hold its reach beyond the ghost layer sparsely";
+  EXPECT_LT(sparseBytes, denseBytes);
+  if (testutil::worldRank() == 0) {
+    const std::vector<float> a = renderHeld(desc, std::move(sparse), MPI_COMM_SELF);
+    const std::vector<float> b = renderHeld(desc, std::move(dense), MPI_COMM_SELF);
+    // Without the sparse shells (their bricks keep one ghost layer) AO near those bricks' faces
+    // differs: the shells are what the shading rays saw.
+    const std::vector<float> c = renderHeld(desc, std::move(unshelled), MPI_COMM_SELF);
+    ASSERT_EQ(a.size(), b.size());
+    ASSERT_EQ(a.size(), c.size());
+    EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(float)));
+    EXPECT_NE(0, std::memcmp(a.data(), c.data(), a.size() * sizeof(float)));
+    std::printf(
+        "4 bricks of a 160^3 field, ghost reach: %zu bytes with %zu sparse shells, %zu "
+        "dense\n",
+        sparseBytes, shells, denseBytes);
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
 }
 
 TEST(BrickDriverMpi, EachRankHoldsOnlyItsBricks) {

@@ -10,6 +10,7 @@
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/SciVisRenderer.h"
+#include "renderers/scivis/ShadingShell.h"
 #include "tests/renderers/RenderTestUtil.h"
 
 namespace renderers {
@@ -174,6 +175,48 @@ TEST(SciVis, ABrickWithItsNeighbourAsGhostShadesLikeTheWholeScene) {
       if (a.rgba[3] > 0.1f) ++lit;
     }
   EXPECT_GT(lit, 20);
+}
+
+// A sparse ghost shell (--ghost reach) is the dense box for shading rays: the same macrocells
+// and value ranges, and every point of a macrocell holding an isovalue samples to the same bits
+// (from its blocks outside the core, from the core's field inside); it holds fewer voxels.
+TEST(SciVis, ShadingShellSamplesAsTheDenseBox) {
+  const SceneDesc wavelet = waveletScene(97);
+  const VolumeSource& source = wavelet.volumes[0].source;
+  const VoxelBox box{{5, 0, 11}, {70, 60, 97}}, coreBox{{5, 20, 30}, {50, 60, 80}};
+  const std::vector<float> isovalues = {160.0f, 215.0f};
+  const Volume denseVoxels = loadVolume(source, box), coreVoxels = loadVolume(source, coreBox);
+  const VolumeField dense(denseVoxels), core(coreVoxels);
+  const ShadingShell shell = ShadingShell::load(source, box, coreBox, isovalues);
+  ASSERT_EQ(shell.macroCount(), dense.macroCount());
+  EXPECT_LT(shell.voxelCount(), box.voxelCount());
+  EXPECT_GT(shell.blockCount(), 0u);
+  std::uint64_t state = 7, sampled = 0, fromBlocks = 0;
+  auto unit = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<float>(state >> 40) / static_cast<float>(1 << 24);
+  };
+  for (int m = 0; m < dense.macroCount(); ++m) {
+    ASSERT_EQ(shell.macroMin(m), dense.macroMin(m)) << "macrocell " << m;
+    ASSERT_EQ(shell.macroMax(m), dense.macroMax(m)) << "macrocell " << m;
+    bool holds = false;
+    for (float iso : isovalues)
+      holds = holds || (iso >= dense.macroMin(m) && iso <= dense.macroMax(m));
+    if (!holds) continue;
+    const Box3 b = dense.macroBounds(m);
+    for (int i = 0; i < 40; ++i) {
+      const Vec3 p{b.lo.x + (b.hi.x - b.lo.x) * unit(), b.lo.y + (b.hi.y - b.lo.y) * unit(),
+                   b.lo.z + (b.hi.z - b.lo.z) * unit()};
+      float want = 0, got = 0, none = 0;
+      ASSERT_TRUE(dense.sample(p, want));
+      ASSERT_TRUE(shell.sample(p, got, &core));
+      ASSERT_EQ(std::memcmp(&want, &got, sizeof want), 0) << "macrocell " << m;
+      fromBlocks += !core.sample(p, none);
+      ++sampled;
+    }
+  }
+  EXPECT_GT(fromBlocks, 0u);
+  EXPECT_GT(sampled, fromBlocks);
 }
 
 TEST(SciVis, MarschnerLobbIsosurfaceHitsLieOnTheLevelSet) {

@@ -1,0 +1,76 @@
+#pragma once
+// The ghost shell of one volume for a brick's shading rays (--ghost reach), held sparsely.
+//
+// Shading rays only ask whether an isosurface lies between two points
+// (SciVisRenderer::isosurfaceBetween): they jump over every macrocell whose value range holds no
+// isovalue and sample only inside the others. So a brick needs, as far as its shading rays
+// reach, the value range of every macrocell and the voxels of just those macrocells whose range
+// holds an isovalue (on the whole field's macrocell grid) — and of those only the voxels of cells
+// its dense core does not hold: cells inside the core are read from the core. Everything else is
+// the geometry of a dense VolumeField over the same box (FieldGeometry: the same box,
+// macrocells, ranges and arithmetic), so every shading ray takes the same samples and gets the
+// same bits as with the whole box held densely.
+//
+// Plain data (copyable); every const method is thread-safe. Voxels are kept as float32.
+#include <cstdint>
+#include <vector>
+
+#include "renderers/scivis/VolumeField.h"
+#include "renderers/scivis/VolumeSource.h"
+
+namespace renderers {
+
+class ShadingShell : public FieldGeometry {
+ public:
+  ShadingShell() = default;  // empty: no shell (shading rays use the dense volume)
+
+  // `box` of `source` (at least 2 voxels per axis), read one layer of macrocells at a time, so
+  // no more than that layer of the box is ever held densely; per macrocell whose value range
+  // holds one of `isovalues`, the voxels of its cells that do not lie inside `core` (the
+  // brick's dense voxels, a sub-box of `box`; may be empty).
+  static ShadingShell load(const VolumeSource& source, const VoxelBox& box, const VoxelBox& core,
+                           const std::vector<float>& isovalues);
+
+  bool empty() const { return macroMin_.empty(); }
+  std::size_t blockCount() const { return blocks_.size(); }
+  std::size_t voxelCount() const { return voxels_.size(); }
+  std::size_t bytes() const;  // ranges, block table and blocks
+
+  // The trilinear value at world point p, as VolumeField::sample over the dense box gives it
+  // (cells inside the core from `core`, the dense field of the `core` box given to load); false
+  // outside dataBounds() and in macrocells without voxels (no isovalue in their range).
+  bool sample(Vec3 p, float& value, const VolumeField* core) const {
+    Cell c;
+    if (!locate(p, c)) return false;
+    if (core && c.ix >= core_.lo.x && c.iy >= core_.lo.y && c.iz >= core_.lo.z &&
+        c.ix + 1 < core_.hi.x && c.iy + 1 < core_.hi.y && c.iz + 1 < core_.hi.z)
+      return core->sample(p, value);
+    const std::int32_t b = block_[static_cast<std::size_t>(macroIndexOf(c))];
+    if (b < 0) return false;
+    const Block& k = blocks_[static_cast<std::size_t>(b)];
+    const std::size_t sy = k.size.x, sz = sy * static_cast<std::size_t>(k.size.y);
+    const float* v = voxels_.data() + k.offset + static_cast<std::size_t>(c.ix - k.lo.x) +
+                     static_cast<std::size_t>(c.iy - k.lo.y) * sy +
+                     static_cast<std::size_t>(c.iz - k.lo.z) * sz;
+    const float corners[8] = {v[0],  v[1],      v[sy],      v[sy + 1],
+                              v[sz], v[sz + 1], v[sz + sy], v[sz + sy + 1]};
+    value = trilinear(corners, c.fx, c.fy, c.fz);
+    return true;
+  }
+
+ private:
+  // The voxels [lo, lo + size) of one macrocell, x fastest, at `offset` in voxels_.
+  struct Block {
+    std::size_t offset;
+    Index3 lo, size;
+  };
+
+  ShadingShell(const GridGeometry& grid, const VoxelBox& box) : FieldGeometry(grid, box) {}
+
+  VoxelBox core_;                    // cells with all 8 voxels in it are read from the core
+  std::vector<std::int32_t> block_;  // per macrocell: its block, or -1
+  std::vector<Block> blocks_;
+  std::vector<float> voxels_;
+};
+
+}  // namespace renderers
