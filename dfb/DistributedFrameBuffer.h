@@ -73,7 +73,8 @@ struct FrameStats {
   std::uint64_t gatherBytesSent = 0, gatherBytesReceived = 0;  // display-format gather
   std::uint64_t pixelBytesReceived = 0;  // final pixels into this rank (gather), uncompressed
   std::uint64_t staleInputs = 0, earlyInputs = 0;
-  double lastSetTileToCompleteMs = 0;  // last local setTile → frame complete on all ranks
+  // last local setTile → frame complete on all ranks (with a display format: image gathered)
+  double lastSetTileToCompleteMs = 0;
   double frameMs = 0;                  // begin → end returned
   std::int64_t lastSetTileNs = 0;      // steady_clock time of the last local setTile; 0: none
   // Where the owner's time went, summed over tiles (threads overlap, so these can exceed the
