@@ -199,6 +199,12 @@ void DistributedFrameBuffer::begin(const FrameInfo& frame) {
 
 void DistributedFrameBuffer::setTile(Tile tile) {
   Impl& d = *impl_;
+  // The tile is rendered when it comes here: compositing overhead counts from this moment (a
+  // tile this rank owns is composited, and maybe routed, inside this call). Threads race: keep
+  // the latest.
+  const std::int64_t now = Clock::now().time_since_epoch().count();
+  for (std::int64_t seen = d.lastSetTileNs; seen < now;)
+    if (d.lastSetTileNs.compare_exchange_weak(seen, now)) break;
   const int index = d.grid.indexOfOrigin(tile.region.x0, tile.region.y0);
   if (index < 0 || d.grid.region(index) != tile.region)
     throw Error("setTile: region [" + std::to_string(tile.region.x0) + ", " +
@@ -215,7 +221,6 @@ void DistributedFrameBuffer::setTile(Tile tile) {
     d.messenger.send(d.messengerRank[static_cast<size_t>(owner)], d.options.objectId,
                      std::move(bytes));
   }
-  d.lastSetTileNs = Clock::now().time_since_epoch().count();
 }
 
 void DistributedFrameBuffer::incoming(int, Bytes&& payload) { impl_->deliver(std::move(payload)); }

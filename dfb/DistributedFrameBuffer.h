@@ -75,8 +75,8 @@ struct FrameStats {
   std::uint64_t staleInputs = 0, earlyInputs = 0;
   // last local setTile → frame complete on all ranks (with a display format: image gathered)
   double lastSetTileToCompleteMs = 0;
-  double frameMs = 0;                  // begin → end returned
-  std::int64_t lastSetTileNs = 0;      // steady_clock time of the last local setTile; 0: none
+  double frameMs = 0;              // begin → end returned
+  std::int64_t lastSetTileNs = 0;  // steady_clock time the last local setTile began; 0: none
   // Where the owner's time went, summed over tiles (threads overlap, so these can exceed the
   // frame): unpacking tile messages, the tile operation, tone mapping, the rest of the pixel-op
   // chain (e.g. a wall's routing: cutting and sending).
