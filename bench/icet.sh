@@ -61,7 +61,7 @@ fig_icet() {
 set terminal pngcairo size 1100,800 noenhanced; set output '$results/icet.png'
 set multiplot layout 2,1 title "DFB vs IceT, same bricks (builtin:wavelet, 1 brick + 1 thread per rank; 2 cores: 4 and 8 ranks oversubscribed)"
 set style data histogram; set style histogram clustered gap 1; set style fill solid 0.6
-set xtics rotate by -35 font ",8"; set key top left; set grid ytics
+set xtics rotate by -35 font ",8"; set key outside top right; set grid ytics
 set ylabel "total frame ms (median)"; set yrange [0:*]
 plot '$work/icet.dat' using 2:xtic(1) title "DFB" lc rgb "#3070b0", \
      '' using 3 title "IceT reduce (default)" lc rgb "#c08030", \
