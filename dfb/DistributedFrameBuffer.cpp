@@ -60,8 +60,10 @@ struct DistributedFrameBuffer::Impl {
   std::vector<std::string> inputErrors;
 
   std::vector<float> tileErrors;
+  std::vector<float> errorsLocal, errorsGlobal;  // the frame-end reduction's buffers
   std::vector<std::uint32_t> imageRgba8;
   std::vector<float> imageRgbaF32;
+  GatherBuffers gatherBuffers;  // kept between frames: see GatherBuffers
 
   std::atomic<std::uint64_t> tilesSet{0}, tilesCompleted{0}, staleInputs{0}, earlyInputs{0};
   std::atomic<std::int64_t> lastSetTileNs{0};
@@ -77,6 +79,8 @@ struct DistributedFrameBuffer::Impl {
   // Runs the pixel ops of a tile whose last input arrived, with the tile's mutex held.
   void finishTile(int tileIndex, OwnedTile& owned);
   void deliver(Bytes&& bytes);
+  // The display-format gather of the finished frame to rank 0 (nothing with NONE).
+  GatherCounts gather(Clock::time_point deadline);
   void failInput(const std::string& message) {
     std::lock_guard lock(frameMutex);
     inputErrors.push_back(message);
@@ -196,6 +200,12 @@ void DistributedFrameBuffer::begin(const FrameInfo& frame) {
 
 void DistributedFrameBuffer::setTile(Tile tile) {
   Impl& d = *impl_;
+  // The tile is rendered when it comes here: compositing overhead counts from this moment (a
+  // tile this rank owns is composited, and maybe routed, inside this call). Threads race: keep
+  // the latest.
+  const std::int64_t now = Clock::now().time_since_epoch().count();
+  for (std::int64_t seen = d.lastSetTileNs; seen < now;)
+    if (d.lastSetTileNs.compare_exchange_weak(seen, now)) break;
   const int index = d.grid.indexOfOrigin(tile.region.x0, tile.region.y0);
   if (index < 0 || d.grid.region(index) != tile.region)
     throw Error("setTile: region [" + std::to_string(tile.region.x0) + ", " +
@@ -212,7 +222,6 @@ void DistributedFrameBuffer::setTile(Tile tile) {
     d.messenger.send(d.messengerRank[static_cast<size_t>(owner)], d.options.objectId,
                      std::move(bytes));
   }
-  d.lastSetTileNs = Clock::now().time_since_epoch().count();
 }
 
 void DistributedFrameBuffer::incoming(int, Bytes&& payload) { impl_->deliver(std::move(payload)); }
@@ -316,6 +325,41 @@ void DistributedFrameBuffer::Impl::finishTile(int tileIndex, OwnedTile& owned) {
   tilesCompleted++;
 }
 
+GatherCounts DistributedFrameBuffer::Impl::gather(Clock::time_point deadline) {
+  if (options.format == DisplayFormat::NONE) return {};
+  const bool rgba8 = options.format == DisplayFormat::RGBA8;
+  const int bytesPerPixel = rgba8 ? 4 : 16;
+  std::byte* image = nullptr;
+  if (rank == 0) {
+    const size_t pixels = static_cast<size_t>(grid.width()) * static_cast<size_t>(grid.height());
+    if (rgba8) {
+      imageRgba8.resize(pixels);
+      image = reinterpret_cast<std::byte*>(imageRgba8.data());
+    } else {
+      imageRgbaF32.resize(4 * pixels);
+      image = reinterpret_cast<std::byte*>(imageRgbaF32.data());
+    }
+  }
+  auto tilesOf = [&](int r) {
+    std::vector<int> list;
+    for (int t = 0; t < grid.tileCount(); ++t)
+      if (owner[static_cast<size_t>(t)] == r) list.push_back(t);
+    return list;
+  };
+  std::vector<std::byte> blank;
+  auto pixelsOf = [&](int t) -> const std::byte* {
+    OwnedTile& owned = *tiles[static_cast<size_t>(t)];
+    if (!owned.active) {  // not rendered this frame: black, transparent
+      blank.assign(static_cast<size_t>(grid.region(t).pixelCount() * bytesPerPixel), std::byte{0});
+      return blank.data();
+    }
+    if (rgba8) return reinterpret_cast<const std::byte*>(owned.rgba8.data());
+    return reinterpret_cast<const std::byte*>(owned.operation->finished().color.data());
+  };
+  return gatherImage(comm, grid, bytesPerPixel, options.compressGather, ownedTiles, tilesOf,
+                     pixelsOf, image, deadline, gatherBuffers);
+}
+
 void DistributedFrameBuffer::end() {
   Impl& d = *impl_;
   const auto deadline = Clock::now() + d.options.frameTimeout;
@@ -351,15 +395,22 @@ void DistributedFrameBuffer::end() {
   }
 
   // One reduction agrees that every rank's tiles are complete and shares the tiles' error
-  // estimates (each owner contributes its own, never NaN; the rest are zero).
+  // estimates (each owner contributes its own, never NaN; the rest are zero). It runs while the
+  // image is gathered: every rank enters the gather with its tiles complete as well, so the
+  // image is finished when the gather is, and the agreement costs no time of its own. Another
+  // rank may be up to a frame timeout later than this one: both waits allow for that.
   const size_t count = d.tileErrors.size();
-  std::vector<float> local(count), global(count);
-  for (int t : d.ownedTiles) local[static_cast<size_t>(t)] = d.tileErrors[static_cast<size_t>(t)];
+  d.errorsLocal.assign(count, 0.0f);
+  d.errorsGlobal.resize(count);
+  for (int t : d.ownedTiles)
+    d.errorsLocal[static_cast<size_t>(t)] = d.tileErrors[static_cast<size_t>(t)];
+  const auto collectiveDeadline = deadline + d.options.frameTimeout;
   MPI_Request request;
-  checkMpi(MPI_Iallreduce(local.data(), global.data(), static_cast<int>(count), MPI_FLOAT, MPI_MAX,
-                          d.comm, &request),
+  checkMpi(MPI_Iallreduce(d.errorsLocal.data(), d.errorsGlobal.data(), static_cast<int>(count),
+                          MPI_FLOAT, MPI_MAX, d.comm, &request),
            "MPI_Iallreduce");
-  waitWithDeadline(request, deadline + d.options.frameTimeout,
+  const GatherCounts counts = d.gather(collectiveDeadline);
+  waitWithDeadline(request, collectiveDeadline,
                    "frame " + std::to_string(d.frame.frameId) +
                        ": another rank did not finish the frame within " +
                        std::to_string(2 * d.options.frameTimeout.count()) + " ms");
@@ -368,7 +419,7 @@ void DistributedFrameBuffer::end() {
     std::lock_guard lock(d.frameMutex);
     d.inFrame = false;
   }
-  d.tileErrors = std::move(global);
+  d.tileErrors.swap(d.errorsGlobal);
 
   FrameStats stats;
   stats.frameId = d.frame.frameId;
@@ -395,45 +446,9 @@ void DistributedFrameBuffer::end() {
                                         complete.time_since_epoch() - Clock::duration(lastSet))
                                         .count();
 
-  if (d.options.format != DisplayFormat::NONE) {
-    const bool rgba8 = d.options.format == DisplayFormat::RGBA8;
-    const int bytesPerPixel = rgba8 ? 4 : 16;
-    std::byte* image = nullptr;
-    if (d.rank == 0) {
-      const size_t pixels =
-          static_cast<size_t>(d.grid.width()) * static_cast<size_t>(d.grid.height());
-      if (rgba8) {
-        d.imageRgba8.resize(pixels);
-        image = reinterpret_cast<std::byte*>(d.imageRgba8.data());
-      } else {
-        d.imageRgbaF32.resize(4 * pixels);
-        image = reinterpret_cast<std::byte*>(d.imageRgbaF32.data());
-      }
-    }
-    auto tilesOf = [&](int r) {
-      std::vector<int> list;
-      for (int t = 0; t < d.grid.tileCount(); ++t)
-        if (d.owner[static_cast<size_t>(t)] == r) list.push_back(t);
-      return list;
-    };
-    std::vector<std::byte> blank;
-    auto pixelsOf = [&](int t) -> const std::byte* {
-      OwnedTile& owned = *d.tiles[static_cast<size_t>(t)];
-      if (!owned.active) {  // not rendered this frame: black, transparent
-        blank.assign(static_cast<size_t>(d.grid.region(t).pixelCount() * bytesPerPixel),
-                     std::byte{0});
-        return blank.data();
-      }
-      if (rgba8) return reinterpret_cast<const std::byte*>(owned.rgba8.data());
-      return reinterpret_cast<const std::byte*>(owned.operation->finished().color.data());
-    };
-    const GatherCounts counts =
-        gatherImage(d.comm, d.grid, bytesPerPixel, d.options.compressGather, d.ownedTiles, tilesOf,
-                    pixelsOf, image, Clock::now() + d.options.frameTimeout);
-    stats.gatherBytesSent = counts.bytesSent;
-    stats.gatherBytesReceived = counts.bytesReceived;
-    stats.pixelBytesReceived = counts.pixelBytesReceived;
-  }
+  stats.gatherBytesSent = counts.bytesSent;
+  stats.gatherBytesReceived = counts.bytesReceived;
+  stats.pixelBytesReceived = counts.pixelBytesReceived;
   stats.frameMs = msBetween(d.frameStart, Clock::now());
   d.lastStats = stats;
 }

@@ -73,9 +73,10 @@ struct FrameStats {
   std::uint64_t gatherBytesSent = 0, gatherBytesReceived = 0;  // display-format gather
   std::uint64_t pixelBytesReceived = 0;  // final pixels into this rank (gather), uncompressed
   std::uint64_t staleInputs = 0, earlyInputs = 0;
-  double lastSetTileToCompleteMs = 0;  // last local setTile → frame complete on all ranks
-  double frameMs = 0;                  // begin → end returned
-  std::int64_t lastSetTileNs = 0;      // steady_clock time of the last local setTile; 0: none
+  // last local setTile → frame complete on all ranks (with a display format: image gathered)
+  double lastSetTileToCompleteMs = 0;
+  double frameMs = 0;              // begin → end returned
+  std::int64_t lastSetTileNs = 0;  // steady_clock time the last local setTile began; 0: none
   // Where the owner's CPU time went (each thread's CPU clock, summed over tiles): unpacking tile
   // messages, the tile operation, tone mapping, the rest of the pixel-op chain (e.g. a wall's
   // routing: cutting and sending).

@@ -10,20 +10,26 @@
 //   icet_bench --compare A.png B.png       (largest channel difference of two PNGs)
 //
 // One brick per rank. transparent: premultiplied float RGBA, the DFB's RGBAF32 image vs IceT's
-// ordered float blending (icetCompositeOrder = the bricks' visibility order); opaque: the DFB's
-// RGBA8 image vs IceT's z-buffer compositing of RGBA8 + depth (the nearest brick's fragment
-// wins, so only a scene of opaque surfaces, e.g. builtin:spheres, gives the DFB's image). Either
-// way the finished image ends on the display rank(s), as the DFB's gather brings it to rank 0.
+// ordered float blending (icetCompositeOrder = the bricks' visibility order); opaque: the
+// scene's surfaces made opaque and its volumes hidden (z-compositing keeps only the nearest
+// fragment, so it is right only for opaque surfaces), the DFB's RGBA8 image vs IceT's z-buffer
+// compositing of RGBA8 + depth. --tiles 1x1: the finished image ends on rank 0 (the DFB's
+// gather, IceT's single tile). --tiles 2x2 (the display-wall case): IceT with 4 tiles, tile
+// ty*2+tx shown by rank ty*2+tx; the DFB as dfbwall's route mode (display format NONE, each
+// finished tile tone-mapped on its owner, cut at display borders and sent to the display's rank,
+// here the same ranks 0-3), so its displays hold RGBA8.
 //
 // Per frame and variant rank 0 prints one JSON line: total_ms (barrier → finished image on the
 // last display rank), render_ms (slowest rank's local rendering), overhead_ms (the paper's
-// compositing overhead: the slowest rank's last local render → the finished image; all ranks
-// on one host, whose steady clock is system-wide). With --images, the last frame's images are
-// written as PNGs and every IceT image is compared with the DFB's.
+// compositing overhead: the slowest rank's last local render → the finished image on every
+// display rank; all ranks on one host, whose steady clock is system-wide), icet_bytes_sent.
+// With --images, the last frame's images are written as PNGs and every IceT image is compared
+// with the DFB's (linear radiance for 1x1 transparent, else 8-bit levels).
 #include <mpi.h>
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -35,13 +41,17 @@
 
 #include "bench/icet/BrickImage.h"
 #include "bench/icet/IcetCompositor.h"
+#include "bench/icet/PieceReceiver.h"
 #include "dfb/DistributedFrameBuffer.h"
 #include "dfb/Messenger.h"
 #include "dfb/MpiSession.h"
 #include "dfb/Timing.h"
 #include "renderers/BuiltinScenes.h"
 #include "renderers/scivis/BrickFrameDriver.h"
+#include "wall/DisplayRoutingOp.h"
+#include "wall/PieceMessage.h"
 #include "wall/Png.h"
+#include "wall/Ranks.h"
 
 namespace {
 
@@ -88,9 +98,17 @@ struct Finished {
   std::vector<float> linear;
 };
 
-// Each display rank's tile to rank 0 (outside the timed part), assembled on the canvas.
-Finished assemble(const icetbench::IcetCompositor& icet, bool blend, int width, int height,
-                  MPI_Comm comm) {
+// What one rank shows of the finished image: a rectangle of the canvas (x, y, w, h) and its
+// pixels, linear float RGBA (`blend`) or RGBA8. Empty on ranks that show nothing.
+struct Part {
+  bool shown = false;
+  std::array<int, 4> rect{0, 0, 0, 0};
+  std::vector<float> linear;
+  std::vector<std::uint32_t> rgba8;
+};
+
+// Each display rank's part to rank 0 (outside the timed part), assembled on the canvas.
+Finished assemble(const Part& mine, bool blend, int width, int height, MPI_Comm comm) {
   int rank = 0, size = 0;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
@@ -103,13 +121,9 @@ Finished assemble(const icetbench::IcetCompositor& icet, bool blend, int width, 
     std::array<int, 5> head{0, 0, 0, 0, 0};  // has tile, rect
     std::vector<float> f;
     std::vector<std::uint32_t> b;
-    if (rank == r && icet.displayedTile() >= 0) {
-      const auto rect = icet.tileRect();
-      head = {1, rect[0], rect[1], rect[2], rect[3]};
-      if (blend)
-        f = icet.tileRgba();
-      else
-        b = icet.tileRgba8();
+    if (rank == r && mine.shown) {
+      head = {1, mine.rect[0], mine.rect[1], mine.rect[2], mine.rect[3]};
+      f = mine.linear, b = mine.rgba8;
     }
     if (r != 0) {
       if (rank == r) MPI_Send(head.data(), 5, MPI_INT, 0, 7, comm);
@@ -214,11 +228,16 @@ int run(int argc, char** argv) {
   if (tilesX * tilesY > ranks) throw std::runtime_error("more tiles than ranks");
   const std::vector<std::string> variants = split(o.variants, ',');
   const bool blend = o.mode == "transparent";
-  const bool withDfb = std::find(variants.begin(), variants.end(), "dfb") != variants.end();
-  if (withDfb && tilesX * tilesY != 1)
-    throw std::runtime_error("the DFB's tiled case is dfbwall --wall (wall ranks present tiles)");
+  const bool tiled = tilesX * tilesY > 1;
 
   renderers::SceneDesc loaded = renderers::loadSceneDesc(o.scene);
+  if (!blend) {
+    // z-compositing keeps the nearest fragment and drops what lies behind it, so it is right only
+    // for opaque surfaces: the opaque mode renders the scene's surfaces opaque and its volumes
+    // not at all (the wavelet: both isosurfaces opaque, no haze).
+    for (renderers::VolumeDesc& v : loaded.volumes) v.visible = false;
+    for (renderers::Material& m : loaded.materials) m.opacity = 1.0f;
+  }
   renderers::Environment& environment = loaded.environment;
   if (environment.kind != renderers::Environment::Kind::Constant) {
     // IceT blends one background colour under the image: both sides get the gradient's middle.
@@ -245,8 +264,23 @@ int run(int argc, char** argv) {
   options.width = width, options.height = height;
   options.format = blend ? dfb::DisplayFormat::RGBAF32 : dfb::DisplayFormat::RGBA8;
   options.compressGather = false;  // one host: dfbwall compresses only between hosts
+  // Tiled: as dfbwall's route mode, nothing is gathered; every finished tile is tone-mapped on
+  // its owner, cut at display borders and sent to the display's rank (ranks 0 .. tiles-1 here,
+  // as IceT's tile displays are), which assembles its display.
+  const wall::Layout layout = icetbench::tiledLayout(width, height, tilesX, tilesY);
+  std::unique_ptr<icetbench::PieceReceiver> receiver;
+  if (tiled) {
+    options.format = dfb::DisplayFormat::NONE;
+    if (rank < tilesX * tilesY) {
+      receiver = std::make_unique<icetbench::PieceReceiver>(layout, rank, options.tileSize);
+      messenger.registerObject(wall::kWallNodeObject, receiver.get());
+    }
+  }
   driver.configure(options);
   auto fb = std::make_unique<dfb::DistributedFrameBuffer>(messenger, dfbComm, options);
+  if (tiled)
+    fb->addPixelOp(std::make_shared<wall::DisplayRoutingOp>(
+        messenger, layout, wall::RankRoles{0, tilesX * tilesY}, options.tileSize));
 
   // The IceT side: the same brick, rendered full-frame, composited afterwards.
   icetbench::BrickImage image(desc, settings, rank, ranks, !blend, options.toneMap);
@@ -281,17 +315,20 @@ int run(int argc, char** argv) {
       const std::size_t v = (k + static_cast<std::size_t>(f)) % variants.size();
       const std::string& name = variants[v];
       Sample s{};
+      if (receiver) receiver->expect(id);
       MPI_Barrier(MPI_COMM_WORLD);
       const auto t0 = Clock::now();
       s.start = ns(t0);
-      double icetMs = 0, icetBytes = 0;
+      double icetBytes = 0;
       if (name == "dfb") {
         const renderers::FrameReport report = driver.renderFrame(*fb, frame, camera);
         s.finished = ns(Clock::now());
         const std::int64_t last = fb->stats().lastSetTileNs;
         s.rendered = last != 0 ? last : s.start;
         s.renderMs = report.renderMs;
-        s.display = rank == 0;
+        s.display = tiled ? receiver != nullptr : rank == 0;
+        // The display's last piece may come after this rank's end(): the image is finished then.
+        if (receiver) s.finished = receiver->wait();
       } else if (name == "icet-reduce" || name == "icet-radixk") {
         image.render(frame, camera, driver);
         const auto t1 = Clock::now();
@@ -304,15 +341,16 @@ int run(int argc, char** argv) {
         s.finished = ns(Clock::now());
         s.display = icet.displayedTile() >= 0;
         const icetbench::IcetTimes t = icet.times();
-        icetMs = t.compositeMs, icetBytes = t.bytesSent;
+        icetBytes = t.bytesSent;
       } else {
         throw std::runtime_error("unknown variant '" + name + "'");
       }
       std::vector<Sample> all(static_cast<std::size_t>(rank == 0 ? ranks : 0));
       MPI_Gather(&s, sizeof s, MPI_BYTE, all.data(), sizeof s, MPI_BYTE, 0, MPI_COMM_WORLD);
-      double sumIcetBytes = 0, maxIcetMs = 0;
+      // IceT's own composite timer is not reported: it includes waiting for the slowest rank's
+      // rendering (measured 80-1500 ms here), so it is no compositing overhead.
+      double sumIcetBytes = 0;
       MPI_Reduce(&icetBytes, &sumIcetBytes, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
-      MPI_Reduce(&icetMs, &maxIcetMs, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
       if (rank == 0) {
         std::int64_t lastRender = 0, done = 0;
         double renderMs = 0;
@@ -333,14 +371,22 @@ int run(int argc, char** argv) {
                   {"render_ms", renderMs},
                   {"overhead_ms", static_cast<double>(done - lastRender) * 1e-6}};
         if (name != "dfb") {
-          line["icet_composite_ms_max_over_ranks"] = maxIcetMs;
           line["icet_bytes_sent"] = sumIcetBytes;
         }
         std::printf("%s\n", line.dump().c_str());
         std::fflush(stdout);
       }
       if (f == o.frames && !o.images.empty()) {
-        if (name == "dfb") {
+        if (name == "dfb" && tiled) {
+          // The displays hold tone-mapped RGBA8, as a wall shows it.
+          Part part;
+          if (receiver) {
+            const dfb::Region r = layout.displays[static_cast<std::size_t>(rank)].rect;
+            part.shown = true, part.rect = {r.x0, r.y0, r.width(), r.height()};
+            part.rgba8 = receiver->image().pixels;
+          }
+          finished[v] = assemble(part, false, width, height, MPI_COMM_WORLD);
+        } else if (name == "dfb") {
           if (rank == 0) {
             finished[v].rgba8.resize(static_cast<std::size_t>(width) * height);
             if (blend) {
@@ -352,7 +398,15 @@ int run(int argc, char** argv) {
             }
           }
         } else {
-          finished[v] = assemble(icet, blend, width, height, MPI_COMM_WORLD);
+          Part part;
+          if (icet.displayedTile() >= 0) {
+            part.shown = true, part.rect = icet.tileRect();
+            if (blend)
+              part.linear = icet.tileRgba();
+            else
+              part.rgba8 = icet.tileRgba8();
+          }
+          finished[v] = assemble(part, blend, width, height, MPI_COMM_WORLD);
         }
       }
     }
@@ -366,7 +420,8 @@ int run(int argc, char** argv) {
       if (v == dfbIndex || dfbIndex == variants.size()) continue;
       // Float summation order differs (IceT blends pairs of partial images, the DFB sorts each
       // pixel's fragments): a few ulps in linear radiance, at most a level in RGBA8.
-      Json check{{"image_check", compareImages(finished[dfbIndex], finished[v], blend ? 1e-4 : 1)}};
+      Json check{{"image_check",
+                  compareImages(finished[dfbIndex], finished[v], blend && !tiled ? 1e-4 : 1)}};
       check["image_check"]["variant"] = variants[v];
       check["image_check"]["against"] = "dfb";
       std::printf("%s\n", check.dump().c_str());

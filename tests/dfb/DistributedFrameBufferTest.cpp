@@ -69,16 +69,20 @@ DfbOptions options(DisplayFormat format, TileOperationFactory operation = writeO
 TEST(Dfb, GatheredRgbaF32EqualsTheReference) {
   Messenger messenger(MPI_COMM_WORLD);
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::RGBAF32));
-  renderFrame(dfb, 1);
-  if (worldRank() == 0) {
+  // Several frames: the gather keeps its buffers from one frame to the next.
+  for (std::uint32_t frame = 1; frame <= 3; ++frame) {
+    renderFrame(dfb, frame);
+    if (worldRank() != 0) continue;
     const auto& image = dfb.imageRgbaF32();
     ASSERT_EQ(image.size(), static_cast<size_t>(4 * kWidth * kHeight));
     for (int y = 0; y < kHeight; ++y)
       for (int x = 0; x < kWidth; ++x)
         for (int c = 0; c < 4; ++c)
-          ASSERT_EQ(image[static_cast<size_t>(4 * (y * kWidth + x) + c)], pixelValue(x, y, 1, c))
-              << x << "," << y << " channel " << c;
+          ASSERT_EQ(image[static_cast<size_t>(4 * (y * kWidth + x) + c)],
+                    pixelValue(x, y, frame, c))
+              << x << "," << y << " channel " << c << " frame " << frame;
     EXPECT_EQ(dfb.stats().pixelBytesReceived, static_cast<std::uint64_t>(16 * kWidth * kHeight));
+    EXPECT_EQ(dfb.stats().gatherBytesSent, 0u) << "rank 0 places its own tiles, sends none";
   }
   std::uint64_t completed = dfb.stats().tilesCompleted, total = 0;
   MPI_Allreduce(&completed, &total, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD);
