@@ -114,12 +114,7 @@ fig_cluster() {
   fig_pixelcost
   goals+=(${pixelcost_goals[@]+"${pixelcost_goals[@]}"})
 
-  local goalJson="" g
-  for g in "${goals[@]}"; do
-    goalJson+="${goalJson:+,
-   }\"$g\""
-    echo "  goal: $g"
-  done
+  goals_json ${goals[@]+"${goals[@]}"}
   cat >"$results/cluster.json" <<EOF
 {"figure": "cluster", "machine": $machine, "load_average_at_start": "$loadAtStart", "load_average_at_end": "$(cut -d' ' -f1-3 /proc/loadavg)",
  "setup": {"wall": "2x2 x 1920x1080 (3840x2160); wall1 drives the top row, wall2 the bottom (one wall rank per display)",
@@ -128,7 +123,7 @@ fig_cluster() {
            "spp": 1, "orbit_degrees_per_frame": $orbit, "frames_per_run": {"pattern": $frames, "pathtracer": $ptframes, "scivis": $ptframes}, "scenes": {"pattern, pathtracer": "Cornell box orbit", "scivis": "builtin:wavelet"}, "runs": $reps,
            "link_utilisation": "wall_bytes_sent per second / (sending hosts x 125e6 B/s); route: every render host sends, gather: render1 relays",
            "cpu_per_pixel": "one host: see pixelcost.json (thread CPU per stage, the rest of each process, pixel_cost_bench, callgrind)"},
- "goals": [$goalJson],
+ "goals": [$goals_json],
  "results": [$rows
  ]}
 EOF

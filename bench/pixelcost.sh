@@ -113,12 +113,7 @@ fig_pixelcost() {
     done
   fi
 
-  local goalJson="" g
-  for g in "${pixelcost_goals[@]}"; do
-    goalJson+="${goalJson:+,
-   }\"$g\""
-    echo "  goal: $g"
-  done
+  goals_json ${pixelcost_goals[@]+"${pixelcost_goals[@]}"}
   cat >"$results/pixelcost.json" <<EOF
 {"figure": "pixelcost", "machine": $machine, "load_average_at_start": "$(cut -d' ' -f1-3 /proc/loadavg)",
  "setup": {"wall": "2x2 x 1920x1080 (3840x2160), one host, 2 render + 4 wall ranks, shared memory (nothing compressed)",
@@ -127,7 +122,7 @@ fig_pixelcost() {
            "unit": "CPU ns per delivered pixel (3840 x 2160 per frame), summed over the side's ranks and threads",
            "stages": "thread CPU clock per stage (dfb/Timing.h); render side after render(), wall side after the wire",
            "other": "render: process CPU over the frames - render() CPU - stages; wall: process CPU - main thread (waits, swap barrier, GL calls) - GL driver threads (llvmpipe) - stages. Mostly the messenger's MPI and inbox threads (MPI copies, polling, decompression, dispatch)"},
- "goals": [$goalJson],
+ "goals": [$goals_json],
  "app": [$appRows
  ],
  "pixel_cost_bench": [
