@@ -27,6 +27,7 @@
 #include "wall/GlfwPresenter.h"
 #include "wall/Layout.h"
 #include "wall/OsmesaPresenter.h"
+#include "wall/PieceMessage.h"
 #include "wall/Png.h"
 #include "wall/Ranks.h"
 #include "wall/Routing.h"
@@ -222,7 +223,11 @@ void Session::runWall() {
   options.timeout = m.timeout;
   options.framesAhead = static_cast<std::uint32_t>(m.options.framesInFlight) + 2;
   {
-    wall::WallNode node(*m.messenger, *m.layout, process, m.role, std::move(presenters), options);
+    wall::MpiWallPeers peers(*m.messenger, m.role, options.timeout);
+    std::vector<wall::Presenter*> shown;
+    for (auto& p : presenters) shown.push_back(p.get());
+    wall::WallNode node(*m.layout, peers, std::move(shown), options);
+    const dfb::Registration pieces(*m.messenger, wall::kWallNodeObject, &node);
     m.wallStop->onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
     MPI_Request request;
     dfb::checkMpi(MPI_Ibarrier(m.own, &request), "MPI_Ibarrier");

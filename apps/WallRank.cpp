@@ -13,6 +13,7 @@
 #include "dfb/Timing.h"
 #include "wall/GlfwPresenter.h"
 #include "wall/OsmesaPresenter.h"
+#include "wall/PieceMessage.h"
 #include "wall/WallNode.h"
 
 namespace app {
@@ -69,7 +70,11 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
       }
     };
   {
-    wall::WallNode node(messenger, layout, process, wallComm, std::move(presenters), options);
+    wall::MpiWallPeers peers(messenger, wallComm, options.timeout);
+    std::vector<wall::Presenter*> shown;
+    for (auto& p : presenters) shown.push_back(p.get());
+    wall::WallNode node(layout, peers, std::move(shown), options);
+    const dfb::Registration pieces(messenger, wall::kWallNodeObject, &node);
     control.onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
     // While the renderers idle (a converged wall), rank 0 tells the walls to keep waiting; a
     // capture asked for through the control API names its frame.

@@ -141,4 +141,21 @@ class Messenger {
   std::unique_ptr<Impl> impl_;
 };
 
+// Registers `handler` under `id` for its lifetime (unregisters first thing in its destructor, so
+// declare it after the handler it registers).
+class Registration {
+ public:
+  Registration(Messenger& messenger, ObjectId id, MessageHandler* handler)
+      : messenger_(messenger), id_(id) {
+    messenger_.registerObject(id_, handler);
+  }
+  ~Registration() { messenger_.unregisterObject(id_); }
+  Registration(const Registration&) = delete;
+  Registration& operator=(const Registration&) = delete;
+
+ private:
+  Messenger& messenger_;
+  ObjectId id_;
+};
+
 }  // namespace dfb

@@ -27,14 +27,15 @@ constexpr size_t kUploadBatches = 8;
 
 }  // namespace
 
-WallNode::WallNode(dfb::Messenger& messenger, const Layout& layout, int process, MPI_Comm wallComm,
-                   std::vector<std::unique_ptr<Presenter>> presenters, WallNodeOptions options)
-    : messenger_(messenger),
-      layout_(layout),
-      process_(process),
+WallNode::WallNode(const Layout& layout, WallPeers& peers, std::vector<Presenter*> presenters,
+                   WallNodeOptions options)
+    : layout_(layout),
+      peers_(peers),
+      process_(peers.process()),
       presenters_(std::move(presenters)),
       options_(std::move(options)),
-      mine_(layout.displaysOfProcess(process)) {
+      mine_(layout.displaysOfProcess(process_)) {
+  const int process = process_;
   if (presenters_.size() != mine_.size())
     throw Error("wall process " + std::to_string(process) + " drives " +
                 std::to_string(mine_.size()) + " displays but got " +
@@ -61,19 +62,9 @@ WallNode::WallNode(dfb::Messenger& messenger, const Layout& layout, int process,
     tileWindows_.push_back(window);
   }
   uploadBatch_ = std::max<size_t>(1, uploadBatch_ / kUploadBatches);
-  dfb::checkMpi(MPI_Comm_dup(wallComm, &comm_), "MPI_Comm_dup");
-  messenger_.registerObject(kWallNodeObject, this);
-  MPI_Request barrier;
-  dfb::checkMpi(MPI_Ibarrier(comm_, &barrier), "MPI_Ibarrier");
-  dfb::waitWithDeadline(barrier, Clock::now() + options_.timeout,
-                        "starting the wall: another wall process did not join within " +
-                            std::to_string(options_.timeout.count()) + " ms");
 }
 
-WallNode::~WallNode() {
-  messenger_.unregisterObject(kWallNodeObject);
-  MPI_Comm_free(&comm_);
-}
+WallNode::~WallNode() = default;
 
 WallNode::Slot& WallNode::slotFor(std::uint32_t frameId) {
   auto found = slots_.find(frameId);
@@ -112,60 +103,73 @@ int WallNode::expectedPieceIndex(size_t position, const dfb::Region& local) cons
 }
 
 void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
+  const std::int64_t start = dfb::threadCpuNs();  // stage CPU time (dfb/Timing.h)
+  PieceHeader h{};
   try {
-    const std::int64_t start = dfb::threadCpuNs();  // stage CPU time (dfb/Timing.h)
-    const PieceHeader h = readPieceHeader(payload);
-    const std::int64_t unpacked = dfb::threadCpuNs();
-    const int position =
-        h.display >= 0 && static_cast<size_t>(h.display) < positionOfDisplay_.size()
-            ? positionOfDisplay_[static_cast<size_t>(h.display)]
-            : -1;
+    h = readPieceHeader(payload);
+  } catch (const std::exception& e) {
+    std::lock_guard lock(mutex_);
+    if (error_.empty()) error_ = e.what();
+    complete_.notify_all();
+    return;
+  }
+  {
+    std::lock_guard lock(mutex_);
+    unpackNs_ += dfb::threadCpuNs() - start;
+  }
+  receivePiece(
+      "rank " + std::to_string(fromRank), h.frameId, h.display, {h.x0, h.y0, h.x1, h.y1},
+      [&](Image& image) { copyPiece(payload, h, image); }, payload.size());
+}
+
+bool WallNode::receivePiece(const std::string& sender, std::uint32_t frameId, int display,
+                            const dfb::Region& local, const std::function<void(Image&)>& fill,
+                            std::size_t bytes, std::string* why) {
+  try {
+    const std::int64_t start = dfb::threadCpuNs();
+    const int position = display >= 0 && static_cast<size_t>(display) < positionOfDisplay_.size()
+                             ? positionOfDisplay_[static_cast<size_t>(display)]
+                             : -1;
     if (position < 0)
-      throw Error("rank " + std::to_string(fromRank) + " sent a piece of display " +
-                  std::to_string(h.display) + ", which wall process " + std::to_string(process_) +
-                  " does not drive");
+      throw Error(sender + " sent a piece of display " + std::to_string(display) +
+                  ", which wall process " + std::to_string(process_) + " does not drive");
     const size_t at = static_cast<size_t>(position);
-    const dfb::Region local{h.x0, h.y0, h.x1, h.y1};
-    const std::string& name = layout_.displays[static_cast<size_t>(h.display)].name;
+    const std::string& name = layout_.displays[static_cast<size_t>(display)].name;
     Image* image = nullptr;
     int piece = -1;
     {
       // Everything about the piece is checked, and the piece claimed, before a pixel is copied:
       // a duplicate or a stray rectangle never touches a buffer the presenter may be reading.
       std::lock_guard lock(mutex_);
-      if (static_cast<std::int64_t>(h.frameId) <= lastPresented_)
-        throw Error("rank " + std::to_string(fromRank) + " sent a piece for frame " +
-                    std::to_string(h.frameId) + ", already presented");
-      if (static_cast<std::int64_t>(h.frameId) > lastPresented_ + options_.framesAhead)
-        throw Error("rank " + std::to_string(fromRank) + " sent a piece for frame " +
-                    std::to_string(h.frameId) + ", more than " +
+      if (static_cast<std::int64_t>(frameId) <= lastPresented_)
+        throw Error(sender + " sent a piece for frame " + std::to_string(frameId) +
+                    ", already presented");
+      if (static_cast<std::int64_t>(frameId) > lastPresented_ + options_.framesAhead)
+        throw Error(sender + " sent a piece for frame " + std::to_string(frameId) + ", more than " +
                     std::to_string(options_.framesAhead) + " frames past the last presented (" +
                     std::to_string(lastPresented_) + ")");
       piece = expectedPieceIndex(at, local);
       if (piece < 0)
-        throw Error("rank " + std::to_string(fromRank) + " sent display '" + name + "' a piece [" +
-                    std::to_string(local.x0) + ", " + std::to_string(local.x1) + ") x [" +
-                    std::to_string(local.y0) + ", " + std::to_string(local.y1) +
-                    ") that is none of its expected pieces");
-      Slot& slot = slotFor(h.frameId);
+        throw Error(sender + " sent display '" + name + "' a piece [" + std::to_string(local.x0) +
+                    ", " + std::to_string(local.x1) + ") x [" + std::to_string(local.y0) + ", " +
+                    std::to_string(local.y1) + ") that is none of its expected pieces");
+      Slot& slot = slotFor(frameId);
       if (slot.claimed[at][static_cast<size_t>(piece)])
         throw Error("display '" + name + "' got piece [" + std::to_string(local.x0) + ", " +
                     std::to_string(local.x1) + ") x [" + std::to_string(local.y0) + ", " +
-                    std::to_string(local.y1) + ") of frame " + std::to_string(h.frameId) +
-                    " twice");
+                    std::to_string(local.y1) + ") of frame " + std::to_string(frameId) + " twice");
       slot.claimed[at][static_cast<size_t>(piece)] = true;
       image = &slot.displays[at];
-      bytesReceived_ += payload.size();
+      bytesReceived_ += bytes;
     }
     // Claimed pieces are disjoint, and the presenting thread reads a slot only once every piece
     // is counted below, so this copy needs no lock.
-    copyPiece(payload, h, *image);
+    fill(*image);
     const std::int64_t assembledCpu = dfb::threadCpuNs();
     const auto assembled = Clock::now();
     std::lock_guard lock(mutex_);
-    unpackNs_ += unpacked - start;
-    assembleNs_ += assembledCpu - unpacked;
-    Slot& slot = slots_.at(h.frameId);
+    assembleNs_ += assembledCpu - start;
+    Slot& slot = slots_.at(frameId);
     const int got = ++slot.received[at];
     slot.toUpload.emplace_back(position, piece);
     // The presenting thread drains the list when it wakes: woken once per batch, not per piece
@@ -176,10 +180,13 @@ void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
       wake = true;
     }
     if (wake) complete_.notify_all();
+    return true;
   } catch (const std::exception& e) {
     std::lock_guard lock(mutex_);
     if (error_.empty()) error_ = e.what();
+    if (why) *why = e.what();
     complete_.notify_all();  // presentFrame wakes and throws it at once, not at its deadline
+    return false;
   }
 }
 
@@ -331,13 +338,16 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     if (captureAsked_ > captureDone_ && frameId >= captureAskedFrame_)
       mine[1] = static_cast<std::int64_t>(captureAsked_);
   }
-  MPI_Request barrier;
-  dfb::checkMpi(MPI_Iallreduce(mine, agreed, 4, MPI_INT64_T, MPI_MAX, comm_, &barrier),
-                "MPI_Iallreduce");
-  dfb::waitWithDeadline(barrier, deadline,
-                        "swap barrier of frame " + std::to_string(frameId) +
-                            ": another wall process did not complete it within " +
-                            std::to_string(options_.timeout.count()) + " ms");
+  std::copy(std::begin(mine), std::end(mine), std::begin(agreed));
+  if (!peers_.agreeMax(frameId, agreed, 4, deadline)) {
+    // The render job is gone: this frame is never shown, its buffers go back to the spares.
+    std::lock_guard lock(mutex_);
+    spare_.push_back(std::move(*slot));
+    slots_.erase(frameId);
+    report.abandoned = true;
+    report.stopped = true;
+    return report;
+  }
   const auto released = Clock::now();
   report.wallCompleteNs = agreed[0];
   if (lastSwapNs_ != 0)
@@ -369,16 +379,25 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   {
     std::lock_guard lock(mutex_);
     lastPresented_ = frameId;
-    spare_.push_back(std::move(*slot));
+    if (shown_) spare_.push_back(std::move(*shown_));
+    shown_ = std::move(*slot);
     slots_.erase(frameId);
   }
-  if (process_ == 0) acknowledgeFrame(messenger_, frameId, report.wallCompleteNs);
+  if (process_ == 0) peers_.presented(frameId, report.wallCompleteNs);
   report.waitMs = msBetween(start, arrived);
   report.uploadMs = static_cast<double>(uploadNs) * 1e-6;
   report.drawMs = msBetween(arrived, drawn);
   report.barrierMs = msBetween(drawn, released);
   report.presentMs = msBetween(released, presented);
   return report;
+}
+
+void WallNode::showLastPresented() {
+  if (!shown_) return;
+  for (size_t i = 0; i < mine_.size(); ++i) {
+    const Image& image = shown_->displays[i];
+    presenters_[i]->present(image.pixels.data(), image.width, image.height);
+  }
 }
 
 void WallNode::finish() {
@@ -401,40 +420,20 @@ void WallNode::capture(std::uint32_t frameId) {
     writeDisplayCapture(options_.captureDir, layout_, mine_[i], frameId, shown.pixels.data());
     mine.insert(mine.end(), shown.pixels.begin(), shown.pixels.end());
   }
-  int size = 0, rank = 0;
-  MPI_Comm_size(comm_, &size);
-  MPI_Comm_rank(comm_, &rank);
-  const auto deadline = Clock::now() + options_.timeout;
-  const std::string late = "capture of frame " + std::to_string(frameId) +
-                           ": another wall process did not join within " +
-                           std::to_string(options_.timeout.count()) + " ms";
-  const int count = static_cast<int>(mine.size());
-  std::vector<int> counts(static_cast<size_t>(size)), offsets(static_cast<size_t>(size));
-  MPI_Request request;
-  dfb::checkMpi(MPI_Igather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm_, &request),
-                "MPI_Igather");
-  dfb::waitWithDeadline(request, deadline, late);
-  std::vector<std::uint32_t> all;
-  if (rank == 0) {
-    std::int64_t total = 0;
-    for (int r = 0; r < size; ++r) {
-      offsets[static_cast<size_t>(r)] = static_cast<int>(total);
-      total += counts[static_cast<size_t>(r)];
-    }
-    // MPI counts are ints; the layout's canvas cap keeps every display's pixels far below.
-    if (total > std::numeric_limits<int>::max())
-      throw Error("capture of frame " + std::to_string(frameId) + ": " + std::to_string(total) +
-                  " pixels do not fit one MPI gather");
-    all.resize(static_cast<size_t>(total));
-  }
-  dfb::checkMpi(MPI_Igatherv(mine.data(), count, MPI_UINT32_T, all.data(), counts.data(),
-                             offsets.data(), MPI_UINT32_T, 0, comm_, &request),
-                "MPI_Igatherv");
-  dfb::waitWithDeadline(request, deadline, late);
-  if (rank != 0) return;
+  const std::vector<std::vector<std::uint32_t>> all =
+      peers_.gatherToFirst(std::move(mine), Clock::now() + options_.timeout);
+  if (process_ != 0) return;
   std::vector<const std::uint32_t*> pixels(layout_.displays.size(), nullptr);
-  for (int p = 0; p < size; ++p) {
-    const std::uint32_t* at = all.data() + offsets[static_cast<size_t>(p)];
+  for (int p = 0; p < static_cast<int>(all.size()); ++p) {
+    const std::uint32_t* at = all[static_cast<size_t>(p)].data();
+    std::size_t expected = 0;
+    for (int d : layout_.displaysOfProcess(p))
+      expected += static_cast<size_t>(layout_.displays[static_cast<size_t>(d)].rect.pixelCount());
+    if (all[static_cast<size_t>(p)].size() != expected)
+      throw Error("capture of frame " + std::to_string(frameId) + ": wall process " +
+                  std::to_string(p) + " sent " +
+                  std::to_string(all[static_cast<size_t>(p)].size()) +
+                  " pixels for its displays' " + std::to_string(expected));
     for (int d : layout_.displaysOfProcess(p)) {
       pixels[static_cast<size_t>(d)] = at;
       at += static_cast<size_t>(layout_.displays[static_cast<size_t>(d)].rect.pixelCount());

@@ -12,17 +12,21 @@
 // touches it, or one whole-display piece in gather mode), so completion is counted in pieces,
 // never in pixels, and a duplicate is an error rather than a miscount.
 //
-// Threading: incoming() runs on the messenger's handler threads, several pieces at once (each is
-// checked and claimed under the lock, then copied unlocked: claimed pieces are disjoint);
-// everything else on the thread that made the node, which owns the presenters (GL contexts).
-#include <mpi.h>
-
+// The node talks to the other wall processes only through wall::WallPeers (wall/WallPeers.h), and
+// takes pieces from whoever calls incoming() (the job's messenger, where the node is registered
+// under kWallNodeObject) or receivePiece() (a service link): one node for both transports.
+//
+// Threading: incoming() and receivePiece() run on the receiving threads, several pieces at once
+// (each is checked and claimed under the lock, then copied unlocked: claimed pieces are
+// disjoint); everything else on the thread that made the node, which owns the presenters (GL
+// contexts).
 #include <chrono>
 #include <condition_variable>
 #include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -31,6 +35,7 @@
 #include "wall/Image.h"
 #include "wall/Layout.h"
 #include "wall/Presenter.h"
+#include "wall/WallPeers.h"
 
 namespace wall {
 
@@ -75,14 +80,18 @@ struct PresentReport {
   bool stopped = false;
   // The name of a display whose window an operator closed (empty: none).
   std::string closedDisplay;
+  // The frame was complete here but abandoned in the swap barrier (its render job is gone, see
+  // WallPeers::agreeMax): not presented; showLastPresented() puts the last one back.
+  bool abandoned = false;
 };
 
 class WallNode : public dfb::MessageHandler {
  public:
-  // Collective over `wallComm` (the wall ranks). `presenters` has one per display of `process`,
-  // in layout.displaysOfProcess(process) order.
-  WallNode(dfb::Messenger& messenger, const Layout& layout, int process, MPI_Comm wallComm,
-           std::vector<std::unique_ptr<Presenter>> presenters, WallNodeOptions options);
+  // This is wall process peers.process(); `presenters` (not owned: a service wall keeps them
+  // from one render job to the next) has one per display of it, in
+  // layout.displaysOfProcess(process) order.
+  WallNode(const Layout& layout, WallPeers& peers, std::vector<Presenter*> presenters,
+           WallNodeOptions options);
   ~WallNode() override;
 
   // Waits for frame `frameId` on this process's displays, joins the swap barrier, presents,
@@ -104,8 +113,22 @@ class WallNode : public dfb::MessageHandler {
   // frame when captures were asked for and it was not captured yet (a run stopped early).
   void finish();
 
+  // Puts back on every display the last frame presented here (after an abandoned one, whose
+  // draw() may already show on an offscreen drawable). Nothing when none was presented.
+  void showLastPresented();
+
+  // A piece message (wall/PieceMessage.h) from rank `fromRank` of the job's messenger.
   void incoming(int fromRank, dfb::Bytes&& payload) override;
   bool concurrent() const override { return true; }
+  // A piece of frame `frameId` for display `display` (layout index), rectangle `local` in the
+  // display's coordinates, from `sender` (named in messages). Checked and claimed under the
+  // lock; then `fill(image)` writes its pixels into the display's back buffer, only inside
+  // `local`, unlocked (it may decode). `bytes`: what it took on the wire, for the statistics.
+  // A piece that is not one this node expects, or a `fill` that throws, is an error that
+  // presentFrame throws (the sender is broken); returns false then, with the message in `why`.
+  bool receivePiece(const std::string& sender, std::uint32_t frameId, int display,
+                    const dfb::Region& local, const std::function<void(Image&)>& fill,
+                    std::size_t bytes, std::string* why = nullptr);
 
  private:
   // Handles window events and hands pressed keys to options_.onKeys (main thread, unlocked).
@@ -127,11 +150,10 @@ class WallNode : public dfb::MessageHandler {
   // thread writes them any more.
   void upload(const Slot& slot, std::vector<std::pair<int, int>>& batch);
 
-  dfb::Messenger& messenger_;
   const Layout& layout_;
+  WallPeers& peers_;
   int process_;
-  MPI_Comm comm_ = MPI_COMM_NULL;
-  std::vector<std::unique_ptr<Presenter>> presenters_;
+  std::vector<Presenter*> presenters_;
   WallNodeOptions options_;
   std::vector<int> mine_;               // display indices of this process
   std::vector<int> positionOfDisplay_;  // layout index -> position in mine_, or -1
@@ -148,6 +170,7 @@ class WallNode : public dfb::MessageHandler {
   std::condition_variable complete_;
   std::map<std::uint32_t, Slot> slots_;
   std::vector<Slot> spare_;                     // buffers of presented frames, reused
+  std::optional<Slot> shown_;                   // the last presented frame (showLastPresented)
   std::vector<std::pair<int, int>> uploading_;  // main thread: the batch being uploaded
   size_t uploadBatch_ = 0;  // pieces queued for upload that wake the presenting thread
   std::int64_t lastPresented_ = 0;

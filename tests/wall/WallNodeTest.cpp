@@ -95,7 +95,9 @@ TEST(WallNode, PresentsOnlyWhenEveryDisplayHasTheFrameAndAcknowledgesIt) {
     options.tileSize = kTileSize;
     options.lastFrame = kFrames;
     options.timeout = std::chrono::seconds(20);
-    WallNode node(messenger, layout, process, roleComm, std::move(presenters), options);
+    MpiWallPeers peers(messenger, roleComm, options.timeout);
+    WallNode node(layout, peers, {presenter}, options);
+    const dfb::Registration registration(messenger, kWallNodeObject, &node);
     MPI_Barrier(MPI_COMM_WORLD);
     for (std::uint32_t frame = 1; frame <= kFrames; ++frame) {
       node.presentFrame(frame);

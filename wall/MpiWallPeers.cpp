@@ -1,0 +1,77 @@
+#include <limits>
+#include <string>
+
+#include "dfb/BoundedWait.h"
+#include "dfb/Error.h"
+#include "wall/Error.h"
+#include "wall/FrameCredits.h"
+#include "wall/WallPeers.h"
+
+namespace wall {
+
+MpiWallPeers::MpiWallPeers(dfb::Messenger& messenger, MPI_Comm wallComm,
+                           std::chrono::milliseconds timeout)
+    : messenger_(messenger) {
+  dfb::checkMpi(MPI_Comm_dup(wallComm, &comm_), "MPI_Comm_dup");
+  MPI_Comm_rank(comm_, &rank_);
+  MPI_Comm_size(comm_, &size_);
+  MPI_Request barrier;
+  dfb::checkMpi(MPI_Ibarrier(comm_, &barrier), "MPI_Ibarrier");
+  dfb::waitWithDeadline(barrier, Clock::now() + timeout,
+                        "starting the wall: another wall process did not join within " +
+                            std::to_string(timeout.count()) + " ms");
+}
+
+MpiWallPeers::~MpiWallPeers() { MPI_Comm_free(&comm_); }
+
+bool MpiWallPeers::agreeMax(std::uint32_t frameId, std::int64_t* values, int count,
+                            Clock::time_point deadline) {
+  std::vector<std::int64_t> mine(values, values + count);
+  MPI_Request request;
+  dfb::checkMpi(MPI_Iallreduce(mine.data(), values, count, MPI_INT64_T, MPI_MAX, comm_, &request),
+                "MPI_Iallreduce");
+  dfb::waitWithDeadline(request, deadline,
+                        "swap barrier of frame " + std::to_string(frameId) +
+                            ": another wall process did not complete it in time");
+  return true;
+}
+
+std::vector<std::vector<std::uint32_t>> MpiWallPeers::gatherToFirst(std::vector<std::uint32_t> mine,
+                                                                    Clock::time_point deadline) {
+  const std::string late = "gathering the wall's pixels: another wall process did not join in time";
+  const int count = static_cast<int>(mine.size());
+  std::vector<int> counts(static_cast<size_t>(size_)), offsets(static_cast<size_t>(size_));
+  MPI_Request request;
+  dfb::checkMpi(MPI_Igather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm_, &request),
+                "MPI_Igather");
+  dfb::waitWithDeadline(request, deadline, late);
+  std::vector<std::uint32_t> all;
+  if (rank_ == 0) {
+    std::int64_t total = 0;
+    for (int r = 0; r < size_; ++r) {
+      offsets[static_cast<size_t>(r)] = static_cast<int>(total);
+      total += counts[static_cast<size_t>(r)];
+    }
+    // MPI counts are ints; the layout's canvas cap keeps every display's pixels far below.
+    if (total > std::numeric_limits<int>::max())
+      throw Error(std::to_string(total) + " pixels do not fit one MPI gather");
+    all.resize(static_cast<size_t>(total));
+  }
+  dfb::checkMpi(MPI_Igatherv(mine.data(), count, MPI_UINT32_T, all.data(), counts.data(),
+                             offsets.data(), MPI_UINT32_T, 0, comm_, &request),
+                "MPI_Igatherv");
+  dfb::waitWithDeadline(request, deadline, late);
+  std::vector<std::vector<std::uint32_t>> out;
+  if (rank_ != 0) return out;
+  for (int r = 0; r < size_; ++r) {
+    const auto from = all.begin() + offsets[static_cast<size_t>(r)];
+    out.emplace_back(from, from + counts[static_cast<size_t>(r)]);
+  }
+  return out;
+}
+
+void MpiWallPeers::presented(std::uint32_t frameId, std::int64_t completeNs) {
+  acknowledgeFrame(messenger_, frameId, completeNs);
+}
+
+}  // namespace wall
