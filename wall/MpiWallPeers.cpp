@@ -11,7 +11,13 @@ namespace wall {
 
 MpiWallPeers::MpiWallPeers(dfb::Messenger& messenger, MPI_Comm wallComm,
                            std::chrono::milliseconds timeout)
-    : messenger_(messenger) {
+    : MpiWallPeers(wallComm, timeout, [&messenger](std::uint32_t frameId, std::int64_t ns) {
+        acknowledgeFrame(messenger, frameId, ns);
+      }) {}
+
+MpiWallPeers::MpiWallPeers(MPI_Comm wallComm, std::chrono::milliseconds timeout,
+                           std::function<void(std::uint32_t, std::int64_t)> onPresented)
+    : onPresented_(std::move(onPresented)) {
   dfb::checkMpi(MPI_Comm_dup(wallComm, &comm_), "MPI_Comm_dup");
   MPI_Comm_rank(comm_, &rank_);
   MPI_Comm_size(comm_, &size_);
@@ -24,7 +30,7 @@ MpiWallPeers::MpiWallPeers(dfb::Messenger& messenger, MPI_Comm wallComm,
 
 MpiWallPeers::~MpiWallPeers() { MPI_Comm_free(&comm_); }
 
-bool MpiWallPeers::agreeMax(std::uint32_t frameId, std::int64_t* values, int count,
+void MpiWallPeers::agreeMax(std::uint32_t frameId, std::int64_t* values, int count,
                             Clock::time_point deadline) {
   std::vector<std::int64_t> mine(values, values + count);
   MPI_Request request;
@@ -33,7 +39,6 @@ bool MpiWallPeers::agreeMax(std::uint32_t frameId, std::int64_t* values, int cou
   dfb::waitWithDeadline(request, deadline,
                         "swap barrier of frame " + std::to_string(frameId) +
                             ": another wall process did not complete it in time");
-  return true;
 }
 
 std::vector<std::vector<std::uint32_t>> MpiWallPeers::gatherToFirst(std::vector<std::uint32_t> mine,
@@ -71,7 +76,7 @@ std::vector<std::vector<std::uint32_t>> MpiWallPeers::gatherToFirst(std::vector<
 }
 
 void MpiWallPeers::presented(std::uint32_t frameId, std::int64_t completeNs) {
-  acknowledgeFrame(messenger_, frameId, completeNs);
+  onPresented_(frameId, completeNs);
 }
 
 }  // namespace wall

@@ -24,6 +24,8 @@ using dfb::nsBetween;
 // While a frame's pieces arrive, the presenting thread is woken to upload them this many times
 // (and once more when the frame is complete).
 constexpr size_t kUploadBatches = 8;
+// Values of the swap barrier's reduction (presentFrame).
+constexpr int kAgreed = 5;
 
 }  // namespace
 
@@ -190,6 +192,21 @@ bool WallNode::receivePiece(const std::string& sender, std::uint32_t frameId, in
   }
 }
 
+void WallNode::dropSlot(std::uint32_t frameId) {
+  std::lock_guard lock(mutex_);
+  auto found = slots_.find(frameId);
+  if (found == slots_.end()) return;
+  spare_.push_back(std::move(found->second));
+  slots_.erase(found);
+}
+
+void WallNode::abort(const std::string& reason) {
+  std::lock_guard lock(mutex_);
+  if (!aborted_) abortReason_ = reason;
+  aborted_ = true;
+  complete_.notify_all();
+}
+
 void WallNode::stopAfter(std::uint32_t lastFrame) {
   std::lock_guard lock(mutex_);
   stopAfter_ = lastFrame;
@@ -258,7 +275,7 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     std::unique_lock lock(mutex_);
     const auto stopsBefore = [&] { return stopAfter_ >= 0 && frameId > stopAfter_; };
     const auto ready = [&] {
-      if (!error_.empty() || stopsBefore()) return true;
+      if (!error_.empty() || aborted_ || stopsBefore()) return true;
       auto found = slots_.find(frameId);
       return found != slots_.end() &&
              found->second.displaysComplete == static_cast<int>(mine_.size()) &&
@@ -267,7 +284,7 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     // Pieces that arrived are uploaded while the rest are still on their way; keepWaiting()
     // moves the deadline while the renderers idle.
     while (true) {
-      if (error_.empty() && !stopsBefore()) {
+      if (error_.empty() && !aborted_ && !stopsBefore()) {
         auto found = slots_.find(frameId);
         if (found != slots_.end() && !found->second.toUpload.empty()) {
           uploading_.swap(found->second.toUpload);
@@ -293,12 +310,17 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
       pollWindows();
       lock.lock();
     }
-    if (!error_.empty()) throw Error("wall process " + std::to_string(process_) + ": " + error_);
+    if (!error_.empty() && !options_.abandonOnFailure)
+      throw Error("wall process " + std::to_string(process_) + ": " + error_);
     if (stopsBefore()) {
       report.stopped = true;
       return report;
     }
-    if (!ready()) {
+    if (!error_.empty()) {
+      report.failure = error_;
+    } else if (aborted_) {
+      report.failure = abortReason_;
+    } else if (!ready()) {
       std::string missing;
       auto found = slots_.find(frameId);
       for (size_t i = 0; i < mine_.size(); ++i) {
@@ -307,18 +329,32 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
           missing += " '" + layout_.displays[static_cast<size_t>(mine_[i])].name + "' has " +
                      std::to_string(got) + "/" + std::to_string(expectedPieces_[i]) + " pieces;";
       }
-      throw dfb::DeadlineError("frame " + std::to_string(frameId) +
+      const std::string late = "frame " + std::to_string(frameId) +
                                " not complete on wall process " + std::to_string(process_) +
                                " after " + std::to_string(options_.timeout.count()) +
-                               " ms:" + missing);
+                               " ms:" + missing;
+      if (!options_.abandonOnFailure) throw dfb::DeadlineError(late);
+      report.failure = late;
     }
-    slot = &slots_.at(frameId);
-    report.bytesReceived = bytesReceived_;
-    bytesReceived_ = 0;
-    report.unpackMs = static_cast<double>(unpackNs_) * 1e-6;
-    report.assembleMs = static_cast<double>(assembleNs_) * 1e-6;
-    unpackNs_ = assembleNs_ = 0;
-    report.completeNs = slot->completeNs;
+    if (report.failure.empty()) {
+      slot = &slots_.at(frameId);
+      report.bytesReceived = bytesReceived_;
+      bytesReceived_ = 0;
+      report.unpackMs = static_cast<double>(unpackNs_) * 1e-6;
+      report.assembleMs = static_cast<double>(assembleNs_) * 1e-6;
+      unpackNs_ = assembleNs_ = 0;
+      report.completeNs = slot->completeNs;
+    }
+  }
+  if (!report.failure.empty()) {
+    // This process gives the frame up: it says so in the swap barrier, which every process
+    // joins for this frame whether it has it or not, so none shows it and none waits in vain.
+    if (options_.onAbandon) options_.onAbandon(report.failure);
+    std::int64_t abandon[kAgreed] = {0, 0, lastSwapNs_, -lastSwapNs_, 1};
+    peers_.agreeMax(frameId, abandon, kAgreed, Clock::now() + options_.timeout);
+    dropSlot(frameId);
+    report.stopped = report.abandoned = true;
+    return report;
   }
   const auto arrived = Clock::now();
   // Every display draws the frame into its back buffer before the barrier, so what follows the
@@ -332,20 +368,19 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   // The capture requests ride along: the highest sequence any process was asked for (for this
   // frame or an earlier one), so every process captures the same frame. So do the previous
   // frame's swap times (latest and, negated, earliest): how far apart the displays changed.
-  std::int64_t mine[4] = {report.completeNs, 0, lastSwapNs_, -lastSwapNs_}, agreed[4] = {};
+  // The last value: some process gave the frame up (abandonOnFailure): nobody shows it.
+  std::int64_t agreed[kAgreed] = {report.completeNs, 0, lastSwapNs_, -lastSwapNs_, 0};
   {
     std::lock_guard lock(mutex_);
     if (captureAsked_ > captureDone_ && frameId >= captureAskedFrame_)
-      mine[1] = static_cast<std::int64_t>(captureAsked_);
+      agreed[1] = static_cast<std::int64_t>(captureAsked_);
   }
-  std::copy(std::begin(mine), std::end(mine), std::begin(agreed));
-  if (!peers_.agreeMax(frameId, agreed, 4, deadline)) {
-    // The render job is gone: this frame is never shown, its buffers go back to the spares.
-    std::lock_guard lock(mutex_);
-    spare_.push_back(std::move(*slot));
-    slots_.erase(frameId);
-    report.abandoned = true;
-    report.stopped = true;
+  peers_.agreeMax(frameId, agreed, kAgreed, deadline);
+  if (agreed[4] != 0) {
+    dropSlot(frameId);
+    showLastPresented();  // what draw() put in the back buffer may show offscreen
+    report.stopped = report.abandoned = true;
+    report.failure = "another wall process gave frame " + std::to_string(frameId) + " up";
     return report;
   }
   const auto released = Clock::now();

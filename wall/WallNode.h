@@ -55,6 +55,12 @@ struct WallNodeOptions {
   // idle wall still hears its keyboard). Empty: keys are ignored.
   std::function<void(const std::vector<WallKey>&)> onKeys;
   std::chrono::milliseconds eventPoll{50};
+  // A service wall outlives its render jobs: a frame this process cannot complete (a bad piece,
+  // its deadline, abort()) is given up in the swap barrier on every process and presentFrame
+  // returns `abandoned` instead of throwing. onAbandon runs first, with the reason (so the
+  // service can tell the other processes at once rather than at their deadlines).
+  bool abandonOnFailure = false;
+  std::function<void(const std::string& reason)> onAbandon;
 };
 
 struct PresentReport {
@@ -80,9 +86,10 @@ struct PresentReport {
   bool stopped = false;
   // The name of a display whose window an operator closed (empty: none).
   std::string closedDisplay;
-  // The frame was complete here but abandoned in the swap barrier (its render job is gone, see
-  // WallPeers::agreeMax): not presented; showLastPresented() puts the last one back.
+  // With abandonOnFailure: the frame was given up (by this process: `failure` says why, or by
+  // another) and not presented; the displays still show the last presented frame.
   bool abandoned = false;
+  std::string failure;
 };
 
 class WallNode : public dfb::MessageHandler {
@@ -101,6 +108,9 @@ class WallNode : public dfb::MessageHandler {
   // Thread-safe: the run ends after frame `lastFrame`; a presentFrame for a later frame returns
   // at once (or wakes up) with `stopped` set. Every wall process must be told the same frame.
   void stopAfter(std::uint32_t lastFrame);
+  // Thread-safe, with abandonOnFailure: the render job is gone; the frame being waited for (or
+  // the next one) is given up on every process and presentFrame returns `abandoned`.
+  void abort(const std::string& reason);
   // Thread-safe: the renderers idle (a converged wall waits for a change), so the wait for the
   // next frame's pieces starts over: its deadline is `timeout` from now. Render rank 0 repeats
   // this well within the timeout while it idles; a rank that dies still ends the wait.
@@ -143,6 +153,7 @@ class WallNode : public dfb::MessageHandler {
     std::int64_t completeNs = 0;
   };
   Slot& slotFor(std::uint32_t frameId);  // with mutex_ held
+  void dropSlot(std::uint32_t frameId);  // its buffers back to the spares
   // Which of display `position`'s expected pieces `local` is, or -1 when it is none of them.
   int expectedPieceIndex(size_t position, const dfb::Region& local) const;
   void capture(std::uint32_t frameId);
@@ -182,6 +193,8 @@ class WallNode : public dfb::MessageHandler {
   std::uint64_t captureDone_ = 0;  // highest sequence captured (the same on every process)
   std::int64_t lastSwapNs_ = 0;    // steady_clock time the last frame's swaps ended here
   std::string error_;
+  bool aborted_ = false;
+  std::string abortReason_;
   std::uint64_t bytesReceived_ = 0;
   std::int64_t unpackNs_ = 0, assembleNs_ = 0;
 };

@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "dfb/Messenger.h"
@@ -25,10 +26,9 @@ class WallPeers {
   virtual int process() const = 0;
   virtual int processCount() const = 0;
   // Every wall process calls this for the same frame with its `count` values; each gets the
-  // element-wise maximum over all of them in `values`. False: the frame was abandoned (its render
-  // job is gone; only a service wall does that) and must not be shown. Throws
-  // dfb::DeadlineError once `deadline` passes without every process having joined.
-  virtual bool agreeMax(std::uint32_t frameId, std::int64_t* values, int count,
+  // element-wise maximum over all of them in `values`. Throws dfb::DeadlineError once
+  // `deadline` passes without every process having joined.
+  virtual void agreeMax(std::uint32_t frameId, std::int64_t* values, int count,
                         Clock::time_point deadline) = 0;
   // Process 0 gets every process's `mine` in process order; the others get nothing. Same
   // deadline rule.
@@ -44,20 +44,23 @@ class WallPeers {
 class MpiWallPeers : public WallPeers {
  public:
   MpiWallPeers(dfb::Messenger& messenger, MPI_Comm wallComm, std::chrono::milliseconds timeout);
+  // The same, with the credit handed to `onPresented` instead (a service wall's job link).
+  MpiWallPeers(MPI_Comm wallComm, std::chrono::milliseconds timeout,
+               std::function<void(std::uint32_t frameId, std::int64_t completeNs)> onPresented);
   ~MpiWallPeers() override;
   MpiWallPeers(const MpiWallPeers&) = delete;
   MpiWallPeers& operator=(const MpiWallPeers&) = delete;
 
   int process() const override { return rank_; }
   int processCount() const override { return size_; }
-  bool agreeMax(std::uint32_t frameId, std::int64_t* values, int count,
+  void agreeMax(std::uint32_t frameId, std::int64_t* values, int count,
                 Clock::time_point deadline) override;
   std::vector<std::vector<std::uint32_t>> gatherToFirst(std::vector<std::uint32_t> mine,
                                                         Clock::time_point deadline) override;
   void presented(std::uint32_t frameId, std::int64_t completeNs) override;
 
  private:
-  dfb::Messenger& messenger_;
+  std::function<void(std::uint32_t, std::int64_t)> onPresented_;
   MPI_Comm comm_ = MPI_COMM_NULL;
   int rank_ = 0, size_ = 1;
 };
