@@ -6,11 +6,13 @@
 //
 // Thread-safe: the DFB runs it for different tiles concurrently.
 #include <atomic>
+#include <memory>
 #include <vector>
 
 #include "dfb/Messenger.h"
 #include "dfb/PixelOp.h"
 #include "wall/Layout.h"
+#include "wall/PieceSink.h"
 #include "wall/Ranks.h"
 #include "wall/Routing.h"
 
@@ -18,14 +20,19 @@ namespace wall {
 
 class DisplayRoutingOp : public dfb::PixelOp {
  public:
-  // `tileSize` must be the DFB's; the cut of every tile is computed once, here.
+  // `tileSize` must be the DFB's; the cut of every tile is computed once, here. `sink` carries
+  // the pieces (the job's messenger or a service link).
+  DisplayRoutingOp(std::shared_ptr<PieceSink> sink, const Layout& layout, int tileSize);
+  // The single-job wall: pieces to the wall ranks of `roles` through `messenger`.
   DisplayRoutingOp(dfb::Messenger& messenger, const Layout& layout, const RankRoles& roles,
                    int tileSize);
   void process(dfb::FinishedTile& tile) override;
+  // This rank finished frame `frameId`: the sink sends what it held back.
+  void endFrame(std::uint32_t frameId) { sink_->endFrame(frameId); }
 
-  // Pieces handed to the messenger since the last call: their bytes (piece headers included,
-  // before Snappy; the messenger's traffic() has them on the wire), how many, and how many went
-  // to a wall rank on another host (the ones the messenger compresses).
+  // Pieces handed to the sink since the last call: their bytes (piece headers included,
+  // before compression; the transport counts them on the wire), how many, and how many went to
+  // a wall process on another host.
   struct Sent {
     std::uint64_t bytes = 0, pieces = 0, piecesToOtherHosts = 0;
   };
@@ -33,21 +40,14 @@ class DisplayRoutingOp : public dfb::PixelOp {
     return {bytesSent_.exchange(0), piecesSent_.exchange(0), piecesToOtherHosts_.exchange(0)};
   }
   // CPU nanoseconds of the calling threads, summed over tiles, since the last call: cutting and
-  // packing pieces, and handing them to the messenger (which compresses them there when they
-  // leave the host; MPI's copies happen later, on the messenger's thread).
-  struct StageNs {
-    std::int64_t cut = 0, send = 0;
-  };
-  StageNs takeStageNs() { return {cutNs_.exchange(0), sendNs_.exchange(0)}; }
+  // packing pieces, and handing them to the transport (see PieceSink::takeStageNs).
+  using StageNs = PieceSink::StageNs;
+  StageNs takeStageNs() { return sink_->takeStageNs(); }
 
  private:
-  dfb::Messenger& messenger_;
+  std::shared_ptr<PieceSink> sink_;
   std::vector<std::vector<Piece>> piecesOfTile_;
-  std::vector<int> rankOfDisplay_;
-  std::vector<bool> planeDelta_;  // per display: pre-filter pieces for Snappy
-  std::vector<bool> otherHost_;   // per display: its wall rank is on another host
   std::atomic<std::uint64_t> bytesSent_{0}, piecesSent_{0}, piecesToOtherHosts_{0};
-  std::atomic<std::int64_t> cutNs_{0}, sendNs_{0};
 };
 
 }  // namespace wall
