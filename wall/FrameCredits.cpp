@@ -8,11 +8,13 @@
 
 namespace wall {
 
-FrameCredits::FrameCredits(dfb::Messenger& messenger) : messenger_(messenger) {
-  messenger_.registerObject(kFrameCreditsObject, this);
+FrameCredits::FrameCredits(dfb::Messenger& messenger) : messenger_(&messenger) {
+  messenger_->registerObject(kFrameCreditsObject, this);
 }
 
-FrameCredits::~FrameCredits() { messenger_.unregisterObject(kFrameCreditsObject); }
+FrameCredits::~FrameCredits() {
+  if (messenger_) messenger_->unregisterObject(kFrameCreditsObject);
+}
 
 void FrameCredits::waitForPresented(std::int64_t frameId, std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
@@ -50,14 +52,18 @@ void FrameCredits::incoming(int fromRank, dfb::Bytes&& payload) {
     throw Error("malformed frame acknowledgement of " + std::to_string(payload.size()) +
                 " bytes from rank " + std::to_string(fromRank));
   std::memcpy(&ack, payload.data(), sizeof ack);
+  acknowledged(ack.frameId, ack.completeNs, "rank " + std::to_string(fromRank));
+}
+
+void FrameCredits::acknowledged(std::uint32_t frameId, std::int64_t completeNs,
+                                const std::string& from) {
   {
     std::lock_guard lock(mutex_);
-    if (ack.frameId != lastPresented_ + 1)
-      throw Error("frame acknowledgement for frame " + std::to_string(ack.frameId) + " from rank " +
-                  std::to_string(fromRank) + " after frame " + std::to_string(lastPresented_));
-    lastPresented_ = ack.frameId;
-    times_[ack.frameId] = {ack.completeNs,
-                           std::chrono::steady_clock::now().time_since_epoch().count()};
+    if (frameId != lastPresented_ + 1)
+      throw Error("frame acknowledgement for frame " + std::to_string(frameId) + " from " + from +
+                  " after frame " + std::to_string(lastPresented_));
+    lastPresented_ = frameId;
+    times_[frameId] = {completeNs, std::chrono::steady_clock::now().time_since_epoch().count()};
     // Kept only until the frame's statistics are written; a run without them never asks.
     while (times_.size() > 64) times_.erase(times_.begin());
   }

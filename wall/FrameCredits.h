@@ -9,15 +9,18 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <string>
 
 #include "dfb/Messenger.h"
 
 namespace wall {
 
-// Lives on render rank 0, registered under kFrameCreditsObject.
+// Lives on render rank 0: registered under kFrameCreditsObject on the job's messenger, or fed
+// by a service link (wall/service/ServiceClient.h) through acknowledged().
 class FrameCredits : public dfb::MessageHandler {
  public:
   explicit FrameCredits(dfb::Messenger& messenger);
+  FrameCredits() = default;
   ~FrameCredits() override;
 
   // Blocks until frame `frameId` has been presented on every display (ids below 1 return at
@@ -33,9 +36,12 @@ class FrameCredits : public dfb::MessageHandler {
   std::optional<AckTimes> takeTimes(std::int64_t frameId);
 
   void incoming(int fromRank, dfb::Bytes&& payload) override;
+  // Every display presented `frameId` (the last display had every piece at `completeNs`).
+  // Frames are acknowledged in order; anything else throws wall::Error naming `from`.
+  void acknowledged(std::uint32_t frameId, std::int64_t completeNs, const std::string& from);
 
  private:
-  dfb::Messenger& messenger_;
+  dfb::Messenger* messenger_ = nullptr;
   mutable std::mutex mutex_;
   std::condition_variable presented_;
   std::int64_t lastPresented_ = 0;

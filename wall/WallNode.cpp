@@ -200,6 +200,12 @@ void WallNode::dropSlot(std::uint32_t frameId) {
   slots_.erase(found);
 }
 
+void WallNode::reportError(const std::string& why) {
+  std::lock_guard lock(mutex_);
+  if (error_.empty()) error_ = why;
+  complete_.notify_all();
+}
+
 void WallNode::abort(const std::string& reason) {
   std::lock_guard lock(mutex_);
   if (!aborted_) abortReason_ = reason;

@@ -108,6 +108,9 @@ class WallNode : public dfb::MessageHandler {
   // Thread-safe: the run ends after frame `lastFrame`; a presentFrame for a later frame returns
   // at once (or wakes up) with `stopped` set. Every wall process must be told the same frame.
   void stopAfter(std::uint32_t lastFrame);
+  // Thread-safe: an error of the sender found outside the node (a malformed batch); presentFrame
+  // throws it, or with abandonOnFailure gives the frame up.
+  void reportError(const std::string& why);
   // Thread-safe, with abandonOnFailure: the render job is gone; the frame being waited for (or
   // the next one) is given up on every process and presentFrame returns `abandoned`.
   void abort(const std::string& reason);

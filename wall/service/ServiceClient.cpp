@@ -1,0 +1,215 @@
+#include "wall/service/ServiceClient.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include "dfb/Timing.h"
+#include "wall/Error.h"
+
+namespace wall::service {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr auto kKeepalive = std::chrono::seconds(1);
+// A batch is sent before the frame ends once it holds this much: the link stays busy while the
+// rank still renders, and a wall process never needs a whole display's frame in one message.
+constexpr std::size_t kFlushBytes = std::size_t{4} << 20;
+
+const std::byte* bytesOf(const zmq::message_t& m) { return static_cast<const std::byte*>(m.data()); }
+
+}  // namespace
+
+ServiceClient::ServiceClient(const std::string& address, const Hello& hello,
+                             std::chrono::milliseconds timeout,
+                             const std::function<void(const std::string&)>& onQueued)
+    : address_(address), socket_(context_, zmq::socket_type::dealer), timeout_(timeout) {
+  const std::string endpoint = tcpEndpoint(address, "--connect");
+  configureSocket(socket_, static_cast<int>(timeout.count()));
+  socket_.connect(endpoint);
+  socket_.send(toMessage(packHello(hello)), zmq::send_flags::none);
+  auto deadline = Clock::now() + timeout;
+  while (true) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
+    if (left.count() <= 0 || zmq::poll(&item, 1, left) == 0)
+      throw Error("no dfbwall wall answered at " + address + " within " +
+                  std::to_string(timeout.count() / 1000) + " s (is `dfbwall serve` running there?)");
+    zmq::message_t reply;
+    if (!socket_.recv(reply, zmq::recv_flags::none)) continue;
+    const MessageHeader h = parseHeader(bytesOf(reply), reply.size());
+    switch (static_cast<Kind>(h.kind)) {
+      case Kind::Directory:
+        directory_ = parseDirectory(bytesOf(reply), reply.size());
+        directoryBytes_.assign(bytesOf(reply), bytesOf(reply) + reply.size());
+        return;
+      case Kind::Refused:
+        throw Error("the wall at " + address + " refused the job: " +
+                    parseText(bytesOf(reply), reply.size()));
+      case Kind::Queued:
+        if (onQueued) onQueued(parseText(bytesOf(reply), reply.size()));
+        deadline = Clock::now() + timeout;  // the wall answers; it is not dead
+        break;
+      default:
+        throw Error("the wall at " + address + " answered the hello with message kind " +
+                    std::to_string(h.kind));
+    }
+  }
+}
+
+ServiceClient::~ServiceClient() {
+  stop_ = true;
+  waker_.notify();
+  if (thread_.joinable()) thread_.join();
+  if (!byeSent_ && directory_.session != 0) {
+    // A job that fails says so, so the wall takes the next one at once instead of at its timeout.
+    try {
+      socket_.send(toMessage(packControl(Kind::Bye, directory_.session, 0, -1)),
+                   zmq::send_flags::dontwait);
+    } catch (const std::exception&) {
+    }
+  }
+}
+
+void ServiceClient::start(FrameCredits& credits, std::function<void(const std::string&)> onError) {
+  credits_ = &credits;
+  onError_ = std::move(onError);
+  thread_ = std::thread([this] { run(); });
+}
+
+void ServiceClient::post(dfb::Bytes message) {
+  {
+    std::lock_guard lock(mutex_);
+    outbox_.push_back(std::move(message));
+  }
+  waker_.notify();
+}
+
+void ServiceClient::capture(std::uint32_t frameId, std::uint64_t sequence) {
+  post(packControl(Kind::Capture, directory_.session, frameId, static_cast<std::int64_t>(sequence)));
+}
+
+void ServiceClient::bye(std::uint32_t lastFrame) {
+  {
+    std::lock_guard lock(mutex_);
+    byeSent_ = true;
+  }
+  post(packControl(Kind::Bye, directory_.session, lastFrame));
+}
+
+void ServiceClient::run() {
+  const std::uint64_t session = directory_.session;
+  const auto wallTimeout = std::chrono::milliseconds(directory_.timeoutMs);
+  auto lastKeepalive = Clock::time_point{};
+  auto lastHeard = Clock::now();
+  bool failed = false;
+  const auto fail = [&](const std::string& why) {
+    if (!failed && onError_) onError_(why);
+    failed = true;
+  };
+  try {
+    while (!stop_) {
+      zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}, waker_.pollItem()};
+      zmq::poll(items, 2, std::chrono::milliseconds(200));
+      if (items[1].revents) waker_.drain();
+      std::vector<dfb::Bytes> out;
+      {
+        std::lock_guard lock(mutex_);
+        out.swap(outbox_);
+      }
+      for (dfb::Bytes& m : out) socket_.send(toMessage(std::move(m)), zmq::send_flags::none);
+      if (Clock::now() - lastKeepalive >= kKeepalive) {
+        socket_.send(toMessage(packControl(Kind::Keepalive, session, 0)), zmq::send_flags::none);
+        lastKeepalive = Clock::now();
+      }
+      zmq::message_t m;
+      while (socket_.recv(m, zmq::recv_flags::dontwait)) {
+        lastHeard = Clock::now();
+        const MessageHeader h = parseHeader(bytesOf(m), m.size());
+        if (h.session != session) continue;  // a late answer to nothing of ours
+        if (h.kind == static_cast<std::uint16_t>(Kind::Presented)) {
+          const Control c = parseControl(bytesOf(m), m.size());
+          credits_->acknowledged(static_cast<std::uint32_t>(c.value), c.second,
+                                 "the wall at " + address_);
+        } else if (h.kind == static_cast<std::uint16_t>(Kind::Ended)) {
+          fail("the wall at " + address_ + " ended the job: " + parseText(bytesOf(m), m.size()));
+        } else if (h.kind != static_cast<std::uint16_t>(Kind::Keepalive)) {
+          fail("the wall at " + address_ + " sent message kind " + std::to_string(h.kind));
+        }
+      }
+      if (!failed && Clock::now() - lastHeard > wallTimeout + kKeepalive * 2)
+        fail("the wall at " + address_ + " has not answered for " +
+             std::to_string(wallTimeout.count() / 1000) + " s");
+    }
+  } catch (const std::exception& e) {
+    fail(e.what());
+  }
+}
+
+ServicePieceSink::ServicePieceSink(const Directory& directory, int renderRank,
+                                   const CodecSpec& codec, int deadPeerMs)
+    : session_(directory.session), renderRank_(renderRank), codec_(codec) {
+  for (const Display& d : directory.layout.displays) {
+    processOfDisplay_.push_back(d.process);
+    batches_.push_back(std::make_unique<Batch>());
+  }
+  for (const DirectoryProcess& p : directory.processes) {
+    sockets_.emplace_back(context_, zmq::socket_type::dealer);
+    configureSocket(sockets_.back(), deadPeerMs);
+    // A few frames of a whole display in flight at most; then send() waits (back-pressure).
+    sockets_.back().set(zmq::sockopt::sndhwm, 64);
+    sockets_.back().connect(p.endpoint);
+    socketMutex_.push_back(std::make_unique<std::mutex>());
+  }
+}
+
+ServicePieceSink::~ServicePieceSink() = default;
+
+void ServicePieceSink::flush(int display, Batch& batch) {
+  if (!batch.open) return;
+  batch.open = false;
+  dfb::Bytes bytes = batch.writer.take();
+  const std::int64_t t0 = dfb::threadCpuNs();
+  wireBytes_ += bytes.size();
+  messages_++;
+  const int process = processOfDisplay_[static_cast<size_t>(display)];
+  {
+    std::lock_guard lock(*socketMutex_[static_cast<size_t>(process)]);
+    sockets_[static_cast<size_t>(process)].send(toMessage(std::move(bytes)),
+                                                zmq::send_flags::none);
+  }
+  sendNs_ += dfb::threadCpuNs() - t0;
+}
+
+std::size_t ServicePieceSink::send(std::uint32_t frameId, int display, const dfb::Region& local,
+                                   const std::uint32_t* pixels, int stride) {
+  const std::int64_t t0 = dfb::threadCpuNs();
+  thread_local dfb::Bytes piece;
+  encodePiece(codec_, local, pixels, stride, piece);
+  cutNs_ += dfb::threadCpuNs() - t0;
+  Batch& batch = *batches_.at(static_cast<size_t>(display));
+  std::lock_guard lock(batch.mutex);
+  if (batch.open && batch.frameId != frameId) flush(display, batch);
+  if (!batch.open) {
+    BatchHeader h;
+    h.frameId = frameId;
+    h.display = display;
+    h.renderRank = static_cast<std::uint32_t>(renderRank_);
+    h.codec = codec_.codec;
+    batch.writer.start(session_, h);
+    batch.frameId = frameId;
+    batch.open = true;
+  }
+  batch.writer.append(piece);
+  if (batch.writer.bytes() >= kFlushBytes) flush(display, batch);
+  return static_cast<std::size_t>(local.pixelCount()) * 4 + 20;
+}
+
+void ServicePieceSink::endFrame(std::uint32_t frameId) {
+  for (size_t d = 0; d < batches_.size(); ++d) {
+    Batch& batch = *batches_[d];
+    std::lock_guard lock(batch.mutex);
+    if (batch.open && batch.frameId == frameId) flush(static_cast<int>(d), batch);
+  }
+}
+
+}  // namespace wall::service

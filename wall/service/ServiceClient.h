@@ -1,0 +1,111 @@
+#pragma once
+// A render job's side of a persistent wall (`dfbwall serve`, wall/service/WallService.h).
+//
+// ServiceClient, on render rank 0 only: says hello to the wall's directory socket and gets the
+// directory (or a refusal: wrong token, busy, another protocol version), then keeps the job
+// alive (a keepalive every second: the wall drops a job it has not heard from within its
+// timeout), turns the wall's Presented messages into frame credits (wall/FrameCredits.h), and
+// tells the wall about captures and the last frame.
+//
+// ServicePieceSink, on every render rank: the display-routing op's pieces for a service wall,
+// encoded with the job's codec into one batch per (display, frame), sent to the wall process
+// that drives the display when the rank's frame is done (or when a batch grows past a few MiB).
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "wall/FrameCredits.h"
+#include "wall/PieceSink.h"
+#include "wall/service/Protocol.h"
+#include "wall/service/Zmq.h"
+
+namespace wall::service {
+
+class ServiceClient {
+ public:
+  // Connects to "HOST:PORT" and waits up to `timeout` for the directory. With hello.wait, a
+  // busy wall queues the job: `onQueued(text)` is told, and the wait for the directory starts
+  // over each time the wall says where the job stands. Throws wall::Error with the wall's
+  // reason, or "no dfbwall wall answered at HOST:PORT within S s".
+  ServiceClient(const std::string& address, const Hello& hello, std::chrono::milliseconds timeout,
+                const std::function<void(const std::string&)>& onQueued = {});
+  ~ServiceClient();  // says goodbye if bye() was not called (the wall drops the job at once)
+  ServiceClient(const ServiceClient&) = delete;
+  ServiceClient& operator=(const ServiceClient&) = delete;
+
+  const Directory& directory() const { return directory_; }
+  // The directory as the wall sent it (for the job's other ranks: parseDirectory).
+  const dfb::Bytes& directoryBytes() const { return directoryBytes_; }
+
+  // Starts the link's thread: keepalives, credits into `credits`, and a wall that ends the job
+  // (Ended: its reason) or goes silent for its timeout reported through `onError` (on the
+  // link's thread; call it once).
+  void start(FrameCredits& credits, std::function<void(const std::string&)> onError);
+  // Thread-safe. Capture frame `frameId` (or the first after it), request `sequence`.
+  void capture(std::uint32_t frameId, std::uint64_t sequence);
+  // Thread-safe. The job's last frame: the wall presents up to it and then ends the job.
+  void bye(std::uint32_t lastFrame);
+
+ private:
+  void run();
+  void post(dfb::Bytes message);
+
+  std::string address_;
+  zmq::context_t context_{1};
+  zmq::socket_t socket_;
+  Directory directory_;
+  dfb::Bytes directoryBytes_;
+  std::chrono::milliseconds timeout_;
+  FrameCredits* credits_ = nullptr;
+  std::function<void(const std::string&)> onError_;
+  std::mutex mutex_;
+  std::vector<dfb::Bytes> outbox_;
+  bool byeSent_ = false;
+  Waker waker_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// Every render rank: DEALER sockets to the wall processes' piece sockets (connected at once;
+// ZeroMQ queues until they are up).
+class ServicePieceSink : public PieceSink {
+ public:
+  ServicePieceSink(const Directory& directory, int renderRank, const CodecSpec& codec,
+                   int deadPeerMs);
+  ~ServicePieceSink() override;
+  std::size_t send(std::uint32_t frameId, int display, const dfb::Region& local,
+                   const std::uint32_t* pixels, int stride) override;
+  void endFrame(std::uint32_t frameId) override;
+  bool otherHost(int) const override { return true; }
+  // Bytes and messages handed to the sockets since the last call.
+  struct Traffic {
+    std::uint64_t bytes = 0, messages = 0;
+  };
+  Traffic takeTraffic() { return {wireBytes_.exchange(0), messages_.exchange(0)}; }
+
+ private:
+  struct Batch {
+    std::mutex mutex;
+    BatchWriter writer;
+    std::uint32_t frameId = 0;
+    bool open = false;
+  };
+  void flush(int display, Batch& batch);  // with batch.mutex held
+
+  std::uint64_t session_;
+  int renderRank_;
+  CodecSpec codec_;
+  std::vector<int> processOfDisplay_;
+  zmq::context_t context_{1};
+  std::vector<zmq::socket_t> sockets_;  // by wall process
+  std::vector<std::unique_ptr<std::mutex>> socketMutex_;
+  std::vector<std::unique_ptr<Batch>> batches_;  // by display
+  std::atomic<std::uint64_t> wireBytes_{0}, messages_{0};
+};
+
+}  // namespace wall::service

@@ -1,0 +1,53 @@
+#pragma once
+// What the wall service needs of ZeroMQ (cppzmq): messages that hand a dfb::Bytes over without
+// a copy, socket options every link of ours sets, endpoints and the address a process advertises,
+// and a way to wake a thread that waits in zmq::poll from any other thread.
+//
+// Why ZeroMQ: it frames messages (a length is never ours to trust: ZMQ_MAXMSGSIZE drops a peer
+// that announces more before anything is allocated), queues sends without blocking the render
+// threads (high-water marks), reconnects, sends heartbeats so a dead peer or a cut link closes
+// the connection, and offers CURVE should a lab want encryption. Sockets are not thread-safe:
+// each is used by one thread, or under a mutex.
+#include <zmq.hpp>
+
+#include <string>
+
+#include "dfb/Compression.h"
+
+namespace wall::service {
+
+// A message owning `bytes` (no copy).
+zmq::message_t toMessage(dfb::Bytes&& bytes);
+// Limits and heartbeats every socket of ours gets: messages over kMaxMessageBytes close the
+// connection; a peer silent for `deadPeerMs` after a heartbeat is disconnected; no linger.
+void configureSocket(zmq::socket_t& socket, int deadPeerMs);
+// "HOST:PORT" or "PORT" (then 127.0.0.1) -> "tcp://HOST:PORT"; throws wall::Error naming
+// `option` on anything else.
+std::string tcpEndpoint(const std::string& address, const std::string& option);
+// The host part of an address as `tcpEndpoint` reads it.
+std::string hostOf(const std::string& address);
+bool isLoopback(const std::string& host);
+// What other hosts should dial to reach this process: the listen host when it is a specific
+// address, otherwise this host's first non-loopback IPv4 address (127.0.0.1 when it has none).
+std::string advertisedHost(const std::string& listenHost);
+// The endpoint a socket bound to, with the real port ("tcp://0.0.0.0:41234").
+std::string lastEndpoint(zmq::socket_t& socket);
+// The port of a "tcp://HOST:PORT" endpoint.
+int portOf(const std::string& endpoint);
+
+// An eventfd: notify() from any thread makes it readable; pollItem() goes in a zmq::poll list.
+class Waker {
+ public:
+  Waker();
+  ~Waker();
+  Waker(const Waker&) = delete;
+  Waker& operator=(const Waker&) = delete;
+  void notify();
+  void drain();
+  zmq::pollitem_t pollItem() const;
+
+ private:
+  int fd_ = -1;
+};
+
+}  // namespace wall::service
