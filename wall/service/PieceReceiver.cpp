@@ -129,10 +129,10 @@ void PieceReceiver::handle(std::string peer, zmq::message_t message) {
         const bool ok = node->receivePiece(
             sender, h.frameId, h.display, p.local,
             [&](Image& image) {
-              decodePixels(codec, p.data, p.size, p.local.width(), p.local.height(),
-                           image.pixels.data() + static_cast<size_t>(p.local.y0) * image.width +
-                               p.local.x0,
-                           image.width);
+              decodePixels(
+                  codec, p.data, p.size, p.local.width(), p.local.height(),
+                  image.pixels.data() + static_cast<size_t>(p.local.y0) * image.width + p.local.x0,
+                  image.width);
             },
             p.size + 20);
         if (!ok) break;  // the node has the error: it ends the job

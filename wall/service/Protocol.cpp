@@ -214,8 +214,7 @@ std::string parseText(const std::byte* data, std::size_t size) {
   return s;
 }
 
-dfb::Bytes packControl(Kind kind, std::uint64_t session, std::uint64_t value,
-                       std::int64_t second) {
+dfb::Bytes packControl(Kind kind, std::uint64_t session, std::uint64_t value, std::int64_t second) {
   Writer w(kind, session);
   w.put(value);
   w.put(second);
@@ -267,8 +266,8 @@ struct PieceRecord {
 constexpr int kMaxPieceSide = 4096;
 }  // namespace
 
-void BatchWriter::add(const CodecSpec& codec, const dfb::Region& local,
-                      const std::uint32_t* pixels, int stride) {
+void BatchWriter::add(const CodecSpec& codec, const dfb::Region& local, const std::uint32_t* pixels,
+                      int stride) {
   const std::size_t at = bytes_.size();
   PieceRecord record{local.x0, local.y0, local.x1, local.y1, 0};
   bytes_.resize(at + sizeof record);

@@ -59,8 +59,8 @@ struct Hello {
   std::uint32_t tileSize = 64;
   CodecSpec codec;
   std::uint32_t framesInFlight = 2;
-  bool wait = false;        // queue behind the connected job instead of being refused
-  std::string captureDir;   // on the wall hosts; empty: no captures
+  bool wait = false;       // queue behind the connected job instead of being refused
+  std::string captureDir;  // on the wall hosts; empty: no captures
   std::uint32_t captureEvery = 0;
 };
 

@@ -15,7 +15,9 @@ constexpr auto kKeepalive = std::chrono::seconds(1);
 // rank still renders, and a wall process never needs a whole display's frame in one message.
 constexpr std::size_t kFlushBytes = std::size_t{4} << 20;
 
-const std::byte* bytesOf(const zmq::message_t& m) { return static_cast<const std::byte*>(m.data()); }
+const std::byte* bytesOf(const zmq::message_t& m) {
+  return static_cast<const std::byte*>(m.data());
+}
 
 }  // namespace
 
@@ -29,11 +31,13 @@ ServiceClient::ServiceClient(const std::string& address, const Hello& hello,
   socket_.send(toMessage(packHello(hello)), zmq::send_flags::none);
   auto deadline = Clock::now() + timeout;
   while (true) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
     zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
     if (left.count() <= 0 || zmq::poll(&item, 1, left) == 0)
       throw Error("no dfbwall wall answered at " + address + " within " +
-                  std::to_string(timeout.count() / 1000) + " s (is `dfbwall serve` running there?)");
+                  std::to_string(timeout.count() / 1000) +
+                  " s (is `dfbwall serve` running there?)");
     zmq::message_t reply;
     if (!socket_.recv(reply, zmq::recv_flags::none)) continue;
     const MessageHeader h = parseHeader(bytesOf(reply), reply.size());
@@ -43,8 +47,8 @@ ServiceClient::ServiceClient(const std::string& address, const Hello& hello,
         directoryBytes_.assign(bytesOf(reply), bytesOf(reply) + reply.size());
         return;
       case Kind::Refused:
-        throw Error("the wall at " + address + " refused the job: " +
-                    parseText(bytesOf(reply), reply.size()));
+        throw Error("the wall at " + address +
+                    " refused the job: " + parseText(bytesOf(reply), reply.size()));
       case Kind::Queued:
         if (onQueued) onQueued(parseText(bytesOf(reply), reply.size()));
         deadline = Clock::now() + timeout;  // the wall answers; it is not dead
@@ -85,7 +89,8 @@ void ServiceClient::post(dfb::Bytes message) {
 }
 
 void ServiceClient::capture(std::uint32_t frameId, std::uint64_t sequence) {
-  post(packControl(Kind::Capture, directory_.session, frameId, static_cast<std::int64_t>(sequence)));
+  post(
+      packControl(Kind::Capture, directory_.session, frameId, static_cast<std::int64_t>(sequence)));
 }
 
 void ServiceClient::bye(std::uint32_t lastFrame) {
@@ -174,8 +179,7 @@ void ServicePieceSink::flush(int display, Batch& batch) {
   const int process = processOfDisplay_[static_cast<size_t>(display)];
   {
     std::lock_guard lock(*socketMutex_[static_cast<size_t>(process)]);
-    sockets_[static_cast<size_t>(process)].send(toMessage(std::move(bytes)),
-                                                zmq::send_flags::none);
+    sockets_[static_cast<size_t>(process)].send(toMessage(std::move(bytes)), zmq::send_flags::none);
   }
   sendNs_ += dfb::threadCpuNs() - t0;
 }
