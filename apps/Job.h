@@ -14,6 +14,12 @@
 #include "renderers/RenderScene.h"
 #include "wall/Layout.h"
 #include "wall/Ranks.h"
+#include "wall/service/Codec.h"
+#include "wall/service/Protocol.h"
+
+namespace wall::service {
+class ServiceClient;
+}
 
 namespace app {
 
@@ -21,7 +27,11 @@ class Preview;
 
 struct Job {
   Options options;
-  std::optional<wall::Layout> layout;
+  std::optional<wall::Layout> layout;  // --wall's, or the serving wall's (--connect)
+  // --connect: the wall's directory (every rank) and the link to it (render rank 0).
+  std::optional<wall::service::Directory> directory;
+  std::shared_ptr<wall::service::ServiceClient> service;
+  wall::service::CodecSpec codec;
   wall::RankRoles roles;  // without a wall: every rank renders
   int worldRank = 0;
   int canvasWidth = 0, canvasHeight = 0;
@@ -40,6 +50,7 @@ struct Job {
   std::uint32_t failAtFrame = 0;
   void failIfAsked(std::uint32_t frame) const;
   bool gatherMode() const { return options.mode == "gather"; }
+  bool connected() const { return directory.has_value(); }
   bool isWallRank() const { return roles.processOfRank(worldRank) >= 0; }
   // The whole-wall preview is assembled on rank 0 (apps/Preview.h).
   bool previewWanted() const { return !options.previewFile.empty() || !options.control.empty(); }

@@ -2,6 +2,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "wall/service/Codec.h"
+
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -97,6 +99,14 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
       ->capture_default_str();
 
   cli.add_option("--wall", o.wall, "wall layout (configs/walls/*.toml)");
+  cli.add_option("--connect", o.connect,
+                 "HOST:PORT of a wall that `dfbwall serve` runs: every rank renders for it");
+  cli.add_option("--token", o.token, "with --connect (and serve): the wall's token");
+  cli.add_option("--codec", o.codec,
+                 "with --connect: how pieces travel: raw, snappy (lossless, plane-delta "
+                 "filtered) or jpeg[:QUALITY[:444|422|420]] (lossy, for thin links)")
+      ->capture_default_str();
+  cli.add_flag("--wait", o.wait, "with --connect: wait for a busy wall instead of failing");
   cli.add_flag("--offscreen", o.offscreen, "present through OSMesa instead of windows");
   cli.add_option("--capture", o.captureDir,
                  "write each display's last frame (and a wall preview) under DIR");
@@ -141,6 +151,16 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
   cli.add_option("--camera-path", o.cameraPath,
                  "FILE.toml: camera keyframes (time -> camera) for a reproducible fly-through");
 
+  CLI::App* serve = cli.add_subcommand(
+      "serve",
+      "run the wall of --wall as a persistent service that render jobs connect to "
+      "(mpirun -np W dfbwall serve --wall L --listen [ADDR:]PORT; jobs: dfbwall --connect)");
+  serve
+      ->add_option("--listen", o.listen,
+                   "[ADDR:]PORT of wall process 0's directory (default address 127.0.0.1; any "
+                   "other needs a token, generated and printed when not given)")
+      ->required();
+  serve->fallthrough();  // --wall, --offscreen, --timeout, --stats, --token are the main ones
   try {
     cli.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -153,18 +173,37 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
     if (print) std::fprintf(stderr, "dfbwall: error: %s\n", message.c_str());
     return 2;
   };
+  o.serve = serve->parsed();
+  if (o.serve && o.wall.empty()) return fail("serve needs --wall FILE.toml: the wall it runs");
+  if (o.serve && !o.connect.empty()) return fail("serve and --connect: a wall does not connect");
+  if (!o.connect.empty() && !o.wall.empty())
+    return fail("--connect and --wall: the wall you connect to has its own layout");
+  if (!o.connect.empty() && (o.offscreen || o.mode != "route"))
+    return fail(
+        "--offscreen and --mode are for a wall of this job (--wall); with --connect the "
+        "wall decides how it presents and pieces always go straight to it");
+  if (o.connect.empty() && !o.serve && (o.wait || !o.token.empty()))
+    return fail("--token and --wait are for --connect (or serve)");
+  if (!o.connect.empty()) {
+    try {
+      wall::service::parseCodec(o.codec);
+    } catch (const std::exception& e) {
+      return fail(e.what());
+    }
+  }
   if (!size.empty()) {
     const std::string problem = parseSize(size, o.width, o.height);
     if (!problem.empty()) return fail(problem + " (got '" + size + "')");
     o.sizeGiven = true;
   }
-  if (!o.wall.empty() && o.sizeGiven)
+  if (hasWall(o) && o.sizeGiven)
     return fail("--size and --wall: the canvas of a wall is the bounding box of its displays");
-  if (!o.wall.empty() && !o.image.empty())
+  if (hasWall(o) && !o.image.empty())
     return fail(
         "--image is for runs without --wall; use --capture DIR to save what the wall shows");
-  if (o.wall.empty() && (o.offscreen || !o.captureDir.empty() || o.mode != "route" || o.dryRun))
-    return fail("--offscreen, --capture, --mode and --dry-run need --wall FILE.toml");
+  if (!hasWall(o) && (o.offscreen || !o.captureDir.empty() || o.mode != "route" || o.dryRun))
+    return fail(
+        "--offscreen, --capture, --mode and --dry-run need --wall FILE.toml (or --connect)");
   if (!o.cameraPath.empty() && o.orbit != 0.0f)
     return fail("--camera-path and --orbit both move the camera: choose one");
   if (!o.controlToken.empty() && o.control.empty())

@@ -47,6 +47,15 @@ struct Options {
   int timeoutSeconds = 60;
   bool quiet = false;
 
+  // The wall as a service (issue 20). `dfbwall serve`: these processes are the wall of `wall`,
+  // listening for render jobs on `listen`. `--connect`: this job renders for such a wall.
+  bool serve = false;
+  std::string listen;            // serve: [ADDR:]PORT
+  std::string connect;           // HOST:PORT of a serving wall; empty: none
+  std::string token;             // serve: required from jobs; connect: what to present
+  std::string codec = "snappy";  // connect: raw | snappy | jpeg[:QUALITY[:SUBSAMPLING]]
+  bool wait = false;             // connect: queue behind a connected job instead of failing
+
   // Steering (issue 12).
   std::string control;         // [ADDR:]PORT of the control server on render rank 0; empty: none
   std::string controlToken;    // required from clients; generated when binding beyond loopback
@@ -57,5 +66,8 @@ struct Options {
 // Parses argv. Returns an exit code to stop with (0 after --help) or -1 to go on; messages go to
 // stdout/stderr only when `print` (rank 0).
 int parseOptions(int argc, char** argv, Options& options, bool print);
+// True when the hub or the wall is on the other end: a wall of this job (--wall) or a serving
+// wall (--connect).
+inline bool hasWall(const Options& o) { return !o.wall.empty() || !o.connect.empty(); }
 
 }  // namespace app

@@ -28,6 +28,7 @@
 #include "wall/PieceMessage.h"
 #include "wall/Png.h"
 #include "wall/Routing.h"
+#include "wall/service/ServiceClient.h"
 
 namespace app {
 namespace {
@@ -225,7 +226,13 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
   };
   dfb::DistributedFrameBuffer dfb(messenger, renderComm, dfbOptions);
   std::shared_ptr<wall::DisplayRoutingOp> routing;
-  if (route) {
+  std::shared_ptr<wall::service::ServicePieceSink> serviceSink;
+  if (route && job.connected()) {
+    serviceSink = std::make_shared<wall::service::ServicePieceSink>(
+        *job.directory, renderRank, job.codec, static_cast<int>(o.timeoutSeconds) * 1000);
+    routing = std::make_shared<wall::DisplayRoutingOp>(serviceSink, *job.layout, o.tileSize);
+    dfb.addPixelOp(routing);
+  } else if (route) {
     routing =
         std::make_shared<wall::DisplayRoutingOp>(messenger, *job.layout, job.roles, o.tileSize);
     dfb.addPixelOp(routing);
@@ -233,7 +240,14 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
   Preview* const preview = job.preview;
   if (preview) dfb.addPixelOp(preview->op());
   std::unique_ptr<wall::FrameCredits> credits;
-  if (hasWall && job.worldRank == 0) credits = std::make_unique<wall::FrameCredits>(messenger);
+  if (hasWall && job.worldRank == 0) {
+    if (job.service) {
+      credits = std::make_unique<wall::FrameCredits>();
+      job.service->start(*credits, [&job](const std::string& why) { job.failure->fail(why); });
+    } else {
+      credits = std::make_unique<wall::FrameCredits>(messenger);
+    }
+  }
 
   // What every rank renders with now; each frame order may change it (steering).
   FrameView current = initialView(o, job.scene.desc->camera);
@@ -357,7 +371,8 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
           messenger.setResting(true);
           idling = true;
         }
-        if (job.worldRank == 0 && hasWall)
+        // A serving wall hears the job's keepalives instead.
+        if (job.worldRank == 0 && hasWall && !job.service)
           steering.tellWallsKeepWaiting(job.roles.renderRanks, job.roles.worldSize());
         writeReady(false);
         publish(lastFrame, true);
@@ -366,9 +381,13 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
       if (idling) messenger.setResting(false);
       idling = false;
       applyView(order.view);
-      if (job.worldRank == 0 && hasWall && order.captureSequence > 0)
-        steering.tellWallsCapture(frameId, order.captureSequence, job.roles.renderRanks,
-                                  job.roles.worldSize());
+      if (job.worldRank == 0 && hasWall && order.captureSequence > 0) {
+        if (job.service)
+          job.service->capture(frameId, order.captureSequence);
+        else
+          steering.tellWallsCapture(frameId, order.captureSequence, job.roles.renderRanks,
+                                    job.roles.worldSize());
+      }
       const dfb::FrameInfo frame = order.frame;
       const auto start = Clock::now();
       if (!pending.empty() && pending.back().frameMs <= 0)
@@ -378,13 +397,19 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
 
       job.failIfAsked(frameId);
       const renderers::FrameReport report = renderFrame(dfb, frame, order.view.camera);
+      if (routing) routing->endFrame(frameId);
       const dfb::FrameStats stats = dfb.stats();
       wall::DisplayRoutingOp::Sent sent;
       if (routing) sent = routing->takeSent();
       const auto relayStart = Clock::now();
       if (hasWall && !route && job.worldRank == 0)
         sent = relayToDisplays(job, messenger, frameId, dfb.imageRgba8());
-      const dfb::Messenger::ObjectTraffic wallNow = messenger.traffic(wall::kWallNodeObject);
+      dfb::Messenger::ObjectTraffic wallNow = messenger.traffic(wall::kWallNodeObject);
+      if (serviceSink) {  // the pieces went through the service's sockets, not the messenger
+        const auto traffic = serviceSink->takeTraffic();
+        wallNow.bytesSent = wallBefore.bytesSent + traffic.bytes;
+        wallNow.messagesSent = wallBefore.messagesSent + traffic.messages;
+      }
       const std::uint64_t compressed = messenger.counters().messagesCompressed;
       StageTimes& t = totals.stages;
       t.gatherRelay += msBetween(relayStart, Clock::now());
@@ -445,11 +470,15 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
     if (idling) messenger.setResting(false);
     steering.setPresentedProbe({});  // the credits go with this function
     if (job.worldRank == 0 && stopped) {
-      if (hasWall)
+      if (job.service)
+        job.service->bye(lastFrame);
+      else if (hasWall)
         control.announceLastFrame(lastFrame, exitCode, job.roles.renderRanks,
                                   job.roles.worldSize());
       if (!o.quiet) std::printf("stopped after frame %u\n", lastFrame);
     }
+    // A serving wall learns the last frame here when the run ended by its count.
+    if (job.service && !stopped) job.service->bye(lastFrame);
     if (credits) credits->waitForPresented(lastFrame, timeout);
     if (preview) preview->finish(lastFrame, timeout);
     totals.stages.processCpu = static_cast<double>(dfb::processCpuNs() - cpuAtStart) * 1e-6;

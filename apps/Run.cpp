@@ -24,6 +24,7 @@
 #include "dfb/MpiSession.h"
 #include "renderers/BuiltinScenes.h"
 #include "wall/Error.h"
+#include "wall/service/ServiceClient.h"
 
 namespace app {
 namespace {
@@ -138,6 +139,31 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
       if (job.worldRank == 0 && !o.cameraPath.empty())
         job.cameraPath = CameraPath::load(o.cameraPath, job.scene.desc->camera);
     }
+    if (!o.connect.empty()) {
+      job.roles = wall::RankRoles{worldSize, 0};  // every rank renders; the wall is elsewhere
+      job.codec = wall::service::parseCodec(o.codec);
+      if (job.worldRank == 0) {
+        wall::service::Hello hello;
+        hello.token = o.token;
+        char name[MPI_MAX_PROCESSOR_NAME];
+        int length = 0;
+        MPI_Get_processor_name(name, &length);
+        hello.host = std::string(name, static_cast<size_t>(length));
+        hello.renderRanks = static_cast<std::uint32_t>(worldSize);
+        hello.tileSize = static_cast<std::uint32_t>(o.tileSize);
+        hello.codec = job.codec;
+        hello.framesInFlight = static_cast<std::uint32_t>(o.framesInFlight);
+        hello.wait = o.wait;
+        hello.captureDir = o.dryRun ? std::string() : o.captureDir;
+        hello.captureEvery = static_cast<std::uint32_t>(o.captureEvery);
+        job.service = std::make_shared<wall::service::ServiceClient>(
+            o.connect, hello, std::chrono::seconds(o.timeoutSeconds),
+            [](const std::string& queued) {
+              std::printf("dfbwall: %s\n", queued.c_str());
+              std::fflush(stdout);
+            });
+      }
+    }
     if (o.dryRun) return {};
     if (std::string problem = checkOutputs(job); !problem.empty()) return problem;
     if (job.worldRank == 0 && !o.statsFile.empty()) {
@@ -190,6 +216,20 @@ std::vector<RankTotals> collectTotals(const Job& job, RankTotals mine,
   return all;
 }
 
+// --connect: render rank 0 read the wall's directory; every rank routes with it.
+void shareDirectory(Job& job, std::chrono::milliseconds timeout) {
+  dfb::Bytes bytes = job.service ? job.service->directoryBytes() : dfb::Bytes{};
+  std::uint64_t size = bytes.size();
+  boundedBcast(&size, sizeof size, MPI_COMM_WORLD, timeout, "sharing the wall's directory");
+  bytes.resize(size);
+  boundedBcast(bytes.data(), static_cast<int>(size), MPI_COMM_WORLD, timeout,
+               "sharing the wall's directory");
+  job.directory = wall::service::parseDirectory(bytes.data(), bytes.size());
+  job.layout = job.directory->layout;
+  job.canvasWidth = job.layout->canvasWidth;
+  job.canvasHeight = job.layout->canvasHeight;
+}
+
 }  // namespace
 
 int run(int argc, char** argv) {
@@ -210,6 +250,7 @@ int run(int argc, char** argv) {
   job.failure = &failure;
   const int parsed = parseOptions(argc, argv, job.options, job.worldRank == 0);
   if (parsed >= 0) return parsed;
+  if (job.options.serve) return runServe(job.options, job.worldRank, signals, failure);
   const std::chrono::milliseconds timeout = std::chrono::seconds(job.options.timeoutSeconds);
 
   // From here on, whatever goes wrong on this rank ends the job through the failure path,
@@ -221,6 +262,7 @@ int run(int argc, char** argv) {
     if (!agree(setUp(job, mpi->worldSize(), stats, server, hashes), job.worldRank, timeout))
       return 1;
     if (!agree(compareInputs(job, hashes, timeout), job.worldRank, timeout)) return 1;
+    if (!job.options.connect.empty()) shareDirectory(job, timeout);
     if (job.options.dryRun) {
       if (job.worldRank == 0) printDryRun(job);
       return 0;

@@ -9,4 +9,11 @@ namespace app {
 // gracefully (apps/RunControl.h). Returns the exit code.
 int run(int argc, char** argv);
 
+struct Options;
+class StopSignals;
+class FailurePath;
+// `dfbwall serve`: every rank is a wall process of options.wall's layout, serving render jobs
+// until stopped (wall/service/WallService.h). Returns the exit code.
+int runServe(const Options& options, int worldRank, StopSignals& signals, FailurePath& failure);
+
 }  // namespace app
