@@ -470,6 +470,20 @@ TEST(CodecHostile, JpegOfAnotherKind) {
   EXPECT_EQ(decode(Codec::Jpeg, baseline, 32, 32).size(), 32u * 32u);
   expectRefused(Codec::Jpeg, compress(TJSAMP_GRAY, 0), 32, 32, "greyscale");
   expectRefused(Codec::Jpeg, compress(TJSAMP_420, TJFLAG_PROGRESSIVE), 32, 32, "progressive");
+  // The baseline JPEG with its frame marker made arithmetic-coded (SOF9), and with its first scan
+  // announcing one component of three (a non-interleaved, multi-scan layout).
+  const auto markerAt = [&](std::uint8_t marker) {
+    for (std::size_t i = 2; i + 1 < baseline.size(); ++i)
+      if (baseline[i] == std::byte{0xFF} && baseline[i + 1] == std::byte{marker}) return i;
+    ADD_FAILURE() << "no marker " << int{marker};
+    return std::size_t{0};
+  };
+  dfb::Bytes arithmetic = baseline;
+  arithmetic[markerAt(0xC0) + 1] = std::byte{0xC9};
+  expectRefused(Codec::Jpeg, arithmetic, 32, 32, "arithmetic-coded");
+  dfb::Bytes multiScan = baseline;
+  multiScan[markerAt(0xDA) + 4] = std::byte{1};
+  expectRefused(Codec::Jpeg, multiScan, 32, 32, "a first scan of one component");
   tjDestroy(handle);
 }
 
