@@ -470,6 +470,20 @@ TEST(CodecHostile, JpegOfAnotherKind) {
   EXPECT_EQ(decode(Codec::Jpeg, baseline, 32, 32).size(), 32u * 32u);
   expectRefused(Codec::Jpeg, compress(TJSAMP_GRAY, 0), 32, 32, "greyscale");
   expectRefused(Codec::Jpeg, compress(TJSAMP_420, TJFLAG_PROGRESSIVE), 32, 32, "progressive");
+  // The baseline JPEG with its frame marker made arithmetic-coded (SOF9), and with its first scan
+  // announcing one component of three (a non-interleaved, multi-scan layout).
+  const auto markerAt = [&](std::uint8_t marker) {
+    for (std::size_t i = 2; i + 1 < baseline.size(); ++i)
+      if (baseline[i] == std::byte{0xFF} && baseline[i + 1] == std::byte{marker}) return i;
+    ADD_FAILURE() << "no marker " << int{marker};
+    return std::size_t{0};
+  };
+  dfb::Bytes arithmetic = baseline;
+  arithmetic[markerAt(0xC0) + 1] = std::byte{0xC9};
+  expectRefused(Codec::Jpeg, arithmetic, 32, 32, "arithmetic-coded");
+  dfb::Bytes multiScan = baseline;
+  multiScan[markerAt(0xDA) + 4] = std::byte{1};
+  expectRefused(Codec::Jpeg, multiScan, 32, 32, "a first scan of one component");
   tjDestroy(handle);
 }
 
@@ -509,19 +523,42 @@ TEST(CodecHostile, Garbage) {
     }
 }
 
-// Every single-byte corruption of a small piece of each codec decodes or is refused, and never
-// crashes (the fuzz target, tests/fuzz/FuzzCodec.cpp, goes further).
+// Every single-byte corruption of a small piece of each codec decodes or is refused, never
+// crashes, and leaves the thread able to decode the intact piece (the fuzz target,
+// tests/fuzz/FuzzCodec.cpp, goes further).
 TEST(CodecHostile, EverySingleByteCorruption) {
   const Pixels image = renderedLookingPixels(16, 16);
   for (const char* text : {"snappy", "jpeg:90:420", "jpeg:90:444"}) {
     const CodecSpec spec = parseCodec(text);
     const dfb::Bytes whole = encode(spec, image, 16, 16);
+    const Pixels intact = decode(spec.codec, whole, 16, 16);
     for (std::size_t i = 0; i < whole.size(); ++i)
       for (const std::uint8_t x : {0x01, 0x80, 0xFF}) {
         dfb::Bytes corrupt = whole;
         corrupt[i] ^= std::byte{x};
         decodeOrRefuse(spec.codec, corrupt, 16, 16);
+        ASSERT_EQ(decode(spec.codec, whole, 16, 16), intact)
+            << text << ": byte " << i << " ^ " << int{x} << " broke the next decode";
       }
+  }
+}
+
+// Regression: libjpeg-turbo 2.1's tjDecompressHeader3 leaves its instance mid-header after an
+// error, and every later decode on it failed; the codec now replaces the thread's instance.
+TEST(CodecHostile, JpegDecodingRecoversFromABadHeader) {
+  const Pixels image = renderedLookingPixels(32, 32);
+  const dfb::Bytes jpeg = encode(CodecSpec{Codec::Jpeg}, image, 32, 32);
+  dfb::Bytes bad = jpeg;  // the frame header's height set to 0 ("Empty JPEG image")
+  bool found = false;
+  for (std::size_t i = 2; i + 6 < bad.size() && !found; ++i)
+    if (bad[i] == std::byte{0xFF} && bad[i + 1] == std::byte{0xC0}) {
+      bad[i + 5] = bad[i + 6] = std::byte{0};
+      found = true;
+    }
+  ASSERT_TRUE(found);
+  for (int round = 0; round < 3; ++round) {
+    expectRefused(Codec::Jpeg, bad, 32, 32, "a frame header of height 0");
+    EXPECT_NO_THROW(decode(Codec::Jpeg, jpeg, 32, 32)) << "round " << round;
   }
 }
 

@@ -121,37 +121,53 @@ void decodeSnappy(const std::byte* data, std::size_t size, int width, int height
 
 // ---- JPEG through TurboJPEG: one compressor and one decompressor per thread. ----
 
-class TurboJpegHandle {
+// A thread's TurboJPEG instance, created when first used and again after a failure:
+// tjDecompressHeader3 (libjpeg-turbo 2.1) returns from an error without aborting the
+// decompression it started, and every later call on that instance then failed ("Bogus marker
+// length" on valid JPEGs), so one corrupt piece would have broken the thread's decoding for good.
+class TurboJpegInstance {
  public:
-  explicit TurboJpegHandle(tjhandle handle) : handle_(handle) {}
-  ~TurboJpegHandle() {
-    if (handle_) tjDestroy(handle_);
+  explicit TurboJpegInstance(tjhandle (*init)(), const char* what) : init_(init), what_(what) {}
+  ~TurboJpegInstance() { reset(); }
+  TurboJpegInstance(const TurboJpegInstance&) = delete;
+  TurboJpegInstance& operator=(const TurboJpegInstance&) = delete;
+
+  tjhandle get() {
+    if (!handle_) handle_ = init_();
+    if (!handle_)
+      throw Error(std::string("TurboJPEG could not create a ") + what_ + ": " + message(nullptr));
+    return handle_;
   }
-  TurboJpegHandle(const TurboJpegHandle&) = delete;
-  TurboJpegHandle& operator=(const TurboJpegHandle&) = delete;
-  tjhandle get() const { return handle_; }
+  // The instance's error message; the instance is dropped, the next get() makes a fresh one.
+  std::string failure() {
+    std::string text = message(handle_);
+    reset();
+    return text;
+  }
 
  private:
-  tjhandle handle_;
+  static std::string message(tjhandle handle) {
+    const char* text = tjGetErrorStr2(handle);
+    return text ? text : "unknown TurboJPEG error";
+  }
+  void reset() {
+    if (handle_) tjDestroy(handle_);
+    handle_ = nullptr;
+  }
+
+  tjhandle (*init_)();
+  const char* what_;
+  tjhandle handle_ = nullptr;
 };
 
-std::string turboJpegError(tjhandle handle) {
-  const char* text = tjGetErrorStr2(handle);
-  return text ? text : "unknown TurboJPEG error";
+TurboJpegInstance& compressor() {
+  thread_local TurboJpegInstance instance(tjInitCompress, "compressor");
+  return instance;
 }
 
-tjhandle compressor() {
-  thread_local const TurboJpegHandle handle(tjInitCompress());
-  if (!handle.get())
-    throw Error("TurboJPEG could not create a compressor: " + turboJpegError(nullptr));
-  return handle.get();
-}
-
-tjhandle decompressor() {
-  thread_local const TurboJpegHandle handle(tjInitDecompress());
-  if (!handle.get())
-    throw Error("TurboJPEG could not create a decompressor: " + turboJpegError(nullptr));
-  return handle.get();
+TurboJpegInstance& decompressor() {
+  thread_local TurboJpegInstance instance(tjInitDecompress, "decompressor");
+  return instance;
 }
 
 int turboJpegSubsampling(ChromaSubsampling subsampling) {
@@ -179,12 +195,12 @@ void encodeJpeg(const CodecSpec& spec, const std::uint32_t* pixels, int width, i
   if (buffer.size() < bound) buffer.resize(bound);
   unsigned char* jpeg = buffer.data();
   unsigned long jpegSize = bound;
-  const tjhandle handle = compressor();
-  if (tjCompress2(handle, reinterpret_cast<const unsigned char*>(pixels), width, 4 * stride, height,
-                  TJPF_RGBA, &jpeg, &jpegSize, subsampling, spec.jpegQuality,
+  TurboJpegInstance& instance = compressor();
+  if (tjCompress2(instance.get(), reinterpret_cast<const unsigned char*>(pixels), width, 4 * stride,
+                  height, TJPF_RGBA, &jpeg, &jpegSize, subsampling, spec.jpegQuality,
                   TJFLAG_NOREALLOC) != 0)
     throw Error("TurboJPEG could not compress a " + sizeText(width, height) +
-                " piece: " + turboJpegError(handle));
+                " piece: " + instance.failure());
   append(out, reinterpret_cast<const std::byte*>(jpeg), jpegSize);
 }
 
@@ -242,12 +258,11 @@ void decodeJpeg(const std::byte* data, std::size_t size, int width, int height, 
                 int destStride) {
   const auto* jpeg = reinterpret_cast<const unsigned char*>(data);
   checkJpegStructure(jpeg, size, width, height);
-  const tjhandle handle = decompressor();
+  TurboJpegInstance& instance = decompressor();
   int jpegWidth = 0, jpegHeight = 0, subsampling = 0, colorspace = 0;
-  if (tjDecompressHeader3(handle, jpeg, size, &jpegWidth, &jpegHeight, &subsampling, &colorspace) !=
-      0)
-    throw Error("jpeg piece of " + sizeText(width, height) +
-                ": bad header: " + turboJpegError(handle));
+  if (tjDecompressHeader3(instance.get(), jpeg, size, &jpegWidth, &jpegHeight, &subsampling,
+                          &colorspace) != 0)
+    throw Error("jpeg piece of " + sizeText(width, height) + ": bad header: " + instance.failure());
   if (jpegWidth != width || jpegHeight != height)
     throw Error("jpeg piece of " + sizeText(width, height) + " holds a " +
                 sizeText(jpegWidth, jpegHeight) + " image");
@@ -259,10 +274,10 @@ void decodeJpeg(const std::byte* data, std::size_t size, int width, int height, 
         ", not YCbCr");
   }
   // Warnings (a truncated or corrupt stream, which libjpeg would fill in with grey) are errors.
-  if (tjDecompress2(handle, jpeg, size, reinterpret_cast<unsigned char*>(dest), width,
+  if (tjDecompress2(instance.get(), jpeg, size, reinterpret_cast<unsigned char*>(dest), width,
                     4 * destStride, height, TJPF_RGBA,
                     TJFLAG_STOPONWARNING | TJFLAG_LIMITSCANS) != 0)
-    throw Error("jpeg piece of " + sizeText(width, height) + ": " + turboJpegError(handle));
+    throw Error("jpeg piece of " + sizeText(width, height) + ": " + instance.failure());
 }
 
 }  // namespace
