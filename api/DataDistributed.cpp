@@ -21,6 +21,7 @@
 #include "dfb/Error.h"
 #include "dfb/Messenger.h"
 #include "renderers/FrameDriver.h"
+#include "renderers/Parallel.h"
 #include "renderers/scivis/BrickFrameDriver.h"
 #include "wall/DisplayRoutingOp.h"
 #include "wall/FrameCredits.h"
@@ -71,6 +72,9 @@ struct Session::Impl {
   std::shared_ptr<wall::DisplayRoutingOp> routing;
   std::unique_ptr<wall::FrameCredits> credits;
   std::unique_ptr<renderers::BrickFrameDriver> driver;
+  // Where all of this rank's rendering runs: at most options.threads threads of its own, no cap
+  // on the program's TBB parallelism (renderers/Parallel.h).
+  std::unique_ptr<renderers::TaskArena> arena;
   Style style;
   bool styleSet = false, dirty = false, replacing = false;
   std::vector<renderers::HeldBrick> pending;  // bricks added since the last frame
@@ -82,6 +86,7 @@ struct Session::Impl {
   void setUp();  // the layout, roles and canvas; throws on bad input
   void commit();
   void startRendering();
+  void renderFrame();  // in the arena
 };
 
 Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make_unique<Impl>()) {
@@ -119,6 +124,9 @@ Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make
   dfb::checkMpi(MPI_Comm_split(m.own, m.isWall() ? 1 : 0, m.rank, &m.role), "MPI_Comm_split");
   dfb::MessengerOptions messaging;
   messaging.quiesceTimeout = m.timeout;
+  // The session's thread budget covers the tile inputs the messenger combines too (the dfbwall
+  // executable caps both with one process-wide limit, which a program embedding us must not get).
+  messaging.handlerThreads = options.threads;
   m.messenger = std::make_unique<dfb::Messenger>(m.own, messaging);
   // A message that cannot be handled arrives on the messaging thread, where nothing can throw to
   // the program: it ends the job, as it does the dfbwall executable (docs/design.md, Failures).
@@ -149,6 +157,7 @@ void Session::Impl::startRendering() {
   // The driver's operation (composite, then accumulate): the same for every scene version.
   renderers::configureBrickDfb(dfbOptions, activeTiles);
   fb = std::make_unique<dfb::DistributedFrameBuffer>(*messenger, role, dfbOptions);
+  arena = std::make_unique<renderers::TaskArena>(options.threads);
   if (route) {
     routing =
         std::make_shared<wall::DisplayRoutingOp>(*messenger, *layout, roles, options.tileSize);
@@ -205,6 +214,7 @@ void Session::runWall() {
   Impl& m = *impl_;
   if (!m.isWall()) throw std::logic_error("dfbwall: runWall() on a render rank");
   const int process = m.roles.processOfRank(m.rank);
+  renderers::FloatModeGuard callersMode;  // a GL implementation may change it (llvmpipe)
   std::optional<wall::GlfwSession> glfw;
   if (!m.options.offscreen) glfw.emplace();
   std::vector<std::unique_ptr<wall::Presenter>> presenters;
@@ -280,7 +290,7 @@ void Session::Impl::commit() {
   auto desc = std::make_shared<renderers::SceneDesc>(sceneDesc(style, bricks, role, timeout));
   renderers::BrickDriverOptions driving;
   driving.samplesPerPixel = static_cast<std::uint32_t>(std::max(1, style.samplesPerPixel));
-  driving.threads = options.threads;
+  driving.threads = 0;  // no process-wide cap: the arena renderFrame runs in has the threads
   driving.activeTiles = activeTiles;
   driving.timeout = timeout;
   driver = std::make_unique<renderers::BrickFrameDriver>(std::move(desc), settings, driving,
@@ -291,45 +301,51 @@ void Session::renderFrame() {
   Impl& m = *impl_;
   if (m.isWall()) throw std::logic_error("dfbwall: renderFrame() on a wall rank");
   if (m.closed) throw std::logic_error("dfbwall: renderFrame() after close()");
-  const std::uint32_t frameId = m.frameId + 1;
+  // Render tasks set flush-to-zero and denormals-are-zero on the threads that run them, this one
+  // included: the program gets its own mode back, also when the frame throws.
+  renderers::FloatModeGuard callersMode;
+  m.arena->execute([&m] { m.renderFrame(); });
+}
+
+void Session::Impl::renderFrame() {
+  const std::uint32_t next = frameId + 1;
   // Frames in flight: rank 0 starts frame F once the wall presented F - K.
-  if (m.credits)
-    m.credits->waitForPresented(static_cast<std::int64_t>(frameId) - m.options.framesInFlight,
-                                m.timeout);
+  if (credits)
+    credits->waitForPresented(static_cast<std::int64_t>(next) - options.framesInFlight, timeout);
   FrameOrder order{};
-  order.changed = m.dirty || !m.driver ? 1 : 0;
-  const Camera& c = m.camera;
-  const float camera[10] = {c.position[0], c.position[1], c.position[2], c.lookAt[0], c.lookAt[1],
+  order.changed = dirty || !driver ? 1 : 0;
+  const Camera& c = camera;
+  const float floats[10] = {c.position[0], c.position[1], c.position[2], c.lookAt[0], c.lookAt[1],
                             c.lookAt[2],   c.up[0],       c.up[1],       c.up[2],     c.fovY};
-  std::memcpy(order.camera, camera, sizeof camera);
+  std::memcpy(order.camera, floats, sizeof floats);
   int changed = order.changed, anyChanged = 0;
   MPI_Request request;
-  dfb::checkMpi(MPI_Iallreduce(&changed, &anyChanged, 1, MPI_INT, MPI_MAX, m.role, &request),
+  dfb::checkMpi(MPI_Iallreduce(&changed, &anyChanged, 1, MPI_INT, MPI_MAX, role, &request),
                 "MPI_Iallreduce");
-  bounded(request, 2 * m.timeout, "frame " + std::to_string(frameId));
-  dfb::checkMpi(MPI_Ibcast(order.camera, sizeof order.camera, MPI_BYTE, 0, m.role, &request),
+  bounded(request, 2 * timeout, "frame " + std::to_string(next));
+  dfb::checkMpi(MPI_Ibcast(order.camera, sizeof order.camera, MPI_BYTE, 0, role, &request),
                 "MPI_Ibcast");
-  bounded(request, m.timeout, "frame " + std::to_string(frameId));
+  bounded(request, timeout, "frame " + std::to_string(next));
   if (anyChanged) {
-    if (!m.styleSet) throw std::logic_error("dfbwall: renderFrame() before setStyle()");
-    m.commit();
-    m.dirty = false;
-    ++m.epoch;
+    if (!styleSet) throw std::logic_error("dfbwall: renderFrame() before setStyle()");
+    commit();
+    dirty = false;
+    ++epoch;
   }
   Camera used;
   std::memcpy(used.position.data(), order.camera, 3 * sizeof(float));
   std::memcpy(used.lookAt.data(), order.camera + 3, 3 * sizeof(float));
   std::memcpy(used.up.data(), order.camera + 6, 3 * sizeof(float));
   used.fovY = order.camera[9];
-  if (!anyChanged && std::memcmp(&used, &m.lastCamera, sizeof used) != 0) ++m.epoch;
-  m.lastCamera = used;
+  if (!anyChanged && std::memcmp(&used, &lastCamera, sizeof used) != 0) ++epoch;
+  lastCamera = used;
   renderers::CameraDesc cd;
   cd.position = {used.position[0], used.position[1], used.position[2]};
   cd.lookAt = {used.lookAt[0], used.lookAt[1], used.lookAt[2]};
   cd.up = {used.up[0], used.up[1], used.up[2]};
   cd.fovY = used.fovY;
-  m.driver->renderFrame(*m.fb, {frameId, m.epoch}, cd);
-  m.frameId = frameId;
+  driver->renderFrame(*fb, {next, epoch}, cd);
+  frameId = next;
 }
 
 std::uint32_t Session::framesRendered() const { return impl_->frameId; }

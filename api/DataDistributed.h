@@ -26,6 +26,12 @@
 // std::runtime_error naming the cause; after one the session is unusable (end the job with
 // MPI_Abort). MPI must be initialised with MPI_THREAD_MULTIPLE (the messaging runs on its own
 // thread).
+//
+// Threads and floating point. Rendering runs in the session's own TBB task arena
+// (SessionOptions::threads), joined by the thread that calls renderFrame(); its tasks run with
+// flush-to-zero and denormals-are-zero on, whatever the caller's mode, so the image never depends
+// on it. renderFrame() and runWall() give the calling thread its own mode (MXCSR FTZ/DAZ) back
+// when they return or throw.
 #include <mpi.h>
 
 #include <array>
@@ -142,7 +148,10 @@ struct SessionOptions {
   std::string captureDir;         // wall captures DIR/<display>/frame-NNNNNN.png, DIR/wall-*.png
   int captureEvery = 0;           // every K-th frame; 0: the last one only
   int tileSize = 64;
-  int threads = 0;           // TBB threads per render rank; 0: all cores
+  // Threads per render rank (0: all cores): the session renders in a TBB task arena of its own
+  // with this many threads and combines tiles with as many; the program's own TBB parallelism
+  // (its arenas, its tbb::global_control) is neither capped nor used by it.
+  int threads = 0;
   int framesInFlight = 2;    // frames rendered ahead of the wall
   int timeoutSeconds = 300;  // bound of every wait (see above)
   float exposure = 1;        // tone mapping: linear radiance times this, then sRGB

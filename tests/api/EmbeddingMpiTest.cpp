@@ -1,0 +1,173 @@
+// The data-distributed API embedded in a program (issue 20): the calling thread gets its own
+// floating-point mode back after rendering, the program's own TBB parallelism is not capped by a
+// session, render ranks that pass different styles fail together, and errors are thrown, never
+// turned into MPI_Abort.
+#include <gtest/gtest.h>
+#include <mpi.h>
+#include <pmmintrin.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+#include <xmmintrin.h>
+
+#include <atomic>
+#include <chrono>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "api/DataDistributed.h"
+#include "tests/MpiTestUtil.h"
+#include "tests/api/ApiTestScene.h"
+
+namespace {
+
+using namespace apitest;
+
+struct FloatMode {
+  bool flushZero, denormalsZero;
+};
+
+void setFloatMode(FloatMode mode) {
+  _MM_SET_FLUSH_ZERO_MODE(mode.flushZero ? _MM_FLUSH_ZERO_ON : _MM_FLUSH_ZERO_OFF);
+  _MM_SET_DENORMALS_ZERO_MODE(mode.denormalsZero ? _MM_DENORMALS_ZERO_ON : _MM_DENORMALS_ZERO_OFF);
+}
+
+FloatMode floatMode() {
+  return {_MM_GET_FLUSH_ZERO_MODE() == _MM_FLUSH_ZERO_ON,
+          _MM_GET_DENORMALS_ZERO_MODE() == _MM_DENORMALS_ZERO_ON};
+}
+
+// What a denormal does in this thread's mode: 1e-40f * 0.5 is a denormal result (kept without
+// flush-to-zero), and 1e-40f itself reads as 0 under denormals-are-zero.
+bool denormalResultKept() {
+  volatile float tiny = 1e-40f;
+  volatile float half = tiny * 0.5f;
+  return half != 0.0f;
+}
+
+dfbwall::SessionOptions options(int threads) {
+  dfbwall::SessionOptions o;
+  o.width = 64, o.height = 48, o.tileSize = 16, o.threads = threads, o.timeoutSeconds = 30;
+  return o;
+}
+
+// Every render rank (all of MPI_COMM_WORLD) adds its slabs of 4.
+void addBricks(dfbwall::Session& session, std::vector<float>& storage) {
+  for (int b = testutil::worldRank(); b < 4; b += testutil::worldSize())
+    session.addBrick(brick(b, 4, storage));
+}
+
+// Whether two tasks of one parallel_for run at the same time in the caller's arena: each waits
+// (up to 10 s) for the other to start. Under a process-wide cap of one thread the second starts
+// only after the first gave up.
+bool twoTasksRunAtOnce() {
+  std::atomic<int> started{0};
+  std::atomic<bool> bothSeen{true};
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, 2, 1),
+      [&](const tbb::blocked_range<int>&) {
+        ++started;
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+        while (started.load() < 2 && std::chrono::steady_clock::now() < deadline)
+          std::this_thread::sleep_for(std::chrono::microseconds(100));
+        if (started.load() < 2) bothSeen = false;
+      },
+      tbb::simple_partitioner());
+  return bothSeen.load();
+}
+
+TEST(ApiEmbedding, RenderFrameRestoresTheCallersFloatMode) {
+  const FloatMode before = floatMode();
+  std::vector<std::uint8_t> first;
+  {
+    dfbwall::Session session(MPI_COMM_WORLD, options(2));
+    session.setStyle(style());
+    session.setCamera(camera());
+    std::vector<float> storage;
+    addBricks(session, storage);
+    // Every mode the program may be in, each kept through a frame (the first one of a scene
+    // version, then accumulating ones, then a new version again).
+    const FloatMode modes[] = {{false, false}, {true, true}, {true, false}, {false, true}};
+    for (int round = 0; round < 2; ++round)
+      for (const FloatMode mode : modes) {
+        setFloatMode(mode);
+        const bool newVersion = round == 1 && mode.flushZero && mode.denormalsZero;
+        if (newVersion) {
+          session.clearBricks();  // a new scene version: its first frame renders frame 1 again
+          addBricks(session, storage);
+        }
+        session.renderFrame();
+        const FloatMode after = floatMode();
+        EXPECT_EQ(after.flushZero, mode.flushZero) << "round " << round;
+        EXPECT_EQ(after.denormalsZero, mode.denormalsZero) << "round " << round;
+        EXPECT_EQ(denormalResultKept(), !mode.flushZero && !mode.denormalsZero);
+        if (round == 0 && !mode.flushZero && !mode.denormalsZero) first = session.image();
+        // The image does not depend on the caller's mode: the new version's first frame (made
+        // with the caller in another mode than frame 1 was) is frame 1's image, byte for byte.
+        if (newVersion && testutil::worldRank() == 0) {
+          ASSERT_FALSE(first.empty());
+          EXPECT_EQ(session.image(), first);
+        }
+      }
+    session.close();
+  }
+  setFloatMode(before);
+}
+
+TEST(ApiEmbedding, ThrowingRenderFrameRestoresTheCallersFloatMode) {
+  dfbwall::SessionOptions o = options(2);
+  o.timeoutSeconds = 20;
+  dfbwall::Session session(MPI_COMM_WORLD, o);
+  session.setStyle(style());
+  session.setCamera(camera());
+  std::vector<float> storage;
+  addBricks(session, storage);
+  session.renderFrame();  // a frame rendered, so render tasks ran on this thread before
+  setFloatMode({false, false});
+  // "The same brick" with other bounds on rank 1: the next frame fails on every rank.
+  session.clearBricks();
+  dfbwall::Brick b = brick(0, 2, storage);
+  if (testutil::worldRank() == 1) b.boundsHi[0] += 0.1f;
+  session.addBrick(b);
+  EXPECT_THROW(session.renderFrame(), std::runtime_error);
+  EXPECT_FALSE(floatMode().flushZero);
+  EXPECT_FALSE(floatMode().denormalsZero);
+  session.close();
+}
+
+TEST(ApiEmbedding, ASessionLeavesTheProgramsTbbParallelismAlone) {
+  const std::size_t cap =
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  const int concurrency = tbb::this_task_arena::max_concurrency();
+  {
+    dfbwall::Session session(MPI_COMM_WORLD, options(1));
+    session.setStyle(style());
+    session.setCamera(camera());
+    std::vector<float> storage;
+    addBricks(session, storage);
+    session.renderFrame();
+    session.renderFrame();
+    // The session is alive (and its renderer with it) with one thread of its own: the program's
+    // parallelism is what it was.
+    EXPECT_EQ(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism), cap);
+    EXPECT_EQ(tbb::this_task_arena::max_concurrency(), concurrency);
+    if (concurrency >= 2) {
+      EXPECT_TRUE(twoTasksRunAtOnce());
+    }
+    // The program's own arena too, and a cap of its own it sets while the session lives.
+    tbb::task_arena mine(2);
+    EXPECT_EQ(mine.max_concurrency(), 2);
+    {
+      tbb::global_control own(tbb::global_control::max_allowed_parallelism, 2);
+      session.renderFrame();
+      EXPECT_EQ(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
+                2u);
+    }
+    session.close();
+  }
+  EXPECT_EQ(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism), cap);
+}
+
+}  // namespace
