@@ -44,10 +44,11 @@ void bounded(MPI_Request& request, std::chrono::milliseconds timeout, const std:
       what + ": another rank did not join within " + std::to_string(timeout.count()) + " ms");
 }
 
-// What render rank 0 decides for every frame: the camera (so every rank renders the same).
+// What render rank 0 sends for every frame: the camera (so every rank renders the same) and the
+// hash of its style, which every rank compares its own with.
 struct FrameOrder {
-  std::int32_t changed;  // any rank changed its bricks or the style: a new scene version
   float camera[10];
+  std::uint64_t styleHash;
 };
 
 }  // namespace
@@ -76,6 +77,7 @@ struct Session::Impl {
   // on the program's TBB parallelism (renderers/Parallel.h).
   std::unique_ptr<renderers::TaskArena> arena;
   Style style;
+  std::uint64_t hashOfStyle = 0;  // styleHash(style)
   bool styleSet = false, dirty = false, replacing = false;
   std::vector<renderers::HeldBrick> pending;  // bricks added since the last frame
   Camera camera, lastCamera;
@@ -251,6 +253,7 @@ void Session::runWall() {
 
 void Session::setStyle(const Style& style) {
   impl_->style = style;
+  impl_->hashOfStyle = styleHash(style);
   impl_->styleSet = true;
   impl_->dirty = true;
 }
@@ -313,21 +316,34 @@ void Session::Impl::renderFrame() {
   if (credits)
     credits->waitForPresented(static_cast<std::int64_t>(next) - options.framesInFlight, timeout);
   FrameOrder order{};
-  order.changed = dirty || !driver ? 1 : 0;
   const Camera& c = camera;
   const float floats[10] = {c.position[0], c.position[1], c.position[2], c.lookAt[0], c.lookAt[1],
                             c.lookAt[2],   c.up[0],       c.up[1],       c.up[2],     c.fovY};
   std::memcpy(order.camera, floats, sizeof floats);
-  int changed = order.changed, anyChanged = 0;
+  order.styleHash = hashOfStyle;
   MPI_Request request;
-  dfb::checkMpi(MPI_Iallreduce(&changed, &anyChanged, 1, MPI_INT, MPI_MAX, role, &request),
+  dfb::checkMpi(MPI_Ibcast(&order, sizeof order, MPI_BYTE, 0, role, &request), "MPI_Ibcast");
+  bounded(request, 2 * timeout, "frame " + std::to_string(next));  // rank 0 may wait for the wall
+  // What the ranks must agree on, each the lowest rank it concerns as renderRanks - rank (MPI_MAX;
+  // 0: none): whether any rank changed its bricks or style (a new scene version), a rank without
+  // a style, a rank whose style is not render rank 0's.
+  const int renderRanks = roles.renderRanks, mark = renderRanks - rank;
+  int mine[3] = {dirty || !driver ? 1 : 0, styleSet ? 0 : mark,
+                 styleSet && hashOfStyle != order.styleHash ? mark : 0};
+  int agreed[3] = {0, 0, 0};
+  dfb::checkMpi(MPI_Iallreduce(mine, agreed, 3, MPI_INT, MPI_MAX, role, &request),
                 "MPI_Iallreduce");
-  bounded(request, 2 * timeout, "frame " + std::to_string(next));
-  dfb::checkMpi(MPI_Ibcast(order.camera, sizeof order.camera, MPI_BYTE, 0, role, &request),
-                "MPI_Ibcast");
   bounded(request, timeout, "frame " + std::to_string(next));
+  const bool anyChanged = agreed[0] != 0;
   if (anyChanged) {
-    if (!styleSet) throw std::logic_error("dfbwall: renderFrame() before setStyle()");
+    // Thrown on every rank alike, before anything changed: the session stays in step.
+    if (agreed[1])
+      throw std::logic_error("dfbwall: renderFrame() before setStyle() on render rank " +
+                             std::to_string(renderRanks - agreed[1]));
+    if (agreed[2])
+      throw std::runtime_error(
+          "dfbwall: the render ranks passed different styles to setStyle() (render rank " +
+          std::to_string(renderRanks - agreed[2]) + " differs from render rank 0)");
     commit();
     dirty = false;
     ++epoch;

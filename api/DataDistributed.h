@@ -85,7 +85,9 @@ struct Light {
   float intensity = 1;
 };
 
-// Everything but the data, the same on every render rank.
+// Everything but the data, the same on every render rank: at each scene version the ranks compare
+// a hash of every field (floats by their bits), and ranks that passed different styles make
+// renderFrame() throw on every rank, naming the lowest rank that differs from render rank 0.
 struct Style {
   std::vector<VolumeStyle> volumes;
   std::vector<Isosurface> isosurfaces;

@@ -10,14 +10,17 @@
 #include <tbb/task_arena.h>
 #include <xmmintrin.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "api/DataDistributed.h"
+#include "api/SceneStyle.h"
 #include "tests/MpiTestUtil.h"
 #include "tests/api/ApiTestScene.h"
 
@@ -168,6 +171,123 @@ TEST(ApiEmbedding, ASessionLeavesTheProgramsTbbParallelismAlone) {
     session.close();
   }
   EXPECT_EQ(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism), cap);
+}
+
+// Every field of the style changes its hash (tests on one rank; the hash is what the ranks
+// compare at each scene version), and the same style always gives the same hash.
+TEST(ApiEmbedding, TheStyleHashCoversEveryField) {
+  const dfbwall::Style base = [] {
+    dfbwall::Style st = style();
+    st.lights.push_back({});
+    return st;
+  }();
+  const std::uint64_t h = dfbwall::styleHash(base);
+  EXPECT_EQ(dfbwall::styleHash(base), h);
+  EXPECT_EQ(dfbwall::styleHash(dfbwall::Style(base)), h);
+  using Change = void (*)(dfbwall::Style&);
+  const Change changes[] = {
+      [](dfbwall::Style& s) { s.volumes.push_back(s.volumes[0]); },
+      [](dfbwall::Style& s) { s.volumes[0].name = "other"; },
+      [](dfbwall::Style& s) { s.volumes[0].grid.dims[2] += 1; },
+      [](dfbwall::Style& s) { s.volumes[0].grid.origin[1] += 0.5f; },
+      [](dfbwall::Style& s) { s.volumes[0].grid.spacing[0] *= 2; },
+      [](dfbwall::Style& s) { s.volumes[0].transferFunction = "viridis"; },
+      [](dfbwall::Style& s) { s.volumes[0].maxOpacity += 0.01f; },
+      [](dfbwall::Style& s) { s.volumes[0].autoRange = !s.volumes[0].autoRange; },
+      [](dfbwall::Style& s) { s.volumes[0].valueMin -= 1; },
+      [](dfbwall::Style& s) { s.volumes[0].valueMax += 1; },
+      [](dfbwall::Style& s) { s.volumes[0].visible = !s.volumes[0].visible; },
+      [](dfbwall::Style& s) { s.isosurfaces.pop_back(); },
+      [](dfbwall::Style& s) { s.isosurfaces[0].volume = 1; },
+      [](dfbwall::Style& s) { s.isosurfaces[0].value += 1; },
+      [](dfbwall::Style& s) { s.isosurfaces[0].color[2] = 0; },
+      [](dfbwall::Style& s) { s.isosurfaces[0].opacity = 0.25f; },
+      [](dfbwall::Style& s) { s.particleColor[0] = 0; },
+      [](dfbwall::Style& s) { s.particleOpacity = 0.5f; },
+      [](dfbwall::Style& s) { s.meshColor[1] = 0; },
+      [](dfbwall::Style& s) { s.meshOpacity = 0.5f; },
+      [](dfbwall::Style& s) { s.lights.clear(); },
+      [](dfbwall::Style& s) { s.lights[0].kind = dfbwall::Light::Kind::Point; },
+      [](dfbwall::Style& s) { s.lights[0].direction[0] = 1; },
+      [](dfbwall::Style& s) { s.lights[0].position[2] = 3; },
+      [](dfbwall::Style& s) { s.lights[0].color[1] = 0.5f; },
+      [](dfbwall::Style& s) { s.lights[0].intensity = 2; },
+      [](dfbwall::Style& s) { s.aoSamples += 1; },
+      [](dfbwall::Style& s) { s.aoDistance *= 2; },
+      [](dfbwall::Style& s) { s.shadows = !s.shadows; },
+      [](dfbwall::Style& s) { s.samplingRate = 2; },
+      [](dfbwall::Style& s) { s.background[2] = 1; },
+      [](dfbwall::Style& s) { s.samplesPerPixel = 4; },
+      [](dfbwall::Style& s) { s.seed += 1; },
+  };
+  std::vector<std::uint64_t> seen{h};
+  for (std::size_t i = 0; i < std::size(changes); ++i) {
+    dfbwall::Style changed = base;
+    changes[i](changed);
+    const std::uint64_t c = dfbwall::styleHash(changed);
+    EXPECT_NE(c, h) << "change " << i;
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), c), 0) << "change " << i;
+    seen.push_back(c);
+  }
+  // Strings are framed by their length: moving a character between two names is a change.
+  dfbwall::Style a = base, b = base;
+  a.volumes.push_back(a.volumes[0]);
+  b.volumes.push_back(b.volumes[0]);
+  a.volumes[0].name = "ab", a.volumes[1].name = "c";
+  b.volumes[0].name = "a", b.volumes[1].name = "bc";
+  EXPECT_NE(dfbwall::styleHash(a), dfbwall::styleHash(b));
+  // Floats count by their bits: -0 is another style than +0.
+  a = base, b = base;
+  a.background[0] = 0.0f, b.background[0] = -0.0f;
+  EXPECT_NE(dfbwall::styleHash(a), dfbwall::styleHash(b));
+}
+
+TEST(ApiEmbedding, DifferentStylesFailOnEveryRankAndCanBeFixed) {
+  ASSERT_GE(testutil::worldSize(), 3) << "run with 3 ranks (tests/api/CMakeLists.txt)";
+  dfbwall::SessionOptions o = options(2);
+  o.timeoutSeconds = 20;
+  dfbwall::Session session(MPI_COMM_WORLD, o);
+  dfbwall::Style st = style();
+  if (testutil::worldRank() == 2) st.lights.push_back({});  // one light more, on rank 2 only
+  session.setStyle(st);
+  session.setCamera(camera());
+  std::vector<float> storage;
+  addBricks(session, storage);
+  try {
+    session.renderFrame();
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  "the render ranks passed different styles to setStyle() (render rank 2 differs"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(session.framesRendered(), 0u);
+  // Only a style change tells: a later frame with the same styles fails again.
+  EXPECT_THROW(session.renderFrame(), std::runtime_error);
+  // The ranks agreed on the failure, so the session is still in step: the same style everywhere
+  // renders.
+  session.setStyle(style());
+  EXPECT_NO_THROW(session.renderFrame());
+  EXPECT_EQ(session.framesRendered(), 1u);
+  session.close();
+}
+
+TEST(ApiEmbedding, AStyleMissingOnOneRankFailsOnEveryRank) {
+  dfbwall::SessionOptions o = options(2);
+  o.timeoutSeconds = 20;
+  dfbwall::Session session(MPI_COMM_WORLD, o);
+  if (testutil::worldRank() != 1) session.setStyle(style());
+  session.setCamera(camera());
+  try {
+    session.renderFrame();
+    ADD_FAILURE() << "no error";
+  } catch (const std::logic_error& e) {
+    EXPECT_NE(std::string(e.what()).find("renderFrame() before setStyle() on render rank 1"),
+              std::string::npos)
+        << e.what();
+  }
+  session.close();
 }
 
 }  // namespace
