@@ -6,14 +6,15 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <cstring>
 #include <exception>
 #include <filesystem>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 
 #include "api/SceneStyle.h"
+#include "api/SessionTesting.h"
 #include "api/WallStop.h"
 #include "dfb/AtomicFile.h"
 #include "dfb/BoundedWait.h"
@@ -51,6 +52,49 @@ struct FrameOrder {
   std::uint64_t styleHash;
 };
 
+// The first error the messenger reported on this rank. It arrives on the messenger's threads,
+// where nothing can throw to the program (a message for no object, one that does not decode, a
+// handler that threw): it is kept here, and the session's next collective call on this rank
+// throws it (docs/design.md, "Failures").
+class FirstError {
+ public:
+  void record(const std::string& message) {
+    std::lock_guard lock(mutex_);
+    if (!failed_) message_ = message;
+    failed_ = true;
+  }
+  bool failed() const {
+    std::lock_guard lock(mutex_);
+    return failed_;
+  }
+  [[noreturn]] void raise(const std::string& then = {}) {
+    std::lock_guard lock(mutex_);
+    thrown_ = true;
+    throw std::runtime_error(then.empty() ? message_ : message_ + "; then: " + then);
+  }
+  void raiseUnlessThrown() {
+    std::unique_lock lock(mutex_);
+    if (!failed_ || thrown_) return;
+    lock.unlock();
+    raise();
+  }
+  // In a handler: a failure that follows the recorded one (a deadline, most likely) is thrown as
+  // the recorded one, the cause, with its own message appended. Returns when there is none or it
+  // was thrown already, and for a std::logic_error (the handler rethrows).
+  void raiseInstead(const std::exception& e) {
+    if (dynamic_cast<const std::logic_error*>(&e)) return;  // a misuse, whatever else happened
+    std::unique_lock lock(mutex_);
+    if (!failed_ || thrown_) return;
+    lock.unlock();
+    raise(e.what());
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::string message_;
+  bool failed_ = false, thrown_ = false;
+};
+
 }  // namespace
 
 struct Session::Impl {
@@ -64,6 +108,9 @@ struct Session::Impl {
   int width = 0, height = 0;
   std::unique_ptr<dfb::Messenger> messenger;
   std::unique_ptr<WallStop> wallStop;
+  // Shared with the messenger's error callback: the messenger, declared before it, is destroyed
+  // after it and may still report an error while it stops.
+  std::shared_ptr<FirstError> error = std::make_shared<FirstError>();
   bool closed = false;
 
   // Render ranks.
@@ -130,12 +177,14 @@ Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make
   // executable caps both with one process-wide limit, which a program embedding us must not get).
   messaging.handlerThreads = options.threads;
   m.messenger = std::make_unique<dfb::Messenger>(m.own, messaging);
-  // A message that cannot be handled arrives on the messaging thread, where nothing can throw to
-  // the program: it ends the job, as it does the dfbwall executable (docs/design.md, Failures).
-  m.messenger->setErrorCallback([rank = m.rank](const std::string& message) {
-    std::fprintf(stderr, "dfbwall: error on rank %d: %s\n", rank, message.c_str());
-    MPI_Abort(MPI_COMM_WORLD, 1);
-  });
+  // A message that cannot be handled arrives on a messaging thread, where nothing can throw to
+  // the program: it is recorded, and thrown by this rank's next renderFrame(), close() or
+  // runWall() (the library never ends the job; the program decides).
+  m.messenger->setErrorCallback(
+      [error = m.error, where = "dfbwall: error on rank " + std::to_string(m.rank) + " (" +
+                                m.messenger->hostOf(m.rank) + "): "](const std::string& message) {
+        error->record(where + message);
+      });
   m.wallStop = std::make_unique<WallStop>(*m.messenger);
   if (!m.isWall()) m.startRendering();
 }
@@ -212,7 +261,7 @@ MPI_Comm Session::renderComm() const { return impl_->isWall() ? MPI_COMM_NULL : 
 int Session::canvasWidth() const { return impl_->width; }
 int Session::canvasHeight() const { return impl_->height; }
 
-void Session::runWall() {
+void Session::runWall() try {
   Impl& m = *impl_;
   if (!m.isWall()) throw std::logic_error("dfbwall: runWall() on a render rank");
   const int process = m.roles.processOfRank(m.rank);
@@ -236,19 +285,27 @@ void Session::runWall() {
   {
     wall::WallNode node(*m.messenger, *m.layout, process, m.role, std::move(presenters), options);
     m.wallStop->onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
+    // However the block is left (a throw too), the stop no longer reaches the node it leaves.
+    const std::unique_ptr<WallStop, void (*)(WallStop*)> forget(
+        m.wallStop.get(), [](WallStop* stop) { stop->onLastFrame({}); });
     MPI_Request request;
     dfb::checkMpi(MPI_Ibarrier(m.own, &request), "MPI_Ibarrier");
     bounded(request, m.timeout, "dfbwall session start-up");
-    for (std::uint32_t frameId = 1;; ++frameId)
+    for (std::uint32_t frameId = 1;; ++frameId) {
       if (node.presentFrame(frameId).stopped) break;
+      if (m.error->failed()) m.error->raise();  // the render ranks fail at their deadline
+    }
     node.finish();  // captures the last frame
-    m.wallStop->onLastFrame({});
   }
   m.wallStop.reset();
   m.messenger->stop();
   MPI_Comm_free(&m.role);
   MPI_Comm_free(&m.own);
   m.closed = true;
+  m.error->raiseUnlessThrown();
+} catch (const std::exception& e) {
+  impl_->error->raiseInstead(e);
+  throw;
 }
 
 void Session::setStyle(const Style& style) {
@@ -307,7 +364,12 @@ void Session::renderFrame() {
   // Render tasks set flush-to-zero and denormals-are-zero on the threads that run them, this one
   // included: the program gets its own mode back, also when the frame throws.
   renderers::FloatModeGuard callersMode;
-  m.arena->execute([&m] { m.renderFrame(); });
+  try {
+    m.arena->execute([&m] { m.renderFrame(); });
+  } catch (const std::exception& e) {
+    m.error->raiseInstead(e);
+    throw;
+  }
 }
 
 void Session::Impl::renderFrame() {
@@ -326,14 +388,21 @@ void Session::Impl::renderFrame() {
   bounded(request, 2 * timeout, "frame " + std::to_string(next));  // rank 0 may wait for the wall
   // What the ranks must agree on, each the lowest rank it concerns as renderRanks - rank (MPI_MAX;
   // 0: none): whether any rank changed its bricks or style (a new scene version), a rank without
-  // a style, a rank whose style is not render rank 0's.
+  // a style, a rank whose style is not render rank 0's, a rank that failed (its messenger
+  // reported an error): then every rank throws here, together, instead of the others waiting
+  // for it until their deadline.
   const int renderRanks = roles.renderRanks, mark = renderRanks - rank;
-  int mine[3] = {dirty || !driver ? 1 : 0, styleSet ? 0 : mark,
-                 styleSet && hashOfStyle != order.styleHash ? mark : 0};
-  int agreed[3] = {0, 0, 0};
-  dfb::checkMpi(MPI_Iallreduce(mine, agreed, 3, MPI_INT, MPI_MAX, role, &request),
+  const bool failed = error->failed();
+  int mine[4] = {dirty || !driver ? 1 : 0, styleSet ? 0 : mark,
+                 styleSet && hashOfStyle != order.styleHash ? mark : 0, failed ? mark : 0};
+  int agreed[4] = {0, 0, 0, 0};
+  dfb::checkMpi(MPI_Iallreduce(mine, agreed, 4, MPI_INT, MPI_MAX, role, &request),
                 "MPI_Iallreduce");
   bounded(request, timeout, "frame " + std::to_string(next));
+  if (failed) error->raise();
+  if (agreed[3])
+    throw std::runtime_error("dfbwall: render rank " + std::to_string(renderRanks - agreed[3]) +
+                             " failed (its error says why); the session is unusable");
   const bool anyChanged = agreed[0] != 0;
   if (anyChanged) {
     // Thrown on every rank alike, before anything changed: the session stays in step.
@@ -362,6 +431,7 @@ void Session::Impl::renderFrame() {
   cd.fovY = used.fovY;
   driver->renderFrame(*fb, {next, epoch}, cd);
   frameId = next;
+  if (error->failed()) error->raise();  // during this frame: the others learn at the next one
 }
 
 std::uint32_t Session::framesRendered() const { return impl_->frameId; }
@@ -383,7 +453,7 @@ void Session::writeImage(const std::string& path) const {
 
 std::size_t Session::sceneBytes() const { return impl_->driver ? impl_->driver->sceneBytes() : 0; }
 
-void Session::close() {
+void Session::close() try {
   Impl& m = *impl_;
   if (m.closed) return;
   if (m.isWall()) throw std::logic_error("dfbwall: close() on a wall rank (runWall() returns)");
@@ -400,6 +470,16 @@ void Session::close() {
   MPI_Comm_free(&m.role);
   MPI_Comm_free(&m.own);
   m.closed = true;
+  m.error->raiseUnlessThrown();  // one that came after the last frame
+} catch (const std::exception& e) {
+  impl_->error->raiseInstead(e);
+  throw;
 }
+
+void SessionTesting::send(Session& session, int toRank, std::uint64_t object) {
+  session.impl_->messenger->send(toRank, object, dfb::Bytes{});
+}
+
+void SessionTesting::quiesce(Session& session) { session.impl_->messenger->quiesce(); }
 
 }  // namespace dfbwall

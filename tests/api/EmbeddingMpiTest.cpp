@@ -21,6 +21,7 @@
 
 #include "api/DataDistributed.h"
 #include "api/SceneStyle.h"
+#include "api/SessionTesting.h"
 #include "tests/MpiTestUtil.h"
 #include "tests/api/ApiTestScene.h"
 
@@ -288,6 +289,86 @@ TEST(ApiEmbedding, AStyleMissingOnOneRankFailsOnEveryRank) {
         << e.what();
   }
   session.close();
+}
+
+// An object id nobody registers: a message for it is what a faulty peer (or a message of another
+// version) would send, reported by the receiving rank's messenger.
+constexpr std::uint64_t kNobody = 0x7E57;
+
+std::string caught(dfbwall::Session& session) {
+  try {
+    session.renderFrame();
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(ApiEmbedding, AMessengerErrorIsThrownOnEveryRankInsteadOfAborting) {
+  ASSERT_GE(testutil::worldSize(), 3) << "run with 3 ranks (tests/api/CMakeLists.txt)";
+  const int rank = testutil::worldRank();
+  dfbwall::SessionOptions o = options(2);
+  o.timeoutSeconds = 20;
+  dfbwall::Session session(MPI_COMM_WORLD, o);
+  session.setStyle(style());
+  session.setCamera(camera());
+  std::vector<float> storage;
+  addBricks(session, storage);
+  session.renderFrame();
+  // Rank 0 sends rank 1 a message for no object; once every rank has handled what was sent, rank
+  // 1's messenger has reported it (before: MPI_Abort, the whole job gone).
+  if (rank == 0) dfbwall::SessionTesting::send(session, 1, kNobody);
+  dfbwall::SessionTesting::quiesce(session);
+  setFloatMode({false, false});
+  // Every rank throws at the next frame, together: rank 1 the cause, the others who failed.
+  const std::string first = caught(session);
+  if (rank == 1) {
+    EXPECT_NE(first.find("dfbwall: error on rank 1 ("), std::string::npos) << first;
+    EXPECT_NE(first.find("message from rank 0 to object id " + std::to_string(kNobody) +
+                         " on rank 1, which has no object registered under that id"),
+              std::string::npos)
+        << first;
+  } else {
+    EXPECT_NE(first.find("dfbwall: render rank 1 failed"), std::string::npos) << first;
+  }
+  EXPECT_FALSE(floatMode().flushZero);
+  EXPECT_FALSE(floatMode().denormalsZero);
+  // The session is unusable from now on, on every rank alike (so they stay in step)...
+  const std::string second = caught(session);
+  EXPECT_EQ(second.substr(0, 20), first.substr(0, 20)) << second;
+  EXPECT_EQ(session.framesRendered(), 1u);
+  // ...and still closes: the error was thrown already, close() does not throw it again.
+  EXPECT_NO_THROW(session.close());
+}
+
+TEST(ApiEmbedding, AMessengerErrorAfterTheLastFrameIsThrownByClose) {
+  ASSERT_GE(testutil::worldSize(), 3) << "run with 3 ranks (tests/api/CMakeLists.txt)";
+  const int rank = testutil::worldRank();
+  dfbwall::Session session(MPI_COMM_WORLD, options(2));
+  session.setStyle(style());
+  session.setCamera(camera());
+  std::vector<float> storage;
+  addBricks(session, storage);
+  session.renderFrame();
+  // Rank 0 sends rank 2 a message for no object; close() quiesces the messaging, so rank 2 has
+  // handled it before close() returns, and close() throws it there only.
+  if (rank == 0) dfbwall::SessionTesting::send(session, 2, kNobody);
+  if (rank == 2) {
+    try {
+      session.close();
+      ADD_FAILURE() << "no error";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("dfbwall: error on rank 2 ("), std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find("to object id " + std::to_string(kNobody)),
+                std::string::npos)
+          << e.what();
+    }
+  } else {
+    EXPECT_NO_THROW(session.close());
+  }
+  // Closed all the same: its communicators are released, a second close() does nothing.
+  EXPECT_NO_THROW(session.close());
 }
 
 }  // namespace
