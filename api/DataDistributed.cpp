@@ -6,14 +6,15 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <cstring>
 #include <exception>
 #include <filesystem>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 
 #include "api/SceneStyle.h"
+#include "api/SessionTesting.h"
 #include "api/WallStop.h"
 #include "dfb/AtomicFile.h"
 #include "dfb/BoundedWait.h"
@@ -21,6 +22,7 @@
 #include "dfb/Error.h"
 #include "dfb/Messenger.h"
 #include "renderers/FrameDriver.h"
+#include "renderers/Parallel.h"
 #include "renderers/scivis/BrickFrameDriver.h"
 #include "wall/DisplayRoutingOp.h"
 #include "wall/FrameCredits.h"
@@ -44,10 +46,54 @@ void bounded(MPI_Request& request, std::chrono::milliseconds timeout, const std:
       what + ": another rank did not join within " + std::to_string(timeout.count()) + " ms");
 }
 
-// What render rank 0 decides for every frame: the camera (so every rank renders the same).
+// What render rank 0 sends for every frame: the camera (so every rank renders the same) and the
+// hash of its style, which every rank compares its own with.
 struct FrameOrder {
-  std::int32_t changed;  // any rank changed its bricks or the style: a new scene version
   float camera[10];
+  std::uint64_t styleHash;
+};
+
+// The first error the messenger reported on this rank. It arrives on the messenger's threads,
+// where nothing can throw to the program (a message for no object, one that does not decode, a
+// handler that threw): it is kept here, and the session's next collective call on this rank
+// throws it (docs/design.md, "Failures").
+class FirstError {
+ public:
+  void record(const std::string& message) {
+    std::lock_guard lock(mutex_);
+    if (!failed_) message_ = message;
+    failed_ = true;
+  }
+  bool failed() const {
+    std::lock_guard lock(mutex_);
+    return failed_;
+  }
+  [[noreturn]] void raise(const std::string& then = {}) {
+    std::lock_guard lock(mutex_);
+    thrown_ = true;
+    throw std::runtime_error(then.empty() ? message_ : message_ + "; then: " + then);
+  }
+  void raiseUnlessThrown() {
+    std::unique_lock lock(mutex_);
+    if (!failed_ || thrown_) return;
+    lock.unlock();
+    raise();
+  }
+  // In a handler: a failure that follows the recorded one (a deadline, most likely) is thrown as
+  // the recorded one, the cause, with its own message appended. Returns when there is none or it
+  // was thrown already, and for a std::logic_error (the handler rethrows).
+  void raiseInstead(const std::exception& e) {
+    if (dynamic_cast<const std::logic_error*>(&e)) return;  // a misuse, whatever else happened
+    std::unique_lock lock(mutex_);
+    if (!failed_ || thrown_) return;
+    lock.unlock();
+    raise(e.what());
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::string message_;
+  bool failed_ = false, thrown_ = false;
 };
 
 }  // namespace
@@ -63,6 +109,9 @@ struct Session::Impl {
   int width = 0, height = 0;
   std::unique_ptr<dfb::Messenger> messenger;
   std::unique_ptr<WallStop> wallStop;
+  // Shared with the messenger's error callback: the messenger, declared before it, is destroyed
+  // after it and may still report an error while it stops.
+  std::shared_ptr<FirstError> error = std::make_shared<FirstError>();
   bool closed = false;
 
   // Render ranks.
@@ -72,7 +121,11 @@ struct Session::Impl {
   std::shared_ptr<wall::DisplayRoutingOp> routing;
   std::unique_ptr<wall::FrameCredits> credits;
   std::unique_ptr<renderers::BrickFrameDriver> driver;
+  // Where all of this rank's rendering runs: at most options.threads threads of its own, no cap
+  // on the program's TBB parallelism (renderers/Parallel.h).
+  std::unique_ptr<renderers::TaskArena> arena;
   Style style;
+  std::uint64_t hashOfStyle = 0;  // styleHash(style)
   bool styleSet = false, dirty = false, replacing = false;
   std::vector<renderers::HeldBrick> pending;  // bricks added since the last frame
   Camera camera, lastCamera;
@@ -83,6 +136,7 @@ struct Session::Impl {
   void setUp();  // the layout, roles and canvas; throws on bad input
   void commit();
   void startRendering();
+  void renderFrame();  // in the arena
 };
 
 Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make_unique<Impl>()) {
@@ -120,13 +174,18 @@ Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make
   dfb::checkMpi(MPI_Comm_split(m.own, m.isWall() ? 1 : 0, m.rank, &m.role), "MPI_Comm_split");
   dfb::MessengerOptions messaging;
   messaging.quiesceTimeout = m.timeout;
+  // The session's thread budget covers the tile inputs the messenger combines too (the dfbwall
+  // executable caps both with one process-wide limit, which a program embedding us must not get).
+  messaging.handlerThreads = options.threads;
   m.messenger = std::make_unique<dfb::Messenger>(m.own, messaging);
-  // A message that cannot be handled arrives on the messaging thread, where nothing can throw to
-  // the program: it ends the job, as it does the dfbwall executable (docs/design.md, Failures).
-  m.messenger->setErrorCallback([rank = m.rank](const std::string& message) {
-    std::fprintf(stderr, "dfbwall: error on rank %d: %s\n", rank, message.c_str());
-    MPI_Abort(MPI_COMM_WORLD, 1);
-  });
+  // A message that cannot be handled arrives on a messaging thread, where nothing can throw to
+  // the program: it is recorded, and thrown by this rank's next renderFrame(), close() or
+  // runWall() (the library never ends the job; the program decides).
+  m.messenger->setErrorCallback(
+      [error = m.error, where = "dfbwall: error on rank " + std::to_string(m.rank) + " (" +
+                                m.messenger->hostOf(m.rank) + "): "](const std::string& message) {
+        error->record(where + message);
+      });
   m.wallStop = std::make_unique<WallStop>(*m.messenger);
   if (!m.isWall()) m.startRendering();
 }
@@ -150,6 +209,7 @@ void Session::Impl::startRendering() {
   // The driver's operation (composite, then accumulate): the same for every scene version.
   renderers::configureBrickDfb(dfbOptions, activeTiles);
   fb = std::make_unique<dfb::DistributedFrameBuffer>(*messenger, role, dfbOptions);
+  arena = std::make_unique<renderers::TaskArena>(options.threads);
   if (route) {
     routing =
         std::make_shared<wall::DisplayRoutingOp>(*messenger, *layout, roles, options.tileSize);
@@ -202,10 +262,11 @@ MPI_Comm Session::renderComm() const { return impl_->isWall() ? MPI_COMM_NULL : 
 int Session::canvasWidth() const { return impl_->width; }
 int Session::canvasHeight() const { return impl_->height; }
 
-void Session::runWall() {
+void Session::runWall() try {
   Impl& m = *impl_;
   if (!m.isWall()) throw std::logic_error("dfbwall: runWall() on a render rank");
   const int process = m.roles.processOfRank(m.rank);
+  renderers::FloatModeGuard callersMode;  // a GL implementation may change it (llvmpipe)
   std::optional<wall::GlfwSession> glfw;
   if (!m.options.offscreen) glfw.emplace();
   std::vector<std::unique_ptr<wall::Presenter>> presenters;
@@ -229,23 +290,32 @@ void Session::runWall() {
     wall::WallNode node(*m.layout, peers, std::move(shown), options);
     const dfb::Registration pieces(*m.messenger, wall::kWallNodeObject, &node);
     m.wallStop->onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
+    // However the block is left (a throw too), the stop no longer reaches the node it leaves.
+    const std::unique_ptr<WallStop, void (*)(WallStop*)> forget(
+        m.wallStop.get(), [](WallStop* stop) { stop->onLastFrame({}); });
     MPI_Request request;
     dfb::checkMpi(MPI_Ibarrier(m.own, &request), "MPI_Ibarrier");
     bounded(request, m.timeout, "dfbwall session start-up");
-    for (std::uint32_t frameId = 1;; ++frameId)
+    for (std::uint32_t frameId = 1;; ++frameId) {
       if (node.presentFrame(frameId).stopped) break;
+      if (m.error->failed()) m.error->raise();  // the render ranks fail at their deadline
+    }
     node.finish();  // captures the last frame
-    m.wallStop->onLastFrame({});
   }
   m.wallStop.reset();
   m.messenger->stop();
   MPI_Comm_free(&m.role);
   MPI_Comm_free(&m.own);
   m.closed = true;
+  m.error->raiseUnlessThrown();
+} catch (const std::exception& e) {
+  impl_->error->raiseInstead(e);
+  throw;
 }
 
 void Session::setStyle(const Style& style) {
   impl_->style = style;
+  impl_->hashOfStyle = styleHash(style);
   impl_->styleSet = true;
   impl_->dirty = true;
 }
@@ -285,7 +355,7 @@ void Session::Impl::commit() {
   auto desc = std::make_shared<renderers::SceneDesc>(sceneDesc(style, bricks, role, timeout));
   renderers::BrickDriverOptions driving;
   driving.samplesPerPixel = static_cast<std::uint32_t>(std::max(1, style.samplesPerPixel));
-  driving.threads = options.threads;
+  driving.threads = 0;  // no process-wide cap: the arena renderFrame runs in has the threads
   driving.activeTiles = activeTiles;
   driving.timeout = timeout;
   driver = std::make_unique<renderers::BrickFrameDriver>(std::move(desc), settings, driving,
@@ -296,45 +366,77 @@ void Session::renderFrame() {
   Impl& m = *impl_;
   if (m.isWall()) throw std::logic_error("dfbwall: renderFrame() on a wall rank");
   if (m.closed) throw std::logic_error("dfbwall: renderFrame() after close()");
-  const std::uint32_t frameId = m.frameId + 1;
+  // Render tasks set flush-to-zero and denormals-are-zero on the threads that run them, this one
+  // included: the program gets its own mode back, also when the frame throws.
+  renderers::FloatModeGuard callersMode;
+  try {
+    m.arena->execute([&m] { m.renderFrame(); });
+  } catch (const std::exception& e) {
+    m.error->raiseInstead(e);
+    throw;
+  }
+}
+
+void Session::Impl::renderFrame() {
+  const std::uint32_t next = frameId + 1;
   // Frames in flight: rank 0 starts frame F once the wall presented F - K.
-  if (m.credits)
-    m.credits->waitForPresented(static_cast<std::int64_t>(frameId) - m.options.framesInFlight,
-                                m.timeout);
+  if (credits)
+    credits->waitForPresented(static_cast<std::int64_t>(next) - options.framesInFlight, timeout);
   FrameOrder order{};
-  order.changed = m.dirty || !m.driver ? 1 : 0;
-  const Camera& c = m.camera;
-  const float camera[10] = {c.position[0], c.position[1], c.position[2], c.lookAt[0], c.lookAt[1],
+  const Camera& c = camera;
+  const float floats[10] = {c.position[0], c.position[1], c.position[2], c.lookAt[0], c.lookAt[1],
                             c.lookAt[2],   c.up[0],       c.up[1],       c.up[2],     c.fovY};
-  std::memcpy(order.camera, camera, sizeof camera);
-  int changed = order.changed, anyChanged = 0;
+  std::memcpy(order.camera, floats, sizeof floats);
+  order.styleHash = hashOfStyle;
   MPI_Request request;
-  dfb::checkMpi(MPI_Iallreduce(&changed, &anyChanged, 1, MPI_INT, MPI_MAX, m.role, &request),
+  dfb::checkMpi(MPI_Ibcast(&order, sizeof order, MPI_BYTE, 0, role, &request), "MPI_Ibcast");
+  bounded(request, 2 * timeout, "frame " + std::to_string(next));  // rank 0 may wait for the wall
+  // What the ranks must agree on, each the lowest rank it concerns as renderRanks - rank (MPI_MAX;
+  // 0: none): whether any rank changed its bricks or style (a new scene version), a rank without
+  // a style, a rank whose style is not render rank 0's, a rank that failed (its messenger
+  // reported an error): then every rank throws here, together, instead of the others waiting
+  // for it until their deadline.
+  const int renderRanks = roles.renderRanks, mark = renderRanks - rank;
+  const bool failed = error->failed();
+  int mine[4] = {dirty || !driver ? 1 : 0, styleSet ? 0 : mark,
+                 styleSet && hashOfStyle != order.styleHash ? mark : 0, failed ? mark : 0};
+  int agreed[4] = {0, 0, 0, 0};
+  dfb::checkMpi(MPI_Iallreduce(mine, agreed, 4, MPI_INT, MPI_MAX, role, &request),
                 "MPI_Iallreduce");
-  bounded(request, 2 * m.timeout, "frame " + std::to_string(frameId));
-  dfb::checkMpi(MPI_Ibcast(order.camera, sizeof order.camera, MPI_BYTE, 0, m.role, &request),
-                "MPI_Ibcast");
-  bounded(request, m.timeout, "frame " + std::to_string(frameId));
+  bounded(request, timeout, "frame " + std::to_string(next));
+  if (failed) error->raise();
+  if (agreed[3])
+    throw std::runtime_error("dfbwall: render rank " + std::to_string(renderRanks - agreed[3]) +
+                             " failed (its error says why); the session is unusable");
+  const bool anyChanged = agreed[0] != 0;
   if (anyChanged) {
-    if (!m.styleSet) throw std::logic_error("dfbwall: renderFrame() before setStyle()");
-    m.commit();
-    m.dirty = false;
-    ++m.epoch;
+    // Thrown on every rank alike, before anything changed: the session stays in step.
+    if (agreed[1])
+      throw std::logic_error("dfbwall: renderFrame() before setStyle() on render rank " +
+                             std::to_string(renderRanks - agreed[1]));
+    if (agreed[2])
+      throw std::runtime_error(
+          "dfbwall: the render ranks passed different styles to setStyle() (render rank " +
+          std::to_string(renderRanks - agreed[2]) + " differs from render rank 0)");
+    commit();
+    dirty = false;
+    ++epoch;
   }
   Camera used;
   std::memcpy(used.position.data(), order.camera, 3 * sizeof(float));
   std::memcpy(used.lookAt.data(), order.camera + 3, 3 * sizeof(float));
   std::memcpy(used.up.data(), order.camera + 6, 3 * sizeof(float));
   used.fovY = order.camera[9];
-  if (!anyChanged && std::memcmp(&used, &m.lastCamera, sizeof used) != 0) ++m.epoch;
-  m.lastCamera = used;
+  if (!anyChanged && std::memcmp(&used, &lastCamera, sizeof used) != 0) ++epoch;
+  lastCamera = used;
   renderers::CameraDesc cd;
   cd.position = {used.position[0], used.position[1], used.position[2]};
   cd.lookAt = {used.lookAt[0], used.lookAt[1], used.lookAt[2]};
   cd.up = {used.up[0], used.up[1], used.up[2]};
   cd.fovY = used.fovY;
-  m.driver->renderFrame(*m.fb, {frameId, m.epoch}, cd);
-  m.frameId = frameId;
+  driver->renderFrame(*fb, {next, epoch}, cd);
+  frameId = next;
+  if (error->failed()) error->raise();  // during this frame: the others learn at the next one
 }
 
 std::uint32_t Session::framesRendered() const { return impl_->frameId; }
@@ -356,7 +458,7 @@ void Session::writeImage(const std::string& path) const {
 
 std::size_t Session::sceneBytes() const { return impl_->driver ? impl_->driver->sceneBytes() : 0; }
 
-void Session::close() {
+void Session::close() try {
   Impl& m = *impl_;
   if (m.closed) return;
   if (m.isWall()) throw std::logic_error("dfbwall: close() on a wall rank (runWall() returns)");
@@ -373,6 +475,16 @@ void Session::close() {
   MPI_Comm_free(&m.role);
   MPI_Comm_free(&m.own);
   m.closed = true;
+  m.error->raiseUnlessThrown();  // one that came after the last frame
+} catch (const std::exception& e) {
+  impl_->error->raiseInstead(e);
+  throw;
 }
+
+void SessionTesting::send(Session& session, int toRank, std::uint64_t object) {
+  session.impl_->messenger->send(toRank, object, dfb::Bytes{});
+}
+
+void SessionTesting::quiesce(Session& session) { session.impl_->messenger->quiesce(); }
 
 }  // namespace dfbwall

@@ -20,12 +20,28 @@
 // ranks must be the same data (replication: either rank may render it).
 //
 // Every call but the accessors is collective over the render ranks (renderFrame, close; setStyle,
-// addBrick, clearBricks and setCamera are local and take effect at the next renderFrame). Every
-// wait is bounded by SessionOptions::timeoutSeconds: a rank that stops answering (or a program
-// that takes longer between frames than that, with a wall waiting) is an error, thrown as
-// std::runtime_error naming the cause; after one the session is unusable (end the job with
-// MPI_Abort). MPI must be initialised with MPI_THREAD_MULTIPLE (the messaging runs on its own
-// thread).
+// addBrick, clearBricks and setCamera are local and take effect at the next renderFrame). MPI
+// must be initialised with MPI_THREAD_MULTIPLE (the messaging runs on its own thread).
+//
+// Errors are thrown, never turned into MPI_Abort by the library. Every wait is bounded by
+// SessionOptions::timeoutSeconds: a rank that stops answering (or a program that takes longer
+// between frames than that, with a wall waiting) is an error, thrown as std::runtime_error naming
+// the cause. An error found on the session's messaging threads (a message for no object, one that
+// does not decode, a handler that threw) is kept and thrown by this rank's renderFrame(),
+// close() or runWall() in progress, or else its next one: "dfbwall: error on rank R (HOST):
+// cause". renderFrame() shares it in its per-frame exchange, so the other render ranks throw
+// ("render rank R failed") at the same frame; a rank waiting for a failed peer anywhere else
+// throws at its deadline at the latest. Errors every render rank finds alike in renderFrame()
+// before the frame starts (bricks that disagree, different styles, no style) leave the ranks in
+// step: give the corrected input again (setStyle; clearBricks and addBrick) and render again.
+// After any other error the session is unusable (every further renderFrame() throws; close() on
+// every rank still releases it): end the job with MPI_Abort.
+//
+// Threads and floating point. Rendering runs in the session's own TBB task arena
+// (SessionOptions::threads), joined by the thread that calls renderFrame(); its tasks run with
+// flush-to-zero and denormals-are-zero on, whatever the caller's mode, so the image never depends
+// on it. renderFrame() and runWall() give the calling thread its own mode (MXCSR FTZ/DAZ) back
+// when they return or throw.
 #include <mpi.h>
 
 #include <array>
@@ -79,7 +95,9 @@ struct Light {
   float intensity = 1;
 };
 
-// Everything but the data, the same on every render rank.
+// Everything but the data, the same on every render rank: at each scene version the ranks compare
+// a hash of every field (floats by their bits), and ranks that passed different styles make
+// renderFrame() throw on every rank, naming the lowest rank that differs from render rank 0.
 struct Style {
   std::vector<VolumeStyle> volumes;
   std::vector<Isosurface> isosurfaces;
@@ -142,7 +160,10 @@ struct SessionOptions {
   std::string captureDir;         // wall captures DIR/<display>/frame-NNNNNN.png, DIR/wall-*.png
   int captureEvery = 0;           // every K-th frame; 0: the last one only
   int tileSize = 64;
-  int threads = 0;           // TBB threads per render rank; 0: all cores
+  // Threads per render rank (0: all cores): the session renders in a TBB task arena of its own
+  // with this many threads and combines tiles with as many; the program's own TBB parallelism
+  // (its arenas, its tbb::global_control) is neither capped nor used by it.
+  int threads = 0;
   int framesInFlight = 2;    // frames rendered ahead of the wall
   int timeoutSeconds = 300;  // bound of every wait (see above)
   float exposure = 1;        // tone mapping: linear radiance times this, then sRGB
@@ -186,6 +207,7 @@ class Session {
   void close();
 
  private:
+  friend struct SessionTesting;  // the tests' access to the messaging (not installed)
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

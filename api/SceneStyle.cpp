@@ -66,7 +66,90 @@ renderers::WorldMesh mesh(const Brick& brick, const Mesh& m, const char* field) 
   return out;
 }
 
+// The canonical serialisation styleHash() hashes, fed byte by byte.
+class Fnv1a {
+ public:
+  void bytes(const void* data, std::size_t n) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) hash_ = (hash_ ^ b[i]) * 0x100000001b3ull;
+  }
+  void u64(std::uint64_t v) {
+    unsigned char b[8];
+    for (int i = 0; i < 8; ++i) b[i] = static_cast<unsigned char>(v >> (8 * i));
+    bytes(b, 8);
+  }
+  void i64(std::int64_t v) { u64(static_cast<std::uint64_t>(v)); }
+  void f32(float v) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    u64(bits);
+  }
+  void vec(const Vec3f& v) {
+    for (float c : v) f32(c);
+  }
+  void text(const std::string& s) {
+    u64(s.size());
+    bytes(s.data(), s.size());
+  }
+  std::uint64_t value() const { return hash_; }
+
+ private:
+  std::uint64_t hash_ = 0xcbf29ce484222325ull;
+};
+
 }  // namespace
+
+// A field added to Style or to a struct it holds must be hashed below: these sizes change with
+// it (on the platform the suite runs on) and remind whoever adds one.
+#if defined(__x86_64__) && defined(__GLIBCXX__)
+static_assert(sizeof(FieldGrid) == 36 && sizeof(VolumeStyle) == 128 && sizeof(Isosurface) == 24 &&
+                  sizeof(Light) == 44 && sizeof(Style) == 144,
+              "a field was added to dfbwall::Style: hash it in styleHash()");
+#endif
+
+std::uint64_t styleHash(const Style& style) {
+  Fnv1a h;
+  h.u64(style.volumes.size());
+  for (const VolumeStyle& v : style.volumes) {
+    h.text(v.name);
+    for (int d : v.grid.dims) h.i64(d);
+    h.vec(v.grid.origin);
+    h.vec(v.grid.spacing);
+    h.text(v.transferFunction);
+    h.f32(v.maxOpacity);
+    h.u64(v.autoRange ? 1 : 0);
+    h.f32(v.valueMin);
+    h.f32(v.valueMax);
+    h.u64(v.visible ? 1 : 0);
+  }
+  h.u64(style.isosurfaces.size());
+  for (const Isosurface& i : style.isosurfaces) {
+    h.i64(i.volume);
+    h.f32(i.value);
+    h.vec(i.color);
+    h.f32(i.opacity);
+  }
+  h.vec(style.particleColor);
+  h.f32(style.particleOpacity);
+  h.vec(style.meshColor);
+  h.f32(style.meshOpacity);
+  h.u64(style.lights.size());
+  for (const Light& l : style.lights) {
+    h.i64(static_cast<std::int64_t>(l.kind));
+    h.vec(l.direction);
+    h.vec(l.position);
+    h.vec(l.color);
+    h.f32(l.intensity);
+  }
+  h.i64(style.aoSamples);
+  h.f32(style.aoDistance);
+  h.u64(style.shadows ? 1 : 0);
+  h.f32(style.samplingRate);
+  h.vec(style.background);
+  h.i64(style.samplesPerPixel);
+  h.u64(style.seed);
+  return h.value();
+}
 
 renderers::BrickContent brickContent(const Style& style, const Brick& brick) {
   if (brick.id < 0) fail(brick, "the id must not be negative");

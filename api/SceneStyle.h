@@ -4,6 +4,7 @@
 #include <mpi.h>
 
 #include <chrono>
+#include <cstdint>
 #include <vector>
 
 #include "api/DataDistributed.h"
@@ -20,5 +21,10 @@ renderers::BrickContent brickContent(const Style& style, const Brick& brick);
 // when a volume asks for autoRange (the value range over every rank's voxels, one allreduce).
 renderers::SceneDesc sceneDesc(const Style& style, const std::vector<renderers::HeldBrick>& mine,
                                MPI_Comm renderComm, std::chrono::milliseconds timeout);
+
+// FNV-1a over a canonical serialisation of every field of the style (sizes and string lengths
+// included, floats by their bits, little-endian integers): the same on every rank for the same
+// style, whatever the platform's padding. The render ranks compare it at every scene version.
+std::uint64_t styleHash(const Style& style);
 
 }  // namespace dfbwall

@@ -1,7 +1,10 @@
 #include "renderers/Parallel.h"
 
+#include <pmmintrin.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+#include <xmmintrin.h>
 
 #include <optional>
 
@@ -18,6 +21,34 @@ ThreadLimit::ThreadLimit(int threads) : impl_(std::make_unique<Impl>()) {
 }
 
 ThreadLimit::~ThreadLimit() = default;
+
+struct TaskArena::Impl {
+  tbb::task_arena arena;
+  explicit Impl(int threads) : arena(threads > 0 ? threads : tbb::task_arena::automatic) {}
+};
+
+TaskArena::TaskArena(int threads) : impl_(std::make_unique<Impl>(threads)) {
+  // An arena takes the floating-point settings of the thread that initialises it and applies
+  // them to each of its tasks (and to a thread while it is inside execute()).
+  FloatModeGuard caller;
+  _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+  _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+  impl_->arena.initialize();
+}
+
+TaskArena::~TaskArena() = default;
+
+void TaskArena::execute(const std::function<void()>& work) { impl_->arena.execute(work); }
+
+int TaskArena::maxConcurrency() const { return impl_->arena.max_concurrency(); }
+
+FloatModeGuard::FloatModeGuard()
+    : flushZero_(_MM_GET_FLUSH_ZERO_MODE()), denormalsZero_(_MM_GET_DENORMALS_ZERO_MODE()) {}
+
+FloatModeGuard::~FloatModeGuard() {
+  _MM_SET_FLUSH_ZERO_MODE(flushZero_);
+  _MM_SET_DENORMALS_ZERO_MODE(denormalsZero_);
+}
 
 void parallelFor(std::size_t count, const std::function<void(std::size_t)>& body) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1),
