@@ -184,6 +184,12 @@ Directory parseDirectory(const std::byte* data, std::size_t size) {
     display.rect.x1 = r.get<std::int32_t>();
     display.rect.y1 = r.get<std::int32_t>();
     display.process = r.get<std::int32_t>();
+    // Checked in 64 bits before anything computes a width or moves the rectangle: a side
+    // of INT_MAX - INT_MIN would overflow an int in computeCanvas and validateLayout.
+    if (!dfb::isSaneRegion(display.rect, kMaxCanvasSide))
+      r.fail("display " + std::to_string(i) + " has the rectangle [" +
+             std::to_string(display.rect.x0) + ", " + std::to_string(display.rect.x1) + ") x [" +
+             std::to_string(display.rect.y0) + ", " + std::to_string(display.rect.y1) + ")");
     d.layout.displays.push_back(std::move(display));
   }
   const auto processes = r.get<std::uint32_t>();
@@ -196,10 +202,12 @@ Directory parseDirectory(const std::byte* data, std::size_t size) {
   r.end();
   if (d.framesInFlight < 1 || d.framesInFlight > 16)
     r.fail("frames in flight " + std::to_string(d.framesInFlight));
-  // The same checks as a layout file gets; the canvas must be what the displays make.
-  computeCanvas(d.layout);
+  // The same checks as a layout file gets, before computeCanvas moves the displays (which
+  // overflows an int for displays 2^31 apart; validateLayout refuses such a canvas in 64 bits);
+  // the canvas must be what the displays make.
   if (const Problems problems = validateLayout(d.layout); !problems.empty())
     r.fail("its layout: " + joinProblems(problems));
+  computeCanvas(d.layout);
   if (d.layout.canvasWidth != width || d.layout.canvasHeight != height ||
       d.layout.processCount != static_cast<int>(processes))
     r.fail("canvas or process count does not match its displays");
