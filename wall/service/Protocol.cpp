@@ -284,7 +284,12 @@ void BatchWriter::add(const CodecSpec& codec, const dfb::Region& local, const st
   const std::size_t at = bytes_.size();
   PieceRecord record{local.x0, local.y0, local.x1, local.y1, 0};
   bytes_.resize(at + sizeof record);
-  encodePixels(codec, pixels, local.width(), local.height(), stride, bytes_);
+  try {
+    encodePixels(codec, pixels, local.width(), local.height(), stride, bytes_);
+  } catch (...) {
+    bytes_.resize(at);  // no half-written record left in the batch
+    throw;
+  }
   record.size = static_cast<std::uint32_t>(bytes_.size() - at - sizeof record);
   std::memcpy(bytes_.data() + at, &record, sizeof record);
   ++pieces_;
