@@ -16,9 +16,14 @@ class Writer {
     h.session = session;
     raw(&h, sizeof h);
   }
+  // resize + memcpy rather than insert: GCC 12 at -O2 warns (-Wstringop-overflow, a false
+  // positive) about the inlined vector::insert into the fresh 16-byte header, which
+  // DFBWALL_WERROR turns into a build error.
   void raw(const void* p, std::size_t n) {
-    const auto* b = static_cast<const std::byte*>(p);
-    bytes_.insert(bytes_.end(), b, b + n);
+    if (n == 0) return;
+    const std::size_t at = bytes_.size();
+    bytes_.resize(at + n);
+    std::memcpy(bytes_.data() + at, p, n);
   }
   template <typename T>
   void put(T value) {
@@ -179,6 +184,12 @@ Directory parseDirectory(const std::byte* data, std::size_t size) {
     display.rect.x1 = r.get<std::int32_t>();
     display.rect.y1 = r.get<std::int32_t>();
     display.process = r.get<std::int32_t>();
+    // Checked in 64 bits before anything computes a width or moves the rectangle: a side
+    // of INT_MAX - INT_MIN would overflow an int in computeCanvas and validateLayout.
+    if (!dfb::isSaneRegion(display.rect, kMaxCanvasSide))
+      r.fail("display " + std::to_string(i) + " has the rectangle [" +
+             std::to_string(display.rect.x0) + ", " + std::to_string(display.rect.x1) + ") x [" +
+             std::to_string(display.rect.y0) + ", " + std::to_string(display.rect.y1) + ")");
     d.layout.displays.push_back(std::move(display));
   }
   const auto processes = r.get<std::uint32_t>();
@@ -191,10 +202,12 @@ Directory parseDirectory(const std::byte* data, std::size_t size) {
   r.end();
   if (d.framesInFlight < 1 || d.framesInFlight > 16)
     r.fail("frames in flight " + std::to_string(d.framesInFlight));
-  // The same checks as a layout file gets; the canvas must be what the displays make.
-  computeCanvas(d.layout);
+  // The same checks as a layout file gets, before computeCanvas moves the displays (which
+  // overflows an int for displays 2^31 apart; validateLayout refuses such a canvas in 64 bits);
+  // the canvas must be what the displays make.
   if (const Problems problems = validateLayout(d.layout); !problems.empty())
     r.fail("its layout: " + joinProblems(problems));
+  computeCanvas(d.layout);
   if (d.layout.canvasWidth != width || d.layout.canvasHeight != height ||
       d.layout.processCount != static_cast<int>(processes))
     r.fail("canvas or process count does not match its displays");
@@ -271,7 +284,12 @@ void BatchWriter::add(const CodecSpec& codec, const dfb::Region& local, const st
   const std::size_t at = bytes_.size();
   PieceRecord record{local.x0, local.y0, local.x1, local.y1, 0};
   bytes_.resize(at + sizeof record);
-  encodePixels(codec, pixels, local.width(), local.height(), stride, bytes_);
+  try {
+    encodePixels(codec, pixels, local.width(), local.height(), stride, bytes_);
+  } catch (...) {
+    bytes_.resize(at);  // no half-written record left in the batch
+    throw;
+  }
   record.size = static_cast<std::uint32_t>(bytes_.size() - at - sizeof record);
   std::memcpy(bytes_.data() + at, &record, sizeof record);
   ++pieces_;
