@@ -40,8 +40,6 @@ TaskArena::~TaskArena() = default;
 
 void TaskArena::execute(const std::function<void()>& work) { impl_->arena.execute(work); }
 
-int TaskArena::maxConcurrency() const { return impl_->arena.max_concurrency(); }
-
 FloatModeGuard::FloatModeGuard()
     : flushZero_(_MM_GET_FLUSH_ZERO_MODE()), denormalsZero_(_MM_GET_DENORMALS_ZERO_MODE()) {}
 

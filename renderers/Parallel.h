@@ -39,7 +39,6 @@ class TaskArena {
 
   // Runs `work` on the calling thread inside the arena; an exception in it is rethrown here.
   void execute(const std::function<void()>& work);
-  int maxConcurrency() const;
 
  private:
   struct Impl;

@@ -315,6 +315,9 @@ TEST(ApiEmbedding, AMessengerErrorIsThrownOnEveryRankInsteadOfAborting) {
   std::vector<float> storage;
   addBricks(session, storage);
   session.renderFrame();
+  // Every rank is out of its frame: the message below arrives between calls (during one, that
+  // call would throw it on rank 1 alone).
+  MPI_Barrier(MPI_COMM_WORLD);
   // Rank 0 sends rank 1 a message for no object; once every rank has handled what was sent, rank
   // 1's messenger has reported it (before: MPI_Abort, the whole job gone).
   if (rank == 0) dfbwall::SessionTesting::send(session, 1, kNobody);
@@ -350,6 +353,7 @@ TEST(ApiEmbedding, AMessengerErrorAfterTheLastFrameIsThrownByClose) {
   std::vector<float> storage;
   addBricks(session, storage);
   session.renderFrame();
+  MPI_Barrier(MPI_COMM_WORLD);  // every rank is out of its frame (as above)
   // Rank 0 sends rank 2 a message for no object; close() quiesces the messaging, so rank 2 has
   // handled it before close() returns, and close() throws it there only.
   if (rank == 0) dfbwall::SessionTesting::send(session, 2, kNobody);
