@@ -24,16 +24,16 @@
 #include "renderers/FrameDriver.h"
 #include "renderers/Parallel.h"
 #include "renderers/scivis/BrickFrameDriver.h"
+#include "wall/DisplayPresenters.h"
 #include "wall/DisplayRoutingOp.h"
 #include "wall/FrameCredits.h"
-#include "wall/GlfwPresenter.h"
 #include "wall/Layout.h"
-#include "wall/OsmesaPresenter.h"
 #include "wall/PieceMessage.h"
 #include "wall/Png.h"
 #include "wall/Ranks.h"
 #include "wall/Routing.h"
 #include "wall/WallNode.h"
+#include "wall/service/ServiceClient.h"
 
 namespace dfbwall {
 namespace {
@@ -120,6 +120,11 @@ struct Session::Impl {
   std::unique_ptr<dfb::DistributedFrameBuffer> fb;
   std::shared_ptr<wall::DisplayRoutingOp> routing;
   std::unique_ptr<wall::FrameCredits> credits;
+  // With SessionOptions::connect: the wall's directory, the link to it (render rank 0) and the
+  // pieces' way there (every rank).
+  std::optional<wall::service::Directory> directory;
+  std::shared_ptr<wall::service::ServiceClient> service;
+  std::shared_ptr<wall::service::ServicePieceSink> serviceSink;
   std::unique_ptr<renderers::BrickFrameDriver> driver;
   // Where all of this rank's rendering runs: at most options.threads threads of its own, no cap
   // on the program's TBB parallelism (renderers/Parallel.h).
@@ -171,6 +176,12 @@ Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make
                                                    " could not set up the session (it says why)"
                                              : problem);
   }
+  if (!options.connect.empty()) {
+    m.directory = wall::service::shareDirectory(m.own, m.service.get(), m.timeout);
+    m.layout = m.directory->layout;
+    m.width = m.layout->canvasWidth;
+    m.height = m.layout->canvasHeight;
+  }
   dfb::checkMpi(MPI_Comm_split(m.own, m.isWall() ? 1 : 0, m.rank, &m.role), "MPI_Comm_split");
   dfb::MessengerOptions messaging;
   messaging.quiesceTimeout = m.timeout;
@@ -210,7 +221,19 @@ void Session::Impl::startRendering() {
   renderers::configureBrickDfb(dfbOptions, activeTiles);
   fb = std::make_unique<dfb::DistributedFrameBuffer>(*messenger, role, dfbOptions);
   arena = std::make_unique<renderers::TaskArena>(options.threads);
-  if (route) {
+  if (route && directory) {
+    serviceSink = std::make_shared<wall::service::ServicePieceSink>(
+        *directory, rank, wall::service::parseCodec(options.codec),
+        static_cast<int>(timeout.count()));
+    routing = std::make_shared<wall::DisplayRoutingOp>(serviceSink, *layout, options.tileSize);
+    fb->addPixelOp(routing);
+    if (rank == 0) {
+      credits = std::make_unique<wall::FrameCredits>();
+      // The wall ending the job, or going silent, is this rank's next call's error.
+      service->start(*credits,
+                     [error = error](const std::string& why) { error->record("dfbwall: " + why); });
+    }
+  } else if (route) {
     routing =
         std::make_shared<wall::DisplayRoutingOp>(*messenger, *layout, roles, options.tileSize);
     fb->addPixelOp(routing);
@@ -223,7 +246,20 @@ void Session::Impl::startRendering() {
 }
 
 void Session::Impl::setUp() {
-  if (!options.wall.empty()) {
+  if (!options.connect.empty()) {
+    if (!options.wall.empty())
+      throw std::runtime_error(
+          "dfbwall: SessionOptions wall and connect: a wall you connect to has its own layout");
+    const wall::service::CodecSpec codec = wall::service::parseCodec(options.codec);
+    roles = wall::RankRoles{size, 0};  // every rank renders; the wall is elsewhere
+    if (rank == 0)
+      service = std::make_shared<wall::service::ServiceClient>(
+          options.connect,
+          wall::service::jobHello(size, options.tileSize, codec, options.framesInFlight,
+                                  options.token, options.wait, options.captureDir,
+                                  options.captureEvery),
+          timeout);
+  } else if (!options.wall.empty()) {
     layout = wall::loadLayout(options.wall);
     if (auto problem = wall::checkRankCount(*layout, size)) throw std::runtime_error(*problem);
     roles = wall::rankRoles(*layout, size);
@@ -267,15 +303,7 @@ void Session::runWall() try {
   if (!m.isWall()) throw std::logic_error("dfbwall: runWall() on a render rank");
   const int process = m.roles.processOfRank(m.rank);
   renderers::FloatModeGuard callersMode;  // a GL implementation may change it (llvmpipe)
-  std::optional<wall::GlfwSession> glfw;
-  if (!m.options.offscreen) glfw.emplace();
-  std::vector<std::unique_ptr<wall::Presenter>> presenters;
-  for (int d : m.layout->displaysOfProcess(process)) {
-    const wall::Display& display = m.layout->displays[static_cast<std::size_t>(d)];
-    presenters.push_back(
-        m.options.offscreen ? wall::makeOsmesaPresenter(display.rect.width(), display.rect.height())
-                            : wall::makeGlfwPresenter(*glfw, wall::windowOptionsFor(display)));
-  }
+  const auto presenters = wall::makeDisplayPresenters(*m.layout, process, m.options.offscreen);
   wall::WallNodeOptions options;
   options.tileSize = m.options.tileSize;
   options.captureDir = m.options.captureDir;
@@ -285,9 +313,7 @@ void Session::runWall() try {
   options.framesAhead = static_cast<std::uint32_t>(m.options.framesInFlight) + 2;
   {
     wall::MpiWallPeers peers(*m.messenger, m.role, options.timeout);
-    std::vector<wall::Presenter*> shown;
-    for (auto& p : presenters) shown.push_back(p.get());
-    wall::WallNode node(*m.layout, peers, std::move(shown), options);
+    wall::WallNode node(*m.layout, peers, presenters->list(), options);
     const dfb::Registration pieces(*m.messenger, wall::kWallNodeObject, &node);
     m.wallStop->onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
     // However the block is left (a throw too), the stop no longer reaches the node it leaves.
@@ -435,6 +461,7 @@ void Session::Impl::renderFrame() {
   cd.up = {used.up[0], used.up[1], used.up[2]};
   cd.fovY = used.fovY;
   driver->renderFrame(*fb, {next, epoch}, cd);
+  if (routing) routing->endFrame(next);
   frameId = next;
   if (error->failed()) error->raise();  // during this frame: the others learn at the next one
 }
@@ -463,11 +490,16 @@ void Session::close() try {
   if (m.closed) return;
   if (m.isWall()) throw std::logic_error("dfbwall: close() on a wall rank (runWall() returns)");
   if (m.rank == 0 && m.layout) {
-    m.wallStop->announceLastFrame(m.frameId, m.roles.renderRanks, m.roles.worldSize());
+    if (m.service)
+      m.service->bye(m.frameId);
+    else
+      m.wallStop->announceLastFrame(m.frameId, m.roles.renderRanks, m.roles.worldSize());
     if (m.credits) m.credits->waitForPresented(m.frameId, m.timeout);
   }
   m.driver.reset();
+  m.service.reset();  // after the goodbye and the last credit: its thread holds the credits
   m.credits.reset();
+  m.serviceSink.reset();
   m.fb.reset();
   m.routing.reset();
   m.wallStop.reset();

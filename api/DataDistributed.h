@@ -167,6 +167,16 @@ struct SessionOptions {
   int framesInFlight = 2;    // frames rendered ahead of the wall
   int timeoutSeconds = 300;  // bound of every wait (see above)
   float exposure = 1;        // tone mapping: linear radiance times this, then sRGB
+  // A wall that `dfbwall serve` runs ("HOST:PORT"), instead of `wall`: every rank of the
+  // communicator renders, and the pieces go straight from the tile owners to the wall's
+  // processes (the wall is not part of this job). Render rank 0 reads the wall's layout from it;
+  // captureDir is then a folder on the wall's hosts. `token`: the wall's, when it needs one;
+  // `codec`: "raw", "snappy" or "jpeg[:QUALITY]"; `wait`: queue behind a job the wall is
+  // showing instead of failing with its "busy" error.
+  std::string connect;
+  std::string token;
+  std::string codec = "snappy";
+  bool wait = false;
 };
 
 class Session {

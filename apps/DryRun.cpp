@@ -15,8 +15,20 @@ void printDryRun(const Job& job) {
   const wall::Layout& layout = *job.layout;
   std::printf("layout %s: canvas %dx%d, %zu displays, %d wall processes\n", layout.file.c_str(),
               layout.canvasWidth, layout.canvasHeight, layout.displays.size(), layout.processCount);
-  std::printf("ranks: 0..%d render, %d..%d wall\n", job.roles.renderRanks - 1,
-              job.roles.renderRanks, job.roles.worldSize() - 1);
+  if (job.connected()) {
+    std::printf("wall service at %s (protocol %u, session %016llx, %u frames in flight):\n",
+                o.connect.c_str(), static_cast<unsigned>(wall::service::kProtocolVersion),
+                static_cast<unsigned long long>(job.directory->session),
+                job.directory->framesInFlight);
+    for (size_t p = 0; p < job.directory->processes.size(); ++p)
+      std::printf("  wall process %zu: pieces to %s\n", p,
+                  job.directory->processes[p].endpoint.c_str());
+    std::printf("ranks: 0..%d render, every one sends its pieces straight to the wall (codec %s)\n",
+                job.roles.renderRanks - 1, wall::service::codecName(job.codec).c_str());
+  } else {
+    std::printf("ranks: 0..%d render, %d..%d wall\n", job.roles.renderRanks - 1,
+                job.roles.renderRanks, job.roles.worldSize() - 1);
+  }
   const std::vector<bool> active = wall::tilesShownByAnyDisplay(layout, o.tileSize);
   int shown = 0;
   for (bool a : active) shown += a;
@@ -31,7 +43,8 @@ void printDryRun(const Job& job) {
     const auto tiles = wall::tilesOfDisplay(layout, static_cast<int>(d), o.tileSize);
     std::printf("display %-8s %4dx%-4d at (%d, %d), wall process %d (rank %d)%s%s, %zu tiles:",
                 display.name.c_str(), display.rect.width(), display.rect.height(), display.rect.x0,
-                display.rect.y0, display.process, job.roles.rankOfProcess(display.process),
+                display.rect.y0, display.process,
+                job.connected() ? -1 : job.roles.rankOfProcess(display.process),
                 display.host.empty() ? "" : ", host ", display.host.c_str(), tiles.size());
     for (const wall::DisplayTile& t : tiles)
       std::printf(" %d@r%d", t.tileIndex,

@@ -143,19 +143,9 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
       job.roles = wall::RankRoles{worldSize, 0};  // every rank renders; the wall is elsewhere
       job.codec = wall::service::parseCodec(o.codec);
       if (job.worldRank == 0) {
-        wall::service::Hello hello;
-        hello.token = o.token;
-        char name[MPI_MAX_PROCESSOR_NAME];
-        int length = 0;
-        MPI_Get_processor_name(name, &length);
-        hello.host = std::string(name, static_cast<size_t>(length));
-        hello.renderRanks = static_cast<std::uint32_t>(worldSize);
-        hello.tileSize = static_cast<std::uint32_t>(o.tileSize);
-        hello.codec = job.codec;
-        hello.framesInFlight = static_cast<std::uint32_t>(o.framesInFlight);
-        hello.wait = o.wait;
-        hello.captureDir = o.dryRun ? std::string() : o.captureDir;
-        hello.captureEvery = static_cast<std::uint32_t>(o.captureEvery);
+        const wall::service::Hello hello = wall::service::jobHello(
+            worldSize, o.tileSize, job.codec, o.framesInFlight, o.token, o.wait,
+            o.dryRun ? std::string() : o.captureDir, o.captureEvery);
         job.service = std::make_shared<wall::service::ServiceClient>(
             o.connect, hello, std::chrono::seconds(o.timeoutSeconds),
             [](const std::string& queued) {
@@ -218,13 +208,7 @@ std::vector<RankTotals> collectTotals(const Job& job, RankTotals mine,
 
 // --connect: render rank 0 read the wall's directory; every rank routes with it.
 void shareDirectory(Job& job, std::chrono::milliseconds timeout) {
-  dfb::Bytes bytes = job.service ? job.service->directoryBytes() : dfb::Bytes{};
-  std::uint64_t size = bytes.size();
-  boundedBcast(&size, sizeof size, MPI_COMM_WORLD, timeout, "sharing the wall's directory");
-  bytes.resize(size);
-  boundedBcast(bytes.data(), static_cast<int>(size), MPI_COMM_WORLD, timeout,
-               "sharing the wall's directory");
-  job.directory = wall::service::parseDirectory(bytes.data(), bytes.size());
+  job.directory = wall::service::shareDirectory(MPI_COMM_WORLD, job.service.get(), timeout);
   job.layout = job.directory->layout;
   job.canvasWidth = job.layout->canvasWidth;
   job.canvasHeight = job.layout->canvasHeight;

@@ -12,8 +12,7 @@
 #include "apps/StopSignals.h"
 #include "dfb/AtomicFile.h"
 #include "dfb/Messenger.h"
-#include "wall/GlfwPresenter.h"
-#include "wall/OsmesaPresenter.h"
+#include "wall/DisplayPresenters.h"
 #include "wall/Ranks.h"
 #include "wall/service/WallService.h"
 
@@ -49,17 +48,7 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
   }
   try {
     const int process = worldRank;
-    std::optional<wall::GlfwSession> glfw;
-    if (!o.offscreen) glfw.emplace();
-    std::vector<std::unique_ptr<wall::Presenter>> presenters;
-    std::vector<wall::Presenter*> shown;
-    for (int d : layout->displaysOfProcess(process)) {
-      const wall::Display& display = layout->displays[static_cast<size_t>(d)];
-      presenters.push_back(
-          o.offscreen ? wall::makeOsmesaPresenter(display.rect.width(), display.rect.height())
-                      : wall::makeGlfwPresenter(*glfw, wall::windowOptionsFor(display)));
-      shown.push_back(presenters.back().get());
-    }
+    const auto presenters = wall::makeDisplayPresenters(*layout, process, o.offscreen);
     dfb::MessengerOptions messaging;
     messaging.quiesceTimeout = timeout;
     messaging.handlerThreads = 1;  // commands only: the pieces come through the service's sockets
@@ -84,7 +73,8 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
       std::fprintf(stats, "%s\n", line.c_str());
       std::fflush(stats);
     };
-    wall::service::WallService wallService(messenger, MPI_COMM_WORLD, *layout, shown, service);
+    wall::service::WallService wallService(messenger, MPI_COMM_WORLD, *layout, presenters->list(),
+                                           service);
     if (worldRank == 0) {
       // One line a script can read: where jobs connect, and the token when one is needed.
       std::printf("dfbwall: wall service on %s%s%s\n", wallService.address().c_str(),

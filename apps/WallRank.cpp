@@ -11,8 +11,7 @@
 #include "apps/ThreadCpu.h"
 #include "apps/WallKeys.h"
 #include "dfb/Timing.h"
-#include "wall/GlfwPresenter.h"
-#include "wall/OsmesaPresenter.h"
+#include "wall/DisplayPresenters.h"
 #include "wall/PieceMessage.h"
 #include "wall/WallNode.h"
 
@@ -31,15 +30,7 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
   const int process = job.roles.processOfRank(job.worldRank);
 
   // Only wall ranks ever start GL: OSMesa offscreen, or GLFW windows on this host's displays.
-  std::optional<wall::GlfwSession> glfw;
-  if (!o.offscreen) glfw.emplace();
-  std::vector<std::unique_ptr<wall::Presenter>> presenters;
-  for (int d : layout.displaysOfProcess(process)) {
-    const wall::Display& display = layout.displays[static_cast<size_t>(d)];
-    presenters.push_back(
-        o.offscreen ? wall::makeOsmesaPresenter(display.rect.width(), display.rect.height())
-                    : wall::makeGlfwPresenter(*glfw, wall::windowOptionsFor(display)));
-  }
+  const auto presenters = wall::makeDisplayPresenters(layout, process, o.offscreen);
 
   wall::WallNodeOptions options;
   options.tileSize = o.tileSize;
@@ -71,9 +62,7 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
     };
   {
     wall::MpiWallPeers peers(messenger, wallComm, options.timeout);
-    std::vector<wall::Presenter*> shown;
-    for (auto& p : presenters) shown.push_back(p.get());
-    wall::WallNode node(layout, peers, std::move(shown), options);
+    wall::WallNode node(layout, peers, presenters->list(), options);
     const dfb::Registration pieces(messenger, wall::kWallNodeObject, &node);
     control.onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
     // While the renderers idle (a converged wall), rank 0 tells the walls to keep waiting; a

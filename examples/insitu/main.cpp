@@ -5,6 +5,7 @@
 //
 //   mpirun -np 6 insitu --wall 2x2.toml --capture caps    # 2 simulating ranks, 4 wall ranks
 //   mpirun -np 2 insitu --size 400x300 --image last.png   # no wall: the last frame as a PNG
+//   mpirun -np 2 insitu --connect wall0:7000 --token T     # a wall that `dfbwall serve` runs
 //
 // The grid is cut into --blocks slabs whatever the rank count (rank r holds slabs r, r + R, ...),
 // so any number of ranks computes the same field and shows the same pixels.
@@ -30,11 +31,13 @@ struct Args {
 };
 
 [[noreturn]] void usage(const char* problem) {
-  std::fprintf(stderr,
-               "insitu: %s\nusage: insitu [--grid N] [--blocks B] [--steps S] [--show-every K]\n"
-               "              [--wall LAYOUT.toml [--windows] [--capture DIR]]\n"
-               "              [--size WxH --image FILE.png] [--threads T]\n",
-               problem);
+  std::fprintf(
+      stderr,
+      "insitu: %s\nusage: insitu [--grid N] [--blocks B] [--steps S] [--show-every K]\n"
+      "              [--wall LAYOUT.toml [--windows] [--capture DIR]]\n"
+      "              [--connect HOST:PORT [--token T] [--codec C] [--wait] [--capture DIR]]\n"
+      "              [--size WxH --image FILE.png] [--threads T]\n",
+      problem);
   std::exit(2);
 }
 
@@ -56,6 +59,14 @@ Args parse(int argc, char** argv) {
       a.showEvery = std::atoi(value().c_str());
     else if (k == "--wall")
       a.session.wall = value();
+    else if (k == "--connect")
+      a.session.connect = value();
+    else if (k == "--token")
+      a.session.token = value();
+    else if (k == "--codec")
+      a.session.codec = value();
+    else if (k == "--wait")
+      a.session.wait = true;
     else if (k == "--windows")
       a.session.offscreen = false;
     else if (k == "--capture")

@@ -5,7 +5,10 @@
 # wall shows: every display's capture of the last frame equals the same program's one-rank
 # image cut out (invariant 2 of docs/design.md), 3 ranks render that image byte for byte, and
 # it is a picture (many colours), not a blank.
-# Environment: BUILD (the dfbwall build tree), SOURCE, MPIEXEC, COMPARE (compare_captures).
+# Then the same on a wall that `dfbwall serve` runs, the simulation connecting to it
+# (SessionOptions::connect): the captures again equal the one-rank image.
+# Environment: BUILD (the dfbwall build tree), SOURCE, MPIEXEC, COMPARE (compare_captures),
+# DFBWALL (the executable, for `dfbwall serve`).
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 work=$(mktemp -d /tmp/dfbwall-insitu.XXXXXX)
@@ -31,6 +34,20 @@ timeout 120 "$MPIEXEC" -np 3 "$insitu" "${args[@]}" --size "$size" --image "$wor
 
 "$COMPARE" "$layout" "$work/caps" "$work/one.png" 3
 cmp "$work/one.png" "$work/three.png"
+
+# The same simulation on a wall that is not part of its job (`dfbwall serve`): 2 ranks, all of
+# them simulating and rendering, the pieces straight to the wall's 4 processes.
+port=$((20000 + ($$ + 7) % 20000))
+"$MPIEXEC" -np 4 "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" --offscreen \
+  --timeout 20 >"$work/serve.out" 2>"$work/serve.err" &
+serve=$!
+trap 'kill -9 $serve 2>/dev/null; rm -rf "$work"' EXIT
+for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
+timeout 120 "$MPIEXEC" -np 2 "$insitu" "${args[@]}" --connect "127.0.0.1:$port" --codec raw \
+  --capture "$work/served"
+"$COMPARE" "$layout" "$work/served" "$work/one.png" 3
+kill -USR1 $serve
+wait $serve
 colors=$("$COMPARE" --colors "$work/one.png")
 echo "the last frame has $colors colours"
 if [ "$colors" -lt 500 ]; then echo "FAIL: the image is (nearly) blank"; exit 1; fi

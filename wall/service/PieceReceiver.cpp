@@ -78,7 +78,11 @@ void PieceReceiver::run() {
         body.swap(extra);
         logOnce(peer, "a message of several parts");
       }
-      handle(peer, std::move(body));
+      try {
+        handle(peer, std::move(body));
+      } catch (const std::exception& e) {
+        logOnce(peer, e.what());  // e.g. a task arena that cannot take more work
+      }
     }
   }
 }

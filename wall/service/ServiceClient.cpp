@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "dfb/BoundedWait.h"
+#include "dfb/Error.h"
 #include "dfb/Timing.h"
 #include "wall/Error.h"
 
@@ -26,18 +28,26 @@ ServiceClient::ServiceClient(const std::string& address, const Hello& hello,
                              const std::function<void(const std::string&)>& onQueued)
     : address_(address), socket_(context_, zmq::socket_type::dealer), timeout_(timeout) {
   const std::string endpoint = tcpEndpoint(address, "--connect");
-  configureSocket(socket_, static_cast<int>(timeout.count()));
+  // The goodbye of a job that fails gets a second to leave.
+  configureSocket(socket_, static_cast<int>(timeout.count()), 1000);
   socket_.connect(endpoint);
   socket_.send(toMessage(packHello(hello)), zmq::send_flags::none);
   auto deadline = Clock::now() + timeout;
+  bool queued = false;
   while (true) {
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-    zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
-    if (left.count() <= 0 || zmq::poll(&item, 1, left) == 0)
+    if (left.count() <= 0)
       throw Error("no dfbwall wall answered at " + address + " within " +
                   std::to_string(timeout.count() / 1000) +
                   " s (is `dfbwall serve` running there?)");
+    zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
+    if (zmq::poll(&item, 1, std::min<std::chrono::milliseconds>(left, kKeepalive)) == 0) {
+      // Waiting in the wall's queue: say so every second, or the wall forgets the job.
+      if (queued)
+        socket_.send(toMessage(packControl(Kind::Keepalive, 0, 0)), zmq::send_flags::none);
+      continue;
+    }
     zmq::message_t reply;
     if (!socket_.recv(reply, zmq::recv_flags::none)) continue;
     const MessageHeader h = parseHeader(bytesOf(reply), reply.size());
@@ -50,7 +60,8 @@ ServiceClient::ServiceClient(const std::string& address, const Hello& hello,
         throw Error("the wall at " + address +
                     " refused the job: " + parseText(bytesOf(reply), reply.size()));
       case Kind::Queued:
-        if (onQueued) onQueued(parseText(bytesOf(reply), reply.size()));
+        if (onQueued && !queued) onQueued(parseText(bytesOf(reply), reply.size()));
+        queued = true;
         deadline = Clock::now() + timeout;  // the wall answers; it is not dead
         break;
       default:
@@ -150,6 +161,42 @@ void ServiceClient::run() {
   }
 }
 
+Directory shareDirectory(MPI_Comm comm, const ServiceClient* client,
+                         std::chrono::milliseconds timeout) {
+  dfb::Bytes bytes = client ? client->directoryBytes() : dfb::Bytes{};
+  std::uint64_t size = bytes.size();
+  const auto bounded = [&](void* data, int count) {
+    MPI_Request request;
+    dfb::checkMpi(MPI_Ibcast(data, count, MPI_BYTE, 0, comm, &request), "MPI_Ibcast");
+    dfb::waitWithDeadline(request, Clock::now() + timeout,
+                          "sharing the wall's directory: a rank did not join in time");
+  };
+  bounded(&size, sizeof size);
+  if (size > kMaxMessageBytes) throw Error("a directory of " + std::to_string(size) + " bytes");
+  bytes.resize(size);
+  bounded(bytes.data(), static_cast<int>(size));
+  return parseDirectory(bytes.data(), bytes.size());
+}
+
+Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int framesInFlight,
+               const std::string& token, bool wait, const std::string& captureDir,
+               int captureEvery) {
+  Hello hello;
+  hello.token = token;
+  char name[MPI_MAX_PROCESSOR_NAME];
+  int length = 0;
+  MPI_Get_processor_name(name, &length);
+  hello.host = std::string(name, static_cast<size_t>(length));
+  hello.renderRanks = static_cast<std::uint32_t>(renderRanks);
+  hello.tileSize = static_cast<std::uint32_t>(tileSize);
+  hello.codec = codec;
+  hello.framesInFlight = static_cast<std::uint32_t>(framesInFlight);
+  hello.wait = wait;
+  hello.captureDir = captureDir;
+  hello.captureEvery = static_cast<std::uint32_t>(captureEvery);
+  return hello;
+}
+
 ServicePieceSink::ServicePieceSink(const Directory& directory, int renderRank,
                                    const CodecSpec& codec, int deadPeerMs)
     : session_(directory.session), renderRank_(renderRank), codec_(codec) {
@@ -159,7 +206,8 @@ ServicePieceSink::ServicePieceSink(const Directory& directory, int renderRank,
   }
   for (const DirectoryProcess& p : directory.processes) {
     sockets_.emplace_back(context_, zmq::socket_type::dealer);
-    configureSocket(sockets_.back(), deadPeerMs);
+    // A rank that is done still delivers its last batches (up to the timeout) as it exits.
+    configureSocket(sockets_.back(), deadPeerMs, deadPeerMs);
     // A few frames of a whole display in flight at most; then send() waits (back-pressure).
     sockets_.back().set(zmq::sockopt::sndhwm, 64);
     sockets_.back().connect(p.endpoint);

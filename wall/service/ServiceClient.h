@@ -10,6 +10,8 @@
 // ServicePieceSink, on every render rank: the display-routing op's pieces for a service wall,
 // encoded with the job's codec into one batch per (display, frame), sent to the wall process
 // that drives the display when the rank's frame is done (or when a batch grows past a few MiB).
+#include <mpi.h>
+
 #include <atomic>
 #include <chrono>
 #include <functional>
@@ -70,6 +72,15 @@ class ServiceClient {
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };
+
+// Collective over `comm` (a render job's ranks): `client` (non-null on rank 0 of `comm` only)
+// read the wall's directory; every rank gets it (bounded by `timeout`).
+Directory shareDirectory(MPI_Comm comm, const ServiceClient* client,
+                         std::chrono::milliseconds timeout);
+// The hello of a job of `renderRanks` ranks on this host.
+Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int framesInFlight,
+               const std::string& token, bool wait, const std::string& captureDir,
+               int captureEvery);
 
 // Every render rank: DEALER sockets to the wall processes' piece sockets (connected at once;
 // ZeroMQ queues until they are up).

@@ -27,6 +27,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr dfb::ObjectId kServiceObject = 0x3A11'0010;
+constexpr std::size_t kMaxQueued = 16;    // jobs waiting behind the connected one (--wait)
+constexpr std::size_t kMaxLogged = 1024;  // lines about strangers between two jobs
 
 // Between the wall processes (the wall job's messenger): the desk's commands to every process,
 // and the processes' answers to the desk.
@@ -203,6 +205,7 @@ struct WallService::Impl::Desk {
   }
   void nextJob() {
     state = State::Idle;
+    logged.clear();
     while (!queue.empty() && !shuttingDown) {
       job = queue.front();
       queue.pop_front();
@@ -223,7 +226,8 @@ struct WallService::Impl::Desk {
     }
     const std::string who = hello.host.empty() ? "an unnamed host" : hello.host;
     if (!service.token.empty() && hello.token != service.token) {
-      log("refused a job from " + who + ": " + (hello.token.empty() ? "no token" : "wrong token"));
+      logOnce(peer, "refused a job from " + who + ": " +
+                        (hello.token.empty() ? "no token" : "wrong token"));
       reply(peer,
             packText(Kind::Refused, 0,
                      hello.token.empty() ? "this wall needs a token (--token)" : "wrong token"));
@@ -242,8 +246,14 @@ struct WallService::Impl::Desk {
     }
     const std::string busy = "busy: a job from " + job.hello.host + " is connected";
     if (!hello.wait) {
-      log("refused a job from " + who + ": " + busy);
+      logOnce(peer, "refused a job from " + who + ": " + busy);
       reply(peer, packText(Kind::Refused, 0, busy));
+      return;
+    }
+    if (queue.size() >= kMaxQueued) {
+      logOnce(peer, "refused a job from " + who + ": the queue is full");
+      reply(peer, packText(Kind::Refused, 0,
+                           busy + ", and " + std::to_string(kMaxQueued) + " jobs wait already"));
       return;
     }
     queue.push_back({peer, hello, Clock::now(), 0, {}});
@@ -257,12 +267,26 @@ struct WallService::Impl::Desk {
       h = parseHeader(data, size);
     } catch (const std::exception& e) {
       logOnce(peer, e.what());
+      // A dfbwall of another version learns why at once instead of at its timeout.
+      MessageHeader mine;
+      std::memcpy(&mine, data, std::min(size, sizeof mine));
+      if (size >= sizeof mine && mine.magic == kMagic)
+        reply(peer, packText(Kind::Refused, 0, e.what()));
       return;
     }
     const Kind kind = static_cast<Kind>(h.kind);
     if (kind == Kind::Hello) return onHello(peer, data, size);
-    for (Job& queued : queue)
-      if (queued.peer == peer) queued.lastHeard = Clock::now();
+    for (size_t place = 0; place < queue.size(); ++place) {
+      if (queue[place].peer != peer) continue;
+      // A waiting job's keepalive: it is still there; tell it where it stands.
+      queue[place].lastHeard = Clock::now();
+      if (kind == Kind::Keepalive)
+        reply(peer,
+              packText(Kind::Queued, 0,
+                       "busy: a job from " + job.hello.host + " is connected; waiting (place " +
+                           std::to_string(place + 1) + ")"));
+      return;
+    }
     const bool ours = state != State::Idle && state != State::Closed && peer == job.peer &&
                       h.session == job.session;
     if (!ours) {
@@ -284,6 +308,8 @@ struct WallService::Impl::Desk {
       case Kind::Keepalive:
         command.kind = Command::KeepWaiting;
         service.toAll(command);
+        // The job hears the wall is alive even while no frame is presented (a slow one).
+        reply(peer, packControl(Kind::Keepalive, job.session, 0));
         break;
       case Kind::Capture:
         command.kind = Command::Capture;
@@ -292,7 +318,7 @@ struct WallService::Impl::Desk {
         service.toAll(command);
         break;
       case Kind::Bye:
-        if (c.second < 0) return endJob("the job failed before its last frame");
+        if (c.second < 0) return endJob("the job left without naming its last frame");
         command.kind = Command::LastFrame;
         command.a = static_cast<std::int64_t>(c.value);
         service.toAll(command);
@@ -301,9 +327,14 @@ struct WallService::Impl::Desk {
         endJob("unexpected message kind " + std::to_string(h.kind));
     }
   }
+  // One line per connection and kind of problem (a client that repeats itself, or a flood of
+  // them, cannot fill the log), at most kMaxLogged lines between two jobs.
+  static std::string peerOf(const zmq::message_t& id) {
+    return std::string(static_cast<const char*>(id.data()), id.size());
+  }
   void logOnce(const std::string& peer, const std::string& what) {
-    if (logged.size() > 1024 || !logged.insert(peer + what.substr(0, 40)).second) return;
-    log("ignored a message on the directory port: " + what);
+    if (logged.size() >= kMaxLogged || !logged.insert(peer + what.substr(0, 48)).second) return;
+    log(what.rfind("refused", 0) == 0 ? what : "ignored a message on the directory port: " + what);
   }
   void onEvent(const CommandHeader& e, const std::string& text) {
     if (e.kind == Command::StopAsked) {
@@ -406,8 +437,14 @@ struct WallService::Impl::Desk {
           zmq::message_t extra;
           if (!socket.recv(extra, zmq::recv_flags::dontwait)) break;
         }
-        onClient(std::string(static_cast<const char*>(id.data()), id.size()),
-                 static_cast<const std::byte*>(body.data()), body.size());
+        try {
+          onClient(std::string(static_cast<const char*>(id.data()), id.size()),
+                   static_cast<const std::byte*>(body.data()), body.size());
+        } catch (const std::exception& e) {
+          // Nothing a client sends ends the wall; a failure handling it drops its job at most.
+          log(std::string("handling a message on the directory port: ") + e.what());
+          if (peerOf(id) == job.peer) endJob(e.what());
+        }
       }
       if (state == State::Running && Clock::now() - job.lastHeard > service.options.timeout)
         endJob("no word from the job for " +

@@ -20,8 +20,8 @@ zmq::message_t toMessage(dfb::Bytes&& bytes) {
       [](void*, void* hint) { delete static_cast<dfb::Bytes*>(hint); }, owned);
 }
 
-void configureSocket(zmq::socket_t& socket, int deadPeerMs) {
-  socket.set(zmq::sockopt::linger, 0);
+void configureSocket(zmq::socket_t& socket, int deadPeerMs, int lingerMs) {
+  socket.set(zmq::sockopt::linger, lingerMs);
   socket.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxMessageBytes));
   socket.set(zmq::sockopt::heartbeat_ivl, std::max(100, deadPeerMs / 4));
   socket.set(zmq::sockopt::heartbeat_timeout, deadPeerMs);

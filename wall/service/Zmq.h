@@ -19,8 +19,10 @@ namespace wall::service {
 // A message owning `bytes` (no copy).
 zmq::message_t toMessage(dfb::Bytes&& bytes);
 // Limits and heartbeats every socket of ours gets: messages over kMaxMessageBytes close the
-// connection; a peer silent for `deadPeerMs` after a heartbeat is disconnected; no linger.
-void configureSocket(zmq::socket_t& socket, int deadPeerMs);
+// connection; a peer silent for `deadPeerMs` after a heartbeat is disconnected. `lingerMs`: how
+// long closing the socket waits for messages still queued (a job's last pieces must reach the
+// wall after its rank is done; the wall's own sockets wait for nobody).
+void configureSocket(zmq::socket_t& socket, int deadPeerMs, int lingerMs = 0);
 // "HOST:PORT" or "PORT" (then 127.0.0.1) -> "tcp://HOST:PORT"; throws wall::Error naming
 // `option` on anything else.
 std::string tcpEndpoint(const std::string& address, const std::string& option);
