@@ -41,7 +41,7 @@ port=$((20000 + ($$ + 7) % 20000))
 "$MPIEXEC" -np 4 "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" --offscreen \
   --timeout 20 >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
-trap 'kill -9 $serve 2>/dev/null; rm -rf "$work"' EXIT
+trap 'kill -9 $serve 2>/dev/null || true; rm -rf "$work"' EXIT
 for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
 timeout 120 "$MPIEXEC" -np 2 "$insitu" "${args[@]}" --connect "127.0.0.1:$port" --codec raw \
   --capture "$work/served"
