@@ -301,6 +301,9 @@ struct WallService::Impl::Desk {
     } catch (const std::exception& e) {
       return endJob(e.what());
     }
+    // The job counts the wall silent after its --timeout without a message: a frame that takes
+    // longer to render than that must not end it, so every keepalive is answered.
+    if (kind == Kind::Keepalive) reply(peer, packControl(Kind::Keepalive, job.session, 0));
     if (state != State::Running) return;
     CommandHeader command{};
     command.session = job.session;
