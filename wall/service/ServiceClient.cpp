@@ -199,7 +199,7 @@ Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int frames
 
 ServicePieceSink::ServicePieceSink(const Directory& directory, int renderRank,
                                    const CodecSpec& codec, int deadPeerMs)
-    : session_(directory.session), renderRank_(renderRank), codec_(codec), deadPeerMs_(deadPeerMs) {
+    : session_(directory.session), renderRank_(renderRank), codec_(codec) {
   for (const Display& d : directory.layout.displays) {
     processOfDisplay_.push_back(d.process);
     batches_.push_back(std::make_unique<Batch>());
@@ -215,13 +215,7 @@ ServicePieceSink::ServicePieceSink(const Directory& directory, int renderRank,
   }
 }
 
-ServicePieceSink::~ServicePieceSink() {
-  // The last frame's batches may still be queued when a render rank ends (on a 1 Gbit/s link a
-  // rank's share of a 4K frame takes over 100 ms to leave), and only rank 0 waits for the wall
-  // to present it. With linger 0 closing the sockets dropped them: the wall then waited for a
-  // frame that never completed and dropped the job. Give them until the dead-peer deadline.
-  for (zmq::socket_t& socket : sockets_) socket.set(zmq::sockopt::linger, deadPeerMs_);
-}
+ServicePieceSink::~ServicePieceSink() = default;
 
 void ServicePieceSink::flush(int display, Batch& batch) {
   if (!batch.open) return;

@@ -111,7 +111,6 @@ class ServicePieceSink : public PieceSink {
   std::uint64_t session_;
   int renderRank_;
   CodecSpec codec_;
-  int deadPeerMs_;
   std::vector<int> processOfDisplay_;
   zmq::context_t context_{1};
   std::vector<zmq::socket_t> sockets_;  // by wall process

@@ -311,8 +311,6 @@ struct WallService::Impl::Desk {
       case Kind::Keepalive:
         command.kind = Command::KeepWaiting;
         service.toAll(command);
-        // The job hears the wall is alive even while no frame is presented (a slow one).
-        reply(peer, packControl(Kind::Keepalive, job.session, 0));
         break;
       case Kind::Capture:
         command.kind = Command::Capture;
