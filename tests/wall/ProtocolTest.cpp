@@ -1,0 +1,850 @@
+// The wall service's wire protocol (wall/service/Protocol.h): round trips of every message kind
+// (hello, directory, text, control, piece batches in each codec, built with BatchWriter::add and
+// with encodePiece + append), and hostile input: every malformed message is a wall::Error with a
+// message a log can print, never a crash (this suite also runs under ASan+UBSan, and every
+// truncated message is copied into a buffer of exactly its size so an over-read is caught).
+//
+// With DFBWALL_WRITE_FUZZ_SEEDS=DIR, the test WritesFuzzSeeds writes real pack* output into
+// DIR/service_hello, DIR/service_batch and DIR/service_directory: the seed corpora of the fuzz
+// targets (tests/fuzz/corpus/, scripts/fuzz).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "wall/Error.h"
+#include "wall/Image.h"
+#include "wall/Layout.h"
+#include "wall/service/Codec.h"
+#include "wall/service/Protocol.h"
+
+namespace wall::service {
+namespace {
+
+using Pixels = std::vector<std::uint32_t>;
+
+// Byte offsets of the fields the hostile tests patch (the layout Protocol.cpp writes).
+constexpr std::size_t kHeaderBytes = sizeof(MessageHeader);
+constexpr std::size_t kVersionAt = 4;
+constexpr std::size_t kKindAt = 6;
+constexpr std::size_t kHelloTokenLengthAt = kHeaderBytes;
+constexpr std::size_t kDirectoryCanvasWidthAt = kHeaderBytes;
+constexpr std::size_t kDirectoryDisplayCountAt = kHeaderBytes + 8;
+constexpr std::size_t kDirectoryFirstNameAt = kHeaderBytes + 12;
+constexpr std::size_t kBatchPieceCountAt = kHeaderBytes + 16;
+constexpr std::size_t kBatchFirstRecordAt = kHeaderBytes + 20;
+constexpr std::size_t kRecordSizeAt = 16;  // within a piece record: x0, y0, x1, y1, size
+constexpr std::size_t kRecordBytes = 20;
+
+template <typename T>
+void poke(dfb::Bytes& bytes, std::size_t at, T value) {
+  ASSERT_LE(at + sizeof value, bytes.size());
+  std::memcpy(bytes.data() + at, &value, sizeof value);
+}
+
+// The message of the wall::Error `f` throws; a test failure when it throws nothing or another
+// type.
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const wall::Error& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "not a wall::Error: " << e.what();
+    return {};
+  }
+  ADD_FAILURE() << "no exception";
+  return {};
+}
+
+#define EXPECT_ERROR_HAS(statement, text)                                                 \
+  do {                                                                                    \
+    const std::string message_ = errorOf([&] { statement; });                             \
+    EXPECT_NE(message_.find(text), std::string::npos) << "message: '" << message_ << "'"; \
+  } while (false)
+
+Pixels randomPixels(int width, int height, unsigned seed) {
+  std::mt19937 random(seed);
+  Pixels pixels(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  for (std::uint32_t& p : pixels) p = random();
+  return pixels;
+}
+
+// Smooth and opaque, with a little structure: compresses, and JPEG keeps it close.
+Pixels smoothPixels(int width, int height) {
+  Pixels pixels(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      pixels[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+             static_cast<std::size_t>(x)] =
+          rgba8(static_cast<std::uint8_t>(30 + 190 * x / width),
+                static_cast<std::uint8_t>(50 + 150 * y / height),
+                static_cast<std::uint8_t>(220 - 120 * (x + y) / (width + height)), 255);
+  return pixels;
+}
+
+Hello fullHello() {
+  Hello h;
+  h.token = "s3cret-token";
+  h.host = "render-node-07";
+  h.renderRanks = 12;
+  h.tileSize = 32;
+  h.codec = parseCodec("jpeg:75:444");
+  h.framesInFlight = 3;
+  h.wait = true;
+  h.captureDir = "/scratch/captures/run 1";
+  h.captureEvery = 10;
+  return h;
+}
+
+// configs/walls/2x2.toml: four 200x150 panels, bezels 6/6/5/5 px, one process each.
+constexpr const char* k2x2Bezels = R"(
+description = "2x2 grid of 200x150 panels with bezels"
+[grid]
+columns = 2
+rows = 2
+display_size = [200, 150]
+bezel_px = [6, 6, 5, 5]
+)";
+
+constexpr const char* k3x2ByColumn = R"(
+[grid]
+columns = 3
+rows = 2
+display_size = [160, 120]
+bezel_px = [15, 30, 10, 20]
+process_per = "column"
+)";
+
+Layout layoutOf(const char* toml, const std::string& file) {
+  LayoutResult result = readLayoutText(toml, file);
+  EXPECT_TRUE(result.ok()) << joinProblems(result.problems);
+  return result.layout;
+}
+
+Directory directoryOf(const char* toml, const std::string& file) {
+  Directory d;
+  d.session = 0x0123'4567'89AB'CDEFull;
+  d.layout = layoutOf(toml, file);
+  for (int p = 0; p < d.layout.processCount; ++p)
+    d.processes.push_back(
+        {"tcp://wall" + std::to_string(p + 1) + ".example:" + std::to_string(5600 + p)});
+  d.framesInFlight = 3;
+  d.timeoutMs = 15000;
+  return d;
+}
+
+Directory twoByTwo() { return directoryOf(k2x2Bezels, "configs/walls/2x2.toml"); }
+
+// A display-sized image and the pieces a render rank would cut from it: 64x64 tiles clipped at
+// the display's border (so odd sizes), rows `stride` pixels apart.
+struct Source {
+  int width = 0, height = 0;
+  Pixels pixels;
+  std::vector<dfb::Region> pieces;
+  const std::uint32_t* at(const dfb::Region& r) const {
+    return pixels.data() + static_cast<std::size_t>(r.y0) * static_cast<std::size_t>(width) +
+           static_cast<std::size_t>(r.x0);
+  }
+};
+
+Source sourceImage(int width, int height, bool smooth, unsigned seed) {
+  Source s;
+  s.width = width, s.height = height;
+  s.pixels = smooth ? smoothPixels(width, height) : randomPixels(width, height, seed);
+  for (int y = 0; y < height; y += 64)
+    for (int x = 0; x < width; x += 64)
+      s.pieces.push_back({x, y, std::min(x + 64, width), std::min(y + 64, height)});
+  return s;
+}
+
+BatchHeader batchHeader(Codec codec) {
+  BatchHeader h;
+  h.frameId = 41;
+  h.display = 2;
+  h.renderRank = 5;
+  h.codec = codec;
+  return h;
+}
+
+// A batch of every piece of `source`; every other piece through encodePiece + append, as the
+// service client does it.
+dfb::Bytes batchOf(const CodecSpec& spec, const Source& source, std::uint64_t session = 77) {
+  BatchWriter writer;
+  BatchHeader h = batchHeader(spec.codec);
+  writer.start(session, h);
+  dfb::Bytes piece;
+  for (std::size_t i = 0; i < source.pieces.size(); ++i) {
+    const dfb::Region& r = source.pieces[i];
+    if (i % 2 == 0) {
+      writer.add(spec, r, source.at(r), source.width);
+    } else {
+      encodePiece(spec, r, source.at(r), source.width, piece);
+      writer.append(piece);
+    }
+  }
+  EXPECT_EQ(writer.pieces(), source.pieces.size());
+  return writer.take();
+}
+
+Pixels decodePiece(Codec codec, const BatchPiece& piece) {
+  Pixels out(static_cast<std::size_t>(piece.local.pixelCount()));
+  decodePixels(codec, piece.data, piece.size, piece.local.width(), piece.local.height(), out.data(),
+               piece.local.width());
+  return out;
+}
+
+Pixels cut(const Source& source, const dfb::Region& r) {
+  Pixels out;
+  for (int y = r.y0; y < r.y1; ++y) {
+    const std::uint32_t* row = source.at({r.x0, y, r.x1, y + 1});
+    out.insert(out.end(), row, row + r.width());
+  }
+  return out;
+}
+
+// ---- round trips ----
+
+TEST(Protocol, HelloRoundTrips) {
+  for (const Hello& hello : {Hello{}, fullHello()}) {
+    const dfb::Bytes bytes = packHello(hello);
+    const MessageHeader header = parseHeader(bytes.data(), bytes.size());
+    EXPECT_EQ(header.magic, kMagic);
+    EXPECT_EQ(header.version, kProtocolVersion);
+    EXPECT_EQ(header.kind, static_cast<std::uint16_t>(Kind::Hello));
+    EXPECT_EQ(header.session, 0u);
+    const Hello back = parseHello(bytes.data(), bytes.size());
+    EXPECT_EQ(back.token, hello.token);
+    EXPECT_EQ(back.host, hello.host);
+    EXPECT_EQ(back.renderRanks, hello.renderRanks);
+    EXPECT_EQ(back.tileSize, hello.tileSize);
+    EXPECT_EQ(back.codec, hello.codec);
+    EXPECT_EQ(back.framesInFlight, hello.framesInFlight);
+    EXPECT_EQ(back.wait, hello.wait);
+    EXPECT_EQ(back.captureDir, hello.captureDir);
+    EXPECT_EQ(back.captureEvery, hello.captureEvery);
+  }
+  // Each codec, and the longest strings allowed.
+  for (const char* codec : {"raw", "snappy", "jpeg:1:420", "jpeg:100:422"}) {
+    Hello hello = fullHello();
+    hello.codec = parseCodec(codec);
+    hello.token = std::string(kMaxStringBytes, 't');
+    const dfb::Bytes bytes = packHello(hello);
+    const Hello back = parseHello(bytes.data(), bytes.size());
+    EXPECT_EQ(back.codec, hello.codec) << codec;
+    EXPECT_EQ(back.token, hello.token);
+  }
+}
+
+TEST(Protocol, DirectoryOfA2x2WallWithBezelsRoundTrips) {
+  const Directory d = twoByTwo();
+  ASSERT_EQ(d.layout.displays.size(), 4u);
+  ASSERT_EQ(d.layout.canvasWidth, 412);
+  ASSERT_EQ(d.layout.canvasHeight, 310);
+  const dfb::Bytes bytes = packDirectory(d);
+  const MessageHeader header = parseHeader(bytes.data(), bytes.size());
+  EXPECT_EQ(header.kind, static_cast<std::uint16_t>(Kind::Directory));
+  EXPECT_EQ(header.session, d.session);
+
+  const Directory back = parseDirectory(bytes.data(), bytes.size());
+  EXPECT_EQ(back.session, d.session);
+  EXPECT_EQ(back.framesInFlight, 3u);
+  EXPECT_EQ(back.timeoutMs, 15000u);
+  EXPECT_EQ(back.layout.file, "configs/walls/2x2.toml");
+  EXPECT_EQ(back.layout.canvasWidth, 412);
+  EXPECT_EQ(back.layout.canvasHeight, 310);
+  EXPECT_EQ(back.layout.processCount, 4);
+  ASSERT_EQ(back.layout.displays.size(), 4u);
+  for (std::size_t i = 0; i < 4; ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_EQ(back.layout.displays[i].name, d.layout.displays[i].name);
+    EXPECT_EQ(back.layout.displays[i].rect, d.layout.displays[i].rect);
+    EXPECT_EQ(back.layout.displays[i].process, d.layout.displays[i].process);
+  }
+  // The bezels: 12 px between the columns, 10 px between the rows.
+  EXPECT_EQ(back.layout.displays[0].rect, (dfb::Region{0, 0, 200, 150}));
+  EXPECT_EQ(back.layout.displays[3].rect, (dfb::Region{212, 160, 412, 310}));
+  ASSERT_EQ(back.processes.size(), 4u);
+  for (std::size_t p = 0; p < 4; ++p)
+    EXPECT_EQ(back.processes[p].endpoint, d.processes[p].endpoint);
+  EXPECT_EQ(back.processes[3].endpoint, "tcp://wall4.example:5603");
+}
+
+TEST(Protocol, DirectoryWithProcessesDrivingSeveralDisplaysRoundTrips) {
+  const Directory d = directoryOf(k3x2ByColumn, "3x2.toml");
+  ASSERT_EQ(d.layout.processCount, 3);
+  const dfb::Bytes bytes = packDirectory(d);
+  const Directory back = parseDirectory(bytes.data(), bytes.size());
+  ASSERT_EQ(back.layout.displays.size(), 6u);
+  EXPECT_EQ(back.layout.processCount, 3);
+  EXPECT_EQ(back.processes.size(), 3u);
+  for (std::size_t i = 0; i < 6; ++i) {
+    EXPECT_EQ(back.layout.displays[i].rect, d.layout.displays[i].rect);
+    EXPECT_EQ(back.layout.displays[i].process, d.layout.displays[i].process);
+  }
+}
+
+TEST(Protocol, TextMessagesRoundTrip) {
+  for (const Kind kind : {Kind::Refused, Kind::Queued, Kind::Ended})
+    for (const std::string& text :
+         {std::string(), std::string("the wall is busy with a job from render-3 (since 12:00)"),
+          std::string("2"), std::string(kMaxStringBytes, 'x'), std::string("\0 nul\n", 6)}) {
+      const dfb::Bytes bytes = packText(kind, 99, text);
+      const MessageHeader header = parseHeader(bytes.data(), bytes.size());
+      EXPECT_EQ(header.kind, static_cast<std::uint16_t>(kind));
+      EXPECT_EQ(header.session, 99u);
+      EXPECT_EQ(parseText(bytes.data(), bytes.size()), text);
+    }
+  // A longer reason is cut, not refused: the job still learns why.
+  const dfb::Bytes bytes = packText(Kind::Refused, 1, std::string(kMaxStringBytes + 100, 'y'));
+  EXPECT_EQ(parseText(bytes.data(), bytes.size()), std::string(kMaxStringBytes, 'y'));
+}
+
+TEST(Protocol, ControlMessagesRoundTrip) {
+  struct Case {
+    Kind kind;
+    std::uint64_t value;
+    std::int64_t second;
+  };
+  for (const Case c :
+       {Case{Kind::Keepalive, 0, 0}, Case{Kind::Bye, 1234, 0}, Case{Kind::Capture, 17, 3},
+        Case{Kind::Presented, 4'000'000'000u, 1'700'000'000'123'456'789},
+        Case{Kind::Presented, std::numeric_limits<std::uint64_t>::max(),
+             std::numeric_limits<std::int64_t>::min()},
+        Case{Kind::Capture, 0, -1}}) {
+    const dfb::Bytes bytes = packControl(c.kind, 0xFEED, c.value, c.second);
+    const MessageHeader header = parseHeader(bytes.data(), bytes.size());
+    EXPECT_EQ(header.kind, static_cast<std::uint16_t>(c.kind));
+    EXPECT_EQ(header.session, 0xFEEDu);
+    const Control back = parseControl(bytes.data(), bytes.size());
+    EXPECT_EQ(back.value, c.value);
+    EXPECT_EQ(back.second, c.second);
+  }
+}
+
+TEST(Protocol, LosslessBatchesRoundTripBitExactly) {
+  // 150 x 100: pieces of 64x64, 64x36, 22x64, 22x36; a random and a smooth image (Snappy stores
+  // the one and compresses the other).
+  for (const bool smooth : {false, true})
+    for (const char* codec : {"raw", "snappy"}) {
+      SCOPED_TRACE(std::string(codec) + (smooth ? " smooth" : " random"));
+      const CodecSpec spec = parseCodec(codec);
+      const Source source = sourceImage(150, 100, smooth, 3);
+      const dfb::Bytes bytes = batchOf(spec, source, 1234);
+      const MessageHeader header = parseHeader(bytes.data(), bytes.size());
+      EXPECT_EQ(header.kind, static_cast<std::uint16_t>(Kind::Batch));
+      EXPECT_EQ(header.session, 1234u);
+      std::vector<BatchPiece> pieces;
+      const BatchHeader h = parseBatch(bytes.data(), bytes.size(), pieces);
+      EXPECT_EQ(h.frameId, 41u);
+      EXPECT_EQ(h.display, 2);
+      EXPECT_EQ(h.renderRank, 5u);
+      EXPECT_EQ(h.codec, spec.codec);
+      EXPECT_EQ(h.pieceCount, source.pieces.size());
+      ASSERT_EQ(pieces.size(), source.pieces.size());
+      for (std::size_t i = 0; i < pieces.size(); ++i) {
+        SCOPED_TRACE(i);
+        EXPECT_EQ(pieces[i].local, source.pieces[i]);
+        EXPECT_GE(pieces[i].data, bytes.data());
+        EXPECT_LE(pieces[i].data + pieces[i].size, bytes.data() + bytes.size());
+        if (spec.codec == Codec::Raw) {
+          EXPECT_EQ(pieces[i].size, static_cast<std::size_t>(source.pieces[i].pixelCount()) * 4);
+        }
+        EXPECT_EQ(decodePiece(h.codec, pieces[i]), cut(source, source.pieces[i]));
+      }
+    }
+}
+
+TEST(Protocol, JpegBatchesRoundTripClosely) {
+  for (const char* codec : {"jpeg:90:444", "jpeg:90:420"}) {
+    SCOPED_TRACE(codec);
+    const Source source = sourceImage(150, 100, true, 0);
+    const dfb::Bytes bytes = batchOf(parseCodec(codec), source);
+    std::vector<BatchPiece> pieces;
+    const BatchHeader h = parseBatch(bytes.data(), bytes.size(), pieces);
+    EXPECT_EQ(h.codec, Codec::Jpeg);
+    ASSERT_EQ(pieces.size(), source.pieces.size());
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+      EXPECT_EQ(pieces[i].local, source.pieces[i]);
+      const Pixels got = decodePiece(h.codec, pieces[i]);
+      const Pixels want = cut(source, source.pieces[i]);
+      ASSERT_EQ(got.size(), want.size());
+      for (std::size_t p = 0; p < got.size(); ++p) {
+        ASSERT_EQ(got[p] >> 24, 255u);
+        for (int c = 0; c < 3; ++c)
+          ASSERT_NEAR(static_cast<int>((got[p] >> (8 * c)) & 0xFF),
+                      static_cast<int>((want[p] >> (8 * c)) & 0xFF), 8)
+              << "piece " << i << " pixel " << p << " channel " << c;
+      }
+    }
+  }
+}
+
+TEST(Protocol, EmptyBatchAndAWriterUsedTwice) {
+  BatchWriter writer;
+  writer.start(5, batchHeader(Codec::Snappy));
+  EXPECT_EQ(writer.pieces(), 0u);
+  const dfb::Bytes empty = writer.take();
+  std::vector<BatchPiece> pieces{BatchPiece{}};
+  const BatchHeader h = parseBatch(empty.data(), empty.size(), pieces);
+  EXPECT_EQ(h.pieceCount, 0u);
+  EXPECT_TRUE(pieces.empty());
+
+  // The same writer, a second batch: nothing of the first is left in it.
+  const Source source = sourceImage(70, 10, false, 8);
+  writer.start(6, batchHeader(Codec::Raw));
+  for (const dfb::Region& r : source.pieces)
+    writer.add(CodecSpec{Codec::Raw}, r, source.at(r), source.width);
+  const dfb::Bytes second = writer.take();
+  EXPECT_EQ(parseHeader(second.data(), second.size()).session, 6u);
+  parseBatch(second.data(), second.size(), pieces);
+  ASSERT_EQ(pieces.size(), 2u);
+  EXPECT_EQ(decodePiece(Codec::Raw, pieces[1]), cut(source, source.pieces[1]));
+}
+
+TEST(Protocol, AFailedAddLeavesTheBatchAsItWas) {
+  const Source source = sourceImage(16, 16, false, 2);
+  BatchWriter writer;
+  writer.start(1, batchHeader(Codec::Raw));
+  const std::size_t before = writer.bytes();
+  // An empty rectangle: the codec refuses it.
+  EXPECT_THROW(writer.add(CodecSpec{Codec::Raw}, {4, 4, 4, 8}, source.at({4, 4, 5, 5}), 16),
+               wall::Error);
+  EXPECT_EQ(writer.bytes(), before);
+  EXPECT_EQ(writer.pieces(), 0u);
+  writer.add(CodecSpec{Codec::Raw}, {0, 0, 16, 16}, source.pixels.data(), 16);
+  const dfb::Bytes bytes = writer.take();
+  std::vector<BatchPiece> pieces;
+  parseBatch(bytes.data(), bytes.size(), pieces);
+  ASSERT_EQ(pieces.size(), 1u);
+  EXPECT_EQ(decodePiece(Codec::Raw, pieces[0]), source.pixels);
+}
+
+TEST(Protocol, PackRefusesWhatItCannotSay) {
+  Hello hello;
+  hello.host = std::string(kMaxStringBytes + 1, 'h');
+  EXPECT_ERROR_HAS(packHello(hello), "4097 bytes");
+}
+
+// ---- hostile input ----
+
+// Every parser on `bytes` copied into a buffer of exactly its size (ASan sees any over-read).
+void expectEveryParserRefuses(const dfb::Bytes& message, const std::string& what) {
+  const dfb::Bytes bytes(message);  // exactly sized
+  std::vector<BatchPiece> pieces;
+  EXPECT_THROW(parseHello(bytes.data(), bytes.size()), wall::Error) << what;
+  EXPECT_THROW(parseDirectory(bytes.data(), bytes.size()), wall::Error) << what;
+  EXPECT_THROW(parseText(bytes.data(), bytes.size()), wall::Error) << what;
+  EXPECT_THROW(parseControl(bytes.data(), bytes.size()), wall::Error) << what;
+  EXPECT_THROW(parseBatch(bytes.data(), bytes.size(), pieces), wall::Error) << what;
+}
+
+TEST(ProtocolHostile, EmptyAndTinyMessages) {
+  EXPECT_ERROR_HAS(parseHeader(nullptr, 0), "not the dfbwall protocol: a message of 0 bytes");
+  std::vector<BatchPiece> pieces;
+  EXPECT_ERROR_HAS(parseHello(nullptr, 0), "malformed hello");
+  EXPECT_ERROR_HAS(parseDirectory(nullptr, 0), "malformed directory");
+  EXPECT_ERROR_HAS(parseText(nullptr, 0), "malformed text message");
+  EXPECT_ERROR_HAS(parseControl(nullptr, 0), "malformed control message");
+  EXPECT_ERROR_HAS(parseBatch(nullptr, 0, pieces), "malformed piece batch");
+
+  const dfb::Bytes three = {std::byte{'D'}, std::byte{'F'}, std::byte{'B'}};
+  EXPECT_ERROR_HAS(parseHeader(three.data(), three.size()), "a message of 3 bytes");
+  expectEveryParserRefuses(three, "3 bytes");
+  EXPECT_ERROR_HAS(parseHello(three.data(), three.size()), "ends after 3 bytes");
+}
+
+TEST(ProtocolHostile, WrongMagic) {
+  dfb::Bytes bytes = packHello(Hello{});
+  bytes[0] ^= std::byte{0x20};
+  EXPECT_ERROR_HAS(parseHeader(bytes.data(), bytes.size()),
+                   "not the dfbwall protocol (wrong magic number)");
+  // An HTTP request on the port.
+  const std::string http = "GET / HTTP/1.1\r\nHost: wall\r\n\r\n";
+  EXPECT_ERROR_HAS(parseHeader(reinterpret_cast<const std::byte*>(http.data()), http.size()),
+                   "not the dfbwall protocol");
+}
+
+TEST(ProtocolHostile, WrongVersionNamesBothVersions) {
+  for (const std::uint16_t version :
+       {std::uint16_t{0}, std::uint16_t{2}, std::uint16_t{7}, std::uint16_t{0xFFFF}}) {
+    dfb::Bytes bytes = packControl(Kind::Keepalive, 3, 0);
+    poke(bytes, kVersionAt, version);
+    const std::string message = errorOf([&] { parseHeader(bytes.data(), bytes.size()); });
+    EXPECT_NE(message.find("protocol version " + std::to_string(version)), std::string::npos)
+        << message;
+    EXPECT_NE(message.find("speaks " + std::to_string(kProtocolVersion)), std::string::npos)
+        << message;
+  }
+}
+
+TEST(ProtocolHostile, UnknownKind) {
+  for (const std::uint16_t kind : {std::uint16_t{0}, std::uint16_t{11}, std::uint16_t{0xFFFF}}) {
+    dfb::Bytes bytes = packControl(Kind::Keepalive, 3, 0);
+    poke(bytes, kKindAt, kind);
+    EXPECT_ERROR_HAS(parseHeader(bytes.data(), bytes.size()),
+                     "unknown message kind " + std::to_string(kind));
+  }
+}
+
+TEST(ProtocolHostile, EveryTruncationOfAHello) {
+  const dfb::Bytes whole = packHello(fullHello());
+  for (std::size_t n = 0; n < whole.size(); ++n) {
+    SCOPED_TRACE(n);
+    const dfb::Bytes cut(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(n));
+    if (n < kHeaderBytes) {
+      EXPECT_ERROR_HAS(parseHeader(cut.data(), cut.size()), "not the dfbwall protocol");
+    } else {
+      EXPECT_NO_THROW(parseHeader(cut.data(), cut.size()));
+    }
+    EXPECT_ERROR_HAS(parseHello(cut.data(), cut.size()),
+                     "malformed hello: ends after " + std::to_string(n) + " bytes");
+  }
+}
+
+TEST(ProtocolHostile, EveryTruncationOfABatch) {
+  for (const char* codec : {"raw", "snappy", "jpeg"}) {
+    SCOPED_TRACE(codec);
+    const dfb::Bytes whole = batchOf(parseCodec(codec), sourceImage(20, 12, true, 0));
+    std::vector<BatchPiece> pieces;
+    for (std::size_t n = 0; n < whole.size(); ++n) {
+      const dfb::Bytes cut(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(n));
+      const std::string message = errorOf([&] { parseBatch(cut.data(), cut.size(), pieces); });
+      // Cut before the count: the header ends early; after it: the count cannot fit, or the
+      // piece's data is cut.
+      EXPECT_NE(message.find("malformed piece batch"), std::string::npos) << n << ": " << message;
+    }
+  }
+}
+
+TEST(ProtocolHostile, EveryTruncationOfTheOtherMessages) {
+  for (const dfb::Bytes& whole : {packDirectory(twoByTwo()), packText(Kind::Refused, 1, "busy"),
+                                  packControl(Kind::Presented, 1, 2, 3)}) {
+    const Kind kind = static_cast<Kind>(parseHeader(whole.data(), whole.size()).kind);
+    for (std::size_t n = 0; n < whole.size(); ++n) {
+      SCOPED_TRACE(n);
+      const dfb::Bytes cut(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(n));
+      if (kind == Kind::Directory)
+        EXPECT_ERROR_HAS(parseDirectory(cut.data(), cut.size()), "malformed directory");
+      else if (kind == Kind::Refused)
+        EXPECT_ERROR_HAS(parseText(cut.data(), cut.size()), "malformed text message");
+      else
+        EXPECT_ERROR_HAS(parseControl(cut.data(), cut.size()), "malformed control message");
+    }
+  }
+}
+
+TEST(ProtocolHostile, ABatchClaimingTwoToThe32PiecesIsRefusedBeforeAnyAllocation) {
+  const Source source = sourceImage(8, 8, false, 1);
+  dfb::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
+  poke(bytes, kBatchPieceCountAt, std::numeric_limits<std::uint32_t>::max());
+  std::vector<BatchPiece> pieces;
+  EXPECT_ERROR_HAS(parseBatch(bytes.data(), bytes.size(), pieces), "4294967295 pieces in");
+  // One more piece than there is.
+  poke(bytes, kBatchPieceCountAt, std::uint32_t{2});
+  EXPECT_ERROR_HAS(parseBatch(bytes.data(), bytes.size(), pieces), "malformed piece batch");
+}
+
+TEST(ProtocolHostile, APieceWhoseSizeFieldSaysFourGiB) {
+  const Source source = sourceImage(8, 8, false, 1);
+  for (const std::uint32_t size :
+       {std::numeric_limits<std::uint32_t>::max(), std::uint32_t{1} << 31, std::uint32_t{257}}) {
+    dfb::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
+    poke(bytes, kBatchFirstRecordAt + kRecordSizeAt, size);
+    std::vector<BatchPiece> pieces;
+    EXPECT_ERROR_HAS(parseBatch(bytes.data(), bytes.size(), pieces),
+                     std::to_string(size) + " more needed");
+  }
+  // A size smaller than the data: the rest is "too many" bytes, or the raw decode refuses it.
+  dfb::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
+  poke(bytes, kBatchFirstRecordAt + kRecordSizeAt, std::uint32_t{255});
+  std::vector<BatchPiece> pieces;
+  EXPECT_ERROR_HAS(parseBatch(bytes.data(), bytes.size(), pieces), "1 bytes too many");
+}
+
+TEST(ProtocolHostile, BadPieceRectangles) {
+  constexpr int kMax = std::numeric_limits<int>::max(), kMin = std::numeric_limits<int>::min();
+  const Source source = sourceImage(8, 8, false, 1);
+  for (const dfb::Region r :
+       {dfb::Region{-1, 0, 7, 8}, dfb::Region{0, -8, 8, 0}, dfb::Region{3, 0, 3, 8},  // empty
+        dfb::Region{0, 5, 8, 5},                                                      // empty
+        dfb::Region{8, 0, 0, 8},                                                      // inverted
+        dfb::Region{0, 0, 4097, 1}, dfb::Region{0, 0, 1, 4097}, dfb::Region{0, 0, kMax, kMax},
+        dfb::Region{kMin, kMin, kMax, kMax}, dfb::Region{kMax, 0, kMin, 1},
+        dfb::Region{kMax - 1, 0, kMax, 1}}) {
+    SCOPED_TRACE(std::to_string(r.x0) + "," + std::to_string(r.y0) + " " + std::to_string(r.x1) +
+                 "," + std::to_string(r.y1));
+    dfb::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
+    poke(bytes, kBatchFirstRecordAt + 0, r.x0);
+    poke(bytes, kBatchFirstRecordAt + 4, r.y0);
+    poke(bytes, kBatchFirstRecordAt + 8, r.x1);
+    poke(bytes, kBatchFirstRecordAt + 12, r.y1);
+    std::vector<BatchPiece> pieces;
+    if (r == dfb::Region{kMax - 1, 0, kMax, 1}) {
+      // A 1x1 piece far out: the batch parses (the wall node checks it against the display),
+      // and its raw data is the wrong size for one pixel.
+      parseBatch(bytes.data(), bytes.size(), pieces);
+      ASSERT_EQ(pieces.size(), 1u);
+      EXPECT_THROW(decodePiece(Codec::Raw, pieces[0]), wall::Error);
+      continue;
+    }
+    EXPECT_ERROR_HAS(parseBatch(bytes.data(), bytes.size(), pieces),
+                     "piece 0 has the rectangle [" + std::to_string(r.x0) + ", " +
+                         std::to_string(r.x1) + ") x [" + std::to_string(r.y0) + ", " +
+                         std::to_string(r.y1) + ")");
+  }
+  // The largest piece allowed is 4096 a side; the codec refuses data of the wrong size for it.
+  dfb::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
+  poke(bytes, kBatchFirstRecordAt + 8, 4096);
+  poke(bytes, kBatchFirstRecordAt + 12, 4096);
+  std::vector<BatchPiece> pieces;
+  parseBatch(bytes.data(), bytes.size(), pieces);
+  ASSERT_EQ(pieces.size(), 1u);
+  EXPECT_EQ(pieces[0].local, (dfb::Region{0, 0, 4096, 4096}));
+}
+
+TEST(ProtocolHostile, AnUnknownCodecInABatch) {
+  dfb::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, sourceImage(8, 8, false, 1));
+  poke(bytes, kHeaderBytes + 12, std::uint32_t{3});
+  std::vector<BatchPiece> pieces;
+  EXPECT_ERROR_HAS(parseBatch(bytes.data(), bytes.size(), pieces), "codec 3");
+}
+
+TEST(ProtocolHostile, AHelloWithA60000ByteTextLength) {
+  dfb::Bytes bytes = packHello(fullHello());
+  poke(bytes, kHelloTokenLengthAt, std::uint16_t{60000});
+  EXPECT_ERROR_HAS(parseHello(bytes.data(), bytes.size()), "a text field longer than 4096");
+  // Also when the 60000 bytes are there.
+  bytes.insert(bytes.end(), 60000, std::byte{'a'});
+  EXPECT_ERROR_HAS(parseHello(bytes.data(), bytes.size()), "a text field longer than 4096");
+  // A length just past the message.
+  bytes = packHello(fullHello());
+  poke(bytes, kHelloTokenLengthAt, static_cast<std::uint16_t>(bytes.size()));
+  EXPECT_ERROR_HAS(parseHello(bytes.data(), bytes.size()), "malformed hello: ends after");
+}
+
+TEST(ProtocolHostile, HelloFieldsOutOfRange) {
+  const auto expectBad = [](const std::function<void(Hello&)>& change, const std::string& text) {
+    Hello hello = fullHello();
+    change(hello);
+    const dfb::Bytes bytes = packHello(hello);
+    EXPECT_ERROR_HAS(parseHello(bytes.data(), bytes.size()), text);
+  };
+  expectBad([](Hello& h) { h.renderRanks = 0; }, "render ranks 0");
+  expectBad([](Hello& h) { h.renderRanks = 1u << 21; }, "render ranks");
+  expectBad([](Hello& h) { h.tileSize = 2; }, "tile size 2");
+  expectBad([](Hello& h) { h.tileSize = 1u << 20; }, "tile size");
+  expectBad([](Hello& h) { h.codec.codec = static_cast<Codec>(7); }, "codec 7");
+  expectBad([](Hello& h) { h.codec.jpegQuality = 0; }, "JPEG quality 0");
+  expectBad([](Hello& h) { h.codec.jpegQuality = 101; }, "JPEG quality 101");
+  expectBad([](Hello& h) { h.codec.subsampling = static_cast<ChromaSubsampling>(3); },
+            "chroma subsampling 3");
+  expectBad([](Hello& h) { h.framesInFlight = 0; }, "frames in flight 0");
+  expectBad([](Hello& h) { h.framesInFlight = 17; }, "frames in flight 17");
+  expectBad([](Hello& h) { h.captureEvery = (1u << 30) + 1; }, "capture-every");
+  dfb::Bytes bytes = packHello(fullHello());
+  // The wait flag: the byte after codec, quality and subsampling.
+  const std::size_t waitAt =
+      kHeaderBytes + 2 + fullHello().token.size() + 2 + fullHello().host.size() + 4 + 4 + 3;
+  ASSERT_EQ(bytes[waitAt], std::byte{1});
+  bytes[waitAt] = std::byte{2};
+  EXPECT_ERROR_HAS(parseHello(bytes.data(), bytes.size()), "wait flag 2");
+}
+
+// A directory packed from a layout no loader would accept.
+dfb::Bytes directoryWith(const std::function<void(Directory&)>& change) {
+  Directory d = twoByTwo();
+  change(d);
+  return packDirectory(d);
+}
+
+TEST(ProtocolHostile, ADirectoryWhoseDisplaysOverlap) {
+  const dfb::Bytes bytes = directoryWith([](Directory& d) {
+    d.layout.displays[1].rect = {150, 0, 350, 150};  // 50 px over display 0
+  });
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "overlaps display 'r0c0'");
+}
+
+TEST(ProtocolHostile, ADirectoryWhoseCanvasDoesNotMatch) {
+  dfb::Bytes bytes = packDirectory(twoByTwo());
+  poke(bytes, kDirectoryCanvasWidthAt, 413);
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()),
+                   "canvas or process count does not match its displays");
+  poke(bytes, kDirectoryCanvasWidthAt, -412);
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "does not match");
+  // Five endpoints for four processes.
+  bytes = directoryWith([](Directory& d) { d.processes.push_back({"tcp://extra:1"}); });
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "does not match");
+}
+
+TEST(ProtocolHostile, ADirectoryWithBadCountsOrDisplays) {
+  dfb::Bytes bytes = packDirectory(twoByTwo());
+  for (const std::uint32_t count : {0u, 1025u, std::numeric_limits<std::uint32_t>::max()}) {
+    poke(bytes, kDirectoryDisplayCountAt, count);
+    EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()),
+                     std::to_string(count) + " displays");
+  }
+  bytes = directoryWith([](Directory& d) { d.processes.clear(); });
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "0 wall processes");
+  bytes = directoryWith([](Directory& d) { d.framesInFlight = 0; });
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "frames in flight 0");
+  bytes = directoryWith([](Directory& d) { d.layout.displays[2].name = "a b"; });
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "'a b' may contain only");
+  bytes = directoryWith([](Directory& d) { d.layout.displays[2].process = -1; });
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "malformed directory");
+  bytes = directoryWith([](Directory& d) { d.layout.displays[2].rect = {0, 0, 0, 0}; });
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "malformed directory");
+  // A name length past the cap.
+  bytes = packDirectory(twoByTwo());
+  poke(bytes, kDirectoryFirstNameAt, std::uint16_t{60000});
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "a text field longer than 4096");
+}
+
+TEST(ProtocolHostile, ADirectoryWithExtremeRectangles) {
+  constexpr int kMax = std::numeric_limits<int>::max(), kMin = std::numeric_limits<int>::min();
+  for (const dfb::Region r :
+       {dfb::Region{kMin, 0, kMax, 150}, dfb::Region{0, kMin, 200, kMax},
+        dfb::Region{kMax, 0, kMin, 150}, dfb::Region{kMin, kMin, 0, 0},
+        dfb::Region{kMax - 200, 0, kMax, 150}, dfb::Region{kMin, 0, kMin + 200, 150},
+        dfb::Region{0, 0, (1 << 20) + 1, 150}}) {
+    SCOPED_TRACE(std::to_string(r.x0) + "," + std::to_string(r.y0) + " " + std::to_string(r.x1) +
+                 "," + std::to_string(r.y1));
+    const dfb::Bytes bytes = directoryWith([&](Directory& d) { d.layout.displays[3].rect = r; });
+    EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "malformed directory");
+  }
+}
+
+TEST(ProtocolHostile, TrailingGarbage) {
+  std::vector<dfb::Bytes> messages = {packHello(fullHello()), packDirectory(twoByTwo()),
+                                      packText(Kind::Queued, 2, "3"), packControl(Kind::Bye, 2, 9),
+                                      batchOf(parseCodec("snappy"), sourceImage(8, 8, true, 0))};
+  for (dfb::Bytes& bytes : messages) {
+    const Kind kind = static_cast<Kind>(parseHeader(bytes.data(), bytes.size()).kind);
+    for (const std::size_t extra : {std::size_t{1}, std::size_t{3}, std::size_t{1000}}) {
+      dfb::Bytes longer = bytes;
+      longer.insert(longer.end(), extra, std::byte{0x5A});
+      const std::string tooMany = std::to_string(extra) + " bytes too many";
+      std::vector<BatchPiece> pieces;
+      switch (kind) {
+        case Kind::Hello:
+          EXPECT_ERROR_HAS(parseHello(longer.data(), longer.size()), tooMany);
+          break;
+        case Kind::Directory:
+          EXPECT_ERROR_HAS(parseDirectory(longer.data(), longer.size()), tooMany);
+          break;
+        case Kind::Queued:
+          EXPECT_ERROR_HAS(parseText(longer.data(), longer.size()), tooMany);
+          break;
+        case Kind::Bye:
+          EXPECT_ERROR_HAS(parseControl(longer.data(), longer.size()), tooMany);
+          break;
+        default:
+          EXPECT_ERROR_HAS(parseBatch(longer.data(), longer.size(), pieces), tooMany);
+      }
+    }
+  }
+}
+
+TEST(ProtocolHostile, RandomBytesAndSingleByteCorruptions) {
+  std::mt19937 random(11);
+  std::vector<BatchPiece> pieces;
+  const auto everyParser = [&](const dfb::Bytes& bytes) {
+    // Each may accept or refuse; none may crash or throw anything but wall::Error.
+    const auto tryOne = [](const std::function<void()>& f) {
+      try {
+        f();
+      } catch (const wall::Error&) {
+      }
+    };
+    tryOne([&] { parseHeader(bytes.data(), bytes.size()); });
+    tryOne([&] { parseHello(bytes.data(), bytes.size()); });
+    tryOne([&] { parseDirectory(bytes.data(), bytes.size()); });
+    tryOne([&] { parseText(bytes.data(), bytes.size()); });
+    tryOne([&] { parseControl(bytes.data(), bytes.size()); });
+    tryOne([&] {
+      const BatchHeader h = parseBatch(bytes.data(), bytes.size(), pieces);
+      for (const BatchPiece& p : pieces)
+        if (p.local.pixelCount() <= 64 * 64) decodePiece(h.codec, p);
+    });
+  };
+  for (int i = 0; i < 200; ++i) {
+    dfb::Bytes bytes(random() % 200);
+    for (std::byte& b : bytes) b = static_cast<std::byte>(random());
+    everyParser(bytes);
+  }
+  for (const dfb::Bytes& whole : {packHello(fullHello()), packDirectory(twoByTwo()),
+                                  batchOf(parseCodec("snappy"), sourceImage(20, 12, true, 0)),
+                                  batchOf(parseCodec("jpeg"), sourceImage(20, 12, true, 0))})
+    for (std::size_t at = 0; at < whole.size(); ++at) {
+      dfb::Bytes bytes = whole;
+      bytes[at] ^= static_cast<std::byte>(1 + random() % 255);
+      everyParser(bytes);
+    }
+}
+
+// ---- fuzz seeds ----
+
+void writeSeed(const std::filesystem::path& dir, const std::string& name, const dfb::Bytes& bytes) {
+  std::filesystem::create_directories(dir);
+  std::ofstream out(dir / name, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
+  ASSERT_TRUE(out.good()) << (dir / name);
+}
+
+TEST(Protocol, WritesFuzzSeeds) {
+  const char* root = std::getenv("DFBWALL_WRITE_FUZZ_SEEDS");
+  if (root == nullptr || *root == '\0') GTEST_SKIP() << "DFBWALL_WRITE_FUZZ_SEEDS is not set";
+  const std::filesystem::path dir(root);
+
+  const std::filesystem::path hello = dir / "service_hello";
+  writeSeed(hello, "hello-default", packHello(Hello{}));
+  writeSeed(hello, "hello-full", packHello(fullHello()));
+  Hello snappy = fullHello();
+  snappy.codec = parseCodec("snappy");
+  snappy.token.clear();
+  snappy.wait = false;
+  writeSeed(hello, "hello-snappy", packHello(snappy));
+  writeSeed(hello, "text-refused", packText(Kind::Refused, 0, "the wall is busy"));
+  writeSeed(hello, "text-queued", packText(Kind::Queued, 5, "2"));
+  writeSeed(hello, "text-ended", packText(Kind::Ended, 5, "no word from the job for 60 s"));
+  writeSeed(hello, "control-keepalive", packControl(Kind::Keepalive, 5, 0));
+  writeSeed(hello, "control-presented", packControl(Kind::Presented, 5, 17, 1'700'000'000'000));
+  writeSeed(hello, "control-capture", packControl(Kind::Capture, 5, 3, 1));
+
+  const std::filesystem::path batch = dir / "service_batch";
+  const Source small = sourceImage(24, 20, true, 0);
+  const Source noise = sourceImage(66, 20, false, 4);  // 64x20 and 2x20
+  writeSeed(batch, "batch-raw", batchOf(parseCodec("raw"), small));
+  writeSeed(batch, "batch-snappy-compressed", batchOf(parseCodec("snappy"), small));
+  writeSeed(batch, "batch-snappy-stored", batchOf(parseCodec("snappy"), noise));
+  writeSeed(batch, "batch-jpeg-420", batchOf(parseCodec("jpeg:90:420"), small));
+  writeSeed(batch, "batch-jpeg-444",
+            batchOf(parseCodec("jpeg:50:444"), sourceImage(9, 7, true, 0)));
+  writeSeed(batch, "batch-jpeg-422-four",
+            batchOf(parseCodec("jpeg:75:422"), sourceImage(80, 70, true, 0)));
+  BatchWriter writer;
+  writer.start(5, batchHeader(Codec::Raw));
+  writeSeed(batch, "batch-empty", writer.take());
+
+  const std::filesystem::path directory = dir / "service_directory";
+  writeSeed(directory, "directory-2x2-bezels", packDirectory(twoByTwo()));
+  writeSeed(directory, "directory-3x2-by-column",
+            packDirectory(directoryOf(k3x2ByColumn, "3x2.toml")));
+  writeSeed(directory, "directory-1x1",
+            packDirectory(directoryOf("[[display]]\nname = \"main\"\norigin = [0, 0]\n"
+                                      "size = [640, 480]\nprocess = 0\n",
+                                      "1x1.toml")));
+}
+
+}  // namespace
+}  // namespace wall::service
