@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -802,9 +803,16 @@ void writeSeed(const std::filesystem::path& dir, const std::string& name, const 
 }
 
 TEST(Protocol, WritesFuzzSeeds) {
+  // Without the variable the seeds go to a temporary folder, and every one must parse back: the
+  // corpus generator is checked on every run, not only when someone regenerates the corpus.
   const char* root = std::getenv("DFBWALL_WRITE_FUZZ_SEEDS");
-  if (root == nullptr || *root == '\0') GTEST_SKIP() << "DFBWALL_WRITE_FUZZ_SEEDS is not set";
-  const std::filesystem::path dir(root);
+  const bool keep = root != nullptr && *root != '\0';
+  const std::filesystem::path dir =
+      keep ? std::filesystem::path(root)
+           : std::filesystem::temp_directory_path() /
+                 ("dfbwall-seeds-" +
+                  std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" +
+                  std::to_string(std::rand()));
 
   const std::filesystem::path hello = dir / "service_hello";
   writeSeed(hello, "hello-default", packHello(Hello{}));
@@ -844,6 +852,32 @@ TEST(Protocol, WritesFuzzSeeds) {
             packDirectory(directoryOf("[[display]]\nname = \"main\"\norigin = [0, 0]\n"
                                       "size = [640, 480]\nprocess = 0\n",
                                       "1x1.toml")));
+
+  int seeds = 0;
+  for (const auto& folder : {hello, batch, directory})
+    for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+      std::string text(static_cast<size_t>(std::filesystem::file_size(entry.path())), '\0');
+      FILE* in = std::fopen(entry.path().c_str(), "rb");
+      ASSERT_NE(in, nullptr) << entry.path();
+      const size_t got = std::fread(text.data(), 1, text.size(), in);
+      std::fclose(in);
+      ASSERT_EQ(got, text.size()) << entry.path();
+      const auto* bytes = reinterpret_cast<const std::byte*>(text.data());
+      const MessageHeader h = parseHeader(bytes, text.size());
+      std::vector<BatchPiece> pieces;
+      if (h.kind == static_cast<std::uint16_t>(Kind::Hello)) {
+        EXPECT_NO_THROW(parseHello(bytes, text.size()));
+      }
+      if (h.kind == static_cast<std::uint16_t>(Kind::Directory)) {
+        EXPECT_NO_THROW(parseDirectory(bytes, text.size()));
+      }
+      if (h.kind == static_cast<std::uint16_t>(Kind::Batch)) {
+        EXPECT_NO_THROW(parseBatch(bytes, text.size(), pieces));
+      }
+      ++seeds;
+    }
+  EXPECT_GE(seeds, 15);
+  if (!keep) std::filesystem::remove_all(dir);
 }
 
 }  // namespace
