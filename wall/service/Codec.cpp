@@ -130,6 +130,10 @@ class TurboJpegHandle {
   TurboJpegHandle(const TurboJpegHandle&) = delete;
   TurboJpegHandle& operator=(const TurboJpegHandle&) = delete;
   tjhandle get() const { return handle_; }
+  void reset(tjhandle handle) {
+    if (handle_) tjDestroy(handle_);
+    handle_ = handle;
+  }
 
  private:
   tjhandle handle_;
@@ -147,11 +151,27 @@ tjhandle compressor() {
   return handle.get();
 }
 
+TurboJpegHandle& decompressorHandle() {
+  thread_local TurboJpegHandle handle(tjInitDecompress());
+  return handle;
+}
+
 tjhandle decompressor() {
-  thread_local const TurboJpegHandle handle(tjInitDecompress());
+  TurboJpegHandle& handle = decompressorHandle();
+  if (!handle.get()) handle.reset(tjInitDecompress());
   if (!handle.get())
     throw Error("TurboJPEG could not create a decompressor: " + turboJpegError(nullptr));
   return handle.get();
+}
+
+// TurboJPEG 2.1 leaves libjpeg's state in the handle when a call fails (it does not abort the
+// decompression), and the next piece on this thread would then be read as the continuation of
+// the bad one ("Unsupported marker type"): after an error, this thread starts over with a new
+// decompressor.
+Error decodeFailure(tjhandle handle, const std::string& what) {
+  Error error(what + turboJpegError(handle));
+  decompressorHandle().reset(nullptr);
+  return error;
 }
 
 int turboJpegSubsampling(ChromaSubsampling subsampling) {
@@ -246,8 +266,7 @@ void decodeJpeg(const std::byte* data, std::size_t size, int width, int height, 
   int jpegWidth = 0, jpegHeight = 0, subsampling = 0, colorspace = 0;
   if (tjDecompressHeader3(handle, jpeg, size, &jpegWidth, &jpegHeight, &subsampling, &colorspace) !=
       0)
-    throw Error("jpeg piece of " + sizeText(width, height) +
-                ": bad header: " + turboJpegError(handle));
+    throw decodeFailure(handle, "jpeg piece of " + sizeText(width, height) + ": bad header: ");
   if (jpegWidth != width || jpegHeight != height)
     throw Error("jpeg piece of " + sizeText(width, height) + " holds a " +
                 sizeText(jpegWidth, jpegHeight) + " image");
@@ -262,7 +281,7 @@ void decodeJpeg(const std::byte* data, std::size_t size, int width, int height, 
   if (tjDecompress2(handle, jpeg, size, reinterpret_cast<unsigned char*>(dest), width,
                     4 * destStride, height, TJPF_RGBA,
                     TJFLAG_STOPONWARNING | TJFLAG_LIMITSCANS) != 0)
-    throw Error("jpeg piece of " + sizeText(width, height) + ": " + turboJpegError(handle));
+    throw decodeFailure(handle, "jpeg piece of " + sizeText(width, height) + ": ");
 }
 
 }  // namespace
