@@ -724,6 +724,33 @@ TEST(ProtocolHostile, ADirectoryWithExtremeRectangles) {
   }
 }
 
+// A wall process decodes every piece of every job on a few threads: a corrupt JPEG piece (every
+// single-byte corruption of one) is refused, and the next, valid batch on the same thread still
+// decodes to the same pixels.
+TEST(ProtocolHostile, ACorruptJpegPieceDoesNotSpoilTheNextBatch) {
+  const dfb::Bytes good = batchOf(parseCodec("jpeg:90:420"), sourceImage(20, 12, true, 0));
+  std::vector<BatchPiece> pieces;
+  const BatchHeader h = parseBatch(good.data(), good.size(), pieces);
+  ASSERT_EQ(pieces.size(), 1u);
+  const Pixels want = decodePiece(h.codec, pieces[0]);
+  for (std::size_t at = kBatchFirstRecordAt + kRecordBytes; at < good.size(); ++at)
+    for (const std::uint8_t x : {0x01, 0x80, 0xFF}) {
+      dfb::Bytes corrupt = good;
+      corrupt[at] ^= std::byte{x};
+      try {
+        std::vector<BatchPiece> bad;
+        parseBatch(corrupt.data(), corrupt.size(), bad);
+        decodePiece(h.codec, bad[0]);
+      } catch (const wall::Error&) {
+      }
+      parseBatch(good.data(), good.size(), pieces);
+      Pixels got;
+      ASSERT_NO_THROW(got = decodePiece(h.codec, pieces[0]))
+          << "after byte " << at << " of the batch was flipped with " << int{x};
+      ASSERT_EQ(got, want) << "after byte " << at << " of the batch was flipped with " << int{x};
+    }
+}
+
 TEST(ProtocolHostile, TrailingGarbage) {
   std::vector<dfb::Bytes> messages = {packHello(fullHello()), packDirectory(twoByTwo()),
                                       packText(Kind::Queued, 2, "3"), packControl(Kind::Bye, 2, 9),
