@@ -17,10 +17,10 @@
 #include "api/SessionTesting.h"
 #include "api/WallStop.h"
 #include "dfb/AtomicFile.h"
-#include "dfb/BoundedWait.h"
 #include "dfb/DistributedFrameBuffer.h"
 #include "dfb/Error.h"
-#include "dfb/Messenger.h"
+#include "messaging/BoundedWait.h"
+#include "messaging/Messenger.h"
 #include "renderers/FrameDriver.h"
 #include "renderers/Parallel.h"
 #include "renderers/scivis/BrickFrameDriver.h"
@@ -41,7 +41,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 void bounded(MPI_Request& request, std::chrono::milliseconds timeout, const std::string& what) {
-  dfb::waitWithDeadline(
+  messaging::waitWithDeadline(
       request, Clock::now() + timeout,
       what + ": another rank did not join within " + std::to_string(timeout.count()) + " ms");
 }
@@ -107,7 +107,7 @@ struct Session::Impl {
   std::optional<wall::Layout> layout;
   wall::RankRoles roles;
   int width = 0, height = 0;
-  std::unique_ptr<dfb::Messenger> messenger;
+  std::unique_ptr<messaging::Messenger> messenger;
   std::unique_ptr<WallStop> wallStop;
   // Shared with the messenger's error callback: the messenger, declared before it, is destroyed
   // after it and may still report an error while it stops.
@@ -183,12 +183,12 @@ Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make
     m.height = m.layout->canvasHeight;
   }
   dfb::checkMpi(MPI_Comm_split(m.own, m.isWall() ? 1 : 0, m.rank, &m.role), "MPI_Comm_split");
-  dfb::MessengerOptions messaging;
+  messaging::MessengerOptions messaging;
   messaging.quiesceTimeout = m.timeout;
   // The session's thread budget covers the tile inputs the messenger combines too (the dfbwall
   // executable caps both with one process-wide limit, which a program embedding us must not get).
   messaging.handlerThreads = options.threads;
-  m.messenger = std::make_unique<dfb::Messenger>(m.own, messaging);
+  m.messenger = std::make_unique<messaging::Messenger>(m.own, messaging);
   // A message that cannot be handled arrives on a messaging thread, where nothing can throw to
   // the program: it is recorded, and thrown by this rank's next renderFrame(), close() or
   // runWall() (the library never ends the job; the program decides).
@@ -314,7 +314,7 @@ void Session::runWall() try {
   {
     wall::MpiWallPeers peers(*m.messenger, m.role, options.timeout);
     wall::WallNode node(*m.layout, peers, presenters->list(), options);
-    const dfb::Registration pieces(*m.messenger, wall::kWallNodeObject, &node);
+    const messaging::Registration pieces(*m.messenger, wall::kWallNodeObject, &node);
     m.wallStop->onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
     // However the block is left (a throw too), the stop no longer reaches the node it leaves.
     const std::unique_ptr<WallStop, void (*)(WallStop*)> forget(
@@ -514,7 +514,7 @@ void Session::close() try {
 }
 
 void SessionTesting::send(Session& session, int toRank, std::uint64_t object) {
-  session.impl_->messenger->send(toRank, object, dfb::Bytes{});
+  session.impl_->messenger->send(toRank, object, messaging::Bytes{});
 }
 
 void SessionTesting::quiesce(Session& session) { session.impl_->messenger->quiesce(); }

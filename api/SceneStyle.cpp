@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
+#include "messaging/BoundedWait.h"
 #include "renderers/scivis/TransferFunction.h"
 
 namespace dfbwall {
@@ -221,9 +221,9 @@ renderers::SceneDesc sceneDesc(const Style& style, const std::vector<renderers::
     dfb::checkMpi(MPI_Iallreduce(local.data(), global.data(), static_cast<int>(2 * n), MPI_FLOAT,
                                  MPI_MAX, renderComm, &request),
                   "MPI_Iallreduce");
-    dfb::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
-                          "value ranges of a new scene version: another render rank did not "
-                          "join in time");
+    messaging::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
+                                "value ranges of a new scene version: another render rank did not "
+                                "join in time");
   }
   for (std::size_t v = 0; v < n; ++v) {
     const VolumeStyle& s = style.volumes[v];

@@ -12,7 +12,7 @@ struct SessionTesting {
   // communicator, through the session's messenger.
   static void send(Session& session, int toRank, std::uint64_t object);
   // Collective over the session's communicator: returns once every message sent before any rank
-  // entered it has been handled (dfb::Messenger::quiesce).
+  // entered it has been handled (messaging::Messenger::quiesce).
   static void quiesce(Session& session);
 };
 

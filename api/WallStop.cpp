@@ -6,7 +6,7 @@
 
 namespace dfbwall {
 
-WallStop::WallStop(dfb::Messenger& messenger) : messenger_(messenger) {
+WallStop::WallStop(messaging::Messenger& messenger) : messenger_(messenger) {
   messenger_.registerObject(kWallStopObject, this);
 }
 
@@ -14,7 +14,7 @@ WallStop::~WallStop() { messenger_.unregisterObject(kWallStopObject); }
 
 void WallStop::announceLastFrame(std::uint32_t lastFrame, int firstWallRank, int worldSize) {
   for (int rank = firstWallRank; rank < worldSize; ++rank) {
-    dfb::Bytes bytes(sizeof lastFrame);
+    messaging::Bytes bytes(sizeof lastFrame);
     std::memcpy(bytes.data(), &lastFrame, sizeof lastFrame);
     messenger_.send(rank, kWallStopObject, std::move(bytes));
   }
@@ -30,7 +30,7 @@ void WallStop::onLastFrame(std::function<void(std::uint32_t)> stop) {
   if (known && stop) stop(*known);
 }
 
-void WallStop::incoming(int fromRank, dfb::Bytes&& payload) {
+void WallStop::incoming(int fromRank, messaging::Bytes&& payload) {
   std::uint32_t lastFrame = 0;
   if (payload.size() != sizeof lastFrame)
     throw std::runtime_error("malformed wall-stop message of " + std::to_string(payload.size()) +

@@ -11,15 +11,15 @@
 #include <mutex>
 #include <optional>
 
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 
 namespace dfbwall {
 
-constexpr dfb::ObjectId kWallStopObject = 0x5709'0002;
+constexpr messaging::ObjectId kWallStopObject = 0x5709'0002;
 
-class WallStop : public dfb::MessageHandler {
+class WallStop : public messaging::MessageHandler {
  public:
-  explicit WallStop(dfb::Messenger& messenger);
+  explicit WallStop(messaging::Messenger& messenger);
   ~WallStop() override;
   WallStop(const WallStop&) = delete;
   WallStop& operator=(const WallStop&) = delete;
@@ -29,10 +29,10 @@ class WallStop : public dfb::MessageHandler {
   // Wall ranks: `stop(lastFrame)` runs once it is known (at once when it is known already).
   void onLastFrame(std::function<void(std::uint32_t)> stop);
 
-  void incoming(int fromRank, dfb::Bytes&& payload) override;
+  void incoming(int fromRank, messaging::Bytes&& payload) override;
 
  private:
-  dfb::Messenger& messenger_;
+  messaging::Messenger& messenger_;
   std::mutex mutex_;
   std::optional<std::uint32_t> lastFrame_;
   std::function<void(std::uint32_t)> stop_;

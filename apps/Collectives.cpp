@@ -1,14 +1,14 @@
 #include "apps/Collectives.h"
 
-#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
+#include "messaging/BoundedWait.h"
 
 namespace app {
 namespace {
 
 void finish(MPI_Request& request, std::chrono::milliseconds timeout, const std::string& what,
             std::chrono::microseconds maxSleep = std::chrono::microseconds(20)) {
-  dfb::waitWithDeadline(
+  messaging::waitWithDeadline(
       request, std::chrono::steady_clock::now() + timeout,
       what + ": another rank did not join within " + std::to_string(timeout.count()) + " ms",
       maxSleep);

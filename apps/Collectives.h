@@ -1,6 +1,6 @@
 #pragma once
 // The app's collectives, each with a deadline (docs/design.md, invariant 6): the non-blocking
-// MPI call completed by dfb::waitWithDeadline, so a rank that never joins turns into a
+// MPI call completed by messaging::waitWithDeadline, so a rank that never joins turns into a
 // dfb::Error naming `what` on the others instead of a hang.
 #include <mpi.h>
 
@@ -10,7 +10,7 @@
 namespace app {
 
 void boundedBarrier(MPI_Comm comm, std::chrono::milliseconds timeout, const std::string& what);
-// `maxSleep`: the longest sleep between polls (dfb::waitWithDeadline); long for a rank that
+// `maxSleep`: the longest sleep between polls (messaging::waitWithDeadline); long for a rank that
 // idles until the next order.
 void boundedBcast(void* buffer, int bytes, MPI_Comm comm, std::chrono::milliseconds timeout,
                   const std::string& what,

@@ -10,7 +10,7 @@
 #include "apps/CameraPath.h"
 #include "apps/Failure.h"
 #include "apps/Options.h"
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 #include "renderers/RenderScene.h"
 #include "wall/Layout.h"
 #include "wall/Ranks.h"
@@ -124,13 +124,13 @@ class Steering;
 // Render ranks: renders the frames, feeds the wall (route or gather), writes --image on rank 0,
 // streams the statistics there. Returns the exit code agreed with rank 0 (0, or a stop's).
 // `status`: rank 0 with a control server, what it reports (else null).
-int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm,
+int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm renderComm,
                   RunControl& control, Steering& steering, StatusBoard* status, StatsStream* stats,
                   RankTotals& totals);
 // Wall ranks: assembles, swaps and presents the frames of this process's displays until the
 // last frame (or the one rank 0 announces when the run stops early). Returns the exit code.
-int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, RunControl& control,
-                Steering& steering, RankTotals& totals);
+int runWallRank(const Job& job, messaging::Messenger& messenger, MPI_Comm wallComm,
+                RunControl& control, Steering& steering, RankTotals& totals);
 
 // The peak resident set of this process (VmHWM), in KiB; 0 where /proc is missing.
 double peakRssKiB();

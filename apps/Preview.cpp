@@ -6,7 +6,7 @@
 
 namespace app {
 
-Preview::Preview(const Job& job, dfb::Messenger& messenger) : job_(job) {
+Preview::Preview(const Job& job, messaging::Messenger& messenger) : job_(job) {
   const wall::PreviewGrid grid{job.canvasWidth, job.canvasHeight,
                                wall::previewFactor(job.canvasWidth, job.canvasHeight)};
   op_ = std::make_shared<wall::PreviewOp>(messenger, grid);

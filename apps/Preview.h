@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "apps/Job.h"
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 #include "wall/PreviewAssembler.h"
 #include "wall/PreviewOp.h"
 
@@ -19,7 +19,7 @@ class Preview {
  public:
   // Every render rank, before the start-up barrier (and before the control server starts, which
   // serves it). Lives until the messenger has stopped.
-  Preview(const Job& job, dfb::Messenger& messenger);
+  Preview(const Job& job, messaging::Messenger& messenger);
   std::shared_ptr<wall::PreviewOp> op() const { return op_; }
   // Render rank 0 only (nullptr elsewhere).
   wall::PreviewAssembler* assembler() const { return assembler_.get(); }

@@ -15,10 +15,10 @@
 #include "apps/Stats.h"
 #include "apps/StatusBoard.h"
 #include "apps/Steering.h"
-#include "dfb/BoundedWait.h"
 #include "dfb/DistributedFrameBuffer.h"
 #include "dfb/Error.h"
 #include "dfb/Timing.h"
+#include "messaging/BoundedWait.h"
 #include "renderers/FrameDriver.h"
 #include "renderers/Renderer.h"
 #include "renderers/WorkDistribution.h"
@@ -71,7 +71,7 @@ bool endsWith(const std::string& s, const std::string& suffix) {
 
 // Gather mode's relay, as Tide-like walls do it: rank 0 has the whole image and sends each
 // display its rectangle.
-wall::DisplayRoutingOp::Sent relayToDisplays(const Job& job, dfb::Messenger& messenger,
+wall::DisplayRoutingOp::Sent relayToDisplays(const Job& job, messaging::Messenger& messenger,
                                              std::uint32_t frameId,
                                              const std::vector<std::uint32_t>& image) {
   wall::DisplayRoutingOp::Sent sent;
@@ -79,9 +79,9 @@ wall::DisplayRoutingOp::Sent relayToDisplays(const Job& job, dfb::Messenger& mes
   for (size_t d = 0; d < layout.displays.size(); ++d) {
     const dfb::Region& rect = layout.displays[d].rect;
     const int to = job.roles.rankOfProcess(layout.displays[d].process);
-    dfb::Bytes piece = wall::packPiece(frameId, static_cast<int>(d),
-                                       dfb::Region{0, 0, rect.width(), rect.height()}, image.data(),
-                                       job.canvasWidth, rect.x0, rect.y0, messenger.compresses(to));
+    messaging::Bytes piece = wall::packPiece(
+        frameId, static_cast<int>(d), dfb::Region{0, 0, rect.width(), rect.height()}, image.data(),
+        job.canvasWidth, rect.x0, rect.y0, messenger.compresses(to));
     sent.bytes += piece.size();
     sent.pieces++;
     if (!messenger.sameHost(to)) sent.piecesToOtherHosts++;
@@ -112,8 +112,8 @@ std::vector<RankFrame> gatherRankFrames(const RankFrame& mine, MPI_Comm comm,
   dfb::checkMpi(MPI_Igather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, 0,
                             comm, &request),
                 "MPI_Igather");
-  dfb::waitWithDeadline(request, Clock::now() + timeout,
-                        "frame statistics: another render rank did not send them in time");
+  messaging::waitWithDeadline(request, Clock::now() + timeout,
+                              "frame statistics: another render rank did not send them in time");
   return all;
 }
 
@@ -143,7 +143,7 @@ FrameRecord combine(const std::vector<RankFrame>& all) {
 
 }  // namespace
 
-int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm,
+int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm renderComm,
                   RunControl& control, Steering& steering, StatusBoard* status,
                   StatsStream* statsStream, RankTotals& totals) {
   const Options& o = job.options;
@@ -317,7 +317,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
     auto lastProgress = Clock::now();
     const auto runStart = Clock::now();
     // What the pieces take on the wire: the messenger counts it per object, after compression.
-    dfb::Messenger::ObjectTraffic wallBefore = messenger.traffic(wall::kWallNodeObject);
+    messaging::Messenger::ObjectTraffic wallBefore = messenger.traffic(wall::kWallNodeObject);
     std::uint64_t compressedBefore = messenger.counters().messagesCompressed;
     Clock::time_point previousStart;
     std::uint32_t lastFrame = 0;  // the last frame every render rank completed
@@ -404,7 +404,7 @@ int runRenderRank(const Job& job, dfb::Messenger& messenger, MPI_Comm renderComm
       const auto relayStart = Clock::now();
       if (hasWall && !route && job.worldRank == 0)
         sent = relayToDisplays(job, messenger, frameId, dfb.imageRgba8());
-      dfb::Messenger::ObjectTraffic wallNow = messenger.traffic(wall::kWallNodeObject);
+      messaging::Messenger::ObjectTraffic wallNow = messenger.traffic(wall::kWallNodeObject);
       if (serviceSink) {  // the pieces went through the service's sockets, not the messenger
         const auto traffic = serviceSink->takeTraffic();
         wallNow.bytesSent = wallBefore.bytesSent + traffic.bytes;

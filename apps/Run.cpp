@@ -19,9 +19,9 @@
 #include "apps/StopSignals.h"
 #include "apps/control/PageRoutes.h"
 #include "dfb/AtomicFile.h"
-#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
-#include "dfb/MpiSession.h"
+#include "messaging/BoundedWait.h"
+#include "messaging/MpiSession.h"
 #include "renderers/BuiltinScenes.h"
 #include "wall/Error.h"
 #include "wall/service/ServiceClient.h"
@@ -201,8 +201,9 @@ std::vector<RankTotals> collectTotals(const Job& job, RankTotals mine,
   dfb::checkMpi(MPI_Igather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, 0,
                             MPI_COMM_WORLD, &request),
                 "MPI_Igather");
-  dfb::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
-                        "collecting statistics: another rank did not send its totals in time");
+  messaging::waitWithDeadline(
+      request, std::chrono::steady_clock::now() + timeout,
+      "collecting statistics: another rank did not send its totals in time");
   return all;
 }
 
@@ -219,9 +220,9 @@ void shareDirectory(Job& job, std::chrono::milliseconds timeout) {
 int run(int argc, char** argv) {
   // Before MPI or any library starts a thread: the stop signals stay blocked in all of them.
   StopSignals signals;
-  std::unique_ptr<dfb::MpiSession> mpi;
+  std::unique_ptr<messaging::MpiSession> mpi;
   try {
-    mpi = std::make_unique<dfb::MpiSession>(&argc, &argv);
+    mpi = std::make_unique<messaging::MpiSession>(&argc, &argv);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "dfbwall: error: %s\n", e.what());
     return 1;
@@ -256,12 +257,12 @@ int run(int argc, char** argv) {
     dfb::checkMpi(
         MPI_Comm_split(MPI_COMM_WORLD, job.isWallRank() ? 1 : 0, job.worldRank, &roleComm),
         "MPI_Comm_split");
-    dfb::MessengerOptions messaging;
+    messaging::MessengerOptions messaging;
     messaging.compress = job.options.compress;
     messaging.compressWithinHost = job.options.compressWithinHost;
     messaging.handlerThreads = job.options.handlerThreads;
     messaging.quiesceTimeout = timeout;
-    dfb::Messenger messenger(MPI_COMM_WORLD, messaging);
+    messaging::Messenger messenger(MPI_COMM_WORLD, messaging);
     // A message that cannot be handled (malformed, for nobody, a handler that threw) is a
     // failure of the job now, not a frame that times out later under another name.
     messenger.setErrorCallback([&failure](const std::string& m) { failure.fail(m); });

@@ -14,15 +14,15 @@ struct ControlMessage {
 };
 constexpr std::uint32_t kAskToStop = 1, kLastFrame = 2;
 
-dfb::Bytes pack(const ControlMessage& m) {
-  dfb::Bytes bytes(sizeof m);
+messaging::Bytes pack(const ControlMessage& m) {
+  messaging::Bytes bytes(sizeof m);
   std::memcpy(bytes.data(), &m, sizeof m);
   return bytes;
 }
 
 }  // namespace
 
-RunControl::RunControl(dfb::Messenger& messenger, StopSignals& signals)
+RunControl::RunControl(messaging::Messenger& messenger, StopSignals& signals)
     : messenger_(messenger), signals_(signals) {
   messenger_.registerObject(kRunControlObject, this);
 }
@@ -66,7 +66,7 @@ void RunControl::onLastFrame(std::function<void(std::uint32_t)> stop) {
   if (known && stop) stop(*known);
 }
 
-void RunControl::incoming(int fromRank, dfb::Bytes&& payload) {
+void RunControl::incoming(int fromRank, messaging::Bytes&& payload) {
   ControlMessage m;
   if (payload.size() != sizeof m)
     throw std::runtime_error("malformed run-control message of " + std::to_string(payload.size()) +

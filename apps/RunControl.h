@@ -14,15 +14,15 @@
 #include <optional>
 
 #include "apps/StopSignals.h"
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 
 namespace app {
 
-constexpr dfb::ObjectId kRunControlObject = 0x5709'0001;
+constexpr messaging::ObjectId kRunControlObject = 0x5709'0001;
 
-class RunControl : public dfb::MessageHandler {
+class RunControl : public messaging::MessageHandler {
  public:
-  RunControl(dfb::Messenger& messenger, StopSignals& signals);
+  RunControl(messaging::Messenger& messenger, StopSignals& signals);
   ~RunControl() override;
   RunControl(const RunControl&) = delete;
   RunControl& operator=(const RunControl&) = delete;
@@ -43,10 +43,10 @@ class RunControl : public dfb::MessageHandler {
   int exitCode() const { return exitCode_; }
   void setExitCode(int code) { exitCode_ = code; }
 
-  void incoming(int fromRank, dfb::Bytes&& payload) override;
+  void incoming(int fromRank, messaging::Bytes&& payload) override;
 
  private:
-  dfb::Messenger& messenger_;
+  messaging::Messenger& messenger_;
   StopSignals& signals_;
   bool asked_ = false;
   std::atomic<int> exitCode_{0};

@@ -11,7 +11,7 @@
 #include "apps/Run.h"
 #include "apps/StopSignals.h"
 #include "dfb/AtomicFile.h"
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 #include "wall/DisplayPresenters.h"
 #include "wall/Ranks.h"
 #include "wall/service/WallService.h"
@@ -49,10 +49,10 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
   try {
     const int process = worldRank;
     const auto presenters = wall::makeDisplayPresenters(*layout, process, o.offscreen);
-    dfb::MessengerOptions messaging;
+    messaging::MessengerOptions messaging;
     messaging.quiesceTimeout = timeout;
     messaging.handlerThreads = 1;  // commands only: the pieces come through the service's sockets
-    dfb::Messenger messenger(MPI_COMM_WORLD, messaging);
+    messaging::Messenger messenger(MPI_COMM_WORLD, messaging);
     messenger.setErrorCallback([&failure](const std::string& m) { failure.fail(m); });
     wall::service::ServiceOptions service;
     service.listen = o.listen;

@@ -22,8 +22,8 @@ struct WallMessage {
 };
 
 template <typename T>
-dfb::Bytes pack(std::uint32_t kind, const T& body) {
-  dfb::Bytes bytes(sizeof kind + sizeof body);
+messaging::Bytes pack(std::uint32_t kind, const T& body) {
+  messaging::Bytes bytes(sizeof kind + sizeof body);
   std::memcpy(bytes.data(), &kind, sizeof kind);
   std::memcpy(bytes.data() + sizeof kind, &body, sizeof body);
   return bytes;
@@ -84,7 +84,7 @@ std::string checkRequest(const SteeringRequest& r) {
   return {};
 }
 
-Steering::Steering(dfb::Messenger& messenger) : messenger_(messenger) {
+Steering::Steering(messaging::Messenger& messenger) : messenger_(messenger) {
   messenger_.registerObject(kSteeringObject, this);
 }
 
@@ -163,7 +163,7 @@ void Steering::onCapture(std::function<void(std::uint32_t, std::uint64_t)> callb
   capture_ = std::move(callback);
 }
 
-void Steering::incoming(int fromRank, dfb::Bytes&& payload) {
+void Steering::incoming(int fromRank, messaging::Bytes&& payload) {
   std::uint32_t kind = 0;
   if (payload.size() >= sizeof kind) std::memcpy(&kind, payload.data(), sizeof kind);
   const auto malformed = [&] {

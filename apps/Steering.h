@@ -19,12 +19,12 @@
 #include <string>
 #include <vector>
 
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 #include "renderers/Math.h"
 
 namespace app {
 
-constexpr dfb::ObjectId kSteeringObject = 0x5709'0002;
+constexpr messaging::ObjectId kSteeringObject = 0x5709'0002;
 
 // One request; trivially copyable (it travels from wall ranks to rank 0 as bytes). `fields`
 // says which of the values are set; the rest are ignored.
@@ -69,9 +69,9 @@ struct SteeringRequest {
 // kind), or empty when it can. Ranges: docs in README.md, "Steering the wall".
 std::string checkRequest(const SteeringRequest& r);
 
-class Steering : public dfb::MessageHandler {
+class Steering : public messaging::MessageHandler {
  public:
-  explicit Steering(dfb::Messenger& messenger);
+  explicit Steering(messaging::Messenger& messenger);
   ~Steering() override;
   Steering(const Steering&) = delete;
   Steering& operator=(const Steering&) = delete;
@@ -100,12 +100,12 @@ class Steering : public dfb::MessageHandler {
   void onKeepWaiting(std::function<void()> callback);
   void onCapture(std::function<void(std::uint32_t frameId, std::uint64_t sequence)> callback);
 
-  void incoming(int fromRank, dfb::Bytes&& payload) override;
+  void incoming(int fromRank, messaging::Bytes&& payload) override;
 
  private:
   std::uint64_t enqueue(SteeringRequest request);
 
-  dfb::Messenger& messenger_;
+  messaging::Messenger& messenger_;
   std::mutex mutex_;
   std::condition_variable queued_;
   std::deque<SteeringRequest> queue_;

@@ -23,8 +23,8 @@ constexpr const char* kGlThreadPrefix = "llvmpipe";
 
 }  // namespace
 
-int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, RunControl& control,
-                Steering& steering, RankTotals& totals) {
+int runWallRank(const Job& job, messaging::Messenger& messenger, MPI_Comm wallComm,
+                RunControl& control, Steering& steering, RankTotals& totals) {
   const Options& o = job.options;
   const wall::Layout& layout = *job.layout;
   const int process = job.roles.processOfRank(job.worldRank);
@@ -63,7 +63,7 @@ int runWallRank(const Job& job, dfb::Messenger& messenger, MPI_Comm wallComm, Ru
   {
     wall::MpiWallPeers peers(messenger, wallComm, options.timeout);
     wall::WallNode node(layout, peers, presenters->list(), options);
-    const dfb::Registration pieces(messenger, wall::kWallNodeObject, &node);
+    const messaging::Registration pieces(messenger, wall::kWallNodeObject, &node);
     control.onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
     // While the renderers idle (a converged wall), rank 0 tells the walls to keep waiting; a
     // capture asked for through the control API names its frame.

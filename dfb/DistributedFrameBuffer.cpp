@@ -10,11 +10,11 @@
 #include <mutex>
 #include <string>
 
-#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
 #include "dfb/ImageGather.h"
 #include "dfb/TileMessage.h"
 #include "dfb/Timing.h"
+#include "messaging/BoundedWait.h"
 
 namespace dfb {
 namespace {}  // namespace
@@ -31,12 +31,12 @@ struct OwnedTile {
 };
 
 struct DistributedFrameBuffer::Impl {
-  Impl(Messenger& m, DfbOptions o)
+  Impl(messaging::Messenger& m, DfbOptions o)
       : messenger(m),
         options(std::move(o)),
         grid(options.width, options.height, options.tileSize) {}
 
-  Messenger& messenger;
+  messaging::Messenger& messenger;
   DfbOptions options;
   TileGrid grid;
   MPI_Comm comm = MPI_COMM_NULL;
@@ -55,8 +55,8 @@ struct DistributedFrameBuffer::Impl {
   FrameInfo frame;
   std::uint32_t accumulationId = 0;
   bool haveEpoch = false;
-  std::map<std::uint32_t, std::vector<Bytes>> early;  // inputs for frames not begun yet
-  int remaining = 0;                                  // owned tiles not complete this frame
+  std::map<std::uint32_t, std::vector<messaging::Bytes>> early;  // inputs for frames not begun yet
+  int remaining = 0;  // owned tiles not complete this frame
   std::vector<std::string> inputErrors;
 
   std::vector<float> tileErrors;
@@ -71,14 +71,14 @@ struct DistributedFrameBuffer::Impl {
   // twice per stage per tile.
   std::atomic<std::int64_t> unpackNs{0}, operationNs{0}, toneMapNs{0}, pixelOpsNs{0};
   Clock::time_point frameStart;
-  Messenger::ObjectTraffic trafficAtBegin;
-  MessengerCounters countersAtBegin;
+  messaging::Messenger::ObjectTraffic trafficAtBegin;
+  messaging::MessengerCounters countersAtBegin;
   FrameStats lastStats;
 
   void processInput(int tileIndex, Tile&& input);
   // Runs the pixel ops of a tile whose last input arrived, with the tile's mutex held.
   void finishTile(int tileIndex, OwnedTile& owned);
-  void deliver(Bytes&& bytes);
+  void deliver(messaging::Bytes&& bytes);
   // The display-format gather of the finished frame to rank 0 (nothing with NONE).
   GatherCounts gather(Clock::time_point deadline);
   void failInput(const std::string& message) {
@@ -88,7 +88,7 @@ struct DistributedFrameBuffer::Impl {
   }
 };
 
-DistributedFrameBuffer::DistributedFrameBuffer(Messenger& messenger, MPI_Comm comm,
+DistributedFrameBuffer::DistributedFrameBuffer(messaging::Messenger& messenger, MPI_Comm comm,
                                                DfbOptions options)
     : impl_(std::make_unique<Impl>(messenger, std::move(options))) {
   Impl& d = *impl_;
@@ -103,7 +103,7 @@ DistributedFrameBuffer::DistributedFrameBuffer(Messenger& messenger, MPI_Comm co
   MPI_Request request;
   checkMpi(MPI_Iallgather(&mine, 1, MPI_INT, d.messengerRank.data(), 1, MPI_INT, d.comm, &request),
            "MPI_Iallgather");
-  waitWithDeadline(request, deadline, late);
+  messaging::waitWithDeadline(request, deadline, late);
 
   const int count = d.grid.tileCount();
   d.owner.resize(static_cast<size_t>(count));
@@ -124,7 +124,7 @@ DistributedFrameBuffer::DistributedFrameBuffer(Messenger& messenger, MPI_Comm co
   messenger.registerObject(d.options.objectId, this);
   // Nobody may send to this object before every rank has registered it.
   checkMpi(MPI_Ibarrier(d.comm, &request), "MPI_Ibarrier");
-  waitWithDeadline(request, deadline, late);
+  messaging::waitWithDeadline(request, deadline, late);
 }
 
 DistributedFrameBuffer::~DistributedFrameBuffer() {
@@ -145,7 +145,7 @@ void DistributedFrameBuffer::setToneMap(const ToneMapSettings& toneMap) {
 
 void DistributedFrameBuffer::begin(const FrameInfo& frame) {
   Impl& d = *impl_;
-  std::vector<Bytes> held;
+  std::vector<messaging::Bytes> held;
   {
     std::lock_guard lock(d.frameMutex);
     if (d.inFrame)
@@ -195,7 +195,7 @@ void DistributedFrameBuffer::begin(const FrameInfo& frame) {
       d.early.erase(d.early.begin());
     }
   }
-  for (Bytes& bytes : held) d.deliver(std::move(bytes));
+  for (messaging::Bytes& bytes : held) d.deliver(std::move(bytes));
 }
 
 void DistributedFrameBuffer::setTile(Tile tile) {
@@ -218,15 +218,17 @@ void DistributedFrameBuffer::setTile(Tile tile) {
   if (owner == d.rank) {
     d.processInput(index, std::move(tile));
   } else {
-    Bytes bytes = packTile(tile, index, d.frame.frameId, d.frame.epoch);
+    messaging::Bytes bytes = packTile(tile, index, d.frame.frameId, d.frame.epoch);
     d.messenger.send(d.messengerRank[static_cast<size_t>(owner)], d.options.objectId,
                      std::move(bytes));
   }
 }
 
-void DistributedFrameBuffer::incoming(int, Bytes&& payload) { impl_->deliver(std::move(payload)); }
+void DistributedFrameBuffer::incoming(int, messaging::Bytes&& payload) {
+  impl_->deliver(std::move(payload));
+}
 
-void DistributedFrameBuffer::Impl::deliver(Bytes&& bytes) {
+void DistributedFrameBuffer::Impl::deliver(messaging::Bytes&& bytes) {
   TileMessageHeader header;
   Tile tile;
   const std::int64_t start = threadCpuNs();
@@ -410,10 +412,10 @@ void DistributedFrameBuffer::end() {
                           MPI_FLOAT, MPI_MAX, d.comm, &request),
            "MPI_Iallreduce");
   const GatherCounts counts = d.gather(collectiveDeadline);
-  waitWithDeadline(request, collectiveDeadline,
-                   "frame " + std::to_string(d.frame.frameId) +
-                       ": another rank did not finish the frame within " +
-                       std::to_string(2 * d.options.frameTimeout.count()) + " ms");
+  messaging::waitWithDeadline(request, collectiveDeadline,
+                              "frame " + std::to_string(d.frame.frameId) +
+                                  ": another rank did not finish the frame within " +
+                                  std::to_string(2 * d.options.frameTimeout.count()) + " ms");
   const auto complete = Clock::now();
   {
     std::lock_guard lock(d.frameMutex);
@@ -425,8 +427,8 @@ void DistributedFrameBuffer::end() {
   stats.frameId = d.frame.frameId;
   stats.tilesSet = d.tilesSet;
   stats.tilesCompleted = d.tilesCompleted;
-  const Messenger::ObjectTraffic tiles = d.messenger.traffic(d.options.objectId);
-  const MessengerCounters all = d.messenger.counters();
+  const messaging::Messenger::ObjectTraffic tiles = d.messenger.traffic(d.options.objectId);
+  const messaging::MessengerCounters all = d.messenger.counters();
   stats.tileBytesSent = tiles.bytesSent - d.trafficAtBegin.bytesSent;
   stats.tileBytesReceived = tiles.bytesReceived - d.trafficAtBegin.bytesReceived;
   stats.otherBytesSent = all.wireBytesSent - d.countersAtBegin.wireBytesSent - stats.tileBytesSent;

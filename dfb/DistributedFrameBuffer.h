@@ -28,10 +28,10 @@
 #include <memory>
 #include <vector>
 
-#include "dfb/Messenger.h"
 #include "dfb/PixelOp.h"
 #include "dfb/Tile.h"
 #include "dfb/TileOperation.h"
+#include "messaging/Messenger.h"
 
 namespace dfb {
 
@@ -57,7 +57,7 @@ struct DfbOptions {
   // Gathered images (RGBA8, RGBAF32) are compressed; RGBA8 through the plane-delta filter first.
   bool compressGather = true;
   // Distinct per DFB sharing a messenger; the same on every rank.
-  ObjectId objectId = 0xDFB0;
+  messaging::ObjectId objectId = 0xDFB0;
   std::chrono::milliseconds frameTimeout{60000};
   // Inputs for a frame more than this many frames past the current one are an error instead of
   // being held (a corrupt frame id would otherwise hold memory forever).
@@ -83,9 +83,9 @@ struct FrameStats {
   double unpackMs = 0, operationMs = 0, toneMapMs = 0, pixelOpsMs = 0;
 };
 
-class DistributedFrameBuffer final : public MessageHandler {
+class DistributedFrameBuffer final : public messaging::MessageHandler {
  public:
-  DistributedFrameBuffer(Messenger& messenger, MPI_Comm comm, DfbOptions options);
+  DistributedFrameBuffer(messaging::Messenger& messenger, MPI_Comm comm, DfbOptions options);
   ~DistributedFrameBuffer() override;
   DistributedFrameBuffer(const DistributedFrameBuffer&) = delete;
   DistributedFrameBuffer& operator=(const DistributedFrameBuffer&) = delete;
@@ -116,7 +116,7 @@ class DistributedFrameBuffer final : public MessageHandler {
 
   FrameStats stats() const;  // of the last frame, this rank
 
-  void incoming(int fromRank, Bytes&& payload) override;
+  void incoming(int fromRank, messaging::Bytes&& payload) override;
   // Tile inputs are combined in any order, under each tile's own lock (as from the renderers'
   // threads), so the messenger hands several to this frame buffer at once.
   bool concurrent() const override { return true; }

@@ -1,23 +1,12 @@
 #pragma once
-// The one exception type the DFB throws: a message a user can act on.
-#include <stdexcept>
-#include <string>
+// The DFB throws the messaging layer's error type (messaging/Error.h): dfb::Error is the DFB's
+// exception, the same class the Messenger throws.
+#include "messaging/Error.h"
 
 namespace dfb {
 
-class Error : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-// A wait passed its deadline: another rank did not do its part in time. Kept apart so the app
-// can find out which rank before it ends the job (Messenger::probePeers).
-class DeadlineError : public Error {
- public:
-  using Error::Error;
-};
-
-// Turns an MPI return code into an Error naming the call; MPI_SUCCESS passes through.
-void checkMpi(int code, const char* call);
+using Error = messaging::Error;
+using DeadlineError = messaging::DeadlineError;
+using messaging::checkMpi;
 
 }  // namespace dfb

@@ -4,8 +4,8 @@
 #include <limits>
 #include <string>
 
-#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
+#include "messaging/BoundedWait.h"
 
 namespace dfb {
 namespace {
@@ -46,7 +46,7 @@ void packBlock(const TileGrid& grid, int bytesPerPixel, bool compress,
   // Appended rather than memcpy'd into a sized vector: GCC 12 at -O3 (Release) takes the
   // latter for a possible null dereference (-Wnull-dereference), which -Werror fails on.
   const auto* headerBytes = reinterpret_cast<const std::byte*>(&header);
-  Bytes& out = compress ? b.raw : b.block;
+  messaging::Bytes& out = compress ? b.raw : b.block;
   out.clear();
   // Reserved up front: GCC 12 at -O3 otherwise sees the inserts below write past a 16-byte
   // buffer (-Wstringop-overflow, -Warray-bounds false positives), and it saves regrowing.
@@ -59,13 +59,13 @@ void packBlock(const TileGrid& grid, int bytesPerPixel, bool compress,
   if (!compress) return;
   if (!b.raw.empty()) {
     if (bytesPerPixel == 4) {
-      planeDeltaEncode(b.raw, 4, b.filtered);
-      if (compressIfSmaller(b.filtered, b.body)) header.compressed = 2;
-    } else if (compressIfSmaller(b.raw, b.body)) {
+      messaging::planeDeltaEncode(b.raw, 4, b.filtered);
+      if (messaging::compressIfSmaller(b.filtered, b.body)) header.compressed = 2;
+    } else if (messaging::compressIfSmaller(b.raw, b.body)) {
       header.compressed = 1;
     }
   }
-  const Bytes& payload = header.compressed ? b.body : b.raw;
+  const messaging::Bytes& payload = header.compressed ? b.body : b.raw;
   b.block.assign(headerBytes, headerBytes + sizeof header);
   b.block.insert(b.block.end(), payload.begin(), payload.end());
 }
@@ -100,7 +100,7 @@ GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel,
   MPI_Request request;
   checkMpi(MPI_Igather(&blockSize, 1, MPI_INT, b.sizes.data(), 1, MPI_INT, 0, comm, &request),
            "MPI_Igather");
-  waitWithDeadline(request, deadline, late);
+  messaging::waitWithDeadline(request, deadline, late);
   b.offsets.resize(b.sizes.size());
   if (rank == 0) {
     std::uint64_t total = 0;
@@ -123,7 +123,7 @@ GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel,
       counts.pixelBytesReceived += tileBytes(grid, tile, bytesPerPixel);
     }
   }
-  waitWithDeadline(request, deadline, late);
+  messaging::waitWithDeadline(request, deadline, late);
   if (rank != 0) return counts;
 
   for (int r = 1; r < size; ++r) {
@@ -140,10 +140,10 @@ GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel,
       throw Error("gather: rank " + std::to_string(r) + " sent " + std::to_string(data.size()) +
                   " raw bytes, its header says " + std::to_string(h.rawBytes));
     if (h.compressed) {
-      decompress(data, h.rawBytes, b.unpacked);
+      messaging::decompress(data, h.rawBytes, b.unpacked);
       pixels = b.unpacked.data();
       if (h.compressed == 2) {
-        planeDeltaDecode(b.unpacked, 4, b.unfiltered);
+        messaging::planeDeltaDecode(b.unpacked, 4, b.unfiltered);
         pixels = b.unfiltered.data();
       }
     }

@@ -10,8 +10,8 @@
 #include <functional>
 #include <vector>
 
-#include "dfb/Compression.h"
 #include "dfb/Tile.h"
+#include "messaging/Compression.h"
 
 namespace dfb {
 
@@ -25,7 +25,7 @@ struct GatherCounts {
 // every frame touch every page anew, and first-touch page faults (~20 us per 4 KiB page on
 // this kind of VM) made a 512x512 RGBAF32 gather take 50 ms instead of 2-3.
 struct GatherBuffers {
-  Bytes raw, block, filtered, body, all, unpacked, unfiltered;
+  messaging::Bytes raw, block, filtered, body, all, unpacked, unfiltered;
   std::vector<int> sizes, offsets;
 };
 

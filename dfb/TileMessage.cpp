@@ -4,17 +4,17 @@
 #include <string>
 
 #include "dfb/Error.h"
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 
 namespace dfb {
 namespace {
 
-void append(Bytes& out, size_t& at, const std::vector<float>& channel) {
+void append(messaging::Bytes& out, size_t& at, const std::vector<float>& channel) {
   std::memcpy(out.data() + at, channel.data(), channel.size() * sizeof(float));
   at += channel.size() * sizeof(float);
 }
 
-void take(const Bytes& in, size_t& at, std::vector<float>& channel, size_t count) {
+void take(const messaging::Bytes& in, size_t& at, std::vector<float>& channel, size_t count) {
   channel.resize(count);
   std::memcpy(channel.data(), in.data() + at, count * sizeof(float));
   at += count * sizeof(float);
@@ -22,7 +22,8 @@ void take(const Bytes& in, size_t& at, std::vector<float>& channel, size_t count
 
 }  // namespace
 
-Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId, std::uint32_t epoch) {
+messaging::Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId,
+                          std::uint32_t epoch) {
   const size_t n = static_cast<size_t>(tile.pixelCount());
   const bool rgba8 = !tile.rgba8.empty();
   if (rgba8 && tile.rgba8.size() != n)
@@ -54,8 +55,8 @@ Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId, std::uint
   header.payloadBytes =
       static_cast<std::uint32_t>(floats * sizeof(float) + (rgba8 ? n * sizeof(std::uint32_t) : 0));
 
-  Bytes out;
-  out.reserve(sizeof header + header.payloadBytes + Messenger::kSpareCapacity);
+  messaging::Bytes out;
+  out.reserve(sizeof header + header.payloadBytes + messaging::Messenger::kSpareCapacity);
   out.resize(sizeof header + header.payloadBytes);
   std::memcpy(out.data(), &header, sizeof header);
   size_t at = sizeof header;
@@ -67,7 +68,7 @@ Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId, std::uint
   return out;
 }
 
-Tile unpackTile(const Bytes& bytes, TileMessageHeader& header) {
+Tile unpackTile(const messaging::Bytes& bytes, TileMessageHeader& header) {
   if (bytes.size() < sizeof header)
     throw Error("tile message of " + std::to_string(bytes.size()) +
                 " bytes is shorter than its header");

@@ -4,8 +4,8 @@
 // the channels the header's flags announce (color always; depth, normal, albedo optional).
 #include <cstdint>
 
-#include "dfb/Compression.h"
 #include "dfb/Tile.h"
+#include "messaging/Compression.h"
 
 namespace dfb {
 
@@ -29,8 +29,9 @@ constexpr std::uint32_t kHasDepth = 1, kHasNormal = 2, kHasAlbedo = 4;
 // Display pixels after the float channels; with kNoColor, no color floats (RGBA8 only).
 constexpr std::uint32_t kHasRgba8 = 8, kNoColor = 16;
 
-Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId, std::uint32_t epoch);
+messaging::Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId,
+                          std::uint32_t epoch);
 // Throws dfb::Error when the bytes are not a well-formed tile message.
-Tile unpackTile(const Bytes& bytes, TileMessageHeader& header);
+Tile unpackTile(const messaging::Bytes& bytes, TileMessageHeader& header);
 
 }  // namespace dfb

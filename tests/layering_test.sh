@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The layering of docs/design.md, checked on every include: dfb/ includes nothing of ours;
-# renderers/ and wall/ use dfb/ but not each other (nor apps/, api/); only apps/ and api/ (the
-# data-distributed API) tie them together, and neither includes the other.
+# The layering of docs/design.md, checked on every include: messaging/ includes nothing of ours;
+# dfb/ uses messaging/ only; renderers/ and wall/ use dfb/ and messaging/ but not each other (nor
+# apps/, api/); only apps/ and api/ (the data-distributed API) tie them together, and neither
+# includes the other.
 # (Includes are written from the repository root, so one include path serves every library;
 # this test is what keeps a library from reaching into another.)
 set -euo pipefail
@@ -15,6 +16,7 @@ forbid() {  # forbid FOLDER PATTERN...
     fi
   done
 }
+forbid messaging dfb renderers wall apps api
 forbid dfb renderers wall apps api
 forbid renderers wall apps api
 forbid wall renderers apps api
@@ -25,5 +27,5 @@ if hits=$(grep -nE '#include +"' "$root/api/DataDistributed.h"); then
   echo "FAIL: api/DataDistributed.h must include only <mpi.h> and standard headers:"; echo "$hits"
   status=1
 fi
-[ $status -eq 0 ] && echo "dfb/ -> nothing; renderers/, wall/ -> dfb/ only; api/ self-contained: holds"
+[ $status -eq 0 ] && echo "messaging/ -> nothing; dfb/ -> messaging/ only; renderers/, wall/ -> dfb/, messaging/ only; api/ self-contained: holds"
 exit $status

@@ -3,11 +3,11 @@
 
 #include <cstdio>
 
-#include "dfb/MpiSession.h"
+#include "messaging/MpiSession.h"
 
 int main(int argc, char** argv) {
   try {
-    dfb::MpiSession mpi(&argc, &argv);
+    messaging::MpiSession mpi(&argc, &argv);
     ::testing::InitGoogleTest(&argc, argv);
     if (mpi.worldRank() != 0) {
       // Only rank 0 prints progress; every rank still prints its failures.

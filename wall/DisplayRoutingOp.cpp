@@ -11,7 +11,7 @@ DisplayRoutingOp::DisplayRoutingOp(std::shared_ptr<PieceSink> sink, const Layout
     piecesOfTile_[static_cast<size_t>(t)] = piecesOf(layout, tiles.region(t));
 }
 
-DisplayRoutingOp::DisplayRoutingOp(dfb::Messenger& messenger, const Layout& layout,
+DisplayRoutingOp::DisplayRoutingOp(messaging::Messenger& messenger, const Layout& layout,
                                    const RankRoles& roles, int tileSize)
     : DisplayRoutingOp(std::make_shared<MessengerPieceSink>(messenger, layout, roles), layout,
                        tileSize) {}

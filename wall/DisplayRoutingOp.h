@@ -9,8 +9,8 @@
 #include <memory>
 #include <vector>
 
-#include "dfb/Messenger.h"
 #include "dfb/PixelOp.h"
+#include "messaging/Messenger.h"
 #include "wall/Layout.h"
 #include "wall/PieceSink.h"
 #include "wall/Ranks.h"
@@ -24,7 +24,7 @@ class DisplayRoutingOp : public dfb::PixelOp {
   // the pieces (the job's messenger or a service link).
   DisplayRoutingOp(std::shared_ptr<PieceSink> sink, const Layout& layout, int tileSize);
   // The single-job wall: pieces to the wall ranks of `roles` through `messenger`.
-  DisplayRoutingOp(dfb::Messenger& messenger, const Layout& layout, const RankRoles& roles,
+  DisplayRoutingOp(messaging::Messenger& messenger, const Layout& layout, const RankRoles& roles,
                    int tileSize);
   void process(dfb::FinishedTile& tile) override;
   // This rank finished frame `frameId`: the sink sends what it held back.

@@ -8,7 +8,7 @@
 
 namespace wall {
 
-FrameCredits::FrameCredits(dfb::Messenger& messenger) : messenger_(&messenger) {
+FrameCredits::FrameCredits(messaging::Messenger& messenger) : messenger_(&messenger) {
   messenger_->registerObject(kFrameCreditsObject, this);
 }
 
@@ -46,7 +46,7 @@ struct Acknowledgement {
 };
 }  // namespace
 
-void FrameCredits::incoming(int fromRank, dfb::Bytes&& payload) {
+void FrameCredits::incoming(int fromRank, messaging::Bytes&& payload) {
   Acknowledgement ack;
   if (payload.size() != sizeof ack)
     throw Error("malformed frame acknowledgement of " + std::to_string(payload.size()) +
@@ -70,9 +70,10 @@ void FrameCredits::acknowledged(std::uint32_t frameId, std::int64_t completeNs,
   presented_.notify_all();
 }
 
-void acknowledgeFrame(dfb::Messenger& messenger, std::uint32_t frameId, std::int64_t completeNs) {
+void acknowledgeFrame(messaging::Messenger& messenger, std::uint32_t frameId,
+                      std::int64_t completeNs) {
   const Acknowledgement ack{frameId, 0, completeNs};
-  dfb::Bytes payload(sizeof ack);
+  messaging::Bytes payload(sizeof ack);
   std::memcpy(payload.data(), &ack, sizeof ack);
   messenger.send(0, kFrameCreditsObject, std::move(payload));
 }

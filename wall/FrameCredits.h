@@ -11,15 +11,15 @@
 #include <optional>
 #include <string>
 
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 
 namespace wall {
 
 // Lives on render rank 0: registered under kFrameCreditsObject on the job's messenger, or fed
 // by a service link (wall/service/ServiceClient.h) through acknowledged().
-class FrameCredits : public dfb::MessageHandler {
+class FrameCredits : public messaging::MessageHandler {
  public:
-  explicit FrameCredits(dfb::Messenger& messenger);
+  explicit FrameCredits(messaging::Messenger& messenger);
   FrameCredits() = default;
   ~FrameCredits() override;
 
@@ -35,13 +35,13 @@ class FrameCredits : public dfb::MessageHandler {
   // acknowledgement has not come yet.
   std::optional<AckTimes> takeTimes(std::int64_t frameId);
 
-  void incoming(int fromRank, dfb::Bytes&& payload) override;
+  void incoming(int fromRank, messaging::Bytes&& payload) override;
   // Every display presented `frameId` (the last display had every piece at `completeNs`).
   // Frames are acknowledged in order; anything else throws wall::Error naming `from`.
   void acknowledged(std::uint32_t frameId, std::int64_t completeNs, const std::string& from);
 
  private:
-  dfb::Messenger* messenger_ = nullptr;
+  messaging::Messenger* messenger_ = nullptr;
   mutable std::mutex mutex_;
   std::condition_variable presented_;
   std::int64_t lastPresented_ = 0;
@@ -50,6 +50,7 @@ class FrameCredits : public dfb::MessageHandler {
 
 // Sent by wall process 0 to render rank 0 (world rank 0), with the time the last display had
 // every piece of the frame.
-void acknowledgeFrame(dfb::Messenger& messenger, std::uint32_t frameId, std::int64_t completeNs);
+void acknowledgeFrame(messaging::Messenger& messenger, std::uint32_t frameId,
+                      std::int64_t completeNs);
 
 }  // namespace wall

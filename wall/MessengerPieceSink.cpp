@@ -4,7 +4,7 @@
 
 namespace wall {
 
-MessengerPieceSink::MessengerPieceSink(dfb::Messenger& messenger, const Layout& layout,
+MessengerPieceSink::MessengerPieceSink(messaging::Messenger& messenger, const Layout& layout,
                                        const RankRoles& roles)
     : messenger_(messenger) {
   for (const Display& d : layout.displays) {
@@ -18,8 +18,8 @@ MessengerPieceSink::MessengerPieceSink(dfb::Messenger& messenger, const Layout& 
 std::size_t MessengerPieceSink::send(std::uint32_t frameId, int display, const dfb::Region& local,
                                      const std::uint32_t* pixels, int stride) {
   const std::int64_t t0 = dfb::threadCpuNs();
-  dfb::Bytes bytes = packPiece(frameId, display, local, pixels, stride, 0, 0,
-                               planeDelta_[static_cast<size_t>(display)]);
+  messaging::Bytes bytes = packPiece(frameId, display, local, pixels, stride, 0, 0,
+                                     planeDelta_[static_cast<size_t>(display)]);
   const std::size_t size = bytes.size();
   const std::int64_t t1 = dfb::threadCpuNs();
   messenger_.send(rankOfDisplay_[static_cast<size_t>(display)], kWallNodeObject, std::move(bytes));

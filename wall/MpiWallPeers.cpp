@@ -1,15 +1,15 @@
 #include <limits>
 #include <string>
 
-#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
+#include "messaging/BoundedWait.h"
 #include "wall/Error.h"
 #include "wall/FrameCredits.h"
 #include "wall/WallPeers.h"
 
 namespace wall {
 
-MpiWallPeers::MpiWallPeers(dfb::Messenger& messenger, MPI_Comm wallComm,
+MpiWallPeers::MpiWallPeers(messaging::Messenger& messenger, MPI_Comm wallComm,
                            std::chrono::milliseconds timeout)
     : MpiWallPeers(wallComm, timeout, [&messenger](std::uint32_t frameId, std::int64_t ns) {
         acknowledgeFrame(messenger, frameId, ns);
@@ -23,9 +23,9 @@ MpiWallPeers::MpiWallPeers(MPI_Comm wallComm, std::chrono::milliseconds timeout,
   MPI_Comm_size(comm_, &size_);
   MPI_Request barrier;
   dfb::checkMpi(MPI_Ibarrier(comm_, &barrier), "MPI_Ibarrier");
-  dfb::waitWithDeadline(barrier, Clock::now() + timeout,
-                        "starting the wall: another wall process did not join within " +
-                            std::to_string(timeout.count()) + " ms");
+  messaging::waitWithDeadline(barrier, Clock::now() + timeout,
+                              "starting the wall: another wall process did not join within " +
+                                  std::to_string(timeout.count()) + " ms");
 }
 
 MpiWallPeers::~MpiWallPeers() { MPI_Comm_free(&comm_); }
@@ -36,9 +36,9 @@ void MpiWallPeers::agreeMax(std::uint32_t frameId, std::int64_t* values, int cou
   MPI_Request request;
   dfb::checkMpi(MPI_Iallreduce(mine.data(), values, count, MPI_INT64_T, MPI_MAX, comm_, &request),
                 "MPI_Iallreduce");
-  dfb::waitWithDeadline(request, deadline,
-                        "swap barrier of frame " + std::to_string(frameId) +
-                            ": another wall process did not complete it in time");
+  messaging::waitWithDeadline(request, deadline,
+                              "swap barrier of frame " + std::to_string(frameId) +
+                                  ": another wall process did not complete it in time");
 }
 
 std::vector<std::vector<std::uint32_t>> MpiWallPeers::gatherToFirst(std::vector<std::uint32_t> mine,
@@ -49,7 +49,7 @@ std::vector<std::vector<std::uint32_t>> MpiWallPeers::gatherToFirst(std::vector<
   MPI_Request request;
   dfb::checkMpi(MPI_Igather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm_, &request),
                 "MPI_Igather");
-  dfb::waitWithDeadline(request, deadline, late);
+  messaging::waitWithDeadline(request, deadline, late);
   std::vector<std::uint32_t> all;
   if (rank_ == 0) {
     std::int64_t total = 0;
@@ -65,7 +65,7 @@ std::vector<std::vector<std::uint32_t>> MpiWallPeers::gatherToFirst(std::vector<
   dfb::checkMpi(MPI_Igatherv(mine.data(), count, MPI_UINT32_T, all.data(), counts.data(),
                              offsets.data(), MPI_UINT32_T, 0, comm_, &request),
                 "MPI_Igatherv");
-  dfb::waitWithDeadline(request, deadline, late);
+  messaging::waitWithDeadline(request, deadline, late);
   std::vector<std::vector<std::uint32_t>> out;
   if (rank_ != 0) return out;
   for (int r = 0; r < size_; ++r) {

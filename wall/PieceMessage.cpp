@@ -31,15 +31,15 @@ void copyRowStreaming(void* to, const std::byte* from, size_t bytes) {
 
 }  // namespace
 
-dfb::Bytes packPiece(std::uint32_t frameId, int display, const dfb::Region& local,
-                     const std::uint32_t* source, int sourceWidth, int sourceX, int sourceY,
-                     bool planeDelta) {
+messaging::Bytes packPiece(std::uint32_t frameId, int display, const dfb::Region& local,
+                           const std::uint32_t* source, int sourceWidth, int sourceX, int sourceY,
+                           bool planeDelta) {
   const PieceHeader header{kPieceMagic, frameId,  display,  local.x0,
                            local.y0,    local.x1, local.y1, planeDelta ? 1u : 0u};
   const size_t rowBytes = static_cast<size_t>(local.width()) * 4;
   const size_t pixelBytes = rowBytes * static_cast<size_t>(local.height());
-  dfb::Bytes out;
-  out.reserve(sizeof header + pixelBytes + dfb::Messenger::kSpareCapacity);
+  messaging::Bytes out;
+  out.reserve(sizeof header + pixelBytes + messaging::Messenger::kSpareCapacity);
   out.resize(sizeof header + pixelBytes);
   std::memcpy(out.data(), &header, sizeof header);
   std::byte* pixels = out.data() + sizeof header;
@@ -58,17 +58,17 @@ dfb::Bytes packPiece(std::uint32_t frameId, int display, const dfb::Region& loca
   // are), else the rows gathered into this thread's scratch buffer first.
   const std::byte* run = row(0);
   if (local.width() != sourceWidth) {
-    thread_local dfb::Bytes scratch;
+    thread_local messaging::Bytes scratch;
     scratch.resize(pixelBytes);
     for (int y = 0; y < local.height(); ++y)
       std::memcpy(scratch.data() + static_cast<size_t>(y) * rowBytes, row(y), rowBytes);
     run = scratch.data();
   }
-  dfb::planeDeltaEncode(std::span<const std::byte>(run, pixelBytes), 4, pixels);
+  messaging::planeDeltaEncode(std::span<const std::byte>(run, pixelBytes), 4, pixels);
   return out;
 }
 
-PieceHeader readPieceHeader(const dfb::Bytes& bytes) {
+PieceHeader readPieceHeader(const messaging::Bytes& bytes) {
   PieceHeader header;
   if (bytes.size() < sizeof header) throw Error("piece message shorter than its header");
   std::memcpy(&header, bytes.data(), sizeof header);
@@ -86,7 +86,7 @@ PieceHeader readPieceHeader(const dfb::Bytes& bytes) {
   return header;
 }
 
-void copyPiece(const dfb::Bytes& bytes, const PieceHeader& header, Image& display) {
+void copyPiece(const messaging::Bytes& bytes, const PieceHeader& header, Image& display) {
   const dfb::Region local{header.x0, header.y0, header.x1, header.y1};
   if (local.x0 < 0 || local.y0 < 0 || local.x1 > display.width || local.y1 > display.height)
     throw Error("piece [" + std::to_string(local.x0) + ", " + std::to_string(local.x1) + ") x [" +
@@ -97,9 +97,9 @@ void copyPiece(const dfb::Bytes& bytes, const PieceHeader& header, Image& displa
                                         4 * static_cast<size_t>(local.pixelCount()));
   const std::byte* pixels = body.data();
   if (header.planeDelta) {  // into this thread's scratch buffer, then row by row as unfiltered
-    thread_local dfb::Bytes decoded;
+    thread_local messaging::Bytes decoded;
     decoded.resize(body.size());
-    dfb::planeDeltaDecode(body, 4, decoded.data());
+    messaging::planeDeltaDecode(body, 4, decoded.data());
     pixels = decoded.data();
   }
   const size_t rowBytes = 4 * static_cast<size_t>(local.width());

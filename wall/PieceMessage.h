@@ -4,38 +4,38 @@
 // process 0 sends back to render rank 0 once every display has presented a frame.
 #include <cstdint>
 
-#include "dfb/Compression.h"
-#include "dfb/Messenger.h"
 #include "dfb/Tile.h"
+#include "messaging/Compression.h"
+#include "messaging/Messenger.h"
 #include "wall/Image.h"
 
 namespace wall {
 
 // Distributed-object ids on the job's messenger.
-constexpr dfb::ObjectId kWallNodeObject = 0x3A11'0001;
-constexpr dfb::ObjectId kFrameCreditsObject = 0x3A11'0002;
+constexpr messaging::ObjectId kWallNodeObject = 0x3A11'0001;
+constexpr messaging::ObjectId kFrameCreditsObject = 0x3A11'0002;
 
 struct PieceHeader {
   std::uint32_t magic;
   std::uint32_t frameId;
   std::int32_t display;
   std::int32_t x0, y0, x1, y1;  // in the display's own coordinates
-  std::uint32_t planeDelta;     // 1: pixels went through dfb::planeDeltaEncode
+  std::uint32_t planeDelta;     // 1: pixels went through messaging::planeDeltaEncode
 };
 static_assert(sizeof(PieceHeader) == 32, "the piece header is part of the protocol");
 constexpr std::uint32_t kPieceMagic = 0x50494543;  // "PIEC"
 
 // Packs the `local` rectangle of display `display`, taking its pixels from `source`, an image of
 // `sourceWidth` pixels per row whose pixel (sourceX, sourceY) is the piece's top-left.
-dfb::Bytes packPiece(std::uint32_t frameId, int display, const dfb::Region& local,
-                     const std::uint32_t* source, int sourceWidth, int sourceX, int sourceY,
-                     bool planeDelta);
+messaging::Bytes packPiece(std::uint32_t frameId, int display, const dfb::Region& local,
+                           const std::uint32_t* source, int sourceWidth, int sourceX, int sourceY,
+                           bool planeDelta);
 
 // The header of a piece message, checked against the message's size; throws wall::Error on a
 // malformed message.
-PieceHeader readPieceHeader(const dfb::Bytes& bytes);
+PieceHeader readPieceHeader(const messaging::Bytes& bytes);
 // Copies the piece's pixels to their place in its display's image (no intermediate buffer
 // unless the plane-delta filter must be undone); throws wall::Error if they do not fit.
-void copyPiece(const dfb::Bytes& bytes, const PieceHeader& header, Image& display);
+void copyPiece(const messaging::Bytes& bytes, const PieceHeader& header, Image& display);
 
 }  // namespace wall

@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "dfb/Messenger.h"
 #include "dfb/Tile.h"
+#include "messaging/Messenger.h"
 #include "wall/Layout.h"
 #include "wall/Ranks.h"
 
@@ -42,7 +42,7 @@ class PieceSink {
 // first there).
 class MessengerPieceSink : public PieceSink {
  public:
-  MessengerPieceSink(dfb::Messenger& messenger, const Layout& layout, const RankRoles& roles);
+  MessengerPieceSink(messaging::Messenger& messenger, const Layout& layout, const RankRoles& roles);
   std::size_t send(std::uint32_t frameId, int display, const dfb::Region& local,
                    const std::uint32_t* pixels, int stride) override;
   bool otherHost(int display) const override {
@@ -50,7 +50,7 @@ class MessengerPieceSink : public PieceSink {
   }
 
  private:
-  dfb::Messenger& messenger_;
+  messaging::Messenger& messenger_;
   std::vector<int> rankOfDisplay_;
   std::vector<bool> planeDelta_;  // per display: pre-filter pieces for Snappy
   std::vector<bool> otherHost_;   // per display: its wall rank is on another host

@@ -15,7 +15,7 @@ namespace {
 constexpr std::uint32_t kFramesAhead = 16;
 }  // namespace
 
-PreviewAssembler::PreviewAssembler(dfb::Messenger& messenger, PreviewGrid grid, int tileSize,
+PreviewAssembler::PreviewAssembler(messaging::Messenger& messenger, PreviewGrid grid, int tileSize,
                                    std::vector<bool> tilesOfFrame)
     : messenger_(messenger),
       grid_(grid),
@@ -54,7 +54,7 @@ PreviewAssembler::Assembly& PreviewAssembler::assemblyOf(std::uint32_t frame) {
   return a;
 }
 
-void PreviewAssembler::incoming(int fromRank, dfb::Bytes&& payload) {
+void PreviewAssembler::incoming(int fromRank, messaging::Bytes&& payload) {
   PreviewHeader h;
   if (payload.size() < sizeof h)
     throw Error("preview message from rank " + std::to_string(fromRank) + " is too short");

@@ -19,17 +19,17 @@
 #include <mutex>
 #include <vector>
 
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 #include "wall/Image.h"
 #include "wall/Preview.h"
 
 namespace wall {
 
-class PreviewAssembler : public dfb::MessageHandler {
+class PreviewAssembler : public messaging::MessageHandler {
  public:
   // `tilesOfFrame[t]`: whether canvas tile t (at `tileSize`) completes, hence sends its preview,
   // every frame (route mode renders only the tiles some display shows).
-  PreviewAssembler(dfb::Messenger& messenger, PreviewGrid grid, int tileSize,
+  PreviewAssembler(messaging::Messenger& messenger, PreviewGrid grid, int tileSize,
                    std::vector<bool> tilesOfFrame);
   ~PreviewAssembler() override;
   PreviewAssembler(const PreviewAssembler&) = delete;
@@ -44,7 +44,7 @@ class PreviewAssembler : public dfb::MessageHandler {
   bool waitFor(std::uint32_t frame, std::chrono::steady_clock::time_point deadline) const;
   const PreviewGrid& grid() const { return grid_; }
 
-  void incoming(int fromRank, dfb::Bytes&& payload) override;
+  void incoming(int fromRank, messaging::Bytes&& payload) override;
 
  private:
   struct Assembly {
@@ -56,7 +56,7 @@ class PreviewAssembler : public dfb::MessageHandler {
   Assembly& assemblyOf(std::uint32_t frame);             // under mutex_
   void publish(std::uint32_t frame, const Assembly& a);  // under mutex_
 
-  dfb::Messenger& messenger_;
+  messaging::Messenger& messenger_;
   const PreviewGrid grid_;
   const dfb::TileGrid tiles_;
   const std::vector<bool> tilesOfFrame_;

@@ -10,8 +10,8 @@ void PreviewOp::process(dfb::FinishedTile& tile) {
   const PreviewHeader header{kPreviewMagic,  tile.frameId,   tile.region.x0,
                              tile.region.y0, tile.region.x1, tile.region.y1};
   const size_t body = cells.size() * sizeof(std::uint32_t);
-  dfb::Bytes bytes;
-  bytes.reserve(sizeof header + body + dfb::Messenger::kSpareCapacity);
+  messaging::Bytes bytes;
+  bytes.reserve(sizeof header + body + messaging::Messenger::kSpareCapacity);
   bytes.resize(sizeof header + body);
   std::memcpy(bytes.data(), &header, sizeof header);
   std::memcpy(bytes.data() + sizeof header, cells.data(), body);

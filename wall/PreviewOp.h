@@ -8,14 +8,14 @@
 #include <atomic>
 #include <cstdint>
 
-#include "dfb/Messenger.h"
 #include "dfb/PixelOp.h"
+#include "messaging/Messenger.h"
 #include "wall/Preview.h"
 
 namespace wall {
 
 // Distributed-object id of the preview assembler on render rank 0.
-constexpr dfb::ObjectId kPreviewObject = 0x3A11'0003;
+constexpr messaging::ObjectId kPreviewObject = 0x3A11'0003;
 
 struct PreviewHeader {
   std::uint32_t magic;
@@ -28,7 +28,7 @@ constexpr std::uint32_t kPreviewMagic = 0x50524556;  // "PREV"
 class PreviewOp : public dfb::PixelOp {
  public:
   // `toRank`: where the assembler lives (render rank 0, in the messenger's ranks).
-  PreviewOp(dfb::Messenger& messenger, PreviewGrid grid, int toRank = 0)
+  PreviewOp(messaging::Messenger& messenger, PreviewGrid grid, int toRank = 0)
       : messenger_(messenger), grid_(grid), toRank_(toRank) {}
   void process(dfb::FinishedTile& tile) override;
 
@@ -37,7 +37,7 @@ class PreviewOp : public dfb::PixelOp {
   std::uint64_t takeBytesSent() { return bytesSent_.exchange(0); }
 
  private:
-  dfb::Messenger& messenger_;
+  messaging::Messenger& messenger_;
   PreviewGrid grid_;
   int toRank_;
   std::atomic<std::uint64_t> bytesSent_{0};

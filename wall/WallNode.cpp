@@ -4,9 +4,9 @@
 #include <limits>
 #include <string>
 
-#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
 #include "dfb/Timing.h"
+#include "messaging/BoundedWait.h"
 #include "wall/Capture.h"
 #include "wall/Error.h"
 #include "wall/FrameCredits.h"
@@ -104,7 +104,7 @@ int WallNode::expectedPieceIndex(size_t position, const dfb::Region& local) cons
   return index < rects.size() && rects[index] == local ? static_cast<int>(index) : -1;
 }
 
-void WallNode::incoming(int fromRank, dfb::Bytes&& payload) {
+void WallNode::incoming(int fromRank, messaging::Bytes&& payload) {
   const std::int64_t start = dfb::threadCpuNs();  // stage CPU time (dfb/Timing.h)
   PieceHeader h{};
   try {

@@ -31,7 +31,7 @@
 #include <utility>
 #include <vector>
 
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 #include "wall/Image.h"
 #include "wall/Layout.h"
 #include "wall/Presenter.h"
@@ -92,7 +92,7 @@ struct PresentReport {
   std::string failure;
 };
 
-class WallNode : public dfb::MessageHandler {
+class WallNode : public messaging::MessageHandler {
  public:
   // This is wall process peers.process(); `presenters` (not owned: a service wall keeps them
   // from one render job to the next) has one per display of it, in
@@ -131,7 +131,7 @@ class WallNode : public dfb::MessageHandler {
   void showLastPresented();
 
   // A piece message (wall/PieceMessage.h) from rank `fromRank` of the job's messenger.
-  void incoming(int fromRank, dfb::Bytes&& payload) override;
+  void incoming(int fromRank, messaging::Bytes&& payload) override;
   bool concurrent() const override { return true; }
   // A piece of frame `frameId` for display `display` (layout index), rectangle `local` in the
   // display's coordinates, from `sender` (named in messages). Checked and claimed under the

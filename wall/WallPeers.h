@@ -14,7 +14,7 @@
 #include <functional>
 #include <vector>
 
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 
 namespace wall {
 
@@ -43,7 +43,8 @@ class WallPeers {
 // The constructor is collective over `wallComm` (a bounded barrier: every wall process is up).
 class MpiWallPeers : public WallPeers {
  public:
-  MpiWallPeers(dfb::Messenger& messenger, MPI_Comm wallComm, std::chrono::milliseconds timeout);
+  MpiWallPeers(messaging::Messenger& messenger, MPI_Comm wallComm,
+               std::chrono::milliseconds timeout);
   // The same, with the credit handed to `onPresented` instead (a service wall's job link).
   MpiWallPeers(MPI_Comm wallComm, std::chrono::milliseconds timeout,
                std::function<void(std::uint32_t frameId, std::int64_t completeNs)> onPresented);

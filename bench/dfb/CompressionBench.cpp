@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "dfb/Compression.h"
+#include "messaging/Compression.h"
 
 namespace {
 
@@ -37,8 +37,8 @@ std::vector<float> makeFloatTile(bool noisy, unsigned seed) {
   return rgba;
 }
 
-dfb::Bytes toRgba8(const std::vector<float>& rgba) {
-  dfb::Bytes out(rgba.size());
+messaging::Bytes toRgba8(const std::vector<float>& rgba) {
+  messaging::Bytes out(rgba.size());
   for (size_t i = 0; i < rgba.size(); ++i)
     out[i] = static_cast<std::byte>(std::lround(std::min(1.0f, rgba[i]) * 255.0f));
   return out;
@@ -49,18 +49,18 @@ struct Result {
   double ratio, mbPerSecond;
 };
 
-Result measure(const std::string& name, const dfb::Bytes& raw, bool filter) {
+Result measure(const std::string& name, const messaging::Bytes& raw, bool filter) {
   constexpr int kRepeats = 2000;
-  dfb::Bytes filtered, packed;
+  messaging::Bytes filtered, packed;
   size_t packedSize = raw.size();
   const auto start = Clock::now();
   for (int i = 0; i < kRepeats; ++i) {
-    const dfb::Bytes* input = &raw;
+    const messaging::Bytes* input = &raw;
     if (filter) {
-      dfb::planeDeltaEncode(raw, 4, filtered);
+      messaging::planeDeltaEncode(raw, 4, filtered);
       input = &filtered;
     }
-    packedSize = dfb::compressIfSmaller(*input, packed) ? packed.size() : raw.size();
+    packedSize = messaging::compressIfSmaller(*input, packed) ? packed.size() : raw.size();
   }
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return {name, static_cast<double>(raw.size()) / static_cast<double>(packedSize),
@@ -75,9 +75,9 @@ int main(int argc, char** argv) {
   for (bool noisy : {false, true}) {
     const std::string kind = noisy ? "noisy" : "smooth";
     const std::vector<float> tile = makeFloatTile(noisy, 7);
-    dfb::Bytes floatBytes(tile.size() * sizeof(float));
+    messaging::Bytes floatBytes(tile.size() * sizeof(float));
     std::memcpy(floatBytes.data(), tile.data(), floatBytes.size());
-    const dfb::Bytes rgba8 = toRgba8(tile);
+    const messaging::Bytes rgba8 = toRgba8(tile);
     results.push_back(measure("rgba32f_" + kind + "_snappy", floatBytes, false));
     results.push_back(measure("rgba8_" + kind + "_snappy", rgba8, false));
     results.push_back(measure("rgba8_" + kind + "_planedelta_snappy", rgba8, true));

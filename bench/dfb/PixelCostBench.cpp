@@ -31,10 +31,10 @@
 #include <utility>
 #include <vector>
 
-#include "dfb/Envelope.h"
 #include "dfb/PixelOp.h"
 #include "dfb/TileOperation.h"
 #include "dfb/ToneMapKernel.h"
+#include "messaging/Envelope.h"
 #include "renderers/PatternRenderer.h"
 #include "wall/Layout.h"
 #include "wall/PieceMessage.h"
@@ -87,29 +87,29 @@ std::vector<dfb::Tile> makeInputs(const dfb::TileGrid& grid, bool floatNoisy) {
     toneMap.process(finished);
 }
 
-[[gnu::noinline]] dfb::Bytes stageCut(std::uint32_t frame, const wall::Piece& piece,
-                                      const dfb::FinishedTile& tile, bool planeDelta) {
+[[gnu::noinline]] messaging::Bytes stageCut(std::uint32_t frame, const wall::Piece& piece,
+                                            const dfb::FinishedTile& tile, bool planeDelta) {
   return wall::packPiece(frame, piece.display, piece.local, tile.rgba8->data(), tile.region.width(),
                          piece.canvas.x0 - tile.region.x0, piece.canvas.y0 - tile.region.y0,
                          planeDelta);
 }
 
-[[gnu::noinline]] dfb::Bytes stageSeal(dfb::Bytes&& piece, bool compress) {
+[[gnu::noinline]] messaging::Bytes stageSeal(messaging::Bytes&& piece, bool compress) {
   // The messenger compresses payloads of 2048 bytes or more that leave the host.
   const bool large = piece.size() >= 2048;  // read before the payload moves
-  return dfb::sealEnvelope(std::move(piece), wall::kWallNodeObject, compress && large);
+  return messaging::sealEnvelope(std::move(piece), wall::kWallNodeObject, compress && large);
 }
 
-[[gnu::noinline]] void stageOpen(dfb::Bytes&& wire, dfb::Bytes& payload) {
-  dfb::openEnvelope(std::move(wire), std::size_t{1} << 30, payload);
+[[gnu::noinline]] void stageOpen(messaging::Bytes&& wire, messaging::Bytes& payload) {
+  messaging::openEnvelope(std::move(wire), std::size_t{1} << 30, payload);
 }
 
-[[gnu::noinline]] wall::PieceHeader stagePieceUnpack(const dfb::Bytes& payload) {
+[[gnu::noinline]] wall::PieceHeader stagePieceUnpack(const messaging::Bytes& payload) {
   return wall::readPieceHeader(payload);
 }
 
-[[gnu::noinline]] void stageAssemble(const dfb::Bytes& payload, const wall::PieceHeader& header,
-                                     wall::Image& display) {
+[[gnu::noinline]] void stageAssemble(const messaging::Bytes& payload,
+                                     const wall::PieceHeader& header, wall::Image& display) {
   wall::copyPiece(payload, header, display);
 }
 
@@ -144,7 +144,7 @@ Result run(const wall::Layout& layout, int tileSize, int frames, bool floatNoisy
 
   std::map<std::string, std::int64_t> ns;
   std::uint64_t wire = 0;
-  dfb::Bytes payload;
+  messaging::Bytes payload;
   // Frame 0 warms caches and allocations up and is not counted.
   for (int frame = 0; frame <= frames; ++frame) {
     const bool counted = frame > 0;
@@ -172,9 +172,9 @@ Result run(const wall::Layout& layout, int tileSize, int frames, bool floatNoisy
       frameNs["tone_map"] += b - a;
       for (const wall::Piece& piece : pieces[static_cast<size_t>(t)]) {
         a = threadCpuNs();
-        dfb::Bytes bytes = stageCut(finished.frameId, piece, finished, otherHost);
+        messaging::Bytes bytes = stageCut(finished.frameId, piece, finished, otherHost);
         b = threadCpuNs();
-        dfb::Bytes sealed = stageSeal(std::move(bytes), otherHost);
+        messaging::Bytes sealed = stageSeal(std::move(bytes), otherHost);
         const std::int64_t c = threadCpuNs();
         if (counted) wire += sealed.size();
         // The wire: MPI moves the bytes (not measured here).

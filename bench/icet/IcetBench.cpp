@@ -43,9 +43,9 @@
 #include "bench/icet/IcetCompositor.h"
 #include "bench/icet/PieceReceiver.h"
 #include "dfb/DistributedFrameBuffer.h"
-#include "dfb/Messenger.h"
-#include "dfb/MpiSession.h"
 #include "dfb/Timing.h"
+#include "messaging/Messenger.h"
+#include "messaging/MpiSession.h"
 #include "renderers/BuiltinScenes.h"
 #include "renderers/scivis/BrickFrameDriver.h"
 #include "wall/DisplayRoutingOp.h"
@@ -202,7 +202,7 @@ int compareFiles(const std::string& a, const std::string& b) {
 
 int run(int argc, char** argv) {
   if (argc == 4 && std::string(argv[1]) == "--compare") return compareFiles(argv[2], argv[3]);
-  dfb::MpiSession mpi(&argc, &argv);
+  messaging::MpiSession mpi(&argc, &argv);
   const int rank = mpi.worldRank(), ranks = mpi.worldSize();
   Options o;
   CLI::App cli{"DFB vs IceT sort-last compositing on the same bricks"};
@@ -259,7 +259,7 @@ int run(int argc, char** argv) {
   bo.threads = o.threads;
   renderers::BrickFrameDriver driver(
       desc, settings, bo, renderers::loadOwnBricks(*desc, ranks, 1, rank, ranks), dfbComm);
-  dfb::Messenger messenger(dfbComm);
+  messaging::Messenger messenger(dfbComm);
   dfb::DfbOptions options;
   options.width = width, options.height = height;
   options.format = blend ? dfb::DisplayFormat::RGBAF32 : dfb::DisplayFormat::RGBA8;

@@ -46,7 +46,7 @@ std::int64_t PieceReceiver::wait() {
   return completeNs_;
 }
 
-void PieceReceiver::incoming(int fromRank, dfb::Bytes&& payload) {
+void PieceReceiver::incoming(int fromRank, messaging::Bytes&& payload) {
   std::lock_guard lock(mutex_);
   try {
     const wall::PieceHeader header = wall::readPieceHeader(payload);

@@ -9,7 +9,7 @@
 #include <mutex>
 #include <string>
 
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 #include "wall/Image.h"
 #include "wall/Layout.h"
 
@@ -20,7 +20,7 @@ namespace icetbench {
 // column and row take what the division leaves (as IcetCompositor cuts IceT's tiles).
 wall::Layout tiledLayout(int width, int height, int tilesX, int tilesY);
 
-class PieceReceiver final : public dfb::MessageHandler {
+class PieceReceiver final : public messaging::MessageHandler {
  public:
   PieceReceiver(const wall::Layout& layout, int display, int tileSize);
 
@@ -31,7 +31,7 @@ class PieceReceiver final : public dfb::MessageHandler {
   std::int64_t wait();
   const wall::Image& image() const { return image_; }
 
-  void incoming(int fromRank, dfb::Bytes&& payload) override;
+  void incoming(int fromRank, messaging::Bytes&& payload) override;
 
  private:
   int display_;

@@ -113,7 +113,7 @@ double rate(Pass pass) {
 Result measure(const std::string& image, const std::vector<Pixels>& tiles,
                const std::string& codecText) {
   const wall::service::CodecSpec spec = wall::service::parseCodec(codecText);
-  std::vector<dfb::Bytes> encoded(tiles.size());
+  std::vector<messaging::Bytes> encoded(tiles.size());
   const double encodeRate = rate([&] {
     for (std::size_t t = 0; t < tiles.size(); ++t) {
       encoded[t].clear();
@@ -127,7 +127,7 @@ Result measure(const std::string& image, const std::vector<Pixels>& tiles,
                                   decoded[t].data(), kTile);
   });
   double encodedBytes = 0;
-  for (const dfb::Bytes& e : encoded) encodedBytes += static_cast<double>(e.size());
+  for (const messaging::Bytes& e : encoded) encodedBytes += static_cast<double>(e.size());
   return {image,
           wall::service::codecName(spec),
           4.0 * kTile * kTile * kTiles / encodedBytes,

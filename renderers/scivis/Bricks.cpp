@@ -6,8 +6,8 @@
 #include <map>
 #include <string>
 
-#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
+#include "messaging/BoundedWait.h"
 #include "renderers/Error.h"
 
 namespace renderers {
@@ -251,9 +251,9 @@ struct WireBrick {
 };
 
 void finish(MPI_Request& request, std::chrono::milliseconds timeout) {
-  dfb::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
-                        "exchanging brick bounds: another render rank did not join within " +
-                            std::to_string(timeout.count()) + " ms");
+  messaging::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
+                              "exchanging brick bounds: another render rank did not join within " +
+                                  std::to_string(timeout.count()) + " ms");
 }
 
 }  // namespace

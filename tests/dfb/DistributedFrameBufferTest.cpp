@@ -67,7 +67,7 @@ DfbOptions options(DisplayFormat format, TileOperationFactory operation = writeO
 }
 
 TEST(Dfb, GatheredRgbaF32EqualsTheReference) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::RGBAF32));
   // Several frames: the gather keeps its buffers from one frame to the next.
   for (std::uint32_t frame = 1; frame <= 3; ++frame) {
@@ -92,7 +92,7 @@ TEST(Dfb, GatheredRgbaF32EqualsTheReference) {
 class GatherRgba8 : public ::testing::TestWithParam<bool> {};
 
 TEST_P(GatherRgba8, EqualsTheToneMappedReference) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DfbOptions o = options(DisplayFormat::RGBA8);
   o.compressGather = GetParam();
   o.toneMap.exposure = 0.7f;
@@ -126,7 +126,7 @@ INSTANTIATE_TEST_SUITE_P(Compression, GatherRgba8, ::testing::Bool());
 // Tiles that come as display pixels (Tile::rgba8, no color) travel to their owners and reach
 // the RGBA8 image exactly as given: nothing tone-maps them.
 TEST(Dfb, DisplayPixelTilesReachTheImageUntouched) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::RGBA8));
   const auto value = [](int x, int y) {
     return 0x80000000u | (static_cast<std::uint32_t>(x * 131 + y * 7) & 0xffffffu);
@@ -152,7 +152,7 @@ TEST(Dfb, DisplayPixelTilesReachTheImageUntouched) {
 }
 
 TEST(Dfb, FormatNoneGathersNoPixelsToRankZero) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::NONE));
   for (std::uint32_t frame = 1; frame <= 2; ++frame) {
     renderFrame(dfb, frame);
@@ -172,7 +172,7 @@ TEST(Dfb, FormatNoneGathersNoPixelsToRankZero) {
 }
 
 TEST(Dfb, TilesWithNoExpectedInputsAreLeftOutOfTheFrame) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DfbOptions o = options(DisplayFormat::RGBAF32);
   o.expectedInputs = [](int t) { return t % 3 == 0 ? 0 : 1; };
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
@@ -190,7 +190,7 @@ TEST(Dfb, TilesWithNoExpectedInputsAreLeftOutOfTheFrame) {
 }
 
 TEST(Dfb, AccumulationOverFramesIsTheRunningMean) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD,
                              options(DisplayFormat::RGBAF32, accumulateOperation()));
   for (std::uint32_t frame = 1; frame <= 4; ++frame) {
@@ -220,7 +220,7 @@ TEST(Dfb, AccumulationOverFramesIsTheRunningMean) {
 // Renders one frame where tile t gets `inputs` redundant inputs, input k from rank (t + k) % size
 // with sequence k and weight k + 1, sent after random delays.
 std::vector<float> renderRedundant(unsigned delaySeed, int inputs) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DfbOptions o = options(DisplayFormat::RGBAF32, accumulateOperation());
   o.expectedInputs = [inputs](int) { return inputs; };
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
@@ -298,7 +298,7 @@ Tile fragmentTile(const Region& region, unsigned seed, int tile, const TreeNode&
 }
 
 TEST(Dfb, AlphaBlendOfRandomTreesInRandomOrderEqualsSerialComposite) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DfbOptions o = options(DisplayFormat::RGBAF32, alphaBlendOperation());
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
   const TileGrid& grid = dfb.grid();
@@ -345,7 +345,7 @@ TEST(Dfb, AlphaBlendOfRandomTreesInRandomOrderEqualsSerialComposite) {
 }
 
 TEST(Dfb, TilesForTheNextFrameArrivingEarlyAreHeldAndApplied) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::RGBAF32));
   renderFrame(dfb, 1);
   // Rank 0 starts frame 2 late, so the other ranks' tiles for it arrive before its begin().
@@ -365,7 +365,7 @@ TEST(Dfb, TilesForTheNextFrameArrivingEarlyAreHeldAndApplied) {
 }
 
 TEST(Dfb, StaleInputsAreRejectedAndCounted) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DfbOptions o = options(DisplayFormat::RGBAF32);
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
   renderFrame(dfb, 1);
@@ -385,7 +385,7 @@ TEST(Dfb, StaleInputsAreRejectedAndCounted) {
 }
 
 TEST(Dfb, AMissingTileFailsTheFrameOnEveryRankWithinTheTimeout) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DfbOptions o = options(DisplayFormat::NONE);
   o.frameTimeout = std::chrono::milliseconds(400);
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
@@ -409,7 +409,7 @@ TEST(Dfb, AMissingTileFailsTheFrameOnEveryRankWithinTheTimeout) {
 }
 
 TEST(Dfb, SetTileRejectsARegionThatIsNoTile) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::NONE));
   dfb.begin({1, 0});
   Tile bad;
@@ -431,7 +431,7 @@ long residentKiB() {
 
 // Label 'stress': 1,000 small frames, no hang, no growth in memory.
 TEST(DfbStress, ThousandSmallFrames) {
-  Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   DfbOptions o = options(DisplayFormat::RGBA8, accumulateOperation());
   o.width = 96;
   o.height = 64;

@@ -201,7 +201,7 @@ TEST(TileMessage, PacksAndUnpacksEveryChannel) {
   t.sequence = 40;
   t.weight = 7;
   t.accumulationId = 11;
-  const Bytes bytes = packTile(t, 5, 99, 4);
+  const messaging::Bytes bytes = packTile(t, 5, 99, 4);
   TileMessageHeader header;
   const Tile back = unpackTile(bytes, header);
   EXPECT_EQ(header.frameId, 99u);
@@ -218,14 +218,14 @@ TEST(TileMessage, PacksAndUnpacksEveryChannel) {
   EXPECT_EQ(back.weight, 7u);
   EXPECT_EQ(back.accumulationId, 11u);
 
-  Bytes truncated(bytes.begin(), bytes.end() - 4);
+  messaging::Bytes truncated(bytes.begin(), bytes.end() - 4);
   EXPECT_THROW(unpackTile(truncated, header), Error);
 
   // Display pixels only (the pattern renderer's RGBA8 path): no color floats on the wire.
   Tile d;
   d.region = kRegion;
   for (int i = 0; i < kRegion.pixelCount(); ++i) d.rgba8.push_back(0xff000000u + i);
-  const Bytes small = packTile(d, 5, 99, 4);
+  const messaging::Bytes small = packTile(d, 5, 99, 4);
   EXPECT_EQ(small.size(), sizeof(TileMessageHeader) + 4 * d.rgba8.size());
   const Tile dback = unpackTile(small, header);
   EXPECT_TRUE(dback.color.empty());
@@ -239,7 +239,7 @@ TEST(TileMessage, PacksAndUnpacksEveryChannel) {
 TEST(TileMessage, RejectsARegionWhoseSizeOverflows) {
   Tile t;
   t.reset(Region{0, 0, 2, 2});
-  Bytes bytes = packTile(t, 0, 1, 0);
+  messaging::Bytes bytes = packTile(t, 0, 1, 0);
   TileMessageHeader header;
   std::memcpy(&header, bytes.data(), sizeof header);
   header.x0 = -2000000000;

@@ -21,13 +21,13 @@ constexpr int kSide = 64, kStride = 72;
 constexpr Codec kCodecs[] = {Codec::Raw, Codec::Snappy, Codec::Jpeg};
 
 // A valid piece of each codec, to decode after every input.
-const std::vector<dfb::Bytes>& validPieces() {
-  static const std::vector<dfb::Bytes> pieces = [] {
+const std::vector<messaging::Bytes>& validPieces() {
+  static const std::vector<messaging::Bytes> pieces = [] {
     std::vector<std::uint32_t> pixels(kSide * kSide);
     for (int i = 0; i < kSide * kSide; ++i)
       pixels[static_cast<std::size_t>(i)] =
           0xFF000000u | static_cast<std::uint32_t>(i * 2654435761u);
-    std::vector<dfb::Bytes> out;
+    std::vector<messaging::Bytes> out;
     for (const Codec codec : kCodecs) {
       out.emplace_back();
       wall::service::encodePixels(wall::service::CodecSpec{codec}, pixels.data(), kSide, kSide,
@@ -51,7 +51,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       wall::service::decodePixels(kCodecs[c], bytes, size, kSide, kSide, strided.data(), kStride);
     } catch (const wall::Error&) {
     }
-    const dfb::Bytes& valid = validPieces()[c];
+    const messaging::Bytes& valid = validPieces()[c];
     try {
       wall::service::decodePixels(kCodecs[c], valid.data(), valid.size(), kSide, kSide,
                                   packed.data(), kSide);

@@ -6,19 +6,19 @@
 #include <cstring>
 #include <span>
 
-#include "dfb/Compression.h"
 #include "dfb/Error.h"
+#include "messaging/Compression.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 4) return 0;
   std::uint32_t rawSize = 0;
   std::memcpy(&rawSize, data, 4);
-  dfb::Bytes out;
+  messaging::Bytes out;
   try {
-    dfb::decompress(std::span(reinterpret_cast<const std::byte*>(data) + 4, size - 4), rawSize,
-                    out);
-    dfb::Bytes back;
-    if (!out.empty()) dfb::planeDeltaDecode(out, 4, back);
+    messaging::decompress(std::span(reinterpret_cast<const std::byte*>(data) + 4, size - 4),
+                          rawSize, out);
+    messaging::Bytes back;
+    if (!out.empty()) messaging::planeDeltaDecode(out, 4, back);
   } catch (const dfb::Error&) {
   }
   return 0;

@@ -6,24 +6,24 @@
 #include <cstdint>
 #include <cstdlib>
 
-#include "dfb/Envelope.h"
 #include "dfb/Error.h"
+#include "messaging/Envelope.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   constexpr std::size_t kLimit = std::size_t{1} << 20;
   const auto* bytes = reinterpret_cast<const std::byte*>(data);
-  dfb::Bytes payload;
-  dfb::Envelope envelope;
+  messaging::Bytes payload;
+  messaging::Envelope envelope;
   try {
-    envelope = dfb::openEnvelope(dfb::Bytes(bytes, bytes + size), kLimit, payload);
+    envelope = messaging::openEnvelope(messaging::Bytes(bytes, bytes + size), kLimit, payload);
   } catch (const dfb::Error&) {
     return 0;
   }
   if (payload.size() != envelope.rawBytes || payload.size() > kLimit) std::abort();
   for (const bool compress : {false, true}) {
-    dfb::Bytes again;
-    const dfb::Envelope reopened =
-        dfb::openEnvelope(dfb::sealEnvelope(payload, envelope.object, compress), kLimit, again);
+    messaging::Bytes again;
+    const messaging::Envelope reopened = messaging::openEnvelope(
+        messaging::sealEnvelope(payload, envelope.object, compress), kLimit, again);
     if (again != payload || reopened.object != envelope.object) std::abort();
   }
   return 0;

@@ -8,7 +8,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto* bytes = reinterpret_cast<const std::byte*>(data);
-  const dfb::Bytes message(bytes, bytes + size);
+  const messaging::Bytes message(bytes, bytes + size);
   static wall::Image display(96, 64);
   try {
     const wall::PieceHeader header = wall::readPieceHeader(message);

@@ -45,7 +45,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size)
       continue;
     }
     if (header.codec == Codec::Jpeg) continue;
-    dfb::Bytes again;
+    messaging::Bytes again;
     encodePixels(CodecSpec{header.codec}, dest.get(), width, height, width, again);
     const std::unique_ptr<std::uint32_t[]> back(new std::uint32_t[pixels]);
     decodePixels(header.codec, again.data(), again.size(), width, height, back.get(), width);

@@ -32,7 +32,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size)
         display.process < 0 || display.process >= l.processCount)
       std::abort();  // a display outside its canvas or driven by no process
   if (!wall::validateLayout(l).empty()) std::abort();
-  const dfb::Bytes packed = packDirectory(d);
+  const messaging::Bytes packed = packDirectory(d);
   const Directory back = parseDirectory(packed.data(), packed.size());
   bool same = back.session == d.session && back.framesInFlight == d.framesInFlight &&
               back.timeoutMs == d.timeoutMs && back.layout.file == l.file &&

@@ -18,7 +18,7 @@ using namespace wall::service;
 constexpr std::size_t kHeaderBytes = sizeof(MessageHeader);
 
 // The message past its header equals `again` past its header.
-bool sameBody(const std::byte* data, std::size_t size, const dfb::Bytes& again) {
+bool sameBody(const std::byte* data, std::size_t size, const messaging::Bytes& again) {
   return again.size() == size &&
          std::memcmp(again.data() + kHeaderBytes, data + kHeaderBytes, size - kHeaderBytes) == 0;
 }

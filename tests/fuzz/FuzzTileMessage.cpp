@@ -7,7 +7,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto* bytes = reinterpret_cast<const std::byte*>(data);
-  const dfb::Bytes message(bytes, bytes + size);
+  const messaging::Bytes message(bytes, bytes + size);
   dfb::TileMessageHeader header;
   try {
     (void)dfb::unpackTile(message, header);

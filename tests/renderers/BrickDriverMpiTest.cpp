@@ -56,7 +56,7 @@ std::vector<float> renderHeld(const std::shared_ptr<SceneDesc>& desc, std::vecto
   BrickDriverOptions bo;
   bo.threads = 2;
   BrickFrameDriver driver(desc, settings(), bo, std::move(held), comm);
-  dfb::Messenger messenger(comm);
+  messaging::Messenger messenger(comm);
   dfb::DfbOptions options;
   options.width = kWidth, options.height = kHeight, options.tileSize = kTile;
   options.format = dfb::DisplayFormat::RGBAF32;

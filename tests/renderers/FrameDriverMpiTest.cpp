@@ -29,7 +29,7 @@ DfbRun renderThroughDfb(const Scene& scene, Distribution distribution, int frame
   fo.samplesPerPixel = kSpp;
   fo.threads = threads;
   FrameDriver driver(pt, fo);
-  dfb::Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   dfb::DfbOptions options;
   options.width = kWidth, options.height = kHeight, options.tileSize = kTile;
   options.format = dfb::DisplayFormat::RGBAF32;

@@ -108,13 +108,13 @@ double psnrRgb(const Pixels& a, const Pixels& b) {
   return mse == 0 ? 99.0 : 10 * std::log10(255.0 * 255.0 / mse);
 }
 
-dfb::Bytes encode(const CodecSpec& spec, const Pixels& pixels, int width, int height) {
-  dfb::Bytes out;
+messaging::Bytes encode(const CodecSpec& spec, const Pixels& pixels, int width, int height) {
+  messaging::Bytes out;
   encodePixels(spec, pixels.data(), width, height, width, out);
   return out;
 }
 
-Pixels decode(Codec codec, const dfb::Bytes& bytes, int width, int height) {
+Pixels decode(Codec codec, const messaging::Bytes& bytes, int width, int height) {
   Pixels out(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   decodePixels(codec, bytes.data(), bytes.size(), width, height, out.data(), width);
   return out;
@@ -207,7 +207,7 @@ constexpr Size kSizes[] = {{1, 1}, {17, 5}, {64, 64}, {1920, 8}};
 // decodes it into the middle of another buffer with padded rows; the padding stays untouched.
 void expectStridedRoundTrip(Codec codec, const Pixels& source, int stride, int width, int height) {
   const int x0 = 5, y0 = 2;
-  dfb::Bytes bytes{std::byte{0xAB}};  // appended after what is there
+  messaging::Bytes bytes{std::byte{0xAB}};  // appended after what is there
   encodePixels(CodecSpec{codec}, source.data() + y0 * stride + x0, width, height, stride, bytes);
   ASSERT_EQ(bytes[0], std::byte{0xAB});
   const int destStride = width + 7;
@@ -243,18 +243,18 @@ TEST(Codec, RawAndSnappyRoundTripBitExactly) {
 
 TEST(Codec, RawIsThePixelsAsTheyAre) {
   const Pixels pixels = randomPixels(17, 5, 3);
-  const dfb::Bytes bytes = encode(CodecSpec{Codec::Raw}, pixels, 17, 5);
+  const messaging::Bytes bytes = encode(CodecSpec{Codec::Raw}, pixels, 17, 5);
   ASSERT_EQ(bytes.size(), pixels.size() * 4);
   EXPECT_EQ(std::memcmp(bytes.data(), pixels.data(), bytes.size()), 0);
   // Memory order R, G, B, A.
   const Pixels one{rgba8(1, 2, 3, 4)};
-  const dfb::Bytes b = encode(CodecSpec{Codec::Raw}, one, 1, 1);
-  EXPECT_EQ(b, (dfb::Bytes{std::byte{1}, std::byte{2}, std::byte{3}, std::byte{4}}));
+  const messaging::Bytes b = encode(CodecSpec{Codec::Raw}, one, 1, 1);
+  EXPECT_EQ(b, (messaging::Bytes{std::byte{1}, std::byte{2}, std::byte{3}, std::byte{4}}));
 }
 
 TEST(Codec, SnappyShrinksASmoothGradientAndStoresNoise) {
   const Pixels smooth = gradientPixels(64, 64);
-  const dfb::Bytes packed = encode(CodecSpec{Codec::Snappy}, smooth, 64, 64);
+  const messaging::Bytes packed = encode(CodecSpec{Codec::Snappy}, smooth, 64, 64);
   EXPECT_EQ(packed[0], std::byte{kSnappyCompressed});
   EXPECT_LT(packed.size() * 4, smooth.size() * 4 / 2) << packed.size() << " bytes";
   std::printf("snappy, 64x64 gradient: %zu bytes of %zu (%.1fx)\n", packed.size(),
@@ -262,7 +262,7 @@ TEST(Codec, SnappyShrinksASmoothGradientAndStoresNoise) {
               static_cast<double>(smooth.size() * 4) / static_cast<double>(packed.size()));
   // Noise does not shrink: the filtered bytes are stored, one flag byte more than raw.
   const Pixels noise = randomPixels(64, 64, 5);
-  const dfb::Bytes stored = encode(CodecSpec{Codec::Snappy}, noise, 64, 64);
+  const messaging::Bytes stored = encode(CodecSpec{Codec::Snappy}, noise, 64, 64);
   EXPECT_EQ(stored[0], std::byte{kSnappyStored});
   EXPECT_EQ(stored.size(), noise.size() * 4 + 1);
   EXPECT_EQ(decode(Codec::Snappy, stored, 64, 64), noise);
@@ -273,7 +273,7 @@ TEST(Codec, SnappyShrinksASmoothGradientAndStoresNoise) {
 TEST(Codec, JpegOfARenderedLookingImageIsCloseAndSmall) {
   constexpr int kSide = 256;
   const Pixels image = renderedLookingPixels(kSide, kSide);
-  const dfb::Bytes jpeg = encode(parseCodec("jpeg:90:420"), image, kSide, kSide);
+  const messaging::Bytes jpeg = encode(parseCodec("jpeg:90:420"), image, kSide, kSide);
   const Pixels back = decode(Codec::Jpeg, jpeg, kSide, kSide);
   const double psnr = psnrRgb(image, back);
   const std::size_t raw = image.size() * 4;
@@ -284,7 +284,7 @@ TEST(Codec, JpegOfARenderedLookingImageIsCloseAndSmall) {
   for (const std::uint32_t p : back) ASSERT_EQ(p >> 24, 255u);
   // Finer chroma costs bytes, not quality.
   for (const char* text : {"jpeg:90:444", "jpeg:90:422", "jpeg:75"}) {
-    const dfb::Bytes other = encode(parseCodec(text), image, kSide, kSide);
+    const messaging::Bytes other = encode(parseCodec(text), image, kSide, kSide);
     const double p = psnrRgb(image, decode(Codec::Jpeg, other, kSide, kSide));
     std::printf("%s, 256x256 rendered-looking: %zu bytes, PSNR %.2f dB\n", text, other.size(), p);
     EXPECT_GE(p, 35.0) << text;
@@ -293,7 +293,7 @@ TEST(Codec, JpegOfARenderedLookingImageIsCloseAndSmall) {
 
 TEST(Codec, JpegOfNoiseDecodes) {
   const Pixels noise = noisyOpaquePixels(64, 64, 9);
-  const dfb::Bytes jpeg = encode(parseCodec("jpeg:90"), noise, 64, 64);
+  const messaging::Bytes jpeg = encode(parseCodec("jpeg:90"), noise, 64, 64);
   const Pixels back = decode(Codec::Jpeg, jpeg, 64, 64);
   std::printf("jpeg:90:420, 64x64 noise: %zu bytes of %zu, PSNR %.2f dB\n", jpeg.size(),
               noise.size() * 4, psnrRgb(noise, back));
@@ -309,7 +309,7 @@ TEST(Codec, JpegDropsAlphaAndTakesStridedOddRectangles) {
       // Random alpha: the encoder ignores it.
       std::mt19937 random(4);
       for (std::uint32_t& p : source) p = (p & 0x00FF'FFFFu) | (random() << 24);
-      dfb::Bytes jpeg;
+      messaging::Bytes jpeg;
       encodePixels(parseCodec(text), source.data() + 2 * stride + 5, width, height, stride, jpeg);
       const int destStride = width + 3;
       Pixels dest(static_cast<std::size_t>(destStride) * static_cast<std::size_t>(height), 7u);
@@ -335,16 +335,16 @@ TEST(Codec, EncodeAppendsAndChecksItsArguments) {
   const Pixels pixels = gradientPixels(8, 8);
   for (const CodecSpec spec :
        {CodecSpec{Codec::Raw}, CodecSpec{Codec::Snappy}, CodecSpec{Codec::Jpeg}}) {
-    dfb::Bytes out{std::byte{1}, std::byte{2}};
+    messaging::Bytes out{std::byte{1}, std::byte{2}};
     encodePixels(spec, pixels.data(), 8, 8, 8, out);
-    const dfb::Bytes alone = encode(spec, pixels, 8, 8);
-    EXPECT_EQ(dfb::Bytes(out.begin() + 2, out.end()), alone);
+    const messaging::Bytes alone = encode(spec, pixels, 8, 8);
+    EXPECT_EQ(messaging::Bytes(out.begin() + 2, out.end()), alone);
     EXPECT_THROW(encodePixels(spec, pixels.data(), 0, 8, 8, out), wall::Error);
     EXPECT_THROW(encodePixels(spec, pixels.data(), 8, -1, 8, out), wall::Error);
     EXPECT_THROW(encodePixels(spec, pixels.data(), 8, 8, 7, out), wall::Error);
     EXPECT_THROW(encodePixels(spec, pixels.data(), 70000, 1, 70000, out), wall::Error);
   }
-  dfb::Bytes out;
+  messaging::Bytes out;
   EXPECT_THROW(encodePixels(CodecSpec{Codec::Jpeg, 0}, pixels.data(), 8, 8, 8, out), wall::Error);
   EXPECT_THROW(encodePixels(CodecSpec{Codec::Jpeg, 101}, pixels.data(), 8, 8, 8, out), wall::Error);
   EXPECT_THROW(encodePixels(CodecSpec{static_cast<Codec>(7)}, pixels.data(), 8, 8, 8, out),
@@ -353,7 +353,7 @@ TEST(Codec, EncodeAppendsAndChecksItsArguments) {
 
 TEST(Codec, ThreadsEncodeAndDecodeAtOnce) {
   const Pixels image = renderedLookingPixels(64, 64);
-  std::vector<dfb::Bytes> expected;
+  std::vector<messaging::Bytes> expected;
   const CodecSpec specs[] = {parseCodec("snappy"), parseCodec("jpeg:80:444"), parseCodec("jpeg")};
   for (const CodecSpec& spec : specs) expected.push_back(encode(spec, image, 64, 64));
   std::vector<int> failures(4, 0);
@@ -362,7 +362,7 @@ TEST(Codec, ThreadsEncodeAndDecodeAtOnce) {
     threads.emplace_back([&, t] {
       for (int i = 0; i < 50; ++i)
         for (std::size_t s = 0; s < std::size(specs); ++s) {
-          const dfb::Bytes bytes = encode(specs[s], image, 64, 64);
+          const messaging::Bytes bytes = encode(specs[s], image, 64, 64);
           if (bytes != expected[s]) ++failures[static_cast<std::size_t>(t)];
           const Pixels back = decode(specs[s].codec, bytes, 64, 64);
           if (specs[s].codec == Codec::Snappy && back != image)
@@ -375,7 +375,7 @@ TEST(Codec, ThreadsEncodeAndDecodeAtOnce) {
 
 // ---- hostile input ----
 
-void expectRefused(Codec codec, const dfb::Bytes& bytes, int width, int height,
+void expectRefused(Codec codec, const messaging::Bytes& bytes, int width, int height,
                    const std::string& what) {
   Pixels dest(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   EXPECT_THROW(decodePixels(codec, bytes.data(), bytes.size(), width, height, dest.data(), width),
@@ -384,7 +384,7 @@ void expectRefused(Codec codec, const dfb::Bytes& bytes, int width, int height,
 }
 
 // Decodes, or throws wall::Error; anything else (a crash, a sanitizer report) fails the test.
-void decodeOrRefuse(Codec codec, const dfb::Bytes& bytes, int width, int height) {
+void decodeOrRefuse(Codec codec, const messaging::Bytes& bytes, int width, int height) {
   Pixels dest(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   try {
     decodePixels(codec, bytes.data(), bytes.size(), width, height, dest.data(), width);
@@ -405,32 +405,32 @@ TEST(CodecHostile, EveryTruncation) {
   const Pixels image = renderedLookingPixels(24, 16);
   for (const char* text : {"raw", "snappy", "jpeg", "jpeg:100:444"}) {
     const CodecSpec spec = parseCodec(text);
-    const dfb::Bytes whole = encode(spec, image, 24, 16);
+    const messaging::Bytes whole = encode(spec, image, 24, 16);
     for (std::size_t n = 0; n < whole.size(); ++n)
-      expectRefused(spec.codec, dfb::Bytes(whole.begin(), whole.begin() + n), 24, 16,
+      expectRefused(spec.codec, messaging::Bytes(whole.begin(), whole.begin() + n), 24, 16,
                     std::string(text) + " truncated");
   }
   // Stored Snappy (noise) too.
-  const dfb::Bytes stored = encode(CodecSpec{Codec::Snappy}, randomPixels(8, 8, 1), 8, 8);
+  const messaging::Bytes stored = encode(CodecSpec{Codec::Snappy}, randomPixels(8, 8, 1), 8, 8);
   for (std::size_t n = 0; n < stored.size(); ++n)
-    expectRefused(Codec::Snappy, dfb::Bytes(stored.begin(), stored.begin() + n), 8, 8,
+    expectRefused(Codec::Snappy, messaging::Bytes(stored.begin(), stored.begin() + n), 8, 8,
                   "stored snappy truncated");
 }
 
 TEST(CodecHostile, WrongSizesAndTrailingBytes) {
   const Pixels image = gradientPixels(16, 16);
   for (const Codec codec : {Codec::Raw, Codec::Snappy}) {
-    dfb::Bytes bytes = encode(CodecSpec{codec}, image, 16, 16);
+    messaging::Bytes bytes = encode(CodecSpec{codec}, image, 16, 16);
     expectRefused(codec, bytes, 16, 15, "another height");
     expectRefused(codec, bytes, 15, 16, "another width");
     bytes.push_back(std::byte{0});
     expectRefused(codec, bytes, 16, 16, "a trailing byte");
   }
-  dfb::Bytes stored = encode(CodecSpec{Codec::Snappy}, randomPixels(8, 8, 1), 8, 8);
+  messaging::Bytes stored = encode(CodecSpec{Codec::Snappy}, randomPixels(8, 8, 1), 8, 8);
   stored.push_back(std::byte{0});
   expectRefused(Codec::Snappy, stored, 8, 8, "stored snappy with a trailing byte");
   for (const std::uint8_t flag : {2, 255}) {
-    dfb::Bytes bytes = encode(CodecSpec{Codec::Snappy}, image, 16, 16);
+    messaging::Bytes bytes = encode(CodecSpec{Codec::Snappy}, image, 16, 16);
     bytes[0] = std::byte{flag};
     expectRefused(Codec::Snappy, bytes, 16, 16, "an unknown flag");
   }
@@ -438,7 +438,7 @@ TEST(CodecHostile, WrongSizesAndTrailingBytes) {
 
 TEST(CodecHostile, JpegOfAnotherSize) {
   const Pixels image = renderedLookingPixels(32, 32);
-  const dfb::Bytes jpeg = encode(CodecSpec{Codec::Jpeg}, image, 32, 32);
+  const messaging::Bytes jpeg = encode(CodecSpec{Codec::Jpeg}, image, 32, 32);
   expectRefused(Codec::Jpeg, jpeg, 64, 64, "a 32x32 JPEG asked for as 64x64");
   expectRefused(Codec::Jpeg, jpeg, 16, 16, "a 32x32 JPEG asked for as 16x16 (scaled)");
   expectRefused(Codec::Jpeg, jpeg, 32, 31, "a 32x32 JPEG asked for as 32x31");
@@ -462,11 +462,12 @@ TEST(CodecHostile, JpegOfAnotherKind) {
     EXPECT_EQ(tjCompress2(handle, reinterpret_cast<const unsigned char*>(image.data()), 32, 0, 32,
                           TJPF_RGBA, &jpeg, &size, subsampling, 90, flags),
               0);
-    dfb::Bytes bytes(reinterpret_cast<std::byte*>(jpeg), reinterpret_cast<std::byte*>(jpeg) + size);
+    messaging::Bytes bytes(reinterpret_cast<std::byte*>(jpeg),
+                           reinterpret_cast<std::byte*>(jpeg) + size);
     tjFree(jpeg);
     return bytes;
   };
-  const dfb::Bytes baseline = compress(TJSAMP_420, 0);
+  const messaging::Bytes baseline = compress(TJSAMP_420, 0);
   EXPECT_EQ(decode(Codec::Jpeg, baseline, 32, 32).size(), 32u * 32u);
   expectRefused(Codec::Jpeg, compress(TJSAMP_GRAY, 0), 32, 32, "greyscale");
   expectRefused(Codec::Jpeg, compress(TJSAMP_420, TJFLAG_PROGRESSIVE), 32, 32, "progressive");
@@ -478,10 +479,10 @@ TEST(CodecHostile, JpegOfAnotherKind) {
     ADD_FAILURE() << "no marker " << int{marker};
     return std::size_t{0};
   };
-  dfb::Bytes arithmetic = baseline;
+  messaging::Bytes arithmetic = baseline;
   arithmetic[markerAt(0xC0) + 1] = std::byte{0xC9};
   expectRefused(Codec::Jpeg, arithmetic, 32, 32, "arithmetic-coded");
-  dfb::Bytes multiScan = baseline;
+  messaging::Bytes multiScan = baseline;
   multiScan[markerAt(0xDA) + 4] = std::byte{1};
   expectRefused(Codec::Jpeg, multiScan, 32, 32, "a first scan of one component");
   tjDestroy(handle);
@@ -489,22 +490,22 @@ TEST(CodecHostile, JpegOfAnotherKind) {
 
 TEST(CodecHostile, SnappyClaimingAHugeSize) {
   // Flag, then a Snappy length varint of 2^32 - 1, then a few literal bytes.
-  const dfb::Bytes huge{std::byte{kSnappyCompressed},
-                        std::byte{0xFF},
-                        std::byte{0xFF},
-                        std::byte{0xFF},
-                        std::byte{0xFF},
-                        std::byte{0x0F},
-                        std::byte{0x0C},
-                        std::byte{1},
-                        std::byte{2},
-                        std::byte{3},
-                        std::byte{4}};
+  const messaging::Bytes huge{std::byte{kSnappyCompressed},
+                              std::byte{0xFF},
+                              std::byte{0xFF},
+                              std::byte{0xFF},
+                              std::byte{0xFF},
+                              std::byte{0x0F},
+                              std::byte{0x0C},
+                              std::byte{1},
+                              std::byte{2},
+                              std::byte{3},
+                              std::byte{4}};
   expectRefused(Codec::Snappy, huge, 64, 64, "a Snappy stream announcing 4 GiB");
   // Announcing exactly the rectangle's 4 MiB but holding 16 bytes: refused before the 4 MiB are
   // allocated (no Snappy element expands more than 64 bytes from 3).
-  dfb::Bytes claims{std::byte{kSnappyCompressed}, std::byte{0x80}, std::byte{0x80}, std::byte{0x80},
-                    std::byte{0x02}};  // 2^22
+  messaging::Bytes claims{std::byte{kSnappyCompressed}, std::byte{0x80}, std::byte{0x80},
+                          std::byte{0x80}, std::byte{0x02}};  // 2^22
   claims.resize(claims.size() + 16, std::byte{0});
   expectRefused(Codec::Snappy, claims, 1024, 1024, "a Snappy stream announcing 4 MiB");
 }
@@ -513,7 +514,7 @@ TEST(CodecHostile, Garbage) {
   std::mt19937 random(17);
   for (const Codec codec : {Codec::Raw, Codec::Snappy, Codec::Jpeg})
     for (const std::size_t size : {1u, 2u, 3u, 4u, 17u, 100u, 1023u, 5000u}) {
-      dfb::Bytes garbage(size);
+      messaging::Bytes garbage(size);
       for (std::byte& b : garbage) b = static_cast<std::byte>(random());
       expectRefused(codec, garbage, 32, 32, "garbage");
       if (size >= 2 && codec == Codec::Jpeg) {  // garbage after a JPEG's start marker
@@ -530,11 +531,11 @@ TEST(CodecHostile, EverySingleByteCorruption) {
   const Pixels image = renderedLookingPixels(16, 16);
   for (const char* text : {"snappy", "jpeg:90:420", "jpeg:90:444"}) {
     const CodecSpec spec = parseCodec(text);
-    const dfb::Bytes whole = encode(spec, image, 16, 16);
+    const messaging::Bytes whole = encode(spec, image, 16, 16);
     const Pixels intact = decode(spec.codec, whole, 16, 16);
     for (std::size_t i = 0; i < whole.size(); ++i)
       for (const std::uint8_t x : {0x01, 0x80, 0xFF}) {
-        dfb::Bytes corrupt = whole;
+        messaging::Bytes corrupt = whole;
         corrupt[i] ^= std::byte{x};
         decodeOrRefuse(spec.codec, corrupt, 16, 16);
         ASSERT_EQ(decode(spec.codec, whole, 16, 16), intact)
@@ -547,8 +548,8 @@ TEST(CodecHostile, EverySingleByteCorruption) {
 // error, and every later decode on it failed; the codec now replaces the thread's instance.
 TEST(CodecHostile, JpegDecodingRecoversFromABadHeader) {
   const Pixels image = renderedLookingPixels(32, 32);
-  const dfb::Bytes jpeg = encode(CodecSpec{Codec::Jpeg}, image, 32, 32);
-  dfb::Bytes bad = jpeg;  // the frame header's height set to 0 ("Empty JPEG image")
+  const messaging::Bytes jpeg = encode(CodecSpec{Codec::Jpeg}, image, 32, 32);
+  messaging::Bytes bad = jpeg;  // the frame header's height set to 0 ("Empty JPEG image")
   bool found = false;
   for (std::size_t i = 2; i + 6 < bad.size() && !found; ++i)
     if (bad[i] == std::byte{0xFF} && bad[i + 1] == std::byte{0xC0}) {

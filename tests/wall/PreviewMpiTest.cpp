@@ -51,7 +51,7 @@ struct Result {
 };
 
 Result run(const Frames& s, std::uint32_t frames) {
-  dfb::Messenger messenger(MPI_COMM_WORLD);
+  messaging::Messenger messenger(MPI_COMM_WORLD);
   dfb::DfbOptions o;
   o.width = s.width;
   o.height = s.height;

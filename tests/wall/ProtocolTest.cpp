@@ -47,7 +47,7 @@ constexpr std::size_t kRecordSizeAt = 16;  // within a piece record: x0, y0, x1,
 constexpr std::size_t kRecordBytes = 20;
 
 template <typename T>
-void poke(dfb::Bytes& bytes, std::size_t at, T value) {
+void poke(messaging::Bytes& bytes, std::size_t at, T value) {
   ASSERT_LE(at + sizeof value, bytes.size());
   std::memcpy(bytes.data() + at, &value, sizeof value);
 }
@@ -179,11 +179,11 @@ BatchHeader batchHeader(Codec codec) {
 
 // A batch of every piece of `source`; every other piece through encodePiece + append, as the
 // service client does it.
-dfb::Bytes batchOf(const CodecSpec& spec, const Source& source, std::uint64_t session = 77) {
+messaging::Bytes batchOf(const CodecSpec& spec, const Source& source, std::uint64_t session = 77) {
   BatchWriter writer;
   BatchHeader h = batchHeader(spec.codec);
   writer.start(session, h);
-  dfb::Bytes piece;
+  messaging::Bytes piece;
   for (std::size_t i = 0; i < source.pieces.size(); ++i) {
     const dfb::Region& r = source.pieces[i];
     if (i % 2 == 0) {
@@ -217,7 +217,7 @@ Pixels cut(const Source& source, const dfb::Region& r) {
 
 TEST(Protocol, HelloRoundTrips) {
   for (const Hello& hello : {Hello{}, fullHello()}) {
-    const dfb::Bytes bytes = packHello(hello);
+    const messaging::Bytes bytes = packHello(hello);
     const MessageHeader header = parseHeader(bytes.data(), bytes.size());
     EXPECT_EQ(header.magic, kMagic);
     EXPECT_EQ(header.version, kProtocolVersion);
@@ -239,7 +239,7 @@ TEST(Protocol, HelloRoundTrips) {
     Hello hello = fullHello();
     hello.codec = parseCodec(codec);
     hello.token = std::string(kMaxStringBytes, 't');
-    const dfb::Bytes bytes = packHello(hello);
+    const messaging::Bytes bytes = packHello(hello);
     const Hello back = parseHello(bytes.data(), bytes.size());
     EXPECT_EQ(back.codec, hello.codec) << codec;
     EXPECT_EQ(back.token, hello.token);
@@ -251,7 +251,7 @@ TEST(Protocol, DirectoryOfA2x2WallWithBezelsRoundTrips) {
   ASSERT_EQ(d.layout.displays.size(), 4u);
   ASSERT_EQ(d.layout.canvasWidth, 412);
   ASSERT_EQ(d.layout.canvasHeight, 310);
-  const dfb::Bytes bytes = packDirectory(d);
+  const messaging::Bytes bytes = packDirectory(d);
   const MessageHeader header = parseHeader(bytes.data(), bytes.size());
   EXPECT_EQ(header.kind, static_cast<std::uint16_t>(Kind::Directory));
   EXPECT_EQ(header.session, d.session);
@@ -283,7 +283,7 @@ TEST(Protocol, DirectoryOfA2x2WallWithBezelsRoundTrips) {
 TEST(Protocol, DirectoryWithProcessesDrivingSeveralDisplaysRoundTrips) {
   const Directory d = directoryOf(k3x2ByColumn, "3x2.toml");
   ASSERT_EQ(d.layout.processCount, 3);
-  const dfb::Bytes bytes = packDirectory(d);
+  const messaging::Bytes bytes = packDirectory(d);
   const Directory back = parseDirectory(bytes.data(), bytes.size());
   ASSERT_EQ(back.layout.displays.size(), 6u);
   EXPECT_EQ(back.layout.processCount, 3);
@@ -299,14 +299,15 @@ TEST(Protocol, TextMessagesRoundTrip) {
     for (const std::string& text :
          {std::string(), std::string("the wall is busy with a job from render-3 (since 12:00)"),
           std::string("2"), std::string(kMaxStringBytes, 'x'), std::string("\0 nul\n", 6)}) {
-      const dfb::Bytes bytes = packText(kind, 99, text);
+      const messaging::Bytes bytes = packText(kind, 99, text);
       const MessageHeader header = parseHeader(bytes.data(), bytes.size());
       EXPECT_EQ(header.kind, static_cast<std::uint16_t>(kind));
       EXPECT_EQ(header.session, 99u);
       EXPECT_EQ(parseText(bytes.data(), bytes.size()), text);
     }
   // A longer reason is cut, not refused: the job still learns why.
-  const dfb::Bytes bytes = packText(Kind::Refused, 1, std::string(kMaxStringBytes + 100, 'y'));
+  const messaging::Bytes bytes =
+      packText(Kind::Refused, 1, std::string(kMaxStringBytes + 100, 'y'));
   EXPECT_EQ(parseText(bytes.data(), bytes.size()), std::string(kMaxStringBytes, 'y'));
 }
 
@@ -322,7 +323,7 @@ TEST(Protocol, ControlMessagesRoundTrip) {
         Case{Kind::Presented, std::numeric_limits<std::uint64_t>::max(),
              std::numeric_limits<std::int64_t>::min()},
         Case{Kind::Capture, 0, -1}}) {
-    const dfb::Bytes bytes = packControl(c.kind, 0xFEED, c.value, c.second);
+    const messaging::Bytes bytes = packControl(c.kind, 0xFEED, c.value, c.second);
     const MessageHeader header = parseHeader(bytes.data(), bytes.size());
     EXPECT_EQ(header.kind, static_cast<std::uint16_t>(c.kind));
     EXPECT_EQ(header.session, 0xFEEDu);
@@ -340,7 +341,7 @@ TEST(Protocol, LosslessBatchesRoundTripBitExactly) {
       SCOPED_TRACE(std::string(codec) + (smooth ? " smooth" : " random"));
       const CodecSpec spec = parseCodec(codec);
       const Source source = sourceImage(150, 100, smooth, 3);
-      const dfb::Bytes bytes = batchOf(spec, source, 1234);
+      const messaging::Bytes bytes = batchOf(spec, source, 1234);
       const MessageHeader header = parseHeader(bytes.data(), bytes.size());
       EXPECT_EQ(header.kind, static_cast<std::uint16_t>(Kind::Batch));
       EXPECT_EQ(header.session, 1234u);
@@ -369,7 +370,7 @@ TEST(Protocol, JpegBatchesRoundTripClosely) {
   for (const char* codec : {"jpeg:90:444", "jpeg:90:420"}) {
     SCOPED_TRACE(codec);
     const Source source = sourceImage(150, 100, true, 0);
-    const dfb::Bytes bytes = batchOf(parseCodec(codec), source);
+    const messaging::Bytes bytes = batchOf(parseCodec(codec), source);
     std::vector<BatchPiece> pieces;
     const BatchHeader h = parseBatch(bytes.data(), bytes.size(), pieces);
     EXPECT_EQ(h.codec, Codec::Jpeg);
@@ -394,7 +395,7 @@ TEST(Protocol, EmptyBatchAndAWriterUsedTwice) {
   BatchWriter writer;
   writer.start(5, batchHeader(Codec::Snappy));
   EXPECT_EQ(writer.pieces(), 0u);
-  const dfb::Bytes empty = writer.take();
+  const messaging::Bytes empty = writer.take();
   std::vector<BatchPiece> pieces{BatchPiece{}};
   const BatchHeader h = parseBatch(empty.data(), empty.size(), pieces);
   EXPECT_EQ(h.pieceCount, 0u);
@@ -405,7 +406,7 @@ TEST(Protocol, EmptyBatchAndAWriterUsedTwice) {
   writer.start(6, batchHeader(Codec::Raw));
   for (const dfb::Region& r : source.pieces)
     writer.add(CodecSpec{Codec::Raw}, r, source.at(r), source.width);
-  const dfb::Bytes second = writer.take();
+  const messaging::Bytes second = writer.take();
   EXPECT_EQ(parseHeader(second.data(), second.size()).session, 6u);
   parseBatch(second.data(), second.size(), pieces);
   ASSERT_EQ(pieces.size(), 2u);
@@ -423,7 +424,7 @@ TEST(Protocol, AFailedAddLeavesTheBatchAsItWas) {
   EXPECT_EQ(writer.bytes(), before);
   EXPECT_EQ(writer.pieces(), 0u);
   writer.add(CodecSpec{Codec::Raw}, {0, 0, 16, 16}, source.pixels.data(), 16);
-  const dfb::Bytes bytes = writer.take();
+  const messaging::Bytes bytes = writer.take();
   std::vector<BatchPiece> pieces;
   parseBatch(bytes.data(), bytes.size(), pieces);
   ASSERT_EQ(pieces.size(), 1u);
@@ -439,8 +440,8 @@ TEST(Protocol, PackRefusesWhatItCannotSay) {
 // ---- hostile input ----
 
 // Every parser on `bytes` copied into a buffer of exactly its size (ASan sees any over-read).
-void expectEveryParserRefuses(const dfb::Bytes& message, const std::string& what) {
-  const dfb::Bytes bytes(message);  // exactly sized
+void expectEveryParserRefuses(const messaging::Bytes& message, const std::string& what) {
+  const messaging::Bytes bytes(message);  // exactly sized
   std::vector<BatchPiece> pieces;
   EXPECT_THROW(parseHello(bytes.data(), bytes.size()), wall::Error) << what;
   EXPECT_THROW(parseDirectory(bytes.data(), bytes.size()), wall::Error) << what;
@@ -458,14 +459,14 @@ TEST(ProtocolHostile, EmptyAndTinyMessages) {
   EXPECT_ERROR_HAS(parseControl(nullptr, 0), "malformed control message");
   EXPECT_ERROR_HAS(parseBatch(nullptr, 0, pieces), "malformed piece batch");
 
-  const dfb::Bytes three = {std::byte{'D'}, std::byte{'F'}, std::byte{'B'}};
+  const messaging::Bytes three = {std::byte{'D'}, std::byte{'F'}, std::byte{'B'}};
   EXPECT_ERROR_HAS(parseHeader(three.data(), three.size()), "a message of 3 bytes");
   expectEveryParserRefuses(three, "3 bytes");
   EXPECT_ERROR_HAS(parseHello(three.data(), three.size()), "ends after 3 bytes");
 }
 
 TEST(ProtocolHostile, WrongMagic) {
-  dfb::Bytes bytes = packHello(Hello{});
+  messaging::Bytes bytes = packHello(Hello{});
   bytes[0] ^= std::byte{0x20};
   EXPECT_ERROR_HAS(parseHeader(bytes.data(), bytes.size()),
                    "not the dfbwall protocol (wrong magic number)");
@@ -478,7 +479,7 @@ TEST(ProtocolHostile, WrongMagic) {
 TEST(ProtocolHostile, WrongVersionNamesBothVersions) {
   for (const std::uint16_t version :
        {std::uint16_t{0}, std::uint16_t{2}, std::uint16_t{7}, std::uint16_t{0xFFFF}}) {
-    dfb::Bytes bytes = packControl(Kind::Keepalive, 3, 0);
+    messaging::Bytes bytes = packControl(Kind::Keepalive, 3, 0);
     poke(bytes, kVersionAt, version);
     const std::string message = errorOf([&] { parseHeader(bytes.data(), bytes.size()); });
     EXPECT_NE(message.find("protocol version " + std::to_string(version)), std::string::npos)
@@ -490,7 +491,7 @@ TEST(ProtocolHostile, WrongVersionNamesBothVersions) {
 
 TEST(ProtocolHostile, UnknownKind) {
   for (const std::uint16_t kind : {std::uint16_t{0}, std::uint16_t{11}, std::uint16_t{0xFFFF}}) {
-    dfb::Bytes bytes = packControl(Kind::Keepalive, 3, 0);
+    messaging::Bytes bytes = packControl(Kind::Keepalive, 3, 0);
     poke(bytes, kKindAt, kind);
     EXPECT_ERROR_HAS(parseHeader(bytes.data(), bytes.size()),
                      "unknown message kind " + std::to_string(kind));
@@ -498,10 +499,10 @@ TEST(ProtocolHostile, UnknownKind) {
 }
 
 TEST(ProtocolHostile, EveryTruncationOfAHello) {
-  const dfb::Bytes whole = packHello(fullHello());
+  const messaging::Bytes whole = packHello(fullHello());
   for (std::size_t n = 0; n < whole.size(); ++n) {
     SCOPED_TRACE(n);
-    const dfb::Bytes cut(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(n));
+    const messaging::Bytes cut(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(n));
     if (n < kHeaderBytes) {
       EXPECT_ERROR_HAS(parseHeader(cut.data(), cut.size()), "not the dfbwall protocol");
     } else {
@@ -515,10 +516,10 @@ TEST(ProtocolHostile, EveryTruncationOfAHello) {
 TEST(ProtocolHostile, EveryTruncationOfABatch) {
   for (const char* codec : {"raw", "snappy", "jpeg"}) {
     SCOPED_TRACE(codec);
-    const dfb::Bytes whole = batchOf(parseCodec(codec), sourceImage(20, 12, true, 0));
+    const messaging::Bytes whole = batchOf(parseCodec(codec), sourceImage(20, 12, true, 0));
     std::vector<BatchPiece> pieces;
     for (std::size_t n = 0; n < whole.size(); ++n) {
-      const dfb::Bytes cut(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(n));
+      const messaging::Bytes cut(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(n));
       const std::string message = errorOf([&] { parseBatch(cut.data(), cut.size(), pieces); });
       // Cut before the count: the header ends early; after it: the count cannot fit, or the
       // piece's data is cut.
@@ -528,12 +529,13 @@ TEST(ProtocolHostile, EveryTruncationOfABatch) {
 }
 
 TEST(ProtocolHostile, EveryTruncationOfTheOtherMessages) {
-  for (const dfb::Bytes& whole : {packDirectory(twoByTwo()), packText(Kind::Refused, 1, "busy"),
-                                  packControl(Kind::Presented, 1, 2, 3)}) {
+  for (const messaging::Bytes& whole :
+       {packDirectory(twoByTwo()), packText(Kind::Refused, 1, "busy"),
+        packControl(Kind::Presented, 1, 2, 3)}) {
     const Kind kind = static_cast<Kind>(parseHeader(whole.data(), whole.size()).kind);
     for (std::size_t n = 0; n < whole.size(); ++n) {
       SCOPED_TRACE(n);
-      const dfb::Bytes cut(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(n));
+      const messaging::Bytes cut(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(n));
       if (kind == Kind::Directory)
         EXPECT_ERROR_HAS(parseDirectory(cut.data(), cut.size()), "malformed directory");
       else if (kind == Kind::Refused)
@@ -546,7 +548,7 @@ TEST(ProtocolHostile, EveryTruncationOfTheOtherMessages) {
 
 TEST(ProtocolHostile, ABatchClaimingTwoToThe32PiecesIsRefusedBeforeAnyAllocation) {
   const Source source = sourceImage(8, 8, false, 1);
-  dfb::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
+  messaging::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
   poke(bytes, kBatchPieceCountAt, std::numeric_limits<std::uint32_t>::max());
   std::vector<BatchPiece> pieces;
   EXPECT_ERROR_HAS(parseBatch(bytes.data(), bytes.size(), pieces), "4294967295 pieces in");
@@ -559,14 +561,14 @@ TEST(ProtocolHostile, APieceWhoseSizeFieldSaysFourGiB) {
   const Source source = sourceImage(8, 8, false, 1);
   for (const std::uint32_t size :
        {std::numeric_limits<std::uint32_t>::max(), std::uint32_t{1} << 31, std::uint32_t{257}}) {
-    dfb::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
+    messaging::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
     poke(bytes, kBatchFirstRecordAt + kRecordSizeAt, size);
     std::vector<BatchPiece> pieces;
     EXPECT_ERROR_HAS(parseBatch(bytes.data(), bytes.size(), pieces),
                      std::to_string(size) + " more needed");
   }
   // A size smaller than the data: the rest is "too many" bytes, or the raw decode refuses it.
-  dfb::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
+  messaging::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
   poke(bytes, kBatchFirstRecordAt + kRecordSizeAt, std::uint32_t{255});
   std::vector<BatchPiece> pieces;
   EXPECT_ERROR_HAS(parseBatch(bytes.data(), bytes.size(), pieces), "1 bytes too many");
@@ -584,7 +586,7 @@ TEST(ProtocolHostile, BadPieceRectangles) {
         dfb::Region{kMax - 1, 0, kMax, 1}}) {
     SCOPED_TRACE(std::to_string(r.x0) + "," + std::to_string(r.y0) + " " + std::to_string(r.x1) +
                  "," + std::to_string(r.y1));
-    dfb::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
+    messaging::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
     poke(bytes, kBatchFirstRecordAt + 0, r.x0);
     poke(bytes, kBatchFirstRecordAt + 4, r.y0);
     poke(bytes, kBatchFirstRecordAt + 8, r.x1);
@@ -604,7 +606,7 @@ TEST(ProtocolHostile, BadPieceRectangles) {
                          std::to_string(r.y1) + ")");
   }
   // The largest piece allowed is 4096 a side; the codec refuses data of the wrong size for it.
-  dfb::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
+  messaging::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, source);
   poke(bytes, kBatchFirstRecordAt + 8, 4096);
   poke(bytes, kBatchFirstRecordAt + 12, 4096);
   std::vector<BatchPiece> pieces;
@@ -614,14 +616,14 @@ TEST(ProtocolHostile, BadPieceRectangles) {
 }
 
 TEST(ProtocolHostile, AnUnknownCodecInABatch) {
-  dfb::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, sourceImage(8, 8, false, 1));
+  messaging::Bytes bytes = batchOf(CodecSpec{Codec::Raw}, sourceImage(8, 8, false, 1));
   poke(bytes, kHeaderBytes + 12, std::uint32_t{3});
   std::vector<BatchPiece> pieces;
   EXPECT_ERROR_HAS(parseBatch(bytes.data(), bytes.size(), pieces), "codec 3");
 }
 
 TEST(ProtocolHostile, AHelloWithA60000ByteTextLength) {
-  dfb::Bytes bytes = packHello(fullHello());
+  messaging::Bytes bytes = packHello(fullHello());
   poke(bytes, kHelloTokenLengthAt, std::uint16_t{60000});
   EXPECT_ERROR_HAS(parseHello(bytes.data(), bytes.size()), "a text field longer than 4096");
   // Also when the 60000 bytes are there.
@@ -637,7 +639,7 @@ TEST(ProtocolHostile, HelloFieldsOutOfRange) {
   const auto expectBad = [](const std::function<void(Hello&)>& change, const std::string& text) {
     Hello hello = fullHello();
     change(hello);
-    const dfb::Bytes bytes = packHello(hello);
+    const messaging::Bytes bytes = packHello(hello);
     EXPECT_ERROR_HAS(parseHello(bytes.data(), bytes.size()), text);
   };
   expectBad([](Hello& h) { h.renderRanks = 0; }, "render ranks 0");
@@ -652,7 +654,7 @@ TEST(ProtocolHostile, HelloFieldsOutOfRange) {
   expectBad([](Hello& h) { h.framesInFlight = 0; }, "frames in flight 0");
   expectBad([](Hello& h) { h.framesInFlight = 17; }, "frames in flight 17");
   expectBad([](Hello& h) { h.captureEvery = (1u << 30) + 1; }, "capture-every");
-  dfb::Bytes bytes = packHello(fullHello());
+  messaging::Bytes bytes = packHello(fullHello());
   // The wait flag: the byte after codec, quality and subsampling.
   const std::size_t waitAt =
       kHeaderBytes + 2 + fullHello().token.size() + 2 + fullHello().host.size() + 4 + 4 + 3;
@@ -662,21 +664,21 @@ TEST(ProtocolHostile, HelloFieldsOutOfRange) {
 }
 
 // A directory packed from a layout no loader would accept.
-dfb::Bytes directoryWith(const std::function<void(Directory&)>& change) {
+messaging::Bytes directoryWith(const std::function<void(Directory&)>& change) {
   Directory d = twoByTwo();
   change(d);
   return packDirectory(d);
 }
 
 TEST(ProtocolHostile, ADirectoryWhoseDisplaysOverlap) {
-  const dfb::Bytes bytes = directoryWith([](Directory& d) {
+  const messaging::Bytes bytes = directoryWith([](Directory& d) {
     d.layout.displays[1].rect = {150, 0, 350, 150};  // 50 px over display 0
   });
   EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "overlaps display 'r0c0'");
 }
 
 TEST(ProtocolHostile, ADirectoryWhoseCanvasDoesNotMatch) {
-  dfb::Bytes bytes = packDirectory(twoByTwo());
+  messaging::Bytes bytes = packDirectory(twoByTwo());
   poke(bytes, kDirectoryCanvasWidthAt, 413);
   EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()),
                    "canvas or process count does not match its displays");
@@ -688,7 +690,7 @@ TEST(ProtocolHostile, ADirectoryWhoseCanvasDoesNotMatch) {
 }
 
 TEST(ProtocolHostile, ADirectoryWithBadCountsOrDisplays) {
-  dfb::Bytes bytes = packDirectory(twoByTwo());
+  messaging::Bytes bytes = packDirectory(twoByTwo());
   for (const std::uint32_t count : {0u, 1025u, std::numeric_limits<std::uint32_t>::max()}) {
     poke(bytes, kDirectoryDisplayCountAt, count);
     EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()),
@@ -719,7 +721,8 @@ TEST(ProtocolHostile, ADirectoryWithExtremeRectangles) {
         dfb::Region{0, 0, (1 << 20) + 1, 150}}) {
     SCOPED_TRACE(std::to_string(r.x0) + "," + std::to_string(r.y0) + " " + std::to_string(r.x1) +
                  "," + std::to_string(r.y1));
-    const dfb::Bytes bytes = directoryWith([&](Directory& d) { d.layout.displays[3].rect = r; });
+    const messaging::Bytes bytes =
+        directoryWith([&](Directory& d) { d.layout.displays[3].rect = r; });
     EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "malformed directory");
   }
 }
@@ -752,13 +755,13 @@ TEST(ProtocolHostile, ACorruptJpegPieceDoesNotSpoilTheNextBatch) {
 }
 
 TEST(ProtocolHostile, TrailingGarbage) {
-  std::vector<dfb::Bytes> messages = {packHello(fullHello()), packDirectory(twoByTwo()),
-                                      packText(Kind::Queued, 2, "3"), packControl(Kind::Bye, 2, 9),
-                                      batchOf(parseCodec("snappy"), sourceImage(8, 8, true, 0))};
-  for (dfb::Bytes& bytes : messages) {
+  std::vector<messaging::Bytes> messages = {
+      packHello(fullHello()), packDirectory(twoByTwo()), packText(Kind::Queued, 2, "3"),
+      packControl(Kind::Bye, 2, 9), batchOf(parseCodec("snappy"), sourceImage(8, 8, true, 0))};
+  for (messaging::Bytes& bytes : messages) {
     const Kind kind = static_cast<Kind>(parseHeader(bytes.data(), bytes.size()).kind);
     for (const std::size_t extra : {std::size_t{1}, std::size_t{3}, std::size_t{1000}}) {
-      dfb::Bytes longer = bytes;
+      messaging::Bytes longer = bytes;
       longer.insert(longer.end(), extra, std::byte{0x5A});
       const std::string tooMany = std::to_string(extra) + " bytes too many";
       std::vector<BatchPiece> pieces;
@@ -785,7 +788,7 @@ TEST(ProtocolHostile, TrailingGarbage) {
 TEST(ProtocolHostile, RandomBytesAndSingleByteCorruptions) {
   std::mt19937 random(11);
   std::vector<BatchPiece> pieces;
-  const auto everyParser = [&](const dfb::Bytes& bytes) {
+  const auto everyParser = [&](const messaging::Bytes& bytes) {
     // Each may accept or refuse; none may crash or throw anything but wall::Error.
     const auto tryOne = [](const std::function<void()>& f) {
       try {
@@ -805,15 +808,15 @@ TEST(ProtocolHostile, RandomBytesAndSingleByteCorruptions) {
     });
   };
   for (int i = 0; i < 200; ++i) {
-    dfb::Bytes bytes(random() % 200);
+    messaging::Bytes bytes(random() % 200);
     for (std::byte& b : bytes) b = static_cast<std::byte>(random());
     everyParser(bytes);
   }
-  for (const dfb::Bytes& whole : {packHello(fullHello()), packDirectory(twoByTwo()),
-                                  batchOf(parseCodec("snappy"), sourceImage(20, 12, true, 0)),
-                                  batchOf(parseCodec("jpeg"), sourceImage(20, 12, true, 0))})
+  for (const messaging::Bytes& whole : {packHello(fullHello()), packDirectory(twoByTwo()),
+                                        batchOf(parseCodec("snappy"), sourceImage(20, 12, true, 0)),
+                                        batchOf(parseCodec("jpeg"), sourceImage(20, 12, true, 0))})
     for (std::size_t at = 0; at < whole.size(); ++at) {
-      dfb::Bytes bytes = whole;
+      messaging::Bytes bytes = whole;
       bytes[at] ^= static_cast<std::byte>(1 + random() % 255);
       everyParser(bytes);
     }
@@ -821,7 +824,8 @@ TEST(ProtocolHostile, RandomBytesAndSingleByteCorruptions) {
 
 // ---- fuzz seeds ----
 
-void writeSeed(const std::filesystem::path& dir, const std::string& name, const dfb::Bytes& bytes) {
+void writeSeed(const std::filesystem::path& dir, const std::string& name,
+               const messaging::Bytes& bytes) {
   std::filesystem::create_directories(dir);
   std::ofstream out(dir / name, std::ios::binary | std::ios::trunc);
   out.write(reinterpret_cast<const char*>(bytes.data()),

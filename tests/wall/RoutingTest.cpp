@@ -134,7 +134,7 @@ TEST(Routing, TilesBehindBezelsAreNotShown) {
 // then match the message's size. Now refused before any arithmetic.
 TEST(PieceMessage, RejectsARectangleWhoseSizeOverflows) {
   const std::uint32_t pixels[4] = {1, 2, 3, 4};
-  dfb::Bytes bytes = wall::packPiece(1, 0, dfb::Region{0, 0, 2, 2}, pixels, 2, 0, 0, false);
+  messaging::Bytes bytes = wall::packPiece(1, 0, dfb::Region{0, 0, 2, 2}, pixels, 2, 0, 0, false);
   wall::PieceHeader header;
   std::memcpy(&header, bytes.data(), sizeof header);
   header.x0 = -2000000000;

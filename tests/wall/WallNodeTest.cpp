@@ -17,7 +17,7 @@
 namespace wall {
 namespace {
 
-using dfb::Messenger;
+using messaging::Messenger;
 constexpr int kTileSize = 16;
 
 Layout twoDisplays() {
@@ -97,7 +97,7 @@ TEST(WallNode, PresentsOnlyWhenEveryDisplayHasTheFrameAndAcknowledgesIt) {
     options.timeout = std::chrono::seconds(20);
     MpiWallPeers peers(messenger, roleComm, options.timeout);
     WallNode node(layout, peers, {presenter}, options);
-    const dfb::Registration registration(messenger, kWallNodeObject, &node);
+    const messaging::Registration registration(messenger, kWallNodeObject, &node);
     MPI_Barrier(MPI_COMM_WORLD);
     for (std::uint32_t frame = 1; frame <= kFrames; ++frame) {
       node.presentFrame(frame);

@@ -47,7 +47,7 @@ const std::byte* row(const std::uint32_t* pixels, int stride, int y) {
 // The rectangle's pixels in one run: its own memory when its rows are packed, else its rows
 // gathered into `scratch`.
 const std::byte* packedPixels(const std::uint32_t* pixels, int width, int height, int stride,
-                              dfb::Bytes& scratch) {
+                              messaging::Bytes& scratch) {
   if (stride == width) return reinterpret_cast<const std::byte*>(pixels);
   const std::size_t rowBytes = 4 * static_cast<std::size_t>(width);
   scratch.resize(rowBytes * static_cast<std::size_t>(height));
@@ -66,20 +66,20 @@ void unpackRows(const std::byte* packed, int width, int height, std::uint32_t* d
                 packed + static_cast<std::size_t>(y) * rowBytes, rowBytes);
 }
 
-void append(dfb::Bytes& out, const std::byte* bytes, std::size_t size) {
+void append(messaging::Bytes& out, const std::byte* bytes, std::size_t size) {
   out.insert(out.end(), bytes, bytes + size);
 }
 
 // ---- Snappy: the plane-delta filter, then Snappy when it shrinks the filtered bytes. ----
 
 void encodeSnappy(const std::uint32_t* pixels, int width, int height, int stride,
-                  std::size_t pixelBytes, dfb::Bytes& out) {
-  thread_local dfb::Bytes gathered, filtered, compressed;
+                  std::size_t pixelBytes, messaging::Bytes& out) {
+  thread_local messaging::Bytes gathered, filtered, compressed;
   const std::byte* run = packedPixels(pixels, width, height, stride, gathered);
   filtered.resize(pixelBytes);
-  dfb::planeDeltaEncode(std::span<const std::byte>(run, pixelBytes), 4, filtered.data());
-  const bool shrank = dfb::compressIfSmaller(filtered, compressed);
-  const dfb::Bytes& body = shrank ? compressed : filtered;
+  messaging::planeDeltaEncode(std::span<const std::byte>(run, pixelBytes), 4, filtered.data());
+  const bool shrank = messaging::compressIfSmaller(filtered, compressed);
+  const messaging::Bytes& body = shrank ? compressed : filtered;
   out.reserve(out.size() + 1 + body.size());
   out.push_back(static_cast<std::byte>(shrank ? kSnappyCompressed : kSnappyStored));
   append(out, body.data(), body.size());
@@ -90,7 +90,7 @@ void decodeSnappy(const std::byte* data, std::size_t size, int width, int height
   if (size < 1) throw Error("snappy piece of " + sizeText(width, height) + " is empty");
   const auto flag = static_cast<std::uint8_t>(data[0]);
   const std::span<const std::byte> body(data + 1, size - 1);
-  thread_local dfb::Bytes decompressed, unfiltered;
+  thread_local messaging::Bytes decompressed, unfiltered;
   const std::byte* filtered = nullptr;
   if (flag == kSnappyStored) {
     if (body.size() != pixelBytes)
@@ -100,7 +100,7 @@ void decodeSnappy(const std::byte* data, std::size_t size, int width, int height
     filtered = body.data();
   } else if (flag == kSnappyCompressed) {
     try {  // checks the announced size against pixelBytes before it allocates
-      dfb::decompress(body, pixelBytes, decompressed);
+      messaging::decompress(body, pixelBytes, decompressed);
     } catch (const dfb::Error& e) {
       throw Error("snappy piece of " + sizeText(width, height) + ": " + e.what());
     }
@@ -111,11 +111,11 @@ void decodeSnappy(const std::byte* data, std::size_t size, int width, int height
   }
   const std::span<const std::byte> encoded(filtered, pixelBytes);
   if (destStride == width) {
-    dfb::planeDeltaDecode(encoded, 4, reinterpret_cast<std::byte*>(dest));
+    messaging::planeDeltaDecode(encoded, 4, reinterpret_cast<std::byte*>(dest));
     return;
   }
   unfiltered.resize(pixelBytes);
-  dfb::planeDeltaDecode(encoded, 4, unfiltered.data());
+  messaging::planeDeltaDecode(encoded, 4, unfiltered.data());
   unpackRows(unfiltered.data(), width, height, dest, destStride);
 }
 
@@ -183,7 +183,7 @@ int turboJpegSubsampling(ChromaSubsampling subsampling) {
 }
 
 void encodeJpeg(const CodecSpec& spec, const std::uint32_t* pixels, int width, int height,
-                int stride, dfb::Bytes& out) {
+                int stride, messaging::Bytes& out) {
   if (spec.jpegQuality < 1 || spec.jpegQuality > 100)
     throw Error("JPEG quality " + std::to_string(spec.jpegQuality) + " is outside 1 to 100");
   const int subsampling = turboJpegSubsampling(spec.subsampling);
@@ -343,7 +343,7 @@ Codec codecFromByte(std::uint8_t value) {
 }
 
 void encodePixels(const CodecSpec& spec, const std::uint32_t* pixels, int width, int height,
-                  int stride, dfb::Bytes& out) {
+                  int stride, messaging::Bytes& out) {
   const std::size_t pixelBytes = checkedPixelBytes("encodePixels", width, height, stride);
   switch (spec.codec) {
     case Codec::Raw: {

@@ -3,7 +3,7 @@
 // rectangle, typically 64x64 or cut at a display border) for the TCP link to a remote wall
 // process. Chosen per job with `--codec raw|snappy|jpeg[:QUALITY[:444|422|420]]`.
 //  - raw:    the pixels as they are (4 bytes a pixel, rows packed).
-//  - snappy: the plane-delta filter (dfb/Compression.h) then Snappy; lossless. One flag byte
+//  - snappy: the plane-delta filter (messaging/Compression.h) then Snappy; lossless. One flag byte
 //            first: kSnappyStored (the filtered bytes follow, Snappy did not shrink them) or
 //            kSnappyCompressed (a Snappy stream of the filtered bytes follows).
 //  - jpeg:   baseline JPEG through TurboJPEG; alpha is dropped (display pixels are opaque) and
@@ -14,7 +14,7 @@
 #include <cstdint>
 #include <string>
 
-#include "dfb/Compression.h"
+#include "messaging/Compression.h"
 
 namespace wall::service {
 
@@ -52,7 +52,7 @@ Codec codecFromByte(std::uint8_t value);
 // wall::Error on a rectangle outside the limits above, a stride below the width, or a spec
 // outside its ranges.
 void encodePixels(const CodecSpec& spec, const std::uint32_t* pixels, int width, int height,
-                  int stride, dfb::Bytes& out);
+                  int stride, messaging::Bytes& out);
 
 // Decodes exactly width x height pixels into dest (rows destStride pixels apart). Never trusts
 // the data: malformed, truncated or oversized input, and a JPEG whose header gives another size,

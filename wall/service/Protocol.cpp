@@ -36,10 +36,10 @@ class Writer {
     put<std::uint16_t>(static_cast<std::uint16_t>(s.size()));
     raw(s.data(), s.size());
   }
-  dfb::Bytes take() { return std::move(bytes_); }
+  messaging::Bytes take() { return std::move(bytes_); }
 
  private:
-  dfb::Bytes bytes_;
+  messaging::Bytes bytes_;
 };
 
 // Reads fields in order; any read past the end throws, naming the message.
@@ -98,7 +98,7 @@ constexpr std::uint32_t kMaxRanks = 1 << 20;
 
 }  // namespace
 
-dfb::Bytes packHello(const Hello& h) {
+messaging::Bytes packHello(const Hello& h) {
   Writer w(Kind::Hello, 0);
   w.text(h.token);
   w.text(h.host);
@@ -147,7 +147,7 @@ Hello parseHello(const std::byte* data, std::size_t size) {
   return h;
 }
 
-dfb::Bytes packDirectory(const Directory& d) {
+messaging::Bytes packDirectory(const Directory& d) {
   Writer w(Kind::Directory, d.session);
   w.put<std::int32_t>(d.layout.canvasWidth);
   w.put<std::int32_t>(d.layout.canvasHeight);
@@ -214,7 +214,7 @@ Directory parseDirectory(const std::byte* data, std::size_t size) {
   return d;
 }
 
-dfb::Bytes packText(Kind kind, std::uint64_t session, const std::string& text) {
+messaging::Bytes packText(Kind kind, std::uint64_t session, const std::string& text) {
   Writer w(kind, session);
   w.text(text.size() > kMaxStringBytes ? text.substr(0, kMaxStringBytes) : text);
   return w.take();
@@ -227,7 +227,8 @@ std::string parseText(const std::byte* data, std::size_t size) {
   return s;
 }
 
-dfb::Bytes packControl(Kind kind, std::uint64_t session, std::uint64_t value, std::int64_t second) {
+messaging::Bytes packControl(Kind kind, std::uint64_t session, std::uint64_t value,
+                             std::int64_t second) {
   Writer w(kind, session);
   w.put(value);
   w.put(second);
@@ -295,13 +296,13 @@ void BatchWriter::add(const CodecSpec& codec, const dfb::Region& local, const st
   ++pieces_;
 }
 
-void BatchWriter::append(const dfb::Bytes& piece) {
+void BatchWriter::append(const messaging::Bytes& piece) {
   bytes_.insert(bytes_.end(), piece.begin(), piece.end());
   ++pieces_;
 }
 
 void encodePiece(const CodecSpec& codec, const dfb::Region& local, const std::uint32_t* pixels,
-                 int stride, dfb::Bytes& out) {
+                 int stride, messaging::Bytes& out) {
   PieceRecord record{local.x0, local.y0, local.x1, local.y1, 0};
   out.resize(sizeof record);
   encodePixels(codec, pixels, local.width(), local.height(), stride, out);
@@ -309,7 +310,7 @@ void encodePiece(const CodecSpec& codec, const dfb::Region& local, const std::ui
   std::memcpy(out.data(), &record, sizeof record);
 }
 
-dfb::Bytes BatchWriter::take() {
+messaging::Bytes BatchWriter::take() {
   std::memcpy(bytes_.data() + kPieceCountAt, &pieces_, sizeof pieces_);
   pieces_ = 0;
   return std::move(bytes_);

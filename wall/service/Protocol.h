@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "dfb/Compression.h"
 #include "dfb/Tile.h"
+#include "messaging/Compression.h"
 #include "wall/Layout.h"
 #include "wall/service/Codec.h"
 
@@ -77,14 +77,14 @@ struct Directory {
   std::uint32_t timeoutMs = 60000;   // the wall drops a job it has not heard from for this long
 };
 
-dfb::Bytes packHello(const Hello& hello);
-dfb::Bytes packDirectory(const Directory& directory);
+messaging::Bytes packHello(const Hello& hello);
+messaging::Bytes packDirectory(const Directory& directory);
 // Refused, Ended: a reason. Queued: the job's place in the queue as text.
-dfb::Bytes packText(Kind kind, std::uint64_t session, const std::string& text);
+messaging::Bytes packText(Kind kind, std::uint64_t session, const std::string& text);
 // Keepalive (value unused), Bye (the last frame), Capture (frame, sequence in `second`),
 // Presented (frame, completeNs in `second`).
-dfb::Bytes packControl(Kind kind, std::uint64_t session, std::uint64_t value,
-                       std::int64_t second = 0);
+messaging::Bytes packControl(Kind kind, std::uint64_t session, std::uint64_t value,
+                             std::int64_t second = 0);
 
 // The header of any message, checked (magic, version, a known kind); throws wall::Error with a
 // message a log can print ("not the dfbwall protocol", "protocol version 7, this wall speaks 1").
@@ -121,20 +121,20 @@ class BatchWriter {
   void add(const CodecSpec& codec, const dfb::Region& local, const std::uint32_t* pixels,
            int stride);
   // A piece encoded beforehand by encodePiece (so encoding needs no lock around the batch).
-  void append(const dfb::Bytes& piece);
+  void append(const messaging::Bytes& piece);
   std::uint32_t pieces() const { return pieces_; }
   std::size_t bytes() const { return bytes_.size(); }
-  dfb::Bytes take();
+  messaging::Bytes take();
 
  private:
-  dfb::Bytes bytes_;
+  messaging::Bytes bytes_;
   std::uint32_t pieces_ = 0;
 };
 
 // One piece's record and encoded pixels, as BatchWriter::add would write them, into `out`
 // (replacing what it held).
 void encodePiece(const CodecSpec& codec, const dfb::Region& local, const std::uint32_t* pixels,
-                 int stride, dfb::Bytes& out);
+                 int stride, messaging::Bytes& out);
 
 // Parses a whole batch; every piece's rectangle is non-empty and at most 4096 pixels a side,
 // every data range inside the message. Throws wall::Error.

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cstring>
 
-#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
 #include "dfb/Timing.h"
+#include "messaging/BoundedWait.h"
 #include "wall/Error.h"
 
 namespace wall::service {
@@ -91,7 +91,7 @@ void ServiceClient::start(FrameCredits& credits, std::function<void(const std::s
   thread_ = std::thread([this] { run(); });
 }
 
-void ServiceClient::post(dfb::Bytes message) {
+void ServiceClient::post(messaging::Bytes message) {
   {
     std::lock_guard lock(mutex_);
     outbox_.push_back(std::move(message));
@@ -127,12 +127,12 @@ void ServiceClient::run() {
       zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}, waker_.pollItem()};
       zmq::poll(items, 2, std::chrono::milliseconds(200));
       if (items[1].revents) waker_.drain();
-      std::vector<dfb::Bytes> out;
+      std::vector<messaging::Bytes> out;
       {
         std::lock_guard lock(mutex_);
         out.swap(outbox_);
       }
-      for (dfb::Bytes& m : out) socket_.send(toMessage(std::move(m)), zmq::send_flags::none);
+      for (messaging::Bytes& m : out) socket_.send(toMessage(std::move(m)), zmq::send_flags::none);
       if (Clock::now() - lastKeepalive >= kKeepalive) {
         socket_.send(toMessage(packControl(Kind::Keepalive, session, 0)), zmq::send_flags::none);
         lastKeepalive = Clock::now();
@@ -163,13 +163,13 @@ void ServiceClient::run() {
 
 Directory shareDirectory(MPI_Comm comm, const ServiceClient* client,
                          std::chrono::milliseconds timeout) {
-  dfb::Bytes bytes = client ? client->directoryBytes() : dfb::Bytes{};
+  messaging::Bytes bytes = client ? client->directoryBytes() : messaging::Bytes{};
   std::uint64_t size = bytes.size();
   const auto bounded = [&](void* data, int count) {
     MPI_Request request;
     dfb::checkMpi(MPI_Ibcast(data, count, MPI_BYTE, 0, comm, &request), "MPI_Ibcast");
-    dfb::waitWithDeadline(request, Clock::now() + timeout,
-                          "sharing the wall's directory: a rank did not join in time");
+    messaging::waitWithDeadline(request, Clock::now() + timeout,
+                                "sharing the wall's directory: a rank did not join in time");
   };
   bounded(&size, sizeof size);
   if (size > kMaxMessageBytes) throw Error("a directory of " + std::to_string(size) + " bytes");
@@ -220,7 +220,7 @@ ServicePieceSink::~ServicePieceSink() = default;
 void ServicePieceSink::flush(int display, Batch& batch) {
   if (!batch.open) return;
   batch.open = false;
-  dfb::Bytes bytes = batch.writer.take();
+  messaging::Bytes bytes = batch.writer.take();
   const std::int64_t t0 = dfb::threadCpuNs();
   wireBytes_ += bytes.size();
   messages_++;
@@ -235,7 +235,7 @@ void ServicePieceSink::flush(int display, Batch& batch) {
 std::size_t ServicePieceSink::send(std::uint32_t frameId, int display, const dfb::Region& local,
                                    const std::uint32_t* pixels, int stride) {
   const std::int64_t t0 = dfb::threadCpuNs();
-  thread_local dfb::Bytes piece;
+  thread_local messaging::Bytes piece;
   encodePiece(codec_, local, pixels, stride, piece);
   cutNs_ += dfb::threadCpuNs() - t0;
   Batch& batch = *batches_.at(static_cast<size_t>(display));

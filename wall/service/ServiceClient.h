@@ -42,7 +42,7 @@ class ServiceClient {
 
   const Directory& directory() const { return directory_; }
   // The directory as the wall sent it (for the job's other ranks: parseDirectory).
-  const dfb::Bytes& directoryBytes() const { return directoryBytes_; }
+  const messaging::Bytes& directoryBytes() const { return directoryBytes_; }
 
   // Starts the link's thread: keepalives, credits into `credits`, and a wall that ends the job
   // (Ended: its reason) or goes silent for its timeout reported through `onError` (on the
@@ -55,18 +55,18 @@ class ServiceClient {
 
  private:
   void run();
-  void post(dfb::Bytes message);
+  void post(messaging::Bytes message);
 
   std::string address_;
   zmq::context_t context_{1};
   zmq::socket_t socket_;
   Directory directory_;
-  dfb::Bytes directoryBytes_;
+  messaging::Bytes directoryBytes_;
   std::chrono::milliseconds timeout_;
   FrameCredits* credits_ = nullptr;
   std::function<void(const std::string&)> onError_;
   std::mutex mutex_;
-  std::vector<dfb::Bytes> outbox_;
+  std::vector<messaging::Bytes> outbox_;
   bool byeSent_ = false;
   Waker waker_;
   std::atomic<bool> stop_{false};

@@ -12,8 +12,8 @@
 #include <thread>
 
 #include "dfb/AtomicFile.h"
-#include "dfb/BoundedWait.h"
 #include "dfb/Error.h"
+#include "messaging/BoundedWait.h"
 #include "wall/Error.h"
 #include "wall/IdleScreen.h"
 #include "wall/WallNode.h"
@@ -26,7 +26,7 @@ namespace wall::service {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr dfb::ObjectId kServiceObject = 0x3A11'0010;
+constexpr messaging::ObjectId kServiceObject = 0x3A11'0010;
 constexpr std::size_t kMaxQueued = 16;    // jobs waiting behind the connected one (--wait)
 constexpr std::size_t kMaxLogged = 1024;  // lines about strangers between two jobs
 
@@ -56,9 +56,9 @@ struct CommandHeader {
   std::uint32_t textBytes;
 };
 
-dfb::Bytes packCommand(CommandHeader h, const std::string& text = {}) {
+messaging::Bytes packCommand(CommandHeader h, const std::string& text = {}) {
   h.textBytes = static_cast<std::uint32_t>(std::min<size_t>(text.size(), kMaxStringBytes));
-  dfb::Bytes out(sizeof h + h.textBytes);
+  messaging::Bytes out(sizeof h + h.textBytes);
   std::memcpy(out.data(), &h, sizeof h);
   std::memcpy(out.data() + sizeof h, text.data(), h.textBytes);
   return out;
@@ -91,8 +91,8 @@ std::string jsonText(const std::string& s) {
 
 }  // namespace
 
-struct WallService::Impl : dfb::MessageHandler {
-  dfb::Messenger& messenger;
+struct WallService::Impl : messaging::MessageHandler {
+  messaging::Messenger& messenger;
   const Layout& layout;
   std::vector<Presenter*> presenters;
   ServiceOptions options;
@@ -101,7 +101,7 @@ struct WallService::Impl : dfb::MessageHandler {
   std::vector<std::string> endpoints;  // process 0: every process's piece endpoint
   std::unique_ptr<MpiWallPeers> peers;
   std::unique_ptr<PieceReceiver> receiver;
-  std::optional<dfb::Registration> registration;
+  std::optional<messaging::Registration> registration;
 
   // Commands for the main thread; the node of the job in progress for the inbox thread.
   std::mutex mutex;
@@ -116,7 +116,7 @@ struct WallService::Impl : dfb::MessageHandler {
   struct Desk;
   std::unique_ptr<Desk> desk;
 
-  Impl(dfb::Messenger& m, const Layout& l, std::vector<Presenter*> p, ServiceOptions o)
+  Impl(messaging::Messenger& m, const Layout& l, std::vector<Presenter*> p, ServiceOptions o)
       : messenger(m), layout(l), presenters(std::move(p)), options(std::move(o)) {}
 
   void toDesk(CommandHeader h, const std::string& text = {}) {
@@ -126,7 +126,7 @@ struct WallService::Impl : dfb::MessageHandler {
   void toAll(CommandHeader h, const std::string& text = {}) {
     for (int p = 0; p < processCount; ++p) messenger.send(p, kServiceObject, packCommand(h, text));
   }
-  void incoming(int fromRank, dfb::Bytes&& payload) override;
+  void incoming(int fromRank, messaging::Bytes&& payload) override;
   void showIdle(const std::string& status);
   void runJob(const CommandHeader& start, const std::string& captureDir);
 };
@@ -168,7 +168,7 @@ struct WallService::Impl::Desk {
     }
     waker.notify();
   }
-  void reply(const std::string& peer, dfb::Bytes message) {
+  void reply(const std::string& peer, messaging::Bytes message) {
     zmq::message_t id(peer.data(), peer.size());
     socket.send(id, zmq::send_flags::sndmore | zmq::send_flags::dontwait);
     socket.send(toMessage(std::move(message)), zmq::send_flags::dontwait);
@@ -461,7 +461,7 @@ struct WallService::Impl::Desk {
   }
 };
 
-void WallService::Impl::incoming(int fromRank, dfb::Bytes&& payload) {
+void WallService::Impl::incoming(int fromRank, messaging::Bytes&& payload) {
   CommandHeader h;
   if (payload.size() < sizeof h) throw Error("malformed service command");
   std::memcpy(&h, payload.data(), sizeof h);
@@ -506,7 +506,7 @@ void WallService::Impl::incoming(int fromRank, dfb::Bytes&& payload) {
   }
 }
 
-WallService::WallService(dfb::Messenger& messenger, MPI_Comm wallComm, const Layout& layout,
+WallService::WallService(messaging::Messenger& messenger, MPI_Comm wallComm, const Layout& layout,
                          std::vector<Presenter*> presenters, ServiceOptions options)
     : impl_(std::make_unique<Impl>(messenger, layout, std::move(presenters), std::move(options))) {
   Impl& m = *impl_;
@@ -534,8 +534,8 @@ WallService::WallService(dfb::Messenger& messenger, MPI_Comm wallComm, const Lay
   dfb::checkMpi(MPI_Igather(buffer, sizeof buffer, MPI_CHAR, all.data(), sizeof buffer, MPI_CHAR, 0,
                             wallComm, &request),
                 "MPI_Igather");
-  dfb::waitWithDeadline(request, Clock::now() + m.options.timeout,
-                        "starting the wall service: a wall process did not answer");
+  messaging::waitWithDeadline(request, Clock::now() + m.options.timeout,
+                              "starting the wall service: a wall process did not answer");
   for (int p = 0; m.process == 0 && p < m.processCount; ++p)
     m.endpoints.emplace_back(all.data() + static_cast<size_t>(p) * sizeof buffer);
   if (m.process == 0) {
@@ -557,14 +557,14 @@ WallService::WallService(dfb::Messenger& messenger, MPI_Comm wallComm, const Lay
   // Every process's handler is registered before the desk may send.
   MPI_Request barrier;
   dfb::checkMpi(MPI_Ibarrier(wallComm, &barrier), "MPI_Ibarrier");
-  dfb::waitWithDeadline(barrier, Clock::now() + m.options.timeout,
-                        "starting the wall service: a wall process did not answer");
+  messaging::waitWithDeadline(barrier, Clock::now() + m.options.timeout,
+                              "starting the wall service: a wall process did not answer");
   // The address is known on process 0 only: the idle screens show it everywhere.
   char shown[256] = {};
   std::strncpy(shown, m.address.c_str(), sizeof shown - 1);
   dfb::checkMpi(MPI_Ibcast(shown, sizeof shown, MPI_CHAR, 0, wallComm, &request), "MPI_Ibcast");
-  dfb::waitWithDeadline(request, Clock::now() + m.options.timeout,
-                        "starting the wall service: a wall process did not answer");
+  messaging::waitWithDeadline(request, Clock::now() + m.options.timeout,
+                              "starting the wall service: a wall process did not answer");
   m.address = shown;
 }
 

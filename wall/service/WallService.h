@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 #include "wall/Layout.h"
 #include "wall/Presenter.h"
 
@@ -45,7 +45,7 @@ class WallService {
   // Collective over the messenger's ranks, which are the wall processes (rank p = process p),
   // and `wallComm` (the same ranks). Binds the sockets; throws wall::Error on a bad --listen or
   // a port in use.
-  WallService(dfb::Messenger& messenger, MPI_Comm wallComm, const Layout& layout,
+  WallService(messaging::Messenger& messenger, MPI_Comm wallComm, const Layout& layout,
               std::vector<Presenter*> presenters, ServiceOptions options);
   ~WallService();
   WallService(const WallService&) = delete;

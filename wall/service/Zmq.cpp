@@ -13,11 +13,11 @@
 
 namespace wall::service {
 
-zmq::message_t toMessage(dfb::Bytes&& bytes) {
-  auto* owned = new dfb::Bytes(std::move(bytes));
+zmq::message_t toMessage(messaging::Bytes&& bytes) {
+  auto* owned = new messaging::Bytes(std::move(bytes));
   return zmq::message_t(
       owned->data(), owned->size(),
-      [](void*, void* hint) { delete static_cast<dfb::Bytes*>(hint); }, owned);
+      [](void*, void* hint) { delete static_cast<messaging::Bytes*>(hint); }, owned);
 }
 
 void configureSocket(zmq::socket_t& socket, int deadPeerMs, int lingerMs) {

@@ -1,7 +1,7 @@
 #pragma once
-// What the wall service needs of ZeroMQ (cppzmq): messages that hand a dfb::Bytes over without
-// a copy, socket options every link of ours sets, endpoints and the address a process advertises,
-// and a way to wake a thread that waits in zmq::poll from any other thread.
+// What the wall service needs of ZeroMQ (cppzmq): messages that hand a messaging::Bytes over
+// without a copy, socket options every link of ours sets, endpoints and the address a process
+// advertises, and a way to wake a thread that waits in zmq::poll from any other thread.
 //
 // Why ZeroMQ: it frames messages (a length is never ours to trust: ZMQ_MAXMSGSIZE drops a peer
 // that announces more before anything is allocated), queues sends without blocking the render
@@ -12,12 +12,12 @@
 
 #include <string>
 
-#include "dfb/Compression.h"
+#include "messaging/Compression.h"
 
 namespace wall::service {
 
 // A message owning `bytes` (no copy).
-zmq::message_t toMessage(dfb::Bytes&& bytes);
+zmq::message_t toMessage(messaging::Bytes&& bytes);
 // Limits and heartbeats every socket of ours gets: messages over kMaxMessageBytes close the
 // connection; a peer silent for `deadPeerMs` after a heartbeat is disconnected. `lingerMs`: how
 // long closing the socket waits for messages still queued (a job's last pieces must reach the

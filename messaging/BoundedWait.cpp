@@ -1,11 +1,11 @@
-#include "dfb/BoundedWait.h"
+#include "messaging/BoundedWait.h"
 
 #include <algorithm>
 #include <thread>
 
-#include "dfb/Error.h"
+#include "messaging/Error.h"
 
-namespace dfb {
+namespace messaging {
 
 void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_point deadline,
                       const std::string& timeoutMessage) {
@@ -25,4 +25,4 @@ void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_poin
   }
 }
 
-}  // namespace dfb
+}  // namespace messaging

@@ -1,4 +1,4 @@
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 
 #include <algorithm>
 #include <condition_variable>
@@ -16,11 +16,11 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "dfb/BoundedWait.h"
-#include "dfb/Envelope.h"
-#include "dfb/Error.h"
+#include "messaging/BoundedWait.h"
+#include "messaging/Envelope.h"
+#include "messaging/Error.h"
 
-namespace dfb {
+namespace messaging {
 namespace {
 
 constexpr int kTag = 7;
@@ -120,7 +120,7 @@ struct Messenger::Impl {
     if (onError)
       onError(message);
     else
-      std::fprintf(stderr, "[rank %d] dfb messaging: %s\n", rank, message.c_str());
+      std::fprintf(stderr, "[rank %d] messaging: %s\n", rank, message.c_str());
   }
 
   void pushInbox(Packet packet) {
@@ -593,4 +593,4 @@ void Messenger::setErrorCallback(ErrorCallback callback) {
   impl_->onError = std::move(callback);
 }
 
-}  // namespace dfb
+}  // namespace messaging

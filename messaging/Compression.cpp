@@ -1,10 +1,10 @@
-#include "dfb/Compression.h"
+#include "messaging/Compression.h"
 
 #include <snappy.h>
 
-#include "dfb/Error.h"
+#include "messaging/Error.h"
 
-namespace dfb {
+namespace messaging {
 
 bool compressIfSmaller(std::span<const std::byte> raw, Bytes& out) {
   out.resize(snappy::MaxCompressedLength(raw.size()));
@@ -38,4 +38,4 @@ void decompress(std::span<const std::byte> compressed, std::size_t rawSize, Byte
     throw Error("corrupt compressed message: Snappy could not decode it");
 }
 
-}  // namespace dfb
+}  // namespace messaging

@@ -1,18 +1,18 @@
-// The plane-delta pre-filter (dfb/Compression.h). For RGBA8 (4 channels) an SSSE3 kernel takes
-// 16 pixels at a time: a byte shuffle and a 4x4 transpose split them into four 16-byte planes,
-// and the delta is one subtract against the plane shifted by a byte (decode: a prefix sum in
-// four shifted adds); it measured ~6x faster than the byte loop, which cost more than Snappy on
-// a piece. tests/dfb/CompressionTest.cpp checks both against the definition on random sizes.
+// The plane-delta pre-filter (messaging/Compression.h). For RGBA8 (4 channels) an SSSE3 kernel
+// takes 16 pixels at a time: a byte shuffle and a 4x4 transpose split them into four 16-byte
+// planes, and the delta is one subtract against the plane shifted by a byte (decode: a prefix sum
+// in four shifted adds); it measured ~6x faster than the byte loop, which cost more than Snappy on
+// a piece. tests/messaging/CompressionTest.cpp checks both against the definition on random sizes.
 #include <cstdint>
 
-#include "dfb/Compression.h"
+#include "messaging/Compression.h"
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 #define DFB_PLANE_DELTA_SSSE3 1
 #endif
 
-namespace dfb {
+namespace messaging {
 namespace {
 
 using Byte = unsigned char;
@@ -156,4 +156,4 @@ void planeDeltaDecode(std::span<const std::byte> encoded, int channels, Bytes& o
   planeDeltaDecode(encoded, channels, out.data());
 }
 
-}  // namespace dfb
+}  // namespace messaging

@@ -33,10 +33,10 @@
 #include <memory>
 #include <string>
 
-#include "dfb/Compression.h"
-#include "dfb/Envelope.h"
+#include "messaging/Compression.h"
+#include "messaging/Envelope.h"
 
-namespace dfb {
+namespace messaging {
 
 class MessageHandler {
  public:
@@ -158,4 +158,4 @@ class Registration {
   ObjectId id_;
 };
 
-}  // namespace dfb
+}  // namespace messaging

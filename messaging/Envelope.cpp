@@ -1,14 +1,14 @@
-#include "dfb/Envelope.h"
+#include "messaging/Envelope.h"
 
 #include <cstring>
 #include <limits>
 #include <span>
 #include <string>
 
-#include "dfb/Compression.h"
-#include "dfb/Error.h"
+#include "messaging/Compression.h"
+#include "messaging/Error.h"
 
-namespace dfb {
+namespace messaging {
 namespace {
 
 constexpr std::uint32_t kCompressed = 1;
@@ -69,4 +69,4 @@ Envelope openEnvelope(Bytes&& wire, std::size_t maxPayloadBytes, Bytes& payload)
   return envelope;
 }
 
-}  // namespace dfb
+}  // namespace messaging

@@ -1,11 +1,11 @@
-#include "dfb/Compression.h"
+#include "messaging/Compression.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
-namespace dfb {
+namespace messaging {
 namespace {
 
 Bytes smoothRgba8(int width, int height) {
@@ -90,4 +90,4 @@ TEST(PlaneDelta, IsLosslessAndMakesSmoothPixelsCompressible) {
 }
 
 }  // namespace
-}  // namespace dfb
+}  // namespace messaging

@@ -9,9 +9,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "dfb/Compression.h"
+#include "messaging/Compression.h"
 
-namespace dfb {
+namespace messaging {
 
 using ObjectId = std::uint64_t;
 
@@ -25,11 +25,11 @@ inline constexpr std::size_t kEnvelopeBytes = 16;
 // Turns `payload` into a wire buffer for object `object`: Snappy-compressed when `compress`
 // and that makes it smaller (then `*compressed` is set). Payloads of 4 GiB or more are refused.
 Bytes sealEnvelope(Bytes payload, ObjectId object, bool compress, bool* compressed = nullptr);
-// The envelope of a wire buffer without opening it; throws dfb::Error when it is too short.
+// The envelope of a wire buffer without opening it; throws messaging::Error when it is too short.
 Envelope peekEnvelope(const Bytes& wire);
 // Checks the envelope of `wire` (size limit `maxPayloadBytes`, flags, sizes) and returns it with
-// the payload moved into `payload` (decompressed when needed). Throws dfb::Error naming what is
-// wrong; never allocates more than `maxPayloadBytes` for a hostile size.
+// the payload moved into `payload` (decompressed when needed). Throws messaging::Error naming what
+// is wrong; never allocates more than `maxPayloadBytes` for a hostile size.
 Envelope openEnvelope(Bytes&& wire, std::size_t maxPayloadBytes, Bytes& payload);
 
-}  // namespace dfb
+}  // namespace messaging

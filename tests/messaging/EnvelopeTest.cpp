@@ -1,12 +1,12 @@
-#include "dfb/Envelope.h"
+#include "messaging/Envelope.h"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
 
-#include "dfb/Error.h"
+#include "messaging/Error.h"
 
-namespace dfb {
+namespace messaging {
 namespace {
 
 Bytes text(const char* s) {
@@ -69,4 +69,4 @@ TEST(Envelope, RejectsTruncatedUnknownFlagsWrongSizesAndHugeAnnouncements) {
 }
 
 }  // namespace
-}  // namespace dfb
+}  // namespace messaging

@@ -1,10 +1,10 @@
-#include "dfb/MpiSession.h"
+#include "messaging/MpiSession.h"
 
 #include <string>
 
-#include "dfb/Error.h"
+#include "messaging/Error.h"
 
-namespace dfb {
+namespace messaging {
 
 void checkMpi(int code, const char* call) {
   if (code == MPI_SUCCESS) return;
@@ -38,7 +38,7 @@ MpiSession::MpiSession(int* argc, char*** argv) {
                 "; dfbwall's messaging thread needs MPI_THREAD_MULTIPLE (OpenMPI built with "
                 "thread support, as Debian's openmpi-bin is)");
   }
-  // Errors come back as return codes (checkMpi turns them into a dfb::Error naming the call)
+  // Errors come back as return codes (checkMpi turns them into a messaging::Error naming the call)
   // instead of MPI's own abort; communicators duplicated from the world inherit this.
   MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
@@ -51,4 +51,4 @@ MpiSession::~MpiSession() {
   if (!finalized) MPI_Finalize();
 }
 
-}  // namespace dfb
+}  // namespace messaging

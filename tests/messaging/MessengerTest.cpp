@@ -1,5 +1,5 @@
 // Multi-rank tests of the messaging layer; run under mpiexec with 1, 2 and 4 ranks.
-#include "dfb/Messenger.h"
+#include "messaging/Messenger.h"
 
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -21,7 +21,7 @@
 
 #include "tests/MpiTestUtil.h"
 
-namespace dfb {
+namespace messaging {
 namespace {
 
 using testutil::worldRank;
@@ -225,7 +225,7 @@ TEST(Messenger, StopWithMessagesInFlightLosesNothing) {
 }
 
 // What a concurrent handler and a serial one saw: the serial one in send order per sender, the
-// concurrent one several at once, and neither overtaking the other (dfb/Messenger.h).
+// concurrent one several at once, and neither overtaking the other (messaging/Messenger.h).
 struct Ordering {
   std::mutex mutex;
   std::map<int, std::vector<int>> serialSeen;  // per sender: the sequence numbers, in order
@@ -349,4 +349,4 @@ TEST(Messenger, ALargeMessageIsOneMpiMessage) {
 }
 
 }  // namespace
-}  // namespace dfb
+}  // namespace messaging

@@ -1,10 +1,10 @@
 #pragma once
-// Owns MPI_Init_thread / MPI_Finalize for a process. The DFB's messaging thread runs MPI calls
+// Owns MPI_Init_thread / MPI_Finalize for a process. The Messenger's thread runs MPI calls
 // beside collectives issued by the application thread, so it needs MPI_THREAD_MULTIPLE; a lower
 // level is an error with a clear message, not a silent data race.
 #include <mpi.h>
 
-namespace dfb {
+namespace messaging {
 
 class MpiSession {
  public:
@@ -21,4 +21,4 @@ class MpiSession {
   int size_ = 1;
 };
 
-}  // namespace dfb
+}  // namespace messaging
