@@ -731,14 +731,14 @@ TEST(ProtocolHostile, ADirectoryWithExtremeRectangles) {
 // single-byte corruption of one) is refused, and the next, valid batch on the same thread still
 // decodes to the same pixels.
 TEST(ProtocolHostile, ACorruptJpegPieceDoesNotSpoilTheNextBatch) {
-  const dfb::Bytes good = batchOf(parseCodec("jpeg:90:420"), sourceImage(20, 12, true, 0));
+  const messaging::Bytes good = batchOf(parseCodec("jpeg:90:420"), sourceImage(20, 12, true, 0));
   std::vector<BatchPiece> pieces;
   const BatchHeader h = parseBatch(good.data(), good.size(), pieces);
   ASSERT_EQ(pieces.size(), 1u);
   const Pixels want = decodePiece(h.codec, pieces[0]);
   for (std::size_t at = kBatchFirstRecordAt + kRecordBytes; at < good.size(); ++at)
     for (const std::uint8_t x : {0x01, 0x80, 0xFF}) {
-      dfb::Bytes corrupt = good;
+      messaging::Bytes corrupt = good;
       corrupt[at] ^= std::byte{x};
       try {
         std::vector<BatchPiece> bad;
