@@ -6,6 +6,7 @@
 #   cluster_test.sh rank-killed   LAYOUT RENDER_HOSTS RANK
 #   cluster_test.sh link-cut      LAYOUT RENDER_HOSTS HOST TIMEOUT
 #   cluster_test.sh link-flap     LAYOUT RENDER_HOSTS HOST TIMEOUT
+#   cluster_test.sh service       LAYOUT RENDER_HOSTS
 # Needs DFBWALL, COMPARE (compare_captures), MPIEXEC and CLUSTER (scripts/cluster) in the
 # environment, root and CAP_NET_ADMIN; without them it exits 77 (CTest: skipped), saying why.
 # Every call claims a cluster id of its own (--id auto), so tests can run in parallel, and
@@ -13,9 +14,10 @@
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 work=$(mktemp -d)
-id="" job=""
+id="" job="" serve=""
 cleanup() {
   [ -z "$job" ] || kill -9 "$job" 2>/dev/null || true
+  [ -z "$serve" ] || kill -9 "$serve" 2>/dev/null || true
   [ -z "$id" ] || "$CLUSTER" down --id "$id" >/dev/null 2>&1 || true
   rm -rf "$work"
 }
@@ -24,7 +26,12 @@ trap 'exit 143' TERM
 trap 'exit 130' INT
 
 skip() { echo "SKIPPED: $*"; exit 77; }
-fail() { echo "FAIL: $*"; [ ! -f "$work/log" ] || { echo "--- job output:"; cat "$work/log"; }; exit 1; }
+fail() {
+  echo "FAIL: $*"
+  [ ! -f "$work/log" ] || { echo "--- job output:"; cat "$work/log"; }
+  [ ! -f "$work/serve.err" ] || { echo "--- serve output:"; cat "$work/serve.out" "$work/serve.err"; }
+  exit 1
+}
 [ "$(id -u)" -eq 0 ] || skip "emulated hosts need root (network namespaces, veth pairs, tc); CI runs as root"
 command -v ip >/dev/null && command -v tc >/dev/null || skip "iproute2 is missing (scripts/setup installs it)"
 probe="dfbwprobe$$"
@@ -230,6 +237,125 @@ case "$scenario" in
       --image "$work/full.png" --quiet
     "$COMPARE" "$layout" "$work/cap" "$work/full.png" "$frames"
     echo "1 s flap of $host: the run finished (longest frame $stall ms) and its captures are right"
+    ;;
+  service)
+    # The wall as a service across hosts (README, "A wall that stays up"): `dfbwall serve` on
+    # the wall hosts alone, started once, takes render jobs from the render hosts one after
+    # another, each its own mpirun: the path tracer (raw), scivis with 4 bricks (snappy), the
+    # pattern (snappy). Their captures, written by the wall processes, equal the one-process
+    # render; render rank 0 receives no pixels. A second job while one is connected is refused
+    # at once (busy); kill -9 of a render rank leaves the wall up and the next job (--wait) works.
+    layout=$1 hosts=$2
+    up "$layout" "$hosts"
+    state=$(dirname "$mpirun")
+    renderHosts=()
+    for ((h = 1; h <= hosts; ++h)); do renderHosts+=("render$h"); done
+    mapfile -t wallHosts < <(tail -n +$((hosts + 1)) "$state/rank-hosts" | awk '!seen[$0]++')
+    for h in "${wallHosts[@]}"; do
+      [[ " ${renderHosts[*]} " != *" $h "* ]] || fail "$layout puts a wall process on render host $h"
+    done
+    address=$(awk -v h="${wallHosts[0]}" '$1 == h {print $3}' "$state/hosts")
+    port=7000  # a host of its own: nothing else listens there
+    token=$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')
+    "$CLUSTER" mpirun-hosts "${wallHosts[@]}" --id "$id" -- "$DFBWALL" serve --wall "$layout" \
+      --listen "0.0.0.0:$port" --offscreen --timeout 5 --token "$token" --stats "$work/serve.jsonl" \
+      >"$work/serve.out" 2>"$work/serve.err" &
+    serve=$!
+    for _ in $(seq 200); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
+    grep -qx "dfbwall: wall service on $address:$port  token: $token" "$work/serve.out" \
+      || fail "serve did not start on ${wallHosts[0]} ($address:$port) with the token given"
+    # The wall's processes, one per layout process, each on its host: they must outlive every job.
+    wallPids() {
+      local h p
+      for h in "${wallHosts[@]}"; do
+        for p in $(ip netns pids "dfbw$id-$h" 2>/dev/null); do
+          [ "$(cat "/proc/$p/comm" 2>/dev/null)" = dfbwall ] && echo "$p"
+        done
+      done | sort -n | tr '\n' ' '
+      return 0
+    }
+    wall=$(wallPids)
+    [ "$(wc -w <<<"$wall")" -eq "$("$COMPARE" --info "$layout" | cut -d' ' -f1)" ] \
+      || fail "expected one serve process per layout process on the wall hosts, found: $wall"
+    connect=(--connect "$address:$port" --token "$token")
+
+    # job NAME FRAMES CODEC [scene options]: a render job on the render hosts, then its
+    # one-process reference, compared display by display.
+    job() {
+      local name=$1 frames=$2 codec=$3 t0 b
+      shift 3
+      t0=$(now)
+      "$CLUSTER" mpirun-hosts "${renderHosts[@]}" --id "$id" -- "$DFBWALL" "${connect[@]}" ${wait:-} \
+        --codec "$codec" --frames "$frames" --quiet --timeout 30 --capture "$work/$name" \
+        --stats "$work/$name.jsonl" "$@" >"$work/log" 2>&1 || fail "job $name ($codec) failed"
+      echo "job $name ($codec): $(since "$t0") s"
+      [ "$(field "$work/$name.jsonl" rank0_pixel_bytes_received | wc -l)" -eq "$frames" ] \
+        || fail "job $name: no rank0_pixel_bytes_received for each of its $frames frames"
+      for b in $(field "$work/$name.jsonl" rank0_pixel_bytes_received); do
+        [ "$b" = 0 ] || fail "job $name: render rank 0 received $b pixel bytes"
+      done
+      "$MPIEXEC" -n 1 "$DFBWALL" --size "$(canvas "$layout")" --frames "$frames" --quiet \
+        --image "$work/$name-full.png" "$@" || fail "the one-process reference of $name failed"
+      "$COMPARE" "$layout" "$work/$name" "$work/$name-full.png" "$frames" || fail "job $name ($codec)"
+    }
+    job cornell 2 raw --scene builtin:cornell --spp 2 --seed 11
+    job bricks 2 snappy --renderer scivis --scene builtin:wavelet --bricks 4 --tile-size 32
+    job pattern 3 snappy --renderer pattern
+    [ "$(grep -c "job from ${renderHosts[0]}: $hosts render ranks" "$work/serve.err")" -eq 3 ] \
+      || fail "the wall did not log 3 jobs from ${renderHosts[0]} with $hosts render ranks"
+
+    # A job that runs until stopped; a second one meanwhile is refused at once.
+    "$CLUSTER" mpirun-hosts "${renderHosts[@]}" --id "$id" -- "$DFBWALL" "${connect[@]}" \
+      --renderer pattern --frames 0 --timeout 30 >"$work/log" 2>&1 &
+    job=$!
+    for _ in $(seq 300); do
+      grep -q '^frame [0-9]' "$work/log" && break
+      kill -0 "$job" 2>/dev/null || fail "the long job ended before its first progress line"
+      sleep 0.1
+    done
+    grep -q '^frame [0-9]' "$work/log" || fail "the long job showed no frame within 30 s"
+    t0=$(now)
+    if "$CLUSTER" mpirun-hosts "${renderHosts[-1]}" --id "$id" -- "$DFBWALL" "${connect[@]}" \
+      --renderer pattern --frames 1 --quiet --timeout 30 >"$work/busy.out" 2>&1; then
+      cat "$work/busy.out"
+      fail "a second job was accepted while one was connected"
+    fi
+    busy=$(since "$t0")
+    grep -q "busy: a job from ${renderHosts[0]} is connected" "$work/busy.out" \
+      || { cat "$work/busy.out"; fail "no busy error for the second job"; }
+    # At once: well before the job's --timeout (30 s), mpirun's start on the host included.
+    awk -v t="$busy" 'BEGIN {exit !(t < 10)}' || fail "the busy refusal took $busy s (mpirun included)"
+
+    # kill -9 of a render rank (the last, on the last render host) in the middle of the job.
+    victim=""
+    for p in $(ip netns pids "dfbw$id-${renderHosts[-1]}" 2>/dev/null); do
+      [ "$(cat "/proc/$p/comm" 2>/dev/null)" = dfbwall ] && victim=$p
+    done
+    [ -n "$victim" ] || fail "no render rank on ${renderHosts[-1]}"
+    kill -9 "$victim"
+    finish 20
+    [ "$code" -ne 124 ] || fail "the long job still ran 20 s after one of its ranks was killed"
+    kill -0 "$serve" 2>/dev/null || fail "the wall died with the killed job"
+    # The wall notices within its --timeout (5 s); --wait queues the next job until then.
+    t0=$(now)
+    wait=--wait job after 2 snappy --renderer pattern
+    after=$(since "$t0")
+    grep -q "dropping the job from ${renderHosts[0]}" "$work/serve.err" \
+      || fail "the wall did not say it dropped the killed job"
+    [ "$(wallPids)" = "$wall" ] || fail "the wall's processes changed: $wall then $(wallPids)"
+    [ "$(wc -l <"$work/serve.jsonl")" -eq 5 ] || fail "serve --stats: $(wc -l <"$work/serve.jsonl") job lines, expected 5"
+
+    kill -USR1 "$serve"
+    for _ in $(seq 100); do kill -0 "$serve" 2>/dev/null || break; sleep 0.1; done
+    kill -0 "$serve" 2>/dev/null && fail "serve did not stop within 10 s of SIGUSR1"
+    set +e
+    wait "$serve"
+    code=$?
+    set -e
+    serve=""
+    [ "$code" -eq 0 ] || fail "serve exited $code after SIGUSR1"
+    echo "PASS: 5 jobs from ${renderHosts[*]} on one wall on ${wallHosts[*]} (raw, snappy, snappy, killed, after);" \
+      "busy refused in $busy s, the job after the kill done $after s after it"
     ;;
   *) echo "unknown scenario $scenario"; exit 2 ;;
 esac
