@@ -56,12 +56,21 @@ for d in "$work"/cornell/*/; do
   [ "$colors" -gt 100 ] || fail "JPEG job: $d shows $colors colours"
 done
 
+# A job the wall cannot serve (one display's capture folder cannot be made: a file has its name)
+# is refused with the reason; the wall goes on.
+mkdir -p "$work/blocked" && touch "$work/blocked/r0c0"
+if mpi -np 1 "$DFBWALL" --connect "127.0.0.1:$port" --renderer pattern --frames 1 --quiet \
+  --timeout 30 --capture "$work/blocked" >"$work/blocked.out" 2>&1; then
+  fail "a job whose capture folder cannot be made was accepted"
+fi
+grep -q "refused the job: capture folder" "$work/blocked.out" || { cat "$work/blocked.out"; fail "no reason for the refusal"; }
+
 # A job that runs until stopped; a second one meanwhile is refused at once.
 mpi -np 2 "$DFBWALL" --connect "127.0.0.1:$port" --renderer pattern --frames 0 --quiet \
   --timeout 30 >"$work/long.out" 2>&1 &
 long=$!
 for _ in $(seq 100); do grep -q "job from" "$work/serve.err" 2>/dev/null &&
-  [ "$(grep -c "job from .*render ranks" "$work/serve.err")" -ge 4 ] && break; sleep 0.1; done
+  [ "$(grep -c "job from .*render ranks" "$work/serve.err")" -ge 5 ] && break; sleep 0.1; done
 start=$(date +%s.%N)
 if mpi -np 1 "$DFBWALL" --connect "127.0.0.1:$port" --renderer pattern --frames 1 --quiet \
   >"$work/busy.out" 2>&1; then fail "a second job was accepted while one was connected"; fi
@@ -84,7 +93,7 @@ wait=--wait job after 2 snappy --renderer pattern
 next=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN {print b - a}')
 "$COMPARE" "$layout" "$work/after" "$work/after-full.png" 2 || fail "the job after the kill"
 grep -q "dropping the job" "$work/serve.err" || fail "the wall did not say it dropped the killed job"
-[ "$(wc -l <"$work/serve.jsonl")" -ge 5 ] || fail "serve --stats has fewer than 5 job lines"
+[ "$(wc -l <"$work/serve.jsonl")" -ge 6 ] || fail "serve --stats has fewer than 6 job lines"
 
 kill -USR1 "$serve"
 for _ in $(seq 100); do kill -0 "$serve" 2>/dev/null || break; sleep 0.1; done

@@ -150,7 +150,9 @@ struct WallService::Impl::Desk {
   enum class State { Idle, Starting, Running, Ending, Closed } state = State::Idle;
   Job job;
   std::deque<Job> queue;
-  int answers = 0;                 // Ready or Done received for this job
+  // Of this job: processes that answered Start (Ready), and processes done with it (Done, or a
+  // Ready that refused it: such a process never ran a node). The job is over when all are done.
+  int readies = 0, dones = 0;
   std::string failure;             // why the job failed or was dropped
   std::int64_t lastPresented = 0;  // from the Done answers
   std::int64_t bytes = 0;
@@ -177,7 +179,7 @@ struct WallService::Impl::Desk {
   void startJob() {
     job.session = randomId();
     job.started = Clock::now();
-    answers = 0;
+    readies = dones = 0;
     failure.clear();
     lastPresented = bytes = 0;
     state = State::Starting;
@@ -350,32 +352,33 @@ struct WallService::Impl::Desk {
     if (e.session != job.session) return;
     switch (e.kind) {
       case Command::Ready:
-        if (state != State::Starting) return;
-        if (e.a == 0 && failure.empty()) failure = text;
-        if (++answers < service.processCount) return;
-        answers = 0;
-        if (!failure.empty()) {
-          const std::string why = failure;
-          CommandHeader cancel{};
-          cancel.kind = Command::Cancel;
-          cancel.session = job.session;
-          service.toAll(cancel);
-          reply(job.peer, packText(Kind::Refused, 0, why));
-          log("refused the job from " + job.hello.host + ": " + why);
-          state = State::Ending;
-          return;
+        if (e.a == 0) {
+          if (failure.empty()) failure = text;
+          ++dones;
         }
-        {
-          Directory d;
-          d.session = job.session;
-          d.layout = service.layout;
-          for (const std::string& endpoint : service.endpoints) d.processes.push_back({endpoint});
-          d.framesInFlight = std::min<std::uint32_t>(
-              job.hello.framesInFlight, static_cast<std::uint32_t>(service.options.framesInFlight));
-          d.timeoutMs = static_cast<std::uint32_t>(service.options.timeout.count());
-          reply(job.peer, packDirectory(d));
+        if (state == State::Starting && ++readies == service.processCount) {
+          if (!failure.empty()) {
+            CommandHeader cancel{};
+            cancel.kind = Command::Cancel;
+            cancel.session = job.session;
+            service.toAll(cancel);
+            reply(job.peer, packText(Kind::Refused, 0, failure));
+            log("refused the job from " + job.hello.host + ": " + failure);
+            state = State::Ending;
+          } else {
+            Directory d;
+            d.session = job.session;
+            d.layout = service.layout;
+            for (const std::string& endpoint : service.endpoints) d.processes.push_back({endpoint});
+            d.framesInFlight =
+                std::min<std::uint32_t>(job.hello.framesInFlight,
+                                        static_cast<std::uint32_t>(service.options.framesInFlight));
+            d.timeoutMs = static_cast<std::uint32_t>(service.options.timeout.count());
+            reply(job.peer, packDirectory(d));
+            state = State::Running;
+          }
         }
-        state = State::Running;
+        if (dones == service.processCount) jobOver();
         return;
       case Command::Failed:
         if (state == State::Running) endJob(text);
@@ -385,26 +388,28 @@ struct WallService::Impl::Desk {
         bytes += e.b;
         if (!text.empty() && failure.empty()) failure = text;
         if (state == State::Running) state = State::Ending;  // it ended by itself (last frame)
-        if (++answers < service.processCount) return;
-        {
-          const double seconds = std::chrono::duration<double>(Clock::now() - job.started).count();
-          log("the job from " + job.hello.host + " ended after frame " +
-              std::to_string(lastPresented) + (failure.empty() ? "" : " (" + failure + ")"));
-          if (service.options.jobRecord)
-            service.options.jobRecord("{\"job\":" + std::to_string(job.session % 1000000007) +
-                                      ",\"host\":" + jsonText(job.hello.host) +
-                                      ",\"render_ranks\":" + std::to_string(job.hello.renderRanks) +
-                                      ",\"codec\":" + jsonText(codecName(job.hello.codec)) +
-                                      ",\"frames_presented\":" + std::to_string(lastPresented) +
-                                      ",\"wall_bytes_received\":" + std::to_string(bytes) +
-                                      ",\"seconds\":" + std::to_string(seconds) + ",\"ended\":" +
-                                      jsonText(failure.empty() ? "last frame" : failure) + "}");
-        }
-        nextJob();
+        if (++dones == service.processCount) jobOver();
         return;
       default:
         return;
     }
+  }
+  void jobOver() {
+    {
+      const double seconds = std::chrono::duration<double>(Clock::now() - job.started).count();
+      log("the job from " + job.hello.host + " ended after frame " + std::to_string(lastPresented) +
+          (failure.empty() ? "" : " (" + failure + ")"));
+      if (service.options.jobRecord)
+        service.options.jobRecord("{\"job\":" + std::to_string(job.session % 1000000007) +
+                                  ",\"host\":" + jsonText(job.hello.host) +
+                                  ",\"render_ranks\":" + std::to_string(job.hello.renderRanks) +
+                                  ",\"codec\":" + jsonText(codecName(job.hello.codec)) +
+                                  ",\"frames_presented\":" + std::to_string(lastPresented) +
+                                  ",\"wall_bytes_received\":" + std::to_string(bytes) +
+                                  ",\"seconds\":" + std::to_string(seconds) + ",\"ended\":" +
+                                  jsonText(failure.empty() ? "last frame" : failure) + "}");
+    }
+    nextJob();
   }
   // Process 0's node presented a frame on every display: the job's credit, from the desk's
   // thread (the only one that touches the socket).
@@ -607,10 +612,8 @@ void WallService::Impl::runJob(const CommandHeader& start, const std::string& ca
   }
   if (!problem.empty()) {
     answer.kind = Command::Ready;
-    answer.a = 0;
+    answer.a = 0;  // counts as this process's Done too: it runs no node for the job
     toDesk(answer, problem);
-    answer.kind = Command::Done;
-    toDesk(answer);
     return;
   }
   WallNodeOptions o;
