@@ -466,7 +466,7 @@ struct WallService::Impl::Desk {
   }
 };
 
-void WallService::Impl::incoming(int fromRank, messaging::Bytes&& payload) {
+void WallService::Impl::incoming(int /*fromRank*/, messaging::Bytes&& payload) {
   CommandHeader h;
   if (payload.size() < sizeof h) throw Error("malformed service command");
   std::memcpy(&h, payload.data(), sizeof h);
@@ -482,7 +482,6 @@ void WallService::Impl::incoming(int fromRank, messaging::Bytes&& payload) {
     default:
       break;
   }
-  (void)fromRank;
   std::lock_guard lock(mutex);
   if (node && h.session == nodeSession) {
     switch (h.kind) {
