@@ -115,18 +115,15 @@ void WallNode::incoming(int fromRank, messaging::Bytes&& payload) {
     complete_.notify_all();
     return;
   }
-  {
-    std::lock_guard lock(mutex_);
-    unpackNs_ += dfb::threadCpuNs() - start;
-  }
   receivePiece(
       "rank " + std::to_string(fromRank), h.frameId, h.display, {h.x0, h.y0, h.x1, h.y1},
-      [&](Image& image) { copyPiece(payload, h, image); }, payload.size());
+      [&](Image& image) { copyPiece(payload, h, image); }, payload.size(), nullptr,
+      dfb::threadCpuNs() - start);
 }
 
 bool WallNode::receivePiece(const std::string& sender, std::uint32_t frameId, int display,
                             const dfb::Region& local, const std::function<void(Image&)>& fill,
-                            std::size_t bytes, std::string* why) {
+                            std::size_t bytes, std::string* why, std::int64_t unpackNs) {
   try {
     const std::int64_t start = dfb::threadCpuNs();
     const int position = display >= 0 && static_cast<size_t>(display) < positionOfDisplay_.size()
@@ -170,6 +167,7 @@ bool WallNode::receivePiece(const std::string& sender, std::uint32_t frameId, in
     const std::int64_t assembledCpu = dfb::threadCpuNs();
     const auto assembled = Clock::now();
     std::lock_guard lock(mutex_);
+    unpackNs_ += unpackNs;
     assembleNs_ += assembledCpu - start;
     Slot& slot = slots_.at(frameId);
     const int got = ++slot.received[at];

@@ -139,9 +139,10 @@ class WallNode : public messaging::MessageHandler {
   // `local`, unlocked (it may decode). `bytes`: what it took on the wire, for the statistics.
   // A piece that is not one this node expects, or a `fill` that throws, is an error that
   // presentFrame throws (the sender is broken); returns false then, with the message in `why`.
+  // `unpackNs`: CPU time the caller spent reading the piece's header (the statistics' unpack).
   bool receivePiece(const std::string& sender, std::uint32_t frameId, int display,
                     const dfb::Region& local, const std::function<void(Image&)>& fill,
-                    std::size_t bytes, std::string* why = nullptr);
+                    std::size_t bytes, std::string* why = nullptr, std::int64_t unpackNs = 0);
 
  private:
   // Handles window events and hands pressed keys to options_.onKeys (main thread, unlocked).

@@ -138,7 +138,7 @@ void PieceReceiver::handle(std::string peer, zmq::message_t message) {
                   image.pixels.data() + static_cast<size_t>(p.local.y0) * image.width + p.local.x0,
                   image.width);
             },
-            p.size + 20);
+            p.size + kPieceRecordBytes);
         if (!ok) break;  // the node has the error: it ends the job
       }
     } catch (const std::exception& e) {

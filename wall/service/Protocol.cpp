@@ -278,22 +278,15 @@ struct PieceRecord {
   std::uint32_t size;
 };
 constexpr int kMaxPieceSide = 4096;
+static_assert(sizeof(PieceRecord) == kPieceRecordBytes, "the piece record is part of the protocol");
 }  // namespace
 
 void BatchWriter::add(const CodecSpec& codec, const dfb::Region& local, const std::uint32_t* pixels,
                       int stride) {
-  const std::size_t at = bytes_.size();
-  PieceRecord record{local.x0, local.y0, local.x1, local.y1, 0};
-  bytes_.resize(at + sizeof record);
-  try {
-    encodePixels(codec, pixels, local.width(), local.height(), stride, bytes_);
-  } catch (...) {
-    bytes_.resize(at);  // no half-written record left in the batch
-    throw;
-  }
-  record.size = static_cast<std::uint32_t>(bytes_.size() - at - sizeof record);
-  std::memcpy(bytes_.data() + at, &record, sizeof record);
-  ++pieces_;
+  // Encoded aside first: a piece the codec refuses never leaves half a record in the batch.
+  thread_local messaging::Bytes piece;
+  encodePiece(codec, local, pixels, stride, piece);
+  append(piece);
 }
 
 void BatchWriter::append(const messaging::Bytes& piece) {

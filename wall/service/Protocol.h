@@ -113,6 +113,9 @@ struct BatchPiece {
   std::size_t size = 0;
 };
 
+// What each piece adds to a batch before its pixels: rectangle and encoded size.
+constexpr std::size_t kPieceRecordBytes = 20;
+
 // Builds a batch: start it, add pieces (each encoded right into the message), take it.
 class BatchWriter {
  public:

@@ -253,7 +253,7 @@ std::size_t ServicePieceSink::send(std::uint32_t frameId, int display, const dfb
   }
   batch.writer.append(piece);
   if (batch.writer.bytes() >= kFlushBytes) flush(display, batch);
-  return static_cast<std::size_t>(local.pixelCount()) * 4 + 20;
+  return static_cast<std::size_t>(local.pixelCount()) * 4 + kPieceRecordBytes;
 }
 
 void ServicePieceSink::endFrame(std::uint32_t frameId) {
