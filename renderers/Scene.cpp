@@ -30,6 +30,13 @@ std::vector<std::string> SceneDesc::inputFiles() const {
   return files;
 }
 
+std::uint64_t SceneDesc::bytes() const {
+  std::uint64_t total = 0;
+  for (const Shape& s : shapes) total += s.bytes();
+  for (const ParticlesDesc& p : particles) total += p.bytes();
+  return total;
+}
+
 namespace {
 
 struct LightTriangle {
