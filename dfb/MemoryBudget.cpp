@@ -43,8 +43,7 @@ std::uint64_t machineMemory() {
 
 std::string number(double value) {
   char buffer[32];
-  std::snprintf(buffer, sizeof buffer, value < 10 ? "%.2g" : "%.0f", value);
-  if (value >= 10 && value < 100) std::snprintf(buffer, sizeof buffer, "%.1f", value);
+  std::snprintf(buffer, sizeof buffer, value < 100 ? "%.3g" : "%.0f", value);
   return buffer;
 }
 
