@@ -62,9 +62,9 @@ std::string memoryLimitText() {
     source = "--memory-limit";
   } else {
     const int ranks = ranksOnHost.load();
-    source = ranks > 1 ? "the memory of this host shared by " + std::to_string(ranks) +
-                             " ranks; --memory-limit sets it"
-                       : "the memory of this host; --memory-limit sets it";
+    source = "the memory this process may use on this host" +
+             (ranks > 1 ? ", shared by " + std::to_string(ranks) + " ranks" : std::string()) +
+             "; --memory-limit sets it";
   }
   return byteText(limit) + " (" + std::to_string(limit) + " bytes: " + source + ")";
 }

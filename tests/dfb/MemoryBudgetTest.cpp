@@ -41,7 +41,7 @@ TEST(MemoryBudget, TextsAndTheLimit) {
   EXPECT_LT(machine, kMax);
   setRanksOnHost(4);
   EXPECT_EQ(memoryLimit(), machine / 4);
-  EXPECT_NE(memoryLimitText().find("shared by 4 ranks"), std::string::npos) << memoryLimitText();
+  EXPECT_NE(memoryLimitText().find(", shared by 4 ranks"), std::string::npos) << memoryLimitText();
   setRanksOnHost(1);
   setMemoryLimit(1 << 20);
   EXPECT_EQ(memoryProblem(1 << 20), "");
