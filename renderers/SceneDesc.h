@@ -13,6 +13,10 @@
 
 namespace renderers {
 
+// What Embree's acceleration structure and its copy of a primitive (a triangle or a sphere)
+// take, about, for the memory budget: BVH4 nodes and leaves, the vertex and index buffers.
+constexpr std::uint64_t kBvhBytesPerPrimitive = 96;
+
 struct TriangleMesh {
   std::vector<Vec3> positions;
   std::vector<std::array<std::uint32_t, 3>> triangles;  // counter-clockwise seen from the front

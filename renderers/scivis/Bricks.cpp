@@ -293,17 +293,31 @@ void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans
       volumes[i] = dfb::bytesPlus(volumes[i], brickVolumeBytes(desc, i, plan, ghost));
     const Box3 reach = expanded(plan.bounds, ghost);
     for (const ParticlesDesc* p : sets) {
-      const std::uint64_t each =
-          sizeof(Vec3) + (p->radii.size() > 1 ? 4 : 0) + (p->attribute.empty() ? 0 : 4);
+      const std::uint64_t each = sizeof(Vec3) + (p->radii.size() > 1 ? 4 : 0) +
+                                 (p->attribute.empty() ? 0 : 4) + kBvhBytesPerPrimitive;
       std::uint64_t reached = 0;
       for (std::size_t i = 0; i < p->centers.size(); ++i)
         reached +=
             overlaps(reach, p->centers[i] - Vec3{p->radius(i)}, p->centers[i] + Vec3{p->radius(i)});
       others = dfb::bytesPlus(others, reached * each);
     }
-    for (const WorldMesh& m : meshes)
-      others = dfb::bytesPlus(others, 2 * (m.mesh.positions.size() * sizeof(Vec3) +
-                                           m.mesh.triangles.size() * sizeof(m.mesh.triangles[0])));
+    for (const WorldMesh& m : meshes) {
+      // The world-space copy loadBrick makes of every mesh, and the triangles the brick reaches
+      // with their share of the BVH.
+      others = dfb::bytesPlus(others, m.mesh.positions.size() * sizeof(Vec3) +
+                                          m.mesh.triangles.size() * sizeof(m.mesh.triangles[0]));
+      std::uint64_t reached = 0;
+      for (const auto& t : m.mesh.triangles) {
+        const Vec3 a = m.mesh.positions[t[0]], b = m.mesh.positions[t[1]],
+                   c = m.mesh.positions[t[2]];
+        reached += overlaps(
+            reach,
+            {std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})},
+            {std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})});
+      }
+      others = dfb::bytesPlus(others, reached * (3 * sizeof(Vec3) + sizeof(m.mesh.triangles[0]) +
+                                                 kBvhBytesPerPrimitive));
+    }
   }
   std::uint64_t total = others;
   std::size_t largest = 0;

@@ -12,6 +12,7 @@
 #include "dfb/MemoryBudget.h"
 #include "renderers/BuiltinScenes.h"
 #include "renderers/Error.h"
+#include "renderers/RenderScene.h"
 #include "renderers/TomlReader.h"
 #include "renderers/scivis/Bricks.h"
 #include "renderers/scivis/SciVisScene.h"
@@ -179,6 +180,40 @@ file = "huge.obj"
       writeScene("big-scene.toml", kCamera + "# " + std::string(4 * kMiB, 'x') + "\n[[spheres]]\n");
   EXPECT_EQ(errorOf(big).rfind("FILE:1: the scene file (", 0), 0u) << errorOf(big);
   EXPECT_TRUE(contains(errorOf(big), "more than this rank may hold: 64 MiB")) << errorOf(big);
+}
+
+TEST(SceneTomlBudget, TheBvhOfAMeshCountsWhenTheSceneIsBuilt) {
+  // A strip of 20000 triangles: its file and vertices fit in 1.5 MiB, its BVH (about 96 bytes a
+  // triangle) does not.
+  {
+    std::ofstream obj(testDir() / "strip.obj");
+    for (int i = 0; i < 10001; ++i) obj << "v " << i << " 0 0\nv " << i << " 1 0\n";
+    for (int i = 0; i < 10000; ++i) {
+      const int a = 2 * i + 1;
+      obj << "f " << a << " " << a + 2 << " " << a + 1 << "\nf " << a + 1 << " " << a + 2 << " "
+          << a + 3 << "\n";
+    }
+  }
+  const Budget budget(3 * kMiB / 2);
+  const std::string path = writeScene("strip.toml", kCamera + R"([[meshes]]
+name = "strip"
+material = "white"
+file = "strip.obj"
+)");
+  SceneDesc d = loadSceneDesc(path);
+  ASSERT_EQ(d.shapes.at(0).mesh.triangles.size(), 20000u);
+  try {
+    buildRenderScene("pathtracer", std::move(d), false);
+    ADD_FAILURE() << "the BVH fitted";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind("mesh 'strip' (", 0), 0u) << m;
+    EXPECT_TRUE(contains(m,
+                         "strip.obj): the scene's bounding volume hierarchy over its 20000 "
+                         "primitives (about 96 bytes each, per placement)"))
+        << m;
+    EXPECT_TRUE(contains(m, "more than this rank may hold: 1.5 MiB")) << m;
+  }
 }
 
 TEST(SceneTomlBudget, AFailedAllocationWhileLoadingNamesWhatWasLoading) {
