@@ -42,11 +42,12 @@ std::string sparseFile(const std::string& name, std::uint64_t bytes) {
   return p.string();
 }
 
-// The error reading the scene at `path` throws, with the path replaced by "FILE", or
-// "(no error)". A bare std::bad_alloc (or any other exception) fails the test.
-std::string errorOf(const std::string& path) {
+// The renderers::Error `step` throws for the scene at `path`, with the path replaced by "FILE",
+// or "(no error)". A bare std::bad_alloc (or any other exception) fails the test.
+template <class Step>
+std::string errorOf(const std::string& path, Step step) {
   try {
-    loadSceneDesc(path);
+    step();
   } catch (const Error& e) {
     std::string m = e.what();
     if (m.rfind(path, 0) == 0) m = "FILE" + m.substr(path.size());
@@ -55,17 +56,15 @@ std::string errorOf(const std::string& path) {
   return "(no error)";
 }
 
+// The error reading the scene.
+std::string errorOf(const std::string& path) {
+  return errorOf(path, [&] { loadSceneDesc(path); });
+}
+
 // The error building the whole scene (what every rank of an image-parallel run loads).
 std::string loadErrorOf(const std::string& path) {
   const SceneDesc d = loadSceneDesc(path);
-  try {
-    wholeScene(d);
-  } catch (const Error& e) {
-    std::string m = e.what();
-    if (m.rfind(path, 0) == 0) m = "FILE" + m.substr(path.size());
-    return m;
-  }
-  return "(no error)";
+  return errorOf(path, [&] { wholeScene(d); });
 }
 
 bool contains(const std::string& text, const std::string& part) {
@@ -278,6 +277,10 @@ TEST(SceneTomlGeometry, CamerasThatSeeNothing) {
 }
 
 TEST(SceneTomlGeometry, MeshesAndSpheres) {
+  auto sphere = [](const std::string& center, const std::string& radius) {
+    return kCamera + "[[spheres]]\ncenter = " + center + "\nradius = " + radius +
+           "\nmaterial = \"white\"\n";
+  };
   std::ofstream(testDir() / "inf.obj") << "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n";
   std::ofstream(testDir() / "flat.obj") << "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n";
   expectRefusals({
@@ -306,17 +309,9 @@ translate = [3e38, 0, 0]
        ":11: mesh 'far': the transform moves its vertices beyond the float range"},
       {"instance-scale", kCamera + kTriangle + "[[instances]]\nmesh = \"t\"\nscale = 1e20\n",
        ":14: instance of 't'.scale makes a degenerate transform"},
-      {"sphere-tiny", kCamera + R"([[spheres]]
-center = [1e30, 0, 0]
-radius = 1
-material = "white"
-)",
+      {"sphere-tiny", sphere("[1e30, 0, 0]", "1"),
        ":8: sphere 'sphere'.radius 1 is below float precision at its center"},
-      {"sphere-huge", kCamera + R"([[spheres]]
-center = [3e38, 0, 0]
-radius = 1e38
-material = "white"
-)",
+      {"sphere-huge", sphere("[3e38, 0, 0]", "1e38"),
        ":8: sphere 'sphere': center ± radius leaves the float range"},
   });
 }
