@@ -121,7 +121,10 @@ bool hasIsosurface(const SceneDesc& desc, std::size_t volume) {
 std::uint64_t brickVolumeBytes(const SceneDesc& desc, std::size_t i, const BrickPlan& plan,
                                float ghost) {
   const VolumeSource& source = desc.volumes[i].source;
-  const std::uint64_t width = voxelBytes(source.type);
+  // OpenVDB: while a box is sampled, the leaves of the grid that touch it are held too (as many
+  // float voxels again, at most).
+  const std::uint64_t width =
+      voxelBytes(source.type) * (source.kind == VolumeSource::Kind::OpenVdb ? 2 : 1);
   auto dense = [&](const VoxelBox& b) {
     const std::uint64_t voxels = b.voxelCount();
     return dfb::bytesPlus(dfb::bytesTimes(voxels, width), voxels / 64);  // 8 bytes per 8³
