@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "dfb/MemoryBudget.h"
 #include "wall/service/Codec.h"
 
 #include <charconv>
@@ -9,6 +10,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <string>
 
 namespace app {
@@ -136,6 +138,11 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
   cli.add_option("--timeout", o.timeoutSeconds, "seconds before a stalled frame is an error")
       ->check(CLI::Range(1, 86400))
       ->capture_default_str();
+  std::string memoryLimit;
+  cli.add_option("--memory-limit", memoryLimit,
+                 "BYTES, or with a suffix K, M, G, T (e.g. 512M, 4G): what each rank may hold of "
+                 "scenes, images and captures; more is refused when read (default: the host's "
+                 "memory shared by the job's ranks on it)");
   cli.add_flag("--quiet", o.quiet, "no progress line");
   cli.add_option("--control", o.control,
                  "[ADDR:]PORT: serve the JSON control API on render rank 0 (default address "
@@ -190,6 +197,13 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
     } catch (const std::exception& e) {
       return fail(e.what());
     }
+  }
+  if (!memoryLimit.empty()) {
+    const std::optional<std::uint64_t> bytes = dfb::parseByteSize(memoryLimit);
+    if (!bytes)
+      return fail("--memory-limit must be BYTES or a number with K, M, G or T (e.g. 4G), not '" +
+                  memoryLimit + "'");
+    o.memoryLimit = *bytes;
   }
   if (!size.empty()) {
     const std::string problem = parseSize(size, o.width, o.height);

@@ -42,7 +42,9 @@ std::vector<WorldMesh> worldMeshes(const SceneDesc& desc) {
 
 BrickContent wholeScene(const SceneDesc& desc) {
   // One brick without bounds: every voxel, particle and triangle, nothing as ghost.
-  return loadBrick(desc, BrickPlan{0, Box3{}}, 0.0f);
+  const BrickPlan whole{0, Box3{}};
+  checkBrickMemory(desc, {whole}, 0.0f);
+  return loadBrick(desc, whole, 0.0f);
 }
 
 struct SciVisScene::Embree {
@@ -117,6 +119,9 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
       embree_(std::make_unique<Embree>()) {
   const SceneDesc& desc = *desc_;
   const SciVisSettings& settings = desc.scivis;
+  if (desc.volumes.size() > kMaxVolumes)
+    throw Error("the scene has " + std::to_string(desc.volumes.size()) +
+                " volumes; the scivis renderer draws at most " + std::to_string(kMaxVolumes));
   if (content_.volumes.size() != desc.volumes.size())
     throw Error("a scivis brick needs one (possibly empty) volume per scene volume");
   for (const auto* set : {&content_.particles, &content_.ghostParticles})

@@ -92,6 +92,10 @@ class SciVisScene {
     std::vector<std::uint8_t> emptyMacrocells;
   };
   static constexpr int kTableSize = 4096;
+  // The volumes one scene may hold: the renderer keeps each volume's samples along a ray in
+  // arrays of this size. Scene files with more are refused when read (SciVisToml.cpp), other
+  // descriptions when the scene is built.
+  static constexpr std::size_t kMaxVolumes = 8;
   const std::vector<VolumeLayer>& volumes() const { return volumes_; }
   // The volume layers with another transfer function: preset `preset` (an index in
   // transferFunctionPresetNames(); -1: each volume's own) over each volume's value range and
