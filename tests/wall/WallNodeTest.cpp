@@ -65,6 +65,16 @@ void sendDisplay(Messenger& messenger, const Layout& layout, const RankRoles& ro
 
 using Clock = std::chrono::steady_clock;
 
+// `shown` (what a display shows, or its capture) is its part of the canvas of `frame`, pixel for
+// pixel.
+void expectCanvas(const Image& shown, const Display& display, std::uint32_t frame) {
+  ASSERT_EQ(shown.width, display.rect.width());
+  for (int y = 0; y < display.rect.height(); ++y)
+    for (int x = 0; x < display.rect.width(); ++x)
+      ASSERT_EQ(shown.at(x, y), canvasPixel(display.rect.x0 + x, display.rect.y0 + y, frame))
+          << "display " << display.name << " frame " << frame;
+}
+
 TEST(WallNode, PresentsOnlyWhenEveryDisplayHasTheFrameAndAcknowledgesIt) {
   int rank = 0, size = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
@@ -110,12 +120,7 @@ TEST(WallNode, PresentsOnlyWhenEveryDisplayHasTheFrameAndAcknowledgesIt) {
     for (std::uint32_t frame = 1; frame <= kFrames; ++frame) {
       node.presentFrame(frame);
       presentedAt[frame] = std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
-      const Image shown = presenter->readBack();
-      for (int y = 0; y < rect.height(); ++y)
-        for (int x = 0; x < rect.width(); ++x)
-          ASSERT_EQ(shown.at(x, y), canvasPixel(rect.x0 + x, rect.y0 + y, frame))
-              << "display " << layout.displays[static_cast<size_t>(process)].name << " frame "
-              << frame;
+      expectCanvas(presenter->readBack(), layout.displays[static_cast<size_t>(process)], frame);
     }
   }
   // Steady clocks are system-wide on Linux, so times from different ranks compare.
@@ -188,12 +193,7 @@ struct RoutedJob {
     for (std::uint32_t frame = 1; frame <= frames; ++frame) {
       if (beforeFrame) beforeFrame(node, frame);
       node.presentFrame(frame);
-      const Image shown = presenter->readBack();
-      for (int y = 0; y < rect.height(); ++y)
-        for (int x = 0; x < rect.width(); ++x)
-          ASSERT_EQ(shown.at(x, y), canvasPixel(rect.x0 + x, rect.y0 + y, frame))
-              << "display " << layout.displays[static_cast<size_t>(process)].name << " frame "
-              << frame;
+      expectCanvas(presenter->readBack(), layout.displays[static_cast<size_t>(process)], frame);
     }
     node.finish();
   }
@@ -257,11 +257,7 @@ TEST(WallNode, ACaptureAskedOfOneProcessIsTakenByEveryProcess) {
       for (std::uint32_t frame = 1; frame <= kFrames; ++frame) {
         if (!std::filesystem::exists(displayCapturePath(dir, d.name, frame))) continue;
         captured.push_back(frame);
-        const Image image = readPng(displayCapturePath(dir, d.name, frame));
-        ASSERT_EQ(image.width, d.rect.width());
-        for (int y = 0; y < image.height; ++y)
-          for (int x = 0; x < image.width; ++x)
-            ASSERT_EQ(image.at(x, y), canvasPixel(d.rect.x0 + x, d.rect.y0 + y, frame));
+        expectCanvas(readPng(displayCapturePath(dir, d.name, frame)), d, frame);
       }
       // Frame 2 asked for (of process 1 only), frame 4 the last.
       EXPECT_EQ(captured, (std::vector<std::uint32_t>{2, 4})) << "display " << d.name;
