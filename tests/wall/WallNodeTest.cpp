@@ -10,11 +10,13 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <string>
 #include <thread>
 
 #include "dfb/PixelOp.h"
 #include "wall/Capture.h"
 #include "wall/DisplayRoutingOp.h"
+#include "wall/Error.h"
 #include "wall/FrameCredits.h"
 #include "wall/OsmesaPresenter.h"
 #include "wall/PieceMessage.h"
@@ -220,6 +222,25 @@ TEST(DisplayRoutingOp, CutsTilesAtDisplayBordersAndTheDisplaysShowTheCanvas) {
       EXPECT_EQ(op.takeSent().pieces, 0u) << "taken once";
     }
     credits.waitForPresented(kFrames, std::chrono::seconds(20));
+    // A DFB of another tile size: refused by name, nothing sent.
+    std::vector<std::uint32_t> pixels(32 * 30);
+    dfb::FinishedTile wrong;
+    wrong.region = {0, 0, 32, 30};
+    wrong.frameId = kFrames + 1;
+    wrong.rgba8 = &pixels;
+    for (int index : {0, 12, -1}) {
+      wrong.tileIndex = index;
+      try {
+        op.process(wrong);
+        ADD_FAILURE() << "tile " << index << " routed";
+      } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  "display routing: finished tile " + std::to_string(index) +
+                      " [0, 32) x [0, 30) is not a tile of the wall's 86x30 canvas in tiles of 16 "
+                      "(the DFB's tile size must be the op's)");
+      }
+    }
+    EXPECT_EQ(op.takeSent().pieces, 0u);
   } else {
     job.wall(kFrames, {}, {});
   }
