@@ -116,9 +116,9 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
       ->check(CLI::Range(0, 1 << 30));
   cli.add_option("--stats", o.statsFile, "write per-frame statistics as JSON");
   cli.add_option("--preview", o.previewFile,
-                 "assemble the small whole-wall preview on rank 0 from tiles shrunk 1/8 a side "
-                 "on their owners (as the control server does) and write the last one to "
-                 "FILE.png");
+                 "assemble the whole-wall preview (at most 1024 cells a side) on rank 0 from "
+                 "tiles shrunk on their owners (as the control server does) and write the last "
+                 "one to FILE.png");
   cli.add_option("--mode", o.mode,
                  "route: tiles go straight to the displays; gather: through rank 0")
       ->check(CLI::IsMember({"route", "gather"}))
