@@ -61,8 +61,7 @@ class SciVisRenderer final : public Renderer {
                      const Sampler& sampler) const;
   Vec3 shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, const Material& m,
              const Sampler& hitSampler) const;
-  bool occluded(Vec3 origin, Vec3 dir, float tFar, const Sampler& s) const;
-  bool isosurfaceBetween(Vec3 origin, Vec3 dir, float tFar, float jitter) const;
+  bool occluded(Vec3 origin, Vec3 dir, float tFar) const;
 
   const SciVisScene& scene_;
   RenderSettings settings_;

@@ -36,6 +36,15 @@ class ShadingShell : public FieldGeometry {
   std::size_t voxelCount() const { return voxels_.size(); }
   std::size_t bytes() const;  // ranges, block table and blocks
 
+  // The dense core given to load (cells with all 8 voxels in it are read from there).
+  const VoxelBox& core() const { return core_; }
+  // Calls f(lo, size, voxels) for every block of voxels held: voxels [lo, lo + size) (whole-field
+  // indices), x fastest (what the isosurface mesher reads).
+  template <class F>
+  void forEachBlock(F f) const {
+    for (const Block& b : blocks_) f(b.lo, b.size, voxels_.data() + b.offset);
+  }
+
   // The trilinear value at world point p, as VolumeField::sample over the dense box gives it
   // (cells inside the core from `core`, the dense field of the `core` box given to load); false
   // outside dataBounds() and in macrocells without voxels (no isovalue in their range).
