@@ -299,6 +299,25 @@ TEST(SciVis, TilesAndThreadsDoNotChangeAPixel) {
   for (std::size_t i = 3; i < a.size(); i += 4) ASSERT_EQ(a[i], 1.0f);  // background under all
 }
 
+// One visible volume takes the fast march from surface to surface (isosurfaces, particles,
+// meshes); with a second, invisible volume the generic loop does: the same samples and surfaces
+// in the same order, so the same bits.
+TEST(SciVis, TheFastMarchBetweenSurfacesCompositesAsTheGenericLoop) {
+  const auto one = mixedScene(1);
+  auto two = std::make_shared<SceneDesc>(*one);
+  VolumeDesc hidden = two->volumes[0];
+  hidden.name = "hidden";
+  hidden.visible = false;
+  two->volumes.push_back(hidden);
+  const RenderScene a = buildRenderScene("scivis", *one), b = buildRenderScene("scivis", *two);
+  const auto fast =
+      test::renderImage(*makeRenderer("scivis", a, settingsFor(40, 32)), 40, 32, 16, 2, 1);
+  const auto generic =
+      test::renderImage(*makeRenderer("scivis", b, settingsFor(40, 32)), 40, 32, 16, 2, 1);
+  ASSERT_EQ(fast.size(), generic.size());
+  EXPECT_EQ(std::memcmp(fast.data(), generic.data(), fast.size() * sizeof(float)), 0);
+}
+
 // Steering (issue 12): another transfer-function preset or opacity scale changes the picture
 // without rebuilding the scene, and going back to the scene's own gives it back bit for bit.
 TEST(SciVis, LiveTransferFunctionChangesAndRestores) {
