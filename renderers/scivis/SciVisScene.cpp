@@ -58,8 +58,12 @@ struct SciVisScene::Embree {
   };
   RTCDevice device = nullptr;
   RTCScene camera = nullptr, shading = nullptr;
-  std::vector<Geometry> geometries;  // by geometry ID, the same in both scenes
-  std::size_t cameraGeometries = 0;  // none: no ray needs to ask Embree (a volume-only scene)
+  std::vector<Geometry> geometries;   // by geometry ID, the same in both scenes
+  std::size_t cameraGeometries = 0;   // none: no ray needs to ask Embree (a volume-only scene)
+  std::size_t shadingGeometries = 0;  // ghost data: seen by shading rays only
+  // What shading rays test: the camera scene, or (with ghost data) the shading scene, which
+  // holds the ghost geometries and the camera scene as an instance (one BVH per triangle).
+  RTCScene occluders = nullptr;
   std::string message;
   std::atomic<std::int64_t> bytes{0};  // what Embree holds (its memory monitor)
 
@@ -145,8 +149,10 @@ struct SciVisScene::Embree {
   void attach(RTCGeometry g, Geometry info, bool seenByCamera) {
     rtcCommitGeometry(g);
     const auto id = static_cast<unsigned>(geometries.size());
-    if (seenByCamera) rtcAttachGeometryByID(camera, g, id), ++cameraGeometries;
-    rtcAttachGeometryByID(shading, g, id);
+    if (seenByCamera)
+      rtcAttachGeometryByID(camera, g, id), ++cameraGeometries;
+    else
+      rtcAttachGeometryByID(shading, g, id), ++shadingGeometries;
     rtcReleaseGeometry(g);
     geometries.push_back(std::move(info));
   }
@@ -220,7 +226,7 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   e.camera = rtcNewScene(e.device);
   e.shading = rtcNewScene(e.device);
   // Watertight intersection: a closed isosurface must not let a ray through where two of its
-  // triangles meet (without it about 2 in 100 000 camera rays slipped through the wavelet's).
+  // triangles meet (without it one pixel of the 1024² contours image saw through).
   rtcSetSceneFlags(e.camera, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneFlags(e.shading, RTC_SCENE_FLAG_ROBUST);
   for (const WorldMesh& m : content_.meshes) e.add(&m, nullptr, true);
@@ -230,7 +236,20 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   const auto meshStart = std::chrono::steady_clock::now();
   for (std::size_t i = 0; i < volumes_.size(); ++i) addIsosurfaces(i);
   rtcCommitScene(e.camera);
-  rtcCommitScene(e.shading);
+  e.occluders = e.camera;
+  if (e.shadingGeometries > 0) {
+    if (e.cameraGeometries > 0) {
+      RTCGeometry instance = rtcNewGeometry(e.device, RTC_GEOMETRY_TYPE_INSTANCE);
+      rtcSetGeometryInstancedScene(instance, e.camera);
+      const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+      rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
+      rtcCommitGeometry(instance);
+      rtcAttachGeometryByID(e.shading, instance, static_cast<unsigned>(e.geometries.size()));
+      rtcReleaseGeometry(instance);
+    }
+    rtcCommitScene(e.shading);
+    e.occluders = e.shading;
+  }
   if (!e.message.empty()) throw Error("Embree: building the scivis scene: " + e.message);
   isosurfaceStats_.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - meshStart).count();
@@ -434,7 +453,7 @@ bool SciVisScene::intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFa
 
 bool SciVisScene::surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const {
   if (embree_->geometries.empty()) return false;
-  return embree::occluded(embree_->shading, origin, dir, tNear, tFar);
+  return embree::occluded(embree_->occluders, origin, dir, tNear, tFar);
 }
 
 }  // namespace renderers
