@@ -235,6 +235,11 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
     acc.add(c, s.material->opacity, s.t);
   };
   auto nextSurface = [&] {
+    // Behind an opaque surface nothing more is composited: no need to ask Embree again.
+    if (acc.transmittance <= minTransmittance) {
+      haveSurface = false;
+      return;
+    }
     const float after = std::nextafter(surface.t, kInf);
     haveSurface = scene_.intersectSurface(origin, dir, after, t1, surface) && surface.t < t1;
   };
