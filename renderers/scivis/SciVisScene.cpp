@@ -121,7 +121,8 @@ struct SciVisScene::Embree {
   }
 
   // An isosurface's triangles; the mesh can go once this returns (Embree holds a copy).
-  void add(const IsoMesh& mesh, const IsosurfaceDesc& iso, const VolumeField& field,
+  // `field` gives camera hits their normals (shading rays need none: may be null for them).
+  void add(const IsoMesh& mesh, const IsosurfaceDesc& iso, const VolumeField* field,
            bool seenByCamera) {
     if (mesh.triangles.empty()) return;
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -142,7 +143,7 @@ struct SciVisScene::Embree {
       std::copy(mesh.triangles[i].begin(), mesh.triangles[i].end(), idx + 3 * i);
     Geometry info;
     info.isosurface = &iso;
-    info.field = &field;
+    info.field = field;
     attach(g, std::move(info), seenByCamera);
   }
 
@@ -282,8 +283,9 @@ std::size_t SciVisScene::bytes() const {
 
 void SciVisScene::addIsosurfaces(std::size_t volume) {
   const VolumeLayer& layer = volumes_[volume];
-  if (layer.isosurfaces.empty() || !layer.field) return;
-  const VolumeField& field = *layer.field;
+  // A brick without dense voxels of the volume may still hold a shell for its shading rays.
+  if (layer.isosurfaces.empty() || (!layer.field && !layer.shell)) return;
+  const VolumeField* field = layer.field;
   const Volume& voxels = content_.volumes[volume];
   const GridGeometry& grid = voxels.grid;
   std::vector<float> isovalues;
@@ -315,9 +317,9 @@ void SciVisScene::addIsosurfaces(std::size_t volume) {
   // Per macrocell holding an isovalue: its cells camera rays can hit, and the rest of its cells
   // (shading rays only).
   std::vector<CellBlock> camera, shading;
-  for (int m = 0; m < field.macroCount(); ++m) {
-    if (!holdsIsovalue(field.macroMin(m), field.macroMax(m))) continue;
-    const Index3 o = field.macroOrigin(m);
+  for (int m = 0; field && m < field->macroCount(); ++m) {
+    if (!holdsIsovalue(field->macroMin(m), field->macroMax(m))) continue;
+    const Index3 o = field->macroOrigin(m);
     const VoxelBox cells =
         intersect(VoxelBox{o,
                            {o.x + FieldGeometry::kMacro, o.y + FieldGeometry::kMacro,
