@@ -25,6 +25,68 @@ bool overlaps(const Box3& a, Vec3 lo, Vec3 hi) {
          hi.z >= a.lo.z;
 }
 
+// The boxes [from.lo + s dLo, from.hi + s dHi] for s in [0, sMax], together: every point a
+// shadow ray from `from` passes on its way to a light. Towards a directional light d: dLo = dHi
+// = d (the box swept along it); towards a point light in box L: dLo = L.lo - from.lo, dHi =
+// L.hi - from.hi, sMax = 1 (each point of `from` joined to each of L: the convex hull).
+struct SweptBox {
+  Box3 from;
+  Vec3 dLo, dHi;
+  float sMax = 0;
+
+  Box3 bounds() const {
+    Box3 b = from;
+    grow(b, from.lo + dLo * sMax, from.hi + dHi * sMax);
+    return b;
+  }
+  // Whether [lo, hi] meets one of the boxes: per axis, two linear conditions on s.
+  bool overlaps(Vec3 lo, Vec3 hi) const {
+    float s0 = 0, s1 = sMax;
+    // a + s b <= 0 for some s in [s0, s1].
+    auto keep = [&](float a, float b) {
+      if (b > 0)
+        s1 = std::min(s1, -a / b);
+      else if (b < 0)
+        s0 = std::max(s0, -a / b);
+      else if (a > 0)
+        s1 = -1;
+    };
+    for (int a = 0; a < 3; ++a) {
+      keep(from.lo[a] - hi[a], dLo[a]);   // the moving box's low face below hi
+      keep(lo[a] - from.hi[a], -dHi[a]);  // its high face above lo
+    }
+    return s0 <= s1;
+  }
+};
+
+// Where the shadow rays of points in `bounds` go (one SweptBox per light of `reach`): they
+// start near the bounds (shading points lie in them, and rays leave a surface 1e-4 of the
+// extent and a fraction of a step off it: padded here by 1e-3 of the extent and `voxel`, the
+// coarsest voxel spacing) and end at a point light or where they leave the domain. None when
+// the bounds hold the domain.
+std::vector<SweptBox> shadowSweeps(const Box3& bounds, const GhostReach& reach, float voxel) {
+  std::vector<SweptBox> out;
+  if (reach.lights.empty() || reach.domain.empty() ||
+      (bounds.contains(reach.domain.lo) && bounds.contains(reach.domain.hi)))
+    return out;
+  const float pad = 1e-3f * maxComponent(reach.domain.hi - reach.domain.lo) + voxel;
+  const Box3 from = expanded(bounds, pad);
+  Box3 all = reach.domain;
+  grow(all, from.lo, from.hi);
+  // A box moved this far along a unit direction has left every box holding it and the domain.
+  const float across = length(all.hi - all.lo) * 1.001f + pad;
+  for (const ResolvedLight& light : reach.lights) {
+    if (light.kind == LightDesc::Kind::Directional) {
+      const Vec3 d = length(light.direction) > 0 ? normalize(light.direction) : Vec3{};
+      out.push_back({from, d, d, across});
+    } else if (light.kind == LightDesc::Kind::Point) {
+      const Box3 at = expanded({light.position, light.position}, pad);
+      out.push_back({from, at.lo - from.lo, at.hi - from.hi, 1.0f});
+    }
+  }
+  return out;
+}
+
 // Every particle set of the scene: its [[particles]] and the path tracer's sphere shapes.
 std::vector<const ParticlesDesc*> particleSets(const SceneDesc& desc,
                                                std::vector<ParticlesDesc>& converted) {
@@ -153,22 +215,59 @@ float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode) {
   return desc.scivis.aoDistance > 0 ? desc.scivis.aoDistance : 0.25f * sceneExtent;
 }
 
-BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost) {
+GhostReach ghostReach(const SceneDesc& desc, GhostMode mode) {
+  GhostReach reach;
+  if (mode == GhostMode::Layer) return reach;
+  reach.domain = sceneDomain(desc);
+  reach.margin = ghostMargin(desc, maxComponent(reach.domain.hi - reach.domain.lo), mode);
+  if (desc.scivis.shadows)
+    for (const ResolvedLight& light : resolveLights(desc))
+      if (light.kind != LightDesc::Kind::Ambient) reach.lights.push_back(light);
+  return reach;
+}
+
+BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const GhostReach& reach) {
   BrickContent c;
   c.bounds = plan.bounds;
-  const Box3 reach = expanded(plan.bounds, ghost);
+  // What shading rays reach beyond the bounds: AO rays `around` them, shadow rays `sweeps`;
+  // `region` bounds both.
+  const Box3 around = expanded(plan.bounds, reach.margin);
+  float voxel = 0;
+  for (const VolumeDesc& v : desc.volumes)
+    voxel = std::max(voxel, maxComponent(v.source.grid.spacing));
+  const std::vector<SweptBox> sweeps = shadowSweeps(plan.bounds, reach, voxel);
+  Box3 region = around;
+  for (const SweptBox& s : sweeps) {
+    const Box3 b = s.bounds();
+    grow(region, b.lo, b.hi);
+  }
+  auto reached = [&](Vec3 lo, Vec3 hi) {
+    if (overlaps(around, lo, hi)) return true;
+    for (const SweptBox& s : sweeps)
+      if (s.overlaps(lo, hi)) return true;
+    return false;
+  };
+  const bool beyond = reach.margin > 0 || !sweeps.empty();
   for (std::size_t i = 0; i < desc.volumes.size(); ++i) {
     const VolumeDesc& v = desc.volumes[i];
     const GridGeometry& g = v.source.grid;
-    // The voxels around `region`, two beyond it: the crossing test samples one step past a
+    // The voxels around `world`, two beyond it: the crossing test samples one step past a
     // ray's end and gradients half a voxel around a hit. Empty: fewer than 2 voxels on an axis.
-    auto voxelsAround = [&](const Box3& region, VoxelBox& box) {
+    // `whole`: widened to whole macrocells (their far faces included), so every macrocell has
+    // the value range and bounds it has in the whole field, and shading rays skip exactly the
+    // stretches they skip there.
+    auto voxelsAround = [&](const Box3& world, VoxelBox& box, bool whole) {
       bool empty = false;
       for (int a = 0; a < 3; ++a) {
-        const double lo = std::floor((double(region.lo[a]) - g.origin[a]) / g.spacing[a]) - 2;
-        const double hi = std::ceil((double(region.hi[a]) - g.origin[a]) / g.spacing[a]) + 3;
-        const int i0 = static_cast<int>(std::clamp(lo, 0.0, double(g.dims[a])));
-        const int i1 = static_cast<int>(std::clamp(hi, 0.0, double(g.dims[a])));
+        const double lo = std::floor((double(world.lo[a]) - g.origin[a]) / g.spacing[a]) - 2;
+        const double hi = std::ceil((double(world.hi[a]) - g.origin[a]) / g.spacing[a]) + 3;
+        int i0 = static_cast<int>(std::clamp(lo, 0.0, double(g.dims[a])));
+        int i1 = static_cast<int>(std::clamp(hi, 0.0, double(g.dims[a])));
+        if (whole && i1 > i0) {
+          constexpr int m = FieldGeometry::kMacro;
+          i0 = i0 / m * m;
+          i1 = std::min((i1 - 1 + m - 1) / m * m + 1, g.dims[a]);
+        }
         (a == 0 ? box.lo.x : a == 1 ? box.lo.y : box.lo.z) = i0;
         (a == 0 ? box.hi.x : a == 1 ? box.hi.y : box.hi.z) = i1;
         empty = empty || i1 - i0 < 2;
@@ -177,7 +276,7 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost
     };
     // Dense: the voxels camera rays and gradients use (the brick and one ghost layer).
     VoxelBox core;
-    const bool haveCore = voxelsAround(plan.bounds, core);
+    const bool haveCore = voxelsAround(plan.bounds, core, false);
     if (haveCore) {
       c.volumes.push_back(loadVolume(v.source, core));
     } else {
@@ -193,9 +292,13 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost
       if (iso.volume == i) isovalues.push_back(iso.value);
     VoxelBox shell;
     c.shells.emplace_back();
-    if (ghost > 0 && !isovalues.empty() && voxelsAround(reach, shell) && !(shell == core)) {
+    if (beyond && !isovalues.empty() && voxelsAround(region, shell, true) && !(shell == core)) {
+      // A macrocell is reached when a shading ray's sample can fall in one of its cells: when
+      // its bounds, a voxel wider, meet where the rays go.
+      const Vec3 cell = g.spacing;
       ShadingShell sparse =
-          ShadingShell::load(v.source, shell, haveCore ? core : VoxelBox{}, isovalues);
+          ShadingShell::load(v.source, shell, haveCore ? core : VoxelBox{}, isovalues,
+                             [&](const Box3& m) { return reached(m.lo - cell, m.hi + cell); });
       const std::size_t dense = shell.voxelCount() * voxelBytes(v.source.type);
       if (sparse.bytes() + c.volumes.back().bytes() < dense)
         c.shells.back() = std::move(sparse);
@@ -210,7 +313,7 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost
     });
     ParticlesDesc near = selectParticles(*p, [&](Vec3 centre, float r) {
       return !overlaps(plan.bounds, centre - Vec3{r}, centre + Vec3{r}) &&
-             overlaps(reach, centre - Vec3{r}, centre + Vec3{r});
+             reached(centre - Vec3{r}, centre + Vec3{r});
     });
     if (!inside.centers.empty()) c.particles.push_back(std::move(inside));
     if (!near.centers.empty()) c.ghostParticles.push_back(std::move(near));
@@ -218,9 +321,8 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost
   for (const WorldMesh& m : worldMeshes(desc)) {
     WorldMesh inside =
         selectTriangles(m, [&](Vec3 lo, Vec3 hi) { return overlaps(plan.bounds, lo, hi); });
-    WorldMesh near = selectTriangles(m, [&](Vec3 lo, Vec3 hi) {
-      return !overlaps(plan.bounds, lo, hi) && overlaps(reach, lo, hi);
-    });
+    WorldMesh near = selectTriangles(
+        m, [&](Vec3 lo, Vec3 hi) { return !overlaps(plan.bounds, lo, hi) && reached(lo, hi); });
     if (!inside.mesh.triangles.empty()) c.meshes.push_back(std::move(inside));
     if (!near.mesh.triangles.empty()) c.ghostMeshes.push_back(std::move(near));
   }
@@ -231,13 +333,12 @@ std::vector<HeldBrick> loadOwnBricks(const SceneDesc& desc, int bricks, int repl
                                      int ranks, GhostMode ghosts) {
   const std::vector<BrickPlan> plans = splitScene(desc, bricks);
   if (replication < 1) throw Error("--replication must be at least 1");
-  const Box3 domain = sceneDomain(desc);
-  const float ghost = ghostMargin(desc, maxComponent(domain.hi - domain.lo), ghosts);
+  const GhostReach reach = ghostReach(desc, ghosts);
   std::vector<HeldBrick> out;
   for (const BrickPlan& plan : plans) {
     const std::vector<int> h = brickHolders(plan.id, ranks, replication);
     if (std::find(h.begin(), h.end(), rank) != h.end())
-      out.push_back({plan.id, loadBrick(desc, plan, ghost)});
+      out.push_back({plan.id, loadBrick(desc, plan, reach)});
   }
   return out;
 }

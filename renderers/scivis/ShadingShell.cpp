@@ -6,7 +6,8 @@
 namespace renderers {
 
 ShadingShell ShadingShell::load(const VolumeSource& source, const VoxelBox& box,
-                                const VoxelBox& core, const std::vector<float>& isovalues) {
+                                const VoxelBox& core, const std::vector<float>& isovalues,
+                                const std::function<bool(const Box3&)>& reached) {
   ShadingShell s(source.grid, box);
   s.core_ = core;
   s.block_.assign(s.macroMin_.size(), -1);
@@ -48,7 +49,7 @@ ShadingShell ShadingShell::load(const VolumeSource& source, const VoxelBox& box,
         s.macroMin_[m] = lo, s.macroMax_[m] = hi;
         const bool holdsIsovalue = std::any_of(isovalues.begin(), isovalues.end(),
                                                [&](float iso) { return iso >= lo && iso <= hi; });
-        if (!holdsIsovalue) continue;
+        if (!holdsIsovalue || !reached(s.macroBounds(static_cast<int>(m)))) continue;
         // The voxels of the macrocell's cells the core does not hold (all 8 voxels of a cell
         // inside the core: the core's field interpolates the same values in the same cell);
         // their bounding box (voxels first..last).

@@ -13,6 +13,7 @@
 //
 // Plain data (copyable); every const method is thread-safe. Voxels are kept as float32.
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "renderers/scivis/VolumeField.h"
@@ -26,10 +27,13 @@ class ShadingShell : public FieldGeometry {
 
   // `box` of `source` (at least 2 voxels per axis), read one layer of macrocells at a time, so
   // no more than that layer of the box is ever held densely; per macrocell whose value range
-  // holds one of `isovalues`, the voxels of its cells that do not lie inside `core` (the
-  // brick's dense voxels, a sub-box of `box`; may be empty).
+  // holds one of `isovalues` and that shading rays reach (`reached(macroBounds(m))`: the box
+  // may be a region's bounding box, its shading rays reaching only part of it), the voxels of
+  // its cells that do not lie inside `core` (the brick's dense voxels, a sub-box of `box`; may
+  // be empty). A shading ray must not enter a macrocell that is not reached.
   static ShadingShell load(const VolumeSource& source, const VoxelBox& box, const VoxelBox& core,
-                           const std::vector<float>& isovalues);
+                           const std::vector<float>& isovalues,
+                           const std::function<bool(const Box3&)>& reached);
 
   bool empty() const { return macroMin_.empty(); }
   std::size_t blockCount() const { return blocks_.size(); }
