@@ -59,17 +59,29 @@ struct SweptBox {
   }
 };
 
-// Where the shadow rays of points in `bounds` go (one SweptBox per light of `reach`): they
-// start near the bounds (shading points lie in them, and rays leave a surface 1e-4 of the
-// extent and a fraction of a step off it: padded here by 1e-3 of the extent and `voxel`, the
-// coarsest voxel spacing) and end at a point light or where they leave the domain. None when
-// the bounds hold the domain.
-std::vector<SweptBox> shadowSweeps(const Box3& bounds, const GhostReach& reach, float voxel) {
+// How far off a brick's bounds its shading rays may start: SciVisRenderer leaves a surface by
+// 1e-4 of the scene's extent and 0.05 of a volume step (both as SciVisScene computes them);
+// four times that.
+float startPad(const SceneDesc& desc, const Box3& domain) {
+  float finest = 0;
+  for (const VolumeDesc& v : desc.volumes) {
+    const Vec3 h = v.source.grid.spacing;
+    const float m = std::min(h.x, std::min(h.y, h.z));
+    finest = finest > 0 ? std::min(finest, m) : m;
+  }
+  const float step = finest > 0 ? finest / desc.scivis.samplingRate : 1.0f;
+  const float extent = domain.empty() ? 0.0f : std::max(1e-3f, maxComponent(domain.hi - domain.lo));
+  return 4.0f * (1e-4f * extent + 0.05f * step);
+}
+
+// Where the shadow rays of points in `bounds` go (one SweptBox per light of `reach`): from
+// within `pad` of the bounds to a point light or out of the domain. None when the bounds hold
+// the domain.
+std::vector<SweptBox> shadowSweeps(const Box3& bounds, const GhostReach& reach, float pad) {
   std::vector<SweptBox> out;
   if (reach.lights.empty() || reach.domain.empty() ||
       (bounds.contains(reach.domain.lo) && bounds.contains(reach.domain.hi)))
     return out;
-  const float pad = 1e-3f * maxComponent(reach.domain.hi - reach.domain.lo) + voxel;
   const Box3 from = expanded(bounds, pad);
   Box3 all = reach.domain;
   grow(all, from.lo, from.hi);
@@ -229,13 +241,12 @@ GhostReach ghostReach(const SceneDesc& desc, GhostMode mode) {
 BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const GhostReach& reach) {
   BrickContent c;
   c.bounds = plan.bounds;
-  // What shading rays reach beyond the bounds: AO rays `around` them, shadow rays `sweeps`;
-  // `region` bounds both.
-  const Box3 around = expanded(plan.bounds, reach.margin);
-  float voxel = 0;
-  for (const VolumeDesc& v : desc.volumes)
-    voxel = std::max(voxel, maxComponent(v.source.grid.spacing));
-  const std::vector<SweptBox> sweeps = shadowSweeps(plan.bounds, reach, voxel);
+  // What shading rays reach beyond the bounds: shadow rays `sweeps`, AO rays `around` them (as
+  // far as the margin from where they start); `region` bounds both.
+  const float pad = startPad(desc, reach.domain);
+  const std::vector<SweptBox> sweeps = shadowSweeps(plan.bounds, reach, pad);
+  const bool beyond = reach.margin > 0 || !sweeps.empty();
+  const Box3 around = beyond ? expanded(plan.bounds, reach.margin + pad) : plan.bounds;
   Box3 region = around;
   for (const SweptBox& s : sweeps) {
     const Box3 b = s.bounds();
@@ -247,7 +258,6 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const Ghost
       if (s.overlaps(lo, hi)) return true;
     return false;
   };
-  const bool beyond = reach.margin > 0 || !sweeps.empty();
   for (std::size_t i = 0; i < desc.volumes.size(); ++i) {
     const VolumeDesc& v = desc.volumes[i];
     const GridGeometry& g = v.source.grid;
@@ -293,12 +303,12 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const Ghost
     VoxelBox shell;
     c.shells.emplace_back();
     if (beyond && !isovalues.empty() && voxelsAround(region, shell, true) && !(shell == core)) {
-      // A macrocell is reached when a shading ray's sample can fall in one of its cells: when
-      // its bounds, a voxel wider, meet where the rays go.
-      const Vec3 cell = g.spacing;
+      // A macrocell is reached when a shading ray's sample can fall in it: when its bounds (a
+      // hundredth of a voxel wider, for rounding) meet where the rays go.
+      const Vec3 slack = g.spacing * 0.01f;
       ShadingShell sparse =
           ShadingShell::load(v.source, shell, haveCore ? core : VoxelBox{}, isovalues,
-                             [&](const Box3& m) { return reached(m.lo - cell, m.hi + cell); });
+                             [&](const Box3& m) { return reached(m.lo - slack, m.hi + slack); });
       const std::size_t dense = shell.voxelCount() * voxelBytes(v.source.type);
       if (sparse.bytes() + c.volumes.back().bytes() < dense)
         c.shells.back() = std::move(sparse);
