@@ -82,7 +82,7 @@ struct DistributedFrameBuffer::Impl {
 
   // Through the door into the tile's operation, under the tile's lock. `fromRank`: the
   // messenger rank that sent it, -1 when it was set on this rank.
-  void processInput(int tileIndex, Tile&& input, const InputLabel& label, int fromRank);
+  void processInput(int tileIndex, Tile&& input, const FrameInfo& label, int fromRank);
   // "tile T of frame F, input from rank S (host)": what an input error starts with.
   std::string whichInput(int tileIndex, std::uint32_t frameId, int fromRank) const;
   // Runs the pixel ops of a tile whose last input arrived, with the tile's mutex held.
@@ -297,8 +297,8 @@ void DistributedFrameBuffer::Impl::deliver(int fromRank, messaging::Bytes&& byte
   processInput(header.tileIndex, std::move(tile), {header.frameId, header.epoch}, fromRank);
 }
 
-void DistributedFrameBuffer::Impl::processInput(int tileIndex, Tile&& input,
-                                                const InputLabel& label, int fromRank) {
+void DistributedFrameBuffer::Impl::processInput(int tileIndex, Tile&& input, const FrameInfo& label,
+                                                int fromRank) {
   OwnedTile& owned = *tiles[static_cast<size_t>(tileIndex)];
   bool done = false;
   try {

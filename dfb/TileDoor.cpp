@@ -22,7 +22,7 @@ void checkOptional(const char* name, size_t size, size_t perPixel, size_t pixels
 
 }  // namespace
 
-Admission admitInput(const Tile& input, const InputLabel& label, const TileState& tile) {
+Admission admitInput(const Tile& input, const FrameInfo& label, const TileState& tile) {
   // The frame first: a surplus input of a frame this tile has left is no error of the input.
   if (label.frameId < tile.frame.frameId) return Admission::Stale;
   if (label.frameId > tile.frame.frameId)

@@ -3,18 +3,10 @@
 // "Hostile input"). The DFB calls admitInput under the tile's lock, the lock that then applies
 // the input, for an input rendered on this rank and one from another rank alike: an operation
 // never sees an input that does not fit its tile, its frame or its needs (InputNeeds).
-#include <cstdint>
-
 #include "dfb/Tile.h"
 #include "dfb/TileOperation.h"
 
 namespace dfb {
-
-// Where an input says it belongs: its message's header, or this rank's frame for setTile().
-struct InputLabel {
-  std::uint32_t frameId = 0;
-  std::uint32_t epoch = 0;
-};
 
 // A tile as its owner holds it this frame.
 struct TileState {
@@ -34,6 +26,8 @@ enum class Admission {
 // Throws dfb::Error saying what is wrong with any input that is neither (a region that is not
 // the tile's, a channel missing or of the wrong size, another epoch, a generation or children
 // count out of bounds, another accumulation pass, weight 0, a tile that expects no more inputs).
-Admission admitInput(const Tile& input, const InputLabel& label, const TileState& tile);
+// `label`: the frame the input says it belongs to (its message's header, or this rank's frame
+// for setTile()).
+Admission admitInput(const Tile& input, const FrameInfo& label, const TileState& tile);
 
 }  // namespace dfb

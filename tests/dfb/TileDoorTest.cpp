@@ -47,8 +47,7 @@ Tile goodInput() {
 }
 
 // The door's message for `input`, or "" when it admits it.
-std::string refusal(const Tile& input, const TileState& state,
-                    InputLabel label = {kFrame, kEpoch}) {
+std::string refusal(const Tile& input, const TileState& state, FrameInfo label = {kFrame, kEpoch}) {
   try {
     admitInput(input, label, state);
     return {};
