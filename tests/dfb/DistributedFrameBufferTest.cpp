@@ -439,6 +439,28 @@ TEST(Dfb, SetTileOutsideAFrameIsRefused) {
   EXPECT_NE(refusal().find("setTile outside a frame"), std::string::npos);
 }
 
+// A message that is no tile, arriving between frames, is not lost at the next begin(): that
+// begin() throws it, naming the sender.
+TEST(Dfb, AMalformedMessageBetweenFramesFailsTheNextBegin) {
+  messaging::Messenger messenger(MPI_COMM_WORLD);
+  DfbOptions o = options(DisplayFormat::NONE);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
+  renderFrame(dfb, 1);
+  const int sender = worldSize() - 1;
+  if (worldRank() == sender) messenger.send(0, o.objectId, messaging::Bytes(10));
+  messenger.quiesce();
+  if (worldRank() != 0) return;  // the others would wait for rank 0's tiles in frame 2
+  try {
+    dfb.begin({2, 0});
+    ADD_FAILURE() << "begin() must throw the error that came between frames";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("a tile message from rank " + std::to_string(sender)), std::string::npos)
+        << message;
+    EXPECT_NE(message.find("shorter than its header"), std::string::npos) << message;
+  }
+}
+
 // One malformed input for tile 0 (owned by rank 0), from the last rank, in frame 1: rank 0's
 // end() throws the door's error naming the tile, the frame, the sender and what is wrong; the
 // other ranks fail at their deadline (rank 0 ends the job in a real run).
