@@ -315,6 +315,17 @@ float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode) {
   return desc.scivis.aoDistance > 0 ? desc.scivis.aoDistance : 0.25f * sceneExtent;
 }
 
+GhostReach ghostReach(const SceneDesc& desc, GhostMode mode) {
+  GhostReach reach;
+  if (mode == GhostMode::Layer) return reach;
+  reach.domain = sceneDomain(desc);
+  reach.margin = ghostMargin(desc, maxComponent(reach.domain.hi - reach.domain.lo), mode);
+  if (desc.scivis.shadows)
+    for (const ResolvedLight& light : resolveLights(desc))
+      if (light.kind != LightDesc::Kind::Ambient) reach.lights.push_back(light);
+  return reach;
+}
+
 namespace {
 
 // loadBrick's work; `part` says what it is loading, for an allocation that fails on the way.
