@@ -7,15 +7,22 @@
 //       "iso-ao"  two opaque isosurfaces with 4 ambient-occlusion rays and shadows per hit
 // The camera is VTK's ResetCamera() view of the volume (view angle 30°, looking down -z),
 // turned about the volume's centre by 360/FRAMES degrees a frame; the result is the median.
+// Cost per volume sample: "ns_per_volume_sample" is wall time x threads / samples (per core);
+// "cpu_ns_per_volume_sample" is the process's CPU time / samples, which other processes on a
+// shared machine disturb less. The environment variable SCIVIS_MARCH=sse|avx2 picks the volume
+// march's kernel (default: the fastest the CPU runs), to compare them in one build.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
+#include <fstream>
 #include <string>
 #include <vector>
 
 #include "renderers/BuiltinScenes.h"
+#include "renderers/Error.h"
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/SciVisRenderer.h"
 #include "tests/renderers/RenderTestUtil.h"
@@ -53,6 +60,28 @@ SceneDesc benchScene(const std::string& mode, int resolution) {
   return d;
 }
 
+double processCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+double loadAverage() {
+  std::ifstream in("/proc/loadavg");
+  double load = -1;
+  in >> load;
+  return load;
+}
+
+MarchKernel marchFromEnvironment() {
+  const char* name = std::getenv("SCIVIS_MARCH");
+  const std::string n = name ? name : "auto";
+  if (n == "sse") return MarchKernel::Sse;
+  if (n == "avx2") return MarchKernel::Avx2;
+  if (n == "auto") return MarchKernel::Auto;
+  throw Error("SCIVIS_MARCH: '" + n + "' is none of sse, avx2, auto");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -74,11 +103,14 @@ int main(int argc, char** argv) {
     settings.seed = 1;
     // One turn over the frames, as dfbwall's --orbit 360/FRAMES.
     const float orbitDegreesPerFrame = 360.0f / static_cast<float>(frames);
-    auto renderer = makeRenderer("scivis", scene, settings);
-    const auto* scivis = dynamic_cast<const SciVisRenderer*>(renderer.get());
+    const MarchKernel march = resolveMarchKernel(marchFromEnvironment());
+    auto renderer =
+        std::make_unique<SciVisRenderer>(*scene.scivis, settings, SciVisOptions{true, march});
+    const SciVisRenderer* scivis = renderer.get();
     std::vector<double> seconds;
     std::vector<float> image;
     const std::uint64_t samplesBefore = scivis->volumeSamples();
+    const double cpuBefore = processCpuSeconds();
     for (int f = 1; f <= frames; ++f) {
       renderer->beginFrame(
           {static_cast<std::uint32_t>(f), static_cast<std::uint32_t>(f)},
@@ -88,6 +120,7 @@ int main(int argc, char** argv) {
       seconds.push_back(std::chrono::duration<double>(Clock::now() - a).count());
     }
     const double samples = static_cast<double>(scivis->volumeSamples() - samplesBefore);
+    const double cpu = processCpuSeconds() - cpuBefore;
     double total = 0;
     for (double s : seconds) total += s;
     std::vector<double> sorted = seconds;
@@ -122,10 +155,14 @@ int main(int argc, char** argv) {
         "{\"mode\": \"%s\", \"resolution\": %d, \"size\": %d, \"threads\": %d, \"frames\": %d, "
         "\"load_s\": %.3f, \"median_frame_s\": %.4f, \"min_frame_s\": %.4f, \"camera_rays_per_s\": "
         "%.4g, "
-        "\"volume_samples_per_s\": %.4g, \"volume_samples_per_ray\": %.1f}\n",
+        "\"volume_samples_per_s\": %.4g, \"volume_samples_per_ray\": %.1f, "
+        "\"ns_per_volume_sample\": %.2f, \"cpu_ns_per_volume_sample\": %.2f, \"march\": \"%s\", "
+        "\"load\": %.2f}\n",
         mode.c_str(), resolution, size, threads, frames, loadS, median, sorted.front(),
         double(size) * size * frames / total, samples / total,
-        samples / (double(size) * size * frames));
+        samples / (double(size) * size * frames),
+        samples > 0 ? 1e9 * total * threads / samples : 0.0,
+        samples > 0 ? 1e9 * cpu / samples : 0.0, marchKernelName(march), loadAverage());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "scivis_bench: %s\n", e.what());

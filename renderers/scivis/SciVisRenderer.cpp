@@ -5,8 +5,7 @@
 #include <cmath>
 
 #include "renderers/PixelBlocks.h"
-
-#include <emmintrin.h>
+#include "renderers/scivis/VolumeMarch.h"
 
 namespace renderers {
 namespace {
@@ -64,96 +63,6 @@ Vec3 cosineDirection(Vec3 n, float u0, float u1) {
 
 std::uint64_t bitsOf(float t) { return std::bit_cast<std::uint32_t>(t); }
 
-// The common case, apart from the generic loop for speed: one visible volume without
-// isosurfaces, nothing else on the ray before the volume ends. It composites exactly the samples
-// the generic loop composites, with the same arithmetic (same bits): t_k = (k + jitter) step
-// from the first k >= kStart with t_k >= t0, while t_k < t1, t_k <= volumeEnd and light gets
-// through. Samples are taken four at a time (SSE lanes, each computed as the scalar path does)
-// and composited one by one in order; those past the end or past opacity are dropped. Samples
-// in empty macrocells have zero opacity: skipping them changes no bit.
-template <class T>
-std::uint32_t marchOneVolume(const SciVisScene::VolumeLayer& v, Vec3 origin, Vec3 dir, Vec3 invDir,
-                             float t0, float t1, float kStart, float volumeEnd, float step,
-                             float jitter, float minTransmittance, Accumulator& acc) {
-  const VolumeField& field = *v.field;
-  const std::uint8_t* empty = v.emptyMacrocells.data();
-  float k = std::max(kStart, std::ceil(t0 / step - jitter));
-  while (k > kStart && (k - 1 + jitter) * step >= t0) k -= 1;  // rounding: the exact first
-  while ((k + jitter) * step < t0) k += 1;
-
-  const __m128 lanes = _mm_setr_ps(0, 1, 2, 3), jitters = _mm_set1_ps(jitter),
-               steps = _mm_set1_ps(step);
-  const __m128 tableScale = _mm_set1_ps(v.tableScale), valueMin = _mm_set1_ps(v.valueMin);
-  const __m128 zero = _mm_setzero_ps(),
-               lastEntry = _mm_set1_ps(static_cast<float>(SciVisScene::kTableSize - 1));
-  const __m128i lastLower = _mm_set1_epi32(SciVisScene::kTableSize - 2);
-  const float* table = v.table.data();
-  __m128 rgb = _mm_setr_ps(acc.rgb.x, acc.rgb.y, acc.rgb.z, 0);
-  float transmittance = acc.transmittance, depth = acc.depth;
-  std::uint32_t samples = 0;
-  for (bool done = false; !done && transmittance > minTransmittance; k += 4) {
-    alignas(16) float t[4];
-    const __m128 ts = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_set1_ps(k), lanes), jitters), steps);
-    _mm_store_ps(t, ts);
-    if (t[0] >= t1 || t[0] > volumeEnd) break;
-    __m128 values;
-    int macro0;
-    const int inside = field.sample4<T>(
-        _mm_add_ps(_mm_set1_ps(origin.x), _mm_mul_ps(_mm_set1_ps(dir.x), ts)),
-        _mm_add_ps(_mm_set1_ps(origin.y), _mm_mul_ps(_mm_set1_ps(dir.y), ts)),
-        _mm_add_ps(_mm_set1_ps(origin.z), _mm_mul_ps(_mm_set1_ps(dir.z), ts)), values, macro0);
-    if (macro0 >= 0 && empty[macro0]) {
-      // Jump to one sample before the sample before the macrocell's exit, as the generic loop
-      // does: the margin keeps rounding from skipping a sample of the next macrocell.
-      float a = t[0], b = kInf;
-      clipToBox(field.macroBounds(macro0), origin, invDir, a, b);
-      const float last = std::floor(b / step - jitter) - 1;
-      if (last > k + 4) {
-        samples += 1;
-        k = last - 4;  // the loop's += 4 lands on `last`
-        continue;
-      }
-    }
-    // The transfer function, as lookup() computes it: x = clamp(scaled, 0, last entry), entry
-    // i = min(int(x), last - 1), weight x - i.
-    __m128 x = _mm_mul_ps(_mm_sub_ps(values, valueMin), tableScale);
-    x = _mm_andnot_ps(_mm_cmplt_ps(x, zero), x);
-    const __m128 over = _mm_cmplt_ps(lastEntry, x);
-    x = _mm_or_ps(_mm_and_ps(over, lastEntry), _mm_andnot_ps(over, x));
-    __m128i i = _mm_cvttps_epi32(x);
-    const __m128i high = _mm_cmpgt_epi32(i, lastLower);
-    i = _mm_or_si128(_mm_and_si128(high, lastLower), _mm_andnot_si128(high, i));
-    i = _mm_and_si128(i, _mm_cmpgt_epi32(i, _mm_set1_epi32(-1)));  // NaN data: entry 0
-    alignas(16) int entry[4];
-    alignas(16) float weight[4];
-    _mm_store_si128(reinterpret_cast<__m128i*>(entry), i);
-    _mm_store_ps(weight, _mm_sub_ps(x, _mm_cvtepi32_ps(i)));
-    for (int lane = 0; lane < 4; ++lane) {
-      if (transmittance <= minTransmittance || t[lane] >= t1 || t[lane] > volumeEnd) {
-        done = true;
-        break;
-      }
-      ++samples;
-      if (!(inside >> lane & 1)) continue;
-      const float* e = table + 4 * static_cast<std::size_t>(entry[lane]);
-      const __m128 a = _mm_loadu_ps(e), b = _mm_loadu_ps(e + 4);
-      const __m128 rgba = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(weight[lane]), _mm_sub_ps(b, a)));
-      const float alpha = _mm_cvtss_f32(_mm_shuffle_ps(rgba, rgba, _MM_SHUFFLE(3, 3, 3, 3)));
-      if (!(alpha > 0)) continue;
-      // Accumulator::add, channel by channel.
-      rgb = _mm_add_ps(rgb, _mm_mul_ps(rgba, _mm_set1_ps(transmittance * alpha)));
-      transmittance *= 1.0f - alpha;
-      if (depth == kInf && transmittance <= 0.5f) depth = t[lane];
-    }
-  }
-  alignas(16) float sum[4];
-  _mm_store_ps(sum, rgb);
-  acc.rgb = {sum[0], sum[1], sum[2]};
-  acc.transmittance = transmittance;
-  acc.depth = depth;
-  return samples;
-}
-
 }  // namespace
 
 SciVisRenderer::SciVisRenderer(const SciVisScene& scene, const RenderSettings& settings,
@@ -163,6 +72,7 @@ SciVisRenderer::SciVisRenderer(const SciVisScene& scene, const RenderSettings& s
       options_(options),
       layers_(&scene.volumes()),
       camera_(scene.desc().camera, settings.width, settings.height),
+      march_(resolveMarchKernel(options.march)),
       epsilon_(1e-4f * scene.extent() + 0.05f * scene.volumeStep()) {}
 
 void SciVisRenderer::beginFrame(const dfb::FrameInfo& /*frame*/, const CameraDesc& camera) {
@@ -345,22 +255,11 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
       layers[0].isosurfaces.empty() && (!haveSurface || surface.t > volumeEnd)) {
     const float jitter = sampler.get(2);
     const float kStart = std::ceil(volumeStart / step - jitter);
-    const auto march = [&]<class T>() {
-      return marchOneVolume<T>(layers[0], origin, dir, invDir, t0, t1, kStart, volumeEnd, step,
-                               jitter, minTransmittance, acc);
-    };
-    switch (layers[0].field->volume().type) {
-      default:
-      case VoxelType::Float32:
-        out.volumeSamples = march.operator()<float>();
-        break;
-      case VoxelType::UInt8:
-        out.volumeSamples = march.operator()<std::uint8_t>();
-        break;
-      case VoxelType::UInt16:
-        out.volumeSamples = march.operator()<std::uint16_t>();
-        break;
-    }
+    MarchColor color{acc.rgb, acc.transmittance, acc.depth};
+    out.volumeSamples = marchOneVolume(
+        layers[0], {origin, dir, invDir, t0, t1, kStart, volumeEnd, step, jitter, minTransmittance},
+        march_, color);
+    acc.rgb = color.rgb, acc.transmittance = color.transmittance, acc.depth = color.depth;
   } else if (volumeStart <= volumeEnd) {
     const std::size_t n = layers.size();
     // Per volume: the value at the previous sample (when it had one) and at this one.

@@ -18,6 +18,7 @@
 #include "renderers/Renderer.h"
 #include "renderers/Rng.h"
 #include "renderers/scivis/SciVisScene.h"
+#include "renderers/scivis/VolumeMarch.h"
 
 namespace renderers {
 
@@ -33,6 +34,8 @@ struct SciVisOptions {
   // true: the background is composited under every pixel (alpha 1, image-parallel rendering);
   // false: pixels keep their alpha for sort-last compositing.
   bool background = true;
+  // The instruction set of the one-volume march (VolumeMarch.h); all give the same image.
+  MarchKernel march = MarchKernel::Auto;
 };
 
 class SciVisRenderer final : public Renderer {
@@ -72,6 +75,7 @@ class SciVisRenderer final : public Renderer {
   const std::vector<SciVisScene::VolumeLayer>* layers_;
   LiveSettings live_;
   Camera camera_;
+  MarchKernel march_;
   float epsilon_;
   mutable std::atomic<std::uint64_t> volumeSamples_{0};  // added once per tile
 };

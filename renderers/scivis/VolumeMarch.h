@@ -1,0 +1,53 @@
+#pragma once
+// The scivis renderer's common case, apart from its generic loop for speed: a ray through one
+// visible volume without isosurfaces, nothing else on it before the volume ends. The march
+// composites exactly the samples the generic loop composites, with the same arithmetic (the same
+// bits): t_k = (k + jitter) step from the first k >= kStart with t_k >= t0, while t_k < t1,
+// t_k <= volumeEnd and more than minTransmittance of the light gets through.
+//
+// Two kernels, chosen at run time: SSE2 (every x86-64) takes 4 samples of the ray at a time,
+// AVX2 takes 8 (voxels and transfer-function opacities by gathers). Both compute every sample
+// lane by lane as the scalar path does, without fused multiply-adds, and composite in order, so
+// they give the same image bit for bit; they differ only in the benchmark's sample count (a
+// jump over an empty macrocell counts one sample, and the kernels jump from different places).
+#include <cstdint>
+
+#include "renderers/Math.h"
+#include "renderers/scivis/SciVisScene.h"
+
+namespace renderers {
+
+enum class MarchKernel {
+  Auto,  // the fastest the CPU runs
+  Sse,
+  Avx2,
+};
+
+bool marchKernelAvailable(MarchKernel kernel);  // Auto and Sse: always
+// `kernel`, or for Auto the fastest available one. Throws renderers::Error for one the CPU (or
+// the build) lacks.
+MarchKernel resolveMarchKernel(MarchKernel kernel);
+const char* marchKernelName(MarchKernel kernel);
+
+struct MarchRay {
+  Vec3 origin, dir, invDir;  // dir unit length, invDir = 1 / dir
+  float t0, t1;              // the piece of the ray to composite
+  float kStart;              // the generic loop's first sample index
+  float volumeEnd;           // where the volume's data ends on the ray, widened by a step
+  float step, jitter, minTransmittance;
+};
+
+// Premultiplied RGB so far, the light still getting through, the distance where it first
+// dropped to half (infinity until then).
+struct MarchColor {
+  Vec3 rgb;
+  float transmittance = 1.0f;
+  float depth = Box3::kInf;
+};
+
+// Composites the samples of `ray` through layer v (its field set) onto `color` with `kernel`
+// (resolved: Sse or Avx2). Returns the samples taken (for benchmarks).
+std::uint32_t marchOneVolume(const SciVisScene::VolumeLayer& v, const MarchRay& ray,
+                             MarchKernel kernel, MarchColor& color);
+
+}  // namespace renderers
