@@ -374,6 +374,28 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
   return out;
 }
 
+bool SciVisRenderer::marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1,
+                               const Sampler& sampler, MarchRay& ray) const {
+  // integrate()'s test for its one-volume march, when nothing else lies on the ray at all.
+  const auto& layers = *layers_;
+  if (!(t0 < t1) || layers.size() != 1 || !layers[0].visible || !layers[0].isosurfaces.empty() ||
+      !layers[0].field)
+    return false;
+  const float step = scene_.volumeStep();
+  float volumeStart = t0 - step, volumeEnd = t1 + step;
+  if (!clipToBox(layers[0].field->dataBounds(), origin, invDir, volumeStart, volumeEnd))
+    return false;
+  SurfaceHit surface;
+  if (scene_.intersectSurface(origin, dir, t0, t1, surface) && surface.t < t1) return false;
+  const float jitter = sampler.get(2);
+  ray = {origin,    dir,
+         invDir,    t0,
+         t1,        std::ceil(volumeStart / step - jitter),
+         volumeEnd, step,
+         jitter,    scene_.desc().scivis.minTransmittance};
+  return true;
+}
+
 void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulationId,
                             std::uint32_t firstSample, std::uint32_t samples,
                             dfb::Tile& out) const {
@@ -383,9 +405,40 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   const Box3& bounds = scene_.bounds();
   const Environment& background = scene_.desc().environment;
   std::uint64_t volumeSamples = 0;
+  // A pixel's samples add up in its colour in the order of samples, then it is scaled.
+  auto add = [&](std::size_t pixel, Fragment f, Vec3 dir) {
+    if (options_.background) {
+      const Vec3 bg = background.radiance(dir) * (1.0f - f.rgba[3]);
+      f.rgba[0] += bg.x, f.rgba[1] += bg.y, f.rgba[2] += bg.z, f.rgba[3] = 1.0f;
+    }
+    float* px = &out.color[4 * pixel];
+    for (int c = 0; c < 4; ++c) px[c] += f.rgba[c];
+    volumeSamples += f.volumeSamples;
+  };
+  // Rays of the one-volume march wait here and march together, one per SIMD lane; any other
+  // ray of a waiting ray's pixel first lets them finish, so no pixel's sum changes order.
+  const bool packets = layers_->size() == 1 && marchesPackets((*layers_)[0], march_);
+  MarchRay waiting[kMarchPacket];
+  std::size_t waitingPixel[kMarchPacket];
+  int waitingCount = 0;
+  auto marchWaiting = [&] {
+    MarchColor colors[kMarchPacket];
+    std::uint32_t taken[kMarchPacket];
+    marchPacket((*layers_)[0], waiting, waitingCount, colors, taken);
+    for (int i = 0; i < waitingCount; ++i) {
+      Fragment f;  // integrate()'s fragment of the march
+      f.rgba[0] = colors[i].rgb.x, f.rgba[1] = colors[i].rgb.y, f.rgba[2] = colors[i].rgb.z;
+      f.rgba[3] = 1.0f - colors[i].transmittance;
+      f.depth = colors[i].depth;
+      f.volumeSamples = taken[i];
+      add(waitingPixel[i], f, waiting[i].dir);
+    }
+    waitingCount = 0;
+  };
   for (int y = region.y0; y < region.y1; ++y)
     for (int x = region.x0; x < region.x1; ++x) {
-      float sum[4] = {0, 0, 0, 0};
+      const std::size_t pixel = static_cast<std::size_t>(y - region.y0) * region.width() +
+                                static_cast<std::size_t>(x - region.x0);
       for (std::uint32_t s = firstSample; s < firstSample + samples; ++s) {
         const Sampler sampler(settings_.seed, x, y, accumulationId, s);
         Vec3 origin, dir;
@@ -394,19 +447,20 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
         float t0 = 0, t1 = kInf;
         Fragment f;
         const Vec3 invDir = reciprocal(dir);
-        if (clipToBox(bounds, origin, invDir, t0, t1))
-          f = integrate(origin, dir, invDir, t0, t1, sampler);
-        if (options_.background) {
-          const Vec3 bg = background.radiance(dir) * (1.0f - f.rgba[3]);
-          f.rgba[0] += bg.x, f.rgba[1] += bg.y, f.rgba[2] += bg.z, f.rgba[3] = 1.0f;
+        const bool inside = clipToBox(bounds, origin, invDir, t0, t1);
+        if (inside && packets &&
+            marchOnly(origin, dir, invDir, t0, t1, sampler, waiting[waitingCount])) {
+          waitingPixel[waitingCount++] = pixel;
+          if (waitingCount == kMarchPacket) marchWaiting();
+          continue;
         }
-        for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
-        volumeSamples += f.volumeSamples;
+        if (inside) f = integrate(origin, dir, invDir, t0, t1, sampler);
+        if (waitingCount > 0 && waitingPixel[waitingCount - 1] == pixel) marchWaiting();
+        add(pixel, f, dir);
       }
-      float* px = &out.color[4 * (static_cast<std::size_t>(y - region.y0) * region.width() +
-                                  static_cast<std::size_t>(x - region.x0))];
-      for (int c = 0; c < 4; ++c) px[c] = sum[c] * inv;
     }
+  if (waitingCount > 0) marchWaiting();
+  for (float& c : out.color) c *= inv;
   volumeSamples_.fetch_add(volumeSamples, std::memory_order_relaxed);
 }
 

@@ -62,6 +62,10 @@ class SciVisRenderer final : public Renderer {
   // integrate() with 1 / dir, which the caller has already.
   Fragment integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1,
                      const Sampler& sampler) const;
+  // Whether origin + t dir over [t0, t1) holds nothing but one visible volume without
+  // isosurfaces (integrate()'s march alone); then `ray` is that march.
+  bool marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1, const Sampler& sampler,
+                 MarchRay& ray) const;
   Vec3 shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, const Material& m,
              const Sampler& hitSampler) const;
   bool occluded(Vec3 origin, Vec3 dir, float tFar, const Sampler& s) const;

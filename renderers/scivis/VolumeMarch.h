@@ -50,4 +50,14 @@ struct MarchColor {
 std::uint32_t marchOneVolume(const SciVisScene::VolumeLayer& v, const MarchRay& ray,
                              MarchKernel kernel, MarchColor& color);
 
+// Rays marched together, one per SIMD lane: each lane composites its own ray exactly as
+// marchOneVolume does (the same bits), and no lane wastes samples past its ray's end.
+constexpr int kMarchPacket = 8;
+// Whether marchPacket() marches layer v's rays with `kernel` (resolved): AVX2, float voxels.
+bool marchesPackets(const SciVisScene::VolumeLayer& v, MarchKernel kernel);
+// Rays 0 .. count - 1 (count <= kMarchPacket) through layer v, where marchesPackets(v, Avx2):
+// colors[i] and samples[i] as marchOneVolume gives them for rays[i].
+void marchPacket(const SciVisScene::VolumeLayer& v, const MarchRay* rays, int count,
+                 MarchColor* colors, std::uint32_t* samples);
+
 }  // namespace renderers
