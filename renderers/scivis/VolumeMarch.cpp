@@ -126,6 +126,32 @@ AVX2_INLINE __m256 lerp(__m256 a, __m256 b, __m256 f) {
   return _mm256_add_ps(a, _mm256_mul_ps(f, _mm256_sub_ps(b, a)));
 }
 
+// The 8 corner voxels of the cells at offsets[l] of 8 lanes, in VolumeField::interpolate()'s
+// order, a register per corner: pairs along x loaded 64 bits at a time and transposed.
+AVX2_INLINE __m128 pairs(const float* a, const float* b) {
+  return _mm_castpd_ps(_mm_loadh_pd(_mm_load_sd(reinterpret_cast<const double*>(a)),
+                                    reinterpret_cast<const double*>(b)));
+}
+
+AVX2_INLINE void corners8(const float* voxels, const int offsets[8], int strideY, int strideZ,
+                          __m256 c[8]) {
+  for (int z = 0; z < 2; ++z) {
+    __m256 q[4];
+    for (int l = 0; l < 4; ++l) {
+      const float* v = voxels + offsets[l] + z * strideZ;
+      const float* w = voxels + offsets[l + 4] + z * strideZ;
+      q[l] = _mm256_insertf128_ps(_mm256_castps128_ps256(pairs(v, v + strideY)),
+                                  pairs(w, w + strideY), 1);
+    }
+    const __m256 t0 = _mm256_unpacklo_ps(q[0], q[1]), t1 = _mm256_unpackhi_ps(q[0], q[1]);
+    const __m256 t2 = _mm256_unpacklo_ps(q[2], q[3]), t3 = _mm256_unpackhi_ps(q[2], q[3]);
+    c[4 * z + 0] = _mm256_shuffle_ps(t0, t2, 0x44);
+    c[4 * z + 1] = _mm256_shuffle_ps(t0, t2, 0xee);
+    c[4 * z + 2] = _mm256_shuffle_ps(t1, t3, 0x44);
+    c[4 * z + 3] = _mm256_shuffle_ps(t1, t3, 0xee);
+  }
+}
+
 // The transfer function's colour and opacity of 8 lanes: entry at[l] (4 floats per entry) and
 // the next, interpolated with weight, as marchSse computes them. The entries are loaded whole
 // and transposed to a register per channel.
@@ -399,17 +425,6 @@ __attribute__((target("avx2"))) void marchPacketAvx2(const SciVisScene::VolumeLa
       const __m256i ix = cellOf(fx, g.lastCell.x, g.first.x, insideLanes),
                     iy = cellOf(fy, g.lastCell.y, g.first.y, insideLanes),
                     iz = cellOf(fz, g.lastCell.z, g.first.z, insideLanes);
-      // The macrocells (FieldGeometry::macroIndexOf), for empty-space skipping below.
-      const __m256i macros = _mm256_add_epi32(
-          _mm256_sub_epi32(_mm256_srai_epi32(ix, FieldGeometry::kMacroShift), macroFirstX),
-          _mm256_mullo_epi32(
-              macroCellsX,
-              _mm256_add_epi32(
-                  _mm256_sub_epi32(_mm256_srai_epi32(iy, FieldGeometry::kMacroShift), macroFirstY),
-                  _mm256_mullo_epi32(
-                      macroCellsY,
-                      _mm256_sub_epi32(_mm256_srai_epi32(iz, FieldGeometry::kMacroShift),
-                                       macroFirstZ)))));
       const __m256 wx = _mm256_sub_ps(fx, _mm256_cvtepi32_ps(ix)),
                    wy = _mm256_sub_ps(fy, _mm256_cvtepi32_ps(iy)),
                    wz = _mm256_sub_ps(fz, _mm256_cvtepi32_ps(iz));
@@ -417,13 +432,13 @@ __attribute__((target("avx2"))) void marchPacketAvx2(const SciVisScene::VolumeLa
           _mm256_sub_epi32(ix, firstX),
           _mm256_add_epi32(_mm256_mullo_epi32(_mm256_sub_epi32(iy, firstY), strideYs),
                            _mm256_mullo_epi32(_mm256_sub_epi32(iz, firstZ), strideZs)));
-      const auto corner = [voxels, offset](int at)
-                              AVX2_LAMBDA { return _mm256_i32gather_ps(voxels + at, offset, 4); };
+      alignas(32) int offsets[8];
+      _mm256_store_si256(reinterpret_cast<__m256i*>(offsets), offset);
+      __m256 c[8];
+      corners8(voxels, offsets, strideY, strideZ, c);
       // VolumeField::interpolate(): along x, then y, then z.
-      const __m256 x00 = lerp(corner(0), corner(1), wx),
-                   x10 = lerp(corner(strideY), corner(strideY + 1), wx);
-      const __m256 x01 = lerp(corner(strideZ), corner(strideZ + 1), wx),
-                   x11 = lerp(corner(strideZ + strideY), corner(strideZ + strideY + 1), wx);
+      const __m256 x00 = lerp(c[0], c[1], wx), x10 = lerp(c[2], c[3], wx);
+      const __m256 x01 = lerp(c[4], c[5], wx), x11 = lerp(c[6], c[7], wx);
       const __m256 values = lerp(lerp(x00, x10, wy), lerp(x01, x11, wy), wz);
       // The transfer function as marchSse computes it.
       __m256 x = _mm256_mul_ps(_mm256_sub_ps(values, valueMin), tableScale);
@@ -445,6 +460,18 @@ __attribute__((target("avx2"))) void marchPacketAvx2(const SciVisScene::VolumeLa
       // A lane that sees nothing here and lies in an empty macrocell jumps to where marchSse
       // would (the samples in between would see nothing either).
       if (const unsigned dark = inside & taken & ~composited) {
+        // Their macrocells (FieldGeometry::macroIndexOf).
+        const __m256i macros = _mm256_add_epi32(
+            _mm256_sub_epi32(_mm256_srai_epi32(ix, FieldGeometry::kMacroShift), macroFirstX),
+            _mm256_mullo_epi32(
+                macroCellsX,
+                _mm256_add_epi32(
+                    _mm256_sub_epi32(_mm256_srai_epi32(iy, FieldGeometry::kMacroShift),
+                                     macroFirstY),
+                    _mm256_mullo_epi32(
+                        macroCellsY,
+                        _mm256_sub_epi32(_mm256_srai_epi32(iz, FieldGeometry::kMacroShift),
+                                         macroFirstZ)))));
         alignas(32) int macro[8];
         _mm256_store_si256(reinterpret_cast<__m256i*>(macro), macros);
         alignas(32) float t[8];
