@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "dfb/Timing.h"
 #include "renderers/Error.h"
@@ -280,23 +281,39 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     const SciVisRenderer* renderer =
         job.brick < 0 ? nullptr : m.renderers[static_cast<std::size_t>(job.brick)].get();
     const Box3 bounds = plan ? plan->bounds : Box3{};
+    // The brick's pieces of the tile's rays, integrated together (SciVisRenderer batches the
+    // rays of its SIMD march); a ray that misses the brick adds nothing.
+    thread_local std::vector<SciVisRenderer::RayPiece> rays;
+    thread_local std::vector<Fragment> fragments;
+    thread_local std::vector<std::uint8_t> hits;
+    rays.clear(), hits.clear();
     for (int y = region.y0; y < region.y1; ++y)
-      for (int x = region.x0; x < region.x1; ++x) {
-        float sum[4] = {0, 0, 0, 0};
+      for (int x = region.x0; x < region.x1; ++x)
         for (std::uint32_t s = 0; s < spp; ++s) {
           // The camera ray of SciVisRenderer::render, sample for sample.
           const Sampler sampler(m.settings.seed, x, y, accumulationId, s);
           Vec3 origin, dir;
           camera.ray(static_cast<float>(x) + sampler.get(0), static_cast<float>(y) + sampler.get(1),
                      0.5f, 0.5f, origin, dir);
+          float a = 0, b = kInf;
+          const bool hit = renderer && clipToBox(bounds, origin, reciprocal(dir), a, b);
+          hits.push_back(hit ? 1 : 0);
+          if (!renderer || hit) rays.push_back({origin, dir, a, b, sampler});
+        }
+    fragments.resize(rays.size());
+    if (renderer) renderer->integrate(rays.data(), rays.size(), fragments.data());
+    std::size_t sample = 0, ray = 0;
+    for (int y = region.y0; y < region.y1; ++y)
+      for (int x = region.x0; x < region.x1; ++x) {
+        float sum[4] = {0, 0, 0, 0};
+        for (std::uint32_t s = 0; s < spp; ++s, ++sample) {
           if (!renderer) {
-            const Vec3 bg = background.radiance(dir);
+            const Vec3 bg = background.radiance(rays[ray++].dir);
             sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
             continue;
           }
-          float a = 0, b = kInf;
-          if (!clipToBox(bounds, origin, reciprocal(dir), a, b)) continue;
-          const Fragment f = renderer->integrate(origin, dir, a, b, sampler);
+          if (!hits[sample]) continue;
+          const Fragment& f = fragments[ray++];
           for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
         }
         const std::size_t p = static_cast<std::size_t>(y - region.y0) * region.width() +

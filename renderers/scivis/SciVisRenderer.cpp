@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <vector>
 
 #include "renderers/PixelBlocks.h"
 #include "renderers/scivis/VolumeMarch.h"
@@ -396,6 +397,39 @@ bool SciVisRenderer::marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, flo
   return true;
 }
 
+void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment* out) const {
+  const bool packets = layers_->size() == 1 && marchesPackets((*layers_)[0], march_);
+  MarchRay waiting[kMarchPacket];
+  std::size_t waitingIndex[kMarchPacket];
+  int waitingCount = 0;
+  auto marchWaiting = [&] {
+    MarchColor colors[kMarchPacket];
+    std::uint32_t taken[kMarchPacket];
+    marchPacket((*layers_)[0], waiting, waitingCount, colors, taken);
+    for (int i = 0; i < waitingCount; ++i) {
+      Fragment& f = out[waitingIndex[i]];  // integrate()'s fragment of the march alone
+      f = Fragment{};
+      f.rgba[0] = colors[i].rgb.x, f.rgba[1] = colors[i].rgb.y, f.rgba[2] = colors[i].rgb.z;
+      f.rgba[3] = 1.0f - colors[i].transmittance;
+      f.depth = colors[i].depth;
+      f.volumeSamples = taken[i];
+    }
+    waitingCount = 0;
+  };
+  for (std::size_t i = 0; i < count; ++i) {
+    const RayPiece& r = rays[i];
+    const Vec3 invDir = reciprocal(r.dir);
+    if (packets &&
+        marchOnly(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, waiting[waitingCount])) {
+      waitingIndex[waitingCount++] = i;
+      if (waitingCount == kMarchPacket) marchWaiting();
+      continue;
+    }
+    out[i] = integrate(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler);
+  }
+  if (waitingCount > 0) marchWaiting();
+}
+
 void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulationId,
                             std::uint32_t firstSample, std::uint32_t samples,
                             dfb::Tile& out) const {
@@ -404,63 +438,39 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   const float inv = samples ? 1.0f / static_cast<float>(samples) : 0.0f;
   const Box3& bounds = scene_.bounds();
   const Environment& background = scene_.desc().environment;
-  std::uint64_t volumeSamples = 0;
-  // A pixel's samples add up in its colour in the order of samples, then it is scaled.
-  auto add = [&](std::size_t pixel, Fragment f, Vec3 dir) {
-    if (options_.background) {
-      const Vec3 bg = background.radiance(dir) * (1.0f - f.rgba[3]);
-      f.rgba[0] += bg.x, f.rgba[1] += bg.y, f.rgba[2] += bg.z, f.rgba[3] = 1.0f;
-    }
-    float* px = &out.color[4 * pixel];
-    for (int c = 0; c < 4; ++c) px[c] += f.rgba[c];
-    volumeSamples += f.volumeSamples;
-  };
-  // Rays of the one-volume march wait here and march together, one per SIMD lane; any other
-  // ray of a waiting ray's pixel first lets them finish, so no pixel's sum changes order.
-  const bool packets = layers_->size() == 1 && marchesPackets((*layers_)[0], march_);
-  MarchRay waiting[kMarchPacket];
-  std::size_t waitingPixel[kMarchPacket];
-  int waitingCount = 0;
-  auto marchWaiting = [&] {
-    MarchColor colors[kMarchPacket];
-    std::uint32_t taken[kMarchPacket];
-    marchPacket((*layers_)[0], waiting, waitingCount, colors, taken);
-    for (int i = 0; i < waitingCount; ++i) {
-      Fragment f;  // integrate()'s fragment of the march
-      f.rgba[0] = colors[i].rgb.x, f.rgba[1] = colors[i].rgb.y, f.rgba[2] = colors[i].rgb.z;
-      f.rgba[3] = 1.0f - colors[i].transmittance;
-      f.depth = colors[i].depth;
-      f.volumeSamples = taken[i];
-      add(waitingPixel[i], f, waiting[i].dir);
-    }
-    waitingCount = 0;
-  };
+  // The tile's rays first (a ray outside the scene's bounds: an empty piece), integrated
+  // together, then each pixel's samples summed in order.
+  thread_local std::vector<RayPiece> rays;
+  thread_local std::vector<Fragment> fragments;
+  rays.clear();
   for (int y = region.y0; y < region.y1; ++y)
-    for (int x = region.x0; x < region.x1; ++x) {
-      const std::size_t pixel = static_cast<std::size_t>(y - region.y0) * region.width() +
-                                static_cast<std::size_t>(x - region.x0);
+    for (int x = region.x0; x < region.x1; ++x)
       for (std::uint32_t s = firstSample; s < firstSample + samples; ++s) {
         const Sampler sampler(settings_.seed, x, y, accumulationId, s);
         Vec3 origin, dir;
         camera_.ray(static_cast<float>(x) + sampler.get(0), static_cast<float>(y) + sampler.get(1),
                     0.5f, 0.5f, origin, dir);
         float t0 = 0, t1 = kInf;
-        Fragment f;
-        const Vec3 invDir = reciprocal(dir);
-        const bool inside = clipToBox(bounds, origin, invDir, t0, t1);
-        if (inside && packets &&
-            marchOnly(origin, dir, invDir, t0, t1, sampler, waiting[waitingCount])) {
-          waitingPixel[waitingCount++] = pixel;
-          if (waitingCount == kMarchPacket) marchWaiting();
-          continue;
-        }
-        if (inside) f = integrate(origin, dir, invDir, t0, t1, sampler);
-        if (waitingCount > 0 && waitingPixel[waitingCount - 1] == pixel) marchWaiting();
-        add(pixel, f, dir);
+        if (!clipToBox(bounds, origin, reciprocal(dir), t0, t1)) t0 = t1 = 0;
+        rays.push_back({origin, dir, t0, t1, sampler});
       }
+  fragments.resize(rays.size());
+  integrate(rays.data(), rays.size(), fragments.data());
+  std::uint64_t volumeSamples = 0;
+  std::size_t next = 0;
+  for (std::size_t pixel = 0; pixel < static_cast<std::size_t>(region.pixelCount()); ++pixel) {
+    float sum[4] = {0, 0, 0, 0};
+    for (std::uint32_t s = 0; s < samples; ++s, ++next) {
+      Fragment& f = fragments[next];
+      if (options_.background) {
+        const Vec3 bg = background.radiance(rays[next].dir) * (1.0f - f.rgba[3]);
+        f.rgba[0] += bg.x, f.rgba[1] += bg.y, f.rgba[2] += bg.z, f.rgba[3] = 1.0f;
+      }
+      for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
+      volumeSamples += f.volumeSamples;
     }
-  if (waitingCount > 0) marchWaiting();
-  for (float& c : out.color) c *= inv;
+    for (int c = 0; c < 4; ++c) out.color[4 * pixel + static_cast<std::size_t>(c)] = sum[c] * inv;
+  }
   volumeSamples_.fetch_add(volumeSamples, std::memory_order_relaxed);
 }
 

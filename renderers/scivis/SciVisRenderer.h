@@ -54,6 +54,16 @@ class SciVisRenderer final : public Renderer {
   // sample's stream (dimension 2 places the volume sample grid).
   Fragment integrate(Vec3 origin, Vec3 dir, float t0, float t1, const Sampler& sampler) const;
 
+  // A piece of a camera ray for integrate() (t0 >= t1: nothing, an empty fragment).
+  struct RayPiece {
+    Vec3 origin, dir;
+    float t0, t1;
+    Sampler sampler;
+  };
+  // out[i] = integrate(rays[i]) for i < count, the same bits; the rays of the one-volume march
+  // go through it together in SIMD lanes where its kernel takes packets (VolumeMarch.h).
+  void integrate(const RayPiece* rays, std::size_t count, Fragment* out) const;
+
   // Volume samples taken by camera rays since construction (for benchmarks).
   std::uint64_t volumeSamples() const { return volumeSamples_.load(); }
 
