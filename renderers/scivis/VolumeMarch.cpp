@@ -181,7 +181,7 @@ AVX2_INLINE void tableLerp(const float* table, const int at[8], __m256 weight, _
 // add. Positions, cells, weights, the eight corner voxels (gathers), the trilinear value and the
 // transfer function's entry, weight and opacity (gathers) are computed for all lanes; only the
 // lanes with some opacity are then composited, one by one in order, and the first lane past the
-// end or past opacity ends the ray. Float voxels whose offsets fit the gathers' 32-bit indices.
+// end or past opacity ends the ray. Float voxels whose offsets fit 32 bits.
 __attribute__((target("avx2"))) std::uint32_t marchAvx2(const SciVisScene::VolumeLayer& v,
                                                         const MarchRay& r, MarchColor& acc) {
   const VolumeField& field = *v.field;
@@ -570,8 +570,8 @@ __attribute__((target("avx2"))) void marchPacketAvx2(const SciVisScene::VolumeLa
   finish(p, colors, samples);
 }
 
-// Whether every voxel offset of the field fits a gather's signed 32-bit index.
-bool gatherable(const VolumeField& field) {
+// Whether every voxel offset of the field fits the AVX2 kernels' 32-bit lane arithmetic.
+bool offsetsFitInt(const VolumeField& field) {
   return field.volume().voxels.size() / sizeof(float) <= static_cast<std::size_t>(INT_MAX);
 }
 
@@ -592,7 +592,7 @@ MarchKernel resolveMarchKernel(MarchKernel kernel) {
 
 bool marchesPackets(const SciVisScene::VolumeLayer& v, MarchKernel kernel) {
   return kernel == MarchKernel::Avx2 && v.field && v.field->volume().type == VoxelType::Float32 &&
-         gatherable(*v.field);
+         offsetsFitInt(*v.field);
 }
 
 void marchPacket(const SciVisScene::VolumeLayer& v, const MarchRay* rays, int count,
@@ -616,7 +616,7 @@ std::uint32_t marchOneVolume(const SciVisScene::VolumeLayer& v, const MarchRay& 
   const VoxelType type = v.field->volume().type;
   // Integer voxels march 4 at a time everywhere: a gather of 8- or 16-bit voxels would read
   // past the last one.
-  if (kernel == MarchKernel::Avx2 && type == VoxelType::Float32 && gatherable(*v.field))
+  if (kernel == MarchKernel::Avx2 && type == VoxelType::Float32 && offsetsFitInt(*v.field))
     return marchAvx2(v, ray, color);
   switch (type) {
     default:

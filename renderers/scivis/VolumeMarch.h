@@ -5,11 +5,14 @@
 // bits): t_k = (k + jitter) step from the first k >= kStart with t_k >= t0, while t_k < t1,
 // t_k <= volumeEnd and more than minTransmittance of the light gets through.
 //
-// Two kernels, chosen at run time: SSE2 (every x86-64) takes 4 samples of the ray at a time,
-// AVX2 takes 8 (voxels and transfer-function opacities by gathers). Both compute every sample
-// lane by lane as the scalar path does, without fused multiply-adds, and composite in order, so
-// they give the same image bit for bit; they differ only in the benchmark's sample count (a
-// jump over an empty macrocell counts one sample, and the kernels jump from different places).
+// Two kernels, chosen at run time: SSE2 (every x86-64) takes 4 samples of one ray at a time;
+// AVX2 takes 8 samples of one ray (marchOneVolume) or one sample of each of 8 rays
+// (marchPacket, the fast one: no serial compositing, no samples wasted past a ray's end). All
+// compute every sample lane by lane as the scalar path does, without fused multiply-adds, and
+// composite each ray in order, so they give the same image bit for bit; they differ only in the
+// benchmark's sample count (a jump over an empty macrocell counts one sample, and the kernels
+// jump from different places). AVX2 marches float voxels (whose offsets fit 32 bits); the
+// others march with SSE.
 #include <cstdint>
 
 #include "renderers/Math.h"
