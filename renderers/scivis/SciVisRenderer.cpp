@@ -438,38 +438,46 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   const float inv = samples ? 1.0f / static_cast<float>(samples) : 0.0f;
   const Box3& bounds = scene_.bounds();
   const Environment& background = scene_.desc().environment;
-  // The tile's rays first (a ray outside the scene's bounds: an empty piece), integrated
-  // together, then each pixel's samples summed in order.
+  // Rows of the tile's rays at a time (about kBatch rays; a ray outside the scene's bounds is an
+  // empty piece), integrated together, then each pixel's samples summed in order.
   thread_local std::vector<RayPiece> rays;
   thread_local std::vector<Fragment> fragments;
-  rays.clear();
-  for (int y = region.y0; y < region.y1; ++y)
-    for (int x = region.x0; x < region.x1; ++x)
-      for (std::uint32_t s = firstSample; s < firstSample + samples; ++s) {
-        const Sampler sampler(settings_.seed, x, y, accumulationId, s);
-        Vec3 origin, dir;
-        camera_.ray(static_cast<float>(x) + sampler.get(0), static_cast<float>(y) + sampler.get(1),
-                    0.5f, 0.5f, origin, dir);
-        float t0 = 0, t1 = kInf;
-        if (!clipToBox(bounds, origin, reciprocal(dir), t0, t1)) t0 = t1 = 0;
-        rays.push_back({origin, dir, t0, t1, sampler});
-      }
-  fragments.resize(rays.size());
-  integrate(rays.data(), rays.size(), fragments.data());
+  const int width = region.width();
+  const int rows = std::max(
+      1, static_cast<int>(kBatch / std::max<std::size_t>(1, std::size_t{samples} * width)));
   std::uint64_t volumeSamples = 0;
-  std::size_t next = 0;
-  for (std::size_t pixel = 0; pixel < static_cast<std::size_t>(region.pixelCount()); ++pixel) {
-    float sum[4] = {0, 0, 0, 0};
-    for (std::uint32_t s = 0; s < samples; ++s, ++next) {
-      Fragment& f = fragments[next];
-      if (options_.background) {
-        const Vec3 bg = background.radiance(rays[next].dir) * (1.0f - f.rgba[3]);
-        f.rgba[0] += bg.x, f.rgba[1] += bg.y, f.rgba[2] += bg.z, f.rgba[3] = 1.0f;
+  for (int y0 = region.y0; y0 < region.y1; y0 += rows) {
+    const int y1 = std::min(region.y1, y0 + rows);
+    rays.clear();
+    for (int y = y0; y < y1; ++y)
+      for (int x = region.x0; x < region.x1; ++x)
+        for (std::uint32_t s = firstSample; s < firstSample + samples; ++s) {
+          const Sampler sampler(settings_.seed, x, y, accumulationId, s);
+          Vec3 origin, dir;
+          camera_.ray(static_cast<float>(x) + sampler.get(0),
+                      static_cast<float>(y) + sampler.get(1), 0.5f, 0.5f, origin, dir);
+          float t0 = 0, t1 = kInf;
+          if (!clipToBox(bounds, origin, reciprocal(dir), t0, t1)) t0 = t1 = 0;
+          rays.push_back({origin, dir, t0, t1, sampler});
+        }
+    fragments.resize(rays.size());
+    integrate(rays.data(), rays.size(), fragments.data());
+    std::size_t next = 0;
+    const std::size_t first = static_cast<std::size_t>(y0 - region.y0) * width;
+    const std::size_t last = static_cast<std::size_t>(y1 - region.y0) * width;
+    for (std::size_t pixel = first; pixel < last; ++pixel) {
+      float sum[4] = {0, 0, 0, 0};
+      for (std::uint32_t s = 0; s < samples; ++s, ++next) {
+        Fragment& f = fragments[next];
+        if (options_.background) {
+          const Vec3 bg = background.radiance(rays[next].dir) * (1.0f - f.rgba[3]);
+          f.rgba[0] += bg.x, f.rgba[1] += bg.y, f.rgba[2] += bg.z, f.rgba[3] = 1.0f;
+        }
+        for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
+        volumeSamples += f.volumeSamples;
       }
-      for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
-      volumeSamples += f.volumeSamples;
+      for (int c = 0; c < 4; ++c) out.color[4 * pixel + static_cast<std::size_t>(c)] = sum[c] * inv;
     }
-    for (int c = 0; c < 4; ++c) out.color[4 * pixel + static_cast<std::size_t>(c)] = sum[c] * inv;
   }
   volumeSamples_.fetch_add(volumeSamples, std::memory_order_relaxed);
 }

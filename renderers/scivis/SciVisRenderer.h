@@ -63,6 +63,9 @@ class SciVisRenderer final : public Renderer {
   // out[i] = integrate(rays[i]) for i < count, the same bits; the rays of the one-volume march
   // go through it together in SIMD lanes where its kernel takes packets (VolumeMarch.h).
   void integrate(const RayPiece* rays, std::size_t count, Fragment* out) const;
+  // How many rays a caller should hand integrate() at once, about: enough to fill the packets,
+  // few enough to stay in cache.
+  static constexpr std::size_t kBatch = 1024;
 
   // Volume samples taken by camera rays since construction (for benchmarks).
   std::uint64_t volumeSamples() const { return volumeSamples_.load(); }
