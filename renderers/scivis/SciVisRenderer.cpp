@@ -259,7 +259,7 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
     MarchColor color{acc.rgb, acc.transmittance, acc.depth};
     out.volumeSamples = marchOneVolume(
         layers[0], {origin, dir, invDir, t0, t1, kStart, volumeEnd, step, jitter, minTransmittance},
-        march_, color);
+        color);
     acc.rgb = color.rgb, acc.transmittance = color.transmittance, acc.depth = color.depth;
   } else if (volumeStart <= volumeEnd) {
     const std::size_t n = layers.size();

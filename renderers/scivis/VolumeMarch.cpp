@@ -113,7 +113,6 @@ std::uint32_t marchSse(const SciVisScene::VolumeLayer& v, const MarchRay& r, Mar
 }
 
 #define AVX2_INLINE __attribute__((target("avx2"), always_inline)) inline
-#define AVX2_LAMBDA __attribute__((target("avx2"), always_inline))
 
 // min(int(f), last) in the lanes inside; the first held cell outside, so every lane reads held
 // voxels.
@@ -174,164 +173,6 @@ AVX2_INLINE void tableLerp(const float* table, const int at[8], __m256 weight, _
   g = lerp(c[0][1], c[1][1], weight);
   b = lerp(c[0][2], c[1][2], weight);
   a = lerp(c[0][3], c[1][3], weight);
-}
-
-// Eight samples of the ray at a time (AVX2 lanes). Every step is marchSse's (and so the scalar
-// path's) in its order: the target is AVX2 alone, so the compiler cannot fuse a multiply and an
-// add. Positions, cells, weights, the eight corner voxels (gathers), the trilinear value and the
-// transfer function's entry, weight and opacity (gathers) are computed for all lanes; only the
-// lanes with some opacity are then composited, one by one in order, and the first lane past the
-// end or past opacity ends the ray. Float voxels whose offsets fit 32 bits.
-__attribute__((target("avx2"))) std::uint32_t marchAvx2(const SciVisScene::VolumeLayer& v,
-                                                        const MarchRay& r, MarchColor& acc) {
-  const VolumeField& field = *v.field;
-  const FieldGeometry::Layout g = field.layout();
-  const float* voxels = reinterpret_cast<const float*>(field.volume().voxels.data());
-  const std::uint8_t* empty = v.emptyMacrocells.data();
-  const float minTransmittance = r.minTransmittance;
-  float k = firstSample(r);
-
-  const __m256 lanes = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7), jitters = _mm256_set1_ps(r.jitter),
-               steps = _mm256_set1_ps(r.step);
-  const __m256 t1 = _mm256_set1_ps(r.t1), volumeEnd = _mm256_set1_ps(r.volumeEnd);
-  const __m256 ox = _mm256_set1_ps(r.origin.x), oy = _mm256_set1_ps(r.origin.y),
-               oz = _mm256_set1_ps(r.origin.z);
-  const __m256 dx = _mm256_set1_ps(r.dir.x), dy = _mm256_set1_ps(r.dir.y),
-               dz = _mm256_set1_ps(r.dir.z);
-  const __m256 gx = _mm256_set1_ps(g.origin.x), gy = _mm256_set1_ps(g.origin.y),
-               gz = _mm256_set1_ps(g.origin.z);
-  const __m256 sx = _mm256_set1_ps(g.invSpacing.x), sy = _mm256_set1_ps(g.invSpacing.y),
-               sz = _mm256_set1_ps(g.invSpacing.z);
-  const __m256 lox = _mm256_set1_ps(g.lo.x), loy = _mm256_set1_ps(g.lo.y),
-               loz = _mm256_set1_ps(g.lo.z);
-  const __m256 hix = _mm256_set1_ps(g.hi.x), hiy = _mm256_set1_ps(g.hi.y),
-               hiz = _mm256_set1_ps(g.hi.z);
-  const int strideY = static_cast<int>(g.strideY), strideZ = static_cast<int>(g.strideZ);
-  const __m256i strideYs = _mm256_set1_epi32(strideY), strideZs = _mm256_set1_epi32(strideZ);
-  const __m256 tableScale = _mm256_set1_ps(v.tableScale), valueMin = _mm256_set1_ps(v.valueMin);
-  const __m256 zero = _mm256_setzero_ps(),
-               lastEntry = _mm256_set1_ps(static_cast<float>(SciVisScene::kTableSize - 1));
-  const __m256i lastLower = _mm256_set1_epi32(SciVisScene::kTableSize - 2);
-  const float* table = v.table.data();
-
-  __m128 rgb = _mm_setr_ps(acc.rgb.x, acc.rgb.y, acc.rgb.z, 0);
-  float transmittance = acc.transmittance, depth = acc.depth;
-  std::uint32_t samples = 0;
-  for (; transmittance > minTransmittance; k += 8) {
-    const __m256 ts =
-        _mm256_mul_ps(_mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(k), lanes), jitters), steps);
-    const float tFirst = _mm256_cvtss_f32(ts);
-    if (tFirst >= r.t1 || tFirst > r.volumeEnd) break;
-    // VolumeField::locate(), lane by lane.
-    const __m256 fx =
-        _mm256_mul_ps(_mm256_sub_ps(_mm256_add_ps(ox, _mm256_mul_ps(dx, ts)), gx), sx);
-    const __m256 fy =
-        _mm256_mul_ps(_mm256_sub_ps(_mm256_add_ps(oy, _mm256_mul_ps(dy, ts)), gy), sy);
-    const __m256 fz =
-        _mm256_mul_ps(_mm256_sub_ps(_mm256_add_ps(oz, _mm256_mul_ps(dz, ts)), gz), sz);
-    __m256 in =
-        _mm256_and_ps(_mm256_cmp_ps(fx, lox, _CMP_GE_OQ), _mm256_cmp_ps(fx, hix, _CMP_LE_OQ));
-    in = _mm256_and_ps(
-        in, _mm256_and_ps(_mm256_cmp_ps(fy, loy, _CMP_GE_OQ), _mm256_cmp_ps(fy, hiy, _CMP_LE_OQ)));
-    in = _mm256_and_ps(
-        in, _mm256_and_ps(_mm256_cmp_ps(fz, loz, _CMP_GE_OQ), _mm256_cmp_ps(fz, hiz, _CMP_LE_OQ)));
-    const unsigned inside = static_cast<unsigned>(_mm256_movemask_ps(in));
-    __m256 values = zero;
-    if (inside) {
-      const __m256i insideLanes = _mm256_castps_si256(in);
-      const __m256i ix = cellOf(fx, g.lastCell.x, g.first.x, insideLanes),
-                    iy = cellOf(fy, g.lastCell.y, g.first.y, insideLanes),
-                    iz = cellOf(fz, g.lastCell.z, g.first.z, insideLanes);
-      if (inside & 1) {
-        // The macrocell of lane 0 (FieldGeometry::macroIndexOf), for empty-space skipping.
-        const int cx = _mm256_cvtsi256_si32(ix), cy = _mm256_cvtsi256_si32(iy),
-                  cz = _mm256_cvtsi256_si32(iz);
-        const int m = (cx >> FieldGeometry::kMacroShift) - g.macroFirst.x +
-                      g.macroCells.x *
-                          ((cy >> FieldGeometry::kMacroShift) - g.macroFirst.y +
-                           g.macroCells.y * ((cz >> FieldGeometry::kMacroShift) - g.macroFirst.z));
-        if (empty[m]) {
-          const float last = lastBeforeExit(field, m, r, tFirst);
-          if (last > k + 8) {
-            samples += 1;
-            k = last - 8;  // the loop's += 8 lands on `last`
-            continue;
-          }
-        }
-      }
-      const __m256 wx = _mm256_sub_ps(fx, _mm256_cvtepi32_ps(ix)),
-                   wy = _mm256_sub_ps(fy, _mm256_cvtepi32_ps(iy)),
-                   wz = _mm256_sub_ps(fz, _mm256_cvtepi32_ps(iz));
-      const __m256i offset = _mm256_add_epi32(
-          _mm256_sub_epi32(ix, _mm256_set1_epi32(g.first.x)),
-          _mm256_add_epi32(
-              _mm256_mullo_epi32(_mm256_sub_epi32(iy, _mm256_set1_epi32(g.first.y)), strideYs),
-              _mm256_mullo_epi32(_mm256_sub_epi32(iz, _mm256_set1_epi32(g.first.z)), strideZs)));
-      const auto corner = [voxels, offset](int at)
-                              AVX2_LAMBDA { return _mm256_i32gather_ps(voxels + at, offset, 4); };
-      // VolumeField::interpolate(): along x, then y, then z.
-      const __m256 x00 = lerp(corner(0), corner(1), wx),
-                   x10 = lerp(corner(strideY), corner(strideY + 1), wx);
-      const __m256 x01 = lerp(corner(strideZ), corner(strideZ + 1), wx),
-                   x11 = lerp(corner(strideZ + strideY), corner(strideZ + strideY + 1), wx);
-      values = lerp(lerp(x00, x10, wy), lerp(x01, x11, wy), wz);
-    }
-    // The transfer function's entry and weight as marchSse computes them, and the opacity.
-    __m256 x = _mm256_mul_ps(_mm256_sub_ps(values, valueMin), tableScale);
-    x = _mm256_andnot_ps(_mm256_cmp_ps(x, zero, _CMP_LT_OQ), x);
-    const __m256 over = _mm256_cmp_ps(lastEntry, x, _CMP_LT_OQ);
-    x = _mm256_or_ps(_mm256_and_ps(over, lastEntry), _mm256_andnot_ps(over, x));
-    __m256i i = _mm256_cvttps_epi32(x);
-    const __m256i high = _mm256_cmpgt_epi32(i, lastLower);
-    i = _mm256_or_si256(_mm256_and_si256(high, lastLower), _mm256_andnot_si256(high, i));
-    i = _mm256_and_si256(i, _mm256_cmpgt_epi32(i, _mm256_set1_epi32(-1)));  // NaN data: entry 0
-    const __m256 weight = _mm256_sub_ps(x, _mm256_cvtepi32_ps(i));
-    const __m256i at = _mm256_slli_epi32(i, 2);
-    const __m256 a3 = _mm256_i32gather_ps(table + 3, at, 4),
-                 b3 = _mm256_i32gather_ps(table + 7, at, 4);
-    const __m256 alpha = _mm256_add_ps(a3, _mm256_mul_ps(weight, _mm256_sub_ps(b3, a3)));
-    // Lanes before the end of the ray (t grows with the lane) that show something.
-    const unsigned inRange = static_cast<unsigned>(_mm256_movemask_ps(_mm256_and_ps(
-        _mm256_cmp_ps(ts, t1, _CMP_LT_OQ), _mm256_cmp_ps(ts, volumeEnd, _CMP_LE_OQ))));
-    const int end = std::countr_zero(~inRange);
-    unsigned visible =
-        static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(alpha, zero, _CMP_GT_OQ))) & inside &
-        ((1u << end) - 1);
-    bool done = false;
-    if (visible) {
-      alignas(32) float t[8], w[8], alphas[8];
-      alignas(32) int entry[8];
-      _mm256_store_ps(t, ts);
-      _mm256_store_ps(w, weight);
-      _mm256_store_ps(alphas, alpha);
-      _mm256_store_si256(reinterpret_cast<__m256i*>(entry), at);
-      do {
-        const int lane = std::countr_zero(visible);
-        visible &= visible - 1;
-        const float* e = table + entry[lane];
-        const __m128 a = _mm_loadu_ps(e), b = _mm_loadu_ps(e + 4);
-        const __m128 rgba = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(w[lane]), _mm_sub_ps(b, a)));
-        const float opacity = alphas[lane];
-        rgb = _mm_add_ps(rgb, _mm_mul_ps(rgba, _mm_set1_ps(transmittance * opacity)));
-        transmittance *= 1.0f - opacity;
-        if (depth == kInf && transmittance <= 0.5f) depth = t[lane];
-        if (transmittance <= minTransmittance) {
-          samples += static_cast<std::uint32_t>(lane + 1);
-          done = true;
-          break;
-        }
-      } while (visible);
-    }
-    if (done) break;
-    samples += static_cast<std::uint32_t>(end);
-    if (end < 8) break;
-  }
-  alignas(16) float sum[4];
-  _mm_store_ps(sum, rgb);
-  acc.rgb = {sum[0], sum[1], sum[2]};
-  acc.transmittance = transmittance;
-  acc.depth = depth;
-  return samples;
 }
 
 // What every lane of a packet shares: the field's geometry and voxels, the transfer function.
@@ -570,7 +411,7 @@ __attribute__((target("avx2"))) void marchPacketAvx2(const SciVisScene::VolumeLa
   finish(p, colors, samples);
 }
 
-// Whether every voxel offset of the field fits the AVX2 kernels' 32-bit lane arithmetic.
+// Whether every voxel offset of the field fits the packet kernel's 32-bit lane arithmetic.
 bool offsetsFitInt(const VolumeField& field) {
   return field.volume().voxels.size() / sizeof(float) <= static_cast<std::size_t>(INT_MAX);
 }
@@ -612,12 +453,8 @@ const char* marchKernelName(MarchKernel kernel) {
 }
 
 std::uint32_t marchOneVolume(const SciVisScene::VolumeLayer& v, const MarchRay& ray,
-                             MarchKernel kernel, MarchColor& color) {
+                             MarchColor& color) {
   const VoxelType type = v.field->volume().type;
-  // Integer voxels march 4 at a time everywhere: a gather of 8- or 16-bit voxels would read
-  // past the last one.
-  if (kernel == MarchKernel::Avx2 && type == VoxelType::Float32 && offsetsFitInt(*v.field))
-    return marchAvx2(v, ray, color);
   switch (type) {
     default:
     case VoxelType::Float32:

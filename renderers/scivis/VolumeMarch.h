@@ -5,14 +5,15 @@
 // bits): t_k = (k + jitter) step from the first k >= kStart with t_k >= t0, while t_k < t1,
 // t_k <= volumeEnd and more than minTransmittance of the light gets through.
 //
-// Two kernels, chosen at run time: SSE2 (every x86-64) takes 4 samples of one ray at a time;
-// AVX2 takes 8 samples of one ray (marchOneVolume) or one sample of each of 8 rays
-// (marchPacket, the fast one: no serial compositing, no samples wasted past a ray's end). All
-// compute every sample lane by lane as the scalar path does, without fused multiply-adds, and
-// composite each ray in order, so they give the same image bit for bit; they differ only in the
-// benchmark's sample count (a jump over an empty macrocell counts one sample, and the kernels
-// jump from different places). AVX2 marches float voxels (whose offsets fit 32 bits); the
-// others march with SSE.
+// Two kernels: SSE2 (every x86-64) takes 4 samples of one ray at a time (marchOneVolume); where
+// the CPU runs AVX2 (chosen at run time), packets of 8 rays take one sample of each at a time,
+// one ray per lane (marchPacket: no serial compositing, no samples wasted past a ray's end).
+// 8 samples of one ray at a time in AVX2 measured only about 10% faster than SSE's 4, so a ray
+// alone marches with SSE everywhere. Both compute every sample lane by lane as the scalar path
+// does, without fused multiply-adds, and composite each ray in order, so they give the same
+// image bit for bit; they differ only in the benchmark's sample count (a jump over an empty
+// macrocell counts one sample, and the kernels jump from different places). Packets march
+// float voxels (whose offsets fit 32 bits); integer voxels march ray by ray.
 #include <cstdint>
 
 #include "renderers/Math.h"
@@ -48,10 +49,10 @@ struct MarchColor {
   float depth = Box3::kInf;
 };
 
-// Composites the samples of `ray` through layer v (its field set) onto `color` with `kernel`
-// (resolved: Sse or Avx2). Returns the samples taken (for benchmarks).
+// Composites the samples of `ray` through layer v (its field set) onto `color`, 4 at a time
+// (SSE). Returns the samples taken (for benchmarks).
 std::uint32_t marchOneVolume(const SciVisScene::VolumeLayer& v, const MarchRay& ray,
-                             MarchKernel kernel, MarchColor& color);
+                             MarchColor& color);
 
 // Rays marched together, one per SIMD lane: each lane composites its own ray exactly as
 // marchOneVolume does (the same bits), and no lane wastes samples past its ray's end.
