@@ -2,7 +2,7 @@
 # The layering of docs/design.md, checked on every include: messaging/ includes nothing of ours;
 # dfb/ uses messaging/ only; renderers/ and wall/ use dfb/ and messaging/ but not each other (nor
 # apps/, api/); only apps/ and api/ (the data-distributed API) tie them together, and neither
-# includes the other.
+# includes the other; bench/ and examples/ never include tests/.
 # (Includes are written from the repository root, so one include path serves every library;
 # this test is what keeps a library from reaching into another.)
 set -euo pipefail
@@ -22,10 +22,13 @@ forbid renderers wall apps api
 forbid wall renderers apps api
 forbid api apps
 forbid apps api
+# Benchmarks and examples use what a user could: never the tests' helpers.
+forbid bench tests
+forbid examples tests
 # The API's public header is all an installed program sees: MPI and the standard library only.
 if hits=$(grep -nE '#include +"' "$root/api/DataDistributed.h"); then
   echo "FAIL: api/DataDistributed.h must include only <mpi.h> and standard headers:"; echo "$hits"
   status=1
 fi
-[ $status -eq 0 ] && echo "messaging/ -> nothing; dfb/ -> messaging/ only; renderers/, wall/ -> dfb/, messaging/ only; api/ self-contained: holds"
+[ $status -eq 0 ] && echo "messaging/ -> nothing; dfb/ -> messaging/ only; renderers/, wall/ -> dfb/, messaging/ only; api/ self-contained; bench/, examples/ -> no tests/: holds"
 exit $status

@@ -9,8 +9,8 @@
 #include <string>
 
 #include "renderers/BuiltinScenes.h"
+#include "renderers/CanvasImage.h"
 #include "renderers/Scene.h"
-#include "tests/renderers/RenderTestUtil.h"
 
 int main(int argc, char** argv) {
   if (argc < 7) {
@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
     const auto spp = static_cast<std::uint32_t>(std::atoi(argv[4]));
     const std::string name = argc > 7 ? argv[7] : "pathtracer";
     auto renderer = renderers::makeRenderer(name, scene, {w, h, 1, std::atoi(argv[5])});
-    const auto image = renderers::test::renderImage(*renderer, w, h, 64, threads, spp);
+    const auto image = renderers::renderCanvas(*renderer, w, h, 64, threads, spp);
     const auto t2 = Clock::now();
     const double cpu = double(std::clock() - c1) / CLOCKS_PER_SEC;
     const double load = std::chrono::duration<double>(t1 - t0).count();

@@ -27,10 +27,10 @@
 #include <vector>
 
 #include "renderers/BuiltinScenes.h"
+#include "renderers/CanvasImage.h"
 #include "renderers/Error.h"
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/SciVisRenderer.h"
-#include "tests/renderers/RenderTestUtil.h"
 #include "wall/Png.h"
 
 namespace {
@@ -129,7 +129,7 @@ int main(int argc, char** argv) {
           orbitCamera(scene.desc->camera, orbitDegreesPerFrame * static_cast<float>(f - 1)));
       const auto a = Clock::now();
       const double cpuStart = processCpuSeconds();
-      image = test::renderImage(*renderer, size, size, 64, threads, 1);
+      image = renderCanvas(*renderer, size, size, 64, threads, 1);
       seconds.push_back(std::chrono::duration<double>(Clock::now() - a).count());
       cpuSeconds.push_back(processCpuSeconds() - cpuStart);
     }
@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
     if (argc > 6) {
       // Frame 1's view (the last frame rendered is frame `frames`, one step short of a turn).
       renderer->beginFrame({1, 1}, scene.desc->camera);
-      image = test::renderImage(*renderer, size, size, 64, threads, 1);
+      image = renderCanvas(*renderer, size, size, 64, threads, 1);
       const std::string out = argv[6];
       if (out.size() > 4 && out.compare(out.size() - 4, 4, ".f32") == 0) {
         // The linear floats as they are, to check that an optimisation changes no bit.

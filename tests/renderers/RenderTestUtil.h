@@ -8,8 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "dfb/Tile.h"
-#include "renderers/Parallel.h"
+#include "renderers/CanvasImage.h"
 #include "renderers/Renderer.h"
 
 namespace renderers::test {
@@ -41,22 +40,7 @@ inline std::vector<float> renderImage(const Renderer& r, int width, int height, 
                                       int threads, std::uint32_t spp,
                                       std::uint32_t accumulationId = 0,
                                       std::uint32_t firstSample = 0) {
-  std::vector<float> image(4 * static_cast<std::size_t>(width) * height, -1.0f);
-  std::vector<dfb::Region> regions;
-  for (int y = 0; y < height; y += tileSize)
-    for (int x = 0; x < width; x += tileSize)
-      regions.push_back({x, y, std::min(width, x + tileSize), std::min(height, y + tileSize)});
-  ThreadLimit limit(threads);
-  parallelFor(regions.size(), [&](std::size_t i) {
-    dfb::Tile tile;
-    r.render(regions[i], accumulationId, firstSample, spp, tile);
-    const dfb::Region& g = tile.region;
-    for (int y = g.y0; y < g.y1; ++y)
-      std::memcpy(&image[4 * (static_cast<std::size_t>(y) * width + g.x0)],
-                  &tile.color[4 * static_cast<std::size_t>(y - g.y0) * g.width()],
-                  4 * sizeof(float) * g.width());
-  });
-  return image;
+  return renderCanvas(r, width, height, tileSize, threads, spp, accumulationId, firstSample);
 }
 
 }  // namespace renderers::test
