@@ -163,8 +163,8 @@ WorldMesh selectTriangles(const WorldMesh& m, Keep keep) {
   return out;
 }
 
-// The voxels of `g` around `region`, two beyond it: the crossing test samples one step past a
-// ray's end and gradients half a voxel around a hit. False: fewer than 2 voxels on an axis.
+// The voxels of `g` around `region`, two beyond it: gradients look half a voxel around a hit
+// and the brick's isosurface cells reach a cell past its bounds. False: fewer than 2 voxels on an axis.
 // `whole`: widened to whole macrocells (their far faces included), so every macrocell has the
 // value range and bounds it has in the whole field, and shading rays skip exactly the stretches
 // they skip there.
