@@ -226,25 +226,9 @@ EOF
   # AO seams: largest per-channel difference against the unbricked render, and how many
   # channels differ by more than 1e-4.
   local seams
-  seams=$(/usr/bin/python3 - "$work/dp-seam-whole.pfm" "$work/dp-seam-reach.pfm" "$work/dp-seam-layer.pfm" <<'PY'
-import array, sys
-def pfm(path):
-    with open(path, 'rb') as f:
-        f.readline(), f.readline()
-        scale = float(f.readline())
-        data = array.array('f', f.read())
-    if (scale < 0) != (sys.byteorder == 'little'):
-        data.byteswap()
-    return data
-whole = pfm(sys.argv[1])
-out = []
-for name, path in (('reach', sys.argv[2]), ('layer', sys.argv[3])):
-    d = [abs(a - b) for a, b in zip(pfm(path), whole)]
-    out.append('"%s": {"max_abs_difference": %.4g, "channels_over_1e-4": %d, "channels": %d}' %
-               (name, max(d), sum(x > 1e-4 for x in d), len(d)))
-print(', '.join(out))
-PY
-)
+  seams=$("$root/scripts/pfm-diff" "$work/dp-seam-whole.pfm" "$work/dp-seam-reach.pfm" "$work/dp-seam-layer.pfm" |
+    awk '{name = (NR == 1 ? "reach" : "layer")
+          printf "%s\"%s\": {\"max_abs_difference\": %s, \"channels_over_1e-4\": %s, \"channels\": %s}", (NR > 1 ? ", " : ""), name, $2, $3, $4}')
   echo "  AO seams, 4 bricks vs the unbricked render ($memsize, $seamFrames frames, shadows off): {$seams}"
 
   # ---- Skewed scene: replication 2 vs 1. ----

@@ -16,6 +16,7 @@ set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 mpi() { local n=$1; shift; "$MPIEXEC" -n "$n" --oversubscribe --bind-to none "$@"; }
 processes() { "$COMPARE" --info "$1" | cut -d' ' -f1; }  # wall processes of a layout
 canvas() { "$COMPARE" --info "$1" | cut -d' ' -f2; }     # its canvas, WxH
@@ -209,27 +210,12 @@ PY
     done
     mpi 1 "$DFBWALL" --bricks 1 --image "$work/whole.pfm" --quiet "$@"
     mpi 1 "$DFBWALL" --bricks "$bricks" --ghost layer --image "$work/layer.pfm" --quiet "$@"
-    /usr/bin/python3 - "$work/whole.pfm" "$work/one.pfm" "$work/layer.pfm" "$bricks" <<'PY'
-import array, sys
-def pfm(path):
-    with open(path, 'rb') as f:
-        f.readline(), f.readline()
-        scale = float(f.readline())
-        data = array.array('f', f.read())
-    if (scale < 0) != (sys.byteorder == 'little'):
-        data.byteswap()
-    return data
-whole = pfm(sys.argv[1])
-def worst(path):
-    image = pfm(path)
-    assert len(image) == len(whole) > 0, f'{path}: {len(image)} floats, whole {len(whole)}'
-    return max(abs(a - b) for a, b in zip(image, whole))
-reach, layer = worst(sys.argv[2]), worst(sys.argv[3])
-print(f'--bricks {sys.argv[4]} on 1, 3, 4 ranks and replication 2: the same bytes; largest '
-      f'difference per channel from --bricks 1: {reach:.3g} (--ghost layer: {layer:.3g})')
-assert reach <= 1e-4, f'--bricks {sys.argv[4]} differs from --bricks 1 by {reach:.3g} > 1e-4'
-assert layer > 1e-3, f'--ghost layer differs by only {layer:.3g}: nothing crosses bricks'
-PY
+    reach=$("$root/scripts/pfm-diff" "$work/whole.pfm" "$work/one.pfm" | cut -d' ' -f2)
+    layer=$("$root/scripts/pfm-diff" "$work/whole.pfm" "$work/layer.pfm" | cut -d' ' -f2)
+    echo "--bricks $bricks on 1, 3, 4 ranks and replication 2: the same bytes; largest difference" \
+      "per channel from --bricks 1: $reach (--ghost layer: $layer)"
+    awk -v r="$reach" 'BEGIN {exit !(r <= 1e-4)}' || { echo "FAIL: --bricks $bricks differs from --bricks 1 by $reach > 1e-4"; exit 1; }
+    awk -v l="$layer" 'BEGIN {exit !(l > 1e-3)}' || { echo "FAIL: --ghost layer differs by only $layer: nothing crosses bricks"; exit 1; }
     ;;
   *) echo "unknown scenario $scenario"; exit 2 ;;
 esac
