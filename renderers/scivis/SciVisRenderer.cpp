@@ -217,7 +217,10 @@ bool crossesIsosurface(const FieldGeometry& field, Sample sample,
       continue;
     }
     float value;
-    if (!sample(p, value)) break;
+    if (!sample(p, value)) {  // a missing value (NaN): no crossing into or out of it
+      havePrevious = false;
+      continue;
+    }
     if (havePrevious)
       for (const IsosurfaceDesc* iso : isosurfaces)
         if (crosses(previous, value, iso->value)) return true;
