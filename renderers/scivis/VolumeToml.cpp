@@ -177,7 +177,12 @@ void readFile(const TomlReader& r, const toml::table& t, const std::string& what
   try {
     resolveVolumeFile(s);
   } catch (const Error& e) {
-    r.fail(file, what + ".file: " + e.what());
+    // Point at the field the problem is about: a dataset, variable or time step the file lacks.
+    const std::string m = e.what();
+    for (const std::string field : {"dataset", "variable", "time"})
+      if (const toml::node* n = t.get(field); n && m.find(" " + field + " ") != std::string::npos)
+        r.fail(*n, what + "." + field + ": " + m);
+    r.fail(file, what + ".file: " + m);
   }
 }
 
