@@ -85,7 +85,15 @@ VolumeSource::Kind readKind(const TomlReader& r, const toml::table& t, const std
   if (s == "marschner-lobb") return VolumeSource::Kind::MarschnerLobb;
   if (s == "raw") return VolumeSource::Kind::RawFile;
   if (s == "openvdb") return VolumeSource::Kind::OpenVdb;
-  if (s == "file") return VolumeSource::Kind::File;
+  if (s == "file") {
+    // The existing readers by the file's extension: .raw (with dims and type), .vdb.
+    const toml::node* file = t.get("file");
+    const std::string name = file && file->is_string() ? *file->value<std::string>() : "";
+    const std::string ext = std::filesystem::path(name).extension().string();
+    if (ext == ".raw" && !t.get("format")) return VolumeSource::Kind::RawFile;
+    if (ext == ".vdb" && !t.get("format")) return VolumeSource::Kind::OpenVdb;
+    return VolumeSource::Kind::File;
+  }
   r.fail(n, what +
                 ".source must be \"wavelet\", \"marschner-lobb\", \"raw\", \"openvdb\" or "
                 "\"file\", not \"" +

@@ -19,7 +19,8 @@
 //   #      must be header_bytes + dims x type size exactly (checked when the scene is read)
 //   # openvdb: file (required), grid (default: the first float grid); the file's metadata is
 //   #      read with the scene (geometry), its voxels only by loadVolume
-//   # file: file (required; .nrrd .nhdr .nii .nii.gz .mhd .mha .h5 .hdf5 .nc .cdf), format =
+//   # file: file (required; .nrrd .nhdr .nii .nii.gz .mhd .mha .h5 .hdf5 .nc .cdf; .raw and
+//   #      .vdb are read as source = "raw" / "openvdb" with their fields), format =
 //   #      "nrrd" | "nifti" | "metaimage" | "hdf5" | "netcdf" (default: from the name),
 //   #      dataset (HDF5) / variable (NetCDF) (default: the file's only 3-D/4-D one), time
 //   #      (4-D data, default 0); dims, type and (except HDF5) spacing and origin come from the

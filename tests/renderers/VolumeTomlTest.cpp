@@ -185,6 +185,12 @@ TEST(VolumeToml, FilesTakeTheirGridFromTheHeaderAndErrorsNameLineFieldAndFile) {
       "moved.toml", head + "file = \"v.nrrd\"\nspacing = 0.5\norigin = [0, 0, 0]\n" + tf));
   EXPECT_EQ(moved.source.grid.spacing, Vec3{0.5f});
   EXPECT_EQ(moved.source.grid.origin, Vec3{0.0f});
+  // .raw files are raw volumes: dims and type then come from the scene.
+  writeFile("v.raw", std::string(2 * 3 * 4 * 2, '\0'));
+  const VolumeDesc raw = readFirst(
+      writeFile("raw.toml", head + "file = \"v.raw\"\ndims = [2, 3, 4]\ntype = \"uint16\"\n" + tf));
+  EXPECT_EQ(raw.source.kind, VolumeSource::Kind::RawFile);
+  EXPECT_EQ(raw.source.grid.dims, (Index3{2, 3, 4}));
   EXPECT_EQ(errorOf("ext.toml", head + "file = \"v.dat\"\n" + tf),
             ":4: volume 'v'.file: the format is not known from the name (.nrrd .nhdr .nii .nii.gz "
             ".mhd .mha .h5 .hdf5 .nc .cdf); give 'format'");
