@@ -81,7 +81,8 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
   if (bytes.substr(0, 4) != "NRRD")
     throw Error(path + ": not an NRRD file (it does not start with \"NRRD\")");
   ArrayHeader h;
-  bool haveType = false, haveSizes = false, haveDimension = false, ended = false;
+  bool haveType = false, haveSizes = false, haveDimension = false, haveEndian = false,
+       ended = false;
   std::string encoding = "raw", dataFile;
   long long byteSkip = 0;
   std::size_t at = 0, dataStart = bytes.size();
@@ -159,6 +160,7 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
       const std::string e = lower(value);
       if (e != "little" && e != "big") throw Error(fw + ": must be 'little' or 'big'");
       h.data.bigEndian = e == "big";
+      haveEndian = true;
     } else if (field == "data file" || field == "datafile") {
       if (value.empty() || value.find('%') != std::string_view::npos ||
           lower(value).rfind("list", 0) == 0)
@@ -185,7 +187,7 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
   if (!haveDimension) throw Error(what + " misses field 'dimension'");
   if (!haveType) throw Error(what + " misses field 'type'");
   if (!haveSizes) throw Error(what + " misses field 'sizes'");
-  if (fileTypeBytes(h.data.type) > 1 && bytes.find("endian:") == std::string_view::npos)
+  if (fileTypeBytes(h.data.type) > 1 && !haveEndian)
     throw Error(what + " misses field 'endian' (needed for " + fileTypeName(h.data.type) + ")");
   h.data.compressed = encoding == "gzip";
   if (dataFile.empty()) {
