@@ -98,12 +98,20 @@ TEST(VolumeFile, NiftiPlainGzippedAndScaled) {
 }
 
 TEST(VolumeFile, RawDataIsReadOverTheBrickOnly) {
-  const VolumeSource s = fileSource(folder() / "u16.mha");
-  const VoxelBox box{{2, 3, 1}, {10, 7, 6}};
-  const std::uint64_t before = volumeFileBytesRead();
-  const Volume v = loadVolume(s, box);
-  EXPECT_EQ(volumeFileBytesRead() - before, box.voxelCount() * 2);
-  EXPECT_EQ(v.bytes(), box.voxelCount() * 2);
+  writeFile(folder() / "brick.nhdr",
+            "NRRD0004\ntype: uint16\nendian: little\ndimension: 3\n"
+            "sizes: 13 9 7\ndata file: brick.raw\n");
+  writeFile(folder() / "brick.raw", voxelBytesOf<std::uint16_t>(false, true));
+  writeFile(folder() / "brick.nii", niftiHeader(kDims, 16, 32) + voxelBytesOf<float>(false, false));
+  for (const char* name : {"brick.nhdr", "brick.nii"}) {
+    const VolumeSource s = fileSource(folder() / name);
+    const VoxelBox box{{2, 3, 1}, {10, 7, 6}};
+    const std::uint64_t before = volumeFileBytesRead();
+    const Volume v = loadVolume(s, box);
+    const std::size_t width = voxelBytes(s.type);
+    EXPECT_EQ(volumeFileBytesRead() - before, box.voxelCount() * width) << name;
+    EXPECT_EQ(v.bytes(), box.voxelCount() * width) << name;
+  }
 }
 
 TEST(VolumeFile, Hdf5ContiguousChunkedAndFourDimensional) {
