@@ -93,7 +93,8 @@ std::vector<double> attribute(int file, int var, const char* name) {
 }
 
 // Spacing and origin of an axis from its coordinate variable (1-D, named as the dimension):
-// evenly spread from the first to the last value. Uneven axes (ocean depths) are drawn evenly.
+// evenly spread from the lowest to the highest value. Uneven axes (ocean depths) are drawn
+// evenly; a descending axis (latitudes from north to south) is drawn mirrored.
 void axisGeometry(int file, int dim, std::size_t length, float& spacing, float& origin) {
   char name[NC_MAX_NAME + 1] = {};
   int var = -1, rank = 0;
