@@ -97,6 +97,24 @@ TEST(VolumeFile, NiftiPlainGzippedAndScaled) {
       [](int i, int j, int k) { return 2 * field(i, j, k) + 20; }, VoxelType::Float32);
 }
 
+// Compressed files read layer after layer (as a brick's shell is, each layer starting at the
+// previous one's last plane) resume the stream rather than inflate from the start each time,
+// and give the whole read's voxels; so do reads going backwards.
+TEST(VolumeFile, CompressedLayersInAnyOrderEqualTheWholeRead) {
+  writeFile(folder() / "layers.nii.gz",
+            gzipped(niftiHeader(kDims, 4, 16) + voxelBytesOf<std::int16_t>(false, false)));
+  const VolumeSource s = fileSource(folder() / "layers.nii.gz");
+  const Volume whole = loadVolume(s, s.grid.wholeBox());
+  for (const int z0 : {0, 2, 4, 5, 2, 0, 3, 4}) {
+    const VoxelBox layer{{1, 2, z0}, {12, 9, std::min(z0 + 3, kDims.z)}};
+    const Volume part = loadVolume(s, layer);
+    for (int k = layer.lo.z; k < layer.hi.z; ++k)
+      for (int j = layer.lo.y; j < layer.hi.y; ++j)
+        for (int i = layer.lo.x; i < layer.hi.x; ++i)
+          ASSERT_EQ(part.at(i, j, k), whole.at(i, j, k)) << "layer from z " << z0;
+  }
+}
+
 TEST(VolumeFile, RawDataIsReadOverTheBrickOnly) {
   writeFile(folder() / "brick.nhdr",
             "NRRD0004\ntype: uint16\nendian: little\ndimension: 3\n"

@@ -6,12 +6,13 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <optional>
+#include <memory>
 #include <vector>
 
 #include "renderers/Error.h"
@@ -30,10 +31,13 @@ class File {
   ~File() { ::close(fd_); }
   File(const File&) = delete;
   File& operator=(const File&) = delete;
-  std::uint64_t size() const {
-    struct stat st {};
-    if (::fstat(fd_, &st) != 0) throw Error(path_ + ": cannot stat: " + std::strerror(errno));
-    return static_cast<std::uint64_t>(st.st_size);
+  std::uint64_t size() const { return static_cast<std::uint64_t>(status().st_size); }
+  // Which file, in which version: equal for the same unchanged file.
+  std::array<std::int64_t, 5> identity() const {
+    const struct stat st = status();
+    return {static_cast<std::int64_t>(st.st_dev), static_cast<std::int64_t>(st.st_ino),
+            static_cast<std::int64_t>(st.st_size), static_cast<std::int64_t>(st.st_mtim.tv_sec),
+            static_cast<std::int64_t>(st.st_mtim.tv_nsec)};
   }
   // Up to `bytes` bytes at `offset` (fewer only at the end of the file).
   std::size_t readSome(std::uint64_t offset, std::byte* to, std::size_t bytes) const {
@@ -57,6 +61,12 @@ class File {
   }
 
  private:
+  struct stat status() const {
+    struct stat st {};
+    if (::fstat(fd_, &st) != 0) throw Error(path_ + ": cannot stat: " + std::strerror(errno));
+    return st;
+  }
+
   std::string path_;
   int fd_;
 };
@@ -72,6 +82,20 @@ class InflateStream {
   ~InflateStream() { inflateEnd(&z_); }
   InflateStream(const InflateStream&) = delete;
   InflateStream& operator=(const InflateStream&) = delete;
+
+  // A copy of the stream where it is now (zlib's inflateCopy), to resume from later.
+  std::unique_ptr<InflateStream> snapshot() const {
+    auto copy = std::make_unique<InflateStream>(file_, path_, offset_);
+    inflateEnd(&copy->z_);
+    if (inflateCopy(&copy->z_, const_cast<z_stream*>(&z_)) != Z_OK)
+      throw Error(path_ + ": cannot copy the zlib stream");
+    copy->in_ = in_;
+    if (z_.next_in)
+      copy->z_.next_in = reinterpret_cast<Bytef*>(copy->in_.data()) +
+                         (z_.next_in - reinterpret_cast<const Bytef*>(in_.data()));
+    copy->produced_ = produced_;
+    return copy;
+  }
 
   // The next `bytes` bytes into `to`, or dropped when `to` is null.
   void read(std::byte* to, std::uint64_t bytes) {
@@ -129,6 +153,49 @@ class InflateStream {
   z_stream z_{};
   std::uint64_t produced_ = 0;
 };
+
+// The last compressed stream this thread read, kept where the read stopped, and a copy of it
+// at the start of the read's last slab: reading bricks or shell layers of one file in
+// increasing z inflates it once, not once per read (a ShadingShell reads a brick's shell one
+// layer of macrocells at a time, each layer starting at the previous one's last voxel plane).
+// Holds streams' states only (zlib's window and one input chunk each), never voxels.
+struct StreamCache {
+  std::string path;
+  std::uint64_t fileOffset = 0, streamSkip = 0;
+  std::array<std::int64_t, 5> identity{};
+  std::unique_ptr<File> file;
+  std::unique_ptr<InflateStream> stream;  // reads `file`: declared after it, destroyed first
+  std::uint64_t at = 0;                   // bytes consumed after streamSkip
+  std::unique_ptr<InflateStream> mark;    // a copy of `stream` at markAt
+  std::uint64_t markAt = 0;
+};
+thread_local StreamCache streamCache;
+
+// The stream of `a` positioned at byte `at` after its skip: the cached one when it is the same
+// unchanged file and not past `at`, else a new one.
+InflateStream& streamAt(const StoredArray& a, const std::array<std::int64_t, 5>& identity,
+                        std::uint64_t at) {
+  StreamCache& c = streamCache;
+  const bool same = c.stream && c.path == a.path && c.fileOffset == a.fileOffset &&
+                    c.streamSkip == a.streamSkip && c.identity == identity;
+  if (same && c.at > at && c.mark && c.markAt <= at) {  // resume from the mark
+    c.stream = std::move(c.mark);
+    c.at = c.markAt;
+  }
+  if (!(same && c.stream && c.at <= at)) {
+    c.mark.reset();
+    c.stream.reset();
+    c.file = std::make_unique<File>(a.path);
+    c.stream = std::make_unique<InflateStream>(*c.file, a.path, a.fileOffset);
+    c.path = a.path, c.fileOffset = a.fileOffset, c.streamSkip = a.streamSkip;
+    c.identity = identity;
+    c.at = 0;
+    c.stream->read(nullptr, a.streamSkip);
+  }
+  c.stream->read(nullptr, at - c.at);  // discard what lies before
+  c.at = at;
+  return *c.stream;
+}
 
 template <class T>
 T load(const std::byte* p) {
@@ -243,12 +310,15 @@ Volume readStoredBox(const StoredArray& array, const GridGeometry& grid, const V
   // Converting runs go through a buffer of at most ~4 MiB at a time.
   const std::size_t pieceVoxels = std::max<std::size_t>(1, std::min(runVoxels, (4u << 20) / width));
   std::vector<std::byte> piece(pieceVoxels * width);
-  std::optional<InflateStream> stream;
-  std::uint64_t streamAt = 0;  // voxel bytes of the inflated stream consumed so far
-  if (array.compressed) {
-    stream.emplace(file, array.path, array.fileOffset);
-    stream->read(nullptr, array.streamSkip);
-  }
+  InflateStream* stream = nullptr;
+  const std::array<std::int64_t, 5> identity =
+      array.compressed ? file.identity() : std::array<std::int64_t, 5>{};
+  struct DropCacheOnError {  // a stream that failed part-way is not resumed
+    bool armed = true;
+    ~DropCacheOnError() {
+      if (armed) streamCache = StreamCache{};
+    }
+  } dropOnError;
   std::byte* to = v.voxels.data();
   for (int k = box.lo.z; k < box.hi.z; k += slabsPerRun)
     for (int r = 0; r < runsPerSlab; ++r) {
@@ -257,15 +327,18 @@ Volume readStoredBox(const StoredArray& array, const GridGeometry& grid, const V
                                       static_cast<std::uint64_t>(d.x) +
                                   static_cast<std::uint64_t>(box.lo.x);
       std::uint64_t at = voxel * width;
-      if (stream) {
-        stream->read(nullptr, at - streamAt);  // discard what lies outside the box
-        streamAt = at;
+      if (array.compressed) {
+        stream = &streamAt(array, identity, at);      // skips what lies before
+        if (k + slabsPerRun >= box.hi.z && r == 0) {  // the last slab: mark where it starts
+          streamCache.mark = stream->snapshot();
+          streamCache.markAt = at;
+        }
       }
       for (std::size_t done = 0; done < runVoxels;) {
         const std::size_t n = std::min(pieceVoxels, runVoxels - done);
         if (stream) {
           stream->read(piece.data(), n * width);
-          streamAt += n * width;
+          streamCache.at += n * width;
         } else {
           file.read(array.fileOffset + at, piece.data(), n * width);
         }
@@ -275,6 +348,7 @@ Volume readStoredBox(const StoredArray& array, const GridGeometry& grid, const V
         done += n;
       }
     }
+  dropOnError.armed = false;
   v.updateRange();
   return v;
 }
