@@ -20,7 +20,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     return std::string(mkdtemp(pattern));
   }();
   static const char* const names[] = {"v.nrrd", "v.mha", "v.nii", "v.nii.gz"};
-  const std::string path = folder + "/" + names[data[0] % 4];
+  // A new name per input: nothing read from one input's file is resumed on the next.
+  static std::uint64_t count = 0;
+  const std::string path = folder + "/" + std::to_string(count++) + names[data[0] % 4];
   FILE* f = std::fopen(path.c_str(), "wb");
   if (!f) return 0;
   std::fwrite(data + 1, 1, size - 1, f);
