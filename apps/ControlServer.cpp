@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <thread>
@@ -82,7 +83,9 @@ renderers::Vec3 vector3(const Json& v, const std::string& field) {
   return {boundedNumber(v[0], field), boundedNumber(v[1], field), boundedNumber(v[2], field)};
 }
 
+// An empty body is {}: `curl -X POST URL` sends none, and the first thing people type should work.
 Json parseObject(const std::string& body) {
+  if (body.empty()) return Json::object();
   Json j = Json::parse(body, nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded()) throw BadRequest("the body is not valid JSON");
   if (!j.is_object()) throw BadRequest("the body must be a JSON object");
@@ -164,6 +167,7 @@ struct ControlServer::Impl {
   int port = 0;
   std::thread thread;
   std::vector<std::pair<std::string, std::function<HttpReply()>>> extraGets;
+  std::map<std::string, httplib::Server::Handler> posts;  // by path, for bodiless POSTs
 
   bool authorized(const httplib::Request& req) const {
     if (token.empty()) return true;
@@ -277,49 +281,71 @@ void ControlServer::start(const Job& job, Steering& steering, StatusBoard& statu
         j["errors"] = s.errors;
         return json(200, j);
       }));
-  m.server.Post(
-      "/api/camera", guarded([&steering, &status](const httplib::Request& req) {
-        SteeringRequest r = cameraRequest(parseObject(req.body));
-        if (const std::string problem = checkRequest(r); !problem.empty())
-          throw BadRequest(problem);
-        // Checked against the camera shown now (rank 0 checks again when applying).
-        if (!status.waitForFirstPublish(std::chrono::seconds(30)))
-          return json(503, Json{{"error", "the wall is still starting; try again"}});
-        FrameView view = status.snapshot().view;
-        if (!steerView(view, view.camera, r))
-          throw BadRequest("the camera would be unusable: look_at equal to position, or along up");
-        return json(200, Json{{"request", steering.submit(r)}});
-      }));
-  m.server.Post("/api/settings", guarded([&steering, renderer](const httplib::Request& req) {
-                  const SteeringRequest r = settingsRequest(parseObject(req.body), renderer);
-                  return json(200, Json{{"request", steering.submit(r)}});
-                }));
+  // Every POST route is kept by path too: the pre-routing handler below serves a POST without a
+  // body itself.
+  const auto post = [&m](const std::string& path, httplib::Server::Handler handler) {
+    m.posts[path] = handler;
+    m.server.Post(path, std::move(handler));
+  };
+  post("/api/camera", guarded([&steering, &status](const httplib::Request& req) {
+         SteeringRequest r = cameraRequest(parseObject(req.body));
+         if (const std::string problem = checkRequest(r); !problem.empty())
+           throw BadRequest(problem);
+         // Checked against the camera shown now (rank 0 checks again when applying).
+         if (!status.waitForFirstPublish(std::chrono::seconds(30)))
+           return json(503, Json{{"error", "the wall is still starting; try again"}});
+         FrameView view = status.snapshot().view;
+         if (!steerView(view, view.camera, r))
+           throw BadRequest("the camera would be unusable: look_at equal to position, or along up");
+         return json(200, Json{{"request", steering.submit(r)}});
+       }));
+  post("/api/settings", guarded([&steering, renderer](const httplib::Request& req) {
+         const SteeringRequest r = settingsRequest(parseObject(req.body), renderer);
+         return json(200, Json{{"request", steering.submit(r)}});
+       }));
   const bool canCapture = job.layout && !job.options.captureDir.empty();
-  m.server.Post("/api/capture", guarded([&steering, canCapture](const httplib::Request& req) {
-                  if (!req.body.empty() && parseObject(req.body).size() > 0)
-                    throw BadRequest("capture takes no fields");
-                  if (!canCapture)
-                    throw BadRequest("captures need a wall started with --capture DIR");
-                  SteeringRequest r;
-                  r.kind = SteeringRequest::kCapture;
-                  return json(200, Json{{"request", steering.submit(r)}});
-                }));
-  m.server.Post("/api/stop", guarded([&steering](const httplib::Request& req) {
-                  if (!req.body.empty() && parseObject(req.body).size() > 0)
-                    throw BadRequest("stop takes no fields");
-                  SteeringRequest r;
-                  r.kind = SteeringRequest::kStop;
-                  return json(200, Json{{"request", steering.submit(r)}, {"stopping", true}});
-                }));
+  post("/api/capture", guarded([&steering, canCapture](const httplib::Request& req) {
+         if (!parseObject(req.body).empty()) throw BadRequest("capture takes no fields");
+         if (!canCapture) throw BadRequest("captures need a wall started with --capture DIR");
+         SteeringRequest r;
+         r.kind = SteeringRequest::kCapture;
+         return json(200, Json{{"request", steering.submit(r)}});
+       }));
+  post("/api/stop", guarded([&steering](const httplib::Request& req) {
+         if (!parseObject(req.body).empty()) throw BadRequest("stop takes no fields");
+         SteeringRequest r;
+         r.kind = SteeringRequest::kStop;
+         return json(200, Json{{"request", steering.submit(r)}, {"stopping", true}});
+       }));
   for (const auto& [path, handler] : m.extraGets)
     m.server.Get(path, guarded([handler](const auto&) { return handler(); }));
+  // A POST with neither Content-Length nor Transfer-Encoding has an empty body (RFC 9112, 6.3),
+  // and `curl -X POST URL` sends just that. httplib 0.11 instead reads such a body until the
+  // connection closes (Server::routing -> read_content -> detail::read_content_without_length),
+  // which a client waiting for its answer never does: 400 after the 5 s read timeout. The
+  // pre-routing handler runs before that read, so it serves these requests itself, with the
+  // empty body (the handlers take it as {}); the connection stays usable for the next request.
+  m.server.set_pre_routing_handler(
+      [&m, reply](const httplib::Request& req, httplib::Response& res) {
+        if (req.method != "POST" || req.has_header("Content-Length") ||
+            req.has_header("Transfer-Encoding"))
+          return httplib::Server::HandlerResponse::Unhandled;
+        const auto found = m.posts.find(req.path);
+        if (found == m.posts.end())
+          reply(res, error(404, "no such endpoint (see README, \"Steering the wall\")"));
+        else
+          found->second(req, res);
+        return httplib::Server::HandlerResponse::Handled;
+      });
   // httplib's own refusals come with no body: say what went wrong.
   m.server.set_error_handler([reply](const httplib::Request& req, httplib::Response& res) {
     if (!res.body.empty()) return;
     if (res.status == 404)
       reply(res, error(404, "no such endpoint (see README, \"Steering the wall\")"));
     else if (res.status == 400 && req.method == "POST")
-      reply(res, error(400, "a POST needs a body with its length: send {} (curl -d '{}')"));
+      reply(res, error(400,
+                       "the request's body could not be read: it must be as long as its "
+                       "Content-Length says, or validly chunked"));
     else
       reply(res, error(res.status, "request refused"));
   });

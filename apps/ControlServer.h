@@ -11,7 +11,8 @@
 //
 // Anything but a loopback address needs a token (--control-token, or one generated and
 // printed); with a token every request must carry it (Authorization: Bearer TOKEN, or
-// ?token=TOKEN for a browser), else 401. Malformed JSON, unknown fields, NaN, values out of
+// ?token=TOKEN for a browser), else 401. A POST without a body (even without Content-Length, as
+// `curl -X POST` sends it) is taken as {}. Malformed JSON, unknown fields, NaN, values out of
 // range: 400 with a message; the wall keeps running.
 #include <functional>
 #include <memory>

@@ -4,8 +4,10 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <new>
 
 #include "dfb/Error.h"
+#include "dfb/MemoryBudget.h"
 
 namespace app {
 
@@ -23,6 +25,9 @@ void FailurePath::setWhoIsSilent(std::function<std::string()> whoIsSilent) {
 
 void FailurePath::fail(const std::exception& e) {
   std::string what = e.what();
+  // Loaders name what they load (dfb/MemoryBudget.h); this is the net for the rest.
+  if (dynamic_cast<const std::bad_alloc*>(&e))
+    what = "out of memory (an allocation failed); this rank may hold " + dfb::memoryLimitText();
   if (dynamic_cast<const dfb::DeadlineError*>(&e)) {
     std::function<std::string()> ask;
     {

@@ -110,6 +110,9 @@ struct RankTotals {
   double role = 0;        // 0: render, 1: wall
   double sceneBytes = 0;  // render ranks: the scene data this rank holds (its bricks, or all)
   double brickTiles = 0;  // render ranks with --bricks: brick tiles rendered over the run
+  // Render ranks: isosurface triangles held (camera-visible and shading-only) and the seconds
+  // making them and their BVHs at scene load.
+  double isosurfaceTriangles = 0, shadingOnlyTriangles = 0, isosurfaceSeconds = 0;
   // Wall ranks: how far apart the wall processes' swaps of one frame ended (agreed, so the same
   // on every wall rank), the largest and the sum over the frames it is known for.
   double swapSpreadMaxMs = 0, swapSpreadSumMs = 0, swapSpreadFrames = 0;

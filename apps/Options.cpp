@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "dfb/MemoryBudget.h"
 #include "wall/service/Codec.h"
 
 #include <charconv>
@@ -9,6 +10,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <string>
 
 namespace app {
@@ -114,9 +116,9 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
       ->check(CLI::Range(0, 1 << 30));
   cli.add_option("--stats", o.statsFile, "write per-frame statistics as JSON");
   cli.add_option("--preview", o.previewFile,
-                 "assemble the small whole-wall preview on rank 0 from tiles shrunk 1/8 a side "
-                 "on their owners (as the control server does) and write the last one to "
-                 "FILE.png");
+                 "assemble the whole-wall preview (at most 1024 cells a side) on rank 0 from "
+                 "tiles shrunk on their owners (as the control server does) and write the last "
+                 "one to FILE.png");
   cli.add_option("--mode", o.mode,
                  "route: tiles go straight to the displays; gather: through rank 0")
       ->check(CLI::IsMember({"route", "gather"}))
@@ -136,6 +138,11 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
   cli.add_option("--timeout", o.timeoutSeconds, "seconds before a stalled frame is an error")
       ->check(CLI::Range(1, 86400))
       ->capture_default_str();
+  std::string memoryLimit;
+  cli.add_option("--memory-limit", memoryLimit,
+                 "BYTES, or with a suffix K, M, G, T (e.g. 512M, 4G): what each rank may hold of "
+                 "scenes, images and captures; more is refused when read (default: the host's "
+                 "memory shared by the job's ranks on it)");
   cli.add_flag("--quiet", o.quiet, "no progress line");
   cli.add_option("--control", o.control,
                  "[ADDR:]PORT: serve the JSON control API on render rank 0 (default address "
@@ -190,6 +197,13 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
     } catch (const std::exception& e) {
       return fail(e.what());
     }
+  }
+  if (!memoryLimit.empty()) {
+    const std::optional<std::uint64_t> bytes = dfb::parseByteSize(memoryLimit);
+    if (!bytes)
+      return fail("--memory-limit must be BYTES or a number with K, M, G or T (e.g. 4G), not '" +
+                  memoryLimit + "'");
+    o.memoryLimit = *bytes;
   }
   if (!size.empty()) {
     const std::string problem = parseSize(size, o.width, o.height);

@@ -45,6 +45,9 @@ struct Options {
   bool compressWithinHost = false;
   int handlerThreads = 0;  // threads handling received tiles and pieces at once; 0: the cores
   int timeoutSeconds = 60;
+  // Bytes each rank may hold of data sized by its input (dfb/MemoryBudget.h); 0: the host's
+  // memory shared by the job's ranks on it.
+  std::uint64_t memoryLimit = 0;
   bool quiet = false;
 
   // The wall as a service (issue 20). `dfbwall serve`: these processes are the wall of `wall`,

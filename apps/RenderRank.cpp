@@ -213,11 +213,20 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
         renderComm);
     brickDriver->configure(dfbOptions);
     totals.sceneBytes = static_cast<double>(brickDriver->sceneBytes());
+    const renderers::SciVisScene::IsosurfaceStats iso = brickDriver->isosurfaceStats();
+    totals.isosurfaceTriangles = static_cast<double>(iso.cameraTriangles);
+    totals.shadingOnlyTriangles = static_cast<double>(iso.shadingTriangles);
+    totals.isosurfaceSeconds = iso.seconds;
   } else {
     imageDriver = std::make_unique<renderers::FrameDriver>(*renderer, driving);
     imageDriver->configure(dfbOptions);
-    if (job.scene.scivis)
-      totals.sceneBytes = static_cast<double>(job.scene.scivis->content().bytes());
+    if (job.scene.scivis) {
+      totals.sceneBytes = static_cast<double>(job.scene.scivis->bytes());
+      const renderers::SciVisScene::IsosurfaceStats& iso = job.scene.scivis->isosurfaceStats();
+      totals.isosurfaceTriangles = static_cast<double>(iso.cameraTriangles);
+      totals.shadingOnlyTriangles = static_cast<double>(iso.shadingTriangles);
+      totals.isosurfaceSeconds = iso.seconds;
+    }
   }
   auto renderFrame = [&](dfb::DistributedFrameBuffer& fb, const dfb::FrameInfo& frame,
                          const renderers::CameraDesc& camera) {

@@ -5,12 +5,14 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <new>
 #include <string>
 
 #include "apps/Collectives.h"
 #include "apps/ControlServer.h"
 #include "apps/Failure.h"
 #include "apps/Job.h"
+#include "apps/MemoryChecks.h"
 #include "apps/Preview.h"
 #include "apps/RunControl.h"
 #include "apps/Stats.h"
@@ -20,9 +22,11 @@
 #include "apps/control/PageRoutes.h"
 #include "dfb/AtomicFile.h"
 #include "dfb/Error.h"
+#include "dfb/MemoryBudget.h"
 #include "messaging/BoundedWait.h"
 #include "messaging/MpiSession.h"
 #include "renderers/BuiltinScenes.h"
+#include "renderers/scivis/Bricks.h"
 #include "wall/Error.h"
 #include "wall/service/ServiceClient.h"
 
@@ -128,6 +132,7 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
       job.canvasWidth = o.width;
       job.canvasHeight = o.height;
     }
+    if (std::string problem = canvasMemoryProblem(job); !problem.empty()) return problem;
     if (!job.isWallRank() && !o.dryRun) {
       renderers::SceneDesc desc = renderers::loadSceneDesc(o.scene);
       if (o.scene.rfind("builtin:", 0) != 0) {
@@ -136,6 +141,12 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
           hashes.scene = hashFile(file, hashes.scene);
       }
       job.scene = renderers::buildRenderScene(o.renderer, std::move(desc), o.bricks > 0);
+      // Bricks load once the frames are set up; their memory is known now (render ranks are
+      // world ranks 0 .. R-1, in order).
+      if (o.bricks > 0)
+        renderers::checkOwnBricksMemory(*job.scene.desc, o.bricks, o.replication, job.worldRank,
+                                        job.roles.renderRanks,
+                                        renderers::ghostModeFromName(o.ghost));
       if (job.worldRank == 0 && !o.cameraPath.empty())
         job.cameraPath = CameraPath::load(o.cameraPath, job.scene.desc->camera);
     }
@@ -164,6 +175,11 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
     if (job.worldRank == 0 && !o.control.empty())
       server = std::make_unique<ControlServer>(o.control, o.controlToken);
     return {};
+  } catch (const std::bad_alloc&) {
+    // Loaders name what they load; this is the net for whatever else allocates at setup.
+    return "out of memory while setting up (the layout, the scene and its buffers); this rank "
+           "may hold " +
+           dfb::memoryLimitText();
   } catch (const std::exception& e) {
     return e.what();
   }
@@ -235,6 +251,8 @@ int run(int argc, char** argv) {
   job.failure = &failure;
   const int parsed = parseOptions(argc, argv, job.options, job.worldRank == 0);
   if (parsed >= 0) return parsed;
+  dfb::setMemoryLimit(job.options.memoryLimit);
+  dfb::setRanksOnHost(ranksOnThisHost());
   if (job.options.serve) return runServe(job.options, job.worldRank, signals, failure);
   const std::chrono::milliseconds timeout = std::chrono::seconds(job.options.timeoutSeconds);
 

@@ -183,6 +183,10 @@ void StatsStream::writeEnd(const std::vector<RankTotals>& ranks, bool stoppedEar
               {"peak_rss_kib", t.peakRssKiB},
               {"stages_ms", stagesOf(t)}};
     if (!role) line["scene_bytes"] = t.sceneBytes;
+    if (!role && t.isosurfaceTriangles + t.shadingOnlyTriangles > 0)
+      line["isosurfaces"] = {{"camera_triangles", t.isosurfaceTriangles},
+                             {"shading_only_triangles", t.shadingOnlyTriangles},
+                             {"seconds", t.isosurfaceSeconds}};
     if (role && t.swapSpreadFrames > 0)
       line["swap_spread_ms"] = {{"max", t.swapSpreadMaxMs},
                                 {"mean", t.swapSpreadSumMs / t.swapSpreadFrames}};

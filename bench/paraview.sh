@@ -7,7 +7,7 @@
 #    ParaView's Wavelet source at the extent [0, 255]^3 (the same field voxel for voxel), the
 #    volume representation or one Contour filter per value, the same camera turned the same way.
 #  - dfbwall --renderer scivis --bricks N on N ranks vs pvbatch on N ranks (N = 1, 2, 4), at
-#    1024^2 and 2048^2 (--quick: 512^2), orbit of FRAMES frames; each point runs dfbwall then
+#    512^2, 1024^2 and 2048^2 (--quick: 512^2 only), orbit of FRAMES frames; each point runs dfbwall then
 #    ParaView (interleaved), seconds per frame as median and MAD with the first frame left out.
 #  - Threads: ceil(cores / N) per rank for both (dfbwall --threads, llvmpipe's LP_NUM_THREADS),
 #    so 4 ranks on 2 cores are 2x oversubscribed for both.
@@ -123,7 +123,7 @@ EOF
 }
 
 fig_paraview() {
-  local frames=5 sizes=(1024 2048) counts=(1 2 4) reps=1
+  local frames=5 sizes=(512 1024 2048) counts=(1 2 4) reps=1
   [ $quick = 1 ] && frames=4 sizes=(512)
   local step=$((360 / 24)) scenes=(volume contours) mapper="${PARAVIEW_MAPPER:-GPU Based}"
   pv_setup || return 1

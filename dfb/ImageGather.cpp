@@ -139,12 +139,19 @@ GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel,
     if (!h.compressed && h.rawBytes != data.size())
       throw Error("gather: rank " + std::to_string(r) + " sent " + std::to_string(data.size()) +
                   " raw bytes, its header says " + std::to_string(h.rawBytes));
+    if (h.compressed > 2)
+      throw Error("gather: rank " + std::to_string(r) + " sent a block of unknown encoding " +
+                  std::to_string(h.compressed));
     if (h.compressed) {
-      messaging::decompress(data, h.rawBytes, b.unpacked);
-      pixels = b.unpacked.data();
-      if (h.compressed == 2) {
-        messaging::planeDeltaDecode(b.unpacked, 4, b.unfiltered);
-        pixels = b.unfiltered.data();
+      try {
+        messaging::decompress(data, h.rawBytes, b.unpacked);
+        pixels = b.unpacked.data();
+        if (h.compressed == 2) {
+          messaging::planeDeltaDecode(b.unpacked, 4, b.unfiltered);
+          pixels = b.unfiltered.data();
+        }
+      } catch (const messaging::Error& e) {
+        throw Error("gather: rank " + std::to_string(r) + ": " + e.what());
       }
     }
     size_t used = 0;

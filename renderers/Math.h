@@ -34,6 +34,16 @@ constexpr Vec3 cross(Vec3 a, Vec3 b) {
 inline float length(Vec3 a) { return std::sqrt(dot(a, a)); }
 inline Vec3 normalize(Vec3 a) { return a / length(a); }
 constexpr float maxComponent(Vec3 a) { return std::max(a.x, std::max(a.y, a.z)); }
+constexpr float minComponent(Vec3 a) { return std::min(a.x, std::min(a.y, a.z)); }
+inline float maxAbs(Vec3 a) { return std::max({std::fabs(a.x), std::fabs(a.y), std::fabs(a.z)}); }
+inline bool isFinite(Vec3 a) {
+  return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
+}
+// The gap between |x| and the next float above it: the finest detail a coordinate near x keeps.
+inline float floatStep(float x) {
+  const float a = std::fabs(x);
+  return std::nextafter(a, INFINITY) - a;
+}
 constexpr float luminance(Vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 constexpr bool isBlack(Vec3 c) { return c.x <= 0 && c.y <= 0 && c.z <= 0; }
 

@@ -5,6 +5,9 @@
 
 #include <assimp/Importer.hpp>
 
+#include <string>
+
+#include "dfb/MemoryBudget.h"
 #include "renderers/Error.h"
 
 namespace renderers {
@@ -17,7 +20,15 @@ TriangleMesh importMesh(const std::string& path) {
   const aiScene* scene =
       importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                                   aiProcess_PreTransformVertices | aiProcess_SortByPType);
-  if (!scene || !scene->mRootNode) throw Error(path + ": " + importer.GetErrorString());
+  if (!scene || !scene->mRootNode) {
+    // Assimp catches what its readers throw and keeps only the text: a failed allocation
+    // would reach the user as a bare "std::bad_alloc".
+    const std::string why = importer.GetErrorString();
+    if (why.find("bad_alloc") != std::string::npos)
+      throw Error(path + ": out of memory while importing it; this rank may hold " +
+                  dfb::memoryLimitText());
+    throw Error(path + ": " + why);
+  }
   TriangleMesh out;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* mesh = scene->mMeshes[m];

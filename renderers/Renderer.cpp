@@ -4,7 +4,9 @@
 #include <xmmintrin.h>
 
 #include <cmath>
+#include <new>
 
+#include "dfb/MemoryBudget.h"
 #include "renderers/Error.h"
 #include "renderers/PathTracer.h"
 #include "renderers/PatternRenderer.h"
@@ -26,7 +28,9 @@ std::unique_ptr<Renderer> makeRenderer(const std::string& name, const Scene& sce
   throw Error("unknown renderer '" + name + "' (choose pathtracer, primary, pattern or scivis)");
 }
 
-RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc, bool distributed) {
+namespace {
+
+RenderScene buildScene(const std::string& renderer, SceneDesc desc, bool distributed) {
   RenderScene out;
   out.desc = std::make_shared<const SceneDesc>(std::move(desc));
   if (distributed) return out;
@@ -40,6 +44,19 @@ RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc, bool d
     out.surfaces = std::make_shared<const Scene>(*out.desc);
   }
   return out;
+}
+
+}  // namespace
+
+RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc, bool distributed) {
+  try {
+    return buildScene(renderer, std::move(desc), distributed);
+  } catch (const std::bad_alloc&) {
+    throw Error("building the scene for the " + renderer +
+                " renderer (its volumes and bounding volume hierarchies): out of memory; this "
+                "rank may hold " +
+                dfb::memoryLimitText());
+  }
 }
 
 std::unique_ptr<Renderer> makeRenderer(const std::string& name, const RenderScene& scene,

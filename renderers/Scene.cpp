@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 
+#include "dfb/MemoryBudget.h"
 #include "renderers/EmbreeRays.h"
 #include "renderers/Error.h"
 
@@ -35,6 +36,13 @@ std::vector<std::string> SceneDesc::inputFiles() const {
   return files;
 }
 
+std::uint64_t SceneDesc::bytes() const {
+  std::uint64_t total = 0;
+  for (const Shape& s : shapes) total += s.bytes();
+  for (const ParticlesDesc& p : particles) total += p.bytes();
+  return total;
+}
+
 namespace {
 
 struct LightTriangle {
@@ -51,6 +59,29 @@ struct InstanceData {
   // (5% of the bunny's time went there). Empty for spheres and instanced shapes.
   std::vector<Vec3> normals;
 };
+
+// The memory budget of building the scene: Embree's acceleration structure and its copy of each
+// primitive, about kBvhBytesPerPrimitive a triangle or sphere (SceneDesc.h), once per instance
+// at most (a shape placed once is moved into the top-level scene), on top of the description.
+// Names the shape that asks most.
+void checkMemory(const SceneDesc& d) {
+  std::uint64_t total = d.bytes(), largestBytes = 0;
+  std::size_t largest = 0;
+  for (const Instance& inst : d.instances) {
+    const Shape& shape = d.shapes.at(inst.shape);
+    const std::uint64_t bytes = dfb::bytesTimes(shape.primitiveCount(), kBvhBytesPerPrimitive);
+    total = dfb::bytesPlus(total, bytes);
+    if (bytes > largestBytes) largestBytes = bytes, largest = inst.shape;
+  }
+  if (const std::string problem = dfb::memoryProblem(total); !problem.empty()) {
+    const Shape& s = d.shapes[largest];
+    throw Error((s.isSpheres() ? "sphere '" : "mesh '") + s.name + "'" +
+                (s.file.empty() ? std::string() : " (" + s.file + ")") + ": the scene's " +
+                "bounding volume hierarchy over its " + std::to_string(s.primitiveCount()) +
+                " primitives (about " + std::to_string(kBvhBytesPerPrimitive) +
+                " bytes each, per placement) and the rest of the scene " + problem);
+  }
+}
 
 void validate(const SceneDesc& d) {
   const auto nm = d.materials.size();
@@ -203,6 +234,7 @@ struct Scene::Impl {
 
 Scene::Scene(SceneDesc desc) : impl_(std::make_unique<Impl>()) {
   validate(desc);
+  checkMemory(desc);
   Impl& m = *impl_;
   m.desc = std::move(desc);
   m.device = rtcNewDevice(nullptr);

@@ -13,6 +13,10 @@
 
 namespace renderers {
 
+// What Embree's acceleration structure and its copy of a primitive (a triangle or a sphere)
+// take, about, for the memory budget: BVH4 nodes and leaves, the vertex and index buffers.
+constexpr std::uint64_t kBvhBytesPerPrimitive = 96;
+
 struct TriangleMesh {
   std::vector<Vec3> positions;
   std::vector<std::array<std::uint32_t, 3>> triangles;  // counter-clockwise seen from the front
@@ -33,6 +37,12 @@ struct Shape {
   // instance's material applies to every primitive.
   std::vector<std::uint32_t> primitiveMaterials;
   bool isSpheres() const { return !spheres.centers.empty(); }
+  std::uint64_t bytes() const {
+    return mesh.positions.size() * sizeof(Vec3) +
+           mesh.triangles.size() * sizeof(mesh.triangles[0]) +
+           spheres.centers.size() * sizeof(Vec3) + spheres.radii.size() * sizeof(float) +
+           primitiveMaterials.size() * sizeof(std::uint32_t);
+  }
   std::size_t primitiveCount() const {
     return isSpheres() ? spheres.centers.size() : mesh.triangles.size();
   }
@@ -75,6 +85,8 @@ struct SceneDesc {
   // Every file the description refers to besides the scene file itself (meshes, particle and
   // volume files): a cluster checks that every host reads the same bytes from them.
   std::vector<std::string> inputFiles() const;
+  // The bytes its shapes and particles hold (what the memory budget counts as read so far).
+  std::uint64_t bytes() const;
 };
 
 }  // namespace renderers

@@ -2,10 +2,13 @@
 
 #include <toml++/toml.h>
 
+#include <cmath>
 #include <filesystem>
 #include <initializer_list>
+#include <new>
 #include <string_view>
 
+#include "dfb/MemoryBudget.h"
 #include "renderers/Error.h"
 #include "renderers/MeshImport.h"
 #include "renderers/TomlReader.h"
@@ -23,6 +26,56 @@ void readCamera(const TomlReader& r, const toml::table& t, CameraDesc& c) {
   c.lensRadius = r.number(t, "lens_radius", "camera", 0.0f);
   c.focusDistance = r.number(t, "focus_distance", "camera", 0.0f);
   if (!(c.fovY > 0 && c.fovY < 180)) r.fail(*t.get("fov"), "camera.fov must be in (0, 180)");
+  if (!(c.lensRadius >= 0))
+    r.fail(*t.get("lens_radius"), "camera.lens_radius must not be negative");
+  if (!(c.focusDistance >= 0))
+    r.fail(*t.get("focus_distance"), "camera.focus_distance must not be negative");
+  // The view direction as Camera computes it, in float: a direction, and not along up.
+  const Vec3 view = c.lookAt - c.position;
+  const toml::node& lookAt = *t.get("look_at");
+  if (!(length(view) > 0))
+    r.fail(lookAt, "camera.look_at must differ from camera.position (in float precision)");
+  if (!std::isfinite(length(view)))
+    r.fail(lookAt,
+           "camera.look_at is too far from camera.position for float arithmetic "
+           "(the distance squared overflows)");
+  const toml::node& up = t.get("up") ? *t.get("up") : t;
+  if (!(length(c.up) > 0 && std::isfinite(length(c.up))))
+    r.fail(up, "camera.up must be a non-zero direction within the float range");
+  if (!(length(cross(normalize(view), normalize(c.up))) > 1e-5f))
+    r.fail(up, "camera.up must not be parallel to the view direction (look_at - position)");
+}
+
+// Positions from a file may hold NaN or inf (TOML numbers are checked as read); a mesh whose
+// triangles all have zero area shows nothing and has no normals.
+void checkMesh(const TomlReader& r, const toml::node& at, const std::string& what,
+               const TriangleMesh& m) {
+  for (std::size_t i = 0; i < m.positions.size(); ++i)
+    if (!isFinite(m.positions[i]))
+      r.fail(at, what + ": vertex " + std::to_string(i) + " has a non-finite position");
+  for (const auto& t : m.triangles) {
+    const Vec3 p0 = m.positions[t[0]];
+    if (length(cross(m.positions[t[1]] - p0, m.positions[t[2]] - p0)) > 0) return;
+  }
+  r.fail(at, what + ": no triangle has a non-zero area (in float precision): nothing to draw");
+}
+
+// The mesh's bounds moved by `m` must stay within the float range (a scale of 1e30 would not).
+void checkPlacement(const TomlReader& r, const toml::table& t, const std::string& what,
+                    const TriangleMesh& mesh, const Affine& m) {
+  Vec3 lo{INFINITY}, hi{-INFINITY};
+  for (const Vec3& p : mesh.positions) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 p{corner & 1 ? hi.x : lo.x, corner & 2 ? hi.y : lo.y, corner & 4 ? hi.z : lo.z};
+    if (!isFinite(m.point(p)))
+      r.fail(t.get("scale")       ? *t.get("scale")
+             : t.get("translate") ? *t.get("translate")
+                                  : t,
+             what + ": the transform moves its vertices beyond the float range");
+  }
 }
 
 void readEnvironment(const TomlReader& r, const toml::table& t, Environment& e) {
@@ -67,7 +120,8 @@ Material readMaterial(const TomlReader& r, const std::string& name, const toml::
   m.roughness = r.number(t, "roughness", what, 0.0f);
   m.ior = r.number(t, "ior", what, 1.5f);
   m.opacity = r.number(t, "opacity", what, 1.0f);
-  if (!(m.opacity >= 0 && m.opacity <= 1)) r.fail(*t.get("opacity"), what + ".opacity must be in [0, 1]");
+  if (!(m.opacity >= 0 && m.opacity <= 1))
+    r.fail(*t.get("opacity"), what + ".opacity must be in [0, 1]");
   m.specular = r.number(t, "specular", what, 0.0f);
   if (!(m.specular >= 0)) r.fail(*t.get("specular"), what + ".specular must not be negative");
   m.shininess = r.number(t, "shininess", what, 32.0f);
@@ -105,12 +159,24 @@ TriangleMesh readInlineMesh(const TomlReader& r, const toml::table& t, const std
 
 SceneDesc readSceneToml(const std::string& path) {
   if (!std::filesystem::is_regular_file(path)) throw Error(path + ": scene file not found");
+  // TOML++ holds every value as a node of some 50-70 bytes (the number's text: 2 or more).
+  constexpr std::uint64_t kTomlBytesPerFileByte = 40;
+  std::error_code ec;
+  const std::uint64_t fileBytes = std::filesystem::file_size(path, ec);
+  if (std::string problem = dfb::memoryProblem(dfb::bytesTimes(fileBytes, kTomlBytesPerFileByte));
+      !ec && !problem.empty())
+    throw Error(path + ":1: the scene file (" + std::to_string(fileBytes) +
+                " bytes; reading TOML takes up to " + std::to_string(kTomlBytesPerFileByte) +
+                " times that) " + problem);
   toml::table root;
   try {
     root = toml::parse_file(path);
   } catch (const toml::parse_error& e) {
     throw Error(path + ":" + std::to_string(e.source().begin.line) + ": " +
                 std::string(e.description()));
+  } catch (const std::bad_alloc&) {
+    throw Error(path + ": out of memory while reading the scene file; this rank may hold " +
+                dfb::memoryLimitText());
   }
   const TomlReader r(path);
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
@@ -133,21 +199,36 @@ SceneDesc readSceneToml(const std::string& path) {
                {"name", "material", "file", "vertices", "faces", "scale", "rotate", "translate"});
     Shape s;
     s.name = name;
-    if (const toml::node* f = t->get("file")) {
+    const toml::node* f = t->get("file");
+    if (f) {
       const std::filesystem::path file = folder / r.string(*f, what + ".file");
-      try {
-        s.mesh = importMesh(file.string());
-        s.file = file.string();
-      } catch (const Error& e) {
-        r.fail(*f, what + ": " + e.what());
-      }
+      // Importing holds at least the file's bytes; the mesh is checked again once known.
+      std::error_code sizeError;
+      const std::uintmax_t meshFileBytes = std::filesystem::file_size(file, sizeError);
+      if (!sizeError)
+        r.budget(*f, what + ".file (" + std::to_string(meshFileBytes) + " bytes)",
+                 d.bytes() + meshFileBytes);
+      s.mesh = r.loading(*f, what + ".file", [&] {
+        try {
+          return importMesh(file.string());
+        } catch (const Error& e) {
+          r.fail(*f, what + ": " + e.what());
+        }
+      });
+      s.file = file.string();
+      r.budget(*f,
+               what + ".file (" + std::to_string(s.mesh.positions.size()) + " vertices, " +
+                   std::to_string(s.mesh.triangles.size()) + " triangles)",
+               d.bytes() + s.bytes());
     } else {
       s.mesh = readInlineMesh(r, *t, what);
     }
+    checkMesh(r, f ? *f : *t->get("vertices"), what, s.mesh);
     const std::uint32_t material = r.material(d, *t, what);
+    const Affine transform = r.transform(*t, what);
+    checkPlacement(r, *t, what, s.mesh, transform);
     d.shapes.push_back(std::move(s));
-    d.instances.push_back(
-        {static_cast<std::uint32_t>(d.shapes.size() - 1), r.transform(*t, what), material});
+    d.instances.push_back({static_cast<std::uint32_t>(d.shapes.size() - 1), transform, material});
   }
   for (const toml::table* t : r.arrayOfTables(root, "spheres")) {
     const std::string name = t->get("name") ? r.string(*t->get("name"), "sphere.name") : "sphere";
@@ -155,10 +236,18 @@ SceneDesc readSceneToml(const std::string& path) {
     r.onlyKeys(*t, what, {"name", "material", "center", "radius"});
     Shape s;
     s.name = name;
-    s.spheres.centers.push_back(r.vec3(r.require(*t, "center", what), what + ".center"));
+    const Vec3 center = r.vec3(r.require(*t, "center", what), what + ".center");
+    s.spheres.centers.push_back(center);
     const toml::node& rn = r.require(*t, "radius", what);
-    s.spheres.radii.push_back(r.number(rn, what + ".radius"));
-    if (!(s.spheres.radii.back() > 0)) r.fail(rn, what + ".radius must be positive");
+    const float radius = r.number(rn, what + ".radius");
+    s.spheres.radii.push_back(radius);
+    if (!(radius > 0)) r.fail(rn, what + ".radius must be positive");
+    if (!isFinite(center + Vec3{radius}) || !isFinite(center - Vec3{radius}))
+      r.fail(rn, what + ": center ± radius leaves the float range");
+    if (radius < floatStep(maxAbs(center)))
+      r.fail(rn, what + ".radius " + TomlReader::text(radius) +
+                     " is below float precision at its center (steps of " +
+                     TomlReader::text(floatStep(maxAbs(center))) + " there)");
     const std::uint32_t material = r.material(d, *t, what);
     d.shapes.push_back(std::move(s));
     d.instances.push_back({static_cast<std::uint32_t>(d.shapes.size() - 1), {}, material});
@@ -175,7 +264,9 @@ SceneDesc readSceneToml(const std::string& path) {
     for (const Instance& i : d.instances)
       if (i.shape == shape) material = i.material;
     if (t->get("material")) material = r.material(d, *t, what);
-    d.instances.push_back({shape, r.transform(*t, what), material});
+    const Affine transform = r.transform(*t, what);
+    checkPlacement(r, *t, what, d.shapes[shape].mesh, transform);
+    d.instances.push_back({shape, transform, material});
   }
   readSciVis(r, root, folder, d);
   if (d.instances.empty() && d.volumes.empty() && d.particles.empty())

@@ -6,11 +6,15 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <initializer_list>
+#include <new>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "dfb/MemoryBudget.h"
 #include "renderers/Error.h"
 #include "renderers/Math.h"
 #include "renderers/SceneDesc.h"
@@ -42,6 +46,32 @@ class TomlReader {
 
   const toml::node* get(const toml::table& t, std::string_view key) const { return t.get(key); }
 
+  // "FILE:LINE: what", for errors found after reading (VolumeDesc::where).
+  std::string where(const toml::node& at, const std::string& what) const {
+    return path_ + ":" + std::to_string(at.source().begin.line) + ": " + what;
+  }
+
+  // The memory budget (dfb/MemoryBudget.h): fails naming `at` when `bytes` (all this rank will
+  // hold once `what` is loaded: what it holds already included) exceed what it may hold.
+  void budget(const toml::node& at, const std::string& what, std::uint64_t bytes) const {
+    if (std::string problem = dfb::memoryProblem(bytes); !problem.empty())
+      fail(at, what + " " + problem);
+  }
+
+  // Runs `load` (reading the thing `what` at `at` names); an allocation that fails in it is
+  // reported as that thing's error, not as a bare std::bad_alloc.
+  template <class Load>
+  auto loading(const toml::node& at, const std::string& what, Load&& load) const {
+    try {
+      return load();
+    } catch (const std::bad_alloc&) {
+      fail(at,
+           what + ": out of memory while loading it; this rank may hold " + dfb::memoryLimitText());
+    } catch (const std::length_error&) {
+      fail(at, what + ": out of memory while loading it (a size beyond what a container holds)");
+    }
+  }
+
   // The tables of an array of tables ([[key]] entries); none when `key` is absent.
   std::vector<const toml::table*> arrayOfTables(const toml::table& t, std::string_view key) const {
     std::vector<const toml::table*> out;
@@ -63,6 +93,13 @@ class TomlReader {
   }
 
   const std::string& path() const { return path_; }
+
+  // A number as messages show it: "1e+30", "0.25".
+  static std::string text(double v) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%g", v);
+    return buffer;
+  }
 
   const toml::node& require(const toml::table& t, std::string_view key,
                             const std::string& what) const {
@@ -126,6 +163,13 @@ class TomlReader {
       m = rotation(axis, number((*a)[3], what + ".rotate")) * m;
     }
     if (t.get("translate")) m = translation(vec3(t, "translate", what, {})) * m;
+    // Instances are drawn through the inverse: a transform that flattens (a zero scale) or whose
+    // determinant leaves the float range has none.
+    const float det = dot(m.vx, cross(m.vy, m.vz));
+    if (!(std::isfinite(det) && std::fabs(det) >= 1e-30f))
+      fail(t.get("scale") ? *t.get("scale") : t,
+           what + ".scale makes a degenerate transform (determinant " + text(det) +
+               "): every axis must be scaled by a non-zero amount within the float range");
     return m;
   }
 

@@ -1,14 +1,17 @@
 #include "wall/DisplayRoutingOp.h"
 
+#include <string>
+
+#include "wall/Error.h"
+
 namespace wall {
 
 DisplayRoutingOp::DisplayRoutingOp(std::shared_ptr<PieceSink> sink, const Layout& layout,
                                    int tileSize)
-    : sink_(std::move(sink)) {
-  const dfb::TileGrid tiles = canvasTiles(layout, tileSize);
-  piecesOfTile_.resize(static_cast<size_t>(tiles.tileCount()));
-  for (int t = 0; t < tiles.tileCount(); ++t)
-    piecesOfTile_[static_cast<size_t>(t)] = piecesOf(layout, tiles.region(t));
+    : sink_(std::move(sink)), tiles_(canvasTiles(layout, tileSize)) {
+  piecesOfTile_.resize(static_cast<size_t>(tiles_.tileCount()));
+  for (int t = 0; t < tiles_.tileCount(); ++t)
+    piecesOfTile_[static_cast<size_t>(t)] = piecesOf(layout, tiles_.region(t));
 }
 
 DisplayRoutingOp::DisplayRoutingOp(messaging::Messenger& messenger, const Layout& layout,
@@ -17,7 +20,19 @@ DisplayRoutingOp::DisplayRoutingOp(messaging::Messenger& messenger, const Layout
                        tileSize) {}
 
 void DisplayRoutingOp::process(dfb::FinishedTile& tile) {
-  const auto& pieces = piecesOfTile_.at(static_cast<size_t>(tile.tileIndex));
+  // The cuts are the canvas's tiles at the op's tile size: a DFB of another size or canvas would
+  // send pieces of the wrong pixels, or none.
+  if (tile.tileIndex < 0 || tile.tileIndex >= tiles_.tileCount() ||
+      tiles_.region(tile.tileIndex) != tile.region) {
+    const dfb::Region& r = tile.region;
+    throw Error("display routing: finished tile " + std::to_string(tile.tileIndex) + " [" +
+                std::to_string(r.x0) + ", " + std::to_string(r.x1) + ") x [" +
+                std::to_string(r.y0) + ", " + std::to_string(r.y1) +
+                ") is not a tile of the wall's " + std::to_string(tiles_.width()) + "x" +
+                std::to_string(tiles_.height()) + " canvas in tiles of " +
+                std::to_string(tiles_.tileSize()) + " (the DFB's tile size must be the op's)");
+  }
+  const auto& pieces = piecesOfTile_[static_cast<size_t>(tile.tileIndex)];
   for (const Piece& piece : pieces) {
     const int width = tile.region.width();
     const std::uint32_t* at = tile.rgba8->data() +

@@ -19,7 +19,9 @@ dfb::Region PreviewGrid::cellPixels(int cx, int cy) const {
 
 int previewFactor(int canvasWidth, int canvasHeight, int maxSide) {
   const int longest = std::max(canvasWidth, canvasHeight);
-  return std::max(8, (longest + maxSide - 1) / maxSide);
+  int factor = 1;
+  while ((longest + factor - 1) / factor > std::max(1, maxSide)) factor *= 2;
+  return factor;
 }
 
 std::vector<std::uint32_t> downsample(const PreviewGrid& grid, const dfb::Region& region,

@@ -1,7 +1,8 @@
 #pragma once
 // The whole-wall preview: the canvas (bezels included) shrunk by a box filter of `factor` x
-// `factor` pixels, small enough to travel to render rank 0 next to the real frames (about 1/64
-// of their bytes at the default factor of 8) and to be served to a browser. The preview's cell
+// `factor` pixels, small enough to travel to render rank 0 next to the real frames and to be
+// served to a browser, yet detailed enough to steer by: previewFactor keeps it 513-1024 cells
+// on its longest side (the canvas itself, factor 1, when that is smaller). The preview's cell
 // (cx, cy) covers canvas pixels [cx·f, (cx+1)·f) x [cy·f, (cy+1)·f), clipped to the canvas: edge
 // cells of a canvas whose sides are no multiple of f cover fewer pixels and average only those.
 #include <cstdint>
@@ -24,8 +25,10 @@ struct PreviewGrid {
   dfb::Region cellPixels(int cx, int cy) const;
 };
 
-// The factor for a canvas: 8, or more when the preview would otherwise be longer than
-// `maxSide` cells on a side (a browser image, not a second wall).
+// The factor for a canvas: the smallest power of two (1, 2, 4, ...) that keeps the preview at
+// most `maxSide` cells on a side, so the page shows more than maxSide/2 cells across whatever the
+// wall's size (a small wall is not a mosaic, a large one not a second wall). A power of two
+// divides the tile sizes people pick (64), so every cell lies in one tile (exact averages).
 int previewFactor(int canvasWidth, int canvasHeight, int maxSide = 1024);
 
 // Box-filters the RGBA8 pixels of canvas region `region` (rows of `stride` pixels starting at

@@ -6,8 +6,9 @@
 //
 // A cell that straddles two tiles (a tile size that is no multiple of the factor) is the
 // pixel-count-weighted mean of the parts' averages, so it matches the box filter of the whole
-// image within rounding; with the default sizes (tiles of 64, factor 8) every cell lies in one
-// tile and the preview equals downsample() of the full image exactly.
+// image within rounding; with a tile size that is a multiple of the factor (tiles of 64, any
+// factor previewFactor picks up to 64) every cell lies in one tile and the preview equals
+// downsample() of the full image exactly.
 //
 // Registered under kPreviewObject on construction (before the job's start-up barrier);
 // incoming() runs on the messenger's inbox thread, the rest on any thread.

@@ -1,8 +1,10 @@
 #pragma once
 // The preview's pixel op: on the tile owner, after tone mapping, the finished tile shrunk by the
 // preview's box filter (wall/Preview.h) goes to render rank 0, which assembles the whole-wall
-// preview (PreviewAssembler). Full-size pixels never reach rank 0 this way: a 64x64 tile becomes
-// 8x8 cells, 1/64 of its bytes. Runs beside the display-routing op, in route and gather mode.
+// preview (PreviewAssembler). The factor follows the canvas (previewFactor): on a 3840-pixel
+// canvas a 64x64 tile becomes 16x16 cells, 1/16 of its bytes; a canvas of at most 1024 pixels a
+// side is its own preview (factor 1), which costs what gathering it would. Counted apart from
+// the frame's pixels either way. Runs beside the display-routing op, in route and gather mode.
 //
 // Thread-safe: the DFB runs it for different tiles concurrently.
 #include <atomic>

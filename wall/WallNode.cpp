@@ -225,10 +225,7 @@ void WallNode::keepWaiting() {
 
 void WallNode::requestCapture(std::uint32_t frameId, std::uint64_t sequence) {
   std::lock_guard lock(mutex_);
-  if (sequence > captureAsked_) {
-    captureAsked_ = sequence;
-    captureAskedFrame_ = frameId;
-  }
+  captureAsks_.emplace(sequence, frameId);  // a sequence seen before changes nothing
 }
 
 void WallNode::pollWindows() {
@@ -370,14 +367,23 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   // reduction rather than a plain barrier so every wall process also learns when the last
   // display had the frame complete (for the statistics), at no extra round trip.
   // The capture requests ride along: the highest sequence any process was asked for (for this
-  // frame or an earlier one), so every process captures the same frame. So do the previous
+  // frame or an earlier one) and has not captured, so every process captures the same frame; a
+  // request for a later frame waits for it, even when it came before one for this frame (two
+  // requests in a row, both here before either frame, are two captures). So do the previous
   // frame's swap times (latest and, negated, earliest): how far apart the displays changed.
   // The last value: some process gave the frame up (abandonOnFailure): nobody shows it.
   std::int64_t agreed[kAgreed] = {report.completeNs, 0, lastSwapNs_, -lastSwapNs_, 0};
   {
     std::lock_guard lock(mutex_);
-    if (captureAsked_ > captureDone_ && frameId >= captureAskedFrame_)
-      agreed[1] = static_cast<std::int64_t>(captureAsked_);
+    for (auto ask = captureAsks_.begin(); ask != captureAsks_.end();) {
+      if (ask->first <= captureDone_) {
+        ask = captureAsks_.erase(ask);  // captured, by this process's agreement with the others
+        continue;
+      }
+      if (ask->second <= frameId)
+        agreed[1] = std::max(agreed[1], static_cast<std::int64_t>(ask->first));
+      ++ask;
+    }
   }
   peers_.agreeMax(frameId, agreed, kAgreed, deadline);
   if (agreed[4] != 0) {

@@ -192,10 +192,12 @@ class WallNode : public messaging::MessageHandler {
   std::int64_t stopAfter_ = -1;  // -1: no early stop
   std::int64_t lastCaptured_ = 0;
   std::chrono::steady_clock::time_point waitFrom_{};  // keepWaiting: deadlines count from here
-  std::uint64_t captureAsked_ = 0;                    // highest requested sequence
-  std::uint32_t captureAskedFrame_ = 0;               // ... for this frame or later
-  std::uint64_t captureDone_ = 0;  // highest sequence captured (the same on every process)
-  std::int64_t lastSwapNs_ = 0;    // steady_clock time the last frame's swaps ended here
+  // Capture requests not yet captured: sequence -> frame. Each is taken at its frame (or the
+  // first presented after it), also when a later request came first.
+  std::map<std::uint64_t, std::uint32_t> captureAsks_;
+  // Highest sequence captured (the same on every process); presenting thread only.
+  std::uint64_t captureDone_ = 0;
+  std::int64_t lastSwapNs_ = 0;  // steady_clock time the last frame's swaps ended here
   std::string error_;
   bool aborted_ = false;
   std::string abortReason_;

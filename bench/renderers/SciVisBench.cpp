@@ -4,7 +4,11 @@
 //   scivis_bench MODE RESOLUTION SIZE THREADS FRAMES [OUT.png | OUT.f32 (raw linear floats)]
 // MODE: "volume"  the wavelet as a volume (VTK's comparison: blue-white-red over 37..277,
 //                 opacity ramp 0..0.4 per voxel, one sample per voxel, no shading)
+//       "iso"     two opaque isosurfaces (160, 215, as configs/scenes/wavelet256-contours.toml),
+//                 no shadows or AO: what a camera ray costs to find an isosurface
 //       "iso-ao"  two opaque isosurfaces with 4 ambient-occlusion rays and shadows per hit
+// Isosurfaces are triangles made at load (load_s includes them; isosurface_s: polygonising and
+// BVHs); ns_per_camera_ray is per thread (frame time x threads / rays).
 // The camera is VTK's ResetCamera() view of the volume (view angle 30°, looking down -z),
 // turned about the volume's centre by 360/FRAMES degrees a frame; the result is the median.
 #include <algorithm>
@@ -41,6 +45,13 @@ SceneDesc benchScene(const std::string& mode, int resolution) {
   d.camera = {{0, 0, distance}, {0, 0, 0}, {0, 1, 0}, 30.0f, 0, 0};
   if (mode == "volume") {
     v.transfer.opacities = {{37.0f, 0.0f}, {277.0f, 0.4f}};
+  } else if (mode == "iso") {
+    v.visible = false;
+    Material a{"a", MaterialType::Diffuse, {0.55f, 0.7f, 1.0f}, {}, 0, 1.5f};
+    Material b{"b", MaterialType::Diffuse, {1.0f, 0.55f, 0.2f}, {}, 0, 1.5f};
+    d.materials = {a, b};
+    d.isosurfaces = {{0, 160.0f, 0}, {0, 215.0f, 1}};
+    d.scivis.shadows = false;
   } else {
     v.visible = false;
     Material a{"a", MaterialType::Diffuse, {0.9f, 0.9f, 0.95f}, {}, 0, 1.5f};
@@ -57,7 +68,7 @@ SceneDesc benchScene(const std::string& mode, int resolution) {
 
 int main(int argc, char** argv) {
   if (argc < 6) {
-    std::fprintf(stderr, "usage: %s volume|iso-ao RESOLUTION SIZE THREADS FRAMES [OUT.png]\n",
+    std::fprintf(stderr, "usage: %s volume|iso|iso-ao RESOLUTION SIZE THREADS FRAMES [OUT.png]\n",
                  argv[0]);
     return 2;
   }
@@ -118,14 +129,17 @@ int main(int argc, char** argv) {
       if (out.size() > 4 && out.compare(out.size() - 4, 4, ".png") == 0)
         wall::writePng(out, rgba8.data(), size, size);
     }
+    const SciVisScene::IsosurfaceStats& iso = scene.scivis->isosurfaceStats();
+    const double rays = double(size) * size * frames;
     std::printf(
         "{\"mode\": \"%s\", \"resolution\": %d, \"size\": %d, \"threads\": %d, \"frames\": %d, "
-        "\"load_s\": %.3f, \"median_frame_s\": %.4f, \"min_frame_s\": %.4f, \"camera_rays_per_s\": "
-        "%.4g, "
+        "\"load_s\": %.3f, \"isosurface_s\": %.3f, \"isosurface_triangles\": %zu, "
+        "\"median_frame_s\": %.4f, \"min_frame_s\": %.4f, \"camera_rays_per_s\": %.4g, "
+        "\"ns_per_camera_ray\": %.1f, "
         "\"volume_samples_per_s\": %.4g, \"volume_samples_per_ray\": %.1f}\n",
-        mode.c_str(), resolution, size, threads, frames, loadS, median, sorted.front(),
-        double(size) * size * frames / total, samples / total,
-        samples / (double(size) * size * frames));
+        mode.c_str(), resolution, size, threads, frames, loadS, iso.seconds,
+        iso.cameraTriangles + iso.shadingTriangles, median, sorted.front(), rays / total,
+        1e9 * total * threads / rays, samples / total, samples / rays);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "scivis_bench: %s\n", e.what());

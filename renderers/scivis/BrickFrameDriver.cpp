@@ -125,8 +125,8 @@ BrickFrameDriver::BrickFrameDriver(std::shared_ptr<const SceneDesc> desc,
         static_cast<std::size_t>(std::find_if(m.directory.bricks.begin(), m.directory.bricks.end(),
                                               [&](const BrickPlan& p) { return p.id == b.id; }) -
                                  m.directory.bricks.begin());
-    m.bytes += b.content.bytes();
     m.scenes[i] = std::make_unique<SciVisScene>(m.desc, std::move(b.content));
+    m.bytes += m.scenes[i]->bytes();
     m.renderers[i] = std::make_unique<SciVisRenderer>(*m.scenes[i], settings, SciVisOptions{false});
   }
 }
@@ -152,6 +152,17 @@ const std::vector<int>& BrickFrameDriver::holders(int brick) const {
   return impl_->directory.holders.at(static_cast<std::size_t>(brick));
 }
 std::size_t BrickFrameDriver::sceneBytes() const { return impl_->bytes; }
+SciVisScene::IsosurfaceStats BrickFrameDriver::isosurfaceStats() const {
+  SciVisScene::IsosurfaceStats out;
+  for (const auto& scene : impl_->scenes) {
+    if (!scene) continue;
+    const SciVisScene::IsosurfaceStats& s = scene->isosurfaceStats();
+    out.cameraTriangles += s.cameraTriangles;
+    out.shadingTriangles += s.shadingTriangles;
+    out.seconds += s.seconds;
+  }
+  return out;
+}
 std::uint64_t BrickFrameDriver::brickTilesRendered() const { return impl_->brickTiles.load(); }
 
 std::vector<HeldBrick> BrickFrameDriver::releaseBricks() {

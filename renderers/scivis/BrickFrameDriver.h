@@ -60,6 +60,8 @@ class BrickFrameDriver {
   const std::vector<int>& holders(int brick) const;  // render ranks, ascending
   std::vector<int> heldBricks() const;               // ids, on this rank
   std::size_t sceneBytes() const;                    // the brick data this rank holds
+  // Over this rank's bricks: isosurface triangles and the seconds making them (at load).
+  SciVisScene::IsosurfaceStats isosurfaceStats() const;
   // This rank's bricks, moved out for the next scene version; the driver is spent afterwards.
   std::vector<HeldBrick> releaseBricks();
   std::uint64_t brickTilesRendered() const;

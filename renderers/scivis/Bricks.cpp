@@ -4,9 +4,11 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <new>
 #include <string>
 
 #include "dfb/Error.h"
+#include "dfb/MemoryBudget.h"
 #include "messaging/BoundedWait.h"
 #include "renderers/Error.h"
 
@@ -87,6 +89,57 @@ WorldMesh selectTriangles(const WorldMesh& m, Keep keep) {
   return out;
 }
 
+// The voxels of `g` around `region`, two beyond it: the crossing test samples one step past a
+// ray's end and gradients half a voxel around a hit. False: fewer than 2 voxels on an axis.
+bool voxelsAround(const GridGeometry& g, const Box3& region, VoxelBox& box) {
+  bool empty = false;
+  for (int a = 0; a < 3; ++a) {
+    const double lo = std::floor((double(region.lo[a]) - g.origin[a]) / g.spacing[a]) - 2;
+    const double hi = std::ceil((double(region.hi[a]) - g.origin[a]) / g.spacing[a]) + 3;
+    const int i0 = static_cast<int>(std::clamp(lo, 0.0, double(g.dims[a])));
+    const int i1 = static_cast<int>(std::clamp(hi, 0.0, double(g.dims[a])));
+    (a == 0 ? box.lo.x : a == 1 ? box.lo.y : box.lo.z) = i0;
+    (a == 0 ? box.hi.x : a == 1 ? box.hi.y : box.hi.z) = i1;
+    empty = empty || i1 - i0 < 2;
+  }
+  return !empty;
+}
+
+std::string volumeName(const VolumeDesc& v) {
+  return v.where.empty() ? "volume '" + v.name + "'" : v.where;
+}
+
+bool hasIsosurface(const SceneDesc& desc, std::size_t volume) {
+  for (const IsosurfaceDesc& iso : desc.isosurfaces)
+    if (iso.volume == volume) return true;
+  return false;
+}
+
+// What loadBrick holds of volume `i` for `plan` at most: the dense core with its macrocell
+// ranges and, with a ghost shell, the shell both sparse (float voxels) and dense, as loadBrick
+// may hold both while it chooses.
+std::uint64_t brickVolumeBytes(const SceneDesc& desc, std::size_t i, const BrickPlan& plan,
+                               float ghost) {
+  const VolumeSource& source = desc.volumes[i].source;
+  // OpenVDB: while a box is sampled, the leaves of the grid that touch it are held too (as many
+  // float voxels again, at most).
+  const std::uint64_t width =
+      voxelBytes(source.type) * (source.kind == VolumeSource::Kind::OpenVdb ? 2 : 1);
+  auto dense = [&](const VoxelBox& b) {
+    const std::uint64_t voxels = b.voxelCount();
+    return dfb::bytesPlus(dfb::bytesTimes(voxels, width), voxels / 64);  // 8 bytes per 8³
+  };
+  std::uint64_t bytes = 0;
+  VoxelBox core, shell;
+  if (voxelsAround(source.grid, plan.bounds, core)) bytes = dense(core);
+  if (ghost > 0 && hasIsosurface(desc, i) &&
+      voxelsAround(source.grid, {plan.bounds.lo - Vec3{ghost}, plan.bounds.hi + Vec3{ghost}},
+                   shell))
+    bytes =
+        dfb::bytesPlus(bytes, dfb::bytesPlus(dense(shell), dfb::bytesTimes(shell.voxelCount(), 4)));
+  return bytes;
+}
+
 void split(const Box3& box, int count, int& nextId, std::vector<BrickPlan>& out) {
   if (count == 1) {
     out.push_back({nextId++, box});
@@ -153,31 +206,21 @@ float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode) {
   return desc.scivis.aoDistance > 0 ? desc.scivis.aoDistance : 0.25f * sceneExtent;
 }
 
-BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost) {
+namespace {
+
+// loadBrick's work; `part` says what it is loading, for an allocation that fails on the way.
+BrickContent loadBrickData(const SceneDesc& desc, const BrickPlan& plan, float ghost,
+                           std::string& part) {
   BrickContent c;
   c.bounds = plan.bounds;
   const Box3 reach = expanded(plan.bounds, ghost);
   for (std::size_t i = 0; i < desc.volumes.size(); ++i) {
     const VolumeDesc& v = desc.volumes[i];
     const GridGeometry& g = v.source.grid;
-    // The voxels around `region`, two beyond it: the crossing test samples one step past a
-    // ray's end and gradients half a voxel around a hit. Empty: fewer than 2 voxels on an axis.
-    auto voxelsAround = [&](const Box3& region, VoxelBox& box) {
-      bool empty = false;
-      for (int a = 0; a < 3; ++a) {
-        const double lo = std::floor((double(region.lo[a]) - g.origin[a]) / g.spacing[a]) - 2;
-        const double hi = std::ceil((double(region.hi[a]) - g.origin[a]) / g.spacing[a]) + 3;
-        const int i0 = static_cast<int>(std::clamp(lo, 0.0, double(g.dims[a])));
-        const int i1 = static_cast<int>(std::clamp(hi, 0.0, double(g.dims[a])));
-        (a == 0 ? box.lo.x : a == 1 ? box.lo.y : box.lo.z) = i0;
-        (a == 0 ? box.hi.x : a == 1 ? box.hi.y : box.hi.z) = i1;
-        empty = empty || i1 - i0 < 2;
-      }
-      return !empty;
-    };
+    part = volumeName(v) + ": its voxels";
     // Dense: the voxels camera rays and gradients use (the brick and one ghost layer).
     VoxelBox core;
-    const bool haveCore = voxelsAround(plan.bounds, core);
+    const bool haveCore = voxelsAround(g, plan.bounds, core);
     if (haveCore) {
       c.volumes.push_back(loadVolume(v.source, core));
     } else {
@@ -193,7 +236,7 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost
       if (iso.volume == i) isovalues.push_back(iso.value);
     VoxelBox shell;
     c.shells.emplace_back();
-    if (ghost > 0 && !isovalues.empty() && voxelsAround(reach, shell) && !(shell == core)) {
+    if (ghost > 0 && !isovalues.empty() && voxelsAround(g, reach, shell) && !(shell == core)) {
       ShadingShell sparse =
           ShadingShell::load(v.source, shell, haveCore ? core : VoxelBox{}, isovalues);
       const std::size_t dense = shell.voxelCount() * voxelBytes(v.source.type);
@@ -203,6 +246,7 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost
         c.volumes.back() = loadVolume(v.source, shell);
     }
   }
+  part = "its particles and triangles";
   std::vector<ParticlesDesc> converted;
   for (const ParticlesDesc* p : particleSets(desc, converted)) {
     ParticlesDesc inside = selectParticles(*p, [&](Vec3 centre, float r) {
@@ -227,18 +271,116 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost
   return c;
 }
 
-std::vector<HeldBrick> loadOwnBricks(const SceneDesc& desc, int bricks, int replication, int rank,
-                                     int ranks, GhostMode ghosts) {
+}  // namespace
+
+BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost) {
+  std::string part;
+  try {
+    return loadBrickData(desc, plan, ghost, part);
+  } catch (const std::bad_alloc&) {
+    throw Error(part + ": out of memory while loading brick " + std::to_string(plan.id) +
+                "; this rank may hold " + dfb::memoryLimitText());
+  }
+}
+
+void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans, float ghost) {
+  // Per volume, what the plans hold of it; particles and triangles: those the bricks reach
+  // (plus, for triangles, the world-space copy of every mesh loadBrick makes on the way).
+  std::vector<std::uint64_t> volumes(desc.volumes.size(), 0);
+  std::uint64_t others = desc.bytes();
+  std::vector<ParticlesDesc> converted;
+  const std::vector<const ParticlesDesc*> sets = particleSets(desc, converted);
+  const std::vector<WorldMesh> meshes = worldMeshes(desc);
+  for (const BrickPlan& plan : plans) {
+    for (std::size_t i = 0; i < desc.volumes.size(); ++i)
+      volumes[i] = dfb::bytesPlus(volumes[i], brickVolumeBytes(desc, i, plan, ghost));
+    const Box3 reach = expanded(plan.bounds, ghost);
+    for (const ParticlesDesc* p : sets) {
+      const std::uint64_t each = sizeof(Vec3) + (p->radii.size() > 1 ? 4 : 0) +
+                                 (p->attribute.empty() ? 0 : 4) + kBvhBytesPerPrimitive;
+      std::uint64_t reached = 0;
+      for (std::size_t i = 0; i < p->centers.size(); ++i)
+        reached +=
+            overlaps(reach, p->centers[i] - Vec3{p->radius(i)}, p->centers[i] + Vec3{p->radius(i)});
+      others = dfb::bytesPlus(others, reached * each);
+    }
+    for (const WorldMesh& m : meshes) {
+      // The world-space copy loadBrick makes of every mesh, and the triangles the brick reaches
+      // with their share of the BVH.
+      others = dfb::bytesPlus(others, m.mesh.positions.size() * sizeof(Vec3) +
+                                          m.mesh.triangles.size() * sizeof(m.mesh.triangles[0]));
+      std::uint64_t reached = 0;
+      for (const auto& t : m.mesh.triangles) {
+        const Vec3 a = m.mesh.positions[t[0]], b = m.mesh.positions[t[1]],
+                   c = m.mesh.positions[t[2]];
+        reached += overlaps(
+            reach,
+            {std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})},
+            {std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})});
+      }
+      others = dfb::bytesPlus(others, reached * (3 * sizeof(Vec3) + sizeof(m.mesh.triangles[0]) +
+                                                 kBvhBytesPerPrimitive));
+    }
+  }
+  std::uint64_t total = others;
+  std::size_t largest = 0;
+  for (std::size_t i = 0; i < volumes.size(); ++i) {
+    total = dfb::bytesPlus(total, volumes[i]);
+    if (volumes[i] > volumes[largest]) largest = i;
+  }
+  const std::string problem = dfb::memoryProblem(total);
+  if (problem.empty()) return;
+  const std::string bricks =
+      plans.size() == 1 && plans[0].bounds == Box3{}
+          ? std::string("the whole scene")
+          : std::to_string(plans.size()) + (plans.size() == 1 ? " brick" : " bricks");
+  if (!volumes.empty() && volumes[largest] >= others) {
+    const VolumeDesc& v = desc.volumes[largest];
+    const Index3 n = v.source.grid.dims;
+    throw Error(volumeName(v) + ": this rank holds " + std::to_string(volumes[largest]) +
+                " bytes of this " + std::to_string(n.x) + "x" + std::to_string(n.y) + "x" +
+                std::to_string(n.z) + " " + voxelTypeName(v.source.type) + " volume (" + bricks +
+                ", ghost voxels and macrocells included); its data in all " + problem);
+  }
+  throw Error("the scene's particles and triangles: this rank holds " + std::to_string(others) +
+              " bytes of them (" + bricks + "); its data in all " + problem);
+}
+
+namespace {
+
+// The plans rank `rank` holds, and their ghost margin.
+std::vector<BrickPlan> ownPlans(const SceneDesc& desc, int bricks, int replication, int rank,
+                                int ranks, GhostMode ghosts, float& ghost) {
   const std::vector<BrickPlan> plans = splitScene(desc, bricks);
   if (replication < 1) throw Error("--replication must be at least 1");
   const Box3 domain = sceneDomain(desc);
-  const float ghost = ghostMargin(desc, maxComponent(domain.hi - domain.lo), ghosts);
-  std::vector<HeldBrick> out;
+  ghost = ghostMargin(desc, maxComponent(domain.hi - domain.lo), ghosts);
+  std::vector<BrickPlan> mine;
   for (const BrickPlan& plan : plans) {
     const std::vector<int> h = brickHolders(plan.id, ranks, replication);
-    if (std::find(h.begin(), h.end(), rank) != h.end())
-      out.push_back({plan.id, loadBrick(desc, plan, ghost)});
+    if (std::find(h.begin(), h.end(), rank) != h.end()) mine.push_back(plan);
   }
+  return mine;
+}
+
+}  // namespace
+
+void checkOwnBricksMemory(const SceneDesc& desc, int bricks, int replication, int rank, int ranks,
+                          GhostMode ghosts) {
+  float ghost = 0;
+  const std::vector<BrickPlan> mine =
+      ownPlans(desc, bricks, replication, rank, ranks, ghosts, ghost);
+  checkBrickMemory(desc, mine, ghost);
+}
+
+std::vector<HeldBrick> loadOwnBricks(const SceneDesc& desc, int bricks, int replication, int rank,
+                                     int ranks, GhostMode ghosts) {
+  float ghost = 0;
+  const std::vector<BrickPlan> mine =
+      ownPlans(desc, bricks, replication, rank, ranks, ghosts, ghost);
+  checkBrickMemory(desc, mine, ghost);
+  std::vector<HeldBrick> out;
+  for (const BrickPlan& plan : mine) out.push_back({plan.id, loadBrick(desc, plan, ghost)});
   return out;
 }
 

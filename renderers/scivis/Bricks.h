@@ -58,7 +58,22 @@ float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode = Gho
 // macrocells holding an isovalue) or the dense box when that is smaller; particles and mesh
 // triangles reaching into the bounds (drawn, clipped to them) and, as ghost data, those within
 // `ghost` of them.
+// An allocation that fails is reported as renderers::Error naming the volume (or the particles
+// and triangles) it was loading.
 BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost);
+
+// The memory budget of loading `plans` with `ghost` (dfb/MemoryBudget.h): what loadBrick holds
+// for them at most — dense voxel boxes with their ghost layers and macrocells, ghost shells
+// counted both sparse and dense, the particles and triangles they reach — with the scene
+// description itself. Throws renderers::Error before anything is loaded when that is more than
+// this rank may hold, naming the volume that asks most (its file, line and field, e.g.
+// "scene.toml:7: volume 'ct'.dims: ...") or the particles and triangles, and the bytes.
+// loadOwnBricks and wholeScene check this themselves.
+void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans, float ghost);
+// The same for the bricks loadOwnBricks(desc, bricks, replication, rank, ranks, ghosts) loads,
+// for a program that wants to know at setup, before the frames start.
+void checkOwnBricksMemory(const SceneDesc& desc, int bricks, int replication, int rank, int ranks,
+                          GhostMode ghosts = GhostMode::Reach);
 
 // One brick a rank holds: its id (every rank holding an id holds the same data) and its data;
 // content.bounds are the brick's clip bounds.

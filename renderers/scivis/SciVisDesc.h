@@ -18,6 +18,9 @@ struct VolumeDesc {
   VolumeSource source;
   TransferFunction transfer;
   bool visible = true;  // false: only for isosurfaces (no volume rendering of it)
+  // Where its size was given, for errors found after reading (the memory budget of a brick):
+  // "scene.toml:7: volume 'ct'.dims"; empty when not read from a file.
+  std::string where;
 };
 
 // One level set of a volume: a surface at `value`, shaded with a material, possibly transparent.

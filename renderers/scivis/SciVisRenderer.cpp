@@ -35,24 +35,6 @@ inline void lookup(const SciVisScene::VolumeLayer& v, float value, float rgba[4]
   for (int c = 0; c < 4; ++c) rgba[c] = a[c] + f * (a[4 + c] - a[c]);
 }
 
-// The level crossing between (ta, fa) and (tb, fb) (values on opposite sides of `level`), by
-// regula falsi on the field itself; both ends must be inside the field's data.
-float refineCrossing(const VolumeField& field, Vec3 origin, Vec3 dir, float level, float ta,
-                     float fa, float tb, float fb) {
-  for (int iteration = 0; iteration < 6; ++iteration) {
-    const float tm = ta + (tb - ta) * ((level - fa) / (fb - fa));
-    float fm;
-    if (!(tm > ta && tm < tb) || !field.sample(origin + dir * tm, fm)) break;
-    if ((fm - level) * (fa - level) > 0)
-      ta = tm, fa = fm;
-    else
-      tb = tm, fb = fm;
-  }
-  return fb == fa ? ta : ta + (tb - ta) * ((level - fa) / (fb - fa));
-}
-
-inline bool crosses(float a, float b, float level) { return (a < level) != (b < level); }
-
 // A cosine-weighted direction about unit n.
 Vec3 cosineDirection(Vec3 n, float u0, float u1) {
   Vec3 t, b;
@@ -64,8 +46,8 @@ Vec3 cosineDirection(Vec3 n, float u0, float u1) {
 
 std::uint64_t bitsOf(float t) { return std::bit_cast<std::uint32_t>(t); }
 
-// The common case, apart from the generic loop for speed: one visible volume without
-// isosurfaces, nothing else on the ray before the volume ends. It composites exactly the samples
+// The common case, apart from the generic loop for speed: one visible volume, between two
+// surfaces (isosurfaces are surfaces) or none. It composites exactly the samples
 // the generic loop composites, with the same arithmetic (same bits): t_k = (k + jitter) step
 // from the first k >= kStart with t_k >= t0, while t_k < t1, t_k <= volumeEnd and light gets
 // through. Samples are taken four at a time (SSE lanes, each computed as the scalar path does)
@@ -182,77 +164,9 @@ void SciVisRenderer::setLiveSettings(const LiveSettings& live) {
   layers_ = &retuned_;
 }
 
-namespace {
-
-// Whether one of `isosurfaces` lies on origin + t dir, t in [0, tFar], in a field of geometry
-// `field` (a VolumeField, or a brick's ShadingShell: the same macrocells, so the same samples)
-// whose values sample(p, value) gives.
-template <class Sample>
-bool crossesIsosurface(const FieldGeometry& field, Sample sample,
-                       const std::vector<const IsosurfaceDesc*>& isosurfaces, Vec3 origin, Vec3 dir,
-                       float tFar, float jitter) {
-  float t0 = 0, t1 = tFar;
-  if (!clipToBox(field.dataBounds(), origin, reciprocal(dir), t0, t1)) return false;
-  // Shading rays step one voxel (not the camera rays' finer step): they only ask yes or no.
-  const float step = field.minSpacing();
-  float previous = 0;
-  bool havePrevious = false;
-  for (float k = std::floor(t0 / step - jitter);; k += 1) {
-    const float t = (k + jitter) * step;
-    if (t > t1) break;
-    if (t < t0) continue;
-    const Vec3 p = origin + dir * t;
-    // Skip macrocells that hold no isosurface.
-    const int m = field.macroIndex(p);
-    if (m < 0) break;
-    bool any = false;
-    for (const IsosurfaceDesc* iso : isosurfaces)
-      any = any || (iso->value >= field.macroMin(m) && iso->value <= field.macroMax(m));
-    if (!any) {
-      float e0 = t, e1 = kInf;
-      clipToBox(field.macroBounds(m), origin, reciprocal(dir), e0, e1);
-      const float next = std::floor(e1 / step - jitter);
-      if (next > k) k = next;  // the loop's += 1 steps into the next macrocell
-      havePrevious = false;
-      continue;
-    }
-    float value;
-    if (!sample(p, value)) {  // a missing value (NaN): no crossing into or out of it
-      havePrevious = false;
-      continue;
-    }
-    if (havePrevious)
-      for (const IsosurfaceDesc* iso : isosurfaces)
-        if (crosses(previous, value, iso->value)) return true;
-    previous = value;
-    havePrevious = true;
-  }
-  return false;
-}
-
-}  // namespace
-
-bool SciVisRenderer::isosurfaceBetween(Vec3 origin, Vec3 dir, float tFar, float jitter) const {
-  for (const SciVisScene::VolumeLayer& v : *layers_) {
-    if (v.isosurfaces.empty()) continue;
-    const VolumeField* core = v.field;
-    const bool crossed =
-        v.shell
-            ? crossesIsosurface(
-                  *v.shell, [&](Vec3 p, float& value) { return v.shell->sample(p, value, core); },
-                  v.isosurfaces, origin, dir, tFar, jitter)
-        : core ? crossesIsosurface(
-                     *core, [&](Vec3 p, float& value) { return core->sample(p, value); },
-                     v.isosurfaces, origin, dir, tFar, jitter)
-               : false;
-    if (crossed) return true;
-  }
-  return false;
-}
-
-bool SciVisRenderer::occluded(Vec3 origin, Vec3 dir, float tFar, const Sampler& s) const {
-  return scene_.surfaceOccluded(origin, dir, 0.0f, tFar) ||
-         isosurfaceBetween(origin, dir, tFar, s.get(0));
+bool SciVisRenderer::occluded(Vec3 origin, Vec3 dir, float tFar) const {
+  // Isosurfaces are triangles in the shading scene, as every other surface.
+  return scene_.surfaceOccluded(origin, dir, 0.0f, tFar);
 }
 
 Vec3 SciVisRenderer::shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, const Material& m,
@@ -265,7 +179,7 @@ Vec3 SciVisRenderer::shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, co
     int blocked = 0;
     for (int i = 0; i < settings.aoSamples; ++i) {
       const Sampler ray = hitSampler.fork(static_cast<std::uint64_t>(i) + 1);
-      if (occluded(from, cosineDirection(normal, ray.get(1), ray.get(2)), scene_.aoDistance(), ray))
+      if (occluded(from, cosineDirection(normal, ray.get(1), ray.get(2)), scene_.aoDistance()))
         ++blocked;
     }
     ambientVisibility = 1.0f - static_cast<float>(blocked) / static_cast<float>(settings.aoSamples);
@@ -289,7 +203,7 @@ Vec3 SciVisRenderer::shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, co
     }
     const float cosine = dot(normal, toLight);
     if (cosine <= 0) continue;
-    if (settings.shadows && occluded(from, toLight, distance, hitSampler.fork(0x51u + i))) continue;
+    if (settings.shadows && occluded(from, toLight, distance)) continue;
     Vec3 lit = baseColor * cosine;
     if (m.specular > 0) {
       const Vec3 half = normalize(toLight - dir);
@@ -321,6 +235,11 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
     acc.add(c, s.material->opacity, s.t);
   };
   auto nextSurface = [&] {
+    // Behind an opaque surface nothing more is composited: no need to ask Embree again.
+    if (acc.transmittance <= minTransmittance) {
+      haveSurface = false;
+      return;
+    }
     const float after = std::nextafter(surface.t, kInf);
     haveSurface = scene_.intersectSurface(origin, dir, after, t1, surface) && surface.t < t1;
   };
@@ -332,90 +251,69 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
     }
   };
 
-  // The stretch of the ray where some volume has data, widened by a step on each side: the
-  // samples just outside [t0, t1) find the isosurface crossings near its ends.
+  // The stretch of the ray where some visible volume has data, widened by a step on each side
+  // (so samples lie on the same grid whatever cut [t0, t1) is). Isosurfaces are surfaces: a
+  // ray through volumes none of which is visible takes no volume sample at all.
   const float step = scene_.volumeStep();
   float volumeStart = kInf, volumeEnd = -kInf;
   for (const SciVisScene::VolumeLayer& v : *layers_) {
-    if (!v.field) continue;
+    if (!v.field || !v.visible) continue;
     float a = t0 - step, b = t1 + step;
     if (clipToBox(v.field->dataBounds(), origin, invDir, a, b))
       volumeStart = std::min(volumeStart, a), volumeEnd = std::max(volumeEnd, b);
   }
 
   const auto& layers = *layers_;
-  if (volumeStart <= volumeEnd && layers.size() == 1 && layers[0].visible &&
-      layers[0].isosurfaces.empty() && (!haveSurface || surface.t > volumeEnd)) {
+  if (volumeStart <= volumeEnd && layers.size() == 1 && layers[0].visible) {
+    // One visible volume: the fast march from surface to surface. A sample at a surface's very
+    // distance comes before it (as the generic loop composites them), so each stretch ends just
+    // past the surface.
     const float jitter = sampler.get(2);
     const float kStart = std::ceil(volumeStart / step - jitter);
-    const auto march = [&]<class T>() {
-      return marchOneVolume<T>(layers[0], origin, dir, invDir, t0, t1, kStart, volumeEnd, step,
-                               jitter, minTransmittance, acc);
-    };
-    switch (layers[0].field->volume().type) {
-      default:
-      case VoxelType::Float32:
-        out.volumeSamples = march.operator()<float>();
-        break;
-      case VoxelType::UInt8:
-        out.volumeSamples = march.operator()<std::uint8_t>();
-        break;
-      case VoxelType::UInt16:
-        out.volumeSamples = march.operator()<std::uint16_t>();
-        break;
+    float from = t0;
+    for (;;) {
+      const float to = haveSurface ? std::min(t1, std::nextafter(surface.t, kInf)) : t1;
+      const auto march = [&]<class T>() {
+        return marchOneVolume<T>(layers[0], origin, dir, invDir, from, to, kStart, volumeEnd, step,
+                                 jitter, minTransmittance, acc);
+      };
+      switch (layers[0].field->volume().type) {
+        default:
+        case VoxelType::Float32:
+          out.volumeSamples += march.operator()<float>();
+          break;
+        case VoxelType::UInt8:
+          out.volumeSamples += march.operator()<std::uint8_t>();
+          break;
+        case VoxelType::UInt16:
+          out.volumeSamples += march.operator()<std::uint16_t>();
+          break;
+      }
+      if (!haveSurface || acc.transmittance <= minTransmittance) break;
+      shadeSurface(surface);
+      nextSurface();
+      from = to;
     }
   } else if (volumeStart <= volumeEnd) {
     const std::size_t n = layers.size();
-    // Per volume: the value at the previous sample (when it had one) and at this one.
     constexpr std::size_t kMaxLayers = 8;
-    float previous[kMaxLayers], current[kMaxLayers];
-    bool hadPrevious[kMaxLayers] = {}, hasCurrent[kMaxLayers] = {};
+    float current[kMaxLayers];
+    bool hasCurrent[kMaxLayers] = {};
     const float jitter = sampler.get(2);
     std::uint32_t samples = 0;
     float k = std::ceil(volumeStart / step - jitter);
-    float tPrevious = -kInf, tCheck = -kInf;
-    struct Crossing {
-      float t;
-      const IsosurfaceDesc* iso;
-      const VolumeField* field;
-    };
-    Crossing crossings[16];
+    float tCheck = -kInf;
     for (; acc.transmittance > minTransmittance; k += 1) {
       const float t = (k + jitter) * step;
       const Vec3 p = origin + dir * t;
-      bool anyData = false;
-      for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) {
-        hasCurrent[i] = layers[i].field && layers[i].field->sample(p, current[i]);
-        anyData = anyData || hasCurrent[i];
-      }
-      // Isosurface crossings in (tPrevious, t), shaded in order with the surfaces among them.
-      int found = 0;
-      for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) {
-        if (!hasCurrent[i] || !hadPrevious[i]) continue;
-        for (const IsosurfaceDesc* iso : layers[i].isosurfaces) {
-          if (!crosses(previous[i], current[i], iso->value) || found == 16) continue;
-          const float th = refineCrossing(*layers[i].field, origin, dir, iso->value, tPrevious,
-                                          previous[i], t, current[i]);
-          if (th >= t0 && th < t1) crossings[found++] = {th, iso, layers[i].field};
-        }
-      }
-      std::sort(crossings, crossings + found,
-                [](const Crossing& a, const Crossing& b) { return a.t < b.t; });
-      for (int c = 0; c < found; ++c) {
-        surfacesBefore(crossings[c].t);
-        if (acc.transmittance <= minTransmittance) break;
-        const Crossing& x = crossings[c];
-        const Material& m = scene_.desc().materials[x.iso->material];
-        const Vec3 hit = origin + dir * x.t;
-        const Vec3 gradient = x.field->gradient(hit, 0.5f * x.field->minSpacing());
-        const Vec3 normal = length(gradient) > 0 ? normalize(gradient) : -dir;
-        acc.add(shade(hit, normal, dir, m.color, m, sampler.fork(bitsOf(x.t))), m.opacity, x.t);
-      }
+      for (std::size_t i = 0; i < n && i < kMaxLayers; ++i)
+        hasCurrent[i] =
+            layers[i].field && layers[i].visible && layers[i].field->sample(p, current[i]);
       surfacesBefore(t);
       if (t >= t1 || t > volumeEnd) break;
       if (t >= t0) {
         for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) {
-          if (!hasCurrent[i] || !layers[i].visible) continue;
+          if (!hasCurrent[i]) continue;
           float rgba[4];
           lookup(layers[i], current[i], rgba);
           if (rgba[3] > 0) acc.add({rgba[0], rgba[1], rgba[2]}, rgba[3], t);
@@ -423,15 +321,15 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
         ++samples;
       }
       // Empty space: when no volume can show anything in the macrocell here, jump to the last
-      // sample before its exit (the crossing test needs the value there). Macrocells are looked
-      // at only when the ray leaves the ones it was in, not at every sample.
+      // sample before its exit. Macrocells are looked at only when the ray leaves the ones it
+      // was in, not at every sample.
       float skipTo = kInf;
       bool skippable = false;
       if (t >= tCheck) {
         skippable = true;
         float nextCheck = kInf;
         for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) {
-          if (!layers[i].field) continue;
+          if (!layers[i].field || !layers[i].visible) continue;
           const int m = hasCurrent[i] ? layers[i].field->macroIndex(p) : -1;
           float a = t, b = kInf;
           if (m < 0) {
@@ -454,17 +352,11 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
         }
         tCheck = nextCheck;
       }
-      for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) {
-        previous[i] = current[i];
-        hadPrevious[i] = hasCurrent[i];
-      }
-      tPrevious = t;
       if (skippable && skipTo > t) {
         const float last = std::floor(skipTo / step - jitter) - 1;  // one sample before the exit
         if (last > k) {
           k = last - 1;  // the loop's += 1 lands on `last`
           tCheck = -kInf;
-          for (std::size_t i = 0; i < n && i < kMaxLayers; ++i) hadPrevious[i] = false;
         }
       }
     }

@@ -1,8 +1,8 @@
 #pragma once
 // The scientific-visualization renderer ("scivis"): one camera ray per sample, integrated front
 // to back through volumes (emission-absorption, opacity corrected for the step) with the
-// surfaces it meets in between (isosurfaces found on the volumes, particles, meshes; opaque or
-// transparent), shaded locally: diffuse + Phong highlight, shadows from directional and point
+// surfaces it meets in between (isosurfaces, polygonised when the scene is built, particles,
+// meshes: all Embree geometry; opaque or transparent), shaded locally: diffuse + Phong highlight, shadows from directional and point
 // lights, ambient occlusion. Secondary rays never leave the brick's data (with its ghosts), so
 // the renderer works on one brick of a distributed scene as well as on the whole.
 //
@@ -61,8 +61,7 @@ class SciVisRenderer final : public Renderer {
                      const Sampler& sampler) const;
   Vec3 shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, const Material& m,
              const Sampler& hitSampler) const;
-  bool occluded(Vec3 origin, Vec3 dir, float tFar, const Sampler& s) const;
-  bool isosurfaceBetween(Vec3 origin, Vec3 dir, float tFar, float jitter) const;
+  bool occluded(Vec3 origin, Vec3 dir, float tFar) const;
 
   const SciVisScene& scene_;
   RenderSettings settings_;

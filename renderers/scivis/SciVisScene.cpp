@@ -3,12 +3,15 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <string>
 
 #include "renderers/EmbreeRays.h"
 #include "renderers/Error.h"
 #include "renderers/scivis/Bricks.h"
+#include "renderers/scivis/Isosurfaces.h"
 #include "renderers/scivis/TransferFunction.h"
 
 namespace renderers {
@@ -42,20 +45,34 @@ std::vector<WorldMesh> worldMeshes(const SceneDesc& desc) {
 
 BrickContent wholeScene(const SceneDesc& desc) {
   // One brick without bounds: every voxel, particle and triangle, nothing as ghost.
-  return loadBrick(desc, BrickPlan{0, Box3{}}, 0.0f);
+  const BrickPlan whole{0, Box3{}};
+  checkBrickMemory(desc, {whole}, 0.0f);
+  return loadBrick(desc, whole, 0.0f);
 }
 
 struct SciVisScene::Embree {
   struct Geometry {
-    const WorldMesh* mesh = nullptr;           // triangles, or
-    const ParticlesDesc* particles = nullptr;  // spheres
-    std::vector<Vec3> normals;                 // per triangle, unit
+    const WorldMesh* mesh = nullptr;             // triangles, or
+    const ParticlesDesc* particles = nullptr;    // spheres, or
+    const IsosurfaceDesc* isosurface = nullptr;  // an isosurface's triangles on `field`
+    const VolumeField* field = nullptr;
+    std::vector<Vec3> normals;  // per mesh triangle, unit
   };
   RTCDevice device = nullptr;
   RTCScene camera = nullptr, shading = nullptr;
-  std::vector<Geometry> geometries;  // by geometry ID, the same in both scenes
-  std::size_t cameraGeometries = 0;  // none: no ray needs to ask Embree (a volume-only scene)
+  std::vector<Geometry> geometries;   // by geometry ID, the same in both scenes
+  std::size_t cameraGeometries = 0;   // none: no ray needs to ask Embree (a volume-only scene)
+  std::size_t shadingGeometries = 0;  // ghost data: seen by shading rays only
+  // What shading rays test: the camera scene, or (with ghost data) the shading scene, which
+  // holds the ghost geometries and the camera scene as an instance (one BVH per triangle).
+  RTCScene occluders = nullptr;
   std::string message;
+  std::atomic<std::int64_t> bytes{0};  // what Embree holds (its memory monitor)
+
+  static bool monitor(void* self, ssize_t bytes, bool /*post*/) {
+    static_cast<Embree*>(self)->bytes.fetch_add(bytes, std::memory_order_relaxed);
+    return true;
+  }
 
   ~Embree() {
     if (camera) rtcReleaseScene(camera);
@@ -102,10 +119,43 @@ struct SciVisScene::Embree {
     }
     info.mesh = mesh;
     info.particles = particles;
+    attach(g, std::move(info), seenByCamera);
+  }
+
+  // An isosurface's triangles; the mesh can go once this returns (Embree holds a copy).
+  // `field` gives camera hits their normals (shading rays need none: may be null for them).
+  void add(const IsoMesh& mesh, const IsosurfaceDesc& iso, const VolumeField* field,
+           bool seenByCamera) {
+    if (mesh.triangles.empty()) return;
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
+    auto* idx = static_cast<std::uint32_t*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                3 * sizeof(std::uint32_t), mesh.triangles.size()));
+    if (!v || !idx) {
+      rtcReleaseGeometry(g);
+      throw Error("Embree: cannot allocate an isosurface's buffers: " + message);
+    }
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+      const Vec3 p = mesh.positions[i];
+      v[3 * i] = p.x, v[3 * i + 1] = p.y, v[3 * i + 2] = p.z;
+    }
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+      std::copy(mesh.triangles[i].begin(), mesh.triangles[i].end(), idx + 3 * i);
+    Geometry info;
+    info.isosurface = &iso;
+    info.field = field;
+    attach(g, std::move(info), seenByCamera);
+  }
+
+  void attach(RTCGeometry g, Geometry info, bool seenByCamera) {
     rtcCommitGeometry(g);
     const auto id = static_cast<unsigned>(geometries.size());
-    if (seenByCamera) rtcAttachGeometryByID(camera, g, id), ++cameraGeometries;
-    rtcAttachGeometryByID(shading, g, id);
+    if (seenByCamera)
+      rtcAttachGeometryByID(camera, g, id), ++cameraGeometries;
+    else
+      rtcAttachGeometryByID(shading, g, id), ++shadingGeometries;
     rtcReleaseGeometry(g);
     geometries.push_back(std::move(info));
   }
@@ -117,6 +167,9 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
       embree_(std::make_unique<Embree>()) {
   const SceneDesc& desc = *desc_;
   const SciVisSettings& settings = desc.scivis;
+  if (desc.volumes.size() > kMaxVolumes)
+    throw Error("the scene has " + std::to_string(desc.volumes.size()) +
+                " volumes; the scivis renderer draws at most " + std::to_string(kMaxVolumes));
   if (content_.volumes.size() != desc.volumes.size())
     throw Error("a scivis brick needs one (possibly empty) volume per scene volume");
   for (const auto* set : {&content_.particles, &content_.ghostParticles})
@@ -175,15 +228,37 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   e.device = rtcNewDevice(nullptr);
   if (!e.device) throw Error("Embree: cannot create a device");
   rtcSetDeviceErrorFunction(e.device, embree::keepFirstError, &e.message);
+  rtcSetDeviceMemoryMonitorFunction(e.device, &Embree::monitor, &e);
   e.camera = rtcNewScene(e.device);
   e.shading = rtcNewScene(e.device);
+  // Watertight intersection: a closed isosurface must not let a ray through where two of its
+  // triangles meet (without it one pixel of the 1024² contours image saw through).
+  rtcSetSceneFlags(e.camera, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneFlags(e.shading, RTC_SCENE_FLAG_ROBUST);
   for (const WorldMesh& m : content_.meshes) e.add(&m, nullptr, true);
   for (const ParticlesDesc& p : content_.particles) e.add(nullptr, &p, true);
   for (const WorldMesh& m : content_.ghostMeshes) e.add(&m, nullptr, false);
   for (const ParticlesDesc& p : content_.ghostParticles) e.add(nullptr, &p, false);
+  const auto meshStart = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < volumes_.size(); ++i) addIsosurfaces(i);
   rtcCommitScene(e.camera);
-  rtcCommitScene(e.shading);
+  e.occluders = e.camera;
+  if (e.shadingGeometries > 0) {
+    if (e.cameraGeometries > 0) {
+      RTCGeometry instance = rtcNewGeometry(e.device, RTC_GEOMETRY_TYPE_INSTANCE);
+      rtcSetGeometryInstancedScene(instance, e.camera);
+      const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+      rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
+      rtcCommitGeometry(instance);
+      rtcAttachGeometryByID(e.shading, instance, static_cast<unsigned>(e.geometries.size()));
+      rtcReleaseGeometry(instance);
+    }
+    rtcCommitScene(e.shading);
+    e.occluders = e.shading;
+  }
   if (!e.message.empty()) throw Error("Embree: building the scivis scene: " + e.message);
+  isosurfaceStats_.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - meshStart).count();
 
   // The scene's extent (for AO distances and ray offsets) from the whole scene's description,
   // not from what this brick holds: every brick offsets and reaches as the whole scene does.
@@ -206,6 +281,97 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
 }
 
 SciVisScene::~SciVisScene() = default;
+
+std::size_t SciVisScene::bytes() const {
+  return content_.bytes() + static_cast<std::size_t>(std::max<std::int64_t>(0, embree_->bytes));
+}
+
+void SciVisScene::addIsosurfaces(std::size_t volume) {
+  const VolumeLayer& layer = volumes_[volume];
+  // A brick without dense voxels of the volume may still hold a shell for its shading rays.
+  if (layer.isosurfaces.empty() || (!layer.field && !layer.shell)) return;
+  const VolumeField* field = layer.field;
+  const Volume& voxels = content_.volumes[volume];
+  const GridGeometry& grid = voxels.grid;
+  std::vector<float> isovalues;
+  for (const IsosurfaceDesc* iso : layer.isosurfaces) isovalues.push_back(iso->value);
+  auto holdsIsovalue = [&](float lo, float hi) {
+    return std::any_of(isovalues.begin(), isovalues.end(),
+                       [&](float v) { return v >= lo && v <= hi; });
+  };
+  auto intersect = [](const VoxelBox& a, const VoxelBox& b) {
+    return VoxelBox{{std::max(a.lo.x, b.lo.x), std::max(a.lo.y, b.lo.y), std::max(a.lo.z, b.lo.z)},
+                    {std::min(a.hi.x, b.hi.x), std::min(a.hi.y, b.hi.y), std::min(a.hi.z, b.hi.z)}};
+  };
+  // Cells of the dense core; those camera rays can hit: around the clip bounds, a cell beyond
+  // (a hit inside the bounds lies in a cell that overlaps them).
+  const VoxelBox coreCells{voxels.box.lo,
+                           {voxels.box.hi.x - 1, voxels.box.hi.y - 1, voxels.box.hi.z - 1}};
+  VoxelBox cameraCells;
+  for (int a = 0; a < 3; ++a) {
+    const double lo =
+        std::floor((double(content_.bounds.lo[a]) - grid.origin[a]) / grid.spacing[a]) - 1;
+    const double hi =
+        std::floor((double(content_.bounds.hi[a]) - grid.origin[a]) / grid.spacing[a]) + 2;
+    const int i0 = static_cast<int>(std::clamp(lo, -1.0, double(grid.dims[a])));
+    const int i1 = static_cast<int>(std::clamp(hi, -1.0, double(grid.dims[a])));
+    (a == 0 ? cameraCells.lo.x : a == 1 ? cameraCells.lo.y : cameraCells.lo.z) = i0;
+    (a == 0 ? cameraCells.hi.x : a == 1 ? cameraCells.hi.y : cameraCells.hi.z) = i1;
+  }
+  cameraCells = intersect(cameraCells, coreCells);
+  // Per macrocell holding an isovalue: its cells camera rays can hit, and the rest of its cells
+  // (shading rays only).
+  std::vector<CellBlock> camera, shading;
+  for (int m = 0; field && m < field->macroCount(); ++m) {
+    if (!holdsIsovalue(field->macroMin(m), field->macroMax(m))) continue;
+    const Index3 o = field->macroOrigin(m);
+    const VoxelBox cells =
+        intersect(VoxelBox{o,
+                           {o.x + FieldGeometry::kMacro, o.y + FieldGeometry::kMacro,
+                            o.z + FieldGeometry::kMacro}},
+                  coreCells);
+    const VoxelBox seen = intersect(cells, cameraCells);
+    if (!seen.empty()) camera.push_back({seen, {}, 0});
+    if (!(seen == cells)) shading.push_back({cells, cameraCells, 0});
+  }
+  // The sparse shell's cells outside the core (its blocks hold only macrocells with an
+  // isovalue).
+  std::vector<std::pair<Index3, const float*>> shellBlocks;
+  if (layer.shell) {
+    const VoxelBox core = layer.shell->core();
+    const VoxelBox skip = core.empty()
+                              ? VoxelBox{}
+                              : VoxelBox{core.lo, {core.hi.x - 1, core.hi.y - 1, core.hi.z - 1}};
+    layer.shell->forEachBlock([&](Index3 lo, Index3 size, const float* data) {
+      shading.push_back({{lo, {lo.x + size.x - 1, lo.y + size.y - 1, lo.z + size.z - 1}},
+                         skip,
+                         static_cast<int>(shellBlocks.size()) + 1});
+      shellBlocks.emplace_back(size, data);
+    });
+  }
+  const BlockReader read = [&](const CellBlock& b, float* out) {
+    const Index3 n{b.cells.hi.x - b.cells.lo.x + 1, b.cells.hi.y - b.cells.lo.y + 1,
+                   b.cells.hi.z - b.cells.lo.z + 1};
+    if (b.source > 0) {  // a shell block: exactly these voxels
+      const auto& [size, data] = shellBlocks[static_cast<std::size_t>(b.source - 1)];
+      std::copy(data, data + std::size_t(size.x) * size.y * size.z, out);
+      return;
+    }
+    for (int z = 0; z < n.z; ++z)
+      for (int y = 0; y < n.y; ++y)
+        for (int x = 0; x < n.x; ++x)
+          *out++ = voxels.at(b.cells.lo.x + x, b.cells.lo.y + y, b.cells.lo.z + z);
+  };
+  for (bool seenByCamera : {true, false}) {
+    const std::vector<IsoMesh> meshes =
+        polygonise(grid, seenByCamera ? camera : shading, isovalues, read);
+    for (std::size_t k = 0; k < meshes.size(); ++k) {
+      (seenByCamera ? isosurfaceStats_.cameraTriangles : isosurfaceStats_.shadingTriangles) +=
+          meshes[k].triangles.size();
+      embree_->add(meshes[k], *layer.isosurfaces[k], field, seenByCamera);
+    }
+  }
+}
 
 void SciVisScene::bake(VolumeLayer& layer, const VolumeDesc& vd, const TransferFunction& tf,
                        float opacityScale) const {
@@ -257,8 +423,6 @@ std::vector<SciVisScene::VolumeLayer> SciVisScene::retunedVolumes(int preset,
 }
 
 bool SciVisScene::anythingIn(const VolumeLayer& v, float lo, float hi) {
-  for (const IsosurfaceDesc* iso : v.isosurfaces)
-    if (iso->value >= lo && iso->value <= hi) return true;
   // Table entries whose interpolation reaches [lo, hi].
   const float a = std::clamp((lo - v.valueMin) * v.tableScale, 0.0f, float(kTableSize - 1));
   const float b = std::clamp((hi - v.valueMin) * v.tableScale, 0.0f, float(kTableSize - 1));
@@ -275,7 +439,13 @@ bool SciVisScene::intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFa
   const Embree::Geometry& g = embree_->geometries[rh.hit.geomID];
   const std::uint32_t prim = rh.hit.primID;
   hit.t = rh.ray.tfar;
-  if (g.mesh) {
+  if (g.isosurface) {
+    // Shaded as the field's level set: the normal from the field's gradient at the hit.
+    hit.material = &desc_->materials[g.isosurface->material];
+    hit.color = hit.material->color;
+    const Vec3 gradient = g.field->gradient(origin + dir * hit.t, 0.5f * g.field->minSpacing());
+    hit.normal = length(gradient) > 0 ? normalize(gradient) : -dir;
+  } else if (g.mesh) {
     hit.material = &desc_->materials[g.mesh->material];
     hit.normal = g.normals[prim];
     hit.color = hit.material->color;
@@ -290,7 +460,7 @@ bool SciVisScene::intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFa
 
 bool SciVisScene::surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const {
   if (embree_->geometries.empty()) return false;
-  return embree::occluded(embree_->shading, origin, dir, tNear, tFar);
+  return embree::occluded(embree_->occluders, origin, dir, tNear, tFar);
 }
 
 }  // namespace renderers

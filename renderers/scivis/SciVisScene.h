@@ -72,9 +72,20 @@ class SciVisScene {
   const BrickContent& content() const { return content_; }
   // Moves the data out, for a new scene version that keeps it; destroy the scene next.
   BrickContent release() { return std::move(content_); }
+  // What the scene holds: content().bytes() and what Embree holds (surfaces, isosurface
+  // triangles and their BVHs).
+  std::size_t bytes() const;
 
-  // The closest surface (mesh or particle) along origin + t dir with t in [tNear, tFar], camera
-  // data only.
+  // The isosurfaces as triangles, made at construction: triangles camera rays can hit, those
+  // only shading rays see (ghost cells), and the seconds polygonising and building BVHs took.
+  struct IsosurfaceStats {
+    std::size_t cameraTriangles = 0, shadingTriangles = 0;
+    double seconds = 0;
+  };
+  const IsosurfaceStats& isosurfaceStats() const { return isosurfaceStats_; }
+
+  // The closest surface (mesh, particle or isosurface) along origin + t dir with t in
+  // [tNear, tFar], camera data only.
   bool intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFar, SurfaceHit& hit) const;
   // Whether any surface (camera or ghost data) blocks origin + t dir, t in [tNear, tFar].
   bool surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const;
@@ -86,19 +97,24 @@ class SciVisScene {
     std::vector<std::uint32_t> visibleUpTo;  // prefix counts of entries with opacity > 0
     float valueMin = 0, tableScale = 0;
     bool visible = true;
+    // Found as triangles (Embree), not on the volume: they are surfaces to rays.
     std::vector<const IsosurfaceDesc*> isosurfaces;
-    // Per macrocell of `field`: 1 when neither the transfer function nor an isosurface shows
-    // anything in its value range, so rays may jump over it.
+    // Per macrocell of `field`: 1 when the transfer function shows nothing in its value range,
+    // so rays may jump over it.
     std::vector<std::uint8_t> emptyMacrocells;
   };
   static constexpr int kTableSize = 4096;
+  // The volumes one scene may hold: the renderer keeps each volume's samples along a ray in
+  // arrays of this size. Scene files with more are refused when read (SciVisToml.cpp), other
+  // descriptions when the scene is built.
+  static constexpr std::size_t kMaxVolumes = 8;
   const std::vector<VolumeLayer>& volumes() const { return volumes_; }
   // The volume layers with another transfer function: preset `preset` (an index in
   // transferFunctionPresetNames(); -1: each volume's own) over each volume's value range and
   // with its peak opacity, every opacity times `opacityScale` (steering, issue 12).
   std::vector<VolumeLayer> retunedVolumes(int preset, float opacityScale) const;
   float volumeStep() const { return step_; }  // world distance between volume samples
-  // Whether the volume can show anything (opacity or an isosurface) in [lo, hi].
+  // Whether the volume's transfer function shows anything (opacity) in [lo, hi].
   static bool anythingIn(const VolumeLayer& v, float lo, float hi);
 
   const std::vector<ResolvedLight>& lights() const { return lights_; }
@@ -110,6 +126,9 @@ class SciVisScene {
   // `opacityScale`) at this scene's step.
   void bake(VolumeLayer& layer, const VolumeDesc& vd, const TransferFunction& tf,
             float opacityScale) const;
+  // Polygonises volume `volume`'s isosurfaces into the Embree scenes: the cells camera rays can
+  // hit into both, the other dense cells and the shading shell's into the shading scene.
+  void addIsosurfaces(std::size_t volume);
 
   std::shared_ptr<const SceneDesc> desc_;
   BrickContent content_;
@@ -117,6 +136,7 @@ class SciVisScene {
   std::vector<VolumeLayer> volumes_;
   std::vector<ResolvedLight> lights_;
   float step_ = 1, aoDistance_ = 1, extent_ = 1;
+  IsosurfaceStats isosurfaceStats_;
   struct Embree;
   std::unique_ptr<Embree> embree_;
 };

@@ -1,9 +1,13 @@
 #include "renderers/scivis/SciVisToml.h"
 
+#include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
+#include "dfb/MemoryBudget.h"
 #include "renderers/scivis/Particles.h"
+#include "renderers/scivis/SciVisScene.h"
 #include "renderers/scivis/VolumeToml.h"
 
 namespace renderers {
@@ -76,12 +80,21 @@ void readParticles(const TomlReader& r, const toml::table& t, const std::filesys
   } else if (const toml::node* f = t.get("file")) {
     const std::string layout =
         t.get("layout") ? r.string(*t.get("layout"), what + ".layout") : std::string("xyz");
-    try {
-      p.file = (folder / r.string(*f, what + ".file")).string();
-      readParticleFile(p.file, layout, p);
-    } catch (const Error& e) {
-      r.fail(*f, what + ": " + e.what());
-    }
+    p.file = (folder / r.string(*f, what + ".file")).string();
+    // Reading holds the file's records and the particles made of them (no more than as many
+    // bytes again).
+    std::error_code ec;
+    const std::uint64_t fileBytes = std::filesystem::file_size(p.file, ec);
+    if (!ec)
+      r.budget(*f, what + ".file (" + std::to_string(fileBytes) + " bytes)",
+               d.bytes() + dfb::bytesTimes(fileBytes, 2));
+    r.loading(*f, what + ".file", [&] {
+      try {
+        readParticleFile(p.file, layout, p);
+      } catch (const Error& e) {
+        r.fail(*f, what + ": " + e.what());
+      }
+    });
   } else {
     const toml::node& g = *t.get("generator");
     if (r.string(g, what + ".generator") != "clusters")
@@ -93,8 +106,12 @@ void readParticles(const TomlReader& r, const toml::table& t, const std::filesys
     const std::uint64_t seed = t.get("seed") ? r.index(*t.get("seed"), what + ".seed") : 1;
     const float size = r.number(t, "size", what, 2.0f);
     if (!(size > 0)) r.fail(*t.get("size"), what + ".size must be positive");
-    p = clusteredParticles(count, seed, r.vec3(t, "center", what, {}), size,
-                           radius > 0 ? radius : 0.002f * size);
+    r.budget(countNode, what + ".count (" + std::to_string(count) + " particles)",
+             d.bytes() + std::uint64_t{count} * (sizeof(Vec3) + sizeof(float)));
+    const Vec3 center = r.vec3(t, "center", what, {});
+    p = r.loading(countNode, what + ".count", [&] {
+      return clusteredParticles(count, seed, center, size, radius > 0 ? radius : 0.002f * size);
+    });
     p.name = name;
     p.material = r.material(d, t, what);
   }
@@ -109,14 +126,36 @@ void readParticles(const TomlReader& r, const toml::table& t, const std::filesys
     r.fail(t, what + ": missing field 'radius' (or 'radii', or 'r' in the layout)");
   if (p.radii.size() != 1 && p.radii.size() != p.centers.size())
     r.fail(*t.get("radii"), what + ".radii must have one radius per particle");
+  // Radii and attributes from a file may be anything; a sphere must stay within the float range
+  // and be wider than a float step where it is.
+  const toml::node& radiiAt = t.get("radii")    ? *t.get("radii")
+                              : t.get("radius") ? *t.get("radius")
+                              : t.get("file")   ? *t.get("file")
+                                                : t;
   for (float x : p.radii)
-    if (!(x > 0))
-      r.fail(t.get("radii") ? *t.get("radii") : t, what + ": every radius must be positive");
+    if (!(x > 0 && std::isfinite(x)))
+      r.fail(radiiAt,
+             what + ": every radius must be positive and finite, not " + TomlReader::text(x));
+  for (std::size_t i = 0; i < p.centers.size(); ++i) {
+    const Vec3 c = p.centers[i];
+    const float ri = p.radius(i);
+    if (!isFinite(c) || !isFinite(c + Vec3{ri}) || !isFinite(c - Vec3{ri}))
+      r.fail(radiiAt, what + ": particle " + std::to_string(i) +
+                          " reaches beyond the float range (center ± radius)");
+    if (ri < floatStep(maxAbs(c)))
+      r.fail(radiiAt, what + ": the radius of particle " + std::to_string(i) + ", " +
+                          TomlReader::text(ri) + ", is below float precision at its center (" +
+                          "steps of " + TomlReader::text(floatStep(maxAbs(c))) + " there)");
+  }
   if (const toml::node* a = t.get("attribute")) {
     p.attribute = numbers(r, *a, what + ".attribute");
     if (p.attribute.size() != p.centers.size())
       r.fail(*a, what + ".attribute must have one value per particle");
   }
+  for (std::size_t i = 0; i < p.attribute.size(); ++i)
+    if (!std::isfinite(p.attribute[i]))
+      r.fail(t.get("attribute") ? *t.get("attribute") : radiiAt,
+             what + ": the attribute of particle " + std::to_string(i) + " is not finite");
   if (const toml::node* cm = t.get("color_map")) {
     p.colorMap = readTransferFunction(r, *cm, what + ".color_map");
     if (p.attribute.empty()) r.fail(*cm, what + ".color_map needs an attribute per particle");
@@ -152,6 +191,9 @@ LightDesc readLight(const TomlReader& r, const toml::table& t) {
   l.color = r.vec3(t, "color", what, Vec3{1.0f});
   l.intensity = r.number(t, "intensity", what, 1.0f);
   if (!(l.intensity >= 0)) r.fail(*t.get("intensity"), what + ".intensity must not be negative");
+  if (!isFinite(l.color * l.intensity))
+    r.fail(t.get("intensity") ? *t.get("intensity") : *t.get("color"),
+           what + ": color x intensity is beyond the float range");
   return l;
 }
 
@@ -176,12 +218,57 @@ void readSettings(const TomlReader& r, const toml::table& t, SciVisSettings& s) 
     r.fail(*t.get("min_transmittance"), what + ".min_transmittance must be in [0, 1)");
 }
 
+// The renderer marches rays in steps of the finest spacing over the sampling rate, counting
+// the steps from the camera in float: beyond 2^22 steps a float no longer counts them exactly
+// (a ray would stand still), so a scene whose volumes lie that many steps from its camera is
+// refused, naming the volume with the finest spacing.
+void checkSampling(const TomlReader& r, const std::vector<const toml::table*>& tables,
+                   const SceneDesc& d) {
+  constexpr double kMaxSteps = 1 << 22;
+  std::size_t finest = 0;
+  Vec3 lo{INFINITY}, hi{-INFINITY};
+  for (std::size_t i = 0; i < d.volumes.size(); ++i) {
+    const GridGeometry& g = d.volumes[i].source.grid;
+    if (minComponent(g.spacing) < minComponent(d.volumes[finest].source.grid.spacing)) finest = i;
+    Vec3 a, b;
+    g.bounds(g.wholeBox(), a, b);
+    lo = {std::min(lo.x, a.x), std::min(lo.y, a.y), std::min(lo.z, a.z)};
+    hi = {std::max(hi.x, b.x), std::max(hi.y, b.y), std::max(hi.z, b.z)};
+  }
+  if (d.volumes.empty()) return;
+  const double step =
+      double(minComponent(d.volumes[finest].source.grid.spacing)) / double(d.scivis.samplingRate);
+  const Vec3 eye = d.camera.position;
+  double reach = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const double dx = double(corner & 1 ? hi.x : lo.x) - eye.x;
+    const double dy = double(corner & 2 ? hi.y : lo.y) - eye.y;
+    const double dz = double(corner & 4 ? hi.z : lo.z) - eye.z;
+    reach = std::max(reach, std::sqrt(dx * dx + dy * dy + dz * dz));
+  }
+  if (reach / step > kMaxSteps) {
+    const toml::table& t = *tables[finest];
+    r.fail(t.get("spacing") ? *t.get("spacing") : t,
+           "volume '" + d.volumes[finest].name + "'.spacing: the volumes are sampled every " +
+               TomlReader::text(step) +
+               " world units (the finest spacing / scivis.sampling_rate) " + "and reach " +
+               TomlReader::text(reach) + " from the camera: " + TomlReader::text(reach / step) +
+               " samples along a ray, more than a float counts " +
+               "exactly (2^22); use a coarser spacing or put the camera nearer");
+  }
+}
+
 }  // namespace
 
 void readSciVis(const TomlReader& r, const toml::table& root, const std::filesystem::path& folder,
                 SceneDesc& d) {
-  for (const toml::table* t : r.arrayOfTables(root, "volumes")) {
-    VolumeDesc v = readVolume(r, *t, folder);
+  const std::vector<const toml::table*> volumes = r.arrayOfTables(root, "volumes");
+  for (const toml::table* t : volumes) {
+    if (d.volumes.size() == SciVisScene::kMaxVolumes)
+      r.fail(*t, "volumes: the scivis renderer draws at most " +
+                     std::to_string(SciVisScene::kMaxVolumes) + " volumes, and this is volume " +
+                     std::to_string(d.volumes.size() + 1));
+    VolumeDesc v = r.loading(*t, "volume", [&] { return readVolume(r, *t, folder); });
     for (const VolumeDesc& other : d.volumes)
       if (other.name == v.name) r.fail(*t, "volume '" + v.name + "' is defined twice");
     d.volumes.push_back(std::move(v));
@@ -190,6 +277,7 @@ void readSciVis(const TomlReader& r, const toml::table& root, const std::filesys
   for (const toml::table* t : r.arrayOfTables(root, "particles")) readParticles(r, *t, folder, d);
   for (const toml::table* t : r.arrayOfTables(root, "lights")) d.lights.push_back(readLight(r, *t));
   if (const toml::node* s = root.get("scivis")) readSettings(r, r.table(*s, "scivis"), d.scivis);
+  checkSampling(r, volumes, d);
 }
 
 }  // namespace renderers

@@ -1,15 +1,14 @@
 #pragma once
 // The ghost shell of one volume for a brick's shading rays (--ghost reach), held sparsely.
 //
-// Shading rays only ask whether an isosurface lies between two points
-// (SciVisRenderer::isosurfaceBetween): they jump over every macrocell whose value range holds no
-// isovalue and sample only inside the others. So a brick needs, as far as its shading rays
-// reach, the value range of every macrocell and the voxels of just those macrocells whose range
-// holds an isovalue (on the whole field's macrocell grid) — and of those only the voxels of cells
-// its dense core does not hold: cells inside the core are read from the core. Everything else is
-// the geometry of a dense VolumeField over the same box (FieldGeometry: the same box,
-// macrocells, ranges and arithmetic), so every shading ray takes the same samples and gets the
-// same bits as with the whole box held densely.
+// In a volume only isosurfaces stop shading rays, and they are triangles polygonised from the
+// cells of macrocells whose value range holds an isovalue (SciVisScene, Isosurfaces.h). So a
+// brick needs, as far as its shading rays reach, the value range of every macrocell and the
+// voxels of just those macrocells whose range holds an isovalue (on the whole field's macrocell
+// grid) — and of those only the voxels of cells its dense core does not hold: cells inside the
+// core are read from the core. Everything else is the geometry of a dense VolumeField over the
+// same box (FieldGeometry: the same box, macrocells, ranges and arithmetic), so sample() gives
+// the same bits as the whole box held densely.
 //
 // Plain data (copyable); every const method is thread-safe. Voxels are kept as float32.
 #include <cstdint>
@@ -35,6 +34,15 @@ class ShadingShell : public FieldGeometry {
   std::size_t blockCount() const { return blocks_.size(); }
   std::size_t voxelCount() const { return voxels_.size(); }
   std::size_t bytes() const;  // ranges, block table and blocks
+
+  // The dense core given to load (cells with all 8 voxels in it are read from there).
+  const VoxelBox& core() const { return core_; }
+  // Calls f(lo, size, voxels) for every block of voxels held: voxels [lo, lo + size) (whole-field
+  // indices), x fastest (what the isosurface mesher reads).
+  template <class F>
+  void forEachBlock(F f) const {
+    for (const Block& b : blocks_) f(b.lo, b.size, voxels_.data() + b.offset);
+  }
 
   // The trilinear value at world point p, as VolumeField::sample over the dense box gives it
   // (cells inside the core from `core`, the dense field of the `core` box given to load); false

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
@@ -58,6 +59,35 @@ void GridGeometry::bounds(const VoxelBox& box, Vec3& lo, Vec3& hi) const {
   // min/max: a negative spacing (a mirrored grid) still gives lo <= hi.
   lo = {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
   hi = {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
+}
+
+std::string GridGeometry::problem() const {
+  auto text = [](double v) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%g", v);
+    return std::string(buffer);
+  };
+  for (int a = 0; a < 3; ++a) {
+    const std::string axis = std::string(" along ") + "xyz"[a];
+    const int n = dims[a];
+    const float s = spacing[a], o = origin[a];
+    if (n < 2) return "dims" + axis + " must be at least 2, not " + std::to_string(n);
+    if (!(s >= std::numeric_limits<float>::min() && std::isfinite(1.0f / s)))
+      return "spacing" + axis + ", " + text(s) + ", must be a positive normal float";
+    const float extent = s * static_cast<float>(n - 1), far = o + extent;
+    if (!std::isfinite(extent) || !std::isfinite(far))
+      return "spacing" + axis +
+             ": the grid's far corner, origin + spacing (dims - 1) = " + text(o) + " + " + text(s) +
+             " x " + std::to_string(n - 1) + ", is beyond the float range";
+    const float largest = std::max(std::fabs(o), std::fabs(far));
+    const float step = std::nextafter(largest, INFINITY) - largest;
+    if (s < 4 * step)
+      return "spacing" + axis + ", " + text(s) +
+             ", is below float precision at the grid's coordinates (up to " + text(largest) +
+             ", where floats are " + text(step) +
+             " apart): a voxel must span at least 4 of those steps";
+  }
+  return {};
 }
 
 namespace {

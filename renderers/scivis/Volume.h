@@ -47,6 +47,12 @@ struct GridGeometry {
   }
   // World-space bounds of the voxel centres of `box` (the region trilinear samples cover).
   void bounds(const VoxelBox& box, Vec3& lo, Vec3& hi) const;
+  // Why the renderer cannot place this grid's voxels in float, or empty: each axis needs at
+  // least 2 voxels, a normal positive spacing, a far corner (origin + spacing (dims - 1)) within
+  // the float range, and voxels at least 4 float steps apart at the grid's coordinates (else
+  // neighbours share positions and interpolating between them means nothing). Names the field:
+  // "spacing along y, 1e-30, is below float precision ...". Every volume reader calls it.
+  std::string problem() const;
 };
 
 // The held voxels of one volume. Plain data: copyable, movable, no hidden state.

@@ -375,6 +375,16 @@ VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
                      -0.5f * s.grid.spacing.z * static_cast<float>(n.z - 1)};
   }
 
+  // Where its size was given (a brick's memory budget names it), and whether float can place
+  // its voxels.
+  const toml::node* sized = t.get("dims") ? t.get("dims") : t.get("file");
+  d.where = r.where(sized ? *sized : t, what + (sized ? (t.get("dims") ? ".dims" : ".file") : ""));
+  if (const std::string problem = s.grid.problem(); !problem.empty())
+    r.fail(t.get("spacing")  ? *t.get("spacing")
+           : t.get("origin") ? *t.get("origin")
+                             : t,
+           what + "." + problem);
+
   // Procedural fields know their range, so a preset needs none; files do not (unless invisible,
   // when the transfer function is never used). The wavelet's range costs evaluations: only
   // when the transfer function does not give one.

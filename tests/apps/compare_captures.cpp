@@ -23,7 +23,7 @@ namespace {
 
 // --preview: dfbwall's assembled preview (--preview FILE.png, decorated) against the box filter
 // of a single-process render of the canvas: every cell that lies wholly inside a display and off
-// its outline must match within rounding (exactly when the tile size is a multiple of 8).
+// its outline must match within rounding (exactly when the tile size is a multiple of the factor).
 int comparePreview(const wall::Layout& layout, const wall::Image& preview,
                    const wall::Image& full) {
   const wall::PreviewGrid grid{layout.canvasWidth, layout.canvasHeight,

@@ -53,8 +53,9 @@ case "$scenario" in
     ;;
   preview)
     # The whole-wall preview assembled on rank 0 from tiles shrunk on their owners equals the
-    # box filter of a single-process render; its bytes are counted apart, about 1/64 of the
-    # pieces', and in route mode rank 0 still receives no full-size pixel.
+    # box filter of a single-process render; its bytes are counted apart: each tile's cells and
+    # a 24-byte header (the factor follows the canvas: these small walls are their own preview),
+    # and in route mode rank 0 still receives no pixel of the frame itself.
     layout=$1 renders=$2 mode=$3; shift 3
     w=$(processes "$layout"); size=$(canvas "$layout")
     common=(--frames 3 --spp 2 --seed 11 "$@")
@@ -62,19 +63,31 @@ case "$scenario" in
       --preview "$work/preview.png" --stats "$work/stats.json" --quiet "${common[@]}"
     mpi 1 "$DFBWALL" --size "$size" --image "$work/full.png" --quiet "${common[@]}"
     "$COMPARE" --preview "$layout" "$work/preview.png" "$work/full.png"
-    /usr/bin/python3 - "$work/stats.json" "$mode" "$size" <<'PY'
-import json, sys
+    /usr/bin/python3 - "$work/stats.json" "$mode" "$size" "$work/preview.png" "${common[@]}" <<'PY'
+import json, struct, sys
 w, h = map(int, sys.argv[3].split('x'))
+pw, ph = struct.unpack('>II', open(sys.argv[4], 'rb').read()[16:24])  # the PNG's IHDR
+f = next(f for f in (1 << k for k in range(16)) if -(-w // f) == pw and -(-h // f) == ph)
+args = sys.argv[5:]
+tile = int(args[args.index('--tile-size') + 1]) if '--tile-size' in args else 64
+# Every tile's message: a header and the cells it touches (the most a frame can send; route mode
+# renders only the tiles some display shows).
+most = 0
+for ty in range(0, h, tile):
+    for tx in range(0, w, tile):
+        x1, y1 = min(tx + tile, w), min(ty + tile, h)
+        most += 24 + 4 * ((x1 + f - 1) // f - tx // f) * ((y1 + f - 1) // f - ty // f)
 frames = [l for l in map(json.loads, open(sys.argv[1])) if 'frame' in l]
 assert len(frames) == 3, f'{len(frames)} frame lines'
-for f in frames:
-    p, raw, rank0 = f['preview_bytes'], f['wall_bytes_raw'], f['rank0_pixel_bytes_received']
-    assert p > 0, f'frame {f["frame"]}: no preview bytes'
-    # Cells are 1/64 of the canvas's pixels at most; 24-byte headers per tile add a little.
-    assert p * 48 < w * h * 4, f'frame {f["frame"]}: preview {p} bytes, canvas {w}x{h}'
+for f_ in frames:
+    p, rank0 = f_['preview_bytes'], f_['rank0_pixel_bytes_received']
+    assert 0 < p <= most, f'frame {f_["frame"]}: preview {p} bytes, at most {most} expected'
+    if sys.argv[2] == 'gather':  # every tile completes every frame
+        assert p == most, f'frame {f_["frame"]}: preview {p} bytes, {most} expected'
     if sys.argv[2] == 'route':
-        assert rank0 == 0, f'frame {f["frame"]}: rank 0 received {rank0} pixel bytes'
-print(f'preview bytes per frame: {frames[-1]["preview_bytes"]}, pieces {frames[-1]["wall_bytes_raw"]}, canvas {w * h * 4}')
+        assert rank0 == 0, f'frame {f_["frame"]}: rank 0 received {rank0} pixel bytes'
+print(f'preview {pw}x{ph} cells (factor {f}), bytes per frame: {frames[-1]["preview_bytes"]}, '
+      f'pieces {frames[-1]["wall_bytes_raw"]}, canvas {w * h * 4}')
 PY
     ;;
   same-frames)

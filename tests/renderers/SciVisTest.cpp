@@ -220,10 +220,13 @@ TEST(SciVis, ShadingShellSamplesAsTheDenseBox) {
 }
 
 TEST(SciVis, MarschnerLobbIsosurfaceHitsLieOnTheLevelSet) {
-  // The hits lie on the trilinear reconstruction's level set; its distance from the analytic
-  // one is the reconstruction error over the gradient, O(h²) against half a voxel's O(h). With
-  // f_M = 6 the ripple's error where the gradient is smallest measured 2.3 / 1.35 / 0.79 / 0.50
-  // / 0.40 voxels at 41³ / 81³ / 161³ / 257³ / 321³: the criterion holds from 321³ on.
+  // The hits lie on marching-cubes triangles over the trilinear reconstruction. The trilinear
+  // level set's distance from the analytic one is the reconstruction error over the gradient,
+  // O(h²) against half a voxel's O(h). With f_M = 6 the ripple's error where the gradient is
+  // smallest measured 2.3 / 1.35 / 0.79 / 0.50 / 0.40 voxels at 41³ / 81³ / 161³ / 257³ / 321³.
+  // The triangles add their chord error where the ripple curves most: at 321³ the hits measured
+  // at most 0.256 voxels from the trilinear level set and 0.675 from the analytic one (3 of 1709
+  // hits beyond half a voxel): criteria 0.35 and 0.75 voxels.
   const int n = 321;
   auto desc = std::make_shared<SceneDesc>();
   VolumeDesc v;
@@ -252,8 +255,9 @@ TEST(SciVis, MarschnerLobbIsosurfaceHitsLieOnTheLevelSet) {
     return (1 - std::sin(kPi * p.z / 2) + a * (1 + std::cos(2 * kPi * f * std::cos(kPi * r / 2)))) /
            (2 * (1 + a));
   };
+  const VolumeField& field = *scene.volumes()[0].field;
   int hits = 0;
-  float worst = 0;
+  float worst = 0, worstTrilinear = 0;
   for (int y = 0; y < 64; ++y)
     for (int x = 0; x < 64; ++x) {
       Vec3 o, d;
@@ -269,11 +273,20 @@ TEST(SciVis, MarschnerLobbIsosurfaceHitsLieOnTheLevelSet) {
                    (rho(p + Vec3{0, 0, h}) - rho(p - Vec3{0, 0, h})) / (2 * h)};
       const float distance = std::abs(rho(p) - level) / std::max(length(g), 1e-6f);
       worst = std::max(worst, distance);
-      EXPECT_LE(distance, 0.5f * spacing) << "pixel " << x << "," << y;
+      EXPECT_LE(distance, 0.75f * spacing) << "pixel " << x << "," << y;
+      // The same on the trilinear field the triangles approximate.
+      float value = 0;
+      ASSERT_TRUE(field.sample(p, value));
+      const float fromTrilinear =
+          std::abs(value - level) / std::max(length(field.gradient(p, 0.5f * spacing)), 1e-6f);
+      worstTrilinear = std::max(worstTrilinear, fromTrilinear);
+      EXPECT_LE(fromTrilinear, 0.35f * spacing) << "pixel " << x << "," << y;
     }
   EXPECT_GT(hits, 1000);
-  std::printf("Marschner-Lobb %d³: %d hits, farthest %.3f voxels from the level set\n", n, hits,
-              worst / spacing);
+  std::printf(
+      "Marschner-Lobb %d³: %d hits, farthest %.3f voxels from the level set, %.3f from the "
+      "trilinear one\n",
+      n, hits, worst / spacing, worstTrilinear / spacing);
 }
 
 TEST(SciVis, TilesAndThreadsDoNotChangeAPixel) {
@@ -284,6 +297,25 @@ TEST(SciVis, TilesAndThreadsDoNotChangeAPixel) {
   ASSERT_EQ(a.size(), b.size());
   EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0);
   for (std::size_t i = 3; i < a.size(); i += 4) ASSERT_EQ(a[i], 1.0f);  // background under all
+}
+
+// One visible volume takes the fast march from surface to surface (isosurfaces, particles,
+// meshes); with a second, invisible volume the generic loop does: the same samples and surfaces
+// in the same order, so the same bits.
+TEST(SciVis, TheFastMarchBetweenSurfacesCompositesAsTheGenericLoop) {
+  const auto one = mixedScene(1);
+  auto two = std::make_shared<SceneDesc>(*one);
+  VolumeDesc hidden = two->volumes[0];
+  hidden.name = "hidden";
+  hidden.visible = false;
+  two->volumes.push_back(hidden);
+  const RenderScene a = buildRenderScene("scivis", *one), b = buildRenderScene("scivis", *two);
+  const auto fast =
+      test::renderImage(*makeRenderer("scivis", a, settingsFor(40, 32)), 40, 32, 16, 2, 1);
+  const auto generic =
+      test::renderImage(*makeRenderer("scivis", b, settingsFor(40, 32)), 40, 32, 16, 2, 1);
+  ASSERT_EQ(fast.size(), generic.size());
+  EXPECT_EQ(std::memcmp(fast.data(), generic.data(), fast.size() * sizeof(float)), 0);
 }
 
 // Steering (issue 12): another transfer-function preset or opacity scale changes the picture

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <random>
 
+#include "wall/Layout.h"
 #include "wall/Png.h"
 
 namespace wall {
@@ -38,8 +39,38 @@ TEST(Preview, GridSizesRoundUpAndCellsClipToTheCanvas) {
   EXPECT_EQ(grid.height(), 8);
   EXPECT_EQ(grid.cellPixels(12, 7), (dfb::Region{96, 56, 101, 63}));  // 5 x 7 pixels
   EXPECT_EQ(grid.cellsOf({8, 0, 17, 8}), (dfb::Region{1, 0, 3, 1}));
-  EXPECT_EQ(previewFactor(3840, 2160), 8);
-  EXPECT_EQ(previewFactor(16000, 2000), 16);  // at most 1024 cells a side
+}
+
+// The shrink factor follows the canvas: the page shows 513-1024 cells across the longest side
+// whatever the wall's size, or the whole canvas when it is smaller (issue 23: the 2x2 demo wall
+// was a mosaic of 51x38 cells at the old fixed factor of 8).
+TEST(Preview, FactorKeepsFiveHundredToAThousandCellsAcross) {
+  const Layout demo = loadLayout(std::string(DFBWALL_SOURCE_DIR) + "/configs/walls/2x2.toml");
+  ASSERT_EQ(demo.canvasWidth, 412);
+  ASSERT_EQ(demo.canvasHeight, 310);
+  const PreviewGrid small{412, 310, previewFactor(demo.canvasWidth, demo.canvasHeight)};
+  EXPECT_EQ(small.factor, 1);
+  EXPECT_EQ(small.width(), 412);  // every pixel a cell
+  EXPECT_EQ(small.height(), 310);
+
+  const PreviewGrid uhd{3840, 2160, previewFactor(3840, 2160)};  // a 2x2 wall of 1080p panels
+  EXPECT_EQ(uhd.factor, 4);
+  EXPECT_EQ(uhd.width(), 960);
+  EXPECT_EQ(uhd.height(), 540);
+  const PreviewGrid large{16000, 2000, previewFactor(16000, 2000)};
+  EXPECT_EQ(large.factor, 16);
+  EXPECT_EQ(large.width(), 1000);
+  EXPECT_EQ(previewFactor(2000, 16000), 16);  // the longest side counts, portrait too
+  EXPECT_EQ(previewFactor(1024, 768), 1);
+  EXPECT_EQ(previewFactor(1025, 768), 2);  // 513 cells
+
+  for (int side = 1; side <= 70000; side += side / 7 + 1) {
+    const int f = previewFactor(side, side / 3 + 1);
+    const int cells = (side + f - 1) / f;
+    EXPECT_LE(cells, 1024) << side;
+    EXPECT_GE(cells, std::min(side, 513)) << side;
+    EXPECT_EQ(64 % f == 0 || f % 64 == 0, true) << "a power of two: " << f;
+  }
 }
 
 TEST(Preview, WholeImageIsTheExactBoxAverageIncludingPartialEdgeCells) {

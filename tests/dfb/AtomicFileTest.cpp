@@ -1,0 +1,152 @@
+// Output files never seen half-written (dfb/AtomicFile.h), on real files in a scratch folder:
+// the target holds its old bytes (or is absent) until commit, then all the new ones; nothing is
+// left behind either way; failures name the path and the reason.
+#include "dfb/AtomicFile.h"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "dfb/Error.h"
+
+namespace dfb {
+namespace {
+
+namespace fs = std::filesystem;
+
+class AtomicFileTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    folder_ = fs::path(::testing::TempDir()) /
+              ("atomic-file-" +
+               std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(folder_);
+    fs::create_directories(folder_);
+  }
+  void TearDown() override { fs::remove_all(folder_); }
+
+  std::string path(const std::string& name) const { return (folder_ / name).string(); }
+  std::vector<std::string> entries() const {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(folder_)) names.push_back(e.path().filename());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+  static std::string read(const std::string& path) {
+    std::string bytes(fs::file_size(path), '\0');
+    std::ifstream(path, std::ios::binary)
+        .read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    return bytes;
+  }
+  static void write(AtomicFile& file, const std::string& bytes) {
+    ASSERT_EQ(std::fwrite(bytes.data(), 1, bytes.size(), file.stream()), bytes.size());
+  }
+
+  fs::path folder_;
+};
+
+TEST_F(AtomicFileTest, TheTargetAppearsWholeOnlyAtCommit) {
+  const std::string target = path("stats.json");
+  std::string bytes(100000, 'x');
+  bytes += "end";
+  {
+    AtomicFile file(target);
+    write(file, bytes);
+    // Before commit: no target, one hidden temporary next to where it will be.
+    EXPECT_FALSE(fs::exists(target));
+    const std::vector<std::string> names = entries();
+    ASSERT_EQ(names.size(), 1u);
+    EXPECT_EQ(names[0].rfind(".stats.json.", 0), 0u) << names[0];
+    EXPECT_EQ(names[0].size(), std::string(".stats.json.XXXXXX").size());
+    file.commit();
+  }
+  EXPECT_EQ(read(target), bytes);
+  EXPECT_EQ(entries(), std::vector<std::string>{"stats.json"});
+  struct stat st {};
+  ASSERT_EQ(stat(target.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0644u) << "outputs are for other users too";
+}
+
+TEST_F(AtomicFileTest, AnExistingFileKeepsItsBytesUntilCommitThenHasOnlyTheNewOnes) {
+  const std::string target = path("frame.png");
+  { std::ofstream(target) << "the old file, longer than the new one"; }
+  AtomicFile file(target);
+  write(file, "new");
+  EXPECT_EQ(read(target), "the old file, longer than the new one");
+  file.commit();
+  EXPECT_EQ(read(target), "new");
+}
+
+TEST_F(AtomicFileTest, WithoutCommitNothingChangesAndTheTemporaryGoes) {
+  const std::string kept = path("kept.txt");
+  { std::ofstream(kept) << "old"; }
+  {
+    AtomicFile file(kept);
+    write(file, "half of somethi");
+  }  // e.g. an exception while writing
+  {
+    AtomicFile file(path("never.txt"));
+    write(file, "never committed");
+  }
+  EXPECT_EQ(read(kept), "old");
+  EXPECT_EQ(entries(), std::vector<std::string>{"kept.txt"});
+}
+
+TEST_F(AtomicFileTest, TwoWritersOfOneTargetDoNotShareATemporary) {
+  const std::string target = path("same.txt");
+  AtomicFile first(target), second(target);
+  write(first, "first");
+  write(second, "second");
+  EXPECT_EQ(entries().size(), 2u);
+  first.commit();
+  second.commit();
+  EXPECT_EQ(read(target), "second");  // the last commit wins, whole
+  EXPECT_EQ(entries(), std::vector<std::string>{"same.txt"});
+}
+
+TEST_F(AtomicFileTest, FailuresNameThePathAndTheReason) {
+  const std::string missing = path("no-such-folder/out.png");
+  try {
+    AtomicFile file(missing);
+    ADD_FAILURE() << "created a file in a missing folder";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              missing + ": cannot create a temporary file: No such file or directory");
+  }
+  // The rename fails (a folder is in the way): commit throws and removes the temporary.
+  const std::string folder = path("a-folder");
+  fs::create_directories(fs::path(folder) / "inside");
+  AtomicFile file(folder);
+  write(file, "bytes");
+  try {
+    file.commit();
+    ADD_FAILURE() << "committed over a folder";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), folder + ": cannot write: Is a directory");
+  }
+  EXPECT_EQ(entries(), std::vector<std::string>{"a-folder"});
+}
+
+TEST_F(AtomicFileTest, CheckWritableFolderMakesTheFolderOrSaysWhy) {
+  const std::string nested = path("a/b/c");
+  EXPECT_EQ(checkWritableFolder(nested), "");
+  EXPECT_TRUE(fs::is_directory(nested));
+  EXPECT_TRUE(fs::is_empty(nested)) << "the probe file is removed";
+  EXPECT_EQ(checkWritableFolder(nested), "") << "an existing folder is fine";
+  { std::ofstream(path("a-file")) << "x"; }
+  const std::string underFile = path("a-file/sub");
+  EXPECT_EQ(checkWritableFolder(underFile),
+            underFile + ": cannot create the folder: Not a directory");
+  // /proc refuses new files even to root.
+  const std::string proc = "/proc/self/dfbwall-probe-folder";
+  const std::string problem = checkWritableFolder(proc);
+  EXPECT_EQ(problem.rfind(proc + ": cannot create the folder: ", 0), 0u) << problem;
+}
+
+}  // namespace
+}  // namespace dfb

@@ -1,0 +1,119 @@
+// Every wait has a bound (messaging/BoundedWait.h), on real MPI requests of this rank alone
+// (MPI_COMM_SELF, so the test runs the same at any rank count): a request that completes is
+// waited for, one that never does ends in DeadlineError with its message at its deadline, and
+// the long wait's polling costs (nearly) no CPU.
+#include "messaging/BoundedWait.h"
+
+#include <gtest/gtest.h>
+#include <mpi.h>
+#include <time.h>
+
+#include <chrono>
+#include <thread>
+
+#include "messaging/Error.h"
+
+namespace messaging {
+namespace {
+
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+double threadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
+// A receive on a private communicator, matched by a send from another thread after `delay`
+// (or never, when `delay` is negative).
+class Receive {
+ public:
+  explicit Receive(std::chrono::milliseconds delay) {
+    MPI_Comm_dup(MPI_COMM_SELF, &comm_);
+    MPI_Irecv(&value_, 1, MPI_INT, 0, 7, comm_, &request);
+    if (delay >= 0ms)
+      sender_ = std::thread([this, delay] {
+        std::this_thread::sleep_for(delay);
+        const int value = 42;
+        MPI_Send(&value, 1, MPI_INT, 0, 7, comm_);
+      });
+  }
+  ~Receive() {
+    if (sender_.joinable()) sender_.join();
+    if (request != MPI_REQUEST_NULL) {  // never matched: cancelled, so nothing is left pending
+      MPI_Cancel(&request);
+      MPI_Wait(&request, MPI_STATUS_IGNORE);
+    }
+    MPI_Comm_free(&comm_);
+  }
+  int value() const { return value_; }
+
+  MPI_Request request = MPI_REQUEST_NULL;
+
+ private:
+  MPI_Comm comm_ = MPI_COMM_NULL;
+  int value_ = 0;
+  std::thread sender_;
+};
+
+TEST(BoundedWait, ARequestThatCompletesIsWaitedFor) {
+  Receive receive(200ms);
+  const auto start = Clock::now();
+  waitWithDeadline(receive.request, start + 20s, "never said");
+  EXPECT_EQ(receive.value(), 42);
+  EXPECT_EQ(receive.request, MPI_REQUEST_NULL);  // completed and freed by MPI_Test
+  EXPECT_GE(secondsSince(start), 0.19);
+  EXPECT_LT(secondsSince(start), 10.0);
+}
+
+TEST(BoundedWait, ACompletedRequestReturnsEvenPastItsDeadline) {
+  Receive receive(0ms);
+  std::this_thread::sleep_for(100ms);  // matched by now
+  waitWithDeadline(receive.request, Clock::now() - 1s, "never said");
+  EXPECT_EQ(receive.value(), 42);
+}
+
+TEST(BoundedWait, ARequestThatNeverCompletesEndsAtItsDeadlineWithItsMessage) {
+  for (const auto maxSleep : {20us, 50000us}) {
+    Receive receive(-1ms);
+    const auto start = Clock::now();
+    try {
+      if (maxSleep == 20us)
+        waitWithDeadline(receive.request, start + 300ms, "swap barrier of frame 7: late");
+      else
+        waitWithDeadline(receive.request, start + 300ms, "swap barrier of frame 7: late", maxSleep);
+      ADD_FAILURE() << "returned without the request completing";
+    } catch (const DeadlineError& e) {
+      EXPECT_STREQ(e.what(), "swap barrier of frame 7: late");
+    }
+    const double waited = secondsSince(start);
+    EXPECT_GE(waited, 0.3);
+    EXPECT_LT(waited, 3.0) << "the deadline was 0.3 s";
+    EXPECT_NE(receive.request, MPI_REQUEST_NULL);  // still pending: the caller decides
+  }
+}
+
+// The long wait (a rank idling until the next order) sleeps longer and longer between polls:
+// a second of waiting costs this thread a few milliseconds of CPU, not a core; and it still
+// notices the completion within its longest sleep.
+TEST(BoundedWait, TheLongWaitCostsNearlyNoCpuAndStillNoticesCompletion) {
+  Receive receive(1000ms);
+  const auto start = Clock::now();
+  const double cpu = threadCpuSeconds();
+  waitWithDeadline(receive.request, start + 20s, "never said", 50ms);
+  const double used = threadCpuSeconds() - cpu, waited = secondsSince(start);
+  EXPECT_EQ(receive.value(), 42);
+  EXPECT_GE(waited, 0.99);
+  EXPECT_LT(waited, 5.0);
+  // About 20 polls in a second (the sleeps double from 20 us to 50 ms): this thread's own CPU
+  // time, so a loaded machine does not inflate it.
+  EXPECT_LT(used, 0.05) << "CPU seconds spent polling over " << waited << " s";
+}
+
+}  // namespace
+}  // namespace messaging
