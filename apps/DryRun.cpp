@@ -60,10 +60,11 @@ void printDryRun(const Job& job) {
         "bricks: %zu, each on %d render rank(s); tile-brick owner = holders[(tile + brick) %% K]\n",
         bricks.size(), std::min(o.replication, job.roles.renderRanks));
     const renderers::GhostMode ghost = renderers::ghostModeFromName(o.ghost);
-    const renderers::Box3 domain = renderers::sceneDomain(desc);
-    std::printf("ghost: %s, %g world units beyond each brick plus a layer of 2 voxels\n",
-                renderers::ghostModeName(ghost),
-                renderers::ghostMargin(desc, maxComponent(domain.hi - domain.lo), ghost));
+    const renderers::GhostReach reach = renderers::ghostReach(desc, ghost);
+    std::printf(
+        "ghost: %s, %g world units beyond each brick plus a layer of 2 voxels, and for shadows "
+        "the brick swept towards %zu light(s) to the domain's boundary\n",
+        renderers::ghostModeName(ghost), reach.margin, reach.lights.size());
     for (const renderers::BrickPlan& b : bricks) {
       std::printf("brick %d [%g %g %g]..[%g %g %g] on ranks", b.id, b.bounds.lo.x, b.bounds.lo.y,
                   b.bounds.lo.z, b.bounds.hi.x, b.bounds.hi.y, b.bounds.hi.z);

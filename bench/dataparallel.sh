@@ -7,8 +7,8 @@
 #  3. Memory: scene_bytes and peak RSS per rank on 1, 2, 4 ranks with --bricks 4 against the
 #     whole scene on every rank (--bricks 1 --replication RANKS), ambient occlusion on and off,
 #     for both ghost modes: --ghost reach (2 voxels densely around each brick, and as far as AO
-#     reaches the macrocells holding an isovalue, sparsely; images equal the whole scene's) and
-#     --ghost layer (2 voxels; AO near brick faces differs).
+#     and shadow rays reach the macrocells holding an isovalue, sparsely; images equal the whole
+#     scene's) and --ghost layer (2 voxels; AO near brick faces differs, no shadows across them).
 #  4. Mixed vs pure data-parallel on a skewed scene (a dense, translucent particle cluster inside
 #     brick 0; the rest of the domain is an invisible volume): --bricks 4 on 4 ranks with
 #     --replication 2 vs 1.
@@ -140,7 +140,8 @@ EOF
   done
   # The AO seams of --ghost layer: the largest difference per channel (linear radiance, .pfm)
   # of 4 bricks against the unbricked render, both ghost modes, one rank, same seed, shadows
-  # off (shadow rays leave a brick's ghost data in both modes), $seamFrames frames accumulated.
+  # off (AO alone: --ghost layer also loses the shadows across bricks), $seamFrames frames
+  # accumulated.
   local seam="$work/dp-wavelet-seam.toml" seamFrames=8
   sed 's/^ao_distance = .*/&\nshadows = false/' "$wave" >"$seam"
   mpi 1 "${run[@]}" --scene "$seam" --size $memsize --bricks 1 --frames $seamFrames \

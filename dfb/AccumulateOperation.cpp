@@ -53,18 +53,13 @@ class AccumulateOperation final : public TileOperation {
     received_ = 0;
   }
 
+  InputNeeds needs() const override { return {.accumulation = true}; }
+
   bool process(Tile&& input) override {
-    if (input.region != region_) throw Error("input region does not match its tile");
-    if (input.accumulationId != accumulationId_)
-      throw Error(where() + ": input for accumulation pass " +
-                  std::to_string(input.accumulationId) + ", but this frame is pass " +
-                  std::to_string(accumulationId_));
-    if (input.weight == 0) throw Error(where() + ": input with weight 0");
     if (received_ >= expected_)
       throw Error(where() + ": more than the " + std::to_string(expected_) + " expected inputs");
     ++received_;
-    if (expected_ == 1 && accumulationId_ == 0 && input.weight == 1 &&
-        input.color.size() == 4 * static_cast<size_t>(region_.pixelCount())) {
+    if (expected_ == 1 && accumulationId_ == 0 && input.weight == 1) {
       startEpoch(std::move(input));
       return true;
     }

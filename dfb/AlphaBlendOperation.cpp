@@ -31,13 +31,9 @@ class AlphaBlendOperation final : public TileOperation {
     announced_.clear();
   }
 
+  InputNeeds needs() const override { return {.tree = true}; }
+
   bool process(Tile&& input) override {
-    if (input.region != region_) throw Error("input region does not match its tile");
-    if (input.generation < 0 || input.children < 0)
-      throw Error(where() + ": negative generation or children count");
-    const size_t n = static_cast<size_t>(region_.pixelCount());
-    if (!input.depth.empty() && input.depth.size() != n)
-      throw Error(where() + ": depth size mismatch");
     received_[input.generation]++;
     announced_[input.generation] += input.children;
     inputs_.push_back(std::move(input));

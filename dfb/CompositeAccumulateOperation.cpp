@@ -13,13 +13,16 @@ class CompositeAccumulateOperation final : public TileOperation {
   explicit CompositeAccumulateOperation(const Region& region)
       : blend_(alphaBlendOperation()(region)), accumulate_(accumulateOperation()(region)) {}
 
-  void newFrame(const FrameInfo& frame, std::uint32_t accumulationId,
-                int expectedInputs) override {
+  void newFrame(const FrameInfo& frame, std::uint32_t accumulationId, int expectedInputs) override {
     accumulationId_ = accumulationId;
     weight_ = 1;
     blend_->newFrame(frame, accumulationId, expectedInputs);
     accumulate_->newFrame(frame, accumulationId, 1);
   }
+
+  // The tree's inputs, each of the frame's pass (the composited tile is one input of the
+  // accumulation, made here).
+  InputNeeds needs() const override { return {.tree = true, .accumulation = true}; }
 
   bool process(Tile&& input) override {
     // The samples behind the frame: the root tile's (every input of a tree renders alike).
@@ -45,9 +48,8 @@ class CompositeAccumulateOperation final : public TileOperation {
 }  // namespace
 
 TileOperationFactory compositeAccumulateOperation() {
-  return [](const Region& region) {
-    return std::make_unique<CompositeAccumulateOperation>(region);
-  };
+  return
+      [](const Region& region) { return std::make_unique<CompositeAccumulateOperation>(region); };
 }
 
 }  // namespace dfb

@@ -12,12 +12,12 @@
 
 #include "dfb/Error.h"
 #include "dfb/ImageGather.h"
+#include "dfb/TileDoor.h"
 #include "dfb/TileMessage.h"
 #include "dfb/Timing.h"
 #include "messaging/BoundedWait.h"
 
 namespace dfb {
-namespace {}  // namespace
 
 int roundRobinOwner(int tileIndex, int, int ranks) { return tileIndex % ranks; }
 
@@ -26,8 +26,10 @@ struct OwnedTile {
   std::mutex mutex;
   std::unique_ptr<TileOperation> operation;
   std::vector<std::uint32_t> rgba8;
-  bool complete = false;
-  bool active = false;  // expects inputs this frame
+  // What the door (dfb/TileDoor.h) checks every input against: region, needs, frame and pass,
+  // whether the tile expects inputs this frame and is complete. Set by begin() and read by
+  // every input under `mutex`, the lock that applies the input.
+  TileState state;
 };
 
 struct DistributedFrameBuffer::Impl {
@@ -52,10 +54,13 @@ struct DistributedFrameBuffer::Impl {
   std::condition_variable frameDone;
   std::int64_t activeFrame = -1;
   bool inFrame = false;
+  // inFrame for setTile(), which must not take the frame lock on every call.
+  std::atomic<bool> open{false};
   FrameInfo frame;
   std::uint32_t accumulationId = 0;
   bool haveEpoch = false;
-  std::map<std::uint32_t, std::vector<messaging::Bytes>> early;  // inputs for frames not begun yet
+  // Inputs for frames not begun yet, with their senders.
+  std::map<std::uint32_t, std::vector<std::pair<int, messaging::Bytes>>> early;
   int remaining = 0;  // owned tiles not complete this frame
   std::vector<std::string> inputErrors;
 
@@ -75,10 +80,14 @@ struct DistributedFrameBuffer::Impl {
   messaging::MessengerCounters countersAtBegin;
   FrameStats lastStats;
 
-  void processInput(int tileIndex, Tile&& input);
+  // Through the door into the tile's operation, under the tile's lock. `fromRank`: the
+  // messenger rank that sent it, -1 when it was set on this rank.
+  void processInput(int tileIndex, Tile&& input, const FrameInfo& label, int fromRank);
+  // "tile T of frame F, input from rank S (host)": what an input error starts with.
+  std::string whichInput(int tileIndex, std::uint32_t frameId, int fromRank) const;
   // Runs the pixel ops of a tile whose last input arrived, with the tile's mutex held.
   void finishTile(int tileIndex, OwnedTile& owned);
-  void deliver(messaging::Bytes&& bytes);
+  void deliver(int fromRank, messaging::Bytes&& bytes);
   // The display-format gather of the finished frame to rank 0 (nothing with NONE).
   GatherCounts gather(Clock::time_point deadline);
   void failInput(const std::string& message) {
@@ -145,9 +154,11 @@ void DistributedFrameBuffer::setToneMap(const ToneMapSettings& toneMap) {
 
 void DistributedFrameBuffer::begin(const FrameInfo& frame) {
   Impl& d = *impl_;
-  std::vector<messaging::Bytes> held;
+  std::vector<std::pair<int, messaging::Bytes>> held;
   {
     std::lock_guard lock(d.frameMutex);
+    // A bad input that came between frames is this rank's failure (end() took those before).
+    if (!d.inputErrors.empty()) throw Error(d.inputErrors.front());
     if (d.inFrame)
       throw Error("begin(" + std::to_string(frame.frameId) + ") inside frame " +
                   std::to_string(d.frame.frameId));
@@ -165,15 +176,23 @@ void DistributedFrameBuffer::begin(const FrameInfo& frame) {
       OwnedTile& owned = *d.tiles[static_cast<size_t>(t)];
       std::lock_guard tileLock(owned.mutex);
       const int expected = d.options.expectedInputs ? d.options.expectedInputs(t) : 1;
-      owned.active = expected > 0;
-      owned.complete = !owned.active;  // a tile nobody renders this frame is done already
-      if (owned.active) {
-        if (!owned.operation) owned.operation = d.options.operation(d.grid.region(t));
+      TileState& state = owned.state;
+      state.frame = frame;
+      state.accumulationId = d.accumulationId;
+      state.active = expected > 0;
+      state.complete = !state.active;  // a tile nobody renders this frame is done already
+      if (state.active) {
+        if (!owned.operation) {
+          state.region = d.grid.region(t);
+          owned.operation = d.options.operation(state.region);
+          state.needs = owned.operation->needs();
+          // The float gather reads color: display pixels cannot stand in for it then.
+          if (d.options.format == DisplayFormat::RGBAF32) state.needs.displayPixelsForColor = false;
+        }
         owned.operation->newFrame(frame, d.accumulationId, expected);
         ++d.remaining;
       }
     }
-    d.inputErrors.clear();
     d.tilesSet = d.tilesCompleted = 0;
     d.trafficAtBegin = d.messenger.traffic(d.options.objectId);
     d.countersAtBegin = d.messenger.counters();
@@ -194,12 +213,14 @@ void DistributedFrameBuffer::begin(const FrameInfo& frame) {
       d.staleInputs += d.early.begin()->second.size();
       d.early.erase(d.early.begin());
     }
+    d.open = true;
   }
-  for (messaging::Bytes& bytes : held) d.deliver(std::move(bytes));
+  for (auto& [from, bytes] : held) d.deliver(from, std::move(bytes));
 }
 
 void DistributedFrameBuffer::setTile(Tile tile) {
   Impl& d = *impl_;
+  if (!d.open) throw Error("setTile outside a frame: tiles are set between begin() and end()");
   // The tile is rendered when it comes here: compositing overhead counts from this moment (a
   // tile this rank owns is composited, and maybe routed, inside this call). Threads race: keep
   // the latest.
@@ -216,7 +237,7 @@ void DistributedFrameBuffer::setTile(Tile tile) {
   d.tilesSet++;
   const int owner = d.owner[static_cast<size_t>(index)];
   if (owner == d.rank) {
-    d.processInput(index, std::move(tile));
+    d.processInput(index, std::move(tile), {d.frame.frameId, d.frame.epoch}, -1);
   } else {
     messaging::Bytes bytes = packTile(tile, index, d.frame.frameId, d.frame.epoch);
     d.messenger.send(d.messengerRank[static_cast<size_t>(owner)], d.options.objectId,
@@ -224,33 +245,42 @@ void DistributedFrameBuffer::setTile(Tile tile) {
   }
 }
 
-void DistributedFrameBuffer::incoming(int, messaging::Bytes&& payload) {
-  impl_->deliver(std::move(payload));
+void DistributedFrameBuffer::incoming(int fromRank, messaging::Bytes&& payload) {
+  impl_->deliver(fromRank, std::move(payload));
 }
 
-void DistributedFrameBuffer::Impl::deliver(messaging::Bytes&& bytes) {
+std::string DistributedFrameBuffer::Impl::whichInput(int tileIndex, std::uint32_t frameId,
+                                                     int fromRank) const {
+  std::string which =
+      "tile " + std::to_string(tileIndex) + " of frame " + std::to_string(frameId) + ", input ";
+  if (fromRank < 0) return which + "set on this rank (" + std::to_string(rank) + "): ";
+  return which + "from rank " + std::to_string(fromRank) + " (" + messenger.hostOf(fromRank) +
+         "): ";
+}
+
+void DistributedFrameBuffer::Impl::deliver(int fromRank, messaging::Bytes&& bytes) {
   TileMessageHeader header;
   Tile tile;
   const std::int64_t start = threadCpuNs();
   try {
     tile = unpackTile(bytes, header);
   } catch (const Error& e) {
-    failInput(e.what());
+    failInput("a tile message from rank " + std::to_string(fromRank) + " (" +
+              messenger.hostOf(fromRank) + "): " + e.what());
     return;
   }
   unpackNs += threadCpuNs() - start;
   {
     std::lock_guard lock(frameMutex);
     if (static_cast<std::int64_t>(header.frameId) > activeFrame + options.framesAhead) {
-      inputErrors.push_back("rank " + std::to_string(rank) + " received an input for frame " +
-                            std::to_string(header.frameId) + ", more than " +
+      inputErrors.push_back(whichInput(header.tileIndex, header.frameId, fromRank) + "more than " +
                             std::to_string(options.framesAhead) + " frames past frame " +
                             std::to_string(activeFrame));
       frameDone.notify_all();
       return;
     }
     if (static_cast<std::int64_t>(header.frameId) > activeFrame) {
-      early[header.frameId].push_back(std::move(bytes));
+      early[header.frameId].emplace_back(fromRank, std::move(bytes));
       return;
     }
     if (!inFrame || static_cast<std::int64_t>(header.frameId) < activeFrame) {
@@ -260,28 +290,31 @@ void DistributedFrameBuffer::Impl::deliver(messaging::Bytes&& bytes) {
   }
   if (header.tileIndex < 0 || header.tileIndex >= grid.tileCount() ||
       owner[static_cast<size_t>(header.tileIndex)] != rank) {
-    failInput("rank " + std::to_string(rank) + " received tile " +
-              std::to_string(header.tileIndex) + ", which it does not own");
+    failInput(whichInput(header.tileIndex, header.frameId, fromRank) + "rank " +
+              std::to_string(rank) + " does not own that tile");
     return;
   }
-  processInput(header.tileIndex, std::move(tile));
+  processInput(header.tileIndex, std::move(tile), {header.frameId, header.epoch}, fromRank);
 }
 
-void DistributedFrameBuffer::Impl::processInput(int tileIndex, Tile&& input) {
+void DistributedFrameBuffer::Impl::processInput(int tileIndex, Tile&& input, const FrameInfo& label,
+                                                int fromRank) {
   OwnedTile& owned = *tiles[static_cast<size_t>(tileIndex)];
   bool done = false;
   try {
+    // The frame is checked under the lock that applies the input: begin() moves the tile to the
+    // next frame under it, so an input of frame N never lands in frame N + 1.
     std::lock_guard lock(owned.mutex);
-    if (owned.complete || !owned.operation)
-      throw Error("tile " + std::to_string(tileIndex) + " got an input " +
-                  (owned.complete ? "after it was complete" : "though it expects none"));
+    if (admitInput(input, label, owned.state) == Admission::Stale) {
+      staleInputs++;
+      return;
+    }
     const std::int64_t start = threadCpuNs();
     done = owned.operation->process(std::move(input));
     operationNs += threadCpuNs() - start;
     if (done) finishTile(tileIndex, owned);
   } catch (const std::exception& e) {
-    failInput("frame " + std::to_string(frame.frameId) + ", tile " + std::to_string(tileIndex) +
-              ": " + e.what());
+    failInput(whichInput(tileIndex, label.frameId, fromRank) + e.what());
     return;
   }
   // The frame lock is taken only after the tile lock is released: begin() takes them in the
@@ -293,7 +326,7 @@ void DistributedFrameBuffer::Impl::processInput(int tileIndex, Tile&& input) {
 }
 
 void DistributedFrameBuffer::Impl::finishTile(int tileIndex, OwnedTile& owned) {
-  owned.complete = true;
+  owned.state.complete = true;
   FinishedTile finished;
   finished.tileIndex = tileIndex;
   finished.region = grid.region(tileIndex);
@@ -351,7 +384,7 @@ GatherCounts DistributedFrameBuffer::Impl::gather(Clock::time_point deadline) {
   std::vector<std::byte> blank;
   auto pixelsOf = [&](int t) -> const std::byte* {
     OwnedTile& owned = *tiles[static_cast<size_t>(t)];
-    if (!owned.active) {  // not rendered this frame: black, transparent
+    if (!owned.state.active) {  // not rendered this frame: black, transparent
       blank.assign(static_cast<size_t>(grid.region(t).pixelCount() * bytesPerPixel), std::byte{0});
       return blank.data();
     }
@@ -370,16 +403,18 @@ void DistributedFrameBuffer::end() {
     bool late = false;
     std::unique_lock lock(d.frameMutex);
     if (!d.inFrame) throw Error("end() without begin()");
+    d.open = false;  // setTile() after end() has begun is refused
     d.frameDone.wait_until(lock, deadline,
                            [&] { return d.remaining == 0 || !d.inputErrors.empty(); });
     if (!d.inputErrors.empty()) {
       failure = d.inputErrors.front();
+      d.inputErrors.clear();  // reported here; begin() throws only those that come after
     } else if (d.remaining > 0) {
       late = true;
       std::string missing;
       int listed = 0;
       for (int t : d.ownedTiles)
-        if (!d.tiles[static_cast<size_t>(t)]->complete && listed++ < 8) {
+        if (!d.tiles[static_cast<size_t>(t)]->state.complete && listed++ < 8) {
           missing += ' ';  // appended piecewise: GCC 12 -O3 warns falsely on " " + to_string
           missing += std::to_string(t);
         }

@@ -10,7 +10,12 @@
 //
 // Contracts:
 //  - Construction, begin(), end() and destruction are collective over `comm`.
-//  - setTile() is thread-safe and may be called between begin() and end() only.
+//  - setTile() is thread-safe and may be called between begin() and end() only (outside a
+//    frame it throws).
+//  - Every input, set here or received, passes one door (dfb/TileDoor.h) under the lock of the
+//    tile it is for: region, channels (the operation's InputNeeds), frame, epoch, pass and tree
+//    counts. A bad one is a dfb::Error naming the tile, the frame and the sender, thrown by
+//    end() (or by the next begin() when it came between frames), never undefined behaviour.
 //  - Tile messages carry their frame: inputs for a frame a rank has not begun yet are held and
 //    applied at its begin(); inputs for a past frame are rejected and counted.
 //  - Every wait is bounded by DfbOptions::frameTimeout; a timeout is a dfb::Error naming the

@@ -16,6 +16,25 @@ struct FrameInfo {
   std::uint32_t epoch = 0;
 };
 
+// What an operation needs of every input; the DFB's door (dfb/TileDoor.h) refuses an input that
+// does not provide it, so an operation never checks its inputs itself. Every input has its
+// tile's region and color (4 floats a pixel); depth (1), normal and albedo (3) and display
+// pixels (1) are either absent or sized for the region.
+struct InputNeeds {
+  // Display pixels (Tile::rgba8) may stand in for color: color may then be empty.
+  bool displayPixelsForColor = false;
+  // Inputs form a dependency tree: generation in [0, kMaxGeneration], children in
+  // [0, kMaxChildren]. Without it both must be 0.
+  bool tree = false;
+  // Inputs belong to the frame's accumulation pass (Tile::accumulationId) and weigh something
+  // (Tile::weight > 0).
+  bool accumulation = false;
+};
+// A tile's tree is at most this deep and a tile announces at most this many children: far more
+// than bricks a tile can meet, few enough that no count overflows.
+constexpr int kMaxGeneration = 64;
+constexpr int kMaxChildren = 1 << 16;
+
 class TileOperation {
  public:
   virtual ~TileOperation() = default;
@@ -24,9 +43,13 @@ class TileOperation {
   // announce themselves, like the alpha-blend tree, ignore it).
   virtual void newFrame(const FrameInfo& frame, std::uint32_t accumulationId,
                         int expectedInputs) = 0;
-  // Takes one input (moved in: an operation keeps it without a copy when it needs to). Returns
-  // true exactly once per frame: when the tile is complete, after which finished() holds the
-  // result. Throws dfb::Error on an input that does not fit.
+  // What every input must provide; the DFB checks it before process().
+  virtual InputNeeds needs() const = 0;
+  // Takes one input (moved in: an operation keeps it without a copy when it needs to) that
+  // passed the door (dfb/TileDoor.h) with needs(). Returns true exactly once per frame: when the
+  // tile is complete, after which finished() holds the result. Throws dfb::Error on an input
+  // that does not fit what came before it this frame (one too many, a repeated sequence, a
+  // generation the tree did not announce).
   virtual bool process(Tile&& input) = 0;
   // RGBA linear color (and depth) of the completed tile, valid until the next newFrame.
   virtual const Tile& finished() const = 0;

@@ -13,8 +13,9 @@ class WriteOperation final : public TileOperation {
 
   void newFrame(const FrameInfo&, std::uint32_t, int) override { received_ = 0; }
 
+  InputNeeds needs() const override { return {.displayPixelsForColor = true}; }
+
   bool process(Tile&& input) override {
-    if (input.region != region_) throw Error("input region does not match its tile");
     if (++received_ > 1)
       throw Error("tile at (" + std::to_string(region_.x0) + ", " + std::to_string(region_.y0) +
                   ") got a second input in one frame; the write operation takes exactly one");

@@ -1,7 +1,7 @@
 #include "messaging/Envelope.h"
 
+#include <algorithm>
 #include <cstring>
-#include <limits>
 #include <span>
 #include <string>
 
@@ -23,10 +23,17 @@ static_assert(sizeof(WireTrailer) == kEnvelopeBytes, "the envelope is part of th
 
 }  // namespace
 
+void checkPayloadSize(std::size_t payloadBytes, std::size_t maxPayloadBytes,
+                      const std::string& what) {
+  const std::size_t limit = std::min(maxPayloadBytes, kLargestPayload);
+  if (payloadBytes > limit)
+    throw Error(what + " of " + std::to_string(payloadBytes) + " bytes, more than the limit of " +
+                std::to_string(limit));
+}
+
 Bytes sealEnvelope(Bytes payload, ObjectId object, bool compress, bool* compressed) {
-  if (payload.size() > std::numeric_limits<std::uint32_t>::max())
-    throw Error("message of " + std::to_string(payload.size()) + " bytes to object id " +
-                std::to_string(object) + ": more than a message can carry (4 GiB)");
+  checkPayloadSize(payload.size(), kLargestPayload,
+                   "message to object id " + std::to_string(object));
   WireTrailer trailer{object, static_cast<std::uint32_t>(payload.size()), 0};
   Bytes wire;
   if (compress && compressIfSmaller(payload, wire))
@@ -53,9 +60,7 @@ Envelope openEnvelope(Bytes&& wire, std::size_t maxPayloadBytes, Bytes& payload)
   const std::string what = "message to object id " + std::to_string(envelope.object);
   if (envelope.flags & ~kKnownFlags)
     throw Error(what + " has unknown flags " + std::to_string(envelope.flags));
-  if (envelope.rawBytes > maxPayloadBytes)
-    throw Error(what + " of " + std::to_string(envelope.rawBytes) +
-                " bytes, more than the limit of " + std::to_string(maxPayloadBytes));
+  checkPayloadSize(envelope.rawBytes, maxPayloadBytes, what);
   const size_t bodyBytes = wire.size() - kEnvelopeBytes;
   if (envelope.flags & kCompressed) {
     decompress(std::span<const std::byte>(wire.data(), bodyBytes), envelope.rawBytes, payload);

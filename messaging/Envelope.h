@@ -7,6 +7,7 @@
 // of bytes from other ranks can be unit-tested and fuzzed on its own.
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "messaging/Compression.h"
@@ -15,15 +16,26 @@ namespace messaging {
 
 using ObjectId = std::uint64_t;
 
+// The largest payload any message may carry: the wire buffer (payload and envelope; a compressed
+// body is only used when smaller) must fit MPI's int count.
+inline constexpr std::size_t kEnvelopeBytes = 16;
+inline constexpr std::size_t kLargestPayload = 0x7FFF'FFFF - kEnvelopeBytes;
+
+// The one size cap, applied by the sender before a message is sealed and by the receiver before
+// it allocates: throws messaging::Error naming `what` (e.g. "message to object id 5") when
+// `payloadBytes` is above `maxPayloadBytes` or kLargestPayload.
+void checkPayloadSize(std::size_t payloadBytes, std::size_t maxPayloadBytes,
+                      const std::string& what);
+
 struct Envelope {
   ObjectId object = 0;
   std::uint32_t rawBytes = 0;  // the payload's size before compression
   std::uint32_t flags = 0;
 };
-inline constexpr std::size_t kEnvelopeBytes = 16;
 
 // Turns `payload` into a wire buffer for object `object`: Snappy-compressed when `compress`
-// and that makes it smaller (then `*compressed` is set). Payloads of 4 GiB or more are refused.
+// and that makes it smaller (then `*compressed` is set). Payloads above kLargestPayload are
+// refused.
 Bytes sealEnvelope(Bytes payload, ObjectId object, bool compress, bool* compressed = nullptr);
 // The envelope of a wire buffer without opening it; throws messaging::Error when it is too short.
 Envelope peekEnvelope(const Bytes& wire);

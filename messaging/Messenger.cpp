@@ -84,10 +84,18 @@ struct Messenger::Impl {
   std::atomic<std::uint64_t> sendsInFlight{0};
   std::atomic<std::uint64_t> messagesSent{0}, messagesReceived{0}, messagesHandled{0},
       rawBytesSent{0}, wireBytesSent{0}, rawBytesReceived{0}, wireBytesReceived{0},
-      messagesCompressed{0}, unknownReceiver{0}, handlerErrors{0};
+      messagesCompressed{0}, unknownReceiver{0}, handlerErrors{0}, mpiThreadWakeups{0};
 
   mutable std::mutex trafficMutex;
   std::unordered_map<ObjectId, ObjectTraffic> traffic;
+  // What arrived for `id`, when an object is registered under it.
+  void countReceived(ObjectId id, std::uint64_t bytes) {
+    {
+      std::lock_guard lock(registryMutex);
+      if (!handlers.contains(id)) return;
+    }
+    countTraffic(id, 0, bytes);
+  }
   void countTraffic(ObjectId id, std::uint64_t sent, std::uint64_t received) {
     std::lock_guard lock(trafficMutex);
     ObjectTraffic& t = traffic[id];
@@ -133,12 +141,12 @@ struct Messenger::Impl {
 
   // With MPI_ERRORS_RETURN a failed call comes back here; the error callback hears of it
   // (the app then ends the job). Returns whether the call succeeded.
-  bool mpiOk(int code, const char* call) {
+  bool mpiOk(int code, const char* call, const std::string& context = {}) {
     if (code == MPI_SUCCESS) return true;
     try {
       checkMpi(code, call);
     } catch (const std::exception& e) {
-      report(std::string("MPI thread: ") + e.what());
+      report(std::string("MPI thread: ") + e.what() + context);
     }
     return false;
   }
@@ -161,16 +169,25 @@ void Messenger::Impl::mpiLoop() {
   auto idleSleep = std::chrono::microseconds(1);
 
   while (true) {
+    mpiThreadWakeups++;
     bool active = false;
     {
       std::lock_guard lock(outboxMutex);
       fresh.swap(outbox);
     }
     for (Packet& packet : fresh) {
-      MPI_Request request;
-      mpiOk(MPI_Isend(packet.wire.data(), static_cast<int>(packet.wire.size()), MPI_BYTE,
-                      packet.rank, kTag, p2p, &request),
-            "MPI_Isend");
+      // send() refused anything larger: the count fits an int.
+      MPI_Request request = MPI_REQUEST_NULL;
+      if (!mpiOk(MPI_Isend(packet.wire.data(), static_cast<int>(packet.wire.size()), MPI_BYTE,
+                           packet.rank, kTag, p2p, &request),
+                 "MPI_Isend",
+                 " (a message of " + std::to_string(packet.wire.size()) + " bytes to rank " +
+                     std::to_string(packet.rank) + ")")) {
+        // Reported (the failure path); nothing to wait for, and the message never left.
+        sendsInFlight--;
+        messagesSent--;
+        continue;
+      }
       sendRequests.push_back(request);
       sendBuffers.push_back(std::move(packet.wire));
       active = true;
@@ -228,7 +245,7 @@ void Messenger::Impl::mpiLoop() {
       wireBytesReceived += packet.wire.size();
 
       if (packet.wire.size() >= kEnvelopeBytes)
-        countTraffic(peekEnvelope(packet.wire).object, 0, packet.wire.size());
+        countReceived(peekEnvelope(packet.wire).object, packet.wire.size());
       // Before the handler can run: a handler may rest the messenger again (a heartbeat).
       resting = false;
       pushInbox(std::move(packet));
@@ -374,6 +391,10 @@ void Messenger::Impl::waitLocallyIdle(Clock::time_point deadline) {
 }
 
 Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_unique<Impl>()) {
+  if (options.maxMessageBytes > kLargestPayload)
+    throw Error("messenger: a message limit of " + std::to_string(options.maxMessageBytes) +
+                " bytes is more than MPI can send in one message (" +
+                std::to_string(kLargestPayload) + ")");
   impl_->options = options;
   impl_->owner = this;
   impl_->uncaughtAtConstruction = std::uncaught_exceptions();
@@ -401,9 +422,13 @@ Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_
   int length = 0;
   MPI_Get_processor_name(name, &length);
   std::vector<char> names(static_cast<size_t>(impl_->size) * MPI_MAX_PROCESSOR_NAME);
-  checkMpi(MPI_Allgather(name, MPI_MAX_PROCESSOR_NAME, MPI_CHAR, names.data(),
-                         MPI_MAX_PROCESSOR_NAME, MPI_CHAR, impl_->p2p),
-           "MPI_Allgather");
+  MPI_Request request;
+  checkMpi(MPI_Iallgather(name, MPI_MAX_PROCESSOR_NAME, MPI_CHAR, names.data(),
+                          MPI_MAX_PROCESSOR_NAME, MPI_CHAR, impl_->control, &request),
+           "MPI_Iallgather");
+  waitWithDeadline(request, Clock::now() + options.quiesceTimeout,
+                   "starting the messenger: another rank did not join within " +
+                       std::to_string(options.quiesceTimeout.count()) + " ms");
   for (int r = 0; r < impl_->size; ++r) {
     const char* n = names.data() + static_cast<size_t>(r) * MPI_MAX_PROCESSOR_NAME;
     impl_->hosts.emplace_back(n, strnlen(n, MPI_MAX_PROCESSOR_NAME));
@@ -463,6 +488,9 @@ void Messenger::send(int toRank, ObjectId id, Bytes payload) {
     throw Error("send to rank " + std::to_string(toRank) + " of a messenger with " +
                 std::to_string(impl_->size) + " ranks");
   const size_t rawBytes = payload.size();
+  checkPayloadSize(
+      rawBytes, impl_->options.maxMessageBytes,
+      "message to object id " + std::to_string(id) + " on rank " + std::to_string(toRank));
   const bool remote = toRank != impl_->rank;
   bool compressed = false;
   Bytes wire =
@@ -579,7 +607,7 @@ MessengerCounters Messenger::counters() const {
   const Impl& i = *impl_;
   return {i.messagesSent,    i.messagesReceived, i.messagesHandled,   i.rawBytesSent,
           i.wireBytesSent,   i.rawBytesReceived, i.wireBytesReceived, i.messagesCompressed,
-          i.unknownReceiver, i.handlerErrors};
+          i.unknownReceiver, i.handlerErrors,    i.mpiThreadWakeups};
 }
 
 Messenger::ObjectTraffic Messenger::traffic(ObjectId id) const {

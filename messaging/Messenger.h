@@ -57,14 +57,17 @@ struct MessengerOptions {
   // Longest sleep of an idle MPI thread; bounds the added receive latency.
   std::chrono::microseconds maxIdleSleep{200};
   std::chrono::microseconds restingSleep{10000};  // see setResting
-  // quiesce()/stop() give up with an Error after this long.
+  // The messenger's collectives give up with a DeadlineError after this long: the start-up
+  // exchange in the constructor, quiesce() and stop().
   std::chrono::milliseconds quiesceTimeout{30000};
   // Threads that decompress and handle messages for concurrent handlers at once, the inbox
   // thread included (a TBB arena; its workers come from the process's TBB pool, so a cap on
   // TBB's parallelism caps these too). 0: TBB's default (the cores); 1: the inbox thread alone.
   int handlerThreads = 0;
-  // The largest payload a message may announce once decompressed; a larger one is an error
-  // reported through the error callback, so a corrupt 20-byte header cannot allocate 4 GiB.
+  // The largest payload a message may carry (before compression), on both sides: send() refuses
+  // a larger one, and one received that announces more is an error reported through the error
+  // callback, so a corrupt 20-byte header cannot allocate 4 GiB. At most kLargestPayload (an
+  // MPI count is an int); the same on every rank.
   std::size_t maxMessageBytes = std::size_t{1} << 30;
 };
 
@@ -74,6 +77,11 @@ struct MessengerCounters {
   std::uint64_t rawBytesReceived = 0, wireBytesReceived = 0;
   std::uint64_t messagesCompressed = 0;
   std::uint64_t unknownReceiver = 0, handlerErrors = 0;
+  // Passes of the MPI thread's loop. An idle pass ends in a sleep of at least the current idle
+  // sleep (unless something is sent), so an idle second has at most 1 s / maxIdleSleep of them
+  // (restingSleep when resting) plus the back-off's ramp, however loaded the machine: what an
+  // idle messenger costs, counted rather than timed.
+  std::uint64_t mpiThreadWakeups = 0;
 };
 
 class Messenger {
@@ -81,7 +89,9 @@ class Messenger {
   using ErrorCallback = std::function<void(const std::string&)>;
 
   // Collective over `comm`, which it duplicates (twice: point-to-point traffic and its own
-  // collectives never share a communicator with the caller's collectives).
+  // collectives never share a communicator with the caller's collectives). The exchange of host
+  // names is bounded by quiesceTimeout (a DeadlineError); the communicator splits before it have
+  // no non-blocking form (docs/design.md, "Deadlines").
   explicit Messenger(MPI_Comm comm, MessengerOptions options = {});
   ~Messenger();  // stop()s if still running (collective then too), unless unwinding (above).
   Messenger(const Messenger&) = delete;
@@ -98,6 +108,8 @@ class Messenger {
   // A payload with this much spare capacity (reserve(size + kSpareCapacity)) goes out without
   // being copied.
   static constexpr std::size_t kSpareCapacity = kEnvelopeBytes;
+  // Throws messaging::Error, sending nothing, for a payload above maxMessageBytes (the receiver's
+  // cap). A send that MPI refuses later is reported through the error callback.
   void send(int toRank, ObjectId id, Bytes payload);
   // Whether `rank` shares this rank's host (MPI_COMM_TYPE_SHARED), and whether a message to it
   // is compressed (so a producer can choose a pre-filter that only pays before compression).
@@ -127,6 +139,8 @@ class Messenger {
   // Traffic of one distributed object between ranks, on the wire (after compression, headers
   // included): what this rank sent to that id on other ranks, and what it received for it, in
   // bytes and in MPI messages (one per send(), however large: nothing is cut into fragments).
+  // Only ids registered on this rank count what they receive (an unknown id is an error, not an
+  // entry), so the table stays as small as the objects.
   struct ObjectTraffic {
     std::uint64_t bytesSent = 0, bytesReceived = 0;
     std::uint64_t messagesSent = 0, messagesReceived = 0;

@@ -26,8 +26,7 @@ BrickImage::BrickImage(std::shared_ptr<const SceneDesc> desc, const RenderSettin
   const Box3 domain = sceneDomain(*desc_);
   const float extent = maxComponent(domain.hi - domain.lo);
   depthScale_ = extent;
-  scene_ =
-      std::make_unique<SciVisScene>(desc_, loadBrick(*desc_, plan_, ghostMargin(*desc_, extent)));
+  scene_ = std::make_unique<SciVisScene>(desc_, loadBrick(*desc_, plan_, ghostReach(*desc_)));
   renderer_ = std::make_unique<SciVisRenderer>(*scene_, settings_, SciVisOptions{false});
   const std::size_t pixels =
       static_cast<std::size_t>(settings.width) * static_cast<std::size_t>(settings.height);

@@ -27,6 +27,80 @@ bool overlaps(const Box3& a, Vec3 lo, Vec3 hi) {
          hi.z >= a.lo.z;
 }
 
+// The boxes [from.lo + s dLo, from.hi + s dHi] for s in [0, sMax], together: every point a
+// shadow ray from `from` passes on its way to a light. Towards a directional light d: dLo = dHi
+// = d (the box swept along it); towards a point light in box L: dLo = L.lo - from.lo, dHi =
+// L.hi - from.hi, sMax = 1 (each point of `from` joined to each of L: the convex hull).
+struct SweptBox {
+  Box3 from;
+  Vec3 dLo, dHi;
+  float sMax = 0;
+
+  Box3 bounds() const {
+    Box3 b = from;
+    grow(b, from.lo + dLo * sMax, from.hi + dHi * sMax);
+    return b;
+  }
+  // Whether [lo, hi] meets one of the boxes: per axis, two linear conditions on s.
+  bool overlaps(Vec3 lo, Vec3 hi) const {
+    float s0 = 0, s1 = sMax;
+    // a + s b <= 0 for some s in [s0, s1].
+    auto keep = [&](float a, float b) {
+      if (b > 0)
+        s1 = std::min(s1, -a / b);
+      else if (b < 0)
+        s0 = std::max(s0, -a / b);
+      else if (a > 0)
+        s1 = -1;
+    };
+    for (int a = 0; a < 3; ++a) {
+      keep(from.lo[a] - hi[a], dLo[a]);   // the moving box's low face below hi
+      keep(lo[a] - from.hi[a], -dHi[a]);  // its high face above lo
+    }
+    return s0 <= s1;
+  }
+};
+
+// How far off a brick's bounds its shading rays may start: SciVisRenderer leaves a surface by
+// 1e-4 of the scene's extent and 0.05 of a volume step (both as SciVisScene computes them);
+// four times that.
+float startPad(const SceneDesc& desc, const Box3& domain) {
+  float finest = 0;
+  for (const VolumeDesc& v : desc.volumes) {
+    const Vec3 h = v.source.grid.spacing;
+    const float m = std::min(h.x, std::min(h.y, h.z));
+    finest = finest > 0 ? std::min(finest, m) : m;
+  }
+  const float step = finest > 0 ? finest / desc.scivis.samplingRate : 1.0f;
+  const float extent = domain.empty() ? 0.0f : std::max(1e-3f, maxComponent(domain.hi - domain.lo));
+  return 4.0f * (1e-4f * extent + 0.05f * step);
+}
+
+// Where the shadow rays of points in `bounds` go (one SweptBox per light of `reach`): from
+// within `pad` of the bounds to a point light or out of the domain. None when the bounds hold
+// the domain.
+std::vector<SweptBox> shadowSweeps(const Box3& bounds, const GhostReach& reach, float pad) {
+  std::vector<SweptBox> out;
+  if (reach.lights.empty() || reach.domain.empty() ||
+      (bounds.contains(reach.domain.lo) && bounds.contains(reach.domain.hi)))
+    return out;
+  const Box3 from = expanded(bounds, pad);
+  Box3 all = reach.domain;
+  grow(all, from.lo, from.hi);
+  // A box moved this far along a unit direction has left every box holding it and the domain.
+  const float across = length(all.hi - all.lo) * 1.001f + pad;
+  for (const ResolvedLight& light : reach.lights) {
+    if (light.kind == LightDesc::Kind::Directional) {
+      const Vec3 d = length(light.direction) > 0 ? normalize(light.direction) : Vec3{};
+      out.push_back({from, d, d, across});
+    } else if (light.kind == LightDesc::Kind::Point) {
+      const Box3 at = expanded({light.position, light.position}, pad);
+      out.push_back({from, at.lo - from.lo, at.hi - from.hi, 1.0f});
+    }
+  }
+  return out;
+}
+
 // Every particle set of the scene: its [[particles]] and the path tracer's sphere shapes.
 std::vector<const ParticlesDesc*> particleSets(const SceneDesc& desc,
                                                std::vector<ParticlesDesc>& converted) {
@@ -91,18 +165,54 @@ WorldMesh selectTriangles(const WorldMesh& m, Keep keep) {
 
 // The voxels of `g` around `region`, two beyond it: the crossing test samples one step past a
 // ray's end and gradients half a voxel around a hit. False: fewer than 2 voxels on an axis.
-bool voxelsAround(const GridGeometry& g, const Box3& region, VoxelBox& box) {
+// `whole`: widened to whole macrocells (their far faces included), so every macrocell has the
+// value range and bounds it has in the whole field, and shading rays skip exactly the stretches
+// they skip there.
+bool voxelsAround(const GridGeometry& g, const Box3& region, VoxelBox& box, bool whole = false) {
   bool empty = false;
   for (int a = 0; a < 3; ++a) {
     const double lo = std::floor((double(region.lo[a]) - g.origin[a]) / g.spacing[a]) - 2;
     const double hi = std::ceil((double(region.hi[a]) - g.origin[a]) / g.spacing[a]) + 3;
-    const int i0 = static_cast<int>(std::clamp(lo, 0.0, double(g.dims[a])));
-    const int i1 = static_cast<int>(std::clamp(hi, 0.0, double(g.dims[a])));
+    int i0 = static_cast<int>(std::clamp(lo, 0.0, double(g.dims[a])));
+    int i1 = static_cast<int>(std::clamp(hi, 0.0, double(g.dims[a])));
+    if (whole && i1 > i0) {
+      constexpr int m = FieldGeometry::kMacro;
+      i0 = i0 / m * m;
+      i1 = std::min((i1 - 1 + m - 1) / m * m + 1, g.dims[a]);
+    }
     (a == 0 ? box.lo.x : a == 1 ? box.lo.y : box.lo.z) = i0;
     (a == 0 ? box.hi.x : a == 1 ? box.hi.y : box.hi.z) = i1;
     empty = empty || i1 - i0 < 2;
   }
   return !empty;
+}
+
+// Where one brick's shading rays go beyond its bounds (from its GhostReach): ambient-occlusion
+// rays within `around`, shadow rays along `sweeps`; `region` bounds both.
+struct BrickReach {
+  Box3 around, region;
+  std::vector<SweptBox> sweeps;
+  bool beyond = false;  // whether they leave the bounds at all
+  bool reached(Vec3 lo, Vec3 hi) const {
+    if (overlaps(around, lo, hi)) return true;
+    for (const SweptBox& s : sweeps)
+      if (s.overlaps(lo, hi)) return true;
+    return false;
+  }
+};
+
+BrickReach brickReach(const SceneDesc& desc, const Box3& bounds, const GhostReach& reach) {
+  BrickReach r;
+  const float pad = startPad(desc, reach.domain);
+  r.sweeps = shadowSweeps(bounds, reach, pad);
+  r.beyond = reach.margin > 0 || !r.sweeps.empty();
+  r.around = r.beyond ? expanded(bounds, reach.margin + pad) : bounds;
+  r.region = r.around;
+  for (const SweptBox& s : r.sweeps) {
+    const Box3 b = s.bounds();
+    grow(r.region, b.lo, b.hi);
+  }
+  return r;
 }
 
 std::string volumeName(const VolumeDesc& v) {
@@ -119,7 +229,7 @@ bool hasIsosurface(const SceneDesc& desc, std::size_t volume) {
 // ranges and, with a ghost shell, the shell both sparse (float voxels) and dense, as loadBrick
 // may hold both while it chooses.
 std::uint64_t brickVolumeBytes(const SceneDesc& desc, std::size_t i, const BrickPlan& plan,
-                               float ghost) {
+                               const BrickReach& reach) {
   const VolumeSource& source = desc.volumes[i].source;
   // OpenVDB: while a box is sampled, the leaves of the grid that touch it are held too (as many
   // float voxels again, at most).
@@ -132,9 +242,8 @@ std::uint64_t brickVolumeBytes(const SceneDesc& desc, std::size_t i, const Brick
   std::uint64_t bytes = 0;
   VoxelBox core, shell;
   if (voxelsAround(source.grid, plan.bounds, core)) bytes = dense(core);
-  if (ghost > 0 && hasIsosurface(desc, i) &&
-      voxelsAround(source.grid, {plan.bounds.lo - Vec3{ghost}, plan.bounds.hi + Vec3{ghost}},
-                   shell))
+  if (reach.beyond && hasIsosurface(desc, i) &&
+      voxelsAround(source.grid, reach.region, shell, true))
     bytes =
         dfb::bytesPlus(bytes, dfb::bytesPlus(dense(shell), dfb::bytesTimes(shell.voxelCount(), 4)));
   return bytes;
@@ -206,14 +315,25 @@ float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode) {
   return desc.scivis.aoDistance > 0 ? desc.scivis.aoDistance : 0.25f * sceneExtent;
 }
 
+GhostReach ghostReach(const SceneDesc& desc, GhostMode mode) {
+  GhostReach reach;
+  if (mode == GhostMode::Layer) return reach;
+  reach.domain = sceneDomain(desc);
+  reach.margin = ghostMargin(desc, maxComponent(reach.domain.hi - reach.domain.lo), mode);
+  if (desc.scivis.shadows)
+    for (const ResolvedLight& light : resolveLights(desc))
+      if (light.kind != LightDesc::Kind::Ambient) reach.lights.push_back(light);
+  return reach;
+}
+
 namespace {
 
 // loadBrick's work; `part` says what it is loading, for an allocation that fails on the way.
-BrickContent loadBrickData(const SceneDesc& desc, const BrickPlan& plan, float ghost,
+BrickContent loadBrickData(const SceneDesc& desc, const BrickPlan& plan, const GhostReach& ghosts,
                            std::string& part) {
   BrickContent c;
   c.bounds = plan.bounds;
-  const Box3 reach = expanded(plan.bounds, ghost);
+  const BrickReach reach = brickReach(desc, plan.bounds, ghosts);
   for (std::size_t i = 0; i < desc.volumes.size(); ++i) {
     const VolumeDesc& v = desc.volumes[i];
     const GridGeometry& g = v.source.grid;
@@ -236,9 +356,14 @@ BrickContent loadBrickData(const SceneDesc& desc, const BrickPlan& plan, float g
       if (iso.volume == i) isovalues.push_back(iso.value);
     VoxelBox shell;
     c.shells.emplace_back();
-    if (ghost > 0 && !isovalues.empty() && voxelsAround(g, reach, shell) && !(shell == core)) {
-      ShadingShell sparse =
-          ShadingShell::load(v.source, shell, haveCore ? core : VoxelBox{}, isovalues);
+    if (reach.beyond && !isovalues.empty() && voxelsAround(g, reach.region, shell, true) &&
+        !(shell == core)) {
+      // A macrocell is reached when a shading ray's sample can fall in it: when its bounds (a
+      // hundredth of a voxel wider, for rounding) meet where the rays go.
+      const Vec3 slack = g.spacing * 0.01f;
+      ShadingShell sparse = ShadingShell::load(
+          v.source, shell, haveCore ? core : VoxelBox{}, isovalues,
+          [&](const Box3& m) { return reach.reached(m.lo - slack, m.hi + slack); });
       const std::size_t dense = shell.voxelCount() * voxelBytes(v.source.type);
       if (sparse.bytes() + c.volumes.back().bytes() < dense)
         c.shells.back() = std::move(sparse);
@@ -254,7 +379,7 @@ BrickContent loadBrickData(const SceneDesc& desc, const BrickPlan& plan, float g
     });
     ParticlesDesc near = selectParticles(*p, [&](Vec3 centre, float r) {
       return !overlaps(plan.bounds, centre - Vec3{r}, centre + Vec3{r}) &&
-             overlaps(reach, centre - Vec3{r}, centre + Vec3{r});
+             reach.reached(centre - Vec3{r}, centre + Vec3{r});
     });
     if (!inside.centers.empty()) c.particles.push_back(std::move(inside));
     if (!near.centers.empty()) c.ghostParticles.push_back(std::move(near));
@@ -263,7 +388,7 @@ BrickContent loadBrickData(const SceneDesc& desc, const BrickPlan& plan, float g
     WorldMesh inside =
         selectTriangles(m, [&](Vec3 lo, Vec3 hi) { return overlaps(plan.bounds, lo, hi); });
     WorldMesh near = selectTriangles(m, [&](Vec3 lo, Vec3 hi) {
-      return !overlaps(plan.bounds, lo, hi) && overlaps(reach, lo, hi);
+      return !overlaps(plan.bounds, lo, hi) && reach.reached(lo, hi);
     });
     if (!inside.mesh.triangles.empty()) c.meshes.push_back(std::move(inside));
     if (!near.mesh.triangles.empty()) c.ghostMeshes.push_back(std::move(near));
@@ -273,17 +398,18 @@ BrickContent loadBrickData(const SceneDesc& desc, const BrickPlan& plan, float g
 
 }  // namespace
 
-BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost) {
+BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const GhostReach& reach) {
   std::string part;
   try {
-    return loadBrickData(desc, plan, ghost, part);
+    return loadBrickData(desc, plan, reach, part);
   } catch (const std::bad_alloc&) {
     throw Error(part + ": out of memory while loading brick " + std::to_string(plan.id) +
                 "; this rank may hold " + dfb::memoryLimitText());
   }
 }
 
-void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans, float ghost) {
+void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans,
+                      const GhostReach& ghosts) {
   // Per volume, what the plans hold of it; particles and triangles: those the bricks reach
   // (plus, for triangles, the world-space copy of every mesh loadBrick makes on the way).
   std::vector<std::uint64_t> volumes(desc.volumes.size(), 0);
@@ -292,16 +418,16 @@ void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans
   const std::vector<const ParticlesDesc*> sets = particleSets(desc, converted);
   const std::vector<WorldMesh> meshes = worldMeshes(desc);
   for (const BrickPlan& plan : plans) {
+    const BrickReach reach = brickReach(desc, plan.bounds, ghosts);
     for (std::size_t i = 0; i < desc.volumes.size(); ++i)
-      volumes[i] = dfb::bytesPlus(volumes[i], brickVolumeBytes(desc, i, plan, ghost));
-    const Box3 reach = expanded(plan.bounds, ghost);
+      volumes[i] = dfb::bytesPlus(volumes[i], brickVolumeBytes(desc, i, plan, reach));
     for (const ParticlesDesc* p : sets) {
       const std::uint64_t each = sizeof(Vec3) + (p->radii.size() > 1 ? 4 : 0) +
                                  (p->attribute.empty() ? 0 : 4) + kBvhBytesPerPrimitive;
       std::uint64_t reached = 0;
       for (std::size_t i = 0; i < p->centers.size(); ++i)
         reached +=
-            overlaps(reach, p->centers[i] - Vec3{p->radius(i)}, p->centers[i] + Vec3{p->radius(i)});
+            reach.reached(p->centers[i] - Vec3{p->radius(i)}, p->centers[i] + Vec3{p->radius(i)});
       others = dfb::bytesPlus(others, reached * each);
     }
     for (const WorldMesh& m : meshes) {
@@ -313,8 +439,7 @@ void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans
       for (const auto& t : m.mesh.triangles) {
         const Vec3 a = m.mesh.positions[t[0]], b = m.mesh.positions[t[1]],
                    c = m.mesh.positions[t[2]];
-        reached += overlaps(
-            reach,
+        reached += reach.reached(
             {std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})},
             {std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})});
       }
@@ -348,13 +473,11 @@ void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans
 
 namespace {
 
-// The plans rank `rank` holds, and their ghost margin.
+// The plans rank `rank` holds.
 std::vector<BrickPlan> ownPlans(const SceneDesc& desc, int bricks, int replication, int rank,
-                                int ranks, GhostMode ghosts, float& ghost) {
+                                int ranks) {
   const std::vector<BrickPlan> plans = splitScene(desc, bricks);
   if (replication < 1) throw Error("--replication must be at least 1");
-  const Box3 domain = sceneDomain(desc);
-  ghost = ghostMargin(desc, maxComponent(domain.hi - domain.lo), ghosts);
   std::vector<BrickPlan> mine;
   for (const BrickPlan& plan : plans) {
     const std::vector<int> h = brickHolders(plan.id, ranks, replication);
@@ -367,20 +490,17 @@ std::vector<BrickPlan> ownPlans(const SceneDesc& desc, int bricks, int replicati
 
 void checkOwnBricksMemory(const SceneDesc& desc, int bricks, int replication, int rank, int ranks,
                           GhostMode ghosts) {
-  float ghost = 0;
-  const std::vector<BrickPlan> mine =
-      ownPlans(desc, bricks, replication, rank, ranks, ghosts, ghost);
-  checkBrickMemory(desc, mine, ghost);
+  checkBrickMemory(desc, ownPlans(desc, bricks, replication, rank, ranks),
+                   ghostReach(desc, ghosts));
 }
 
 std::vector<HeldBrick> loadOwnBricks(const SceneDesc& desc, int bricks, int replication, int rank,
                                      int ranks, GhostMode ghosts) {
-  float ghost = 0;
-  const std::vector<BrickPlan> mine =
-      ownPlans(desc, bricks, replication, rank, ranks, ghosts, ghost);
-  checkBrickMemory(desc, mine, ghost);
+  const std::vector<BrickPlan> mine = ownPlans(desc, bricks, replication, rank, ranks);
+  const GhostReach reach = ghostReach(desc, ghosts);
+  checkBrickMemory(desc, mine, reach);
   std::vector<HeldBrick> out;
-  for (const BrickPlan& plan : mine) out.push_back({plan.id, loadBrick(desc, plan, ghost)});
+  for (const BrickPlan& plan : mine) out.push_back({plan.id, loadBrick(desc, plan, reach)});
   return out;
 }
 

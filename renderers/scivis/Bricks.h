@@ -36,40 +36,54 @@ std::vector<int> brickHolders(int brick, int ranks, int replication);
 
 // How much ghost data a brick loads around its bounds (--ghost).
 enum class GhostMode {
-  // Everything its shading rays can reach (the ambient-occlusion distance): a brick shades its
-  // points exactly as the whole scene does, at the price of a shell as deep as that distance.
+  // Everything its shading rays can reach: within the ambient-occlusion distance, and the
+  // brick swept towards each light that casts shadows, to the domain's boundary. A brick shades
+  // its points exactly as the whole scene does, at the price of those regions (held sparsely).
   Reach,
   // One ghost layer: only the voxels that interpolation, gradients and the crossing test need
   // at the brick's faces, no ghost particles or triangles. Shading rays see the brick's own data
-  // and that layer (as OSPRay's distributed renderer), so AO near brick faces differs (seams).
+  // and that layer (as OSPRay's distributed renderer), so AO and shadows near brick faces
+  // differ (seams), and no shadow falls from one brick into another.
   Layer,
 };
 // "reach" / "layer"; ghostModeFromName throws renderers::Error naming the choices otherwise.
 const char* ghostModeName(GhostMode mode);
 GhostMode ghostModeFromName(const std::string& name);
 
-// How far a brick's ghost data reaches beyond its bounds (world units; the voxel layer comes on
-// top): with GhostMode::Reach the ambient-occlusion distance when AO is on, else 0. (Shadow rays
-// beyond that see only what the brick holds; docs/design.md.)
+// How far a brick's ambient-occlusion rays reach beyond its bounds (world units; the voxel
+// layer comes on top): with GhostMode::Reach the ambient-occlusion distance when AO is on,
+// else 0.
 float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode = GhostMode::Reach);
 
+// Where a brick's shading rays go beyond its bounds: AO rays up to `margin`, shadow rays from
+// the brick towards each of `lights` until they leave `domain`. Load-time only: live settings
+// change neither lights nor isovalues.
+struct GhostReach {
+  float margin = 0;
+  std::vector<ResolvedLight> lights;  // directional and point lights, when shadows are on
+  Box3 domain{Vec3{Box3::kInf}, Vec3{-Box3::kInf}};  // sceneDomain(): nothing beyond it
+};
+// The reach of every brick of `desc` with `mode` (GhostMode::Layer: nothing).
+GhostReach ghostReach(const SceneDesc& desc, GhostMode mode = GhostMode::Reach);
+
 // The data of `plan`: per volume the voxels around its bounds and two beyond them (dense), and
-// as far as `ghost` world units beyond, for shading rays, a ShadingShell (sparse: only
-// macrocells holding an isovalue) or the dense box when that is smaller; particles and mesh
-// triangles reaching into the bounds (drawn, clipped to them) and, as ghost data, those within
-// `ghost` of them.
+// as far as `reach` goes, for shading rays, a ShadingShell (sparse: only macrocells holding an
+// isovalue that those rays reach) or the dense bounding box when that is smaller; particles
+// and mesh triangles reaching into the bounds (drawn, clipped to them) and, as ghost data,
+// those that shading rays reach.
 // An allocation that fails is reported as renderers::Error naming the volume (or the particles
 // and triangles) it was loading.
-BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, float ghost);
+BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const GhostReach& reach);
 
-// The memory budget of loading `plans` with `ghost` (dfb/MemoryBudget.h): what loadBrick holds
+// The memory budget of loading `plans` with `reach` (dfb/MemoryBudget.h): what loadBrick holds
 // for them at most — dense voxel boxes with their ghost layers and macrocells, ghost shells
 // counted both sparse and dense, the particles and triangles they reach — with the scene
 // description itself. Throws renderers::Error before anything is loaded when that is more than
 // this rank may hold, naming the volume that asks most (its file, line and field, e.g.
 // "scene.toml:7: volume 'ct'.dims: ...") or the particles and triangles, and the bytes.
 // loadOwnBricks and wholeScene check this themselves.
-void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans, float ghost);
+void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans,
+                      const GhostReach& reach);
 // The same for the bricks loadOwnBricks(desc, bricks, replication, rank, ranks, ghosts) loads,
 // for a program that wants to know at setup, before the frames start.
 void checkOwnBricksMemory(const SceneDesc& desc, int bricks, int replication, int rank, int ranks,

@@ -46,8 +46,8 @@ std::vector<WorldMesh> worldMeshes(const SceneDesc& desc) {
 BrickContent wholeScene(const SceneDesc& desc) {
   // One brick without bounds: every voxel, particle and triangle, nothing as ghost.
   const BrickPlan whole{0, Box3{}};
-  checkBrickMemory(desc, {whole}, 0.0f);
-  return loadBrick(desc, whole, 0.0f);
+  checkBrickMemory(desc, {whole}, GhostReach{});
+  return loadBrick(desc, whole, GhostReach{});
 }
 
 struct SciVisScene::Embree {
@@ -266,18 +266,23 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   extent_ = std::max(1e-3f, maxComponent(domain.hi - domain.lo));
   aoDistance_ = settings.aoDistance > 0 ? settings.aoDistance : 0.25f * extent_;
 
-  // Lights: as given, or an ambient light and a headlight along the scene camera's view.
+  lights_ = resolveLights(desc);
+}
+
+std::vector<ResolvedLight> resolveLights(const SceneDesc& desc) {
+  std::vector<ResolvedLight> lights;
   if (desc.lights.empty()) {
-    lights_.push_back({LightDesc::Kind::Ambient, {}, {}, Vec3{0.25f}});
+    lights.push_back({LightDesc::Kind::Ambient, {}, {}, Vec3{0.25f}});
     const Vec3 view = desc.camera.lookAt - desc.camera.position;
-    lights_.push_back({LightDesc::Kind::Directional,
-                       length(view) > 0 ? -normalize(view) : Vec3{0, 0, 1},
-                       {},
-                       Vec3{0.85f}});
+    lights.push_back({LightDesc::Kind::Directional,
+                      length(view) > 0 ? -normalize(view) : Vec3{0, 0, 1},
+                      {},
+                      Vec3{0.85f}});
   } else {
     for (const LightDesc& l : desc.lights)
-      lights_.push_back({l.kind, -l.direction, l.position, l.color * l.intensity});
+      lights.push_back({l.kind, -l.direction, l.position, l.color * l.intensity});
   }
+  return lights;
 }
 
 SciVisScene::~SciVisScene() = default;

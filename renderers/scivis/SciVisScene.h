@@ -60,6 +60,11 @@ struct ResolvedLight {
   Vec3 radiance;  // color * intensity
 };
 
+// The scene's lights as the renderer uses them: as given, or (none given) an ambient light and
+// a directional one from the scene camera's position (the description's camera, fixed: it does
+// not follow the camera of a frame).
+std::vector<ResolvedLight> resolveLights(const SceneDesc& desc);
+
 class SciVisScene {
  public:
   SciVisScene(std::shared_ptr<const SceneDesc> desc, BrickContent content);

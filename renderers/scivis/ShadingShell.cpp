@@ -6,7 +6,8 @@
 namespace renderers {
 
 ShadingShell ShadingShell::load(const VolumeSource& source, const VoxelBox& box,
-                                const VoxelBox& core, const std::vector<float>& isovalues) {
+                                const VoxelBox& core, const std::vector<float>& isovalues,
+                                const std::function<bool(const Box3&)>& reached) {
   ShadingShell s(source.grid, box);
   s.core_ = core;
   s.block_.assign(s.macroMin_.size(), -1);
@@ -48,10 +49,11 @@ ShadingShell ShadingShell::load(const VolumeSource& source, const VoxelBox& box,
         s.macroMin_[m] = lo, s.macroMax_[m] = hi;
         const bool holdsIsovalue = std::any_of(isovalues.begin(), isovalues.end(),
                                                [&](float iso) { return iso >= lo && iso <= hi; });
-        if (!holdsIsovalue) continue;
+        if (!holdsIsovalue || !reached(s.macroBounds(static_cast<int>(m)))) continue;
         // The voxels of the macrocell's cells the core does not hold (all 8 voxels of a cell
-        // inside the core: the core's field interpolates the same values in the same cell);
-        // their bounding box (voxels first..last).
+        // inside the core: the core's field interpolates the same values in the same cell) and
+        // shading rays reach; their bounding box (voxels first..last).
+        const GridGeometry& g = source.grid;
         Index3 first{x1, y1, z1}, last{x0, y0, z0};
         for (int z = z0; z < z1; ++z)
           for (int y = y0; y < y1; ++y)
@@ -60,6 +62,9 @@ ShadingShell ShadingShell::load(const VolumeSource& source, const VoxelBox& box,
                                   z >= core.lo.z && x + 1 < core.hi.x && y + 1 < core.hi.y &&
                                   z + 1 < core.hi.z;
               if (inCore) continue;
+              const auto i = [](int v) { return static_cast<float>(v); };
+              if (!reached({g.worldOf(i(x), i(y), i(z)), g.worldOf(i(x + 1), i(y + 1), i(z + 1))}))
+                continue;
               first = {std::min(first.x, x), std::min(first.y, y), std::min(first.z, z)};
               last = {std::max(last.x, x + 1), std::max(last.y, y + 1), std::max(last.z, z + 1)};
             }

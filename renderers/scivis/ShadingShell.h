@@ -12,6 +12,7 @@
 //
 // Plain data (copyable); every const method is thread-safe. Voxels are kept as float32.
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "renderers/scivis/VolumeField.h"
@@ -25,10 +26,14 @@ class ShadingShell : public FieldGeometry {
 
   // `box` of `source` (at least 2 voxels per axis), read one layer of macrocells at a time, so
   // no more than that layer of the box is ever held densely; per macrocell whose value range
-  // holds one of `isovalues`, the voxels of its cells that do not lie inside `core` (the
-  // brick's dense voxels, a sub-box of `box`; may be empty).
+  // holds one of `isovalues` and that shading rays reach (`reached(world bounds)` of it: the
+  // box may be a region's bounding box, its shading rays reaching only part of it), the voxels
+  // of the bounding box of its cells that shading rays reach and that do not lie inside `core`
+  // (the brick's dense voxels, a sub-box of `box`; may be empty). A shading ray must not
+  // sample a cell that is not reached.
   static ShadingShell load(const VolumeSource& source, const VoxelBox& box, const VoxelBox& core,
-                           const std::vector<float>& isovalues);
+                           const std::vector<float>& isovalues,
+                           const std::function<bool(const Box3&)>& reached);
 
   bool empty() const { return macroMin_.empty(); }
   std::size_t blockCount() const { return blocks_.size(); }
@@ -46,8 +51,8 @@ class ShadingShell : public FieldGeometry {
 
   // The trilinear value at world point p, as VolumeField::sample over the dense box gives it
   // (cells inside the core from `core`, the dense field of the `core` box given to load); false
-  // outside dataBounds(), in macrocells without voxels (no isovalue in their range) and where
-  // the value is missing (NaN).
+  // outside dataBounds(), in macrocells without voxels (no isovalue in their range, or not
+  // reached), in cells not reached and where the value is missing (NaN).
   bool sample(Vec3 p, float& value, const VolumeField* core) const {
     Cell c;
     if (!locate(p, c)) return false;
@@ -57,6 +62,9 @@ class ShadingShell : public FieldGeometry {
     const std::int32_t b = block_[static_cast<std::size_t>(macroIndexOf(c))];
     if (b < 0) return false;
     const Block& k = blocks_[static_cast<std::size_t>(b)];
+    if (c.ix < k.lo.x || c.iy < k.lo.y || c.iz < k.lo.z || c.ix + 1 >= k.lo.x + k.size.x ||
+        c.iy + 1 >= k.lo.y + k.size.y || c.iz + 1 >= k.lo.z + k.size.z)
+      return false;  // a cell shading rays do not reach
     const std::size_t sy = k.size.x, sz = sy * static_cast<std::size_t>(k.size.y);
     const float* v = voxels_.data() + k.offset + static_cast<std::size_t>(c.ix - k.lo.x) +
                      static_cast<std::size_t>(c.iy - k.lo.y) * sy +

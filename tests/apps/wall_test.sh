@@ -10,6 +10,7 @@
 #   wall_test.sh ranks-equal   RANKS [dfbwall options...]   (--image on RANKS ranks == on 1)
 #   wall_test.sh preview       LAYOUT RENDER_RANKS MODE [options for both runs...]
 #   wall_test.sh scene-bytes   RANKS BRICKS MAX_PERCENT [dfbwall options...]
+#   wall_test.sh bricks-whole  BRICKS [dfbwall options...]  (bricked == on 1, 3, 4 ranks, ~ whole)
 # Needs DFBWALL (the executable), COMPARE (compare_captures) and MPIEXEC in the environment.
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
@@ -191,6 +192,43 @@ print('scene_bytes per rank: ' + ', '.join(f'{b:.0f} ({s:.1f}%)' for b, s in zip
       f' of {whole:.0f} bytes (the whole scene)')
 assert whole > 0 and min(split) > 0, 'a rank holds nothing'
 assert max(shares) <= percent, f'a rank holds {max(shares):.1f}% of the scene, more than {percent}%'
+PY
+    ;;
+  bricks-whole)
+    # Data-parallel with every shading ray (AO and shadows across bricks, --ghost reach):
+    # --bricks BRICKS writes the same bytes on 1, 3 and 4 ranks and with --replication 2, and
+    # equals --bricks 1 within 1e-4 per channel (linear .pfm); --ghost layer, whose shading rays
+    # see only the brick, does not (so the scene does cast shadows and AO across bricks).
+    bricks=$1; shift
+    mpi 1 "$DFBWALL" --bricks "$bricks" --image "$work/one.pfm" --quiet "$@"
+    for run in "3" "4" "4 --replication 2"; do
+      read -r n more <<<"$run"
+      # shellcheck disable=SC2086
+      mpi "$n" "$DFBWALL" --bricks "$bricks" $more --image "$work/many.pfm" --quiet "$@"
+      cmp "$work/one.pfm" "$work/many.pfm" || { echo "FAIL: --bricks $bricks on $run ranks differs from 1 rank"; exit 1; }
+    done
+    mpi 1 "$DFBWALL" --bricks 1 --image "$work/whole.pfm" --quiet "$@"
+    mpi 1 "$DFBWALL" --bricks "$bricks" --ghost layer --image "$work/layer.pfm" --quiet "$@"
+    /usr/bin/python3 - "$work/whole.pfm" "$work/one.pfm" "$work/layer.pfm" "$bricks" <<'PY'
+import array, sys
+def pfm(path):
+    with open(path, 'rb') as f:
+        f.readline(), f.readline()
+        scale = float(f.readline())
+        data = array.array('f', f.read())
+    if (scale < 0) != (sys.byteorder == 'little'):
+        data.byteswap()
+    return data
+whole = pfm(sys.argv[1])
+def worst(path):
+    image = pfm(path)
+    assert len(image) == len(whole) > 0, f'{path}: {len(image)} floats, whole {len(whole)}'
+    return max(abs(a - b) for a, b in zip(image, whole))
+reach, layer = worst(sys.argv[2]), worst(sys.argv[3])
+print(f'--bricks {sys.argv[4]} on 1, 3, 4 ranks and replication 2: the same bytes; largest '
+      f'difference per channel from --bricks 1: {reach:.3g} (--ghost layer: {layer:.3g})')
+assert reach <= 1e-4, f'--bricks {sys.argv[4]} differs from --bricks 1 by {reach:.3g} > 1e-4'
+assert layer > 1e-3, f'--ghost layer differs by only {layer:.3g}: nothing crosses bricks'
 PY
     ;;
   *) echo "unknown scenario $scenario"; exit 2 ;;

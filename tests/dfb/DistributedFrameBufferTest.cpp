@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <string>
 #include <thread>
@@ -420,6 +421,142 @@ TEST(Dfb, SetTileRejectsARegionThatIsNoTile) {
   });
   dfb.end();
 }
+
+TEST(Dfb, SetTileOutsideAFrameIsRefused) {
+  messaging::Messenger messenger(MPI_COMM_WORLD);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::NONE));
+  const Tile tile = renderTile(dfb.grid().region(0), 1, 0);
+  auto refusal = [&] {
+    try {
+      dfb.setTile(tile);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(refusal().find("setTile outside a frame"), std::string::npos);
+  renderFrame(dfb, 1);
+  EXPECT_NE(refusal().find("setTile outside a frame"), std::string::npos);
+}
+
+// A message that is no tile, arriving between frames, is not lost at the next begin(): that
+// begin() throws it, naming the sender.
+TEST(Dfb, AMalformedMessageBetweenFramesFailsTheNextBegin) {
+  messaging::Messenger messenger(MPI_COMM_WORLD);
+  DfbOptions o = options(DisplayFormat::NONE);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
+  renderFrame(dfb, 1);
+  const int sender = worldSize() - 1;
+  if (worldRank() == sender) messenger.send(0, o.objectId, messaging::Bytes(10));
+  messenger.quiesce();
+  if (worldRank() != 0) return;  // the others would wait for rank 0's tiles in frame 2
+  try {
+    dfb.begin({2, 0});
+    ADD_FAILURE() << "begin() must throw the error that came between frames";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("a tile message from rank " + std::to_string(sender)), std::string::npos)
+        << message;
+    EXPECT_NE(message.find("shorter than its header"), std::string::npos) << message;
+  }
+}
+
+// One malformed input for tile 0 (owned by rank 0), from the last rank, in frame 1: rank 0's
+// end() throws the door's error naming the tile, the frame, the sender and what is wrong; the
+// other ranks fail at their deadline (rank 0 ends the job in a real run).
+struct BadInput {
+  const char* name;
+  TileOperationFactory operation;
+  DisplayFormat format;
+  std::function<Tile(const Region& tile, std::uint32_t pass)> make;
+  std::uint32_t epoch;  // the message's; the frame is epoch 0
+  bool viaSetTile;      // set on the last rank rather than sent as a raw message
+  const char* expected;
+};
+
+Tile withoutColor(const Region& region, std::uint32_t pass) {
+  Tile t = renderTile(region, 1, pass);
+  t.color.clear();  // a kNoColor | kHasRgba8 message
+  t.rgba8.assign(static_cast<size_t>(region.pixelCount()), 0xff0000ffu);
+  return t;
+}
+
+const BadInput kBadInputs[] = {
+    {"accumulate_without_color", accumulateOperation(), DisplayFormat::NONE, withoutColor, 0, false,
+     "color has 0 floats"},
+    {"alpha_blend_without_color", alphaBlendOperation(), DisplayFormat::NONE, withoutColor, 0,
+     false, "color has 0 floats"},
+    {"composite_accumulate_without_color", compositeAccumulateOperation(), DisplayFormat::NONE,
+     withoutColor, 0, false, "color has 0 floats"},
+    // The float gather reads color: display pixels do not stand in for it there.
+    {"float_gather_of_display_pixels", writeOperation(), DisplayFormat::RGBAF32, withoutColor, 0,
+     true, "color has 0 floats"},
+    {"another_epoch", accumulateOperation(), DisplayFormat::NONE,
+     [](const Region& r, std::uint32_t pass) { return renderTile(r, 1, pass); }, 9, false,
+     "epoch 9, but frame 1 is epoch 0"},
+    {"another_pass", accumulateOperation(), DisplayFormat::NONE,
+     [](const Region& r, std::uint32_t pass) { return renderTile(r, 1, pass + 4); }, 0, false,
+     "accumulation pass 4"},
+    {"a_huge_tree", alphaBlendOperation(), DisplayFormat::NONE,
+     [](const Region& r, std::uint32_t pass) {
+       Tile t = renderTile(r, 1, pass);
+       t.children = 1 << 30;
+       return t;
+     },
+     0, false, "children count 1073741824"},
+    {"a_tree_where_none_is_taken", writeOperation(), DisplayFormat::NONE,
+     [](const Region& r, std::uint32_t pass) {
+       Tile t = renderTile(r, 1, pass);
+       t.generation = 2;
+       return t;
+     },
+     0, false, "takes no dependency tree"},
+    {"the_region_of_another_tile", accumulateOperation(), DisplayFormat::NONE,
+     [](const Region& r, std::uint32_t pass) {
+       return renderTile(Region{r.x0 + kTileSize, r.y0, r.x1 + kTileSize, r.y1}, 1, pass);
+     },
+     0, false, "is not the tile's"},
+};
+
+class DfbDoor : public ::testing::TestWithParam<BadInput> {};
+
+TEST_P(DfbDoor, RefusesAMalformedInputByName) {
+  const BadInput& bad = GetParam();
+  messaging::Messenger messenger(MPI_COMM_WORLD);
+  DfbOptions o = options(bad.format, bad.operation);
+  o.frameTimeout = std::chrono::milliseconds(400);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
+  ASSERT_EQ(dfb.ownerOf(0), 0);
+  const int sender = worldSize() - 1;
+  dfb.begin({1, 0});
+  const std::uint32_t pass = dfb.accumulationId();
+  if (worldRank() == sender) {
+    Tile tile = bad.make(dfb.grid().region(0), pass);
+    if (bad.viaSetTile)
+      dfb.setTile(std::move(tile));
+    else
+      messenger.send(0, o.objectId, packTile(tile, 0, 1, bad.epoch));
+  }
+  for (int t = 1; t < dfb.grid().tileCount(); ++t)
+    if (renders(t)) dfb.setTile(renderTile(dfb.grid().region(t), 1, pass));
+  std::string message;
+  try {
+    dfb.end();
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  ASSERT_FALSE(message.empty()) << "end() must fail";
+  if (worldRank() != 0) return;
+  EXPECT_NE(message.find("tile 0 of frame 1, input "), std::string::npos) << message;
+  EXPECT_NE(message.find(bad.viaSetTile && sender == 0 ? "set on this rank"
+                                                       : "from rank " + std::to_string(sender)),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find(bad.expected), std::string::npos) << message;
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryKind, DfbDoor, ::testing::ValuesIn(kBadInputs),
+                         [](const auto& p) { return std::string(p.param.name); });
 
 long residentKiB() {
   std::ifstream status("/proc/self/status");

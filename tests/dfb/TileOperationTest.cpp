@@ -108,12 +108,6 @@ TEST(AccumulateOperation, DeferredSumsGiveTheBitsOfTheRunningSums) {
   }
 }
 
-TEST(AccumulateOperation, RejectsAnInputForAnotherPass) {
-  auto op = accumulateOperation()(kRegion);
-  op->newFrame({0, 0}, 0, 1);
-  EXPECT_THROW(op->process(constantTile(1.0f, 3)), Error);
-}
-
 TEST(AccumulateOperation, RedundantInputsGiveTheSameBytesInAnyOrder) {
   std::mt19937 random(5);
   std::uniform_real_distribution<float> value(0.0f, 10.0f);

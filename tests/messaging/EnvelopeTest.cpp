@@ -68,5 +68,24 @@ TEST(Envelope, RejectsTruncatedUnknownFlagsWrongSizesAndHugeAnnouncements) {
   }
 }
 
+TEST(Envelope, OneSizeCapForBothSides) {
+  const std::size_t gib = std::size_t{1} << 30;
+  // 2.5 GiB would wrap MPI's int count: above any limit a messenger can have.
+  try {
+    checkPayloadSize(5 * gib / 2, 4 * gib, "message to object id 3");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("message to object id 3 of 2684354560 bytes"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(checkPayloadSize(kLargestPayload, 4 * gib, "m"));
+  EXPECT_THROW(checkPayloadSize(kLargestPayload + 1, 4 * gib, "m"), Error);
+  EXPECT_THROW(checkPayloadSize(1025, 1024, "m"), Error);
+  // The receiver applies the same cap to what a message announces.
+  Bytes payload;
+  EXPECT_THROW(openEnvelope(withTrailer(text("abcd"), 1, 1025, 0), 1024, payload), Error);
+}
+
 }  // namespace
 }  // namespace messaging

@@ -187,7 +187,8 @@ TEST(SciVis, ShadingShellSamplesAsTheDenseBox) {
   const std::vector<float> isovalues = {160.0f, 215.0f};
   const Volume denseVoxels = loadVolume(source, box), coreVoxels = loadVolume(source, coreBox);
   const VolumeField dense(denseVoxels), core(coreVoxels);
-  const ShadingShell shell = ShadingShell::load(source, box, coreBox, isovalues);
+  const ShadingShell shell =
+      ShadingShell::load(source, box, coreBox, isovalues, [](const Box3&) { return true; });
   ASSERT_EQ(shell.macroCount(), dense.macroCount());
   EXPECT_LT(shell.voxelCount(), box.voxelCount());
   EXPECT_GT(shell.blockCount(), 0u);
@@ -217,6 +218,36 @@ TEST(SciVis, ShadingShellSamplesAsTheDenseBox) {
   }
   EXPECT_GT(fromBlocks, 0u);
   EXPECT_GT(sampled, fromBlocks);
+
+  // Shading rays that reach only part of the box (a light's sweep through a bounding box): the
+  // macrocells and cells they do not reach keep their ranges but no voxels, the others sample
+  // as above.
+  const float plane = 0.5f * (dense.dataBounds().lo.x + dense.dataBounds().hi.x);
+  const auto reached = [&](const Box3& b) { return b.lo.x < plane; };
+  const ShadingShell part = ShadingShell::load(source, box, coreBox, isovalues, reached);
+  EXPECT_LT(part.blockCount(), shell.blockCount());
+  EXPECT_GT(part.blockCount(), 0u);
+  int unreached = 0;
+  for (int m = 0; m < dense.macroCount(); ++m) {
+    ASSERT_EQ(part.macroMin(m), dense.macroMin(m)) << "macrocell " << m;
+    ASSERT_EQ(part.macroMax(m), dense.macroMax(m)) << "macrocell " << m;
+    const Box3 b = dense.macroBounds(m);
+    const Vec3 centre = (b.lo + b.hi) * 0.5f;
+    float want = 0, got = 0;
+    const bool inCore = core.sample(centre, want);
+    if (!shell.sample(centre, want, &core)) continue;  // no isovalue here
+    const GridGeometry& g = source.grid;
+    const float cellLo =
+        g.origin.x + g.spacing.x * std::floor((centre.x - g.origin.x) / g.spacing.x);
+    if (cellLo < plane || inCore) {
+      ASSERT_TRUE(part.sample(centre, got, &core)) << "macrocell " << m;
+      ASSERT_EQ(std::memcmp(&want, &got, sizeof want), 0) << "macrocell " << m;
+    } else {
+      EXPECT_FALSE(part.sample(centre, got, &core)) << "macrocell " << m;
+      ++unreached;
+    }
+  }
+  EXPECT_GT(unreached, 0);
 }
 
 TEST(SciVis, MarschnerLobbIsosurfaceHitsLieOnTheLevelSet) {
