@@ -25,8 +25,12 @@ fig_scivis() {
           "$threads" "$frames" "$work/scivis-vtk-$res-$size.png")
         a=$(grep -o '"median_frame_s": [0-9.e+-]*' <<<"$ours" | awk '{print $2}')
         b=$(grep -o '"median_frame_s": [0-9.e+-]*' <<<"$vtk" | awk '{print $2}')
+        ca=$(grep -o '"median_cpu_frame_s": [0-9.e+-]*' <<<"$ours" | awk '{print $2}')
+        cb=$(grep -o '"median_cpu_frame_s": [0-9.e+-]*' <<<"$vtk" | awk '{print $2}')
+        ns=$(grep -o '"ns_per_volume_sample": [0-9.e+-]*' <<<"$ours" | awk '{print $2}')
         echo "  ${res}^3 ${size}^2 ${threads} thread(s): dfbwall $a s, VTK $b s per frame," \
-          "VTK/dfbwall $(awk -v a="$a" -v b="$b" 'BEGIN {printf "%.2f", b / a}')x"
+          "VTK/dfbwall $(awk -v a="$a" -v b="$b" 'BEGIN {printf "%.2f", b / a}')x" \
+          "(CPU time $(awk -v a="$ca" -v b="$cb" 'BEGIN {printf "%.2f", b / a}')x), $ns ns per volume sample"
         echo "${res}^3/${size}^2/${threads}t $a $b" >>"$dat"
         rows="$rows${rows:+,}
   {\"dfbwall\": $ours, \"vtk\": $vtk, \"speedup\": $(awk -v a="$a" -v b="$b" 'BEGIN {printf "%.3f", b / a}')}"

@@ -11,15 +11,23 @@
 // BVHs); ns_per_camera_ray is per thread (frame time x threads / rays).
 // The camera is VTK's ResetCamera() view of the volume (view angle 30°, looking down -z),
 // turned about the volume's centre by 360/FRAMES degrees a frame; the result is the median.
+// Cost per volume sample: "ns_per_volume_sample" is wall time x threads / samples (per core);
+// "cpu_ns_per_volume_sample" is the process's CPU time / samples, which other processes on a
+// shared machine disturb less ("median_cpu_frame_s" likewise beside "median_frame_s"; VTK's
+// script reports the same two). The environment variable SCIVIS_MARCH=sse|avx2 picks the volume
+// march's kernel (default: the fastest the CPU runs), to compare them in one build.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
+#include <fstream>
 #include <string>
 #include <vector>
 
 #include "renderers/BuiltinScenes.h"
+#include "renderers/Error.h"
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/SciVisRenderer.h"
 #include "tests/renderers/RenderTestUtil.h"
@@ -64,6 +72,28 @@ SceneDesc benchScene(const std::string& mode, int resolution) {
   return d;
 }
 
+double processCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+double loadAverage() {
+  std::ifstream in("/proc/loadavg");
+  double load = -1;
+  in >> load;
+  return load;
+}
+
+MarchKernel marchFromEnvironment() {
+  const char* name = std::getenv("SCIVIS_MARCH");
+  const std::string n = name ? name : "auto";
+  if (n == "sse") return MarchKernel::Sse;
+  if (n == "avx2") return MarchKernel::Avx2;
+  if (n == "auto") return MarchKernel::Auto;
+  throw Error("SCIVIS_MARCH: '" + n + "' is none of sse, avx2, auto");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -85,25 +115,33 @@ int main(int argc, char** argv) {
     settings.seed = 1;
     // One turn over the frames, as dfbwall's --orbit 360/FRAMES.
     const float orbitDegreesPerFrame = 360.0f / static_cast<float>(frames);
-    auto renderer = makeRenderer("scivis", scene, settings);
-    const auto* scivis = dynamic_cast<const SciVisRenderer*>(renderer.get());
-    std::vector<double> seconds;
+    const MarchKernel march = resolveMarchKernel(marchFromEnvironment());
+    auto renderer =
+        std::make_unique<SciVisRenderer>(*scene.scivis, settings, SciVisOptions{true, march});
+    const SciVisRenderer* scivis = renderer.get();
+    std::vector<double> seconds, cpuSeconds;
     std::vector<float> image;
     const std::uint64_t samplesBefore = scivis->volumeSamples();
+    const double cpuBefore = processCpuSeconds();
     for (int f = 1; f <= frames; ++f) {
       renderer->beginFrame(
           {static_cast<std::uint32_t>(f), static_cast<std::uint32_t>(f)},
           orbitCamera(scene.desc->camera, orbitDegreesPerFrame * static_cast<float>(f - 1)));
       const auto a = Clock::now();
+      const double cpuStart = processCpuSeconds();
       image = test::renderImage(*renderer, size, size, 64, threads, 1);
       seconds.push_back(std::chrono::duration<double>(Clock::now() - a).count());
+      cpuSeconds.push_back(processCpuSeconds() - cpuStart);
     }
     const double samples = static_cast<double>(scivis->volumeSamples() - samplesBefore);
+    const double cpu = processCpuSeconds() - cpuBefore;
     double total = 0;
     for (double s : seconds) total += s;
     std::vector<double> sorted = seconds;
     std::sort(sorted.begin(), sorted.end());
     const double median = sorted[sorted.size() / 2];
+    std::sort(cpuSeconds.begin(), cpuSeconds.end());
+    const double medianCpu = cpuSeconds[cpuSeconds.size() / 2];
     if (argc > 6) {
       // Frame 1's view (the last frame rendered is frame `frames`, one step short of a turn).
       renderer->beginFrame({1, 1}, scene.desc->camera);
@@ -134,12 +172,16 @@ int main(int argc, char** argv) {
     std::printf(
         "{\"mode\": \"%s\", \"resolution\": %d, \"size\": %d, \"threads\": %d, \"frames\": %d, "
         "\"load_s\": %.3f, \"isosurface_s\": %.3f, \"isosurface_triangles\": %zu, "
-        "\"median_frame_s\": %.4f, \"min_frame_s\": %.4f, \"camera_rays_per_s\": %.4g, "
-        "\"ns_per_camera_ray\": %.1f, "
-        "\"volume_samples_per_s\": %.4g, \"volume_samples_per_ray\": %.1f}\n",
+        "\"median_frame_s\": %.4f, \"median_cpu_frame_s\": %.4f, \"min_frame_s\": %.4f, "
+        "\"camera_rays_per_s\": %.4g, \"ns_per_camera_ray\": %.1f, "
+        "\"volume_samples_per_s\": %.4g, \"volume_samples_per_ray\": %.1f, "
+        "\"ns_per_volume_sample\": %.2f, \"cpu_ns_per_volume_sample\": %.2f, \"march\": \"%s\", "
+        "\"load\": %.2f}\n",
         mode.c_str(), resolution, size, threads, frames, loadS, iso.seconds,
-        iso.cameraTriangles + iso.shadingTriangles, median, sorted.front(), rays / total,
-        1e9 * total * threads / rays, samples / total, samples / rays);
+        iso.cameraTriangles + iso.shadingTriangles, median, medianCpu, sorted.front(), rays / total,
+        1e9 * total * threads / rays, samples / total, samples / rays,
+        samples > 0 ? 1e9 * total * threads / samples : 0.0,
+        samples > 0 ? 1e9 * cpu / samples : 0.0, marchKernelName(march), loadAverage());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "scivis_bench: %s\n", e.what());

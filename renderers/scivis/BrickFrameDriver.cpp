@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "dfb/Timing.h"
 #include "renderers/Error.h"
@@ -291,37 +292,61 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     const SciVisRenderer* renderer =
         job.brick < 0 ? nullptr : m.renderers[static_cast<std::size_t>(job.brick)].get();
     const Box3 bounds = plan ? plan->bounds : Box3{};
-    for (int y = region.y0; y < region.y1; ++y)
-      for (int x = region.x0; x < region.x1; ++x) {
-        float sum[4] = {0, 0, 0, 0};
-        for (std::uint32_t s = 0; s < spp; ++s) {
-          // The camera ray of SciVisRenderer::render, sample for sample.
-          const Sampler sampler(m.settings.seed, x, y, accumulationId, s);
-          Vec3 origin, dir;
-          camera.ray(static_cast<float>(x) + sampler.get(0), static_cast<float>(y) + sampler.get(1),
-                     0.5f, 0.5f, origin, dir);
-          if (!renderer) {
-            const Vec3 bg = background.radiance(dir);
-            sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
-            continue;
+    // The brick's pieces of the tile's rays, rows at a time, integrated together
+    // (SciVisRenderer batches the rays of its SIMD march); a ray that misses the brick adds
+    // nothing.
+    thread_local std::vector<SciVisRenderer::RayPiece> rays;
+    thread_local std::vector<Fragment> fragments;
+    thread_local std::vector<std::uint8_t> hits;
+    const int rows =
+        std::max(1, static_cast<int>(SciVisRenderer::kBatch /
+                                     std::max<std::size_t>(1, std::size_t{spp} * region.width())));
+    for (int y0 = region.y0; y0 < region.y1; y0 += rows) {
+      const int y1 = std::min(region.y1, y0 + rows);
+      rays.clear(), hits.clear();
+      for (int y = y0; y < y1; ++y)
+        for (int x = region.x0; x < region.x1; ++x)
+          for (std::uint32_t s = 0; s < spp; ++s) {
+            // The camera ray of SciVisRenderer::render, sample for sample.
+            const Sampler sampler(m.settings.seed, x, y, accumulationId, s);
+            Vec3 origin, dir;
+            camera.ray(static_cast<float>(x) + sampler.get(0),
+                       static_cast<float>(y) + sampler.get(1), 0.5f, 0.5f, origin, dir);
+            float a = 0, b = kInf;
+            const bool hit = renderer && clipToBox(bounds, origin, reciprocal(dir), a, b);
+            hits.push_back(hit ? 1 : 0);
+            if (!renderer || hit) rays.push_back({origin, dir, a, b, sampler});
           }
-          float a = 0, b = kInf;
-          if (!clipToBox(bounds, origin, reciprocal(dir), a, b)) continue;
-          const Fragment f = renderer->integrate(origin, dir, a, b, sampler);
-          for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
+      fragments.resize(rays.size());
+      if (renderer) renderer->integrate(rays.data(), rays.size(), fragments.data());
+      std::size_t sample = 0, ray = 0;
+      for (int y = y0; y < y1; ++y)
+        for (int x = region.x0; x < region.x1; ++x) {
+          float sum[4] = {0, 0, 0, 0};
+          for (std::uint32_t s = 0; s < spp; ++s, ++sample) {
+            if (!renderer) {
+              const Vec3 bg = background.radiance(rays[ray++].dir);
+              sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
+              continue;
+            }
+            if (!hits[sample]) continue;
+            const Fragment& f = fragments[ray++];
+            for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
+          }
+          const std::size_t p = static_cast<std::size_t>(y - region.y0) * region.width() +
+                                static_cast<std::size_t>(x - region.x0);
+          for (int c = 0; c < 4; ++c)
+            tile.color[4 * p + static_cast<std::size_t>(c)] = sum[c] * inv;
+          if (renderer) {
+            // Sorted by the first sample's ray: with one sample a frame (the usual progressive
+            // case) every sample's fragments then composite in exactly its own ray's order,
+            // also in pixels that see a brick border edge-on.
+            Vec3 origin, dir;
+            sampleRay(camera, m.settings.seed, x, y, accumulationId, 0, origin, dir);
+            tile.depth[p] = brickDepth(bounds, origin, dir);
+          }
         }
-        const std::size_t p = static_cast<std::size_t>(y - region.y0) * region.width() +
-                              static_cast<std::size_t>(x - region.x0);
-        for (int c = 0; c < 4; ++c) tile.color[4 * p + static_cast<std::size_t>(c)] = sum[c] * inv;
-        if (renderer) {
-          // Sorted by the first sample's ray: with one sample a frame (the usual progressive
-          // case) every sample's fragments then composite in exactly its own ray's order, also
-          // in pixels that see a brick border edge-on.
-          Vec3 origin, dir;
-          sampleRay(camera, m.settings.seed, x, y, accumulationId, 0, origin, dir);
-          tile.depth[p] = brickDepth(bounds, origin, dir);
-        }
-      }
+    }
     if (renderer) m.brickTiles.fetch_add(1, std::memory_order_relaxed);
     dfb.setTile(std::move(tile));
   });

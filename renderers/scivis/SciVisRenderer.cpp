@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <vector>
 
 #include "renderers/PixelBlocks.h"
-
-#include <emmintrin.h>
+#include "renderers/scivis/VolumeMarch.h"
 
 namespace renderers {
 namespace {
@@ -46,96 +46,6 @@ Vec3 cosineDirection(Vec3 n, float u0, float u1) {
 
 std::uint64_t bitsOf(float t) { return std::bit_cast<std::uint32_t>(t); }
 
-// The common case, apart from the generic loop for speed: one visible volume, between two
-// surfaces (isosurfaces are surfaces) or none. It composites exactly the samples
-// the generic loop composites, with the same arithmetic (same bits): t_k = (k + jitter) step
-// from the first k >= kStart with t_k >= t0, while t_k < t1, t_k <= volumeEnd and light gets
-// through. Samples are taken four at a time (SSE lanes, each computed as the scalar path does)
-// and composited one by one in order; those past the end or past opacity are dropped. Samples
-// in empty macrocells have zero opacity: skipping them changes no bit.
-template <class T>
-std::uint32_t marchOneVolume(const SciVisScene::VolumeLayer& v, Vec3 origin, Vec3 dir, Vec3 invDir,
-                             float t0, float t1, float kStart, float volumeEnd, float step,
-                             float jitter, float minTransmittance, Accumulator& acc) {
-  const VolumeField& field = *v.field;
-  const std::uint8_t* empty = v.emptyMacrocells.data();
-  float k = std::max(kStart, std::ceil(t0 / step - jitter));
-  while (k > kStart && (k - 1 + jitter) * step >= t0) k -= 1;  // rounding: the exact first
-  while ((k + jitter) * step < t0) k += 1;
-
-  const __m128 lanes = _mm_setr_ps(0, 1, 2, 3), jitters = _mm_set1_ps(jitter),
-               steps = _mm_set1_ps(step);
-  const __m128 tableScale = _mm_set1_ps(v.tableScale), valueMin = _mm_set1_ps(v.valueMin);
-  const __m128 zero = _mm_setzero_ps(),
-               lastEntry = _mm_set1_ps(static_cast<float>(SciVisScene::kTableSize - 1));
-  const __m128i lastLower = _mm_set1_epi32(SciVisScene::kTableSize - 2);
-  const float* table = v.table.data();
-  __m128 rgb = _mm_setr_ps(acc.rgb.x, acc.rgb.y, acc.rgb.z, 0);
-  float transmittance = acc.transmittance, depth = acc.depth;
-  std::uint32_t samples = 0;
-  for (bool done = false; !done && transmittance > minTransmittance; k += 4) {
-    alignas(16) float t[4];
-    const __m128 ts = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_set1_ps(k), lanes), jitters), steps);
-    _mm_store_ps(t, ts);
-    if (t[0] >= t1 || t[0] > volumeEnd) break;
-    __m128 values;
-    int macro0;
-    const int inside = field.sample4<T>(
-        _mm_add_ps(_mm_set1_ps(origin.x), _mm_mul_ps(_mm_set1_ps(dir.x), ts)),
-        _mm_add_ps(_mm_set1_ps(origin.y), _mm_mul_ps(_mm_set1_ps(dir.y), ts)),
-        _mm_add_ps(_mm_set1_ps(origin.z), _mm_mul_ps(_mm_set1_ps(dir.z), ts)), values, macro0);
-    if (macro0 >= 0 && empty[macro0]) {
-      // Jump to one sample before the sample before the macrocell's exit, as the generic loop
-      // does: the margin keeps rounding from skipping a sample of the next macrocell.
-      float a = t[0], b = kInf;
-      clipToBox(field.macroBounds(macro0), origin, invDir, a, b);
-      const float last = std::floor(b / step - jitter) - 1;
-      if (last > k + 4) {
-        samples += 1;
-        k = last - 4;  // the loop's += 4 lands on `last`
-        continue;
-      }
-    }
-    // The transfer function, as lookup() computes it: x = clamp(scaled, 0, last entry), entry
-    // i = min(int(x), last - 1), weight x - i.
-    __m128 x = _mm_mul_ps(_mm_sub_ps(values, valueMin), tableScale);
-    x = _mm_andnot_ps(_mm_cmplt_ps(x, zero), x);
-    const __m128 over = _mm_cmplt_ps(lastEntry, x);
-    x = _mm_or_ps(_mm_and_ps(over, lastEntry), _mm_andnot_ps(over, x));
-    __m128i i = _mm_cvttps_epi32(x);
-    const __m128i high = _mm_cmpgt_epi32(i, lastLower);
-    i = _mm_or_si128(_mm_and_si128(high, lastLower), _mm_andnot_si128(high, i));
-    i = _mm_and_si128(i, _mm_cmpgt_epi32(i, _mm_set1_epi32(-1)));  // NaN data: entry 0
-    alignas(16) int entry[4];
-    alignas(16) float weight[4];
-    _mm_store_si128(reinterpret_cast<__m128i*>(entry), i);
-    _mm_store_ps(weight, _mm_sub_ps(x, _mm_cvtepi32_ps(i)));
-    for (int lane = 0; lane < 4; ++lane) {
-      if (transmittance <= minTransmittance || t[lane] >= t1 || t[lane] > volumeEnd) {
-        done = true;
-        break;
-      }
-      ++samples;
-      if (!(inside >> lane & 1)) continue;
-      const float* e = table + 4 * static_cast<std::size_t>(entry[lane]);
-      const __m128 a = _mm_loadu_ps(e), b = _mm_loadu_ps(e + 4);
-      const __m128 rgba = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(weight[lane]), _mm_sub_ps(b, a)));
-      const float alpha = _mm_cvtss_f32(_mm_shuffle_ps(rgba, rgba, _MM_SHUFFLE(3, 3, 3, 3)));
-      if (!(alpha > 0)) continue;
-      // Accumulator::add, channel by channel.
-      rgb = _mm_add_ps(rgb, _mm_mul_ps(rgba, _mm_set1_ps(transmittance * alpha)));
-      transmittance *= 1.0f - alpha;
-      if (depth == kInf && transmittance <= 0.5f) depth = t[lane];
-    }
-  }
-  alignas(16) float sum[4];
-  _mm_store_ps(sum, rgb);
-  acc.rgb = {sum[0], sum[1], sum[2]};
-  acc.transmittance = transmittance;
-  acc.depth = depth;
-  return samples;
-}
-
 }  // namespace
 
 SciVisRenderer::SciVisRenderer(const SciVisScene& scene, const RenderSettings& settings,
@@ -145,6 +55,7 @@ SciVisRenderer::SciVisRenderer(const SciVisScene& scene, const RenderSettings& s
       options_(options),
       layers_(&scene.volumes()),
       camera_(scene.desc().camera, settings.width, settings.height),
+      march_(resolveMarchKernel(options.march)),
       epsilon_(1e-4f * scene.extent() + 0.05f * scene.volumeStep()) {}
 
 void SciVisRenderer::beginFrame(const dfb::FrameInfo& /*frame*/, const CameraDesc& camera) {
@@ -273,22 +184,12 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
     float from = t0;
     for (;;) {
       const float to = haveSurface ? std::min(t1, std::nextafter(surface.t, kInf)) : t1;
-      const auto march = [&]<class T>() {
-        return marchOneVolume<T>(layers[0], origin, dir, invDir, from, to, kStart, volumeEnd, step,
-                                 jitter, minTransmittance, acc);
-      };
-      switch (layers[0].field->volume().type) {
-        default:
-        case VoxelType::Float32:
-          out.volumeSamples += march.operator()<float>();
-          break;
-        case VoxelType::UInt8:
-          out.volumeSamples += march.operator()<std::uint8_t>();
-          break;
-        case VoxelType::UInt16:
-          out.volumeSamples += march.operator()<std::uint16_t>();
-          break;
-      }
+      MarchColor color{acc.rgb, acc.transmittance, acc.depth};
+      out.volumeSamples += marchOneVolume(
+          layers[0],
+          {origin, dir, invDir, from, to, kStart, volumeEnd, step, jitter, minTransmittance},
+          color);
+      acc.rgb = color.rgb, acc.transmittance = color.transmittance, acc.depth = color.depth;
       if (!haveSurface || acc.transmittance <= minTransmittance) break;
       shadeSurface(surface);
       nextSurface();
@@ -370,6 +271,60 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
   return out;
 }
 
+bool SciVisRenderer::marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1,
+                               const Sampler& sampler, MarchRay& ray) const {
+  // integrate()'s test for its one-volume march, when nothing else lies on the ray at all (its
+  // isosurfaces are triangles: the surface query below sees them).
+  const auto& layers = *layers_;
+  if (!(t0 < t1) || layers.size() != 1 || !layers[0].visible || !layers[0].field) return false;
+  const float step = scene_.volumeStep();
+  float volumeStart = t0 - step, volumeEnd = t1 + step;
+  if (!clipToBox(layers[0].field->dataBounds(), origin, invDir, volumeStart, volumeEnd))
+    return false;
+  SurfaceHit surface;
+  if (scene_.intersectSurface(origin, dir, t0, t1, surface) && surface.t < t1) return false;
+  const float jitter = sampler.get(2);
+  ray = {origin,    dir,
+         invDir,    t0,
+         t1,        std::ceil(volumeStart / step - jitter),
+         volumeEnd, step,
+         jitter,    scene_.desc().scivis.minTransmittance};
+  return true;
+}
+
+void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment* out) const {
+  const bool packets = layers_->size() == 1 && marchesPackets((*layers_)[0], march_);
+  MarchRay waiting[kMarchPacket];
+  std::size_t waitingIndex[kMarchPacket];
+  int waitingCount = 0;
+  auto marchWaiting = [&] {
+    MarchColor colors[kMarchPacket];
+    std::uint32_t taken[kMarchPacket];
+    marchPacket((*layers_)[0], waiting, waitingCount, colors, taken);
+    for (int i = 0; i < waitingCount; ++i) {
+      Fragment& f = out[waitingIndex[i]];  // integrate()'s fragment of the march alone
+      f = Fragment{};
+      f.rgba[0] = colors[i].rgb.x, f.rgba[1] = colors[i].rgb.y, f.rgba[2] = colors[i].rgb.z;
+      f.rgba[3] = 1.0f - colors[i].transmittance;
+      f.depth = colors[i].depth;
+      f.volumeSamples = taken[i];
+    }
+    waitingCount = 0;
+  };
+  for (std::size_t i = 0; i < count; ++i) {
+    const RayPiece& r = rays[i];
+    const Vec3 invDir = reciprocal(r.dir);
+    if (packets &&
+        marchOnly(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, waiting[waitingCount])) {
+      waitingIndex[waitingCount++] = i;
+      if (waitingCount == kMarchPacket) marchWaiting();
+      continue;
+    }
+    out[i] = integrate(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler);
+  }
+  if (waitingCount > 0) marchWaiting();
+}
+
 void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulationId,
                             std::uint32_t firstSample, std::uint32_t samples,
                             dfb::Tile& out) const {
@@ -378,31 +333,47 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   const float inv = samples ? 1.0f / static_cast<float>(samples) : 0.0f;
   const Box3& bounds = scene_.bounds();
   const Environment& background = scene_.desc().environment;
+  // Rows of the tile's rays at a time (about kBatch rays; a ray outside the scene's bounds is an
+  // empty piece), integrated together, then each pixel's samples summed in order.
+  thread_local std::vector<RayPiece> rays;
+  thread_local std::vector<Fragment> fragments;
+  const int width = region.width();
+  const int rows = std::max(
+      1, static_cast<int>(kBatch / std::max<std::size_t>(1, std::size_t{samples} * width)));
   std::uint64_t volumeSamples = 0;
-  for (int y = region.y0; y < region.y1; ++y)
-    for (int x = region.x0; x < region.x1; ++x) {
+  for (int y0 = region.y0; y0 < region.y1; y0 += rows) {
+    const int y1 = std::min(region.y1, y0 + rows);
+    rays.clear();
+    for (int y = y0; y < y1; ++y)
+      for (int x = region.x0; x < region.x1; ++x)
+        for (std::uint32_t s = firstSample; s < firstSample + samples; ++s) {
+          const Sampler sampler(settings_.seed, x, y, accumulationId, s);
+          Vec3 origin, dir;
+          camera_.ray(static_cast<float>(x) + sampler.get(0),
+                      static_cast<float>(y) + sampler.get(1), 0.5f, 0.5f, origin, dir);
+          float t0 = 0, t1 = kInf;
+          if (!clipToBox(bounds, origin, reciprocal(dir), t0, t1)) t0 = t1 = 0;
+          rays.push_back({origin, dir, t0, t1, sampler});
+        }
+    fragments.resize(rays.size());
+    integrate(rays.data(), rays.size(), fragments.data());
+    std::size_t next = 0;
+    const std::size_t first = static_cast<std::size_t>(y0 - region.y0) * width;
+    const std::size_t last = static_cast<std::size_t>(y1 - region.y0) * width;
+    for (std::size_t pixel = first; pixel < last; ++pixel) {
       float sum[4] = {0, 0, 0, 0};
-      for (std::uint32_t s = firstSample; s < firstSample + samples; ++s) {
-        const Sampler sampler(settings_.seed, x, y, accumulationId, s);
-        Vec3 origin, dir;
-        camera_.ray(static_cast<float>(x) + sampler.get(0), static_cast<float>(y) + sampler.get(1),
-                    0.5f, 0.5f, origin, dir);
-        float t0 = 0, t1 = kInf;
-        Fragment f;
-        const Vec3 invDir = reciprocal(dir);
-        if (clipToBox(bounds, origin, invDir, t0, t1))
-          f = integrate(origin, dir, invDir, t0, t1, sampler);
+      for (std::uint32_t s = 0; s < samples; ++s, ++next) {
+        Fragment& f = fragments[next];
         if (options_.background) {
-          const Vec3 bg = background.radiance(dir) * (1.0f - f.rgba[3]);
+          const Vec3 bg = background.radiance(rays[next].dir) * (1.0f - f.rgba[3]);
           f.rgba[0] += bg.x, f.rgba[1] += bg.y, f.rgba[2] += bg.z, f.rgba[3] = 1.0f;
         }
         for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
         volumeSamples += f.volumeSamples;
       }
-      float* px = &out.color[4 * (static_cast<std::size_t>(y - region.y0) * region.width() +
-                                  static_cast<std::size_t>(x - region.x0))];
-      for (int c = 0; c < 4; ++c) px[c] = sum[c] * inv;
+      for (int c = 0; c < 4; ++c) out.color[4 * pixel + static_cast<std::size_t>(c)] = sum[c] * inv;
     }
+  }
   volumeSamples_.fetch_add(volumeSamples, std::memory_order_relaxed);
 }
 

@@ -18,6 +18,7 @@
 #include "renderers/Renderer.h"
 #include "renderers/Rng.h"
 #include "renderers/scivis/SciVisScene.h"
+#include "renderers/scivis/VolumeMarch.h"
 
 namespace renderers {
 
@@ -33,6 +34,8 @@ struct SciVisOptions {
   // true: the background is composited under every pixel (alpha 1, image-parallel rendering);
   // false: pixels keep their alpha for sort-last compositing.
   bool background = true;
+  // The instruction set of the one-volume march (VolumeMarch.h); all give the same image.
+  MarchKernel march = MarchKernel::Auto;
 };
 
 class SciVisRenderer final : public Renderer {
@@ -51,6 +54,19 @@ class SciVisRenderer final : public Renderer {
   // sample's stream (dimension 2 places the volume sample grid).
   Fragment integrate(Vec3 origin, Vec3 dir, float t0, float t1, const Sampler& sampler) const;
 
+  // A piece of a camera ray for integrate() (t0 >= t1: nothing, an empty fragment).
+  struct RayPiece {
+    Vec3 origin, dir;
+    float t0, t1;
+    Sampler sampler;
+  };
+  // out[i] = integrate(rays[i]) for i < count, the same bits; the rays of the one-volume march
+  // go through it together in SIMD lanes where its kernel takes packets (VolumeMarch.h).
+  void integrate(const RayPiece* rays, std::size_t count, Fragment* out) const;
+  // How many rays a caller should hand integrate() at once, about: enough to fill the packets,
+  // few enough to stay in cache.
+  static constexpr std::size_t kBatch = 1024;
+
   // Volume samples taken by camera rays since construction (for benchmarks).
   std::uint64_t volumeSamples() const { return volumeSamples_.load(); }
 
@@ -59,6 +75,10 @@ class SciVisRenderer final : public Renderer {
   // integrate() with 1 / dir, which the caller has already.
   Fragment integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1,
                      const Sampler& sampler) const;
+  // Whether origin + t dir over [t0, t1) holds nothing but one visible volume without
+  // isosurfaces (integrate()'s march alone); then `ray` is that march.
+  bool marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1, const Sampler& sampler,
+                 MarchRay& ray) const;
   Vec3 shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, const Material& m,
              const Sampler& hitSampler) const;
   bool occluded(Vec3 origin, Vec3 dir, float tFar) const;
@@ -71,6 +91,7 @@ class SciVisRenderer final : public Renderer {
   const std::vector<SciVisScene::VolumeLayer>* layers_;
   LiveSettings live_;
   Camera camera_;
+  MarchKernel march_;
   float epsilon_;
   mutable std::atomic<std::uint64_t> volumeSamples_{0};  // added once per tile
 };

@@ -77,6 +77,18 @@ class FieldGeometry {
     return y0 + fz * (y1 - y0);
   }
 
+  // The numbers locate() and macroIndexOf() work with, for vectorised copies of them
+  // (VolumeMarch.cpp), which must round as they do.
+  struct Layout {
+    Vec3 origin, invSpacing, lo, hi;
+    Index3 first, lastCell, macroFirst, macroCells;
+    std::size_t strideY, strideZ;
+  };
+  Layout layout() const {
+    return {origin_,   invSpacing_, lo_,         hi_,      first_,
+            lastCell_, macroFirst_, macroCells_, strideY_, strideZ_};
+  }
+
   // Macrocells: the value range of the voxels a block of cells interpolates between.
   int macroIndex(Vec3 p) const;  // -1 outside dataBounds()
   // The macrocell of a located cell: what macroIndex() gives for the same point.

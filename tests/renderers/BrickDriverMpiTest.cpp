@@ -287,6 +287,18 @@ TEST(BrickDriverMpi, SparseShellsShadeAsTheDenseReach) {
   MPI_Barrier(MPI_COMM_WORLD);
 }
 
+// The wavelet as a volume alone: every brick's rays take the one-volume march, in SIMD packets
+// where the CPU runs them (VolumeMarch.h), with empty macrocells to jump.
+TEST(BrickDriverMpi, AVolumeAloneGivesTheSameBytesOnEveryRankCountAndMatchesTheUnbricked) {
+  auto desc = scene();
+  desc->isosurfaces.clear(), desc->particles.clear(), desc->shapes.clear();
+  desc->instances.clear();
+  desc->volumes[0].transfer.opacities = {{37.0f, 0.0f}, {140.0f, 0.0f}, {277.0f, 0.5f}};
+  desc->scivis.aoSamples = 0;
+  checkEveryRankCountAndReplication(desc, GhostMode::Reach);
+  checkAgainstUnbricked(desc);
+}
+
 TEST(BrickDriverMpi, EachRankHoldsOnlyItsBricks) {
   const auto desc = scene();
   // No shading ray leaves a brick: it holds its data and ghost layers only (what AO and shadow

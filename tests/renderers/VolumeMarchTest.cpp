@@ -1,0 +1,133 @@
+// The one-volume march (VolumeMarch.h): its kernels (SSE, one ray 4 samples at a time; AVX2,
+// packets of 8 rays) give the same image bit for bit, and that image is the generic loop's.
+// Every kernel the machine runs is compared; SSE runs everywhere.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <memory>
+#include <vector>
+
+#include "renderers/BuiltinScenes.h"
+#include "renderers/RenderScene.h"
+#include "renderers/scivis/SciVisRenderer.h"
+#include "renderers/scivis/VolumeMarch.h"
+#include "tests/renderers/RenderTestUtil.h"
+
+namespace renderers {
+namespace {
+
+// The wavelet as a haze without isosurfaces: nothing below 150 (empty macrocells to jump), an
+// opacity ramp above, `peak` at the top (a high peak ends rays early).
+SceneDesc haze(float peak) {
+  SceneDesc d = waveletScene(40);
+  d.isosurfaces.clear();
+  d.volumes[0].transfer.opacities = {{37.0f, 0.0f}, {150.0f, 0.0f}, {277.0f, peak}};
+  d.scivis.aoSamples = 0;
+  return d;
+}
+
+std::vector<MarchKernel> kernels() {
+  std::vector<MarchKernel> out = {MarchKernel::Sse};
+  if (marchKernelAvailable(MarchKernel::Avx2)) out.push_back(MarchKernel::Avx2);
+  return out;
+}
+
+RenderSettings settings(int w, int h) {
+  RenderSettings s;
+  s.width = w, s.height = h, s.seed = 11;
+  return s;
+}
+
+constexpr int kW = 53, kH = 41;  // not a multiple of the packet width
+
+std::vector<float> image(const SciVisScene& scene, MarchKernel kernel, std::uint64_t* samples) {
+  const SciVisRenderer r(scene, settings(kW, kH), SciVisOptions{true, kernel});
+  // Two samples per pixel: a packet must not change the order a pixel's samples add up in.
+  auto out = test::renderImage(r, kW, kH, 16, 2, 2);
+  if (samples) *samples = r.volumeSamples();
+  return out;
+}
+
+bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+TEST(VolumeMarch, EveryKernelGivesTheSseImage) {
+  for (float peak : {0.08f, 0.9f}) {
+    const RenderScene scene = buildRenderScene("scivis", haze(peak));
+    std::uint64_t samples = 0;
+    const auto sse = image(*scene.scivis, MarchKernel::Sse, &samples);
+    EXPECT_GT(samples, 10000u);
+    // The haze shows: pixels differ from one another (the background is a gradient, so compare
+    // a pixel through the volume's centre with one beside it, off the volume).
+    const std::size_t centre = 4 * (static_cast<std::size_t>(kH / 2) * kW + kW / 2);
+    const std::size_t corner = 4 * (static_cast<std::size_t>(kH / 2) * kW + 0);
+    EXPECT_NE(sse[centre], sse[corner]) << "peak " << peak;
+    for (MarchKernel k : kernels()) {
+      const auto other = image(*scene.scivis, k, nullptr);
+      EXPECT_TRUE(sameBits(sse, other)) << marchKernelName(k) << ", peak " << peak;
+    }
+  }
+}
+
+// With a second, invisible volume the renderer takes its generic loop; the march must composite
+// exactly what that loop composites.
+TEST(VolumeMarch, MarchesAsTheGenericLoop) {
+  SceneDesc one = haze(0.5f), two = haze(0.5f);
+  two.volumes.push_back(two.volumes[0]);
+  two.volumes[1].name = "twin";
+  two.volumes[1].visible = false;
+  const RenderScene a = buildRenderScene("scivis", one), b = buildRenderScene("scivis", two);
+  const auto generic = image(*b.scivis, MarchKernel::Sse, nullptr);
+  for (MarchKernel k : kernels())
+    EXPECT_TRUE(sameBits(generic, image(*a.scivis, k, nullptr))) << marchKernelName(k);
+}
+
+// Rays cut into pieces (as bricks cut them), integrated as a batch (packets where the kernel
+// takes them): each piece gets the fragment the SSE march gives it alone.
+TEST(VolumeMarch, CutRaysGiveTheSseFragments) {
+  const RenderScene scene = buildRenderScene("scivis", haze(0.5f));
+  const SceneDesc& desc = *scene.desc;
+  Camera camera(desc.camera, 64, 64);
+  const SciVisRenderer sse(*scene.scivis, settings(64, 64), SciVisOptions{true, MarchKernel::Sse});
+  std::vector<SciVisRenderer::RayPiece> pieces;
+  for (int y = 2; y < 64; y += 5)
+    for (int x = 1; x < 64; x += 3) {
+      const Sampler sampler(4, x, y, 0, 0);
+      Vec3 o, d;
+      camera.ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f, 0.5f, 0.5f, o, d);
+      float t0 = 0, t1 = Box3::kInf;
+      if (!clipToBox(Box3{Vec3{-1.0f}, Vec3{1.0f}}, o, reciprocal(d), t0, t1)) continue;
+      for (float cut : {0.0f, 0.3f, 0.71f}) {
+        const float tc = t0 + cut * (t1 - t0);
+        pieces.push_back({o, d, t0, tc, sampler});
+        pieces.push_back({o, d, tc, t1, sampler});
+      }
+    }
+  ASSERT_GT(pieces.size(), 600u);
+  for (MarchKernel k : kernels()) {
+    const SciVisRenderer other(*scene.scivis, settings(64, 64), SciVisOptions{true, k});
+    std::vector<Fragment> got(pieces.size());
+    other.integrate(pieces.data(), pieces.size(), got.data());
+    int seen = 0;
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+      const SciVisRenderer::RayPiece& r = pieces[i];
+      const Fragment want = sse.integrate(r.origin, r.dir, r.t0, r.t1, r.sampler);
+      EXPECT_EQ(std::memcmp(want.rgba, got[i].rgba, sizeof want.rgba), 0)
+          << marchKernelName(k) << " piece " << i;
+      EXPECT_EQ(std::memcmp(&want.depth, &got[i].depth, sizeof want.depth), 0);
+      seen += want.rgba[3] > 0.01f;
+    }
+    EXPECT_GT(seen, 300) << "pieces that show the haze";
+  }
+}
+
+TEST(VolumeMarch, KernelNames) {
+  EXPECT_EQ(resolveMarchKernel(MarchKernel::Sse), MarchKernel::Sse);
+  const MarchKernel best = resolveMarchKernel(MarchKernel::Auto);
+  EXPECT_TRUE(marchKernelAvailable(best));
+  EXPECT_NE(best, MarchKernel::Auto);
+}
+
+}  // namespace
+}  // namespace renderers
