@@ -55,7 +55,11 @@ namespace dfbwall {
 using Vec3f = std::array<float, 3>;
 using Index3 = std::array<int, 3>;
 
-enum class VoxelType { Float32, UInt8, UInt16 };
+// Float32, UInt8, UInt16 are held as given; Int8, Int16, Int32 and Float64 are converted to
+// float32 when the brick is added (exact for int8, int16 and integers up to 2^24; float64 rounds
+// to the nearest float32). Float voxels may be NaN for missing values: they render as empty
+// space and are left out of the value range.
+enum class VoxelType { Float32, UInt8, UInt16, Int8, Int16, Int32, Float64 };
 
 // One volume's whole field: its grid and where it sits in the world. Voxel (i, j, k) is at
 // origin + spacing * (i, j, k) (vertex-centred, as VTK image data).

@@ -23,16 +23,42 @@ renderers::GridGeometry geometry(const FieldGrid& g) {
   return out;
 }
 
+// What the renderer holds a voxel type as: the types it samples as they are, the others float32.
 renderers::VoxelType voxelType(VoxelType t) {
   switch (t) {
     case VoxelType::UInt8:
       return renderers::VoxelType::UInt8;
     case VoxelType::UInt16:
       return renderers::VoxelType::UInt16;
-    case VoxelType::Float32:
+    default:
       break;
   }
   return renderers::VoxelType::Float32;
+}
+
+// `count` voxels of type `t` at `from` into what voxelType(t) holds, at `to`.
+void convertVoxels(VoxelType t, const void* from, std::byte* to, std::size_t count) {
+  auto each = [&](auto sample) {
+    using T = decltype(sample);
+    for (std::size_t n = 0; n < count; ++n) {
+      T v;
+      std::memcpy(&v, static_cast<const std::byte*>(from) + n * sizeof(T), sizeof v);
+      const float f = static_cast<float>(v);
+      std::memcpy(to + n * sizeof f, &f, sizeof f);
+    }
+  };
+  switch (t) {
+    case VoxelType::Int8:
+      return each(std::int8_t{});
+    case VoxelType::Int16:
+      return each(std::int16_t{});
+    case VoxelType::Int32:
+      return each(std::int32_t{});
+    case VoxelType::Float64:
+      return each(double{});
+    default:  // held as given
+      std::memcpy(to, from, count * renderers::voxelBytes(voxelType(t)));
+  }
 }
 
 [[noreturn]] void fail(const Brick& brick, const std::string& what) {
@@ -176,7 +202,7 @@ renderers::BrickContent brickContent(const Style& style, const Brick& brick) {
       volume.box = box;
       const std::size_t bytes = box.voxelCount() * renderers::voxelBytes(volume.type);
       volume.voxels = renderers::allocateVoxelBytes(bytes);
-      std::memcpy(volume.voxels.data(), part->voxels, bytes);
+      convertVoxels(part->type, part->voxels, volume.voxels.data(), box.voxelCount());
       volume.updateRange();
     }
     c.volumes.push_back(std::move(volume));

@@ -27,6 +27,11 @@ std::vector<std::string> SceneDesc::inputFiles() const {
   for (const VolumeDesc& v : volumes) {
     if (v.source.kind == VolumeSource::Kind::RawFile) files.push_back(v.source.raw.path);
     if (v.source.kind == VolumeSource::Kind::OpenVdb) files.push_back(v.source.vdb.path);
+    if (v.source.kind == VolumeSource::Kind::File) {
+      files.push_back(v.source.file.path);
+      const std::string& data = v.source.file.stored.path;  // a detached data file
+      if (!data.empty() && data != v.source.file.path) files.push_back(data);
+    }
   }
   return files;
 }

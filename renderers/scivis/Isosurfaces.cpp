@@ -174,8 +174,12 @@ void polygoniseBlock(const GridGeometry& grid, const CellBlock& block, const flo
         const float c[8] = {v[0],  v[1],      v[sy],      v[sy + 1],
                             v[sz], v[sz + 1], v[sz + sy], v[sz + sy + 1]};
         int mask = 0;
-        for (int k = 0; k < 8; ++k) mask |= (c[k] >= iso ? 1 : 0) << k;
-        if (mask == 0 || mask == 255) continue;
+        bool missing = false;  // a NaN voxel (a missing value): no surface in this cell
+        for (int k = 0; k < 8; ++k) {
+          mask |= (c[k] >= iso ? 1 : 0) << k;
+          missing = missing || c[k] != c[k];
+        }
+        if (mask == 0 || mask == 255 || missing) continue;
         const int gx = lo.x + x, gy = lo.y + y, gz = lo.z + z;
         if (!skip.empty() && gx >= skip.lo.x && gx < skip.hi.x && gy >= skip.lo.y &&
             gy < skip.hi.y && gz >= skip.lo.z && gz < skip.hi.z)

@@ -7,7 +7,8 @@
 // the edge's own direction (low index first), and a cell's triangles come from one case table.
 // So two bricks that polygonise the same cell make the same triangles, bit for bit, and the
 // surface is closed across cells: an ambiguous face (two diagonal corners above, two below) is
-// split the same way by both cells that share it (the corners above are kept apart).
+// split the same way by both cells that share it (the corners above are kept apart). A cell with
+// a NaN voxel (a missing value, see VolumeField.h) has no triangles: nothing is crossed there.
 //
 // Why here and not a library: VTK's filters need VTK's data model (a large dependency for one
 // algorithm), and OpenVDB's volumeToMesh is a dual mesher over sparse trees whose quads span

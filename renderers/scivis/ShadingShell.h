@@ -52,7 +52,7 @@ class ShadingShell : public FieldGeometry {
   // The trilinear value at world point p, as VolumeField::sample over the dense box gives it
   // (cells inside the core from `core`, the dense field of the `core` box given to load); false
   // outside dataBounds(), in macrocells without voxels (no isovalue in their range, or not
-  // reached) and in cells not reached.
+  // reached), in cells not reached and where the value is missing (NaN).
   bool sample(Vec3 p, float& value, const VolumeField* core) const {
     Cell c;
     if (!locate(p, c)) return false;
@@ -72,7 +72,7 @@ class ShadingShell : public FieldGeometry {
     const float corners[8] = {v[0],  v[1],      v[sy],      v[sy + 1],
                               v[sz], v[sz + 1], v[sz + sy], v[sz + sy + 1]};
     value = trilinear(corners, c.fx, c.fy, c.fz);
-    return true;
+    return value == value;  // NaN: a missing value, as VolumeField::sample
   }
 
  private:

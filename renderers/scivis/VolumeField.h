@@ -5,6 +5,11 @@
 //
 // A point can be sampled where all 8 voxels around it are held: inside the world box of the held
 // voxel centres (`dataBounds`). Outside that the field is "not here" (a brick's neighbour has it).
+//
+// Missing values: float volumes may hold NaN voxels (a file's fill values, land in an ocean
+// model). A point whose cell touches one samples as "no data" (sample() false, sample4() lane
+// off): it renders as empty space and no isosurface is crossed there. Macrocell ranges leave
+// NaN voxels out (a macrocell of NaN only has min +inf, max -inf: it holds nothing).
 #include <emmintrin.h>  // SSE2, which every x86-64 has: sample4()
 
 #include <cmath>
@@ -138,7 +143,8 @@ class VolumeField : public FieldGeometry {
     return trilinear(c, cell.fx, cell.fy, cell.fz);
   }
 
-  // The trilinear value at world point p; false (value untouched) outside dataBounds().
+  // The trilinear value at world point p; false outside dataBounds() and where the value is
+  // missing (NaN; `value` is then NaN too).
   bool sample(Vec3 p, float& value) const {
     Cell c;
     if (!locate(p, c)) return false;
@@ -154,13 +160,13 @@ class VolumeField : public FieldGeometry {
         value = interpolate<std::uint16_t>(c);
         break;
     }
-    return true;
+    return value == value;  // NaN: missing
   }
 
   // sample() at four points at once (their x, y, z in the lanes), for loops that take several
   // samples of a ray together: the same arithmetic lane by lane, so the same bits. Returns the
-  // lanes inside dataBounds() as a 4-bit mask (their values in `value`, the others garbage) and
-  // the macrocell of lane 0 (-1 when outside).
+  // lanes inside dataBounds() with a value (not NaN) as a 4-bit mask (their values in `value`,
+  // the others garbage) and the macrocell of lane 0 (-1 when outside).
   template <class T>
   int sample4(__m128 px, __m128 py, __m128 pz, __m128& value, int& macro0) const {
     const __m128 fx =
@@ -214,7 +220,7 @@ class VolumeField : public FieldGeometry {
     const __m128 x00 = lerp(lo[0], lo[1], wx), x10 = lerp(lo[2], lo[3], wx);
     const __m128 x01 = lerp(hi[0], hi[1], wx), x11 = lerp(hi[2], hi[3], wx);
     value = lerp(lerp(x00, x10, wy), lerp(x01, x11, wy), wz);
-    return mask;
+    return mask & _mm_movemask_ps(_mm_cmpord_ps(value, value));  // NaN lanes: missing
   }
 
   // Central differences of the trilinear field, `h` world units apart; zero where a neighbour

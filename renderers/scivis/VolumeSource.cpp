@@ -16,6 +16,7 @@
 #include "renderers/Error.h"
 #include "renderers/Parallel.h"
 #include "renderers/scivis/OpenVdbVolume.h"
+#include "renderers/scivis/formats/VolumeFile.h"
 
 // This file is compiled with -ffp-contract=off (renderers/CMakeLists.txt): every voxel goes
 // through the same rounding steps as VTK's vtkRTAnalyticSource and as proceduralValue, whichever
@@ -232,6 +233,7 @@ float proceduralValue(const VolumeSource& source, int i, int j, int k) {
       return mlVoxel(source.marschnerLobb, mlAxis(i, d.x), mlAxis(j, d.y), mlAxis(k, d.z));
     case VolumeSource::Kind::RawFile:
     case VolumeSource::Kind::OpenVdb:
+    case VolumeSource::Kind::File:
       break;
   }
   throw Error("proceduralValue: the volume source is a file, not a procedural field");
@@ -264,17 +266,23 @@ std::optional<std::pair<float, float>> knownValueRange(const VolumeSource& sourc
     }
     case VolumeSource::Kind::RawFile:
     case VolumeSource::Kind::OpenVdb:
+    case VolumeSource::Kind::File:
       break;
   }
   return std::nullopt;
 }
 
-std::uint64_t volumeFileBytesRead() { return bytesReadOnThisThread; }
+std::uint64_t volumeFileBytesRead() { return bytesReadOnThisThread + storedBytesRead(); }
 
 Volume loadVolume(const VolumeSource& source, const VoxelBox& box) {
   if (source.kind == VolumeSource::Kind::OpenVdb && source.grid.dims == Index3{}) {
     VolumeSource resolved = source;  // not resolved yet: read the file's metadata first
     resolveOpenVdbGrid(resolved);
+    return loadVolume(resolved, box);
+  }
+  if (source.kind == VolumeSource::Kind::File && source.grid.dims == Index3{}) {
+    VolumeSource resolved = source;  // not resolved yet: read the file's header first
+    resolveVolumeFile(resolved);
     return loadVolume(resolved, box);
   }
   const Index3 d = source.grid.dims;
@@ -302,6 +310,8 @@ Volume loadVolume(const VolumeSource& source, const VoxelBox& box) {
       return loadRaw(source, box);
     case VolumeSource::Kind::OpenVdb:
       return loadOpenVdbBox(source, box);
+    case VolumeSource::Kind::File:
+      return loadVolumeFile(source, box);
   }
   throw Error("unknown volume source");
 }

@@ -1,13 +1,17 @@
 #pragma once
 // Where a volume's voxels come from, and making any sub-box of them. Procedural fields are
 // evaluated only at the requested voxels; raw files are read only over the requested box (a
-// rank keeping one brick never reads the whole file); OpenVDB grids are sampled into the box.
+// rank keeping one brick never reads the whole file); OpenVDB grids are sampled into the box;
+// NRRD, NIfTI, MetaImage, HDF5 and NetCDF files are read over the box only (compressed ones
+// are streamed, everything outside the box discarded: renderers/scivis/formats/).
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "renderers/scivis/Volume.h"
+#include "renderers/scivis/formats/StoredArray.h"
 
 namespace renderers {
 
@@ -41,8 +45,24 @@ struct OpenVdbParams {
   Index3 indexOrigin;
 };
 
+enum class VolumeFormat { Nrrd, Nifti, MetaImage, Hdf5, NetCdf };
+
+// A volume file in one of the formats above (source = "file").
+struct VolumeFileParams {
+  std::string path;
+  VolumeFormat format = VolumeFormat::Nrrd;
+  std::string dataset;   // HDF5: the dataset's path (empty: the file's only 3-D/4-D dataset)
+  std::string variable;  // NetCDF: the variable (empty: the file's only 3-D/4-D variable)
+  int time = 0;          // 4-D data (t, z, y, x): the time step
+  // Filled in by resolveVolumeFile from the header:
+  StoredArray stored;              // NRRD, NIfTI, MetaImage: where the voxels are
+  std::vector<double> missing;     // HDF5, NetCDF: _FillValue / missing_value (become NaN)
+  float slope = 1, intercept = 0;  // NetCDF scale_factor / add_offset
+  bool hasGeometry = false;        // the file places its grid (spacing, origin); HDF5 does not
+};
+
 struct VolumeSource {
-  enum class Kind { Wavelet, MarschnerLobb, RawFile, OpenVdb };
+  enum class Kind { Wavelet, MarschnerLobb, RawFile, OpenVdb, File };
   Kind kind = Kind::Wavelet;
   // The whole field's grid, resolved when the source is read (defaults filled in), so every
   // rank knows every volume's geometry without touching voxels.
@@ -52,6 +72,7 @@ struct VolumeSource {
   MarschnerLobbParams marschnerLobb;
   RawFileParams raw;
   OpenVdbParams vdb;
+  VolumeFileParams file;
 };
 
 // The field's value at whole-field voxel (i, j, k) of a procedural source (Wavelet,

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "renderers/Error.h"
+#include "renderers/scivis/formats/VolumeFile.h"
 
 namespace renderers {
 namespace {
@@ -84,8 +85,18 @@ VolumeSource::Kind readKind(const TomlReader& r, const toml::table& t, const std
   if (s == "marschner-lobb") return VolumeSource::Kind::MarschnerLobb;
   if (s == "raw") return VolumeSource::Kind::RawFile;
   if (s == "openvdb") return VolumeSource::Kind::OpenVdb;
+  if (s == "file") {
+    // The existing readers by the file's extension: .raw (with dims and type), .vdb.
+    const toml::node* file = t.get("file");
+    const std::string name = file && file->is_string() ? *file->value<std::string>() : "";
+    const std::string ext = std::filesystem::path(name).extension().string();
+    if (ext == ".raw" && !t.get("format")) return VolumeSource::Kind::RawFile;
+    if (ext == ".vdb" && !t.get("format")) return VolumeSource::Kind::OpenVdb;
+    return VolumeSource::Kind::File;
+  }
   r.fail(n, what +
-                ".source must be \"wavelet\", \"marschner-lobb\", \"raw\" or \"openvdb\", not \"" +
+                ".source must be \"wavelet\", \"marschner-lobb\", \"raw\", \"openvdb\" or "
+                "\"file\", not \"" +
                 s + "\"");
 }
 
@@ -136,6 +147,51 @@ void readOpenVdb(const TomlReader& r, const toml::table& t, const std::string& w
     if (s.grid.dims[a] > kMaxDims)
       r.fail(file, what + ".file: the grid's active voxels span " + std::to_string(s.grid.dims[a]) +
                        " voxels along an axis, more than " + std::to_string(kMaxDims));
+}
+
+void readFile(const TomlReader& r, const toml::table& t, const std::string& what,
+              const std::filesystem::path& folder, VolumeSource& s) {
+  const toml::node& file = r.require(t, "file", what);
+  VolumeFileParams& f = s.file;
+  f.path = (folder / r.string(file, what + ".file")).string();
+  if (const toml::node* format = t.get("format")) {
+    const auto named = volumeFormatNamed(r.string(*format, what + ".format"));
+    if (!named)
+      r.fail(*format, what +
+                          ".format must be \"nrrd\", \"nifti\", \"metaimage\", \"hdf5\" or "
+                          "\"netcdf\"");
+    f.format = *named;
+  } else if (const auto byName = volumeFormatOfPath(f.path)) {
+    f.format = *byName;
+  } else {
+    r.fail(file, what +
+                     ".file: the format is not known from the name (.nrrd .nhdr .nii .nii.gz .mhd "
+                     ".mha .h5 .hdf5 .nc .cdf); give 'format'");
+  }
+  if (const toml::node* d = t.get("dataset")) {
+    if (f.format != VolumeFormat::Hdf5) r.fail(*d, what + ".dataset is for HDF5 files");
+    f.dataset = r.string(*d, what + ".dataset");
+  }
+  if (const toml::node* v = t.get("variable")) {
+    if (f.format != VolumeFormat::NetCdf) r.fail(*v, what + ".variable is for NetCDF files");
+    f.variable = r.string(*v, what + ".variable");
+  }
+  if (const toml::node* time = t.get("time")) {
+    const auto v = time->value<std::int64_t>();
+    if (!time->is_integer() || !v || *v < 0 || *v > (1 << 30))
+      r.fail(*time, what + ".time must be a non-negative integer");
+    f.time = static_cast<int>(*v);
+  }
+  try {
+    resolveVolumeFile(s);
+  } catch (const Error& e) {
+    // Point at the field the problem is about: a dataset, variable or time step the file lacks.
+    const std::string m = e.what();
+    for (const std::string field : {"dataset", "variable", "time"})
+      if (const toml::node* n = t.get(field); n && m.find(" " + field + " ") != std::string::npos)
+        r.fail(*n, what + "." + field + ": " + m);
+    r.fail(file, what + ".file: " + m);
+  }
 }
 
 }  // namespace
@@ -249,6 +305,11 @@ VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
           t, what,
           {"name", "source", "origin", "spacing", "visible", "transfer_function", "file", "grid"});
       break;
+    case VolumeSource::Kind::File:
+      r.onlyKeys(t, what,
+                 {"name", "source", "origin", "spacing", "visible", "transfer_function", "file",
+                  "format", "dataset", "variable", "time"});
+      break;
   }
   if (const toml::node* v = t.get("visible")) {
     if (!v->is_boolean()) r.fail(*v, what + ".visible must be true or false");
@@ -291,19 +352,24 @@ VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
     case VolumeSource::Kind::OpenVdb:
       readOpenVdb(r, t, what, folder, s);
       break;
+    case VolumeSource::Kind::File:
+      readFile(r, t, what, folder, s);
+      break;
   }
 
-  // Geometry: the file's own for OpenVDB, else the longest side 2 world units centred on 0;
-  // either can be overridden.
+  // Geometry: the file's own for OpenVDB and files that place their grid, else the longest side
+  // 2 world units centred on 0; either can be overridden.
   const Index3 n = s.grid.dims;
+  const bool fileGeometry = s.kind == VolumeSource::Kind::OpenVdb ||
+                            (s.kind == VolumeSource::Kind::File && s.file.hasGeometry);
   if (const toml::node* spacing = t.get("spacing")) {
     s.grid.spacing = readSpacing(r, *spacing, what + ".spacing");
-  } else if (s.kind != VolumeSource::Kind::OpenVdb) {
+  } else if (!fileGeometry) {
     s.grid.spacing = Vec3{2.0f / static_cast<float>(std::max({n.x, n.y, n.z}) - 1)};
   }
   if (const toml::node* origin = t.get("origin")) {
     s.grid.origin = r.vec3(*origin, what + ".origin");
-  } else if (s.kind != VolumeSource::Kind::OpenVdb) {
+  } else if (!fileGeometry) {
     s.grid.origin = {-0.5f * s.grid.spacing.x * static_cast<float>(n.x - 1),
                      -0.5f * s.grid.spacing.y * static_cast<float>(n.y - 1),
                      -0.5f * s.grid.spacing.z * static_cast<float>(n.z - 1)};

@@ -4,7 +4,7 @@
 //
 //   [[volumes]]
 //   name = "wave"
-//   source = "wavelet"            # wavelet | marschner-lobb | raw | openvdb
+//   source = "wavelet"            # wavelet | marschner-lobb | raw | openvdb | file
 //   dims = [256, 256, 256]        # 2 to 16384 per axis. raw: required; wavelet: default VTK's
 //                                 # [21, 21, 21]; marschner-lobb: default [40, 40, 40];
 //                                 # openvdb: not allowed (the grid's active bounding box)
@@ -19,6 +19,12 @@
 //   #      must be header_bytes + dims x type size exactly (checked when the scene is read)
 //   # openvdb: file (required), grid (default: the first float grid); the file's metadata is
 //   #      read with the scene (geometry), its voxels only by loadVolume
+//   # file: file (required; .nrrd .nhdr .nii .nii.gz .mhd .mha .h5 .hdf5 .nc .cdf; .raw and
+//   #      .vdb are read as source = "raw" / "openvdb" with their fields), format =
+//   #      "nrrd" | "nifti" | "metaimage" | "hdf5" | "netcdf" (default: from the name),
+//   #      dataset (HDF5) / variable (NetCDF) (default: the file's only 3-D/4-D one), time
+//   #      (4-D data, default 0); dims, type and (except HDF5) spacing and origin come from the
+//   #      file's header, read with the scene; spacing/origin here override them
 //   transfer_function = { preset = "cool-warm", range = [37, 277], opacity = [[37, 0], [277, 0.4]]
 //   } # preset: cool-warm | viridis | inferno | grayscale | rainbow, or # colors = [[value, r, g,
 //   b], ...] (r, g, b in [0, 1]); exactly one of the two. # opacity = [[value, opacity], ...]

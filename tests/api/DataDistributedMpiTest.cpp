@@ -113,6 +113,38 @@ TEST(DataDistributedApi, BricksThatDisagreeFailOnEveryRank) {
   session.close();
 }
 
+// Voxels given as float64, int16 or int32 render as the same values given as float32 (the field
+// rounded to integers, which all three hold exactly).
+TEST(DataDistributedApi, OtherVoxelTypesRenderAsTheirFloat32Values) {
+  auto image = [](dfbwall::VoxelType type) {
+    dfbwall::SessionOptions o;
+    o.width = 48, o.height = 36, o.tileSize = 16, o.threads = 2;
+    dfbwall::Session session(MPI_COMM_SELF, o);
+    session.setStyle(style());
+    session.setCamera(camera());
+    std::vector<float> storage;
+    dfbwall::Brick b = brick(0, 1, storage);
+    for (float& v : storage) v = std::round(v);
+    std::vector<double> f64(storage.begin(), storage.end());
+    std::vector<std::int16_t> i16(storage.begin(), storage.end());
+    std::vector<std::int32_t> i32(storage.begin(), storage.end());
+    b.volumes[0].type = type;
+    b.volumes[0].voxels = type == dfbwall::VoxelType::Float64 ? static_cast<const void*>(f64.data())
+                          : type == dfbwall::VoxelType::Int16 ? static_cast<const void*>(i16.data())
+                          : type == dfbwall::VoxelType::Int32 ? static_cast<const void*>(i32.data())
+                                                              : storage.data();
+    session.addBrick(b);
+    session.renderFrame();
+    std::vector<std::uint8_t> out = session.image();
+    session.close();
+    return out;
+  };
+  const auto f32 = image(dfbwall::VoxelType::Float32);
+  EXPECT_EQ(image(dfbwall::VoxelType::Float64), f32);
+  EXPECT_EQ(image(dfbwall::VoxelType::Int16), f32);
+  EXPECT_EQ(image(dfbwall::VoxelType::Int32), f32);
+}
+
 TEST(DataDistributedApi, BadBrickDataIsRefusedNamingTheBrick) {
   dfbwall::SessionOptions o;
   o.width = 32, o.height = 32;

@@ -166,6 +166,48 @@ transfer_function = { preset = "grayscale", range = [0, 1] }
       ":1: volume 'ct': missing field 'transfer_function'");
 }
 
+// source = "file": the format from the name (or `format`), the grid from the header, errors
+// naming the scene's line and field and the volume file.
+TEST(VolumeToml, FilesTakeTheirGridFromTheHeaderAndErrorsNameLineFieldAndFile) {
+  const std::string nrrd =
+      writeFile("v.nrrd", std::string("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 3 4 5\n"
+                                      "spacings: 2 2 2\nspace origin: (1,2,3)\n\n") +
+                              std::string(60, '\7'));
+  const std::string head = "[[volumes]]\nname = \"v\"\nsource = \"file\"\n";  // lines 1-3
+  const std::string tf = "transfer_function = { preset = \"viridis\", range = [0, 9] }\n";
+  const VolumeDesc d = readFirst(writeFile("ok.toml", head + "file = \"v.nrrd\"\n" + tf));
+  EXPECT_EQ(d.source.kind, VolumeSource::Kind::File);
+  EXPECT_EQ(d.source.grid.dims, (Index3{3, 4, 5}));
+  EXPECT_EQ(d.source.grid.spacing, Vec3{2.0f});
+  EXPECT_EQ(d.source.grid.origin, (Vec3{1, 2, 3}));
+  EXPECT_EQ(d.source.type, VoxelType::UInt8);
+  const VolumeDesc moved = readFirst(writeFile(
+      "moved.toml", head + "file = \"v.nrrd\"\nspacing = 0.5\norigin = [0, 0, 0]\n" + tf));
+  EXPECT_EQ(moved.source.grid.spacing, Vec3{0.5f});
+  EXPECT_EQ(moved.source.grid.origin, Vec3{0.0f});
+  // .raw files are raw volumes: dims and type then come from the scene.
+  writeFile("v.raw", std::string(2 * 3 * 4 * 2, '\0'));
+  const VolumeDesc raw = readFirst(
+      writeFile("raw.toml", head + "file = \"v.raw\"\ndims = [2, 3, 4]\ntype = \"uint16\"\n" + tf));
+  EXPECT_EQ(raw.source.kind, VolumeSource::Kind::RawFile);
+  EXPECT_EQ(raw.source.grid.dims, (Index3{2, 3, 4}));
+  EXPECT_EQ(errorOf("ext.toml", head + "file = \"v.dat\"\n" + tf),
+            ":4: volume 'v'.file: the format is not known from the name (.nrrd .nhdr .nii .nii.gz "
+            ".mhd .mha .h5 .hdf5 .nc .cdf); give 'format'");
+  EXPECT_EQ(errorOf("fmt.toml", head + "file = \"v.nrrd\"\nformat = \"tiff\"\n" + tf),
+            ":5: volume 'v'.format must be \"nrrd\", \"nifti\", \"metaimage\", \"hdf5\" or "
+            "\"netcdf\"");
+  EXPECT_EQ(errorOf("var.toml", head + "file = \"v.nrrd\"\nvariable = \"T\"\n" + tf),
+            ":5: volume 'v'.variable is for NetCDF files");
+  EXPECT_EQ(errorOf("dims.toml", head + "file = \"v.nrrd\"\ndims = [3, 4, 5]\n" + tf),
+            ":5: unknown field 'dims' in volume 'v'");
+  const std::string nifti =
+      errorOf("nifti.toml", head + "file = \"v.nrrd\"\nformat = \"nifti\"\n" + tf);
+  EXPECT_EQ(nifti.rfind(":4: volume 'v'.file: " + nrrd + ": 146 bytes, too short for a NIfTI", 0),
+            0u)
+      << nifti;
+}
+
 TEST(VolumeToml, FieldErrorsNameFileLineAndField) {
   const std::string w = "[[volumes]]\nname = \"w\"\nsource = \"wavelet\"\n";  // lines 1-3
   EXPECT_EQ(errorOf("unknown.toml", w + "colour = 1\n"),
@@ -173,8 +215,8 @@ TEST(VolumeToml, FieldErrorsNameFileLineAndField) {
   EXPECT_EQ(errorOf("other-source.toml", w + "f_m = 6\n"), ":4: unknown field 'f_m' in volume 'w'");
   EXPECT_EQ(
       errorOf("source.toml", "[[volumes]]\nname = \"w\"\nsource = \"noise\"\n"),
-      ":3: volume 'w'.source must be \"wavelet\", \"marschner-lobb\", \"raw\" or \"openvdb\", "
-      "not \"noise\"");
+      ":3: volume 'w'.source must be \"wavelet\", \"marschner-lobb\", \"raw\", \"openvdb\" or "
+      "\"file\", not \"noise\"");
   EXPECT_EQ(errorOf("dims-small.toml", w + "dims = [64, 1, 64]\n"),
             ":4: volume 'w'.dims must be between 2 and 16384 per axis, not 1");
   EXPECT_EQ(errorOf("dims-big.toml", w + "dims = [25600, 256, 256]\n"),

@@ -1,0 +1,23 @@
+#pragma once
+// HDF5 and NetCDF volumes through their own libraries: each rank opens the file itself and
+// reads its box as a hyperslab (H5Dread) or with nc_get_vara, so it never reads more than its
+// brick. Datasets and variables are 3-D (z, y, x: x varies fastest, as the volume's voxels) or
+// 4-D (t, z, y, x; `time` picks the step). Errors name the file and list the datasets or
+// variables that do exist. Serial HDF5 is not thread-safe: every call holds one lock.
+#include "renderers/scivis/VolumeSource.h"
+
+namespace renderers {
+
+void resolveHdf5(VolumeSource& source);
+Volume loadHdf5Box(const VolumeSource& source, const VoxelBox& box);
+void resolveNetCdf(VolumeSource& source);
+Volume loadNetCdfBox(const VolumeSource& source, const VoxelBox& box);
+
+// Shared by both readers: float voxels equal to one of `missing` become NaN, then
+// value * slope + intercept; the range is updated.
+void markMissing(Volume& v, const std::vector<double>& missing, float slope, float intercept);
+// What a stored type with the given missing values and scale is held as (as StoredArray's rule;
+// any missing value makes float32).
+VoxelType heldTypeOf(FileType type, bool anyMissing, bool scaled);
+
+}  // namespace renderers

@@ -1,0 +1,131 @@
+// Hostile volume files (truncated, lying headers, huge dims, a gzip bomb, wrong types): each
+// gives one error naming the file, fast, with no crash.
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "renderers/BuiltinScenes.h"
+#include "renderers/Error.h"
+#include "renderers/RenderScene.h"
+#include "renderers/scivis/VolumeField.h"
+#include "renderers/scivis/VolumeSource.h"
+#include "renderers/scivis/formats/VolumeFile.h"
+#include "tests/renderers/RenderTestUtil.h"
+#include "tests/renderers/VolumeFileTestUtil.h"
+
+namespace renderers {
+namespace {
+
+using namespace volfiletest;
+
+// ---- hostile files: one error naming the file, fast, no crash ------------------------------
+
+std::string errorOf(const fs::path& path, bool loadToo = true) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string message = "(no error)";
+  try {
+    const VolumeSource s = fileSource(path);
+    if (loadToo) loadVolume(s, {{0, 0, 0}, s.grid.dims});
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(seconds, 2.0) << path;
+  return message;
+}
+
+void expectError(const std::string& name, const std::string& bytes, const std::string& says) {
+  writeFile(folder() / name, bytes);
+  const std::string message = errorOf(folder() / name);
+  EXPECT_NE(message.find(says), std::string::npos) << name << ": " << message;
+  if (says != "(no error)") {
+    EXPECT_NE(message.find(name), std::string::npos) << "the error names the file: " << message;
+  }
+}
+
+TEST(VolumeFile, HostileFilesGiveOneErrorNamingTheFile) {
+  const std::string nrrd = "NRRD0004\ndimension: 3\n";
+  const std::string u8 = voxelBytesOf<std::uint8_t>(false, true);
+  expectError("short.nrrd", nrrd + "type: uchar\nsizes: 13 9 7\n\n" + u8.substr(0, 100),
+              "shorter than the 868 the header calls for");
+  expectError("huge.nrrd", nrrd + "type: uchar\nsizes: 13 9 70000\n\n" + u8, "more than the cap");
+  expectError("total.nrrd", nrrd + "type: uchar\nsizes: 16000 16000 16000\n\n",
+              "voxels, more than");
+  expectError("type.nrrd", nrrd + "type: block\nsizes: 13 9 7\n\n", "type 'block'");
+  expectError("enc.nrrd", nrrd + "type: uchar\nencoding: bzip2\nsizes: 13 9 7\n\n", "bzip2");
+  expectError("dim.nrrd", "NRRD0004\ndimension: 4\n", "dimension 4");
+  expectError("junk.nrrd", nrrd + "sizes: 13 9 x7\n", "'x7' is not a number");
+  expectError("line.nrrd", nrrd + "type: uchar\nsizes 13 9 7\n", "line.nrrd:4");
+  expectError("endian.nrrd", nrrd + "type: short\nsizes: 13 9 7\n\n", "misses field 'endian'");
+  expectError("nomagic.nrrd", "PK\3\4", "not an NRRD file");
+  expectError("endsearly.nrrd",
+              nrrd + "type: uchar\nencoding: gzip\nsizes: 13 9 7\n\n" + gzipped(u8.substr(0, 500)),
+              "ends after 500 bytes");
+  expectError("corrupt.nrrd",
+              nrrd + "type: uchar\nencoding: gzip\nsizes: 13 9 7\n\n" + std::string(300, 'z'),
+              "corrupt");
+  // A gzip bomb: 32 MiB of zeros behind a header asking for 819 bytes: reading stops there.
+  expectError("bomb.nrrd",
+              nrrd + "type: uchar\nencoding: gzip\nsizes: 13 9 7\n\n" +
+                  gzipped(std::string(32u << 20, '\0')),
+              "(no error)");
+  expectError("bomb2.nrrd",
+              nrrd + "type: uchar\nencoding: gzip\nsizes: 1000 1000 40\n\n" +
+                  gzipped(std::string(16u << 20, '\0')),
+              "ends after 16777216 bytes");
+  const std::string nifti = niftiHeader(kDims, 2, 8);
+  expectError("trunc.nii", nifti.substr(0, 200), "too short for a NIfTI-1 header");
+  expectError("short.nii", nifti + u8.substr(0, 10), "shorter than");
+  std::string lying = nifti;
+  lying[70] = 77;  // datatype 77: no such type
+  expectError("type.nii", lying + u8, "'datatype' 77");
+  std::string big = nifti;
+  const std::int16_t huge = 30000;
+  for (int a = 0; a < 3; ++a) std::memcpy(big.data() + 42 + 2 * a, &huge, 2);
+  expectError("huge.nii", big, "must be between 2 and 16384");
+  std::string magic = nifti;
+  magic[345] = 'i';
+  expectError("magic.nii", magic + u8, "'magic'");
+  expectError("notgz.nii.gz", gzipped(nifti + u8).substr(0, 300), "ends after");
+  expectError("nometa.mha", "ObjectType = Image\nNDims = 3\nDimSize = 13 9 7\n", "ElementDataFile");
+  expectError("metatype.mha",
+              "NDims = 3\nDimSize = 13 9 7\nElementType = MET_STRING\nElementDataFile = LOCAL\n",
+              "MET_STRING");
+  expectError("nofile.mhd",
+              "NDims = 3\nDimSize = 13 9 7\nElementType = MET_UCHAR\nElementDataFile = gone.raw\n",
+              "nofile.mhd: its data file");
+  expectError("garbage.h5", "not an hdf5 file at all", "cannot open as an HDF5 file");
+  expectError("garbage.nc", "CDF\1 lies", "has 0 3-D/4-D variables");
+  // Wrong types: a NetCDF text variable; an HDF5 file with only a 2-D dataset.
+  {
+    const fs::path p = folder() / "text.nc";
+    int nc, d[3], v;
+    nc_create(p.c_str(), NC_CLOBBER, &nc);
+    nc_def_dim(nc, "z", 2, &d[0]), nc_def_dim(nc, "y", 2, &d[1]), nc_def_dim(nc, "x", 2, &d[2]);
+    nc_def_var(nc, "words", NC_CHAR, 3, d, &v);
+    nc_close(nc);
+    const std::string m = errorOf(p);
+    EXPECT_NE(m.find("text.nc: variable 'words': the variable's type is not one"),
+              std::string::npos)
+        << m;
+  }
+  {
+    const fs::path p = folder() / "flat.h5";
+    const hid_t f = H5Fcreate(p.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    const hsize_t d2[2] = {4, 4};
+    const hid_t space = H5Screate_simple(2, d2, nullptr);
+    H5Dclose(H5Dcreate2(f, "/image", H5T_IEEE_F32LE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    H5Sclose(space);
+    H5Fclose(f);
+    const std::string m = errorOf(p);
+    EXPECT_NE(m.find("flat.h5: the file has 0 3-D/4-D datasets"), std::string::npos) << m;
+  }
+}
+
+}  // namespace
+}  // namespace renderers
