@@ -12,16 +12,14 @@
 #include <thread>
 
 #include "messaging/Error.h"
+#include "tests/Stopwatch.h"
 
 namespace messaging {
 namespace {
 
 using namespace std::chrono_literals;
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
+using testutil::Clock;
+using testutil::secondsSince;
 
 double threadCpuSeconds() {
   timespec ts{};

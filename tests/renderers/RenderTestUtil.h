@@ -8,8 +8,10 @@
 #include <string>
 #include <vector>
 
+#include "renderers/Camera.h"
 #include "renderers/CanvasImage.h"
 #include "renderers/Renderer.h"
+#include "renderers/scivis/Box.h"
 
 namespace renderers::test {
 
@@ -34,6 +36,15 @@ inline std::string cgalBunny() {
   }
   fs::remove_all(scratch);
   return fs::exists(target) ? target.string() : std::string();
+}
+
+// The camera ray through the centre of pixel (x, y), and where it enters and leaves `box`; false
+// when it misses the box.
+inline bool pixelRayThrough(const Camera& camera, int x, int y, const Box3& box, Vec3& origin,
+                            Vec3& dir, float& t0, float& t1) {
+  camera.ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f, 0.5f, 0.5f, origin, dir);
+  t0 = 0, t1 = Box3::kInf;
+  return clipToBox(box, origin, reciprocal(dir), t0, t1);
 }
 
 inline std::vector<float> renderImage(const Renderer& r, int width, int height, int tileSize,

@@ -124,9 +124,9 @@ TEST(SciVis, ARayCutInTwoCompositesToTheWholeRay) {
     for (int x = 3; x < 64; x += 7) {
       const Sampler sampler(9, x, y, 0, 0);
       Vec3 o, d;
-      camera.ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f, 0.5f, 0.5f, o, d);
-      float t0 = 0, t1 = Box3::kInf;
-      if (!clipToBox(Box3{Vec3{-1.2f}, Vec3{1.2f}}, o, reciprocal(d), t0, t1)) continue;
+      float t0, t1;
+      if (!test::pixelRayThrough(camera, x, y, Box3{Vec3{-1.2f}, Vec3{1.2f}}, o, d, t0, t1))
+        continue;
       const Fragment whole = renderer.integrate(o, d, t0, t1, sampler);
       for (float cut : {0.23f, 0.5f, 0.81f}) {
         const float tc = t0 + cut * (t1 - t0);

@@ -95,9 +95,9 @@ TEST(VolumeMarch, CutRaysGiveTheSseFragments) {
     for (int x = 1; x < 64; x += 3) {
       const Sampler sampler(4, x, y, 0, 0);
       Vec3 o, d;
-      camera.ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f, 0.5f, 0.5f, o, d);
-      float t0 = 0, t1 = Box3::kInf;
-      if (!clipToBox(Box3{Vec3{-1.0f}, Vec3{1.0f}}, o, reciprocal(d), t0, t1)) continue;
+      float t0, t1;
+      if (!test::pixelRayThrough(camera, x, y, Box3{Vec3{-1.0f}, Vec3{1.0f}}, o, d, t0, t1))
+        continue;
       for (float cut : {0.0f, 0.3f, 0.71f}) {
         const float tc = t0 + cut * (t1 - t0);
         pieces.push_back({o, d, t0, tc, sampler});

@@ -11,17 +11,15 @@
 #include <thread>
 
 #include "dfb/Error.h"
+#include "tests/Stopwatch.h"
 #include "wall/Error.h"
 
 namespace wall {
 namespace {
 
 using namespace std::chrono_literals;
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
+using testutil::Clock;
+using testutil::secondsSince;
 
 TEST(FrameCredits, AcknowledgementsCountUpInOrderAndKeepTheirTimes) {
   FrameCredits credits;

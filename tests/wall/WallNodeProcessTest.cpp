@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "tests/Stopwatch.h"
 #include "wall/Capture.h"
 #include "wall/Error.h"
 #include "wall/OsmesaPresenter.h"
@@ -25,7 +26,8 @@ namespace wall {
 namespace {
 
 using namespace std::chrono_literals;
-using Clock = std::chrono::steady_clock;
+using testutil::Clock;
+using testutil::secondsSince;
 constexpr int kTile = 16;
 
 // One 40x30 display: 3 x 2 tiles of 16, the last column 8 wide and the last row 14 high.
@@ -43,10 +45,6 @@ Layout oneDisplay() {
 
 std::uint32_t canvasPixel(int x, int y, std::uint32_t frame) {
   return static_cast<std::uint32_t>(x * 5 + y * 700 + static_cast<int>(frame) * 31) | 0xff000000u;
-}
-
-double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
 // A node with everything it needs; what it acknowledges to the renderers is recorded.
