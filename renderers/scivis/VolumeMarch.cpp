@@ -127,9 +127,11 @@ AVX2_INLINE __m256 lerp(__m256 a, __m256 b, __m256 f) {
 
 // The 8 corner voxels of the cells at offsets[l] of 8 lanes, in VolumeField::interpolate()'s
 // order, a register per corner: pairs along x loaded 64 bits at a time and transposed.
+// (_mm_loadl_epi64 is an unaligned 64-bit load: a voxel pair is only 4-byte aligned, and
+// loading it as a double is undefined behaviour that UBSan reports.)
 AVX2_INLINE __m128 pairs(const float* a, const float* b) {
-  return _mm_castpd_ps(_mm_loadh_pd(_mm_load_sd(reinterpret_cast<const double*>(a)),
-                                    reinterpret_cast<const double*>(b)));
+  return _mm_castsi128_ps(_mm_unpacklo_epi64(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(a)),
+                                             _mm_loadl_epi64(reinterpret_cast<const __m128i*>(b))));
 }
 
 AVX2_INLINE void corners8(const float* voxels, const int offsets[8], int strideY, int strideZ,
