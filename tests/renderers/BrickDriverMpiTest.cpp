@@ -12,6 +12,7 @@
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/BrickFrameDriver.h"
 #include "tests/MpiTestUtil.h"
+#include "tests/renderers/BrickTestUtil.h"
 #include "tests/renderers/RenderTestUtil.h"
 
 namespace renderers {
@@ -54,24 +55,8 @@ RenderSettings settings() {
 // copy; empty elsewhere).
 std::vector<float> renderHeld(const std::shared_ptr<SceneDesc>& desc, std::vector<HeldBrick> held,
                               MPI_Comm comm) {
-  BrickDriverOptions bo;
-  bo.threads = 2;
-  BrickFrameDriver driver(desc, settings(), bo, std::move(held), comm);
-  messaging::Messenger messenger(comm);
-  dfb::DfbOptions options;
-  options.width = kWidth, options.height = kHeight, options.tileSize = kTile;
-  options.format = dfb::DisplayFormat::RGBAF32;
-  options.frameTimeout = std::chrono::milliseconds(30000);
-  driver.configure(options);
-  std::vector<float> image;
-  {
-    dfb::DistributedFrameBuffer fb(messenger, comm, options);
-    for (int f = 0; f < kFrames; ++f)
-      driver.renderFrame(fb, {static_cast<std::uint32_t>(f), 0}, desc->camera);
-    image = fb.imageRgbaF32();
-  }
-  messenger.stop();
-  return image;
+  return test::renderHeldBricks(desc, settings(), std::move(held), comm, kTile, kFrames,
+                                std::chrono::milliseconds(30000));
 }
 
 // The image of kFrames accumulated frames with `bricks` bricks on the first `ranks` ranks of the

@@ -8,38 +8,15 @@
 #include <cmath>
 #include <cstring>
 
-#include "dfb/DistributedFrameBuffer.h"
 #include "renderers/SceneToml.h"
 #include "renderers/scivis/BrickFrameDriver.h"
 #include "tests/MpiTestUtil.h"
+#include "tests/renderers/BrickTestUtil.h"
 
 namespace renderers {
 namespace {
 
 constexpr int kWidth = 64, kHeight = 48, kTile = 16;
-
-std::vector<float> renderHeld(const std::shared_ptr<SceneDesc>& desc, std::vector<HeldBrick> held,
-                              MPI_Comm comm) {
-  RenderSettings settings;
-  settings.width = kWidth, settings.height = kHeight, settings.seed = 11;
-  BrickDriverOptions bo;
-  bo.threads = 2;
-  BrickFrameDriver driver(desc, settings, bo, std::move(held), comm);
-  messaging::Messenger messenger(comm);
-  dfb::DfbOptions options;
-  options.width = kWidth, options.height = kHeight, options.tileSize = kTile;
-  options.format = dfb::DisplayFormat::RGBAF32;
-  options.frameTimeout = std::chrono::milliseconds(60000);
-  driver.configure(options);
-  std::vector<float> image;
-  {
-    dfb::DistributedFrameBuffer fb(messenger, comm, options);
-    driver.renderFrame(fb, {0, 0}, desc->camera);
-    image = fb.imageRgbaF32();
-  }
-  messenger.stop();
-  return image;
-}
 
 // `bricks` bricks on the first `ranks` ranks of the world (rank 0's image; empty elsewhere).
 std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int ranks, int bricks) {
@@ -47,7 +24,12 @@ std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int rank
   const int rank = testutil::worldRank();
   MPI_Comm_split(MPI_COMM_WORLD, rank < ranks ? 0 : 1, rank, &comm);
   std::vector<float> image;
-  if (rank < ranks) image = renderHeld(desc, loadOwnBricks(*desc, bricks, 1, rank, ranks), comm);
+  if (rank < ranks) {
+    RenderSettings settings;
+    settings.width = kWidth, settings.height = kHeight, settings.seed = 11;
+    image = test::renderHeldBricks(desc, settings, loadOwnBricks(*desc, bricks, 1, rank, ranks),
+                                   comm, kTile, 1, std::chrono::milliseconds(60000));
+  }
   MPI_Comm_free(&comm);
   MPI_Barrier(MPI_COMM_WORLD);
   return image;

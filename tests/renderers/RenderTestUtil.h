@@ -38,13 +38,26 @@ inline std::string cgalBunny() {
   return fs::exists(target) ? target.string() : std::string();
 }
 
-// The camera ray through the centre of pixel (x, y), and where it enters and leaves `box`; false
-// when it misses the box.
-inline bool pixelRayThrough(const Camera& camera, int x, int y, const Box3& box, Vec3& origin,
-                            Vec3& dir, float& t0, float& t1) {
-  camera.ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f, 0.5f, 0.5f, origin, dir);
-  t0 = 0, t1 = Box3::kInf;
-  return clipToBox(box, origin, reciprocal(dir), t0, t1);
+// A camera ray through the centre of pixel (x, y), entering the box at t0 and leaving at t1.
+struct PixelRay {
+  int x, y;
+  Vec3 origin, dir;
+  float t0, t1;
+};
+
+// The rays through the pixels (x0 + i dx, y0 + j dy) of a width x height canvas that meet `box`,
+// row by row.
+inline std::vector<PixelRay> pixelRaysThrough(const Camera& camera, int width, int height, int x0,
+                                              int dx, int y0, int dy, const Box3& box) {
+  std::vector<PixelRay> rays;
+  for (int y = y0; y < height; y += dy)
+    for (int x = x0; x < width; x += dx) {
+      PixelRay r{x, y, {}, {}, 0, Box3::kInf};
+      camera.ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f, 0.5f, 0.5f, r.origin,
+                 r.dir);
+      if (clipToBox(box, r.origin, reciprocal(r.dir), r.t0, r.t1)) rays.push_back(r);
+    }
+  return rays;
 }
 
 inline std::vector<float> renderImage(const Renderer& r, int width, int height, int tileSize,

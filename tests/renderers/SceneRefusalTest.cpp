@@ -78,6 +78,11 @@ look_at = [0, 0, 0]
 type = "diffuse"
 )";  // 5 lines
 
+// A [[volumes]] table of a built-in wavelet field (4 lines); `dims` as "x, y, z".
+std::string waveletVolume(const std::string& name, const std::string& dims) {
+  return "[[volumes]]\nname = \"" + name + "\"\nsource = \"wavelet\"\ndims = [" + dims + "]\n";
+}
+
 // Sets a memory limit for one test and restores the machine's when it ends.
 class Budget {
  public:
@@ -91,11 +96,8 @@ constexpr std::uint64_t kMiB = 1 << 20;
 
 TEST(SceneTomlBudget, AVolumeBeyondTheRankIsRefusedBeforeItsVoxelsNamingDimsAndBytes) {
   const Budget budget(64 * kMiB);
-  const std::string path = writeScene("big-volume.toml", kCamera + R"([[volumes]]
-name = "w"
-source = "wavelet"
-dims = [512, 512, 512]
-)");
+  const std::string path =
+      writeScene("big-volume.toml", kCamera + waveletVolume("w", "512, 512, 512"));
   const auto start = std::chrono::steady_clock::now();
   const std::string e = loadErrorOf(path);
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
@@ -125,15 +127,9 @@ dims = [512, 512, 512]
 TEST(SceneTomlBudget, VolumesCountTogether) {
   const Budget budget(64 * kMiB);
   // Two volumes of 32 MiB (+ macrocells): each fits, both do not; the larger is named.
-  const std::string path = writeScene("two-volumes.toml", kCamera + R"([[volumes]]
-name = "a"
-source = "wavelet"
-dims = [256, 256, 128]
-[[volumes]]
-name = "b"
-source = "wavelet"
-dims = [256, 256, 129]
-)");
+  const std::string path =
+      writeScene("two-volumes.toml", kCamera + waveletVolume("a", "256, 256, 128") +
+                                         waveletVolume("b", "256, 256, 129"));
   const std::string e = loadErrorOf(path);
   EXPECT_EQ(e.rfind("FILE:13: volume 'b'.dims: this rank holds", 0), 0u) << e;
   EXPECT_TRUE(contains(e, "more than this rank may hold: 64 MiB")) << e;

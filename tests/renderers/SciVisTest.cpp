@@ -120,26 +120,23 @@ TEST(SciVis, ARayCutInTwoCompositesToTheWholeRay) {
   const SciVisRenderer renderer(scene, settingsFor(64, 64));
   Camera camera(desc->camera, 64, 64);
   int compared = 0;
-  for (int y = 4; y < 64; y += 9)
-    for (int x = 3; x < 64; x += 7) {
-      const Sampler sampler(9, x, y, 0, 0);
-      Vec3 o, d;
-      float t0, t1;
-      if (!test::pixelRayThrough(camera, x, y, Box3{Vec3{-1.2f}, Vec3{1.2f}}, o, d, t0, t1))
-        continue;
-      const Fragment whole = renderer.integrate(o, d, t0, t1, sampler);
-      for (float cut : {0.23f, 0.5f, 0.81f}) {
-        const float tc = t0 + cut * (t1 - t0);
-        const Fragment a = renderer.integrate(o, d, t0, tc, sampler);
-        const Fragment b = renderer.integrate(o, d, tc, t1, sampler);
-        for (int k = 0; k < 4; ++k) {
-          const float composite = a.rgba[k] + (1.0f - a.rgba[3]) * b.rgba[k];
-          EXPECT_NEAR(composite, whole.rgba[k], 1e-5f * std::max(1.0f, std::abs(whole.rgba[k])))
-              << "pixel " << x << "," << y << " cut at " << cut << " channel " << k;
-        }
-        ++compared;
+  for (const test::PixelRay& r :
+       test::pixelRaysThrough(camera, 64, 64, 3, 7, 4, 9, Box3{Vec3{-1.2f}, Vec3{1.2f}})) {
+    const Sampler sampler(9, r.x, r.y, 0, 0);
+    const Vec3 o = r.origin, d = r.dir;
+    const Fragment whole = renderer.integrate(o, d, r.t0, r.t1, sampler);
+    for (float cut : {0.23f, 0.5f, 0.81f}) {
+      const float tc = r.t0 + cut * (r.t1 - r.t0);
+      const Fragment a = renderer.integrate(o, d, r.t0, tc, sampler);
+      const Fragment b = renderer.integrate(o, d, tc, r.t1, sampler);
+      for (int k = 0; k < 4; ++k) {
+        const float composite = a.rgba[k] + (1.0f - a.rgba[3]) * b.rgba[k];
+        EXPECT_NEAR(composite, whole.rgba[k], 1e-5f * std::max(1.0f, std::abs(whole.rgba[k])))
+            << "pixel " << r.x << "," << r.y << " cut at " << cut << " channel " << k;
       }
+      ++compared;
     }
+  }
   EXPECT_GT(compared, 40);
 }
 

@@ -22,6 +22,19 @@ namespace {
 
 using namespace volfiletest;
 
+// `d` drawn by scivis (48x36, one sample a pixel), its first volume coloured viridis over [lo, hi]
+// with opacity `opacity[0]` at lo and `opacity[1]` at hi, every isosurface at `isoValue`.
+std::vector<float> renderField(SceneDesc d, float lo, float hi, const float (&opacity)[2],
+                               float isoValue, std::uint64_t seed) {
+  d.volumes[0].transfer = transferFunctionPreset("viridis", lo, hi);
+  d.volumes[0].transfer.opacities = {{lo, opacity[0]}, {hi, opacity[1]}};
+  for (IsosurfaceDesc& iso : d.isosurfaces) iso.value = isoValue;
+  const RenderScene scene = buildRenderScene("scivis", d);
+  RenderSettings settings;
+  settings.width = 48, settings.height = 36, settings.seed = seed;
+  return test::renderImage(*makeRenderer("scivis", scene, settings), 48, 36, 16, 2, 1);
+}
+
 TEST(VolumeFile, Hdf5AndNetCdfRenderAsTheSameFieldFromARawFile) {
   writeHdf5(folder() / "r.h5");
   writeNetCdf(folder() / "r3.nc", false);
@@ -37,13 +50,7 @@ TEST(VolumeFile, Hdf5AndNetCdfRenderAsTheSameFieldFromARawFile) {
     source.grid.spacing = Vec3{0.15f};
     source.grid.origin = {-0.9f, -0.6f, -0.45f};
     d.volumes[0].source = source;
-    d.volumes[0].transfer = transferFunctionPreset("viridis", -20, 99);
-    d.volumes[0].transfer.opacities = {{-20, 0.1f}, {99, 0.8f}};
-    for (IsosurfaceDesc& iso : d.isosurfaces) iso.value = 30;
-    const RenderScene scene = buildRenderScene("scivis", d);
-    RenderSettings settings;
-    settings.width = 48, settings.height = 36, settings.seed = 3;
-    return test::renderImage(*makeRenderer("scivis", scene, settings), 48, 36, 16, 2, 1);
+    return renderField(d, -20, 99, {0.1f, 0.8f}, 30, 3);
   };
   const std::vector<float> expected = render(raw);
   int lit = 0;
@@ -88,13 +95,7 @@ TEST(VolumeFile, NanVoxelsRenderAsTheFieldWithoutThem) {
     s.grid.dims = d;
     s.grid.spacing = Vec3{0.08f};
     s.grid.origin = {x0, -0.6f, -0.52f};
-    scene.volumes[0].transfer = transferFunctionPreset("viridis", -40, 90);
-    scene.volumes[0].transfer.opacities = {{-40, 0.05f}, {90, 0.3f}};
-    for (IsosurfaceDesc& iso : scene.isosurfaces) iso.value = 40;
-    const RenderScene built = buildRenderScene("scivis", scene);
-    RenderSettings settings;
-    settings.width = 48, settings.height = 36, settings.seed = 5;
-    return test::renderImage(*makeRenderer("scivis", built, settings), 48, 36, 16, 2, 1);
+    return renderField(scene, -40, 90, {0.05f, 0.3f}, 40, 5);
   };
   const std::vector<float> a = render("nan.raw", dims, -0.92f);
   const std::vector<float> b = render("cut.raw", {dims.x - 6, dims.y, dims.z}, -0.92f + 6 * 0.08f);

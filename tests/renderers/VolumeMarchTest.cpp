@@ -91,19 +91,15 @@ TEST(VolumeMarch, CutRaysGiveTheSseFragments) {
   Camera camera(desc.camera, 64, 64);
   const SciVisRenderer sse(*scene.scivis, settings(64, 64), SciVisOptions{true, MarchKernel::Sse});
   std::vector<SciVisRenderer::RayPiece> pieces;
-  for (int y = 2; y < 64; y += 5)
-    for (int x = 1; x < 64; x += 3) {
-      const Sampler sampler(4, x, y, 0, 0);
-      Vec3 o, d;
-      float t0, t1;
-      if (!test::pixelRayThrough(camera, x, y, Box3{Vec3{-1.0f}, Vec3{1.0f}}, o, d, t0, t1))
-        continue;
-      for (float cut : {0.0f, 0.3f, 0.71f}) {
-        const float tc = t0 + cut * (t1 - t0);
-        pieces.push_back({o, d, t0, tc, sampler});
-        pieces.push_back({o, d, tc, t1, sampler});
-      }
+  for (const test::PixelRay& r :
+       test::pixelRaysThrough(camera, 64, 64, 1, 3, 2, 5, Box3{Vec3{-1.0f}, Vec3{1.0f}})) {
+    const Sampler sampler(4, r.x, r.y, 0, 0);
+    for (float cut : {0.0f, 0.3f, 0.71f}) {
+      const float tc = r.t0 + cut * (r.t1 - r.t0);
+      pieces.push_back({r.origin, r.dir, r.t0, tc, sampler});
+      pieces.push_back({r.origin, r.dir, tc, r.t1, sampler});
     }
+  }
   ASSERT_GT(pieces.size(), 600u);
   for (MarchKernel k : kernels()) {
     const SciVisRenderer other(*scene.scivis, settings(64, 64), SciVisOptions{true, k});

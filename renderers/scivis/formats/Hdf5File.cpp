@@ -5,7 +5,6 @@
 #include <vector>
 
 #include "renderers/Error.h"
-#include "renderers/scivis/formats/ArrayHeader.h"
 #include "renderers/scivis/formats/LibraryFormats.h"
 
 namespace renderers {
@@ -62,13 +61,6 @@ std::vector<std::string> volumeDatasets(hid_t file) {
   return names;
 }
 
-std::string listed(const std::vector<std::string>& names) {
-  if (names.empty()) return "none";
-  std::string s;
-  for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
-
 FileType fileTypeOf(hid_t type, const std::string& what) {
   const H5T_class_t c = H5Tget_class(type);
   const std::size_t size = H5Tget_size(type);
@@ -111,7 +103,7 @@ void resolveHdf5(VolumeSource& source) {
   if (f.dataset.empty()) {
     if (names.size() != 1)
       throw Error(f.path + ": the file has " + std::to_string(names.size()) +
-                  " 3-D/4-D datasets; say which with 'dataset' (" + listed(names) + ")");
+                  " 3-D/4-D datasets; say which with 'dataset' (" + listedNames(names) + ")");
     f.dataset = names[0];
   }
   const Handle d(H5Lexists(file.get(), f.dataset.c_str(), H5P_DEFAULT) > 0
@@ -120,31 +112,15 @@ void resolveHdf5(VolumeSource& source) {
                  H5Dclose);
   if (!d.ok())
     throw Error(f.path + ": no dataset '" + f.dataset +
-                "' (the 3-D/4-D datasets: " + listed(names) + ")");
+                "' (the 3-D/4-D datasets: " + listedNames(names) + ")");
   const std::string what = f.path + ": dataset '" + f.dataset + "'";
   const Handle space(H5Dget_space(d.get()), H5Sclose);
   const int rank = H5Sget_simple_extent_ndims(space.get());
-  if (rank != 3 && rank != 4)
-    throw Error(what + " has " + std::to_string(rank) +
-                " dimensions; 3 (z, y, x) or 4 (t, z, y, "
-                "x) are read");
+  checkArrayRank(rank, what);
   hsize_t dims[4] = {};
   H5Sget_simple_extent_dims(space.get(), dims, nullptr);
-  const int t = rank - 3;
-  if (rank == 4 && (f.time < 0 || static_cast<hsize_t>(f.time) >= dims[0]))
-    throw Error(what + ": time " + std::to_string(f.time) + " is past its " +
-                std::to_string(dims[0]) + " time steps");
-  if (rank == 3 && f.time != 0)
-    throw Error(what + " is 3-D: it has no time " + std::to_string(f.time));
-  for (int a = 0; a < 3; ++a)
-    if (dims[t + a] > static_cast<hsize_t>(kMaxFileDims))
-      throw Error(what + ": " + std::to_string(dims[t + a]) +
-                  " voxels along an axis, more than "
-                  "the cap of " +
-                  std::to_string(kMaxFileDims));
-  source.grid.dims = {static_cast<int>(dims[t + 2]), static_cast<int>(dims[t + 1]),
-                      static_cast<int>(dims[t])};
-  checkFileDims(source.grid.dims, what);
+  const std::uint64_t len[4] = {dims[0], dims[1], dims[2], dims[3]};
+  source.grid.dims = arrayGridDims(len, rank, f.time, what);
   const Handle type(H5Dget_type(d.get()), H5Tclose);
   const FileType stored = fileTypeOf(type.get(), what);
   f.missing = attribute(d.get(), "_FillValue");

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "renderers/Error.h"
+#include "renderers/scivis/formats/ArrayHeader.h"
 
 namespace renderers::headertext {
 
@@ -57,6 +58,17 @@ std::vector<long long> integers(std::string_view value, std::size_t count, long 
     out.push_back(static_cast<long long>(v));
   }
   return out;
+}
+
+Index3 fileDims(std::string_view value, const std::string& where) {
+  const auto s = integers(value, 3, 0, 1LL << 40, where);
+  for (int a = 0; a < 3; ++a)
+    if (s[a] > kMaxFileDims)
+      throw Error(where + ": " + std::to_string(s[a]) + " voxels along axis " + std::to_string(a) +
+                  ", more than the cap of " + std::to_string(kMaxFileDims));
+  const Index3 dims{static_cast<int>(s[0]), static_cast<int>(s[1]), static_cast<int>(s[2])};
+  checkFileDims(dims, where);
+  return dims;
 }
 
 std::string besideFile(const std::string& path, std::string_view name) {

@@ -5,6 +5,8 @@
 #include <string_view>
 #include <vector>
 
+#include "renderers/scivis/Volume.h"
+
 namespace renderers::headertext {
 
 std::string_view trim(std::string_view s);
@@ -16,6 +18,8 @@ std::vector<double> numbers(std::string_view value, std::size_t count, const std
 // Exactly `count` integers in [lo, hi].
 std::vector<long long> integers(std::string_view value, std::size_t count, long long lo,
                                 long long hi, const std::string& where);
+// Three voxel counts (x, y, z), each within the per-axis cap, then checked by checkFileDims.
+Index3 fileDims(std::string_view value, const std::string& where);
 // The folder of `path` joined with `name` (unless absolute).
 std::string besideFile(const std::string& path, std::string_view name);
 

@@ -75,13 +75,7 @@ ArrayHeader parseMetaImageHeader(std::string_view bytes, const std::string& path
         throw Error(fw + ": dfbwall reads 3-D images, not " + std::string(value) + "-D");
       haveNDims = true;
     } else if (key == "DimSize") {
-      const auto s = integers(value, 3, 0, 1LL << 40, fw);
-      for (int a = 0; a < 3; ++a)
-        if (s[a] > kMaxFileDims)
-          throw Error(fw + ": " + std::to_string(s[a]) + " voxels along axis " + std::to_string(a) +
-                      ", more than the cap of " + std::to_string(kMaxFileDims));
-      h.dims = {static_cast<int>(s[0]), static_cast<int>(s[1]), static_cast<int>(s[2])};
-      checkFileDims(h.dims, fw);
+      h.dims = fileDims(value, fw);
       haveDims = true;
     } else if (key == "ElementSpacing" || key == "ElementSize") {
       const Vec3 s = vec3(value, fw);

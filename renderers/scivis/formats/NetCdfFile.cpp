@@ -6,7 +6,6 @@
 #include <vector>
 
 #include "renderers/Error.h"
-#include "renderers/scivis/formats/ArrayHeader.h"
 #include "renderers/scivis/formats/LibraryFormats.h"
 
 namespace renderers {
@@ -47,13 +46,6 @@ std::vector<std::string> volumeVariables(const NcFile& f) {
       names.push_back(name);
   }
   return names;
-}
-
-std::string listed(const std::vector<std::string>& names) {
-  if (names.empty()) return "none";
-  std::string s;
-  for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
 }
 
 FileType fileTypeOf(nc_type t, const std::string& what) {
@@ -122,38 +114,23 @@ void resolveNetCdf(VolumeSource& source) {
   if (f.variable.empty()) {
     if (names.size() != 1)
       throw Error(f.path + ": the file has " + std::to_string(names.size()) +
-                  " 3-D/4-D variables; say which with 'variable' (" + listed(names) + ")");
+                  " 3-D/4-D variables; say which with 'variable' (" + listedNames(names) + ")");
     f.variable = names[0];
   }
   int var = -1;
   if (nc_inq_varid(file.id(), f.variable.c_str(), &var) != NC_NOERR)
     throw Error(f.path + ": no variable '" + f.variable +
-                "' (the 3-D/4-D variables: " + listed(names) + ")");
+                "' (the 3-D/4-D variables: " + listedNames(names) + ")");
   const std::string what = f.path + ": variable '" + f.variable + "'";
   int rank = 0, dimIds[NC_MAX_VAR_DIMS] = {};
   nc_type type;
   file.check(nc_inq_var(file.id(), var, nullptr, &type, &rank, dimIds, nullptr), what);
-  if (rank != 3 && rank != 4)
-    throw Error(what + " has " + std::to_string(rank) +
-                " dimensions; 3 (z, y, x) or 4 (t, z, y, "
-                "x) are read");
+  checkArrayRank(rank, what);
   std::size_t len[4] = {};
   for (int a = 0; a < rank; ++a) file.check(nc_inq_dimlen(file.id(), dimIds[a], &len[a]), what);
+  const std::uint64_t extents[4] = {len[0], len[1], len[2], len[3]};
+  source.grid.dims = arrayGridDims(extents, rank, f.time, what);
   const int t = rank - 3;
-  if (rank == 4 && (f.time < 0 || static_cast<std::size_t>(f.time) >= len[0]))
-    throw Error(what + ": time " + std::to_string(f.time) + " is past its " +
-                std::to_string(len[0]) + " time steps");
-  if (rank == 3 && f.time != 0)
-    throw Error(what + " is 3-D: it has no time " + std::to_string(f.time));
-  for (int a = 0; a < 3; ++a)
-    if (len[t + a] > static_cast<std::size_t>(kMaxFileDims))
-      throw Error(what + ": " + std::to_string(len[t + a]) +
-                  " voxels along an axis, more than "
-                  "the cap of " +
-                  std::to_string(kMaxFileDims));
-  source.grid.dims = {static_cast<int>(len[t + 2]), static_cast<int>(len[t + 1]),
-                      static_cast<int>(len[t])};
-  checkFileDims(source.grid.dims, what);
   const FileType stored = fileTypeOf(type, what);
   f.missing = attribute(file.id(), var, "_FillValue");
   for (double m : attribute(file.id(), var, "missing_value")) f.missing.push_back(m);

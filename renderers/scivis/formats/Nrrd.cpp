@@ -123,13 +123,7 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
         throw Error(fw + ": dfbwall reads 3-D scalar volumes, not dimension " + std::string(value));
       haveDimension = true;
     } else if (field == "sizes") {
-      const auto s = integers(value, 3, 0, 1LL << 40, fw);
-      for (int a = 0; a < 3; ++a)
-        if (s[a] > kMaxFileDims)
-          throw Error(fw + ": " + std::to_string(s[a]) + " voxels along axis " + std::to_string(a) +
-                      ", more than the cap of " + std::to_string(kMaxFileDims));
-      h.dims = {static_cast<int>(s[0]), static_cast<int>(s[1]), static_cast<int>(s[2])};
-      checkFileDims(h.dims, fw);
+      h.dims = fileDims(value, fw);
       haveSizes = true;
     } else if (field == "spacings") {
       const auto s = numbers(value, 3, fw);

@@ -161,6 +161,35 @@ void markMissing(Volume& v, const std::vector<double>& missing, float slope, flo
   v.updateRange();
 }
 
+std::string listedNames(const std::vector<std::string>& names) {
+  if (names.empty()) return "none";
+  std::string s;
+  for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+void checkArrayRank(int rank, const std::string& what) {
+  if (rank != 3 && rank != 4)
+    throw Error(what + " has " + std::to_string(rank) +
+                " dimensions; 3 (z, y, x) or 4 (t, z, y, x) are read");
+}
+
+Index3 arrayGridDims(const std::uint64_t* len, int rank, int time, const std::string& what) {
+  const int t = rank - 3;
+  if (rank == 4 && (time < 0 || static_cast<std::uint64_t>(time) >= len[0]))
+    throw Error(what + ": time " + std::to_string(time) + " is past its " + std::to_string(len[0]) +
+                " time steps");
+  if (rank == 3 && time != 0) throw Error(what + " is 3-D: it has no time " + std::to_string(time));
+  for (int a = 0; a < 3; ++a)
+    if (len[t + a] > static_cast<std::uint64_t>(kMaxFileDims))
+      throw Error(what + ": " + std::to_string(len[t + a]) +
+                  " voxels along an axis, more than the cap of " + std::to_string(kMaxFileDims));
+  const Index3 dims{static_cast<int>(len[t + 2]), static_cast<int>(len[t + 1]),
+                    static_cast<int>(len[t])};
+  checkFileDims(dims, what);
+  return dims;
+}
+
 VoxelType heldTypeOf(FileType type, bool anyMissing, bool scaled) {
   if (anyMissing || scaled) return VoxelType::Float32;
   StoredArray a;

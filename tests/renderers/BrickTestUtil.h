@@ -1,0 +1,42 @@
+#pragma once
+// Rendering held bricks through the real DFB, as the data-parallel MPI tests compare them.
+#include <mpi.h>
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "dfb/DistributedFrameBuffer.h"
+#include "renderers/scivis/BrickFrameDriver.h"
+
+namespace renderers::test {
+
+// The RGBAF32 image of `frames` accumulated frames of the bricks `held` on the ranks of `comm`
+// (rank 0's copy; empty elsewhere), rendered with 2 threads a rank in tiles of `tileSize`.
+inline std::vector<float> renderHeldBricks(const std::shared_ptr<SceneDesc>& desc,
+                                           const RenderSettings& settings,
+                                           std::vector<HeldBrick> held, MPI_Comm comm, int tileSize,
+                                           int frames, std::chrono::milliseconds frameTimeout) {
+  BrickDriverOptions bo;
+  bo.threads = 2;
+  BrickFrameDriver driver(desc, settings, bo, std::move(held), comm);
+  messaging::Messenger messenger(comm);
+  dfb::DfbOptions options;
+  options.width = settings.width, options.height = settings.height, options.tileSize = tileSize;
+  options.format = dfb::DisplayFormat::RGBAF32;
+  options.frameTimeout = frameTimeout;
+  driver.configure(options);
+  std::vector<float> image;
+  {
+    dfb::DistributedFrameBuffer fb(messenger, comm, options);
+    for (int f = 0; f < frames; ++f)
+      driver.renderFrame(fb, {static_cast<std::uint32_t>(f), 0}, desc->camera);
+    image = fb.imageRgbaF32();
+  }
+  messenger.stop();
+  return image;
+}
+
+}  // namespace renderers::test
