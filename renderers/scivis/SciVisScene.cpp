@@ -311,7 +311,11 @@ std::vector<ResolvedLight> resolveLights(const SceneDesc& desc) {
 SciVisScene::~SciVisScene() = default;
 
 std::size_t SciVisScene::bytes() const {
-  return content_.bytes() + static_cast<std::size_t>(std::max<std::int64_t>(0, embree_->bytes));
+  std::size_t normals = 0;
+  for (const Embree::Geometry& g : embree_->geometries)
+    normals += (g.normals.size() + g.vertexNormals.size()) * sizeof(Vec3);
+  return content_.bytes() + normals +
+         static_cast<std::size_t>(std::max<std::int64_t>(0, embree_->bytes));
 }
 
 void SciVisScene::addIsosurfaces(std::size_t volume) {
