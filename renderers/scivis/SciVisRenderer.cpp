@@ -136,6 +136,7 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
   Fragment out;
   if (!(t0 < t1)) return out;
   const float minTransmittance = scene_.desc().scivis.minTransmittance;
+  const int aoSamples = scene_.desc().scivis.aoSamples;
 
   // Surfaces come from Embree one at a time, in order; the next one waits in `surface`.
   SurfaceHit surface;
@@ -146,7 +147,9 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
     haveSurface = scene_.intersectSurface(origin, dir, t0, t1, surface) && surface.t < t1;
   auto shadeSurface = [&](const SurfaceHit& s) {
     const Vec3 p = origin + dir * s.t;
-    const Vec3 c = shade(p, s.normal, dir, s.color, *s.material, sampler.fork(bitsOf(s.t)));
+    // The hit's random numbers are for ambient occlusion only: no stream to derive without it.
+    const Sampler hitSampler = aoSamples > 0 ? sampler.fork(bitsOf(s.t)) : Sampler{};
+    const Vec3 c = shade(p, s.normal, dir, s.color, *s.material, hitSampler);
     acc.add(c, s.material->opacity, s.t);
   };
   auto nextSurface = [&] {
