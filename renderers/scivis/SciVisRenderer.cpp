@@ -321,21 +321,27 @@ void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment
   // Each ray's first surface is asked for once, for packets of consecutive rays together
   // (the same hits as one at a time), and handed to marchOnly() and integrate().
   constexpr int kSurfaces = SciVisScene::kSurfacePacket;
+  const bool surfaces = scene_.hasCameraSurfaces();  // none: nothing to ask (a volume alone)
+  static const FirstSurface none{false, SurfaceHit{}};
   SciVisScene::SurfaceQuery queries[kSurfaces];
   SurfaceHit hits[kSurfaces];
   bool found[kSurfaces];
+  FirstSurface firsts[kSurfaces];
   for (std::size_t base = 0; base < count; base += kSurfaces) {
     const int n = static_cast<int>(std::min<std::size_t>(kSurfaces, count - base));
-    for (int j = 0; j < n; ++j) {
-      const RayPiece& r = rays[base + static_cast<std::size_t>(j)];
-      queries[j] = {r.origin, r.dir, r.t0, r.t1, r.t0 < r.t1};
+    if (surfaces) {
+      for (int j = 0; j < n; ++j) {
+        const RayPiece& r = rays[base + static_cast<std::size_t>(j)];
+        queries[j] = {r.origin, r.dir, r.t0, r.t1, r.t0 < r.t1};
+      }
+      scene_.intersectSurfaces(queries, n, hits, found);
+      for (int j = 0; j < n; ++j) firsts[j] = {found[j], hits[j]};
     }
-    scene_.intersectSurfaces(queries, n, hits, found);
     for (int j = 0; j < n; ++j) {
       const std::size_t i = base + static_cast<std::size_t>(j);
       const RayPiece& r = rays[i];
       const Vec3 invDir = reciprocal(r.dir);
-      const FirstSurface first{found[j], hits[j]};
+      const FirstSurface& first = surfaces ? firsts[j] : none;
       if (packets &&
           marchOnly(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, first, waiting[waitingCount])) {
         waitingIndex[waitingCount++] = i;

@@ -472,6 +472,8 @@ bool SciVisScene::intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFa
   return true;
 }
 
+bool SciVisScene::hasCameraSurfaces() const { return embree_->cameraGeometries > 0; }
+
 void SciVisScene::intersectSurfaces(const SurfaceQuery* queries, int count, SurfaceHit* hits,
                                     bool* found) const {
   constexpr int n = kSurfacePacket;

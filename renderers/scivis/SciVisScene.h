@@ -103,6 +103,8 @@ class SciVisScene {
     bool active;
   };
   static constexpr int kSurfacePacket = 16;
+  // Whether camera rays can meet any surface at all (else intersectSurface() finds none).
+  bool hasCameraSurfaces() const;
   void intersectSurfaces(const SurfaceQuery* queries, int count, SurfaceHit* hits,
                          bool* found) const;
   // Whether any surface (camera or ghost data) blocks origin + t dir, t in [tNear, tFar].
