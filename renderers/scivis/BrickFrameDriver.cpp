@@ -298,12 +298,13 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     thread_local std::vector<SciVisRenderer::RayPiece> rays;
     thread_local std::vector<Fragment> fragments;
     thread_local std::vector<std::uint8_t> hits;
+    thread_local std::vector<float> depths;  // per pixel: brickDepth() of its first sample's ray
     const int rows =
         std::max(1, static_cast<int>(SciVisRenderer::kBatch /
                                      std::max<std::size_t>(1, std::size_t{spp} * region.width())));
     for (int y0 = region.y0; y0 < region.y1; y0 += rows) {
       const int y1 = std::min(region.y1, y0 + rows);
-      rays.clear(), hits.clear();
+      rays.clear(), hits.clear(), depths.clear();
       for (int y = y0; y < y1; ++y)
         for (int x = region.x0; x < region.x1; ++x)
           for (std::uint32_t s = 0; s < spp; ++s) {
@@ -316,6 +317,11 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
             const bool hit = renderer && clipToBox(bounds, origin, reciprocal(dir), a, b);
             hits.push_back(hit ? 1 : 0);
             if (!renderer || hit) rays.push_back({origin, dir, a, b, sampler});
+            // Sorted by the first sample's ray: with one sample a frame (the usual progressive
+            // case) every sample's fragments then composite in exactly its own ray's order,
+            // also in pixels that see a brick border edge-on. (Where the ray enters the brick
+            // is `a`, brickDepth()'s own clip.)
+            if (renderer && s == 0) depths.push_back(hit ? a : brickDepth(bounds, origin, dir));
           }
       fragments.resize(rays.size());
       if (renderer) renderer->integrate(rays.data(), rays.size(), fragments.data());
@@ -337,14 +343,9 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
                                 static_cast<std::size_t>(x - region.x0);
           for (int c = 0; c < 4; ++c)
             tile.color[4 * p + static_cast<std::size_t>(c)] = sum[c] * inv;
-          if (renderer) {
-            // Sorted by the first sample's ray: with one sample a frame (the usual progressive
-            // case) every sample's fragments then composite in exactly its own ray's order,
-            // also in pixels that see a brick border edge-on.
-            Vec3 origin, dir;
-            sampleRay(camera, m.settings.seed, x, y, accumulationId, 0, origin, dir);
-            tile.depth[p] = brickDepth(bounds, origin, dir);
-          }
+          if (renderer)
+            tile.depth[p] = depths[static_cast<std::size_t>(y - y0) * region.width() +
+                                   static_cast<std::size_t>(x - region.x0)];
         }
     }
     if (renderer) m.brickTiles.fetch_add(1, std::memory_order_relaxed);

@@ -131,18 +131,25 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, float t0, float t1,
 }
 
 Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1,
-                                   const Sampler& sampler) const {
+                                   const Sampler& sampler, const FirstSurface* first) const {
   Accumulator acc;
   Fragment out;
   if (!(t0 < t1)) return out;
   const float minTransmittance = scene_.desc().scivis.minTransmittance;
+  const int aoSamples = scene_.desc().scivis.aoSamples;
 
   // Surfaces come from Embree one at a time, in order; the next one waits in `surface`.
   SurfaceHit surface;
-  bool haveSurface = scene_.intersectSurface(origin, dir, t0, t1, surface) && surface.t < t1;
+  bool haveSurface;
+  if (first)
+    surface = first->hit, haveSurface = first->found && surface.t < t1;
+  else
+    haveSurface = scene_.intersectSurface(origin, dir, t0, t1, surface) && surface.t < t1;
   auto shadeSurface = [&](const SurfaceHit& s) {
     const Vec3 p = origin + dir * s.t;
-    const Vec3 c = shade(p, s.normal, dir, s.color, *s.material, sampler.fork(bitsOf(s.t)));
+    // The hit's random numbers are for ambient occlusion only: no stream to derive without it.
+    const Sampler hitSampler = aoSamples > 0 ? sampler.fork(bitsOf(s.t)) : Sampler{};
+    const Vec3 c = shade(p, s.normal, dir, s.color, *s.material, hitSampler);
     acc.add(c, s.material->opacity, s.t);
   };
   auto nextSurface = [&] {
@@ -272,7 +279,8 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
 }
 
 bool SciVisRenderer::marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1,
-                               const Sampler& sampler, MarchRay& ray) const {
+                               const Sampler& sampler, const FirstSurface& first,
+                               MarchRay& ray) const {
   // integrate()'s test for its one-volume march, when nothing else lies on the ray at all (its
   // isosurfaces are triangles: the surface query below sees them).
   const auto& layers = *layers_;
@@ -281,8 +289,7 @@ bool SciVisRenderer::marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, flo
   float volumeStart = t0 - step, volumeEnd = t1 + step;
   if (!clipToBox(layers[0].field->dataBounds(), origin, invDir, volumeStart, volumeEnd))
     return false;
-  SurfaceHit surface;
-  if (scene_.intersectSurface(origin, dir, t0, t1, surface) && surface.t < t1) return false;
+  if (first.found && first.hit.t < t1) return false;
   const float jitter = sampler.get(2);
   ray = {origin,    dir,
          invDir,    t0,
@@ -311,16 +318,38 @@ void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment
     }
     waitingCount = 0;
   };
-  for (std::size_t i = 0; i < count; ++i) {
-    const RayPiece& r = rays[i];
-    const Vec3 invDir = reciprocal(r.dir);
-    if (packets &&
-        marchOnly(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, waiting[waitingCount])) {
-      waitingIndex[waitingCount++] = i;
-      if (waitingCount == kMarchPacket) marchWaiting();
-      continue;
+  // Each ray's first surface is asked for once, for packets of consecutive rays together
+  // (the same hits as one at a time), and handed to marchOnly() and integrate().
+  constexpr int kSurfaces = SciVisScene::kSurfacePacket;
+  const bool surfaces = scene_.hasCameraSurfaces();  // none: nothing to ask (a volume alone)
+  static const FirstSurface none{false, SurfaceHit{}};
+  SciVisScene::SurfaceQuery queries[kSurfaces];
+  SurfaceHit hits[kSurfaces];
+  bool found[kSurfaces];
+  FirstSurface firsts[kSurfaces];
+  for (std::size_t base = 0; base < count; base += kSurfaces) {
+    const int n = static_cast<int>(std::min<std::size_t>(kSurfaces, count - base));
+    if (surfaces) {
+      for (int j = 0; j < n; ++j) {
+        const RayPiece& r = rays[base + static_cast<std::size_t>(j)];
+        queries[j] = {r.origin, r.dir, r.t0, r.t1, r.t0 < r.t1};
+      }
+      scene_.intersectSurfaces(queries, n, hits, found);
+      for (int j = 0; j < n; ++j) firsts[j] = {found[j], hits[j]};
     }
-    out[i] = integrate(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler);
+    for (int j = 0; j < n; ++j) {
+      const std::size_t i = base + static_cast<std::size_t>(j);
+      const RayPiece& r = rays[i];
+      const Vec3 invDir = reciprocal(r.dir);
+      const FirstSurface& first = surfaces ? firsts[j] : none;
+      if (packets &&
+          marchOnly(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, first, waiting[waitingCount])) {
+        waitingIndex[waitingCount++] = i;
+        if (waitingCount == kMarchPacket) marchWaiting();
+        continue;
+      }
+      out[i] = integrate(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, &first);
+    }
   }
   if (waitingCount > 0) marchWaiting();
 }

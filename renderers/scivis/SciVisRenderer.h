@@ -2,9 +2,10 @@
 // The scientific-visualization renderer ("scivis"): one camera ray per sample, integrated front
 // to back through volumes (emission-absorption, opacity corrected for the step) with the
 // surfaces it meets in between (isosurfaces, polygonised when the scene is built, particles,
-// meshes: all Embree geometry; opaque or transparent), shaded locally: diffuse + Phong highlight, shadows from directional and point
-// lights, ambient occlusion. Secondary rays never leave the brick's data (with its ghosts), so
-// the renderer works on one brick of a distributed scene as well as on the whole.
+// meshes: all Embree geometry; opaque or transparent), shaded locally: diffuse + Phong highlight,
+// shadows from directional and point lights, ambient occlusion. Secondary rays never leave the
+// brick's data (with its ghosts), so the renderer works on one brick of a distributed scene as well
+// as on the whole.
 //
 // Every ray is integrated over an interval [t0, t1] (the brick's clip bounds; the whole scene:
 // [0, inf)). Volume samples lie on a grid fixed along the ray, t_k = (k + j) * step with j from
@@ -72,13 +73,19 @@ class SciVisRenderer final : public Renderer {
 
  private:
   struct March;
-  // integrate() with 1 / dir, which the caller has already.
-  Fragment integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1,
-                     const Sampler& sampler) const;
+  // The ray's first surface in [t0, t1], when the caller has already asked Embree for it.
+  struct FirstSurface {
+    bool found;
+    SurfaceHit hit;
+  };
+  // integrate() with 1 / dir, which the caller has already, and the first surface (null: asked
+  // here).
+  Fragment integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1, const Sampler& sampler,
+                     const FirstSurface* first = nullptr) const;
   // Whether origin + t dir over [t0, t1) holds nothing but one visible volume without
   // isosurfaces (integrate()'s march alone); then `ray` is that march.
   bool marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1, const Sampler& sampler,
-                 MarchRay& ray) const;
+                 const FirstSurface& first, MarchRay& ray) const;
   Vec3 shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, const Material& m,
              const Sampler& hitSampler) const;
   bool occluded(Vec3 origin, Vec3 dir, float tFar) const;

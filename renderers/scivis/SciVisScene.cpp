@@ -10,6 +10,7 @@
 
 #include "renderers/EmbreeRays.h"
 #include "renderers/Error.h"
+#include "renderers/Parallel.h"
 #include "renderers/scivis/Bricks.h"
 #include "renderers/scivis/Isosurfaces.h"
 #include "renderers/scivis/TransferFunction.h"
@@ -57,12 +58,17 @@ struct SciVisScene::Embree {
     const IsosurfaceDesc* isosurface = nullptr;  // an isosurface's triangles on `field`
     const VolumeField* field = nullptr;
     std::vector<Vec3> normals;  // per mesh triangle, unit
+    // An isosurface seen by the camera: its triangles (Embree's index buffer, alive as long as
+    // the scene) and per vertex the field's unit gradient there (zero where it has none).
+    const std::uint32_t* triangles = nullptr;
+    std::vector<Vec3> vertexNormals;
   };
   RTCDevice device = nullptr;
   RTCScene camera = nullptr, shading = nullptr;
   std::vector<Geometry> geometries;   // by geometry ID, the same in both scenes
   std::size_t cameraGeometries = 0;   // none: no ray needs to ask Embree (a volume-only scene)
   std::size_t shadingGeometries = 0;  // ghost data: seen by shading rays only
+  bool packetsExact = true;           // no spheres among the camera geometries
   // What shading rays test: the camera scene, or (with ghost data) the shading scene, which
   // holds the ghost geometries and the camera scene as an instance (one BVH per triangle).
   RTCScene occluders = nullptr;
@@ -119,6 +125,7 @@ struct SciVisScene::Embree {
     }
     info.mesh = mesh;
     info.particles = particles;
+    if (particles && seenByCamera) packetsExact = false;
     attach(g, std::move(info), seenByCamera);
   }
 
@@ -146,6 +153,22 @@ struct SciVisScene::Embree {
     Geometry info;
     info.isosurface = &iso;
     info.field = field;
+    if (seenByCamera && field) {
+      // The field's gradient at each vertex, once, instead of at every hit (6 trilinear samples
+      // per camera ray). A vertex has the same bits in every brick that makes it (Isosurfaces.h)
+      // and the gradient reads only voxels the brick holds with its ghost layer, so normals
+      // match across bricks as the hit-point gradients did.
+      info.triangles = idx;
+      info.vertexNormals.resize(mesh.positions.size());
+      constexpr std::size_t kChunk = 16384;
+      const std::size_t n = mesh.positions.size();
+      parallelFor((n + kChunk - 1) / kChunk, [&](std::size_t c) {
+        for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+          const Vec3 grad = field->gradient(mesh.positions[i], 0.5f * field->minSpacing());
+          info.vertexNormals[i] = length(grad) > 0 ? normalize(grad) : Vec3{};
+        }
+      });
+    }
     attach(g, std::move(info), seenByCamera);
   }
 
@@ -288,7 +311,11 @@ std::vector<ResolvedLight> resolveLights(const SceneDesc& desc) {
 SciVisScene::~SciVisScene() = default;
 
 std::size_t SciVisScene::bytes() const {
-  return content_.bytes() + static_cast<std::size_t>(std::max<std::int64_t>(0, embree_->bytes));
+  std::size_t normals = 0;
+  for (const Embree::Geometry& g : embree_->geometries)
+    normals += (g.normals.size() + g.vertexNormals.size()) * sizeof(Vec3);
+  return content_.bytes() + normals +
+         static_cast<std::size_t>(std::max<std::int64_t>(0, embree_->bytes));
 }
 
 void SciVisScene::addIsosurfaces(std::size_t volume) {
@@ -441,15 +468,63 @@ bool SciVisScene::intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFa
   if (embree_->cameraGeometries == 0) return false;
   const RTCRayHit rh = embree::closestHit(embree_->camera, origin, dir, tNear, tFar);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-  const Embree::Geometry& g = embree_->geometries[rh.hit.geomID];
-  const std::uint32_t prim = rh.hit.primID;
-  hit.t = rh.ray.tfar;
+  fillSurfaceHit(rh.hit.geomID, rh.hit.primID, rh.hit.u, rh.hit.v, rh.ray.tfar, origin, dir, hit);
+  return true;
+}
+
+bool SciVisScene::hasCameraSurfaces() const { return embree_->cameraGeometries > 0; }
+
+void SciVisScene::intersectSurfaces(const SurfaceQuery* queries, int count, SurfaceHit* hits,
+                                    bool* found) const {
+  constexpr int n = kSurfacePacket;
+  if (count > n) throw Error("intersectSurfaces: more rays than a packet holds");
+  if (embree_->cameraGeometries == 0 || !embree_->packetsExact) {
+    for (int i = 0; i < count; ++i) {
+      const SurfaceQuery& q = queries[i];
+      found[i] = q.active && intersectSurface(q.origin, q.dir, q.tNear, q.tFar, hits[i]);
+    }
+    return;
+  }
+  static_assert(n == 16, "traced with rtcIntersect16");
+  // Not RTC_INTERSECT_CONTEXT_FLAG_COHERENT: its frustum traversal breaks ties on shared edges
+  // differently from single rays (see renderers/Scene.cpp).
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  alignas(64) int valid[n];
+  alignas(64) RTCRayHit16 rh;
+  for (int i = 0; i < n; ++i) {
+    const bool on = i < count && queries[i].active;
+    valid[i] = on ? -1 : 0;
+    const SurfaceQuery q = on ? queries[i] : SurfaceQuery{{}, {0, 0, 1}, 0, 0, false};
+    rh.ray.org_x[i] = q.origin.x, rh.ray.org_y[i] = q.origin.y, rh.ray.org_z[i] = q.origin.z;
+    rh.ray.dir_x[i] = q.dir.x, rh.ray.dir_y[i] = q.dir.y, rh.ray.dir_z[i] = q.dir.z;
+    rh.ray.tnear[i] = q.tNear, rh.ray.tfar[i] = q.tFar, rh.ray.time[i] = 0;
+    rh.ray.mask[i] = 0xFFFFFFFFu, rh.ray.id[i] = 0, rh.ray.flags[i] = 0;
+    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+  }
+  rtcIntersect16(valid, embree_->camera, &context, &rh);
+  for (int i = 0; i < count; ++i) {
+    found[i] = valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+    if (found[i])
+      fillSurfaceHit(rh.hit.geomID[i], rh.hit.primID[i], rh.hit.u[i], rh.hit.v[i], rh.ray.tfar[i],
+                     queries[i].origin, queries[i].dir, hits[i]);
+  }
+}
+
+void SciVisScene::fillSurfaceHit(std::uint32_t geomID, std::uint32_t prim, float u, float v,
+                                 float t, Vec3 origin, Vec3 dir, SurfaceHit& hit) const {
+  const Embree::Geometry& g = embree_->geometries[geomID];
+  hit.t = t;
   if (g.isosurface) {
-    // Shaded as the field's level set: the normal from the field's gradient at the hit.
+    // Shaded as the field's level set: the normal from the field's gradient at the triangle's
+    // vertices, interpolated (Phong normals) with the hit's barycentric coordinates.
     hit.material = &desc_->materials[g.isosurface->material];
     hit.color = hit.material->color;
-    const Vec3 gradient = g.field->gradient(origin + dir * hit.t, 0.5f * g.field->minSpacing());
-    hit.normal = length(gradient) > 0 ? normalize(gradient) : -dir;
+    const std::uint32_t* tri = g.triangles + 3 * std::size_t{prim};
+    const Vec3 n = g.vertexNormals[tri[0]] * (1.0f - u - v) + g.vertexNormals[tri[1]] * u +
+                   g.vertexNormals[tri[2]] * v;
+    hit.normal = length(n) > 0 ? normalize(n) : -dir;
   } else if (g.mesh) {
     hit.material = &desc_->materials[g.mesh->material];
     hit.normal = g.normals[prim];
@@ -460,7 +535,6 @@ bool SciVisScene::intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFa
     hit.normal = normalize(origin + dir * hit.t - p.centers[prim]);
     hit.color = p.attribute.empty() ? hit.material->color : p.colorMap.color(p.attribute[prim]);
   }
-  return true;
 }
 
 bool SciVisScene::surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const {

@@ -92,6 +92,21 @@ class SciVisScene {
   // The closest surface (mesh, particle or isosurface) along origin + t dir with t in
   // [tNear, tFar], camera data only.
   bool intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFar, SurfaceHit& hit) const;
+  // intersectSurface() for up to kSurfacePacket rays at once, the same hits bit for bit:
+  // found[i] = intersectSurface(queries[i]..., hits[i]) for the active queries. Traced as one
+  // Embree packet when the camera data are triangles only (the packet and single-ray triangle
+  // tests agree exactly, as renderers/Scene's packets rely on; sphere tests do not), else one
+  // ray at a time.
+  struct SurfaceQuery {
+    Vec3 origin, dir;
+    float tNear, tFar;
+    bool active;
+  };
+  static constexpr int kSurfacePacket = 16;
+  // Whether camera rays can meet any surface at all (else intersectSurface() finds none).
+  bool hasCameraSurfaces() const;
+  void intersectSurfaces(const SurfaceQuery* queries, int count, SurfaceHit* hits,
+                         bool* found) const;
   // Whether any surface (camera or ghost data) blocks origin + t dir, t in [tNear, tFar].
   bool surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const;
 
@@ -143,6 +158,9 @@ class SciVisScene {
   float step_ = 1, aoDistance_ = 1, extent_ = 1;
   IsosurfaceStats isosurfaceStats_;
   struct Embree;
+  // A hit's shading data from Embree's answer.
+  void fillSurfaceHit(std::uint32_t geomID, std::uint32_t prim, float u, float v, float t,
+                      Vec3 origin, Vec3 dir, SurfaceHit& hit) const;
   std::unique_ptr<Embree> embree_;
 };
 
