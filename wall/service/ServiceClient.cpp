@@ -26,7 +26,7 @@ const std::byte* bytesOf(const zmq::message_t& m) {
 ServiceClient::ServiceClient(const std::string& address, const Hello& hello,
                              std::chrono::milliseconds timeout,
                              const std::function<void(const std::string&)>& onQueued)
-    : address_(address), socket_(context_, zmq::socket_type::dealer), timeout_(timeout) {
+    : address_(address), socket_(context_, zmq::socket_type::dealer) {
   const std::string endpoint = tcpEndpoint(address, "--connect");
   // The goodbye of a job that fails gets a second to leave.
   configureSocket(socket_, static_cast<int>(timeout.count()), 1000);

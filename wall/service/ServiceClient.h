@@ -62,7 +62,6 @@ class ServiceClient {
   zmq::socket_t socket_;
   Directory directory_;
   messaging::Bytes directoryBytes_;
-  std::chrono::milliseconds timeout_;
   FrameCredits* credits_ = nullptr;
   std::function<void(const std::string&)> onError_;
   std::mutex mutex_;
