@@ -89,12 +89,19 @@ pv_run() {
   local n=$1 threads=$2 err=$3 attempt
   shift 3
   for attempt in 1 2 3 4 5; do
-    if env DISPLAY=":$pv_display" HWLOC_COMPONENTS=-gl ${pvpath:+PYTHONPATH=$pvpath} mpiexec -n "$n" \
-      --oversubscribe --bind-to none -x DISPLAY -x LP_NUM_THREADS="$threads" ${pvpath:+-x PYTHONPATH} \
-      pvbatch --force-offscreen-rendering "$root/bench/paraview_wavelet.py" "$@" 2>"$err" >"$err.out" &&
-      ! grep -q "remote rendering which, however, is not available" "$err"; then
+    local rc=0
+    env DISPLAY=":$pv_display" HWLOC_COMPONENTS=-gl ${pvpath:+PYTHONPATH=$pvpath} timeout -k 5 240 \
+      mpiexec -n "$n" --oversubscribe --bind-to none -x DISPLAY -x LP_NUM_THREADS="$threads" \
+      ${pvpath:+-x PYTHONPATH} pvbatch --force-offscreen-rendering "$root/bench/paraview_wavelet.py" \
+      "$@" 2>"$err" >"$err.out" || rc=$?
+    if [ $rc -eq 0 ] && ! grep -q "remote rendering which, however, is not available" "$err"; then
       grep '^{' "$err.out"
       return 0
+    fi
+    # Seen here too: after one rank lost the display the others spun in a collective for good.
+    if [ $rc -eq 124 ] || [ $rc -eq 137 ]; then
+      echo "  (pvbatch did not finish in 4 minutes, attempt $attempt; again)" >&2
+      continue
     fi
     grep -q "bad X server connection\|remote rendering which, however, is not available" "$err" || return 1
     echo "  (a pvbatch rank could not open the X display, attempt $attempt; again)" >&2

@@ -344,24 +344,14 @@ void Scene::intersect(const RayPacket& rays, PacketHits& out) const {
     return;
   }
   static_assert(n == 16, "RayPacket is traced with rtcIntersect16");
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
   alignas(64) int valid[n];
   alignas(64) RTCRayHit16 rh;
   for (int i = 0; i < n; ++i) {
     valid[i] = rays.active[i] ? -1 : 0;
-    const Vec3 o = rays.origin[i], d = rays.direction[i];
-    rh.ray.org_x[i] = o.x, rh.ray.org_y[i] = o.y, rh.ray.org_z[i] = o.z, rh.ray.tnear[i] = 0;
-    rh.ray.dir_x[i] = d.x, rh.ray.dir_y[i] = d.y, rh.ray.dir_z[i] = d.z, rh.ray.time[i] = 0;
-    rh.ray.tfar[i] = std::numeric_limits<float>::infinity(), rh.ray.mask[i] = 0xFFFFFFFFu;
-    rh.ray.id[i] = 0, rh.ray.flags[i] = 0;
-    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    embree::setLane(rh, i, rays.origin[i], rays.direction[i], 0.0f,
+                    std::numeric_limits<float>::infinity());
   }
-  // Not RTC_INTERSECT_CONTEXT_FLAG_COHERENT: Embree's frustum traversal for coherent packets
-  // breaks ties on shared edges differently from single rays, and even lets rays through
-  // edges that single rays hit (PacketTest's tie test fails with it).
-  rtcIntersect16(valid, impl_->top, &context, &rh);
+  embree::closestHits16(impl_->top, valid, rh);
   for (int i = 0; i < n; ++i) {
     out.found[i] = rays.active[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
     if (out.found[i])

@@ -486,24 +486,15 @@ void SciVisScene::intersectSurfaces(const SurfaceQuery* queries, int count, Surf
     return;
   }
   static_assert(n == 16, "traced with rtcIntersect16");
-  // Not RTC_INTERSECT_CONTEXT_FLAG_COHERENT: its frustum traversal breaks ties on shared edges
-  // differently from single rays (see renderers/Scene.cpp).
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
   alignas(64) int valid[n];
   alignas(64) RTCRayHit16 rh;
   for (int i = 0; i < n; ++i) {
     const bool on = i < count && queries[i].active;
     valid[i] = on ? -1 : 0;
     const SurfaceQuery q = on ? queries[i] : SurfaceQuery{{}, {0, 0, 1}, 0, 0, false};
-    rh.ray.org_x[i] = q.origin.x, rh.ray.org_y[i] = q.origin.y, rh.ray.org_z[i] = q.origin.z;
-    rh.ray.dir_x[i] = q.dir.x, rh.ray.dir_y[i] = q.dir.y, rh.ray.dir_z[i] = q.dir.z;
-    rh.ray.tnear[i] = q.tNear, rh.ray.tfar[i] = q.tFar, rh.ray.time[i] = 0;
-    rh.ray.mask[i] = 0xFFFFFFFFu, rh.ray.id[i] = 0, rh.ray.flags[i] = 0;
-    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    embree::setLane(rh, i, q.origin, q.dir, q.tNear, q.tFar);
   }
-  rtcIntersect16(valid, embree_->camera, &context, &rh);
+  embree::closestHits16(embree_->camera, valid, rh);
   for (int i = 0; i < count; ++i) {
     found[i] = valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
     if (found[i])
