@@ -4,97 +4,24 @@
 #include <string_view>
 
 #include "wall/Error.h"
+#include "wall/service/WireFormat.h"
 
 namespace wall::service {
 namespace {
 
-class Writer {
- public:
-  explicit Writer(Kind kind, std::uint64_t session) {
-    MessageHeader h;
-    h.kind = static_cast<std::uint16_t>(kind);
-    h.session = session;
-    raw(&h, sizeof h);
-  }
-  // resize + memcpy rather than insert: GCC 12 at -O2 warns (-Wstringop-overflow, a false
-  // positive) about the inlined vector::insert into the fresh 16-byte header, which
-  // DFBWALL_WERROR turns into a build error.
-  void raw(const void* p, std::size_t n) {
-    if (n == 0) return;
-    const std::size_t at = bytes_.size();
-    bytes_.resize(at + n);
-    std::memcpy(bytes_.data() + at, p, n);
-  }
-  template <typename T>
-  void put(T value) {
-    raw(&value, sizeof value);
-  }
-  void text(const std::string& s) {
-    if (s.size() > kMaxStringBytes)
-      throw Error("a text field of " + std::to_string(s.size()) + " bytes (at most " +
-                  std::to_string(kMaxStringBytes) + ")");
-    put<std::uint16_t>(static_cast<std::uint16_t>(s.size()));
-    raw(s.data(), s.size());
-  }
-  messaging::Bytes take() { return std::move(bytes_); }
-
- private:
-  messaging::Bytes bytes_;
-};
-
-// Reads fields in order; any read past the end throws, naming the message.
-class Reader {
- public:
-  Reader(const std::byte* data, std::size_t size, const char* what)
-      : data_(data), size_(size), what_(what) {
-    skip(sizeof(MessageHeader));
-  }
-  void raw(void* p, std::size_t n) {
-    need(n);
-    std::memcpy(p, data_ + at_, n);
-    at_ += n;
-  }
-  template <typename T>
-  T get() {
-    T value;
-    raw(&value, sizeof value);
-    return value;
-  }
-  std::string text() {
-    const std::size_t n = get<std::uint16_t>();
-    if (n > kMaxStringBytes) fail("a text field longer than " + std::to_string(kMaxStringBytes));
-    need(n);
-    std::string s(reinterpret_cast<const char*>(data_ + at_), n);
-    at_ += n;
-    return s;
-  }
-  const std::byte* span(std::size_t n) {
-    need(n);
-    const std::byte* p = data_ + at_;
-    at_ += n;
-    return p;
-  }
-  void skip(std::size_t n) { span(n); }
-  std::size_t left() const { return size_ - at_; }
-  void end() {
-    if (at_ != size_) fail(std::to_string(size_ - at_) + " bytes too many");
-  }
-  [[noreturn]] void fail(const std::string& why) const {
-    throw Error(std::string("malformed ") + what_ + ": " + why);
-  }
-
- private:
-  void need(std::size_t n) const {
-    if (n > size_ - at_)
-      fail("ends after " + std::to_string(size_) + " bytes, " + std::to_string(n) +
-           " more needed at byte " + std::to_string(at_));
-  }
-  const std::byte* data_;
-  std::size_t size_, at_ = 0;
-  const char* what_;
-};
-
 constexpr std::uint32_t kMaxRanks = 1 << 20;
+
+DirectoryProcess readProcess(Reader& r, std::uint32_t index) {
+  DirectoryProcess p;
+  p.endpoint = r.text();
+  const auto live = r.get<std::uint8_t>();
+  if (live > 1)
+    r.fail("process " + std::to_string(index) + " has the live flag " + std::to_string(live));
+  p.live = live == 1;
+  if (p.live && p.endpoint.empty())
+    r.fail("live process " + std::to_string(index) + " has no endpoint");
+  return p;
+}
 
 }  // namespace
 
@@ -161,9 +88,13 @@ messaging::Bytes packDirectory(const Directory& d) {
     w.put<std::int32_t>(display.process);
   }
   w.put<std::uint32_t>(static_cast<std::uint32_t>(d.processes.size()));
-  for (const DirectoryProcess& p : d.processes) w.text(p.endpoint);
+  for (const DirectoryProcess& p : d.processes) {
+    w.text(p.endpoint);
+    w.put<std::uint8_t>(p.live ? 1 : 0);
+  }
   w.put<std::uint32_t>(d.framesInFlight);
   w.put<std::uint32_t>(d.timeoutMs);
+  w.put<std::uint32_t>(d.rosterVersion);
   w.text(d.layout.file);
   return w.take();
 }
@@ -195,9 +126,10 @@ Directory parseDirectory(const std::byte* data, std::size_t size) {
   const auto processes = r.get<std::uint32_t>();
   if (processes < 1 || processes > static_cast<std::uint32_t>(kMaxDisplays))
     r.fail(std::to_string(processes) + " wall processes");
-  for (std::uint32_t i = 0; i < processes; ++i) d.processes.push_back({r.text()});
+  for (std::uint32_t i = 0; i < processes; ++i) d.processes.push_back(readProcess(r, i));
   d.framesInFlight = r.get<std::uint32_t>();
   d.timeoutMs = r.get<std::uint32_t>();
+  d.rosterVersion = r.get<std::uint32_t>();
   d.layout.file = r.text();
   r.end();
   if (d.framesInFlight < 1 || d.framesInFlight > 16)
@@ -212,6 +144,34 @@ Directory parseDirectory(const std::byte* data, std::size_t size) {
       d.layout.processCount != static_cast<int>(processes))
     r.fail("canvas or process count does not match its displays");
   return d;
+}
+
+messaging::Bytes packRoster(const Roster& roster) {
+  Writer w(Kind::Roster, roster.session);
+  w.put<std::uint32_t>(roster.version);
+  w.put<std::uint32_t>(roster.fromFrame);
+  w.put<std::uint32_t>(static_cast<std::uint32_t>(roster.processes.size()));
+  for (const DirectoryProcess& p : roster.processes) {
+    w.text(p.endpoint);
+    w.put<std::uint8_t>(p.live ? 1 : 0);
+  }
+  w.text(roster.why.size() > kMaxStringBytes ? roster.why.substr(0, kMaxStringBytes) : roster.why);
+  return w.take();
+}
+
+Roster parseRoster(const std::byte* data, std::size_t size) {
+  Reader r(data, size, "roster");
+  Roster roster;
+  roster.session = parseHeader(data, size).session;
+  roster.version = r.get<std::uint32_t>();
+  roster.fromFrame = r.get<std::uint32_t>();
+  const auto processes = r.get<std::uint32_t>();
+  if (processes < 1 || processes > static_cast<std::uint32_t>(kMaxDisplays))
+    r.fail(std::to_string(processes) + " wall processes");
+  for (std::uint32_t i = 0; i < processes; ++i) roster.processes.push_back(readProcess(r, i));
+  roster.why = r.text();
+  r.end();
+  return roster;
 }
 
 messaging::Bytes packText(Kind kind, std::uint64_t session, const std::string& text) {
@@ -254,7 +214,7 @@ MessageHeader parseHeader(const std::byte* data, std::size_t size) {
     throw Error("protocol version " + std::to_string(h.version) + ", this side speaks " +
                 std::to_string(kProtocolVersion) + ": use the same dfbwall on both sides");
   if (h.kind < static_cast<std::uint16_t>(Kind::Hello) ||
-      h.kind > static_cast<std::uint16_t>(Kind::Batch))
+      h.kind > static_cast<std::uint16_t>(kLastKind))
     throw Error("unknown message kind " + std::to_string(h.kind));
   return h;
 }

@@ -4,10 +4,14 @@
 //
 //  - render rank 0 <-> wall process 0, the wall's directory socket (`--listen`): Hello, then
 //    Directory | Refused | Queued; during the job Keepalive, Capture, Bye from the job and
-//    Presented (the credit for frames in flight) and Ended (the wall ended the job) back;
+//    Presented (the credit for frames in flight), Roster (a wall process was lost or came back)
+//    and Ended (the wall ended the job) back;
 //  - every render rank -> the wall processes its tiles touch, each process's piece socket (its
 //    endpoint is in the directory): one Batch per (render rank, display, frame) of pieces,
 //    encoded with the job's codec (wall/service/Codec.h).
+//
+//  - the wall's own processes among themselves (wall/service/WallLink.h): Join, Welcome, Beat,
+//    Command, Barrier, Pixels, Dropped, on the same directory socket of process 0 (the head).
 //
 // Every message starts with a MessageHeader (magic, protocol version, kind, session id). The
 // wall never trusts a length, count, rectangle, display index or frame number from the wire:
@@ -25,7 +29,8 @@
 namespace wall::service {
 
 constexpr std::uint32_t kMagic = 0x57424644;  // "DFBW"
-constexpr std::uint16_t kProtocolVersion = 1;
+// 2: wall processes come and go (Roster, live flags in the directory, the wall link).
+constexpr std::uint16_t kProtocolVersion = 2;
 // Caps of what one message may say, checked before anything is allocated.
 constexpr std::size_t kMaxMessageBytes = std::size_t{1} << 30;
 constexpr std::size_t kMaxStringBytes = 4096;
@@ -41,7 +46,17 @@ enum class Kind : std::uint16_t {
   Presented = 8,
   Ended = 9,
   Batch = 10,
+  Roster = 11,
+  // The wall's own link (wall/service/WallLink.h); a job never sends or gets these.
+  Join = 12,
+  Welcome = 13,
+  Beat = 14,
+  Command = 15,
+  Barrier = 16,
+  Pixels = 17,
+  Dropped = 18,
 };
+constexpr Kind kLastKind = Kind::Dropped;
 
 struct MessageHeader {
   std::uint32_t magic = kMagic;
@@ -66,6 +81,7 @@ struct Hello {
 
 struct DirectoryProcess {
   std::string endpoint;  // "tcp://HOST:PORT" of the process's piece socket
+  bool live = true;      // false: the process is lost; pieces of its displays are not sent
 };
 
 // What the wall tells a job it accepted: everything needed to route pieces to the displays.
@@ -75,10 +91,25 @@ struct Directory {
   std::vector<DirectoryProcess> processes;
   std::uint32_t framesInFlight = 2;  // what the wall grants (at most what the job asked for)
   std::uint32_t timeoutMs = 60000;   // the wall drops a job it has not heard from for this long
+  std::uint32_t rosterVersion = 0;   // of `processes`; a Roster with a higher one replaces them
+};
+
+// The wall's processes changed during a job: one was lost (dropped from the swap barrier; the
+// job stops sending its displays' pieces, counting them as dropped) or (re)joined (the job sends
+// its pieces again, at the latest from `fromFrame`, to the endpoint named here, which changes
+// when a process restarts). Sent before the credit that lets the job start `fromFrame`, so a job
+// that applies the newest roster it has at the start of each frame is never late.
+struct Roster {
+  std::uint64_t session = 0;
+  std::uint32_t version = 0;
+  std::uint32_t fromFrame = 0;  // 0: a loss (at once)
+  std::vector<DirectoryProcess> processes;
+  std::string why;  // one line for the job's log: which process, which host, why
 };
 
 messaging::Bytes packHello(const Hello& hello);
 messaging::Bytes packDirectory(const Directory& directory);
+messaging::Bytes packRoster(const Roster& roster);
 // Refused, Ended: a reason. Queued: the job's place in the queue as text.
 messaging::Bytes packText(Kind kind, std::uint64_t session, const std::string& text);
 // Keepalive (value unused), Bye (the last frame), Capture (frame, sequence in `second`),
@@ -92,6 +123,9 @@ MessageHeader parseHeader(const std::byte* data, std::size_t size);
 Hello parseHello(const std::byte* data, std::size_t size);
 // Also validates the layout (a wall that sends nonsense is an error on the job's side too).
 Directory parseDirectory(const std::byte* data, std::size_t size);
+// Process count 1..kMaxDisplays, endpoints non-empty for live processes. The job checks the
+// count against its directory.
+Roster parseRoster(const std::byte* data, std::size_t size);
 std::string parseText(const std::byte* data, std::size_t size);
 struct Control {
   std::uint64_t value = 0;
