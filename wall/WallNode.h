@@ -45,6 +45,9 @@ struct WallNodeOptions {
   std::string captureDir;   // empty: no captures
   int captureEvery = 0;     // capture every K-th frame; 0: only the last
   std::uint32_t lastFrame = 0;
+  // A service wall process that (re)joins a running job presents from this frame on; pieces of
+  // earlier frames (sent before the job knew it was back) are dropped without a word.
+  std::uint32_t firstFrame = 1;
   std::chrono::milliseconds timeout{60000};
   // Pieces of frames more than this far past the last presented one are refused (an error):
   // the renderers run at most frames-in-flight ahead, so anything further is a corrupt or
@@ -203,6 +206,7 @@ class WallNode : public messaging::MessageHandler {
   std::string abortReason_;
   std::uint64_t bytesReceived_ = 0;
   std::int64_t unpackNs_ = 0, assembleNs_ = 0;
+  std::uint64_t staleDropped_ = 0;  // pieces of frames before options_.firstFrame
 };
 
 }  // namespace wall
