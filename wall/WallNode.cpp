@@ -65,6 +65,7 @@ WallNode::WallNode(const Layout& layout, WallPeers& peers, std::vector<Presenter
   }
   uploadBatch_ = std::max<size_t>(1, uploadBatch_ / kUploadBatches);
   lastPresented_ = static_cast<std::int64_t>(std::max<std::uint32_t>(options_.firstFrame, 1)) - 1;
+  firstFrame_ = options_.firstFrame;
 }
 
 WallNode::~WallNode() = default;
@@ -141,7 +142,7 @@ bool WallNode::receivePiece(const std::string& sender, std::uint32_t frameId, in
       // Everything about the piece is checked, and the piece claimed, before a pixel is copied:
       // a duplicate or a stray rectangle never touches a buffer the presenter may be reading.
       std::lock_guard lock(mutex_);
-      if (frameId < options_.firstFrame) {
+      if (firstFrame_ == 0 || frameId < firstFrame_) {
         ++staleDropped_;
         return true;
       }
@@ -226,6 +227,22 @@ void WallNode::keepWaiting() {
   std::lock_guard lock(mutex_);
   waitFrom_ = Clock::now();
   complete_.notify_all();
+}
+
+void WallNode::startAt(std::uint32_t firstFrame) {
+  std::lock_guard lock(mutex_);
+  if (firstFrame_ != 0) return;
+  firstFrame_ = std::max<std::uint32_t>(firstFrame, 1);
+  lastPresented_ = static_cast<std::int64_t>(firstFrame_) - 1;
+  complete_.notify_all();
+}
+
+std::uint32_t WallNode::waitForStart(Clock::time_point deadline) {
+  std::unique_lock lock(mutex_);
+  complete_.wait_until(lock, deadline, [&] {
+    return firstFrame_ != 0 || aborted_ || stopAfter_ >= 0 || !error_.empty();
+  });
+  return aborted_ || stopAfter_ >= 0 || !error_.empty() ? 0 : firstFrame_;
 }
 
 void WallNode::requestCapture(std::uint32_t frameId, std::uint64_t sequence) {
@@ -456,7 +473,7 @@ void WallNode::finish() {
     std::lock_guard lock(mutex_);
     last = lastPresented_;
   }
-  if (!options_.captureDir.empty() && last >= std::max<std::int64_t>(options_.firstFrame, 1) &&
+  if (!options_.captureDir.empty() && last >= std::max<std::int64_t>(firstFrame_, 1) &&
       last != lastCaptured_)
     capture(static_cast<std::uint32_t>(last));
 }

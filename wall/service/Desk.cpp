@@ -23,6 +23,7 @@ using Clock = std::chrono::steady_clock;
 constexpr std::size_t kMaxQueued = 16;    // jobs waiting behind the connected one (--wait)
 constexpr std::size_t kMaxLogged = 1024;  // lines about strangers between two jobs
 constexpr auto kTick = std::chrono::milliseconds(100);
+constexpr std::uint32_t kNotYet = 0xffffffffu;  // a seat's first frame before the process is Ready
 
 std::uint64_t randomId() {
   std::random_device device;
@@ -204,7 +205,7 @@ struct Desk::Impl {
     for (int p = 0; p < processCount; ++p) {
       const Seat& seat = seats[static_cast<size_t>(p)];
       const Member& m = members[static_cast<size_t>(p)];
-      out.push_back({m.endpoint, m.live && seat.in && !seat.done});
+      out.push_back({m.endpoint, m.live && seat.in && !seat.done && seat.fromFrame != kNotYet});
     }
     return out;
   }
@@ -394,6 +395,10 @@ struct Desk::Impl {
     switch (e.kind) {
       case Command::Ready:
         seat.ready = true;
+        if (e.a != 0 && seat.fromFrame == kNotYet) {
+          if (state == State::Running) joinedJob(p);
+          break;
+        }
         if (e.a == 0) {
           seat.done = true;
           if (state == State::Running) {  // a process that joined mid-job cannot take it
@@ -457,9 +462,17 @@ struct Desk::Impl {
     if (!members[static_cast<size_t>(p)].live) return;
     // Frames up to lastCredited + granted may have started without this process; the next
     // credit (sent after the roster) is the first that lets the job start a later one.
+    // It takes part from the frame named once it is Ready (taking pieces): see joinedJob.
+    seats[static_cast<size_t>(p)] = {true, false, false, kNotYet};
+    sendTo(p, startCommand(0));
+  }
+  // A process admitted to the running job is ready for pieces. Frames up to lastCredited +
+  // granted may have started without it; the next credit (sent after the roster, on the same
+  // socket) is the first that lets the job start a later one.
+  void joinedJob(int p) {
     const std::uint32_t first = lastCredited + granted + 1;
-    seats[static_cast<size_t>(p)] = {true, false, false, first};
-    sendTo(p, startCommand(first));
+    seats[static_cast<size_t>(p)].fromFrame = first;
+    sendTo(p, command(Command::FirstFrame, first));
     ++processesRejoined;
     const std::string line =
         who(p) + " is back in the wall; it shows the job's frames from " + std::to_string(first);

@@ -11,10 +11,11 @@
 namespace wall::service {
 
 enum class Command : std::uint32_t {
-  Start = 1,        // a job: run a wall node for it (text: its capture folder; a: first frame)
-  Cancel = 2,       // the job never started (a process could not): stop before frame 1
-  LastFrame = 3,    // a: the job's last frame
-  Abort = 4,        // the job is gone (text: why): give the frame in progress up
+  Start = 1,      // a job: run a wall node for it (text: its capture folder; a: its first frame, or
+                  // 0 for a process joining a running job: FirstFrame follows its Ready)
+  Cancel = 2,     // the job never started (a process could not): stop before frame 1
+  LastFrame = 3,  // a: the job's last frame
+  Abort = 4,      // the job is gone (text: why): give the frame in progress up
   KeepWaiting = 5,  // the job is alive but idle
   Capture = 6,      // a: frame, b: sequence
   Shutdown = 7,     // the wall stops
@@ -22,6 +23,7 @@ enum class Command : std::uint32_t {
   Done = 9,         // a: last presented frame, b: bytes received (text: failure, if any)
   Failed = 10,      // this process gave a frame up (text: why)
   StopAsked = 11,   // this process was asked to stop the wall
+  FirstFrame = 12,  // a: the first frame of a process that joined a running job
 };
 
 struct CommandHeader {

@@ -91,6 +91,9 @@ void WallService::Impl::incoming(const ServiceCommand& c) {
       case Command::Capture:
         node->requestCapture(static_cast<std::uint32_t>(h.a), static_cast<std::uint64_t>(h.b));
         return;
+      case Command::FirstFrame:
+        node->startAt(static_cast<std::uint32_t>(h.a));
+        return;
       default:
         break;
     }
@@ -222,8 +225,8 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
     head->toHead(answer);
     return;
   }
-  const std::uint32_t firstFrame =
-      static_cast<std::uint32_t>(std::max<std::int64_t>(1, start.header.a));
+  // 0: this process joins a running job; the head names its first frame once it is Ready.
+  std::uint32_t firstFrame = static_cast<std::uint32_t>(std::max<std::int64_t>(0, start.header.a));
   WallNodeOptions o;
   o.tileSize = static_cast<int>(start.header.tileSize);
   o.captureDir = captureDir;
@@ -259,7 +262,8 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
     head->toHead(answer);
     bool asked = false;
     try {
-      for (std::uint32_t frameId = firstFrame;; ++frameId) {
+      if (firstFrame == 0) firstFrame = job.waitForStart(Clock::now() + options.timeout);
+      for (std::uint32_t frameId = firstFrame; frameId > 0; ++frameId) {
         const PresentReport r = job.presentFrame(frameId);
         if (r.stopped) {
           if (!r.failure.empty()) failure = r.failure;
