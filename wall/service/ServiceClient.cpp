@@ -126,6 +126,9 @@ messaging::Bytes ServiceClient::rosterBytes() const {
 void ServiceClient::run() {
   const std::uint64_t session = directory_.session;
   const auto wallTimeout = std::chrono::milliseconds(directory_.timeoutMs);
+  // Often enough for the wall's timeout however short it is.
+  const auto keepalive = std::clamp<std::chrono::milliseconds>(
+      wallTimeout / 4, std::chrono::milliseconds(50), kKeepalive);
   auto lastKeepalive = Clock::time_point{};
   auto lastHeard = Clock::now();
   bool failed = false;
@@ -136,7 +139,8 @@ void ServiceClient::run() {
   try {
     while (!stop_) {
       zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}, waker_.pollItem()};
-      zmq::poll(items, 2, std::chrono::milliseconds(200));
+      zmq::poll(items, 2,
+                std::min<std::chrono::milliseconds>(keepalive, std::chrono::milliseconds(200)));
       if (items[1].revents) waker_.drain();
       std::vector<messaging::Bytes> out;
       {
@@ -144,7 +148,7 @@ void ServiceClient::run() {
         out.swap(outbox_);
       }
       for (messaging::Bytes& m : out) socket_.send(toMessage(std::move(m)), zmq::send_flags::none);
-      if (Clock::now() - lastKeepalive >= kKeepalive) {
+      if (Clock::now() - lastKeepalive >= keepalive) {
         socket_.send(toMessage(packControl(Kind::Keepalive, session, 0)), zmq::send_flags::none);
         lastKeepalive = Clock::now();
       }
