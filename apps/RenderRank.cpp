@@ -395,6 +395,12 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
         serviceSink->setRoster(roster);
         rosterVersion = order.rosterVersion;
         showLost(roster.processes);
+        if (statsStream) {
+          std::vector<std::string> lost;
+          for (const wall::Display& d : job.layout->displays)
+            if (!roster.processes.at(static_cast<size_t>(d.process)).live) lost.push_back(d.name);
+          statsStream->writeWallRoster(roster.version, frameId, roster.why, lost);
+        }
       }
       if (order.stop) {
         exitCode = order.exitCode;

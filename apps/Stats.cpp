@@ -109,6 +109,17 @@ void StatsStream::writeLine(const std::string& json) {
                      (written < 0 ? std::strerror(errno) : "short write (disk full?)"));
 }
 
+void StatsStream::writeWallRoster(std::uint32_t version, std::uint32_t frame,
+                                  const std::string& why,
+                                  const std::vector<std::string>& lostDisplays) {
+  writeLine(Json{{"wall_roster",
+                  {{"version", version},
+                   {"from_frame", frame},
+                   {"why", why},
+                   {"lost_displays", lostDisplays}}}}
+                .dump());
+}
+
 void StatsStream::writeRun(const Job& job) {
   const Options& o = job.options;
   job_bricks_ = o.bricks;

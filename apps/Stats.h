@@ -46,6 +46,10 @@ class StatsStream {
 
   void writeRun(const Job& job);
   void writeFrame(const FrameRecord& frame);
+  // --connect: the wall lost processes or got them back (its roster `version`, applied from
+  // frame `frame`): why, as the wall said it, and the displays that show nothing of the job now.
+  void writeWallRoster(std::uint32_t version, std::uint32_t frame, const std::string& why,
+                       const std::vector<std::string>& lostDisplays);
   // `ranks` has every rank's totals, by world rank; `stoppedEarly`: a graceful stop (signal,
   // closed window) ended the run, with `exitCode`.
   void writeEnd(const std::vector<RankTotals>& ranks, bool stoppedEarly, int exitCode);

@@ -94,6 +94,8 @@ grep -q "lost wall process 3" "$work/job.err" || fail "the job was not told abou
 waitFor 5 sh -c "$(declare -f status); cport=$cport; status | grep -q r1c1" ||
   fail "/api/status does not name r1c1 as lost: $(status)"
 waitFor 5 grep -q '"wall_pieces_dropped":[1-9]' "$work/job.jsonl" || fail "no dropped pieces counted"
+grep -q '"wall_roster":{"version":1,.*"lost_displays":\["r1c1"\]' "$work/job.jsonl" ||
+  fail "the job's --stats do not name the loss of r1c1"
 dead=$(latest r1c1)
 
 # 2. The documented restart of process 3.
