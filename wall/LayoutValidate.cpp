@@ -102,7 +102,7 @@ Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted
     std::set<int> used;
     for (const Display& d : layout.displays)
       if (d.process >= 0) used.insert(d.process);
-    int expected = 0;
+    std::int64_t expected = 0;  // 64 bits: a process index may be INT_MAX
     for (int p : used) {
       if (expected < p && p < kMaxDisplays) {
         // One message per gap, on the first display (in file order) whose index lies past it.
@@ -116,7 +116,7 @@ Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted
             "process indices must run from 0 without gaps, but no display has process " + missing +
                 " (the highest is " + std::to_string(*used.rbegin()) + ")");
       }
-      expected = p + 1;
+      expected = std::int64_t{p} + 1;
     }
   }
 

@@ -31,7 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size)
     const MessageHeader h = parseHeader(data, size);
     if (h.magic != kMagic || h.version != kProtocolVersion ||
         h.kind < static_cast<std::uint16_t>(Kind::Hello) ||
-        h.kind > static_cast<std::uint16_t>(Kind::Batch))
+        h.kind > static_cast<std::uint16_t>(kLastKind))
       std::abort();  // a header past its checks
   } catch (const wall::Error&) {
   }

@@ -133,6 +133,13 @@ TEST(LinkProtocol, PixelsMustFillTheMessageExactly) {
             std::string::npos);
 }
 
+TEST(LinkProtocol, NoPixelsAtAllRoundTrip) {
+  // An empty capture (a process with nothing to show) reads into an empty vector, whose data()
+  // may be null: nothing is copied from or to it.
+  const messaging::Bytes bytes = packPixels(5, 9, {});
+  EXPECT_TRUE(parsePixels(bytes.data(), bytes.size()).pixels.empty());
+}
+
 TEST(LinkProtocol, CommandsRoundTripAndUnknownOnesAreRefused) {
   ServiceCommand c;
   c.header.kind = Command::Start;

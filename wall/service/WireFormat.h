@@ -54,6 +54,7 @@ class Reader {
   }
   void raw(void* p, std::size_t n) {
     need(n);
+    if (n == 0) return;  // `p` may be null then (an empty vector's data())
     std::memcpy(p, data_ + at_, n);
     at_ += n;
   }
