@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "wall/Error.h"
+#include "wall/service/FrameAgreements.h"
 #include "wall/service/LinkMessages.h"
 #include "wall/service/Protocol.h"
 #include "wall/service/Zmq.h"
@@ -105,19 +106,7 @@ struct Desk::Impl {
   bool shuttingDown = false;
   std::set<std::string> logged;
   Clock::time_point lastBeat;
-  struct Barrier {
-    std::vector<std::int64_t> values;
-    std::vector<bool> arrived;
-    Clock::time_point first;
-  };
-  std::map<std::uint32_t, Barrier> barriers;
-  struct Gather {
-    std::vector<std::vector<std::uint32_t>> pixels;
-    std::vector<bool> got;
-    bool headAsked = false;
-    Clock::time_point deadline;
-  };
-  std::map<std::uint32_t, Gather> gathers;
+  FrameAgreements agreements;
 
   explicit Impl(Setup setup)
       : s(std::move(setup)),
@@ -128,7 +117,8 @@ struct Desk::Impl {
             s.options.timeout / 4, std::chrono::milliseconds(50), std::chrono::milliseconds(1000))),
         socket(context, zmq::socket_type::router),
         members(static_cast<size_t>(s.layout->processCount)),
-        seats(static_cast<size_t>(s.layout->processCount)) {
+        seats(static_cast<size_t>(s.layout->processCount)),
+        agreements(s.layout->processCount) {
     configureSocket(socket, static_cast<int>(timeout.count()));
     socket.set(zmq::sockopt::router_mandatory, 0);
     members[0].live = true;
@@ -229,8 +219,7 @@ struct Desk::Impl {
     lastCredited = 0;
     rosterVersion = 0;
     processesLost = processesRejoined = 0;
-    barriers.clear();
-    gathers.clear();
+    agreements.clear();
     waitingToJoinJob.clear();
     granted = std::min<std::uint32_t>(job.hello.framesInFlight,
                                       static_cast<std::uint32_t>(s.options.framesInFlight));
@@ -276,8 +265,7 @@ struct Desk::Impl {
            ",\"processes_lost\":" + std::to_string(processesLost) + ",\"processes_rejoined\":" +
            std::to_string(processesRejoined) + ",\"seconds\":" + std::to_string(secs) +
            ",\"ended\":" + jsonText(failure.empty() ? "last frame" : failure) + "}");
-    barriers.clear();
-    gathers.clear();
+    agreements.clear();
     nextJob();
   }
 
@@ -600,85 +588,42 @@ struct Desk::Impl {
            members[static_cast<size_t>(p)].live;
   }
   void arrive(int p, std::uint64_t session, std::uint32_t frameId,
-              std::vector<std::int64_t> values) {
+              const std::vector<std::int64_t>& values) {
     if (session != job.session || (state != State::Running && state != State::Ending)) return;
     if (!participates(p, frameId)) return;
-    auto [at, fresh] = barriers.try_emplace(frameId);
-    Barrier& b = at->second;
-    if (fresh) {
-      b.values = values;
-      b.arrived.assign(static_cast<size_t>(processCount), false);
-      b.first = Clock::now();
-    } else {
-      if (values.size() != b.values.size()) {
-        log(who(p) + " sent " + std::to_string(values.size()) + " barrier values, not " +
-            std::to_string(b.values.size()));
-        return drop(p, "a malformed swap barrier");
-      }
-      for (size_t i = 0; i < values.size(); ++i) b.values[i] = std::max(b.values[i], values[i]);
-    }
-    b.arrived[static_cast<size_t>(p)] = true;
-    tryRelease(frameId);
-  }
-  void tryRelease(std::uint32_t frameId) {
-    auto at = barriers.find(frameId);
-    if (at == barriers.end()) return;
-    Barrier& b = at->second;
-    for (int p = 0; p < processCount; ++p)
-      if (participates(p, frameId) && !b.arrived[static_cast<size_t>(p)]) return;
-    for (int p = 1; p < processCount; ++p)
-      if (b.arrived[static_cast<size_t>(p)] && members[static_cast<size_t>(p)].live)
-        reply(members[static_cast<size_t>(p)].peer, packBarrier(job.session, {frameId, b.values}));
-    if (b.arrived[0]) {
-      std::lock_guard lock(mutex);
-      releases[{job.session, frameId}] = b.values;
-      handedBack.notify_all();
-    }
-    barriers.erase(at);
+    if (!agreements.arrive(p, frameId, values, Clock::now()))
+      return drop(p, "its swap barrier of frame " + std::to_string(frameId) + " has " +
+                         std::to_string(values.size()) + " values, not the others' count");
+    releaseWhatCan();
   }
   void gatherPixels(int p, std::uint64_t session, std::uint32_t frameId,
                     std::vector<std::uint32_t> pixels) {
     if (session != job.session || !participates(p, frameId)) return;
-    Gather& g = gatherOf(frameId);
-    g.pixels[static_cast<size_t>(p)] = std::move(pixels);
-    g.got[static_cast<size_t>(p)] = true;
-    tryGather(frameId);
+    agreements.pixels(p, frameId, std::move(pixels));
+    releaseWhatCan();
   }
-  Gather& gatherOf(std::uint32_t frameId) {
-    auto [at, fresh] = gathers.try_emplace(frameId);
-    if (fresh) {
-      at->second.pixels.resize(static_cast<size_t>(processCount));
-      at->second.got.assign(static_cast<size_t>(processCount), false);
+  // Barriers and gathers that nobody holds up any more go back to their processes.
+  void releaseWhatCan() {
+    const auto takesPart = [this](int p, std::uint32_t frameId) {
+      return participates(p, frameId);
+    };
+    for (FrameAgreements::Release& r : agreements.complete(takesPart)) {
+      for (int p : r.processes) {
+        if (p == 0) {
+          std::lock_guard lock(mutex);
+          releases[{job.session, r.frameId}] = r.values;
+          handedBack.notify_all();
+        } else if (members[static_cast<size_t>(p)].live) {
+          reply(members[static_cast<size_t>(p)].peer,
+                packBarrier(job.session, {r.frameId, r.values}));
+        }
+      }
     }
-    // Members' pixels of frames the head never asks for (it gave them up) do not pile up.
-    while (gathers.size() > 8 && !gathers.begin()->second.headAsked) gathers.erase(gathers.begin());
-    return gathers.at(frameId);
-  }
-  void tryGather(std::uint32_t frameId) {
-    auto at = gathers.find(frameId);
-    if (at == gathers.end() || !at->second.headAsked) return;
-    Gather& g = at->second;
-    bool complete = Clock::now() >= g.deadline;
-    if (!complete) {
-      complete = true;
-      for (int p = 0; p < processCount; ++p)
-        if (participates(p, frameId) && !g.got[static_cast<size_t>(p)]) complete = false;
-    }
-    if (!complete) return;
-    {
+    for (FrameAgreements::Gathered& g : agreements.gathered(takesPart, Clock::now())) {
       std::lock_guard lock(mutex);
-      gathered[{job.session, frameId}] = std::move(g.pixels);
+      gathered[{job.session, g.frameId}] = std::move(g.pixels);
       handedBack.notify_all();
     }
-    gathers.erase(at);
-  }
-  void releaseWhatCan() {
-    std::vector<std::uint32_t> frames;
-    for (const auto& [frameId, b] : barriers) frames.push_back(frameId);
-    for (std::uint32_t f : frames) tryRelease(f);
-    frames.clear();
-    for (const auto& [frameId, g] : gathers) frames.push_back(frameId);
-    for (std::uint32_t f : frames) tryGather(f);
   }
 
   // ---- the thread ----
@@ -700,12 +645,8 @@ struct Desk::Impl {
       if (m.live && now - m.lastHeard > timeout) drop(p, "no word from it for " + seconds(timeout));
     }
     // A process alive on its link but stuck (a hung driver) never reaches the barrier.
-    std::vector<std::pair<int, std::uint32_t>> late;
-    for (const auto& [frameId, b] : barriers)
-      if (now - b.first > timeout)
-        for (int p = 1; p < processCount; ++p)
-          if (participates(p, frameId) && !b.arrived[static_cast<size_t>(p)])
-            late.emplace_back(p, frameId);
+    const auto late = agreements.late(
+        [this](int p, std::uint32_t frameId) { return participates(p, frameId); }, now, timeout);
     for (const auto& [p, frameId] : late)
       drop(p, "it did not reach the swap barrier of frame " + std::to_string(frameId) + " within " +
                   seconds(timeout) + " of the first process");
@@ -847,12 +788,8 @@ std::vector<std::vector<std::uint32_t>> Desk::gatherToFirst(std::uint64_t, std::
   auto pixels = std::make_shared<std::vector<std::uint32_t>>(std::move(mine));
   impl_->post([this, session, frameId, pixels, deadline] {
     if (session != impl_->job.session) return;
-    Impl::Gather& g = impl_->gatherOf(frameId);
-    g.pixels[0] = std::move(*pixels);
-    g.got[0] = true;
-    g.headAsked = true;
-    g.deadline = deadline;
-    impl_->tryGather(frameId);
+    impl_->agreements.headPixels(frameId, std::move(*pixels), deadline);
+    impl_->releaseWhatCan();
   });
   std::unique_lock lock(impl_->mutex);
   const auto key = std::make_pair(session, frameId);

@@ -1,0 +1,63 @@
+// A service wall head's swap barriers and capture gathers among processes that come and go
+// (wall/service/FrameAgreements.h).
+#include <gtest/gtest.h>
+
+#include "wall/service/FrameAgreements.h"
+
+namespace wall::service {
+namespace {
+
+using Clock = FrameAgreements::Clock;
+using namespace std::chrono_literals;
+
+TEST(FrameAgreements, ABarrierWaitsForExactlyTheProcessesTakingPart) {
+  FrameAgreements board(3);
+  bool twoTakesPart = true;
+  const auto takesPart = [&](int p, std::uint32_t) { return p != 2 || twoTakesPart; };
+  const auto t = Clock::now();
+  ASSERT_TRUE(board.arrive(0, 7, {1, -5}, t));
+  ASSERT_TRUE(board.arrive(1, 7, {3, -9}, t));
+  EXPECT_TRUE(board.complete(takesPart).empty());  // process 2 is still awaited
+  twoTakesPart = false;                            // dropped
+  const auto released = board.complete(takesPart);
+  ASSERT_EQ(released.size(), 1u);
+  EXPECT_EQ(released[0].frameId, 7u);
+  EXPECT_EQ(released[0].values, (std::vector<std::int64_t>{3, -5}));
+  EXPECT_EQ(released[0].processes, (std::vector<int>{0, 1}));
+  EXPECT_TRUE(board.complete(takesPart).empty());  // released once
+}
+
+TEST(FrameAgreements, AValueCountThatDiffersIsRefused) {
+  FrameAgreements board(2);
+  ASSERT_TRUE(board.arrive(0, 1, {1, 2, 3}, Clock::now()));
+  EXPECT_FALSE(board.arrive(1, 1, {1, 2}, Clock::now()));
+}
+
+TEST(FrameAgreements, LateIsWhoHasNotArrivedATimeoutAfterTheFirstButNeverTheHead) {
+  FrameAgreements board(3);
+  const auto all = [](int, std::uint32_t) { return true; };
+  const auto t = Clock::now();
+  board.arrive(1, 4, {0}, t);
+  EXPECT_TRUE(board.late(all, t + 50ms, 100ms).empty());
+  const auto late = board.late(all, t + 150ms, 100ms);
+  ASSERT_EQ(late.size(), 1u);  // process 2; the head (0) is never named
+  EXPECT_EQ(late[0], std::make_pair(2, std::uint32_t{4}));
+}
+
+TEST(FrameAgreements, AGatherCompletesWithEveryoneOrAtItsDeadlineWithGaps) {
+  FrameAgreements board(3);
+  const auto all = [](int, std::uint32_t) { return true; };
+  const auto t = Clock::now();
+  board.pixels(1, 9, {11, 12});
+  EXPECT_TRUE(board.gathered(all, t).empty());  // the head has not asked
+  board.headPixels(9, {1}, t + 1s);
+  EXPECT_TRUE(board.gathered(all, t).empty());  // process 2 missing, deadline ahead
+  const auto done = board.gathered(all, t + 2s);
+  ASSERT_EQ(done.size(), 1u);
+  EXPECT_EQ(done[0].pixels[0], (std::vector<std::uint32_t>{1}));
+  EXPECT_EQ(done[0].pixels[1], (std::vector<std::uint32_t>{11, 12}));
+  EXPECT_TRUE(done[0].pixels[2].empty());  // lost: dark in the wall preview
+}
+
+}  // namespace
+}  // namespace wall::service
