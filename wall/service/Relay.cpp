@@ -92,8 +92,10 @@ struct Relay::Impl {
   void log(const std::string& line) {
     if (options.log) options.log(line);
   }
-  void logOnce(const std::string& key, const std::string& line) {
-    if (logged.size() >= kMaxLogged || !logged.insert(key + line.substr(0, 40)).second) return;
+  // One line per connection and kind of problem (`problem` names it), bounded.
+  void logOnce(const std::string& peer, const std::string& problem, const std::string& line) {
+    if (logged.size() >= kMaxLogged || !logged.insert(peer + "/" + problem.substr(0, 40)).second)
+      return;
     log(line);
   }
   void toJob(const std::string& id, zmq::message_t&& body) {
@@ -118,6 +120,7 @@ struct Relay::Impl {
       p->up = zmq::socket_t(context, zmq::socket_type::dealer);
       configureSocket(p->up, deadPeerMs);
       p->up.set(zmq::sockopt::sndhwm, kPieceHwm);
+      log("wall process " + std::to_string(processes.size()) + ": pieces on " + p->relayEndpoint);
       processes.push_back(std::move(p));
     }
   }
@@ -146,7 +149,7 @@ struct Relay::Impl {
     try {
       h = parseHeader(bytesOf(body), body.size());
     } catch (const std::exception& e) {
-      logOnce(peer, "dropped a message from connection " + peer + ": " + e.what());
+      logOnce(peer, e.what(), "dropped a message from connection " + peer + ": " + e.what());
       // A dfbwall of another version learns why at once, as from the wall.
       MessageHeader mine;
       if (body.size() >= sizeof mine) {
@@ -158,12 +161,13 @@ struct Relay::Impl {
     auto found = jobs.find(id);
     if (found == jobs.end()) {
       if (h.kind != static_cast<std::uint16_t>(Kind::Hello)) {
-        logOnce(peer, "dropped message kind " + std::to_string(h.kind) + " from connection " +
-                          peer + ": it said no hello");
+        logOnce(peer, "no hello",
+                "dropped message kind " + std::to_string(h.kind) + " from connection " + peer +
+                    ": it said no hello");
         return;
       }
       if (jobs.size() >= kMaxJobs) {
-        logOnce("full", "refused a job: " + std::to_string(kMaxJobs) + " connections already");
+        logOnce("", "full", "refused a job: " + std::to_string(kMaxJobs) + " connections already");
         return refuse(id, "it has " + std::to_string(kMaxJobs) + " job connections already");
       }
       auto job = std::make_unique<Job>();
@@ -197,7 +201,7 @@ struct Relay::Impl {
     try {
       h = parseHeader(bytesOf(body), body.size());
     } catch (const std::exception& e) {
-      logOnce("wall", std::string("dropped a message from the wall: ") + e.what());
+      logOnce("wall", e.what(), std::string("dropped a message from the wall: ") + e.what());
       return;
     }
     const Kind kind = static_cast<Kind>(h.kind);
@@ -280,7 +284,8 @@ struct Relay::Impl {
           ++job->dropped;
         else
           ++strangers;
-        logOnce(peer, "dropped a message on the piece port from connection " + peer + ": " + v.why);
+        logOnce(peer, v.why,
+                "dropped a message on the piece port from connection " + peer + ": " + v.why);
         continue;
       }
       if (!send(body, job)) {
