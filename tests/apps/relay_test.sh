@@ -6,14 +6,15 @@
 #  - a stranger sends the relay's piece socket a batch of a session the wall never gave, a batch
 #    with no session and garbage: the relay drops and logs them, the wall never sees them;
 #  - the next job through the relay (scivis, 4 bricks, snappy) equals its one-process render, and
-#    a job without the wall's token is refused through the relay with the wall's reason.
+#    a job without the wall's token is refused through the relay with the wall's reason;
+#  - a relay whose wall does not answer refuses the job, saying so, within its timeout.
 # Needs DFBWALL, COMPARE and MPIEXEC in the environment, and /usr/bin/python3 with pyzmq.
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 work=$(mktemp -d)
-serve="" relay=""
+serve="" relay="" lonely=""
 cleanup() {
-  for p in $relay $serve; do kill -9 "$p" 2>/dev/null || true; done
+  for p in $lonely $relay $serve; do kill -9 "$p" 2>/dev/null || true; done
   rm -rf "$work"
 }
 trap cleanup EXIT
@@ -97,6 +98,19 @@ for _ in $(seq 100); do [ "$(wc -l <"$work/relay.jsonl")" -ge 2 ] && break; slee
 [ "$(wc -l <"$work/relay.jsonl")" -eq 2 ] || fail "expected 2 --stats lines (accepted jobs only)"
 strangers=$(tail -1 "$work/relay.jsonl" | grep -o '"strangers_dropped":[0-9]*' | cut -d: -f2)
 [ "$strangers" -ge 3 ] || fail "the second job's line counts $strangers strangers' messages, not 3"
+
+# A relay whose wall does not answer tells the job so within its timeout (2 s here).
+"$DFBWALL" relay --listen "127.0.0.1:$((relayPort + 1))" --wall "127.0.0.1:$((port + 1))" --timeout 2 \
+  >"$work/lonely.out" 2>"$work/lonely.err" &
+lonely=$!
+if mpi -np 1 "$DFBWALL" --connect "127.0.0.1:$((relayPort + 1))" --renderer pattern --frames 1 \
+  --quiet --timeout 30 >"$work/lonely-job.out" 2>&1; then
+  fail "a job was accepted by a relay without a wall"
+fi
+grep -q "refused the job: relay: the wall at 127.0.0.1:$((port + 1)) did not answer within 2 s" \
+  "$work/lonely-job.out" || { cat "$work/lonely-job.out"; fail "no 'did not answer' from the lonely relay"; }
+kill -USR1 "$lonely"
+wait "$lonely" || fail "the lonely relay exited non-zero after SIGUSR1"
 
 kill -USR1 "$relay"
 wait "$relay" || fail "the relay exited non-zero after SIGUSR1"

@@ -28,6 +28,10 @@ constexpr int kBurst = 64;
 // batches, which travel beside the goodbye, still pass.
 constexpr auto kGrace = std::chrono::seconds(5);
 constexpr std::size_t kMaxLogged = 1024;
+// The wall answers a hello at once (a directory, a refusal or the job's place in its queue); a
+// job whose hello it has not answered this long (or within the relay's timeout) learns so from
+// the relay instead of waiting for its own timeout.
+constexpr auto kHelloAnswer = std::chrono::seconds(10);
 
 const std::byte* bytesOf(const zmq::message_t& m) {
   return static_cast<const std::byte*>(m.data());
@@ -70,6 +74,7 @@ struct Relay::Impl {
     std::string id, host = "an unnamed host";
     std::uint64_t session = 0;  // from the wall's Directory
     Clock::time_point lastHeard, started;
+    bool wallAnswered = false;
     std::optional<Clock::time_point> over;  // goodbye, Ended or Refused: forgotten kGrace later
     std::string end;                        // why it is over
     std::uint64_t batches = 0, bytes = 0, dropped = 0;
@@ -197,6 +202,7 @@ struct Relay::Impl {
   }
 
   void fromWall(Job& job, zmq::message_t&& body) {
+    job.wallAnswered = true;
     MessageHeader h;
     try {
       h = parseHeader(bytesOf(body), body.size());
@@ -325,7 +331,16 @@ struct Relay::Impl {
   void reap() {
     const auto now = Clock::now();
     std::vector<std::pair<Job*, std::string>> done;
+    const auto helloAnswer = std::min<std::chrono::milliseconds>(kHelloAnswer, options.timeout);
     for (auto& [id, job] : jobs) {
+      if (!job->wallAnswered && !job->over && now - job->started > helloAnswer) {
+        const std::string why = "the wall at " + options.wall + " did not answer within " +
+                                std::to_string(helloAnswer.count() / 1000) + " s";
+        log("job from " + job->host + ": " + why);
+        refuse(job->id, why);
+        job->over = now;
+        job->end = why;
+      }
       if (job->over && now - *job->over > kGrace)
         done.emplace_back(job.get(), job->end);
       else if (now - job->lastHeard > options.timeout + std::chrono::seconds(2))
