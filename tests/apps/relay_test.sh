@@ -4,7 +4,8 @@
 #  - a 2-rank job through the relay (pattern, raw): its captures, written by the wall, equal the
 #    one-process render; the relay's --stats line counts its batches;
 #  - a stranger sends the relay's piece socket a batch of a session the wall never gave, a batch
-#    with no session and garbage: the relay drops and logs them, the wall never sees them;
+#    with no session and garbage, and its directory socket a message of the wall's own link: the
+#    relay drops and logs them, the wall never sees them;
 #  - the next job through the relay (scivis, 4 bricks, snappy) equals its one-process render, and
 #    a job without the wall's token is refused through the relay with the wall's reason;
 #  - a relay whose wall does not answer refuses the job, saying so, within its timeout.
@@ -65,7 +66,7 @@ batches=$(field "$work/relay.jsonl" batches_forwarded)
 
 # A stranger on the relay's piece socket of process 1: nothing reaches the wall.
 endpoint=$(sed -n 's/.*wall process 1: pieces on \(tcp:[^ ]*\).*/\1/p' "$work/relay.err")
-/usr/bin/python3 - "$endpoint" <<'PY' || fail "the stranger could not send"
+/usr/bin/python3 - "$endpoint" "tcp://127.0.0.1:$relayPort" <<'PY' || fail "the stranger could not send"
 import struct, sys, time, zmq
 ctx = zmq.Context()
 s = ctx.socket(zmq.DEALER)
@@ -77,6 +78,11 @@ def batch(session):  # header (magic, version 2, kind Batch), frame 1, display 1
 s.send(batch(0x5eed5eed5eed5eed))
 s.send(batch(0))
 s.send(b"not the protocol at all")
+# On the relay's directory socket: a wall-link message (Join, kind 12) for the wall's head.
+d = ctx.socket(zmq.DEALER)
+d.setsockopt(zmq.LINGER, 2000)
+d.connect(sys.argv[2])
+d.send(struct.pack("<IHHQ", 0x57424644, 2, 12, 0) + b"\0" * 32)
 time.sleep(1)
 PY
 for _ in $(seq 50); do grep -q "protocol" "$work/relay.err" && break; sleep 0.1; done
@@ -84,7 +90,9 @@ grep -q "dropped a message on the piece port from connection .*: not the session
   fail "the relay did not log the stranger's batch"
 grep -q "dropped a message on the piece port .*not the dfbwall protocol" "$work/relay.err" ||
   fail "the relay did not log the garbage"
-if grep -q "dropped a message on the piece port" "$work/serve.err"; then
+grep -q "dropped message kind 12 from connection .*: not one a job sends" "$work/relay.err" ||
+  fail "the relay did not drop the wall-link message"
+if grep -q "dropped a message on the piece port\|kind 12" "$work/serve.err"; then
   fail "a stranger's message reached the wall"
 fi
 

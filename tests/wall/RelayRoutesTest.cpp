@@ -1,7 +1,8 @@
 // What a relay (wall/service/RelayRoutes.h) does to the messages it forwards: the wall's
 // Directory and Roster reach the job with the relay's endpoints (live flags, layout, session,
 // credits, roster version and reason as the wall said); piece messages pass only when they are
-// batches of a session the relay has seen in a Directory.
+// batches of a session the relay has seen in a Directory; the directory link carries the kinds of
+// a job's conversation with the wall only.
 #include <gtest/gtest.h>
 
 #include <string>
@@ -118,6 +119,18 @@ TEST(RelayRoutes, OnlyBatchesOfTheWallsSessionsPass) {
 
   sessions.remove(0xabc);
   EXPECT_FALSE(verdict(mine).forward) << "after the job is gone";
+}
+
+TEST(RelayRoutes, TheDirectoryLinkCarriesJobKindsOnly) {
+  for (Kind k : {Kind::Hello, Kind::Keepalive, Kind::Capture, Kind::Bye}) EXPECT_TRUE(jobKind(k));
+  for (Kind k : {Kind::Batch, Kind::Join, Kind::Welcome, Kind::Beat, Kind::Command, Kind::Barrier,
+                 Kind::Pixels, Kind::Dropped, Kind::Directory, Kind::Presented})
+    EXPECT_FALSE(jobKind(k)) << static_cast<int>(k);
+  for (Kind k : {Kind::Directory, Kind::Refused, Kind::Queued, Kind::Keepalive, Kind::Presented,
+                 Kind::Ended, Kind::Roster})
+    EXPECT_TRUE(wallToJobKind(k));
+  for (Kind k : {Kind::Welcome, Kind::Command, Kind::Barrier, Kind::Hello, Kind::Batch})
+    EXPECT_FALSE(wallToJobKind(k)) << static_cast<int>(k);
 }
 
 }  // namespace

@@ -163,6 +163,12 @@ struct Relay::Impl {
       }
       return;
     }
+    if (!jobKind(static_cast<Kind>(h.kind))) {
+      logOnce(peer, "kind " + std::to_string(h.kind),
+              "dropped message kind " + std::to_string(h.kind) + " from connection " + peer +
+                  ": not one a job sends");
+      return;
+    }
     auto found = jobs.find(id);
     if (found == jobs.end()) {
       if (h.kind != static_cast<std::uint16_t>(Kind::Hello)) {
@@ -211,6 +217,11 @@ struct Relay::Impl {
       return;
     }
     const Kind kind = static_cast<Kind>(h.kind);
+    if (!wallToJobKind(kind)) {
+      logOnce("wall", "kind " + std::to_string(h.kind),
+              "dropped message kind " + std::to_string(h.kind) + " from the wall to a job");
+      return;
+    }
     try {
       if (kind == Kind::Directory) {
         const Directory d = parseDirectory(bytesOf(body), body.size());

@@ -19,6 +19,17 @@ messaging::Bytes relayRoster(const Roster& roster, const RelayEndpointOf& relayE
   return packRoster(relayed);
 }
 
+bool jobKind(Kind kind) {
+  return kind == Kind::Hello || kind == Kind::Keepalive || kind == Kind::Capture ||
+         kind == Kind::Bye;
+}
+
+bool wallToJobKind(Kind kind) {
+  return kind == Kind::Directory || kind == Kind::Refused || kind == Kind::Queued ||
+         kind == Kind::Keepalive || kind == Kind::Presented || kind == Kind::Ended ||
+         kind == Kind::Roster;
+}
+
 RelaySessions::Verdict RelaySessions::admit(const std::byte* data, std::size_t size) const {
   Verdict v;
   try {

@@ -28,6 +28,13 @@ messaging::Bytes relayDirectory(const Directory& directory, const RelayEndpointO
 // The same for a Roster; a process without an endpoint (lost, never joined) keeps none.
 messaging::Bytes relayRoster(const Roster& roster, const RelayEndpointOf& relayEndpoint);
 
+// The kinds a job says on the directory link (Hello, Keepalive, Capture, Bye) and the kinds the
+// wall answers a job with (Directory, Refused, Queued, Keepalive, Presented, Ended, Roster): the
+// relay forwards these only, so a connection to the relay never reaches the wall's own link
+// (Join, Beat, Command, ...) on the head's directory socket, nor a job the wall's.
+bool jobKind(Kind kind);
+bool wallToJobKind(Kind kind);
+
 // The sessions the wall gave jobs through the relay, and the verdict on each piece message.
 class RelaySessions {
  public:
