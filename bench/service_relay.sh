@@ -37,6 +37,8 @@ relay_run() {
     --timeout 300 --stats "$out.json" >"$out.log" 2>&1 ||
     { echo "bench: relay figure, $variant with $n render hosts, run $rep failed; left out" >&2; rm -f "$out.json"; }
   if [ -n "$relayPid" ]; then
+    # The relay's CPU over its whole life (idle before and after the job included), in ticks.
+    awk '{print $14 + $15}' "/proc/$relayPid/stat" >"$out-relay.ticks" 2>/dev/null || true
     kill -USR1 "$relayPid" 2>/dev/null || true
     wait "$relayPid" 2>/dev/null || true
   fi
@@ -84,6 +86,14 @@ service_relay_part() {
       rows+="${rows:+,}
     {\"part\": \"relay\", \"variant\": \"$v\", \"render_hosts\": $n, \"renderer\": \"pattern\", \"codec\": \"raw\", \"median_frame_ms\": $med, \"mad_frame_ms\": $mad, \"frames\": $cnt, \"fps\": $fr, \"wall_bytes_wire_per_frame\": $wire, \"binding_links\": $links, \"binding_link_utilisation\": $u}"
       echo "  1 Gbit/s, pattern raw, $n render host(s), $v: $fr fps (median $med ms, MAD $mad), $wire bytes/frame, utilisation of the $links binding link(s) $u"
+      local cpu="null"
+      if [ "$v" = relay ]; then
+        # CPU ms of the relay per frame forwarded, over the runs of this variant.
+        cpu=$(cat "$work"/svc-relay-relay-$n-*-relay.ticks 2>/dev/null | awk -v t="$(getconf CLK_TCK)" \
+          -v f="$(( ${#files[@]} * frames ))" '{s += $1} END {printf "%.3g", (f > 0) ? s * 1000 / t / f : 0}')
+        echo "    relay CPU: $cpu ms per frame (33 MB)"
+      fi
+      rows="${rows%\}}, \"relay_cpu_ms_per_frame\": $cpu}"
       printf '"%s, %s host%s" %s %s\n' "$v" "$n" "$([ "$n" -eq 1 ] || echo s)" "$fr" "$u" >>"$rdat"
     done
     ratio=$(awk -v a="${fpsOf[1]}" -v b="${fpsOf[0]}" 'BEGIN {printf "%.3g", (b > 0) ? a / b : 0}')
