@@ -8,14 +8,16 @@
 #    relay drops and logs them, the wall never sees them;
 #  - the next job through the relay (scivis, 4 bricks, snappy) equals its one-process render, and
 #    a job without the wall's token is refused through the relay with the wall's reason;
+#  - kill -9 of the relay during a job ends the job within its timeout, the wall drops it, and a
+#    relay started again serves the next job;
 #  - a relay whose wall does not answer refuses the job, saying so, within its timeout.
 # Needs DFBWALL, COMPARE and MPIEXEC in the environment, and /usr/bin/python3 with pyzmq.
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 work=$(mktemp -d)
-serve="" relay="" lonely=""
+serve="" relay="" lonely="" long=""
 cleanup() {
-  for p in $lonely $relay $serve; do kill -9 "$p" 2>/dev/null || true; done
+  for p in $long $lonely $relay $serve; do kill -9 "$p" 2>/dev/null || true; done
   rm -rf "$work"
 }
 trap cleanup EXIT
@@ -49,7 +51,7 @@ grep -qx "dfbwall: relay on 127.0.0.1:$relayPort for the wall at 127.0.0.1:$port
 job() {
   local name=$1 frames=$2 codec=$3; shift 3
   mpi -np 2 "$DFBWALL" --connect "127.0.0.1:$relayPort" --token "$token" --codec "$codec" \
-    --frames "$frames" --quiet --timeout 30 --capture "$work/$name" "$@" >"$work/$name.out" 2>&1 ||
+    ${wait:-} --frames "$frames" --quiet --timeout 30 --capture "$work/$name" "$@" >"$work/$name.out" 2>&1 ||
     { cat "$work/$name.out"; fail "job $name through the relay failed"; }
   mpi -np 1 "$DFBWALL" --size "$(canvas "$layout")" --frames "$frames" --quiet \
     --image "$work/$name-full.png" "$@" || fail "reference of $name failed"
@@ -107,6 +109,26 @@ for _ in $(seq 100); do [ "$(wc -l <"$work/relay.jsonl")" -ge 2 ] && break; slee
 strangers=$(tail -1 "$work/relay.jsonl" | grep -o '"strangers_dropped":[0-9]*' | cut -d: -f2)
 [ "$strangers" -ge 3 ] || fail "the second job's line counts $strangers strangers' messages, not 3"
 
+# kill -9 of the relay during a job is a cut link: the job ends within its timeout (5 s), the
+# wall drops it, and a relay started again on the same port serves the next job (--wait).
+mpi -np 2 "$DFBWALL" --connect "127.0.0.1:$relayPort" --token "$token" --renderer pattern \
+  --frames 0 --timeout 5 >"$work/long.out" 2>&1 &
+long=$!
+for _ in $(seq 100); do grep -q '^frame [0-9]' "$work/long.out" && break; sleep 0.1; done
+grep -q '^frame [0-9]' "$work/long.out" || { cat "$work/long.out"; fail "the long job showed no frame"; }
+kill -9 "$relay"
+wait "$relay" 2>/dev/null || true
+t0=$(date +%s.%N)
+if wait "$long"; then fail "the job went on without its relay"; fi
+long=""
+took=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN {print b - a}')
+awk -v t="$took" 'BEGIN {exit !(t < 9)}' || fail "the job ended $took s after its relay died (timeout 5 s)"
+"$DFBWALL" relay --listen "127.0.0.1:$relayPort" --wall "127.0.0.1:$port" --timeout 5 \
+  >"$work/relay.out" 2>>"$work/relay.err" &
+relay=$!
+wait=--wait job again 2 raw --renderer pattern
+grep -q "dropping the job from" "$work/serve.err" || fail "the wall did not drop the orphaned job"
+
 # A relay whose wall does not answer tells the job so within its timeout (2 s here).
 "$DFBWALL" relay --listen "127.0.0.1:$((relayPort + 1))" --wall "127.0.0.1:$((port + 1))" --timeout 2 \
   >"$work/lonely.out" 2>"$work/lonely.err" &
@@ -126,4 +148,4 @@ relay=""
 kill -USR1 "$serve"
 wait "$serve" || fail "serve exited non-zero after SIGUSR1"
 serve=""
-echo "PASS: 2 jobs through the relay equal the one-process render ($batches batches in the first), a stranger's 3 messages dropped at the relay, a wrong token refused through it"
+echo "PASS: 3 jobs through the relay equal the one-process render ($batches batches in the first), a stranger's messages dropped at the relay, a wrong token refused through it, a job whose relay died ended in $took s"
