@@ -1,5 +1,6 @@
 #include "wall/service/Relay.h"
 
+#include <cerrno>
 #include <cstring>
 #include <map>
 #include <optional>
@@ -409,7 +410,12 @@ void Relay::run() {
       items.push_back(writable ? zmq::pollitem_t{p->down.handle(), 0, ZMQ_POLLIN, 0}
                                : zmq::pollitem_t{p->up.handle(), 0, ZMQ_POLLOUT, 0});
     }
-    zmq::poll(items.data(), items.size(), std::chrono::milliseconds(200));
+    try {
+      zmq::poll(items.data(), items.size(), std::chrono::milliseconds(200));
+    } catch (const zmq::error_t& e) {
+      if (e.num() == EINTR) continue;  // a signal the caller did not block: poll again
+      throw;
+    }
     for (std::size_t i = firstProcess; i < items.size(); ++i)
       if (items[i].revents) m.pump(*m.processes[i - firstProcess]);
     if (items[0].revents) {
