@@ -1,5 +1,7 @@
 #include "apps/ControlServer.h"
 
+#include <algorithm>
+
 #include <httplib.h>
 
 #include <charconv>
@@ -274,10 +276,17 @@ void ControlServer::start(const Job& job, Steering& steering, StatusBoard& statu
                {"renderer", renderer},
                {"last_request", {{"id", s.lastRequest}, {"frame", s.lastRequestFrame}}}};
         Json list = Json::array();
-        // The swap barrier presents a frame on every display at once: one number each.
-        for (const std::string& name : displays)
-          list.push_back({{"name", name}, {"presented", s.presented}});
+        // The swap barrier presents a frame on every display at once: one number each. A
+        // display of a wall process the wall lost (--connect) shows nothing of this job.
+        for (const std::string& name : displays) {
+          const bool lost =
+              std::find(s.lostDisplays.begin(), s.lostDisplays.end(), name) != s.lostDisplays.end();
+          list.push_back({{"name", name},
+                          {"presented", s.presented},
+                          {"state", lost ? "lost" : "presenting"}});
+        }
         j["displays"] = list;
+        j["lost_displays"] = s.lostDisplays;
         j["errors"] = s.errors;
         return json(200, j);
       }));

@@ -68,6 +68,8 @@ struct FrameRecord {
   // the wall node, which equals wallPieces (a piece is never cut into several messages).
   std::uint64_t wallBytesSent = 0, wallBytesRaw = 0;
   std::uint64_t wallPieces = 0, wallPiecesToOtherHosts = 0, messagesCompressed = 0;
+  // --connect: pieces not sent because the wall lost their display's process.
+  std::uint64_t wallPiecesDropped = 0;
   std::uint64_t wallMessages = 0;
   std::uint64_t tileBytesSent = 0;  // tile inputs between render ranks
   std::uint64_t previewBytes = 0;   // shrunk tiles for rank 0's preview (apps/Preview.h)

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include "dfb/MemoryBudget.h"
+#include "wall/Layout.h"
 #include "wall/service/Codec.h"
 
 #include <charconv>
@@ -162,11 +163,18 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
       "serve",
       "run the wall of --wall as a persistent service that render jobs connect to "
       "(mpirun -np W dfbwall serve --wall L --listen [ADDR:]PORT; jobs: dfbwall --connect)");
+  serve->add_option("--listen", o.listen,
+                    "[ADDR:]PORT of wall process 0's directory, where jobs connect and the other "
+                    "processes join (default address 127.0.0.1; any other needs a token, "
+                    "generated and printed when not given)");
   serve
-      ->add_option("--listen", o.listen,
-                   "[ADDR:]PORT of wall process 0's directory (default address 127.0.0.1; any "
-                   "other needs a token, generated and printed when not given)")
-      ->required();
+      ->add_option("--process", o.process,
+                   "start (or restart) only the layout's wall process N, on its own (not under "
+                   "mpirun): 0 is the head (needs --listen), the others need --join")
+      ->check(CLI::Range(0, wall::kMaxDisplays - 1));
+  serve->add_option("--join", o.join,
+                    "with --process N > 0: HOST:PORT of the running wall's head (what it prints "
+                    "as 'wall service on')");
   serve->fallthrough();  // --wall, --offscreen, --timeout, --stats, --token are the main ones
   // `dfbwall relay` starts before MPI (apps/Relay.cpp parses its options): listed for --help.
   CLI::App* relay = cli.add_subcommand(
@@ -191,6 +199,16 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
   o.serve = serve->parsed();
   if (o.serve && o.wall.empty()) return fail("serve needs --wall FILE.toml: the wall it runs");
   if (o.serve && !o.connect.empty()) return fail("serve and --connect: a wall does not connect");
+  if (o.serve && o.process > 0 && o.join.empty())
+    return fail("serve --process " + std::to_string(o.process) +
+                " needs --join HOST:PORT: the head of the wall it joins");
+  if (o.serve && o.process > 0 && !o.listen.empty())
+    return fail("serve --listen is for the head (process 0); process " + std::to_string(o.process) +
+                " joins it with --join");
+  if (o.serve && o.process <= 0 && !o.join.empty())
+    return fail("serve --join is for --process N > 0; the head (process 0) uses --listen");
+  if (o.serve && o.process <= 0 && o.listen.empty())
+    return fail("serve needs --listen [ADDR:]PORT: where the head takes jobs and processes");
   if (!o.connect.empty() && !o.wall.empty())
     return fail("--connect and --wall: the wall you connect to has its own layout");
   if (!o.connect.empty() && (o.offscreen || o.mode != "route"))

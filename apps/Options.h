@@ -53,7 +53,9 @@ struct Options {
   // The wall as a service (issue 20). `dfbwall serve`: these processes are the wall of `wall`,
   // listening for render jobs on `listen`. `--connect`: this job renders for such a wall.
   bool serve = false;
-  std::string listen;            // serve: [ADDR:]PORT
+  std::string listen;            // serve, the head: [ADDR:]PORT
+  int process = -1;              // serve --process N: this is the layout's process N, alone
+  std::string join;              // serve --join HOST:PORT: the head a process N > 0 joins
   std::string connect;           // HOST:PORT of a serving wall; empty: none
   std::string token;             // serve: required from jobs; connect: what to present
   std::string codec = "snappy";  // connect: raw | snappy | jpeg[:QUALITY[:SUBSAMPLING]]

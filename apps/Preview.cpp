@@ -27,13 +27,20 @@ Preview::Preview(const Job& job, messaging::Messenger& messenger) : job_(job) {
 Preview::Png Preview::png() const {
   const auto snapshot = assembler_->latest();
   std::lock_guard lock(pngMutex_);
-  if (!png_.bytes || png_.frame != snapshot->frame) {
+  if (!png_.bytes || png_.frame != snapshot->frame || lostChanged_) {
     const wall::Layout* layout = job_.layout ? &*job_.layout : nullptr;
     png_.frame = snapshot->frame;
     png_.bytes = std::make_shared<const std::string>(
-        wall::encodePng(wall::decoratePreview(snapshot->image, assembler_->grid(), layout)));
+        wall::encodePng(wall::decoratePreview(snapshot->image, assembler_->grid(), layout, lost_)));
+    lostChanged_ = false;
   }
   return png_;
+}
+
+void Preview::setLostDisplays(std::vector<bool> lost) {
+  std::lock_guard lock(pngMutex_);
+  if (lost != lost_) lostChanged_ = true;
+  lost_ = std::move(lost);
 }
 
 void Preview::finish(std::uint32_t lastFrame, std::chrono::milliseconds timeout) const {
@@ -44,8 +51,13 @@ void Preview::finish(std::uint32_t lastFrame, std::chrono::milliseconds timeout)
   if (job_.options.previewFile.empty()) return;
   const auto snapshot = assembler_->latest();
   const wall::Layout* layout = job_.layout ? &*job_.layout : nullptr;
+  std::vector<bool> lost;
+  {
+    std::lock_guard lock(pngMutex_);
+    lost = lost_;
+  }
   wall::writePng(job_.options.previewFile,
-                 wall::decoratePreview(snapshot->image, assembler_->grid(), layout));
+                 wall::decoratePreview(snapshot->image, assembler_->grid(), layout, lost));
 }
 
 }  // namespace app

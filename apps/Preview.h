@@ -34,6 +34,8 @@ class Preview {
   // Rank 0 at the end of the run: waits (up to `timeout`) until the last frame's preview is in,
   // so no preview message is still travelling when the assembler goes, then writes --preview.
   void finish(std::uint32_t lastFrame, std::chrono::milliseconds timeout) const;
+  // Thread-safe: the displays (by layout index) a service wall lost; the preview crosses them out.
+  void setLostDisplays(std::vector<bool> lost);
 
  private:
   const Job& job_;
@@ -41,6 +43,8 @@ class Preview {
   std::unique_ptr<wall::PreviewAssembler> assembler_;
   mutable std::mutex pngMutex_;
   mutable Png png_;
+  std::vector<bool> lost_;  // under pngMutex_
+  mutable bool lostChanged_ = false;
 };
 
 }  // namespace app

@@ -24,6 +24,7 @@
 #include "renderers/WorkDistribution.h"
 #include "renderers/scivis/BrickFrameDriver.h"
 #include "wall/DisplayRoutingOp.h"
+#include "wall/Error.h"
 #include "wall/FrameCredits.h"
 #include "wall/PieceMessage.h"
 #include "wall/Png.h"
@@ -100,6 +101,7 @@ struct RankFrame {
   std::uint64_t tileBytes, tiles, samples;
   std::int64_t lastSetTileNs;
   std::uint64_t previewBytes;
+  std::uint64_t wallPiecesDropped;  // for wall processes the wall lost (--connect)
 };
 
 std::vector<RankFrame> gatherRankFrames(const RankFrame& mine, MPI_Comm comm,
@@ -129,6 +131,7 @@ FrameRecord combine(const std::vector<RankFrame>& all) {
     r.wallBytesSent += f.wallBytes;
     r.wallBytesRaw += f.wallBytesRaw;
     r.wallPieces += f.wallPieces;
+    r.wallPiecesDropped += f.wallPiecesDropped;
     r.wallPiecesToOtherHosts += f.wallPiecesToOtherHosts;
     r.wallMessages += f.wallMessages;
     r.messagesCompressed += f.messagesCompressed;
@@ -139,6 +142,20 @@ FrameRecord combine(const std::vector<RankFrame>& all) {
     r.lastSetTileNs = std::max(r.lastSetTileNs, f.lastSetTileNs);
   }
   return r;
+}
+
+// --connect: every render rank routes with the roster rank 0 has (it changed when the wall lost a
+// process or got one back). Collective over `comm`, when the frame order's version is new.
+wall::service::Roster shareRoster(const wall::service::ServiceClient* client, MPI_Comm comm,
+                                  std::chrono::milliseconds timeout) {
+  messaging::Bytes bytes = client ? client->rosterBytes() : messaging::Bytes{};
+  std::uint64_t size = bytes.size();
+  boundedBcast(&size, sizeof size, comm, timeout, "sharing the wall's roster");
+  if (size > wall::service::kMaxMessageBytes)
+    throw wall::Error("a roster of " + std::to_string(size) + " bytes");
+  bytes.resize(size);
+  boundedBcast(bytes.data(), static_cast<int>(size), comm, timeout, "sharing the wall's roster");
+  return wall::service::parseRoster(bytes.data(), bytes.size());
 }
 
 }  // namespace
@@ -333,6 +350,20 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
     int exitCode = 0;
     bool stopped = false, idling = false;
     const std::uint32_t frames = static_cast<std::uint32_t>(o.frames);  // 0: until stopped
+    std::uint32_t rosterVersion = 0;                                    // the directory's
+    // Rank 0: the displays of wall processes the wall lost, for the status and the preview.
+    const auto showLost = [&](const std::vector<wall::service::DirectoryProcess>& processes) {
+      if (job.worldRank != 0) return;
+      std::vector<std::string> names;
+      std::vector<bool> lost;
+      for (const wall::Display& d : job.layout->displays) {
+        lost.push_back(!processes.at(static_cast<size_t>(d.process)).live);
+        if (lost.back()) names.push_back(d.name);
+      }
+      if (status) status->setLostDisplays(std::move(names));
+      if (preview) preview->setLostDisplays(std::move(lost));
+    };
+    if (job.directory) showLost(job.directory->processes);
     // While idle, rank 0 sends an order at least this often: the other ranks' waits are bounded
     // by the timeout (invariant 6), and a rank that died is still noticed.
     const auto heartbeat =
@@ -362,6 +393,7 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
         for (const SteeringRequest& r : requests)
           if (r.kind == SteeringRequest::kStop) control.askToStop(r.exitCode);
         if (!order.idle) order = director->next(frameId, requests);
+        if (job.service) order.rosterVersion = job.service->rosterVersion();
         if (const std::optional<int> code = control.stopRequested())
           order.stop = 1, order.exitCode = *code, order.idle = 0;
       }
@@ -370,6 +402,13 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
       boundedBcast(&order, sizeof order, renderComm, 2 * timeout,
                    "frame " + std::to_string(frameId),
                    idling ? kIdlePoll : std::chrono::microseconds(20));
+      if (serviceSink && order.rosterVersion != rosterVersion) {
+        // The pieces of this frame on go where the wall now is (Protocol.h, Roster).
+        const wall::service::Roster roster = shareRoster(job.service.get(), renderComm, timeout);
+        serviceSink->setRoster(roster);
+        rosterVersion = order.rosterVersion;
+        showLost(roster.processes);
+      }
       if (order.stop) {
         exitCode = order.exitCode;
         stopped = true;
@@ -448,7 +487,8 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
                        static_cast<std::uint64_t>(report.tilesRendered),
                        report.samples,
                        stats.lastSetTileNs,
-                       preview ? preview->op()->takeBytesSent() : 0};
+                       preview ? preview->op()->takeBytesSent() : 0,
+                       serviceSink ? serviceSink->takeDropped() : 0};
         const std::vector<RankFrame> all = gatherRankFrames(mine, renderComm, timeout);
         if (job.worldRank == 0) {
           FrameRecord record = combine(all);

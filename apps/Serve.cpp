@@ -1,8 +1,15 @@
 // `dfbwall serve`: the wall processes of a layout as a persistent service (README, "A wall that
-// stays up"; wall/service/WallService.h). One process per layout process, placed on the hosts
-// the layout names, as wall ranks of a single job are.
+// stays up"; wall/service/WallService.h). Either every process at once under one mpirun (rank p
+// is process p; MPI only tells the others where the head listens), or one process on its own,
+// started or restarted by hand or by a service manager (`--process N`, `--join HOST:PORT`).
+// The processes share no MPI communication after start-up, so under
+// `mpirun --enable-recovery` one that dies leaves the others running.
+#include <unistd.h>
+
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <optional>
 
 #include "apps/Collectives.h"
@@ -10,57 +17,102 @@
 #include "apps/Options.h"
 #include "apps/Run.h"
 #include "apps/StopSignals.h"
-#include "dfb/AtomicFile.h"
-#include "messaging/Messenger.h"
+#include "dfb/Error.h"
+#include "messaging/BoundedWait.h"
 #include "wall/DisplayPresenters.h"
 #include "wall/Ranks.h"
 #include "wall/service/WallService.h"
 
 namespace app {
+namespace {
 
-int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath& failure) {
+// A wall process that fails ends alone (the others drop it), never through MPI_Abort, which
+// would end every process mpirun started.
+[[noreturn]] void failAlone(int process, const std::string& what) {
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  std::fprintf(stderr, "dfbwall serve: wall process %d on %s: error: %s\n", process, host,
+               what.c_str());
+  std::fflush(stderr);
+  std::fflush(stdout);
+  std::_Exit(1);
+}
+
+// Under mpirun: the head's address and token to every process (empty: the head failed to start
+// and said why).
+std::pair<std::string, std::string> shareHead(const std::string& address, const std::string& token,
+                                              std::chrono::milliseconds timeout) {
+  char buffer[1024] = {};
+  if (!address.empty())
+    std::snprintf(buffer, sizeof buffer, "%s\n%s", address.c_str(), token.c_str());
+  MPI_Request request;
+  dfb::checkMpi(MPI_Ibcast(buffer, sizeof buffer, MPI_CHAR, 0, MPI_COMM_WORLD, &request),
+                "MPI_Ibcast");
+  messaging::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
+                              "starting the wall service: the head did not answer");
+  buffer[sizeof buffer - 1] = 0;
+  const char* newline = std::strchr(buffer, '\n');
+  if (!newline) return {};
+  return {std::string(buffer, static_cast<size_t>(newline - buffer)), std::string(newline + 1)};
+}
+
+}  // namespace
+
+int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath& /*failure*/) {
   const auto timeout = std::chrono::milliseconds(std::chrono::seconds(o.timeoutSeconds));
   int worldSize = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &worldSize);
+  const bool alone = o.process >= 0;
+  const int process = alone ? o.process : worldRank;
   // Setup problems (a bad layout, a rank count that does not fit, a port in use) are bad input:
   // one message, every process exits 1.
   std::optional<wall::Layout> layout;
   std::string problem;
   try {
     layout = wall::loadLayout(o.wall);
-    if (worldSize != layout->processCount)
+    if (alone && worldSize != 1)
+      problem = "serve --process starts one wall process on its own; under mpirun -np " +
+                std::to_string(worldSize) + " every rank is a process already (leave it out)";
+    else if (alone && process >= layout->processCount)
+      problem = o.wall + ": the layout has wall processes 0.." +
+                std::to_string(layout->processCount - 1) + "; there is no process " +
+                std::to_string(process);
+    else if (!alone && worldSize != layout->processCount)
       problem = o.wall + ": the layout has " + std::to_string(layout->processCount) +
                 " wall processes; start serve with mpirun -np " +
-                std::to_string(layout->processCount) + " (got " + std::to_string(worldSize) + ")";
+                std::to_string(layout->processCount) + " (got " + std::to_string(worldSize) +
+                "), or each process on its own with --process N";
   } catch (const std::exception& e) {
     problem = e.what();
   }
   FILE* stats = nullptr;
-  if (problem.empty() && worldRank == 0 && !o.statsFile.empty()) {
+  if (problem.empty() && process == 0 && !o.statsFile.empty()) {
     stats = std::fopen(o.statsFile.c_str(), "a");
     if (!stats) problem = "--stats " + o.statsFile + ": cannot open it for writing";
   }
-  {
+  if (alone) {
+    if (!problem.empty()) {
+      std::fprintf(stderr, "dfbwall: error: %s\n", problem.c_str());
+      return 1;
+    }
+  } else {
     int failing = problem.empty() ? 1 << 30 : worldRank, first = 0;
     boundedAllreduce(&failing, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD, timeout, "setup");
     if (first == worldRank) std::fprintf(stderr, "dfbwall: error: %s\n", problem.c_str());
     if (first != 1 << 30) return 1;
   }
+  int stopSignal = 0;
   try {
-    const int process = worldRank;
     const auto presenters = wall::makeDisplayPresenters(*layout, process, o.offscreen);
-    messaging::MessengerOptions messaging;
-    messaging.quiesceTimeout = timeout;
-    messaging.handlerThreads = 1;  // commands only: the pieces come through the service's sockets
-    messaging::Messenger messenger(MPI_COMM_WORLD, messaging);
-    messenger.setErrorCallback([&failure](const std::string& m) { failure.fail(m); });
     wall::service::ServiceOptions service;
+    service.process = process;
     service.listen = o.listen;
+    service.join = o.join;
     service.token = o.token;
     service.timeout = timeout;
     service.handlerThreads = o.handlerThreads;
     service.framesInFlight = o.framesInFlight;
-    int stopSignal = 0;
+    service.leaveAlone = alone;
     service.stopRequested = [&signals, &stopSignal] {
       if (const int s = signals.poll()) stopSignal = s;
       return stopSignal != 0;
@@ -73,20 +125,48 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
       std::fprintf(stats, "%s\n", line.c_str());
       std::fflush(stats);
     };
-    wall::service::WallService wallService(messenger, MPI_COMM_WORLD, *layout, presenters->list(),
-                                           service);
-    if (worldRank == 0) {
-      // One line a script can read: where jobs connect, and the token when one is needed.
-      std::printf("dfbwall: wall service on %s%s%s\n", wallService.address().c_str(),
-                  wallService.token().empty() ? "" : "  token: ", wallService.token().c_str());
-      std::fflush(stdout);
+    std::optional<wall::service::WallService> wallService;
+    if (process == 0) {
+      try {
+        wallService.emplace(*layout, presenters->list(), service);
+      } catch (const std::exception& e) {
+        if (!alone) shareHead({}, {}, timeout);  // the others learn there is no head, and stop
+        std::fprintf(stderr, "dfbwall: error: %s\n", e.what());
+        return 1;
+      }
+      if (!alone) shareHead(wallService->address(), wallService->token(), timeout);
+    } else {
+      if (!alone) {
+        const auto [address, token] = shareHead({}, {}, timeout);
+        if (address.empty()) return 1;  // the head said why
+        service.join = address;
+        service.token = token;
+      }
+      wallService.emplace(*layout, presenters->list(), service);
     }
-    wallService.run();
-    messenger.stop();
+    const std::vector<int> absent =
+        wallService->waitForProcesses(std::chrono::steady_clock::now() + timeout);
+    if (process == 0) {
+      if (!absent.empty()) {
+        std::string list;
+        for (int p : absent) list += (list.empty() ? "" : ", ") + std::to_string(p);
+        service.log("wall process" + std::string(absent.size() > 1 ? "es " : " ") + list +
+                    " did not join within " + std::to_string(o.timeoutSeconds) +
+                    " s; the wall starts without them (they join when they come)");
+      }
+      // One line a script can read: where jobs connect, and the token when one is needed.
+      std::printf("dfbwall: wall service on %s%s%s\n", wallService->address().c_str(),
+                  wallService->token().empty() ? "" : "  token: ", wallService->token().c_str());
+      std::fflush(stdout);
+    } else if (!absent.empty()) {
+      service.log("no answer from the head at " + wallService->address() + " yet; still trying");
+    }
+    wallService->run();
+    wallService.reset();
     if (stats) std::fclose(stats);
     return stopSignal ? exitCodeForStop(stopSignal) : 0;
   } catch (const std::exception& e) {
-    failure.fail(e);
+    failAlone(process, e.what());
   }
 }
 

@@ -146,6 +146,7 @@ void StatsStream::writeFrame(const FrameRecord& f) {
   line["wall_bytes_sent"] = f.wallBytesSent;
   line["wall_bytes_raw"] = f.wallBytesRaw;
   line["wall_pieces"] = f.wallPieces;
+  line["wall_pieces_dropped"] = f.wallPiecesDropped;
   line["wall_pieces_to_other_hosts"] = f.wallPiecesToOtherHosts;
   line["wall_messages"] = f.wallMessages;
   line["messages_compressed"] = f.messagesCompressed;

@@ -33,10 +33,16 @@ void StatusBoard::addError(std::string message) {
   if (errors_.size() > 20) errors_.pop_front();
 }
 
+void StatusBoard::setLostDisplays(std::vector<std::string> names) {
+  std::lock_guard lock(mutex_);
+  lostDisplays_ = std::move(names);
+}
+
 RunStatus StatusBoard::snapshot() const {
   std::lock_guard lock(mutex_);
   RunStatus out = status_;
   out.errors.assign(errors_.begin(), errors_.end());
+  out.lostDisplays = lostDisplays_;
   return out;
 }
 

@@ -24,6 +24,8 @@ struct RunStatus {
   std::uint64_t lastRequest = 0;       // the last steering request applied ...
   std::uint32_t lastRequestFrame = 0;  // ... first shown by this frame
   std::vector<std::string> errors;     // the latest last
+  // --connect: displays of wall processes the wall lost (dark until they rejoin).
+  std::vector<std::string> lostDisplays;
 };
 
 class StatusBoard {
@@ -32,6 +34,8 @@ class StatusBoard {
   void publish(RunStatus status);
   // Something an operator should read (a request that could not be applied); the last 20 kept.
   void addError(std::string message);
+  // The wall lost (or got back) processes: the displays that show nothing of this job now.
+  void setLostDisplays(std::vector<std::string> names);
   RunStatus snapshot() const;
   // The server starts before the scene is loaded; a request checked against the view must wait
   // for the first publish, or it is checked against a default camera. False after `wait`.
@@ -43,6 +47,7 @@ class StatusBoard {
   bool everPublished_ = false;
   RunStatus status_;
   std::deque<std::string> errors_;
+  std::vector<std::string> lostDisplays_;
   std::deque<std::chrono::steady_clock::time_point> frameTimes_;  // of the last frames
 };
 

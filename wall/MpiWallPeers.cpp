@@ -41,9 +41,11 @@ void MpiWallPeers::agreeMax(std::uint32_t frameId, std::int64_t* values, int cou
                                   ": another wall process did not complete it in time");
 }
 
-std::vector<std::vector<std::uint32_t>> MpiWallPeers::gatherToFirst(std::vector<std::uint32_t> mine,
+std::vector<std::vector<std::uint32_t>> MpiWallPeers::gatherToFirst(std::uint32_t frameId,
+                                                                    std::vector<std::uint32_t> mine,
                                                                     Clock::time_point deadline) {
-  const std::string late = "gathering the wall's pixels: another wall process did not join in time";
+  const std::string late = "gathering the wall's pixels of frame " + std::to_string(frameId) +
+                           ": another wall process did not join in time";
   const int count = static_cast<int>(mine.size());
   std::vector<int> counts(static_cast<size_t>(size_)), offsets(static_cast<size_t>(size_));
   MPI_Request request;

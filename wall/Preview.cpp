@@ -77,7 +77,8 @@ Image downsample(const PreviewGrid& grid, const Image& canvas) {
   return out;
 }
 
-Image decoratePreview(const Image& raw, const PreviewGrid& grid, const Layout* layout) {
+Image decoratePreview(const Image& raw, const PreviewGrid& grid, const Layout* layout,
+                      const std::vector<bool>& lost) {
   Image out = raw;
   for (std::uint32_t& p : out.pixels) p |= 0xff000000u;  // a preview is opaque
   if (!layout) return out;
@@ -94,16 +95,30 @@ Image decoratePreview(const Image& raw, const PreviewGrid& grid, const Layout* l
       if (!shown((c.x0 + c.x1) / 2, (c.y0 + c.y1) / 2)) out.at(cx, cy) = kBezel;
     }
   // Outlines half over the picture: on a small canvas a cell is a lot of it.
+  constexpr std::uint32_t kLost = rgba8(220, 40, 30);
+  std::uint32_t color = kOutline;
   auto outline = [&](int x, int y) {
     const std::uint32_t p = out.at(x, y);
     std::uint32_t mixed = 0xff000000u;
     for (int c = 0; c < 3; ++c)
-      mixed |= (((p >> (8 * c) & 0xff) + (kOutline >> (8 * c) & 0xff) + 1) / 2) << (8 * c);
+      mixed |= (((p >> (8 * c) & 0xff) + (color >> (8 * c) & 0xff) + 1) / 2) << (8 * c);
     out.at(x, y) = mixed;
   };
-  for (const Display& d : layout->displays) {
+  for (size_t i = 0; i < layout->displays.size(); ++i) {
+    const Display& d = layout->displays[i];
     const dfb::Region r = dfb::intersect(grid.cellsOf(d.rect), {0, 0, out.width, out.height});
     if (r.empty()) continue;
+    const bool isLost = i < lost.size() && lost[i];
+    color = isLost ? kLost : kOutline;
+    if (isLost) {
+      // Both diagonals: readable at any preview size, and not a picture a scene could make.
+      const int w = r.width(), h = r.height();
+      for (int k = 0; k < std::max(w, h); ++k) {
+        const int x = r.x0 + k * w / std::max(w, h), y = r.y0 + k * h / std::max(w, h);
+        out.at(x, y) = kLost;
+        out.at(r.x1 - 1 - (x - r.x0), y) = kLost;
+      }
+    }
     for (int x = r.x0; x < r.x1; ++x) {
       outline(x, r.y0);
       if (r.y1 - 1 > r.y0) outline(x, r.y1 - 1);

@@ -42,7 +42,9 @@ Image downsample(const PreviewGrid& grid, const Image& canvas);
 
 // What the controller page shows: the raw preview with every cell whose centre no display
 // shows (bezels, gaps) drawn dark, opaque, and each display's outline (its edge cells) mixed
-// half and half with light grey.
-Image decoratePreview(const Image& raw, const PreviewGrid& grid, const Layout* layout);
+// half and half with light grey. A display whose index is set in `lost` (a service wall lost its
+// process: it shows nothing of the job) is crossed out and outlined in red.
+Image decoratePreview(const Image& raw, const PreviewGrid& grid, const Layout* layout,
+                      const std::vector<bool>& lost = {});
 
 }  // namespace wall

@@ -64,6 +64,8 @@ WallNode::WallNode(const Layout& layout, WallPeers& peers, std::vector<Presenter
     tileWindows_.push_back(window);
   }
   uploadBatch_ = std::max<size_t>(1, uploadBatch_ / kUploadBatches);
+  lastPresented_ = static_cast<std::int64_t>(std::max<std::uint32_t>(options_.firstFrame, 1)) - 1;
+  firstFrame_ = options_.firstFrame;
 }
 
 WallNode::~WallNode() = default;
@@ -140,6 +142,10 @@ bool WallNode::receivePiece(const std::string& sender, std::uint32_t frameId, in
       // Everything about the piece is checked, and the piece claimed, before a pixel is copied:
       // a duplicate or a stray rectangle never touches a buffer the presenter may be reading.
       std::lock_guard lock(mutex_);
+      if (firstFrame_ == 0 || frameId < firstFrame_) {
+        ++staleDropped_;
+        return true;
+      }
       if (static_cast<std::int64_t>(frameId) <= lastPresented_)
         throw Error(sender + " sent a piece for frame " + std::to_string(frameId) +
                     ", already presented");
@@ -221,6 +227,22 @@ void WallNode::keepWaiting() {
   std::lock_guard lock(mutex_);
   waitFrom_ = Clock::now();
   complete_.notify_all();
+}
+
+void WallNode::startAt(std::uint32_t firstFrame) {
+  std::lock_guard lock(mutex_);
+  if (firstFrame_ != 0) return;
+  firstFrame_ = std::max<std::uint32_t>(firstFrame, 1);
+  lastPresented_ = static_cast<std::int64_t>(firstFrame_) - 1;
+  complete_.notify_all();
+}
+
+std::uint32_t WallNode::waitForStart(Clock::time_point deadline) {
+  std::unique_lock lock(mutex_);
+  complete_.wait_until(lock, deadline, [&] {
+    return firstFrame_ != 0 || aborted_ || stopAfter_ >= 0 || !error_.empty();
+  });
+  return aborted_ || stopAfter_ >= 0 || !error_.empty() ? 0 : firstFrame_;
 }
 
 void WallNode::requestCapture(std::uint32_t frameId, std::uint64_t sequence) {
@@ -451,7 +473,8 @@ void WallNode::finish() {
     std::lock_guard lock(mutex_);
     last = lastPresented_;
   }
-  if (!options_.captureDir.empty() && last > 0 && last != lastCaptured_)
+  if (!options_.captureDir.empty() && last >= std::max<std::int64_t>(firstFrame_, 1) &&
+      last != lastCaptured_)
     capture(static_cast<std::uint32_t>(last));
 }
 
@@ -466,11 +489,12 @@ void WallNode::capture(std::uint32_t frameId) {
     mine.insert(mine.end(), shown.pixels.begin(), shown.pixels.end());
   }
   const std::vector<std::vector<std::uint32_t>> all =
-      peers_.gatherToFirst(std::move(mine), Clock::now() + options_.timeout);
+      peers_.gatherToFirst(frameId, std::move(mine), Clock::now() + options_.timeout);
   if (process_ != 0) return;
   std::vector<const std::uint32_t*> pixels(layout_.displays.size(), nullptr);
   for (int p = 0; p < static_cast<int>(all.size()); ++p) {
     const std::uint32_t* at = all[static_cast<size_t>(p)].data();
+    if (all[static_cast<size_t>(p)].empty()) continue;  // a lost process: its displays stay dark
     std::size_t expected = 0;
     for (int d : layout_.displaysOfProcess(p))
       expected += static_cast<size_t>(layout_.displays[static_cast<size_t>(d)].rect.pixelCount());

@@ -45,6 +45,10 @@ struct WallNodeOptions {
   std::string captureDir;   // empty: no captures
   int captureEvery = 0;     // capture every K-th frame; 0: only the last
   std::uint32_t lastFrame = 0;
+  // A service wall process that (re)joins a running job presents from this frame on; pieces of
+  // earlier frames (sent before the job knew it was back) are dropped without a word. 0: not
+  // known yet (every piece is dropped until startAt()).
+  std::uint32_t firstFrame = 1;
   std::chrono::milliseconds timeout{60000};
   // Pieces of frames more than this far past the last presented one are refused (an error):
   // the renderers run at most frames-in-flight ahead, so anything further is a corrupt or
@@ -118,6 +122,11 @@ class WallNode : public messaging::MessageHandler {
   // next frame's pieces starts over: its deadline is `timeout` from now. Render rank 0 repeats
   // this well within the timeout while it idles; a rank that dies still ends the wait.
   void keepWaiting();
+  // Thread-safe: the first frame, for a node made with firstFrame 0 (a process that rejoins a
+  // running job learns it once it is ready to take pieces).
+  void startAt(std::uint32_t firstFrame);
+  // Until startAt() was called (its frame), the run was stopped or aborted, or `deadline` (0).
+  std::uint32_t waitForStart(std::chrono::steady_clock::time_point deadline);
   // Thread-safe: capture frame `frameId` or, when it is presented already, the first frame
   // after it; `sequence` numbers the requests (1, 2, ...). Every wall process captures the same
   // frame: the swap barrier agrees on the highest sequence any process has been asked for.
@@ -203,6 +212,8 @@ class WallNode : public messaging::MessageHandler {
   std::string abortReason_;
   std::uint64_t bytesReceived_ = 0;
   std::int64_t unpackNs_ = 0, assembleNs_ = 0;
+  std::uint32_t firstFrame_ = 1;    // 0: not known yet (startAt)
+  std::uint64_t staleDropped_ = 0;  // pieces of frames before firstFrame_
 };
 
 }  // namespace wall

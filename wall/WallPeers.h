@@ -30,9 +30,11 @@ class WallPeers {
   // `deadline` passes without every process having joined.
   virtual void agreeMax(std::uint32_t frameId, std::int64_t* values, int count,
                         Clock::time_point deadline) = 0;
-  // Process 0 gets every process's `mine` in process order; the others get nothing. Same
-  // deadline rule.
-  virtual std::vector<std::vector<std::uint32_t>> gatherToFirst(std::vector<std::uint32_t> mine,
+  // Process 0 gets every process's `mine` (its displays' pixels of captured frame `frameId`) in
+  // process order; the others get nothing. Same deadline rule. A service wall leaves a lost
+  // process's entry empty.
+  virtual std::vector<std::vector<std::uint32_t>> gatherToFirst(std::uint32_t frameId,
+                                                                std::vector<std::uint32_t> mine,
                                                                 Clock::time_point deadline) = 0;
   // Process 0, after every display presented `frameId`: the renderers' credit for a later frame.
   virtual void presented(std::uint32_t frameId, std::int64_t completeNs) = 0;
@@ -56,7 +58,8 @@ class MpiWallPeers : public WallPeers {
   int processCount() const override { return size_; }
   void agreeMax(std::uint32_t frameId, std::int64_t* values, int count,
                 Clock::time_point deadline) override;
-  std::vector<std::vector<std::uint32_t>> gatherToFirst(std::vector<std::uint32_t> mine,
+  std::vector<std::vector<std::uint32_t>> gatherToFirst(std::uint32_t frameId,
+                                                        std::vector<std::uint32_t> mine,
                                                         Clock::time_point deadline) override;
   void presented(std::uint32_t frameId, std::int64_t completeNs) override;
 

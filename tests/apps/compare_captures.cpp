@@ -1,4 +1,7 @@
-// compare_captures LAYOUT CAPTURE_DIR FULL_CANVAS_PNG FRAME   (or: compare_captures --info LAYOUT)
+// compare_captures LAYOUT CAPTURE_DIR FULL_CANVAS_PNG FRAME [DISPLAY]
+//                                                            (or: compare_captures --info LAYOUT)
+//                  DISPLAY: only that display's capture (a wall that lost processes has no
+//                  complete frame of every display)
 //                  --preview LAYOUT PREVIEW_PNG FULL_CANVAS_PNG
 //                  --colors PNG: how many distinct colours the image has, to tell a picture
 //                  from a blank
@@ -98,10 +101,11 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  if (argc != 5) {
-    std::fprintf(stderr, "usage: %s LAYOUT CAPTURE_DIR FULL_CANVAS_PNG FRAME\n", argv[0]);
+  if (argc != 5 && argc != 6) {
+    std::fprintf(stderr, "usage: %s LAYOUT CAPTURE_DIR FULL_CANVAS_PNG FRAME [DISPLAY]\n", argv[0]);
     return 2;
   }
+  const std::string only = argc == 6 ? argv[5] : "";
   try {
     const wall::Layout layout = wall::loadLayout(argv[1]);
     const std::string dir = argv[2];
@@ -112,11 +116,15 @@ int main(int argc, char** argv) {
                    layout.canvasWidth, layout.canvasHeight);
       return 1;
     }
-    const wall::Image preview = wall::readPng(wall::wallPreviewPath(dir, frame));
+    const wall::Image preview =
+        only.empty() ? wall::readPng(wall::wallPreviewPath(dir, frame)) : wall::Image(1, 1);
+    bool found = false;
     for (const wall::Display& d : layout.displays) {
+      if (!only.empty() && d.name != only) continue;
+      found = true;
       const wall::Image expected = wall::crop(full, d.rect);
       const wall::Image got = wall::readPng(wall::displayCapturePath(dir, d.name, frame));
-      const wall::Image shown = wall::crop(preview, d.rect);
+      const wall::Image shown = only.empty() ? wall::crop(preview, d.rect) : got;
       for (const auto* image : {&got, &shown}) {
         if (image->width != expected.width || image->height != expected.height) {
           std::fprintf(stderr, "display %s: capture is %dx%d, its rectangle %dx%d\n",
@@ -135,8 +143,15 @@ int main(int argc, char** argv) {
             }
       }
     }
-    std::printf("%zu displays of frame %u equal the single-process render\n",
-                layout.displays.size(), frame);
+    if (!found) {
+      std::fprintf(stderr, "the layout has no display '%s'\n", only.c_str());
+      return 1;
+    }
+    if (only.empty())
+      std::printf("%zu displays of frame %u equal the single-process render\n",
+                  layout.displays.size(), frame);
+    else
+      std::printf("display %s of frame %u equals the single-process render\n", only.c_str(), frame);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "compare_captures: %s\n", e.what());

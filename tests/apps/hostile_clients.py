@@ -101,7 +101,10 @@ def free_port():
     return port
 
 
-def header(kind, session=0, version=1, magic=MAGIC):
+PROTOCOL = 2
+
+
+def header(kind, session=0, version=PROTOCOL, magic=MAGIC):
     return struct.pack("<IHHQ", magic, version, kind, session)
 
 
@@ -110,7 +113,7 @@ def text(s):
     return struct.pack("<H", len(b)) + b
 
 
-def hello(token=TOKEN, host="hostile", version=1, ranks=1):
+def hello(token=TOKEN, host="hostile", version=PROTOCOL, ranks=1):
     return (header(HELLO, 0, version) + text(token) + text(host) +
             struct.pack("<II", ranks, 64) + struct.pack("<BBBB", 0, 90, 0, 0) +
             struct.pack("<I", 2) + text("") + struct.pack("<I", 0))
@@ -141,6 +144,7 @@ def parse_directory(m):
     endpoints = []
     for _ in range(n):
         e, at = parse_text(m, at)
+        at += 1  # live flag
         endpoints.append(e)
     return session, owners, endpoints
 
@@ -297,7 +301,7 @@ try:
     # not speak; the job times out on its side).
     s, reply = ask(endpoint, hello(version=7, host="hostile-c"), 0.5)
     s.close()
-    expect_log("(c) version 7", "protocol version 7, this side speaks 1")
+    expect_log("(c) version 7", "protocol version 7, this side speaks %d" % PROTOCOL)
 
     # (d) sizes that lie. (d1) raw ZMTP: a valid greeting and READY, then a frame whose 64-bit
     # length says 4 GiB: libzmq refuses it against maxmsgsize (1 GiB) before allocating and

@@ -38,7 +38,8 @@ class OneProcess : public wall::WallPeers {
   int process() const override { return 0; }
   int processCount() const override { return 1; }
   void agreeMax(std::uint32_t, std::int64_t*, int, Clock::time_point) override {}
-  std::vector<std::vector<std::uint32_t>> gatherToFirst(std::vector<std::uint32_t> mine,
+  std::vector<std::vector<std::uint32_t>> gatherToFirst(std::uint32_t,
+                                                        std::vector<std::uint32_t> mine,
                                                         Clock::time_point) override {
     return {std::move(mine)};
   }

@@ -478,7 +478,7 @@ TEST(ProtocolHostile, WrongMagic) {
 
 TEST(ProtocolHostile, WrongVersionNamesBothVersions) {
   for (const std::uint16_t version :
-       {std::uint16_t{0}, std::uint16_t{2}, std::uint16_t{7}, std::uint16_t{0xFFFF}}) {
+       {std::uint16_t{0}, std::uint16_t{1}, std::uint16_t{7}, std::uint16_t{0xFFFF}}) {
     messaging::Bytes bytes = packControl(Kind::Keepalive, 3, 0);
     poke(bytes, kVersionAt, version);
     const std::string message = errorOf([&] { parseHeader(bytes.data(), bytes.size()); });
@@ -490,7 +490,7 @@ TEST(ProtocolHostile, WrongVersionNamesBothVersions) {
 }
 
 TEST(ProtocolHostile, UnknownKind) {
-  for (const std::uint16_t kind : {std::uint16_t{0}, std::uint16_t{11}, std::uint16_t{0xFFFF}}) {
+  for (const std::uint16_t kind : {std::uint16_t{0}, std::uint16_t{19}, std::uint16_t{0xFFFF}}) {
     messaging::Bytes bytes = packControl(Kind::Keepalive, 3, 0);
     poke(bytes, kKindAt, kind);
     EXPECT_ERROR_HAS(parseHeader(bytes.data(), bytes.size()),

@@ -1,6 +1,7 @@
 #include "wall/service/ServiceClient.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 
 #include "dfb/Error.h"
@@ -112,6 +113,16 @@ void ServiceClient::bye(std::uint32_t lastFrame) {
   post(packControl(Kind::Bye, directory_.session, lastFrame));
 }
 
+std::uint32_t ServiceClient::rosterVersion() const {
+  std::lock_guard lock(mutex_);
+  return rosterVersion_;
+}
+
+messaging::Bytes ServiceClient::rosterBytes() const {
+  std::lock_guard lock(mutex_);
+  return rosterBytes_;
+}
+
 void ServiceClient::run() {
   const std::uint64_t session = directory_.session;
   const auto wallTimeout = std::chrono::milliseconds(directory_.timeoutMs);
@@ -146,6 +157,22 @@ void ServiceClient::run() {
           const Control c = parseControl(bytesOf(m), m.size());
           credits_->acknowledged(static_cast<std::uint32_t>(c.value), c.second,
                                  "the wall at " + address_);
+        } else if (h.kind == static_cast<std::uint16_t>(Kind::Roster)) {
+          const Roster roster = parseRoster(bytesOf(m), m.size());
+          if (roster.processes.size() != directory_.processes.size())
+            throw Error("the wall at " + address_ + " sent a roster of " +
+                        std::to_string(roster.processes.size()) + " processes for " +
+                        std::to_string(directory_.processes.size()));
+          if (!roster.why.empty()) {
+            std::fprintf(stderr, "dfbwall: the wall at %s: %s\n", address_.c_str(),
+                         roster.why.c_str());
+            std::fflush(stderr);
+          }
+          std::lock_guard lock(mutex_);
+          if (roster.version > rosterVersion_) {
+            rosterVersion_ = roster.version;
+            rosterBytes_.assign(bytesOf(m), bytesOf(m) + m.size());
+          }
         } else if (h.kind == static_cast<std::uint16_t>(Kind::Ended)) {
           fail("the wall at " + address_ + " ended the job: " + parseText(bytesOf(m), m.size()));
         } else if (h.kind != static_cast<std::uint16_t>(Kind::Keepalive)) {
@@ -199,20 +226,65 @@ Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int frames
 
 ServicePieceSink::ServicePieceSink(const Directory& directory, int renderRank,
                                    const CodecSpec& codec, int deadPeerMs)
-    : session_(directory.session), renderRank_(renderRank), codec_(codec) {
+    : session_(directory.session),
+      renderRank_(renderRank),
+      codec_(codec),
+      deadPeerMs_(deadPeerMs),
+      live_(new std::atomic<bool>[directory.processes.size()]) {
   for (const Display& d : directory.layout.displays) {
     processOfDisplay_.push_back(d.process);
     batches_.push_back(std::make_unique<Batch>());
   }
-  for (const DirectoryProcess& p : directory.processes) {
-    sockets_.emplace_back(context_, zmq::socket_type::dealer);
-    // A rank that is done still delivers its last batches (up to the timeout) as it exits.
-    configureSocket(sockets_.back(), deadPeerMs, deadPeerMs);
-    // A few frames of a whole display in flight at most; then send() waits (back-pressure).
-    sockets_.back().set(zmq::sockopt::sndhwm, 64);
-    sockets_.back().connect(p.endpoint);
+  sockets_.resize(directory.processes.size());
+  endpoints_.resize(directory.processes.size());
+  for (size_t p = 0; p < directory.processes.size(); ++p) {
     socketMutex_.push_back(std::make_unique<std::mutex>());
+    live_[p] = directory.processes[p].live;
+    if (!directory.processes[p].endpoint.empty()) connect(p, directory.processes[p].endpoint);
   }
+}
+
+void ServicePieceSink::connect(size_t process, const std::string& endpoint) {
+  zmq::socket_t socket(context_, zmq::socket_type::dealer);
+  // A rank that is done still delivers its last batches (up to the timeout) as it exits.
+  configureSocket(socket, deadPeerMs_, deadPeerMs_);
+  // A few frames of a whole display in flight at most; then send() waits (back-pressure).
+  socket.set(zmq::sockopt::sndhwm, 64);
+  socket.connect(endpoint);
+  // What the old socket still held was for a process that is gone: it goes with it.
+  if (sockets_[process]) sockets_[process].set(zmq::sockopt::linger, 0);
+  sockets_[process] = std::move(socket);
+  endpoints_[process] = endpoint;
+}
+
+void ServicePieceSink::setRoster(const Roster& roster) {
+  if (roster.processes.size() != sockets_.size())
+    throw Error("a roster of " + std::to_string(roster.processes.size()) + " wall processes for " +
+                std::to_string(sockets_.size()));
+  for (size_t p = 0; p < sockets_.size(); ++p) {
+    const DirectoryProcess& next = roster.processes[p];
+    std::lock_guard lock(*socketMutex_[p]);
+    if (next.live && next.endpoint != endpoints_[p]) connect(p, next.endpoint);
+    live_[p] = next.live;
+  }
+}
+
+// Waits while the process's queue is full (back-pressure from a slow wall), but not forever: a
+// process that takes nothing for the timeout is stuck or gone, and the wall drops it within that
+// time too; its batch is dropped here rather than stalling the whole job.
+void ServicePieceSink::sendBounded(size_t process, messaging::Bytes bytes, std::uint32_t pieces) {
+  std::lock_guard lock(*socketMutex_[process]);
+  zmq::socket_t& socket = sockets_[process];
+  zmq::message_t message = toMessage(std::move(bytes));
+  const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(deadPeerMs_);
+  while (true) {
+    if (!live_[process]) break;
+    if (socket.send(message, zmq::send_flags::dontwait)) return;
+    if (std::chrono::steady_clock::now() >= until) break;
+    zmq::pollitem_t item{socket.handle(), 0, ZMQ_POLLOUT, 0};
+    zmq::poll(&item, 1, std::chrono::milliseconds(100));
+  }
+  dropped_ += pieces;
 }
 
 ServicePieceSink::~ServicePieceSink() = default;
@@ -220,20 +292,23 @@ ServicePieceSink::~ServicePieceSink() = default;
 void ServicePieceSink::flush(int display, Batch& batch) {
   if (!batch.open) return;
   batch.open = false;
+  const std::uint32_t pieces = batch.writer.pieces();
   messaging::Bytes bytes = batch.writer.take();
   const std::int64_t t0 = dfb::threadCpuNs();
   wireBytes_ += bytes.size();
   messages_++;
-  const int process = processOfDisplay_[static_cast<size_t>(display)];
-  {
-    std::lock_guard lock(*socketMutex_[static_cast<size_t>(process)]);
-    sockets_[static_cast<size_t>(process)].send(toMessage(std::move(bytes)), zmq::send_flags::none);
-  }
+  sendBounded(static_cast<size_t>(processOfDisplay_[static_cast<size_t>(display)]),
+              std::move(bytes), pieces);
   sendNs_ += dfb::threadCpuNs() - t0;
 }
 
 std::size_t ServicePieceSink::send(std::uint32_t frameId, int display, const dfb::Region& local,
                                    const std::uint32_t* pixels, int stride) {
+  // A lost wall process's pieces are not even encoded.
+  if (!live_[static_cast<size_t>(processOfDisplay_.at(static_cast<size_t>(display)))]) {
+    ++dropped_;
+    return 0;
+  }
   const std::int64_t t0 = dfb::threadCpuNs();
   thread_local messaging::Bytes piece;
   encodePiece(codec_, local, pixels, stride, piece);

@@ -52,6 +52,11 @@ class ServiceClient {
   void capture(std::uint32_t frameId, std::uint64_t sequence);
   // Thread-safe. The job's last frame: the wall presents up to it and then ends the job.
   void bye(std::uint32_t lastFrame);
+  // Thread-safe. The newest roster the wall sent (wall processes lost or back), packed, and its
+  // version (0: the directory's). The link reads a roster before any later credit, so the roster
+  // a frame starts with is never older than the one the wall counted on (Protocol.h, Roster).
+  std::uint32_t rosterVersion() const;
+  messaging::Bytes rosterBytes() const;
 
  private:
   void run();
@@ -64,9 +69,11 @@ class ServiceClient {
   messaging::Bytes directoryBytes_;
   FrameCredits* credits_ = nullptr;
   std::function<void(const std::string&)> onError_;
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   std::vector<messaging::Bytes> outbox_;
   bool byeSent_ = false;
+  std::uint32_t rosterVersion_ = 0;
+  messaging::Bytes rosterBytes_;
   Waker waker_;
   std::atomic<bool> stop_{false};
   std::thread thread_;
@@ -92,6 +99,14 @@ class ServicePieceSink : public PieceSink {
                    const std::uint32_t* pixels, int stride) override;
   void endFrame(std::uint32_t frameId) override;
   bool otherHost(int) const override { return true; }
+  // Between frames (no send in progress): the wall processes pieces go to from the next frame
+  // on. A lost process's pieces are dropped here and counted; a process back at another
+  // endpoint (restarted) gets a fresh socket. Throws wall::Error when the roster does not fit the
+  // directory.
+  void setRoster(const Roster& roster);
+  // Pieces not sent since the last call: their wall process was lost, or took nothing for the
+  // timeout.
+  std::uint64_t takeDropped() { return dropped_.exchange(0); }
   // Bytes and messages handed to the sockets since the last call.
   struct Traffic {
     std::uint64_t bytes = 0, messages = 0;
@@ -112,10 +127,16 @@ class ServicePieceSink : public PieceSink {
   CodecSpec codec_;
   std::vector<int> processOfDisplay_;
   zmq::context_t context_{1};
+  void connect(size_t process, const std::string& endpoint);  // with its socket mutex held
+  void sendBounded(size_t process, messaging::Bytes bytes, std::uint32_t pieces);
+
+  int deadPeerMs_;
   std::vector<zmq::socket_t> sockets_;  // by wall process
+  std::vector<std::string> endpoints_;
   std::vector<std::unique_ptr<std::mutex>> socketMutex_;
+  std::unique_ptr<std::atomic<bool>[]> live_;    // by wall process
   std::vector<std::unique_ptr<Batch>> batches_;  // by display
-  std::atomic<std::uint64_t> wireBytes_{0}, messages_{0};
+  std::atomic<std::uint64_t> wireBytes_{0}, messages_{0}, dropped_{0};
 };
 
 }  // namespace wall::service

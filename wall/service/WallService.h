@@ -3,59 +3,66 @@
 // connect to (README, "A wall that stays up"). Every process keeps its displays (idle screens
 // before the first job, the last complete frame after each), receives the pieces of the
 // connected job on its own piece socket (wall/service/PieceReceiver.h) and presents them with
-// the same wall node as a single-job wall. Process 0 also runs the desk: the directory socket a
-// job says hello to, one job at a time (a second is refused as busy, or queued with `wait`),
-// the job's keepalives, captures and goodbye, its credits, and the end of a job that goes
-// silent. Nothing a job does ends the wall: a job that dies or sends garbage is dropped within
-// the timeout, its partial frame given up on every display, and the next job taken at once.
+// the same wall node as a single-job wall.
 //
-// The wall processes coordinate through the wall job's messenger (commands from the desk) and
-// WallPeers (the swap barrier), both MPI here.
-#include <mpi.h>
-
+// Process 0 is the head: its desk (wall/service/Desk.h) takes the jobs and coordinates the
+// processes. Every other process joins the head over its own link (wall/service/MemberLink.h):
+// the processes share no MPI job, so one that dies, hangs or loses its network is dropped after
+// the timeout and the others go on; started again (or back on the network) it joins again and
+// shows the running job's frames. Nothing a job does ends the wall: a job that dies or sends
+// garbage is dropped within the timeout, its partial frame given up on every display, and the
+// next job taken at once.
 #include <chrono>
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "messaging/Messenger.h"
 #include "wall/Layout.h"
 #include "wall/Presenter.h"
 
 namespace wall::service {
 
 struct ServiceOptions {
-  std::string listen;                        // [ADDR:]PORT of process 0's directory socket
-  std::string token;                         // required from jobs when not empty
-  std::chrono::milliseconds timeout{60000};  // a silent job is dropped after this long
+  int process = 0;     // which of the layout's processes this is (0: the head)
+  std::string listen;  // the head: [ADDR:]PORT of the directory socket
+  std::string join;    // the others: the head's HOST:PORT
+  std::string token;   // required from jobs and joining processes when not empty
+  std::chrono::milliseconds timeout{60000};  // a silent job or process is dropped after this long
   int handlerThreads = 0;                    // piece decoding threads per process (0: cores)
   int framesInFlight = 2;                    // the most a job is granted
-  // Polled on every process between frames and while idle (stop signals, closed windows); true
-  // asks the wall to shut down after the job in progress is dropped.
+  // A stop asked of a process other than the head (a signal, a closed window) makes it leave
+  // the wall alone (true: a process started on its own) or stop the whole wall (false).
+  bool leaveAlone = false;
+  // Polled between frames and while idle (stop signals); true asks for a stop.
   std::function<bool()> stopRequested;
-  // One line to the wall's log (stderr), prefixed by the caller.
+  // One line to the process's log (stderr), prefixed by the caller.
   std::function<void(const std::string&)> log;
-  // Process 0, one JSON line per job that ended (--stats).
+  // The head: one JSON line per job that ended and per process lost or back (--stats).
   std::function<void(const std::string&)> jobRecord;
 };
 
 class WallService {
  public:
-  // Collective over the messenger's ranks, which are the wall processes (rank p = process p),
-  // and `wallComm` (the same ranks). Binds the sockets; throws wall::Error on a bad --listen or
-  // a port in use.
-  WallService(messaging::Messenger& messenger, MPI_Comm wallComm, const Layout& layout,
-              std::vector<Presenter*> presenters, ServiceOptions options);
+  // Binds this process's sockets (the head: its directory socket too) and starts its link; a
+  // member joins in the background. Throws wall::Error on a bad --listen / --join or a port in
+  // use.
+  WallService(const Layout& layout, std::vector<Presenter*> presenters, ServiceOptions options);
   ~WallService();
   WallService(const WallService&) = delete;
   WallService& operator=(const WallService&) = delete;
 
-  // Process 0: "HOST:PORT" that jobs pass to --connect, and the token they need (generated when
-  // the listen address is not loopback and none was given; empty: none).
+  // The head: "HOST:PORT" that jobs pass to --connect and processes to --join, and the token they
+  // need (generated when the listen address is not loopback and none was given; empty: none).
+  // The others: the head's address they joined.
   std::string address() const;
   std::string token() const;
-  // Presents jobs until the wall is asked to stop; returns on every process then.
+  // The head: waits until every process joined, or `until`; returns those that did not.
+  // Another process: waits until it joined (returns nothing) or `until` (returns itself); throws
+  // wall::Error when the head refused it (wrong token, another layout).
+  std::vector<int> waitForProcesses(std::chrono::steady_clock::time_point until);
+  // Presents jobs until the wall is asked to stop (or this process leaves it); returns then.
+  // Throws wall::Error when the head refuses this process.
   void run();
 
  private:

@@ -75,12 +75,19 @@ function showStatus(s) {
     const tr = document.createElement('tr');
     const name = document.createElement('td');
     const presented = document.createElement('td');
+    const state = document.createElement('td');
     name.textContent = d.name;
     presented.textContent = d.presented;
-    tr.append(name, presented);
+    state.textContent = d.state || 'presenting';
+    if (d.state === 'lost') tr.className = 'lost';
+    tr.append(name, presented, state);
     return tr;
   });
   $('displays').tBodies[0].replaceChildren(...rows);
+  // A display whose wall process the wall lost is marked on the preview too.
+  const lost = new Set(s.lost_displays || []);
+  for (const box of $('outlines').children)
+    box.classList.toggle('lost', lost.has(box.dataset.name));
   if (!settingsShown && s.settings) {
     settingsShown = true;
     showSettings(s.settings);
@@ -128,6 +135,7 @@ async function drawOutlines() {
     const [x0, y0, x1, y1] = d.rect;
     const box = document.createElement('div');
     box.className = 'display';
+    box.dataset.name = d.name;
     box.style.left = (100 * x0 / w) + '%';
     box.style.top = (100 * y0 / h) + '%';
     box.style.width = (100 * (x1 - x0) / w) + '%';
