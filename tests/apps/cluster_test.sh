@@ -8,6 +8,7 @@
 #   cluster_test.sh link-flap     LAYOUT RENDER_HOSTS HOST TIMEOUT
 #   cluster_test.sh service       LAYOUT RENDER_HOSTS
 #   cluster_test.sh relay         LAYOUT RENDER_HOSTS
+#   cluster_test.sh survive       LAYOUT RENDER_HOSTS   (wall processes 0, 1 on wall1; 2, 3 on wall2)
 # Needs DFBWALL, COMPARE (compare_captures), MPIEXEC and CLUSTER (scripts/cluster) in the
 # environment, root and CAP_NET_ADMIN; without them it exits 77 (CTest: skipped), saying why.
 # Every call claims a cluster id of its own (--id auto), so tests can run in parallel, and
@@ -15,9 +16,10 @@
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 work=$(mktemp -d)
-id="" job="" serve="" relay=""
+id="" job="" serve="" relay="" restarted=""
 cleanup() {
   [ -z "$relay" ] || kill -9 "$relay" 2>/dev/null || true
+  [ -z "$restarted" ] || kill -9 "$restarted" 2>/dev/null || true
   [ -z "$job" ] || kill -9 "$job" 2>/dev/null || true
   [ -z "$serve" ] || kill -9 "$serve" 2>/dev/null || true
   [ -z "$id" ] || "$CLUSTER" down --id "$id" >/dev/null 2>&1 || true
@@ -420,6 +422,130 @@ case "$scenario" in
     serve=""
     echo "PASS: a job on ${renderHosts[*]} (no route to the wall) rendered to the wall on ${wallHosts[*]} through" \
       "the relay on gateway1: $batches batches, captures equal the one-process render"
+    ;;
+  survive)
+    # A wall that survives its own processes across hosts (README, "A wall that survives its
+    # own nodes"): `dfbwall serve` under mpirun with recovery on the two wall hosts (the head,
+    # process 0, on wall1), a render job on the render hosts with --frames 0 and a capture of
+    # every frame. kill -9 of process 3 (wall2), then its documented restart inside wall2;
+    # SIGSTOP/SIGCONT of process 1 (wall1); the cut of wall2's link, then its return. Each loss:
+    # within the timeout + 2 s the other displays present new frames and the job goes on; each
+    # return: the display presents again (the restart within 3 s, equal to the one-process render).
+    layout=$1 hosts=$2 timeout=3
+    up "$layout" "$hosts"
+    renderHosts=()
+    for ((h = 1; h <= hosts; ++h)); do renderHosts+=("render$h"); done
+    state=$(dirname "$mpirun")
+    address=$(awk '$1 == "wall1" {print $3}' "$state/hosts")
+    port=7000
+    token=$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')
+    OMPI_MCA_orte_enable_recovery=1 "$CLUSTER" mpirun-hosts wall1 wall2 --id "$id" -- "$DFBWALL" serve \
+      --wall "$layout" --listen "0.0.0.0:$port" --offscreen --timeout $timeout --token "$token" \
+      --stats "$work/serve.jsonl" >"$work/serve.out" 2>"$work/serve.err" &
+    serve=$!
+    for _ in $(seq 200); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
+    grep -q "wall service on $address:$port" "$work/serve.out" || fail "serve did not start on wall1"
+    "$CLUSTER" mpirun-hosts "${renderHosts[@]}" --id "$id" -- "$DFBWALL" --connect "$address:$port" \
+      --token "$token" --renderer pattern --frames 0 --quiet --timeout 30 --capture "$work/cap" \
+      --capture-every 1 --stats "$work/job.jsonl" >"$work/log" 2>&1 &
+    job=$!
+    # The newest frame a display presented (captures older than the newest 40 are deleted).
+    latest() {
+      local dir="$work/cap/$1" newest
+      newest=$(ls "$dir" 2>/dev/null | tail -1)
+      [ -n "$newest" ] || { echo 0; return; }
+      ls "$dir" | head -n -40 | sed "s|^|$dir/|" | xargs -r rm -f
+      ls "$work"/cap/wall-*.png 2>/dev/null | head -n -40 | xargs -r rm -f
+      echo $((10#$(echo "$newest" | tr -dc 0-9)))
+    }
+    advanced() {  # FRAME DISPLAY...: every display presented a frame after FRAME
+      local frame=$1 d; shift
+      for d in "$@"; do [ "$(latest "$d")" -gt "$frame" ] || return 1; done
+    }
+    waitFor() {  # SECONDS CONDITION...
+      local until; until=$(awk -v a="$(now)" -v s="$1" 'BEGIN {printf "%.3f", a + s}'); shift
+      while awk -v t="$(now)" -v u="$until" 'BEGIN {exit !(t < u)}'; do "$@" && return 0; sleep 0.1; done
+      return 1
+    }
+    wallPid() {  # the serve process of wall process N on HOST
+      local p
+      for p in $(ip netns pids "dfbw$id-$2" 2>/dev/null); do
+        [ "$(cat "/proc/$p/comm" 2>/dev/null)" = dfbwall ] &&
+          tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx "OMPI_COMM_WORLD_RANK=$1" && echo "$p"
+      done
+      return 0
+    }
+    waitFor 30 advanced 5 r0c0 r0c1 r1c0 r1c1 || fail "the job's frames did not reach the wall"
+    # lost N DISPLAYS...: the wall drops process N, and the displays named go on presenting.
+    lost() {
+      local process=$1 t0=$2 frame; shift 2
+      waitFor $((timeout + 5)) grep -q "lost wall process $process" "$work/serve.err" ||
+        fail "wall process $process was not dropped"
+      frame=$(latest "$1")
+      waitFor 5 advanced "$frame" "$@" || fail "$* did not present new frames without process $process"
+      local took; took=$(since "$t0")
+      awk -v t="$took" -v b=$((timeout + 2)) 'BEGIN {exit !(t < b)}' ||
+        fail "the other displays presented again $took s after process $process went (timeout $timeout s)"
+      kill -0 "$job" 2>/dev/null || fail "the job stopped when wall process $process went"
+      echo "process $process gone: $* presenting again after $took s"
+    }
+
+    victim=$(wallPid 3 wall2)
+    [ -n "$victim" ] || fail "no wall process 3 on wall2"
+    kill -9 "$victim"
+    lost 3 "$(now)" r0c0 r0c1 r1c0
+    dead=$(latest r1c1)
+    ip netns exec "dfbw$id-wall2" unshare --uts sh -c "hostname wall2; exec $DFBWALL serve \
+      --wall $layout --process 3 --join $address:$port --token $token --offscreen --timeout $timeout" \
+      >"$work/restarted.out" 2>"$work/restarted.err" &
+    restarted=$!
+    t0=$(now)
+    waitFor 10 advanced "$dead" r1c1 || { cat "$work/restarted.err"; fail "the restarted process 3 presents nothing"; }
+    back=$(since "$t0")
+    awk -v t="$back" 'BEGIN {exit !(t < 3)}' || fail "process 3 presented again only $back s after its restart"
+    frame=$(latest r1c1)
+    mkdir -p "$work/check/r1c1"
+    cp "$work/cap/r1c1/frame-$(printf %06d "$frame").png" "$work/check/r1c1/"
+    "$MPIEXEC" -n 1 "$DFBWALL" --renderer pattern --frames "$frame" --size "$(canvas "$layout")" \
+      --image "$work/full.png" --quiet
+    "$COMPARE" "$layout" "$work/check" "$work/full.png" "$frame" r1c1 || fail "the restarted display's frame $frame"
+    echo "process 3 restarted on wall2: r1c1 presented frame $frame after $back s, equal to the one-process render"
+
+    stopped=$(wallPid 1 wall1)
+    kill -STOP "$stopped"
+    lost 1 "$(now)" r0c0 r1c0 r1c1
+    halted=$(latest r0c1)
+    kill -CONT "$stopped"
+    waitFor 10 advanced "$halted" r0c1 || fail "process 1 did not present again after SIGCONT"
+
+    "$CLUSTER" link wall2 down --id "$id"
+    t0=$(now)
+    waitFor $((timeout + 5)) grep -q "lost wall process 2" "$work/serve.err" || fail "wall2's process 2 was not dropped"
+    [ "$(grep -c "lost wall process 3" "$work/serve.err")" -ge 2 ] || fail "wall2's process 3 was not dropped"
+    lost 2 "$t0" r0c0 r0c1
+    cut=$(latest r1c0)
+    "$CLUSTER" link wall2 up --id "$id"
+    t0=$(now)
+    waitFor 20 advanced "$cut" r1c0 r1c1 || fail "wall2's displays did not present again after its link came back"
+    echo "wall2's link back: its displays presenting again after $(since "$t0") s"
+    grep -q '"wall_pieces_dropped":[1-9]' "$work/job.jsonl" || fail "the job counted no dropped pieces"
+    grep -q '"event":"lost","process":2' "$work/serve.jsonl" || fail "no lost event in serve --stats"
+
+    kill -TERM "$job"
+    for _ in $(seq 200); do kill -0 "$job" 2>/dev/null || break; sleep 0.1; done
+    job=""
+    kill -USR1 "$serve"
+    # Every wall process stops, the restarted one too. (After a cut link, OpenMPI 4.1's mpirun
+    # with recovery may stay up once its processes are gone: it is not waited for.)
+    servePids() { for h in wall1 wall2; do for p in $(ip netns pids "dfbw$id-$h" 2>/dev/null); do
+      [ "$(cat "/proc/$p/comm" 2>/dev/null)" = dfbwall ] && echo "$p"; done; done; return 0; }
+    for _ in $(seq 200); do [ -z "$(servePids)" ] && break; sleep 0.1; done
+    [ -z "$(servePids)" ] || fail "wall processes $(servePids | tr '\n' ' ')did not stop within 20 s of SIGUSR1"
+    grep -q "stopping the wall" "$work/serve.err" || fail "the head did not say it stops the wall"
+    pkill -9 -f "dfbwall-cluster/$id/hostfile-wall1-wall2" 2>/dev/null || true
+    kill -9 "$serve" 2>/dev/null || true
+    serve=""
+    echo "PASS: kill -9, restart, SIGSTOP/SIGCONT and a cut link on two wall hosts; the job ran throughout"
     ;;
   *) echo "unknown scenario $scenario"; exit 2 ;;
 esac

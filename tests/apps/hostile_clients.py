@@ -31,6 +31,7 @@ import zmq
 
 MAGIC = 0x57424644
 HELLO, DIRECTORY, REFUSED, QUEUED, KEEPALIVE, CAPTURE, BYE, PRESENTED, ENDED, BATCH = range(1, 11)
+ROSTER, JOIN, WELCOME, BEAT, COMMAND, BARRIER, PIXELS, DROPPED = range(11, 19)
 TOKEN = "secret"
 TIMEOUT_S = 4  # serve --timeout
 WATCHDOG_S = 80
@@ -327,6 +328,31 @@ try:
     s, _ = ask(endpoint, header(CAPTURE, 12345) + b"\x00" * 16, 0.2)
     s.close()
     expect_log("(j) kind outside a job", "message kind 6 outside a job")
+
+    # (k) strangers posing as wall processes: a join with a wrong token, as the head (process
+    # 0), as a process the layout does not have, with another layout; a barrier and a beat
+    # from a link that never joined. Each refused (or told it is not in the wall), logged, and
+    # the wall goes on.
+    def join(token=TOKEN, process=1, layout_hash=0):
+        return (header(JOIN) + text(token) + struct.pack("<I", process) + text("hostile-k") +
+                text("tcp://127.0.0.1:9") + struct.pack("<QQ", layout_hash, 1))
+    for case, message, needle in [
+            ("wrong token", join(token="wrong"), b"wrong token"),
+            ("as the head", join(process=0), b"is the head"),
+            ("process 99", join(process=99), b"is not one of them"),
+            ("another layout", join(layout_hash=12345), b"layout is not the wall's")]:
+        s, reply = ask(endpoint, message)
+        if reply is None or parse_header(reply)[0] != REFUSED or needle not in reply:
+            fail("(k) join %s: expected a Refused reply naming %r, got %r" % (case, needle, reply))
+        s.close()
+    expect_log("(k) join with a wrong token", "refused wall process 1 from hostile-k: wrong token")
+    for case, message in [("barrier", header(BARRIER, 5) + struct.pack("<IIq", 1, 1, 0)),
+                          ("beat", header(BEAT) + struct.pack("<Qq", 1, 0))]:
+        s, reply = ask(endpoint, message)
+        if reply is None or parse_header(reply)[0] != DROPPED:
+            fail("(k) a %s from a stranger: expected Dropped, got %r" % (case, reply))
+        s.close()
+    alive("strangers posing as wall processes")
 
     # (e) a batch for a display that does not exist, with a real session's id (this breaks that
     # session: the wall must drop the job and survive). Also garbage on the piece port first.

@@ -50,7 +50,7 @@ pidOf() {
 # waitFor SECONDS CONDITION...: polls CONDITION every 0.1 s; false when it never held.
 waitFor() {
   local until
-  until=$(awk -v a="$(now)" -v s="$1" 'BEGIN {print a + s}'); shift
+  until=$(awk -v a="$(now)" -v s="$1" 'BEGIN {printf "%.3f", a + s}'); shift
   while awk -v t="$(now)" -v u="$until" 'BEGIN {exit !(t < u)}'; do
     "$@" && return 0
     sleep 0.1

@@ -230,6 +230,7 @@ ServicePieceSink::ServicePieceSink(const Directory& directory, int renderRank,
       renderRank_(renderRank),
       codec_(codec),
       deadPeerMs_(deadPeerMs),
+      sendWaitMs_(std::min<int>(deadPeerMs, static_cast<int>(directory.timeoutMs))),
       live_(new std::atomic<bool>[directory.processes.size()]) {
   for (const Display& d : directory.layout.displays) {
     processOfDisplay_.push_back(d.process);
@@ -270,13 +271,14 @@ void ServicePieceSink::setRoster(const Roster& roster) {
 }
 
 // Waits while the process's queue is full (back-pressure from a slow wall), but not forever: a
-// process that takes nothing for the timeout is stuck or gone, and the wall drops it within that
-// time too; its batch is dropped here rather than stalling the whole job.
+// process that takes nothing for the wall's timeout is stuck or gone (the wall drops it within
+// that time too, and the roster that says so is applied only between frames); its batch is
+// dropped here rather than stalling the whole job.
 void ServicePieceSink::sendBounded(size_t process, messaging::Bytes bytes, std::uint32_t pieces) {
   std::lock_guard lock(*socketMutex_[process]);
   zmq::socket_t& socket = sockets_[process];
   zmq::message_t message = toMessage(std::move(bytes));
-  const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(deadPeerMs_);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(sendWaitMs_);
   while (true) {
     if (!live_[process]) break;
     if (socket.send(message, zmq::send_flags::dontwait)) return;

@@ -131,6 +131,7 @@ class ServicePieceSink : public PieceSink {
   void sendBounded(size_t process, messaging::Bytes bytes, std::uint32_t pieces);
 
   int deadPeerMs_;
+  int sendWaitMs_;  // the longest a batch waits for a full queue: the wall's timeout
   std::vector<zmq::socket_t> sockets_;  // by wall process
   std::vector<std::string> endpoints_;
   std::vector<std::unique_ptr<std::mutex>> socketMutex_;
