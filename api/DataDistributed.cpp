@@ -50,6 +50,7 @@ void bounded(MPI_Request& request, std::chrono::milliseconds timeout, const std:
 // hash of its style, which every rank compares its own with.
 struct FrameOrder {
   float camera[10];
+  std::uint32_t rosterVersion;  // connect: the wall's roster this frame routes with
   std::uint64_t styleHash;
 };
 
@@ -125,6 +126,7 @@ struct Session::Impl {
   std::optional<wall::service::Directory> directory;
   std::shared_ptr<wall::service::ServiceClient> service;
   std::shared_ptr<wall::service::ServicePieceSink> serviceSink;
+  std::uint32_t rosterVersion = 0;  // of the roster serviceSink routes with (0: the directory's)
   std::unique_ptr<renderers::BrickFrameDriver> driver;
   // Where all of this rank's rendering runs: at most options.threads threads of its own, no cap
   // on the program's TBB parallelism (renderers/Parallel.h).
@@ -414,9 +416,15 @@ void Session::Impl::renderFrame() {
                             c.lookAt[2],   c.up[0],       c.up[1],       c.up[2],     c.fovY};
   std::memcpy(order.camera, floats, sizeof floats);
   order.styleHash = hashOfStyle;
+  if (service) order.rosterVersion = service->rosterVersion();
   MPI_Request request;
   dfb::checkMpi(MPI_Ibcast(&order, sizeof order, MPI_BYTE, 0, role, &request), "MPI_Ibcast");
   bounded(request, 2 * timeout, "frame " + std::to_string(next));  // rank 0 may wait for the wall
+  if (serviceSink && order.rosterVersion != rosterVersion) {
+    // The wall lost a process or got one back: its pieces stop, or go to its new endpoint.
+    serviceSink->setRoster(wall::service::shareRoster(role, service.get(), timeout));
+    rosterVersion = order.rosterVersion;
+  }
   // What the ranks must agree on, each the lowest rank it concerns as renderRanks - rank (MPI_MAX;
   // 0: none): whether any rank changed its bricks or style (a new scene version), a rank without
   // a style, a rank whose style is not render rank 0's, a rank that failed (its messenger

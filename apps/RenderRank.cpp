@@ -144,20 +144,6 @@ FrameRecord combine(const std::vector<RankFrame>& all) {
   return r;
 }
 
-// --connect: every render rank routes with the roster rank 0 has (it changed when the wall lost a
-// process or got one back). Collective over `comm`, when the frame order's version is new.
-wall::service::Roster shareRoster(const wall::service::ServiceClient* client, MPI_Comm comm,
-                                  std::chrono::milliseconds timeout) {
-  messaging::Bytes bytes = client ? client->rosterBytes() : messaging::Bytes{};
-  std::uint64_t size = bytes.size();
-  boundedBcast(&size, sizeof size, comm, timeout, "sharing the wall's roster");
-  if (size > wall::service::kMaxMessageBytes)
-    throw wall::Error("a roster of " + std::to_string(size) + " bytes");
-  bytes.resize(size);
-  boundedBcast(bytes.data(), static_cast<int>(size), comm, timeout, "sharing the wall's roster");
-  return wall::service::parseRoster(bytes.data(), bytes.size());
-}
-
 }  // namespace
 
 int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm renderComm,
@@ -404,7 +390,8 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
                    idling ? kIdlePoll : std::chrono::microseconds(20));
       if (serviceSink && order.rosterVersion != rosterVersion) {
         // The pieces of this frame on go where the wall now is (Protocol.h, Roster).
-        const wall::service::Roster roster = shareRoster(job.service.get(), renderComm, timeout);
+        const wall::service::Roster roster =
+            wall::service::shareRoster(renderComm, job.service.get(), timeout);
         serviceSink->setRoster(roster);
         rosterVersion = order.rosterVersion;
         showLost(roster.processes);

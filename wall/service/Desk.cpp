@@ -741,6 +741,9 @@ struct Desk::Impl {
         c.header.kind = Command::Shutdown;
         for (int p = 0; p < processCount; ++p) sendTo(p, c);
         state = State::Closed;
+        // The head's process may exit right after: the shutdown must still reach every
+        // process (closing the socket waits up to a second for what it holds).
+        socket.set(zmq::sockopt::linger, 1000);
         break;
       }
     }
@@ -814,12 +817,12 @@ std::vector<int> Desk::absentProcesses() const {
 
 bool Desk::closed() const { return impl_->isClosed; }
 
-void Desk::toHead(const ServiceCommand& command) {
+void Desk::toHead(const ServiceCommand& command, std::uint64_t) {
   impl_->post([this, command] { impl_->onAnswer(0, command); });
 }
 
-void Desk::agreeMax(std::uint64_t session, std::uint32_t frameId, std::int64_t* values, int count,
-                    Clock::time_point deadline) {
+void Desk::agreeMax(std::uint64_t, std::uint64_t session, std::uint32_t frameId,
+                    std::int64_t* values, int count, Clock::time_point deadline) {
   std::vector<std::int64_t> mine(values, values + count);
   impl_->post([this, session, frameId, mine] { impl_->arrive(0, session, frameId, mine); });
   // The desk releases every barrier within the timeout of its first arrival (it drops whoever
@@ -837,7 +840,7 @@ void Desk::agreeMax(std::uint64_t session, std::uint32_t frameId, std::int64_t* 
   std::copy(agreed.begin(), agreed.end(), values);
 }
 
-std::vector<std::vector<std::uint32_t>> Desk::gatherToFirst(std::uint64_t session,
+std::vector<std::vector<std::uint32_t>> Desk::gatherToFirst(std::uint64_t, std::uint64_t session,
                                                             std::uint32_t frameId,
                                                             std::vector<std::uint32_t> mine,
                                                             Clock::time_point deadline) {

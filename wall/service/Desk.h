@@ -48,10 +48,11 @@ class Desk : public ProcessLink {
   // The desk thread ended (after the wall's shutdown was sent to every process).
   bool closed() const;
 
-  void toHead(const ServiceCommand& command) override;
-  void agreeMax(std::uint64_t session, std::uint32_t frameId, std::int64_t* values, int count,
-                Clock::time_point deadline) override;
-  std::vector<std::vector<std::uint32_t>> gatherToFirst(std::uint64_t session,
+  std::uint64_t epoch() const override { return 0; }
+  void toHead(const ServiceCommand& command, std::uint64_t epoch) override;
+  void agreeMax(std::uint64_t epoch, std::uint64_t session, std::uint32_t frameId,
+                std::int64_t* values, int count, Clock::time_point deadline) override;
+  std::vector<std::vector<std::uint32_t>> gatherToFirst(std::uint64_t epoch, std::uint64_t session,
                                                         std::uint32_t frameId,
                                                         std::vector<std::uint32_t> mine,
                                                         Clock::time_point deadline) override;

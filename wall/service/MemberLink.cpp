@@ -66,10 +66,10 @@ struct MemberLink::Impl {
   void send(messaging::Bytes bytes) {
     socket->send(toMessage(std::move(bytes)), zmq::send_flags::dontwait);
   }
-  void post(messaging::Bytes bytes) {
+  void post(messaging::Bytes bytes, std::uint64_t epoch) {
     {
       std::lock_guard lock(mutex);
-      if (!isJoined) return;
+      if (!isJoined || epoch != generation) return;
       outbox.push_back(std::move(bytes));
     }
     waker.notify();
@@ -222,14 +222,19 @@ std::string MemberLink::refusal() const {
   return impl_->refusedWhy;
 }
 
-void MemberLink::toHead(const ServiceCommand& command) {
-  impl_->post(packCommandMessage(command.header.session, packCommand(command)));
+std::uint64_t MemberLink::epoch() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->generation;
 }
 
-void MemberLink::agreeMax(std::uint64_t session, std::uint32_t frameId, std::int64_t* values,
-                          int count, Clock::time_point deadline) {
+void MemberLink::toHead(const ServiceCommand& command, std::uint64_t epoch) {
+  impl_->post(packCommandMessage(command.header.session, packCommand(command)), epoch);
+}
+
+void MemberLink::agreeMax(std::uint64_t epoch, std::uint64_t session, std::uint32_t frameId,
+                          std::int64_t* values, int count, Clock::time_point deadline) {
   std::unique_lock lock(impl_->mutex);
-  if (!impl_->isJoined)
+  if (!impl_->isJoined || epoch != impl_->generation)
     throw Error("swap barrier of frame " + std::to_string(frameId) +
                 ": this process is not in the wall (it lost the head)");
   const std::uint64_t generation = impl_->generation;
@@ -255,11 +260,12 @@ void MemberLink::agreeMax(std::uint64_t session, std::uint32_t frameId, std::int
   impl_->releases.erase(found);
 }
 
-std::vector<std::vector<std::uint32_t>> MemberLink::gatherToFirst(std::uint64_t session,
+std::vector<std::vector<std::uint32_t>> MemberLink::gatherToFirst(std::uint64_t epoch,
+                                                                  std::uint64_t session,
                                                                   std::uint32_t frameId,
                                                                   std::vector<std::uint32_t> mine,
                                                                   Clock::time_point) {
-  impl_->post(packPixels(session, frameId, mine));
+  impl_->post(packPixels(session, frameId, mine), epoch);
   return {};
 }
 

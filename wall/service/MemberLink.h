@@ -40,10 +40,11 @@ class MemberLink : public ProcessLink {
   // Non-empty once the head refused this process (a wrong token, another layout): fatal.
   std::string refusal() const;
 
-  void toHead(const ServiceCommand& command) override;
-  void agreeMax(std::uint64_t session, std::uint32_t frameId, std::int64_t* values, int count,
-                Clock::time_point deadline) override;
-  std::vector<std::vector<std::uint32_t>> gatherToFirst(std::uint64_t session,
+  std::uint64_t epoch() const override;
+  void toHead(const ServiceCommand& command, std::uint64_t epoch) override;
+  void agreeMax(std::uint64_t epoch, std::uint64_t session, std::uint32_t frameId,
+                std::int64_t* values, int count, Clock::time_point deadline) override;
+  std::vector<std::vector<std::uint32_t>> gatherToFirst(std::uint64_t epoch, std::uint64_t session,
                                                         std::uint32_t frameId,
                                                         std::vector<std::uint32_t> mine,
                                                         Clock::time_point deadline) override;

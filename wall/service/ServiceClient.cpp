@@ -205,6 +205,22 @@ Directory shareDirectory(MPI_Comm comm, const ServiceClient* client,
   return parseDirectory(bytes.data(), bytes.size());
 }
 
+Roster shareRoster(MPI_Comm comm, const ServiceClient* client, std::chrono::milliseconds timeout) {
+  messaging::Bytes bytes = client ? client->rosterBytes() : messaging::Bytes{};
+  std::uint64_t size = bytes.size();
+  const auto bounded = [&](void* data, int count) {
+    MPI_Request request;
+    dfb::checkMpi(MPI_Ibcast(data, count, MPI_BYTE, 0, comm, &request), "MPI_Ibcast");
+    messaging::waitWithDeadline(request, Clock::now() + timeout,
+                                "sharing the wall's roster: a rank did not join in time");
+  };
+  bounded(&size, sizeof size);
+  if (size > kMaxMessageBytes) throw Error("a roster of " + std::to_string(size) + " bytes");
+  bytes.resize(size);
+  bounded(bytes.data(), static_cast<int>(size));
+  return parseRoster(bytes.data(), bytes.size());
+}
+
 Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int framesInFlight,
                const std::string& token, bool wait, const std::string& captureDir,
                int captureEvery) {

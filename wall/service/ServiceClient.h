@@ -83,6 +83,9 @@ class ServiceClient {
 // read the wall's directory; every rank gets it (bounded by `timeout`).
 Directory shareDirectory(MPI_Comm comm, const ServiceClient* client,
                          std::chrono::milliseconds timeout);
+// Collective over `comm`, when the roster version a frame order carries is new to the ranks:
+// the roster `client` (rank 0 of `comm` only) has, on every rank (bounded by `timeout`).
+Roster shareRoster(MPI_Comm comm, const ServiceClient* client, std::chrono::milliseconds timeout);
 // The hello of a job of `renderRanks` ranks on this host.
 Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int framesInFlight,
                const std::string& token, bool wait, const std::string& captureDir,

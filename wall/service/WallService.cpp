@@ -201,6 +201,8 @@ void WallService::Impl::showIdle(const std::string& status) {
 }
 
 void WallService::Impl::runJob(const ServiceCommand& start) {
+  // Everything this job's node says to the head is of the epoch the job started in.
+  const std::uint64_t epoch = head->epoch();
   ServiceCommand answer;
   answer.header.session = start.header.session;
   answer.header.process = process;
@@ -222,7 +224,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
     answer.header.kind = Command::Ready;
     answer.header.a = 0;  // counts as this process's Done too: it runs no node for the job
     answer.text = problem;
-    head->toHead(answer);
+    head->toHead(answer, epoch);
     return;
   }
   // 0: this process joins a running job; the head names its first frame once it is Ready.
@@ -237,18 +239,18 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   o.framesAhead = start.header.framesInFlight + 2;
   o.abandonOnFailure = true;
   const std::uint64_t session = start.header.session;
-  o.onAbandon = [this, session](const std::string& why) {
+  o.onAbandon = [this, session, epoch](const std::string& why) {
     ServiceCommand failed;
     failed.header.kind = Command::Failed;
     failed.header.session = session;
     failed.header.process = process;
     failed.text = why;
-    head->toHead(failed);
+    head->toHead(failed, epoch);
   };
   std::string failure;
   std::int64_t lastPresented = 0, bytes = 0;
   {
-    LinkPeers peers(*head, session, process, processCount);
+    LinkPeers peers(*head, epoch, session, process, processCount);
     WallNode job(layout, peers, presenters, o);
     {
       std::lock_guard lock(mutex);
@@ -259,7 +261,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
                      static_cast<int>(start.header.renderRanks), &job);
     answer.header.kind = Command::Ready;
     answer.header.a = 1;
-    head->toHead(answer);
+    head->toHead(answer, epoch);
     bool asked = false;
     try {
       if (firstFrame == 0) firstFrame = job.waitForStart(Clock::now() + options.timeout);
@@ -280,7 +282,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
           ServiceCommand stop;
           stop.header.kind = Command::StopAsked;
           stop.header.process = process;
-          head->toHead(stop);
+          head->toHead(stop, epoch);
         }
       }
       job.finish();
@@ -299,7 +301,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   answer.header.a = lastPresented;
   answer.header.b = bytes;
   answer.text = failure;
-  head->toHead(answer);
+  head->toHead(answer, epoch);
 }
 
 void WallService::run() {
@@ -323,6 +325,8 @@ void WallService::run() {
       throw Error("the wall's head at " + m.address +
                   " refused this process: " + m.link->refusal());
     const bool joined = !m.link || m.link->joined();
+    // Asked to stop, this process waits for the head's shutdown; without a head there is none.
+    if (asked && !joined) return;
     if (!idleShown || lostNow || joined != wasJoined) {
       m.showIdle(joined ? "waiting for a render job"
                         : "not in the wall: joining the head at " + m.address + " again");
@@ -340,7 +344,7 @@ void WallService::run() {
       ServiceCommand stop;
       stop.header.kind = Command::StopAsked;
       stop.header.process = m.process;
-      m.head->toHead(stop);
+      m.head->toHead(stop, m.head->epoch());
     }
     if (!command) continue;
     if (command->header.kind == Command::Shutdown) break;
