@@ -35,7 +35,7 @@ latest() {
   newest=$(ls "$dir" 2>/dev/null | tail -1)
   [ -n "$newest" ] || { echo 0; return; }
   ls "$dir" | head -n -40 | sed "s|^|$dir/|" | xargs -r rm -f
-  rm -f $(ls "$work"/cap/wall-*.png 2>/dev/null | head -n -40) 2>/dev/null || true
+  ls "$work"/cap/wall-*.png 2>/dev/null | head -n -40 | xargs -r rm -f
   echo $((10#$(echo "$newest" | tr -dc 0-9)))
 }
 pidOf() {  # wall process N's pid among mpirun's children
