@@ -9,6 +9,8 @@
 #  2. The documented restart (`dfbwall serve --process 3 --join`): the relay logs that process 3
 #     moved to a new endpoint, r1c1 presents again within 5 s, its frame equal to the one-process
 #     render of that frame; the job never connected to anything but the relay.
+#  3. SIGSTOP of process 2 behind the relay: the others go on once the wall drops it, the relay's
+#     memory stays bounded (within 64 MiB of before), and after SIGCONT it presents again.
 # Needs DFBWALL, COMPARE and MPIEXEC in the environment.
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
@@ -109,6 +111,25 @@ cp "$work/cap/r1c1/frame-$(printf %06d "$frame").png" "$work/check/r1c1/"
 "$COMPARE" "$layout" "$work/check" "$work/full.png" "$frame" r1c1 || fail "the rejoined display's frame $frame"
 kill -0 "$job" || fail "the job stopped"
 
+# 3. SIGSTOP of process 2: its pieces back up at the relay (which stops reading that process's
+# socket once 16 batches wait for it) while the other displays keep presenting; after the wall
+# drops it and SIGCONT, it rejoins. The relay's memory stays where it was.
+rss() { awk '/^VmRSS/ {print $2}' "/proc/$relay/status"; }
+rssBefore=$(rss)
+stopped=$(pidOf 2)
+[ -n "$stopped" ] || fail "no wall process 2"
+kill -STOP "$stopped"
+waitFor $((timeout + 5)) grep -q "lost wall process 2" "$work/serve.err" || { kill -CONT "$stopped"; fail "the stopped process 2 was not dropped"; }
+frame=$(latest r0c0)
+waitFor 5 advanced "$frame" r0c0 r0c1 r1c1 || { kill -CONT "$stopped"; fail "the others did not go on without process 2 behind the relay"; }
+rssStopped=$(rss)
+halted=$(latest r1c0)
+kill -CONT "$stopped"
+waitFor 10 advanced "$halted" r1c0 || fail "process 2 did not present again after SIGCONT"
+[ "$rssStopped" -lt $((rssBefore + 65536)) ] ||
+  fail "the relay grew from $rssBefore to $rssStopped KiB while process 2 was stopped"
+kill -0 "$job" || fail "the job stopped"
+
 kill -TERM "$job"
 waitFor 20 sh -c "! kill -0 $job 2>/dev/null" || fail "the job did not stop on SIGTERM"
 job=""
@@ -122,4 +143,4 @@ if ! waitFor 20 sh -c "! kill -0 $serve 2>/dev/null && ! kill -0 $restarted 2>/d
   kill -9 "$serve" "$restarted" 2>/dev/null || true
 fi
 serve="" restarted=""
-echo "PASS: through the relay, kill -9 of process 3 left the others presenting; restarted, it presented frame $frame (equal to the one-process render) ${back} s after its start, the relay connected to its new socket"
+echo "PASS: through the relay, kill -9 of process 3 left the others presenting; restarted, it presented frame $frame (equal to the one-process render) ${back} s after its start, the relay connected to its new socket; SIGSTOP of process 2: relay $rssBefore -> $rssStopped KiB"
