@@ -176,6 +176,12 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
                     "with --process N > 0: HOST:PORT of the running wall's head (what it prints "
                     "as 'wall service on')");
   serve->fallthrough();  // --wall, --offscreen, --timeout, --stats, --token are the main ones
+  // `dfbwall relay` starts before MPI (apps/Relay.cpp parses its options): listed for --help.
+  CLI::App* relay = cli.add_subcommand(
+      "relay",
+      "forward render jobs to a serving wall from hosts that cannot reach it "
+      "(dfbwall relay --listen [ADDR:]PORT --wall HOST:PORT; see dfbwall relay --help)");
+  relay->allow_extras();
   try {
     cli.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -188,6 +194,8 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
     if (print) std::fprintf(stderr, "dfbwall: error: %s\n", message.c_str());
     return 2;
   };
+  if (relay->parsed())
+    return fail("relay comes first: dfbwall relay --listen [ADDR:]PORT --wall HOST:PORT");
   o.serve = serve->parsed();
   if (o.serve && o.wall.empty()) return fail("serve needs --wall FILE.toml: the wall it runs");
   if (o.serve && !o.connect.empty()) return fail("serve and --connect: a wall does not connect");
@@ -266,6 +274,32 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
       return fail("--image " + o.image + ": a " + std::to_string(o.width) + "x" +
                   std::to_string(o.height) + " image is " + std::to_string(bytes) +
                   " bytes; one gather carries at most 2^31-1 (use a smaller --size, or .png)");
+  }
+  return -1;
+}
+
+int parseRelayOptions(int argc, char** argv, RelayCommand& c) {
+  CLI::App cli{
+      "dfbwall relay: render jobs connect here (dfbwall --connect RELAY:PORT) instead of to the "
+      "wall, from hosts that cannot reach it; pieces are forwarded without being decoded"};
+  cli.name("dfbwall relay");
+  cli.add_option("--listen", c.listen,
+                 "[ADDR:]PORT for jobs (default address 127.0.0.1); jobs are told ADDR, so on a "
+                 "gateway give the address the render hosts reach")
+      ->required();
+  cli.add_option("--wall", c.wall, "HOST:PORT of the wall (what `dfbwall serve` printed)")
+      ->required();
+  cli.add_option("--timeout", c.timeoutSeconds, "seconds after which a silent job is forgotten")
+      ->check(CLI::Range(1, 86400))
+      ->capture_default_str();
+  cli.add_option("--stats", c.statsFile, "append one JSON line per job to FILE");
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return cli.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "dfbwall relay: error: %s (see dfbwall relay --help)\n", e.what());
+    return 2;
   }
   return -1;
 }

@@ -75,4 +75,11 @@ int parseOptions(int argc, char** argv, Options& options, bool print);
 // wall (--connect).
 inline bool hasWall(const Options& o) { return !o.wall.empty() || !o.connect.empty(); }
 
+// `dfbwall relay` (apps/Relay.cpp): argv from "relay" on. Same return convention.
+struct RelayCommand {
+  std::string listen, wall, statsFile;
+  int timeoutSeconds = 60;
+};
+int parseRelayOptions(int argc, char** argv, RelayCommand& command);
+
 }  // namespace app

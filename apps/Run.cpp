@@ -236,6 +236,8 @@ void shareDirectory(Job& job, std::chrono::milliseconds timeout) {
 int run(int argc, char** argv) {
   // Before MPI or any library starts a thread: the stop signals stay blocked in all of them.
   StopSignals signals;
+  // The relay runs on a gateway, alone: no MPI.
+  if (argc > 1 && std::string(argv[1]) == "relay") return runRelay(argc - 1, argv + 1, signals);
   std::unique_ptr<messaging::MpiSession> mpi;
   try {
     mpi = std::make_unique<messaging::MpiSession>(&argc, &argv);

@@ -16,4 +16,8 @@ class FailurePath;
 // until stopped (wall/service/WallService.h). Returns the exit code.
 int runServe(const Options& options, int worldRank, StopSignals& signals, FailurePath& failure);
 
+// `dfbwall relay ...` (argv from "relay" on): forwards render jobs to a serving wall
+// (wall/service/Relay.h); no MPI. Returns the exit code.
+int runRelay(int argc, char** argv, StopSignals& signals);
+
 }  // namespace app

@@ -7,6 +7,9 @@
 #  2. 100 Mbit/s links, path tracer (builtin:cornell) and scivis (builtin:wavelet), codecs
 #     jpeg:90, snappy, raw: frame rate, bytes per frame, PSNR of the JPEG captures against the
 #     raw captures of the same frame (same seed, frames, camera), and snappy's (lossless) too.
+#  3. The relay's cost at 1 Gbit/s (bench/service_relay.sh): the same job straight to the wall and
+#     through `dfbwall relay` on a gateway, with 2 render hosts and with 1, interleaved.
+# BENCH_SERVICE_PARTS (default "route codecs relay") runs some of them only.
 # Launching only some of a cluster's ranks: scripts/cluster up writes one mpirun for every rank
 # (render ranks 0..R-1, then the wall processes). service_subset writes beside it a hostfile, a
 # rankfile and an mpirun for the ranks of one role only (same agent, same TCP settings): the
@@ -28,6 +31,8 @@ service_subset() {
     -e "s|$state/rankfile|$state/$name-rankfile|" "$state/mpirun" >"$state/$name-mpirun"
   chmod +x "$state/$name-mpirun"
 }
+
+source "$root/bench/service_relay.sh"
 
 service_pid=""
 # service_start STATE PORT OUT: dfbwall serve on the wall hosts; waits for its address line.
@@ -86,12 +91,15 @@ fig_service() {
   service_wall="$root/configs/walls/2x2-1080p-hosts.toml"
   service_token=$(od -An -tx1 -N16 /dev/urandom | tr -d ' \n')
   service_port=7000
-  local gbit=125000000 mbit100=12500000 loadAtStart goals=() rows=""
+  local gbit=125000000 mbit100=12500000 loadAtStart goals=() rows="" parts panels=()
+  parts=" ${BENCH_SERVICE_PARTS:-route codecs relay} "
   loadAtStart=$(cut -d' ' -f1-3 /proc/loadavg)
-  echo "== service: dfbwall serve on the wall hosts vs the single-job route; codecs at 100 Mbit/s; load $loadAtStart"
+  echo "== service: dfbwall serve on the wall hosts vs the single-job route; codecs at 100 Mbit/s; the relay's cost; load $loadAtStart"
   [ "$(id -u)" -eq 0 ] || { echo "bench: the service figure needs root (scripts/cluster)" >&2; return 1; }
   trap service_cleanup EXIT
 
+  local dat="$work/svc-1g.dat" cdat="$work/svc-codecs.dat"
+  if [[ "$parts" == *" route "* ]]; then
   # --- 1. 1 Gbit/s: route (one job over every host) vs service + job, pattern, uncompressed.
   service_cluster 1gbit
   local rep
@@ -105,7 +113,7 @@ fig_service() {
   done
   cluster_down_all
 
-  local dat="$work/svc-1g.dat" fps=() utils=()
+  local fps=() utils=()
   : >"$dat"
   local v
   for v in route service; do
@@ -128,7 +136,10 @@ fig_service() {
   echo "  service/route frame rate: ${ratio}x"
   goals+=("service >= 0.9x route frame rate, pattern raw, 1 Gbit/s: ${ratio}x, $(awk -v a="$ratio" 'BEGIN {print (a >= 0.9) ? "met" : "missed"}')")
   goals+=("service link utilisation >= 0.8, pattern raw, 1 Gbit/s: ${utils[1]}, $(awk -v u="${utils[1]}" 'BEGIN {print (u >= 0.8) ? "met" : "missed"}')")
+  panels+=("plot '$dat' using 2:xtic(1) title \"1 Gbit/s, pattern raw: fps\" lc rgb \"#3070b0\", '' using 0:3 axes x1y2 with points pt 7 ps 1.5 lc rgb \"#c03030\" title \"link utilisation\"")
+  fi
 
+  if [[ "$parts" == *" codecs "* ]]; then
   # --- 2. 100 Mbit/s: codecs, path tracer and scivis, captures of the last frame compared.
   service_cluster 100mbit
   service_start "$service_state" $service_port "$work/svc-serve-100m"
@@ -145,7 +156,6 @@ fig_service() {
   service_stop
   cluster_down_all
 
-  local cdat="$work/svc-codecs.dat"
   : >"$cdat"
   for rv in "${renderers[@]}"; do
     read -r r sc <<<"$rv"
@@ -169,7 +179,7 @@ fig_service() {
           echo "bench: no PSNR for $r $c (captures missing?)" >&2
         fi
       fi
-      rows+=",
+      rows+="${rows:+,}
     {\"part\": \"100mbit\", \"renderer\": \"$r\", \"scene\": \"$sc\", \"codec\": \"$c\", \"median_frame_ms\": $med, \"mad_frame_ms\": $mad, \"frames\": $cnt, \"fps\": $fr, \"wall_bytes_wire_per_frame\": $wire, \"wall_bytes_raw_per_frame\": $raw, \"psnr_db_vs_raw\": $psnr, \"max_channel_error_vs_raw\": $worst}"
       echo "  100 Mbit/s, $r, $c: $fr fps (median $med ms, MAD $mad), $wire bytes/frame (raw $raw), PSNR vs raw ${psnr//\"/} dB (max error $worst)"
       printf '"%s %s" %s %s\n' "$r" "$n" "$fr" "$wire" >>"$cdat"
@@ -185,6 +195,11 @@ fig_service() {
     goals+=("jpeg:90 >= 3x snappy frame rate at >= 40 dB, $r, 100 Mbit/s: ${jr}x at ${jpegPsnr} dB, $(awk -v a="$jr" -v p="$jpegPsnr" 'BEGIN {print (a >= 3 && p != "null" && p + 0 >= 40) ? "met" : "missed"}')")
   done
 
+  panels+=("set logscale y; set yrange [*:*]; set ylabel \"frames per second (log)\"; set y2label \"MB per frame (log)\"; set logscale y2; set y2range [*:*]; plot '$cdat' using 2:xtic(1) title \"100 Mbit/s: fps\" lc rgb \"#3070b0\", '' using 0:(\$3 / 1e6) axes x1y2 with points pt 7 ps 1.5 lc rgb \"#c03030\" title \"MB per frame\"; unset logscale y; unset logscale y2")
+  fi
+
+  [[ "$parts" != *" relay "* ]] || service_relay_part
+
   goals_json ${goals[@]+"${goals[@]}"}
   cat >"$results/service.json" <<EOF
 {"figure": "service", "machine": $machine, "load_average_at_start": "$loadAtStart", "load_average_at_end": "$(cut -d' ' -f1-3 /proc/loadavg)",
@@ -194,21 +209,21 @@ fig_service() {
            "service": "dfbwall serve on the wall hosts only (an mpirun with a wall-only hostfile and rankfile), job: an mpirun with a render-only one, --connect wall1:$service_port",
            "frames_per_run": {"pattern": $frames, "pathtracer, scivis": $rframes}, "runs_part_1": $reps, "spp": 1, "seed": 7, "orbit_degrees_per_frame": $orbit,
            "link_utilisation": "wall_bytes_sent per second / (2 render hosts x 125e6 B/s)",
+           "relay": "part 3: the same pattern raw job straight to the wall (render hosts on the wall's network) and through dfbwall relay on gateway1 (render hosts on a network of their own that reaches only the gateway: scripts/cluster --gateway-hosts 1), with 2 and 1 render hosts; every link, the gateway's two legs too, 1 Gbit/s each way; binding link utilisation: wall_bytes_sent per second over the render hosts' uplinks (direct) or the gateway's one leg (relay)",
            "psnr": "RGB, pooled over the 4 displays' captures of the last frame, against the raw job's captures of the same frame"},
  "goals": [$goals_json],
  "results": [$rows
  ]}
 EOF
-  gnuplot -e "set terminal pngcairo size 1200,520 noenhanced; set output '$results/service.png'" <(cat <<EOF
-set multiplot layout 1,2 title "The wall as a service, 2x2 1080p wall, emulated hosts (median over the frames)"
-set style data histogram; set style fill solid 0.6; set key top right; set xtics rotate by -30 font ",9"
-set ylabel "frames per second"; set yrange [0:*]; set y2label "link utilisation"; set y2range [0:1.05]; set y2tics; set ytics nomirror
-plot '$dat' using 2:xtic(1) title "1 Gbit/s, pattern raw: fps" lc rgb "#3070b0", '' using 0:3 axes x1y2 with points pt 7 ps 1.5 lc rgb "#c03030" title "link utilisation"
-unset y2label; unset y2tics; set ytics mirror; set logscale y; set yrange [*:*]
-set ylabel "frames per second (log)"; set y2label "MB per frame (log)"; set y2tics; set logscale y2; set y2range [*:*]
-plot '$cdat' using 2:xtic(1) title "100 Mbit/s: fps" lc rgb "#3070b0", '' using 0:(\$3 / 1e6) axes x1y2 with points pt 7 ps 1.5 lc rgb "#c03030" title "MB per frame"
-unset multiplot
-EOF
-)
+  [ ${#panels[@]} -gt 0 ] || { trap - EXIT; return 0; }
+  local plot panel
+  plot="set multiplot layout 1,${#panels[@]} title \"The wall as a service, 2x2 1080p wall, emulated hosts (median over the frames)\"
+set style data histogram; set style fill solid 0.6; set key top right; set xtics rotate by -30 font \",9\"
+set y2tics; set ytics nomirror"
+  for panel in "${panels[@]}"; do
+    plot+=$'\n'"set ylabel \"frames per second\"; set yrange [0:*]; set y2label \"link utilisation\"; set y2range [0:1.05]; $panel"
+  done
+  gnuplot -e "set terminal pngcairo size $((600 * ${#panels[@]})),520 noenhanced; set output '$results/service.png'" \
+    <(printf '%s\nunset multiplot\n' "$plot")
   trap - EXIT
 }

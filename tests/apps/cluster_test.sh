@@ -7,6 +7,7 @@
 #   cluster_test.sh link-cut      LAYOUT RENDER_HOSTS HOST TIMEOUT
 #   cluster_test.sh link-flap     LAYOUT RENDER_HOSTS HOST TIMEOUT
 #   cluster_test.sh service       LAYOUT RENDER_HOSTS
+#   cluster_test.sh relay         LAYOUT RENDER_HOSTS
 #   cluster_test.sh survive       LAYOUT RENDER_HOSTS   (wall processes 0, 1 on wall1; 2, 3 on wall2)
 # Needs DFBWALL, COMPARE (compare_captures), MPIEXEC and CLUSTER (scripts/cluster) in the
 # environment, root and CAP_NET_ADMIN; without them it exits 77 (CTest: skipped), saying why.
@@ -15,8 +16,9 @@
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 work=$(mktemp -d)
-id="" job="" serve="" restarted=""
+id="" job="" serve="" relay="" restarted=""
 cleanup() {
+  [ -z "$relay" ] || kill -9 "$relay" 2>/dev/null || true
   [ -z "$restarted" ] || kill -9 "$restarted" 2>/dev/null || true
   [ -z "$job" ] || kill -9 "$job" 2>/dev/null || true
   [ -z "$serve" ] || kill -9 "$serve" 2>/dev/null || true
@@ -32,6 +34,7 @@ fail() {
   echo "FAIL: $*"
   [ ! -f "$work/log" ] || { echo "--- job output:"; cat "$work/log"; }
   [ ! -f "$work/serve.err" ] || { echo "--- serve output:"; cat "$work/serve.out" "$work/serve.err"; }
+  [ ! -f "$work/relay.err" ] || { echo "--- relay output:"; cat "$work/relay.out" "$work/relay.err"; }
   exit 1
 }
 [ "$(id -u)" -eq 0 ] || skip "emulated hosts need root (network namespaces, veth pairs, tc); CI runs as root"
@@ -50,9 +53,10 @@ since() { awk -v a="$1" -v b="$(now)" 'BEGIN {printf "%.1f", b - a}'; }
 # (JSON Lines as dfbwall streams them: no space after the colon; older files had one.)
 field() { grep -o "\"$2\": *[0-9.]*" "$1" | sed 's/.*: *//'; }
 
-# up LAYOUT RENDER_HOSTS: the hosts of the layout plus the render hosts, 1 Gbit/s links.
+# up LAYOUT RENDER_HOSTS [scripts/cluster options]: the hosts of the layout plus the render
+# hosts, 1 Gbit/s links.
 up() {
-  "$CLUSTER" up --id auto --holder $$ --build "$build" --wall "$1" --render-hosts "$2" --rate 1gbit \
+  "$CLUSTER" up --id auto --holder $$ --build "$build" --wall "$1" --render-hosts "$2" --rate 1gbit "${@:3}" \
     >"$work/up" 2>&1 || { cat "$work/up"; fail "scripts/cluster up"; }
   id=$(sed -n 's/^cluster \([0-9]*\):.*/\1/p' "$work/up")
   mpirun=$(sed -n 's/^run: \([^ ]*\) .*/\1/p' "$work/up")
@@ -358,6 +362,66 @@ case "$scenario" in
     [ "$code" -eq 0 ] || fail "serve exited $code after SIGUSR1"
     echo "PASS: 5 jobs from ${renderHosts[*]} on one wall on ${wallHosts[*]} (raw, snappy, snappy, killed, after);" \
       "busy refused in $busy s, the job after the kill done $after s after it"
+    ;;
+  relay)
+    # `dfbwall relay` on a gateway (README, "A wall that stays up"): the render hosts are on a
+    # network of their own that reaches only gateway1 (scripts/cluster --gateway-hosts), which
+    # has a leg on the wall's network too and forwards nothing. `dfbwall serve` on the wall hosts,
+    # the relay on gateway1, a job on the render hosts connecting to the relay: its captures
+    # equal the one-process render. The render hosts cannot open a connection to the wall.
+    layout=$1 hosts=$2
+    up "$layout" "$hosts" --gateway-hosts 1
+    state=$(dirname "$mpirun")
+    renderHosts=()
+    for ((h = 1; h <= hosts; ++h)); do renderHosts+=("render$h"); done
+    mapfile -t wallHosts < <(tail -n +$((hosts + 1)) "$state/rank-hosts" | awk '!seen[$0]++')
+    address=$(awk -v h="${wallHosts[0]}" '$1 == h {print $3}' "$state/hosts")
+    gatewayWall=$(awk '$1 == "gateway1" {print $3}' "$state/hosts")
+    gatewayRender=$(awk '$1 == "gateway1" {print $5}' "$state/hosts")
+    [ -n "$gatewayRender" ] || fail "gateway1 has no address on the render network"
+    port=7000
+    token=$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')
+    "$CLUSTER" mpirun-hosts "${wallHosts[@]}" --id "$id" -- "$DFBWALL" serve --wall "$layout" \
+      --listen "0.0.0.0:$port" --offscreen --timeout 5 --token "$token" \
+      >"$work/serve.out" 2>"$work/serve.err" &
+    serve=$!
+    "$CLUSTER" exec gateway1 --id "$id" -- "$DFBWALL" relay --listen "$gatewayRender:$port" \
+      --wall "$address:$port" --timeout 5 --stats "$work/relay.jsonl" >"$work/relay.out" 2>"$work/relay.err" &
+    relay=$!
+    for _ in $(seq 200); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
+    grep -q "wall service on $address:$port" "$work/serve.out" || fail "serve did not start"
+    grep -qx "dfbwall: relay on $gatewayRender:$port for the wall at $address:$port" "$work/relay.out" \
+      || fail "the relay did not start on gateway1"
+    # The render hosts reach the relay, never the wall (nor the gateway's leg on the wall's network).
+    reach() { ip netns exec "dfbw$id-$1" timeout 3 bash -c "echo >/dev/tcp/$2/$3" 2>/dev/null; }
+    for h in "${renderHosts[@]}"; do
+      reach "$h" "$gatewayRender" "$port" || fail "$h cannot reach the relay at $gatewayRender:$port"
+      ! reach "$h" "$address" "$port" || fail "$h reaches the wall at $address:$port directly"
+      ! reach "$h" "$gatewayWall" "$port" || fail "$h reaches the gateway's wall-side address"
+    done
+    [ "$(ip netns exec "dfbw$id-gateway1" sysctl -n net.ipv4.ip_forward)" = 0 ] || fail "gateway1 forwards"
+    name=pattern frames=3
+    t0=$(now)
+    "$CLUSTER" mpirun-hosts "${renderHosts[@]}" --id "$id" -- "$DFBWALL" --connect "$gatewayRender:$port" \
+      --token "$token" --codec snappy --frames "$frames" --quiet --timeout 30 --capture "$work/$name" \
+      --renderer pattern >"$work/log" 2>&1 || fail "the job through the relay failed"
+    echo "job through the relay: $(since "$t0") s"
+    "$MPIEXEC" -n 1 "$DFBWALL" --size "$(canvas "$layout")" --frames "$frames" --quiet \
+      --image "$work/$name-full.png" --renderer pattern || fail "the one-process reference failed"
+    "$COMPARE" "$layout" "$work/$name" "$work/$name-full.png" "$frames" || fail "the job through the relay"
+    grep -q "job from ${renderHosts[0]}: the wall accepted it" "$work/relay.err" || fail "the relay did not log the job"
+    for _ in $(seq 100); do [ -s "$work/relay.jsonl" ] && break; sleep 0.1; done
+    batches=$(grep -o '"batches_forwarded":[0-9]*' "$work/relay.jsonl" | cut -d: -f2)
+    [ "${batches:-0}" -gt 0 ] || fail "the relay's --stats has no forwarded batches"
+    kill -USR1 "$relay"
+    wait "$relay" || fail "the relay exited non-zero after SIGUSR1"
+    relay=""
+    kill -USR1 "$serve"
+    for _ in $(seq 100); do kill -0 "$serve" 2>/dev/null || break; sleep 0.1; done
+    wait "$serve" || fail "serve exited non-zero after SIGUSR1"
+    serve=""
+    echo "PASS: a job on ${renderHosts[*]} (no route to the wall) rendered to the wall on ${wallHosts[*]} through" \
+      "the relay on gateway1: $batches batches, captures equal the one-process render"
     ;;
   survive)
     # A wall that survives its own processes across hosts (README, "A wall that survives its
