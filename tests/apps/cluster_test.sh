@@ -516,6 +516,9 @@ case "$scenario" in
     lost 1 "$(now)" r0c0 r1c0 r1c1
     halted=$(latest r0c1)
     kill -CONT "$stopped"
+    waitFor 10 grep -q "wall process 1 on .* is back in the wall" "$work/serve.err" ||
+      fail "process 1 did not join again after SIGCONT"
+    halted=$(latest r0c1)
     waitFor 10 advanced "$halted" r0c1 || fail "process 1 did not present again after SIGCONT"
 
     "$CLUSTER" link wall2 down --id "$id"

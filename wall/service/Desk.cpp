@@ -104,6 +104,13 @@ struct Desk::Impl {
   std::uint32_t lastCredited = 0, granted = 2, rosterVersion = 0;
   int processesLost = 0, processesRejoined = 0;
   bool shuttingDown = false;
+  int shutdownAcks = 0;  // members that confirmed the shutdown (State::Closed)
+  Clock::time_point closedAt;
+  int liveMembers() const {
+    int n = 0;
+    for (int p = 1; p < processCount; ++p) n += members[static_cast<size_t>(p)].live ? 1 : 0;
+    return n;
+  }
   std::set<std::string> logged;
   Clock::time_point lastBeat;
   FrameAgreements agreements;
@@ -368,6 +375,10 @@ struct Desk::Impl {
   // An answer of process `p` (its own or over its link).
   void onAnswer(int p, const ServiceCommand& c) {
     const CommandHeader& e = c.header;
+    if (e.kind == Command::Shutdown) {  // a member confirms the wall's shutdown
+      if (state == State::Closed) ++shutdownAcks;
+      return;
+    }
     if (e.kind == Command::StopAsked) {
       if (!shuttingDown) log("stopping the wall (asked by wall process " + std::to_string(p) + ")");
       shuttingDown = true;
@@ -536,6 +547,12 @@ struct Desk::Impl {
     m.lastHeard = Clock::now();
     publishAbsent();
     reply(peer, packControl(Kind::Welcome, 0, j.incarnation));
+    if (state == State::Closed) {  // the wall is stopping: so does this process
+      ServiceCommand c;
+      c.header.kind = Command::Shutdown;
+      sendTo(p, c);
+      return;
+    }
     if (state == State::Running) {
       admitToJob(p);
     } else {
@@ -676,16 +693,26 @@ struct Desk::Impl {
         const std::string peer(static_cast<const char*>(id.data()), id.size());
         onMessage(peer, static_cast<const std::byte*>(body.data()), body.size());
       }
+      if (state == State::Closed) {
+        // Every process said it got the shutdown, or a second passed (a process that did not
+        // hear it stops once it misses the head): only then the head's own process stops, and
+        // with it this socket.
+        if (shutdownAcks == liveMembers() || Clock::now() > closedAt + std::chrono::seconds(1)) {
+          ServiceCommand c;
+          c.header.kind = Command::Shutdown;
+          sendTo(0, c);
+          break;
+        }
+        continue;
+      }
       watch();
       if (shuttingDown && state == State::Idle) {
         ServiceCommand c;
         c.header.kind = Command::Shutdown;
-        for (int p = 0; p < processCount; ++p) sendTo(p, c);
+        for (int p = 1; p < processCount; ++p) sendTo(p, c);
         state = State::Closed;
-        // The head's process may exit right after: the shutdown must still reach every
-        // process (closing the socket waits up to a second for what it holds).
+        closedAt = Clock::now();
         socket.set(zmq::sockopt::linger, 1000);
-        break;
       }
     }
     isClosed = true;

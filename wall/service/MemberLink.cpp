@@ -124,11 +124,15 @@ struct MemberLink::Impl {
       case Kind::Dropped:
         if (joinedNow) lose("the head dropped this process: " + parseText(data, m.size()));
         return;
-      case Kind::Command:
+      case Kind::Command: {
         if (!joinedNow) return;
         lastHeard = Clock::now();
-        if (s.deliver) s.deliver(parseCommand(commandBody(data, m.size())));
+        const ServiceCommand c = parseCommand(commandBody(data, m.size()));
+        // The head waits for this before it closes its socket: its shutdown reached us.
+        if (c.header.kind == Command::Shutdown) send(packCommandMessage(0, packCommand(c)));
+        if (s.deliver) s.deliver(c);
         return;
+      }
       case Kind::Barrier: {
         if (!joinedNow) return;
         lastHeard = Clock::now();
