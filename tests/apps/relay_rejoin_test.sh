@@ -41,7 +41,8 @@ latest() {
   echo $((10#$(echo "$newest" | tr -dc 0-9)))
 }
 pidOf() {  # wall process N's pid among mpirun's children
-  for p in $(pgrep -f -- "serve --wall $layout"); do
+  # mpirun's own children only: another test may run a wall of the same layout meanwhile.
+  for p in $(pgrep -P "$serve"); do
     [ "$(cat /proc/"$p"/comm 2>/dev/null)" = dfbwall ] || continue
     if tr '\0' '\n' <"/proc/$p/environ" | grep -qx "OMPI_COMM_WORLD_RANK=$1"; then echo "$p"; fi
   done
@@ -61,7 +62,8 @@ advanced() {  # advanced FRAME DISPLAY...: every display presented a frame after
 }
 
 timeout=3
-port=$((20000 + $$ % 20000)) relayPort=$((20000 + ($$ + 11) % 20000))
+freePort() { python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
+port=$(freePort) relayPort=$(freePort)
 "$MPIEXEC" --enable-recovery --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 -np 4 \
   "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" --offscreen --timeout $timeout \
   >"$work/serve.out" 2>"$work/serve.err" &

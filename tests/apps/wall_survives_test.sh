@@ -42,7 +42,8 @@ latest() {
 }
 # Wall process N's pid among mpirun's children.
 pidOf() {
-  for p in $(pgrep -f -- "serve --wall $layout"); do
+  # mpirun's own children only: another test may run a wall of the same layout meanwhile.
+  for p in $(pgrep -P "$serve"); do
     [ "$(cat /proc/"$p"/comm 2>/dev/null)" = dfbwall ] || continue
     if tr '\0' '\n' <"/proc/$p/environ" | grep -qx "OMPI_COMM_WORLD_RANK=$1"; then echo "$p"; fi
   done
@@ -65,7 +66,8 @@ status() { python3 -c "import json,sys,urllib.request; print(json.load(urllib.re
 
 layout=$1
 timeout=3
-port=$((20000 + $$ % 20000)) cport=$((20001 + $$ % 20000))
+freePort() { python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
+port=$(freePort) cport=$(freePort)
 "$MPIEXEC" --enable-recovery --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 -np 4 \
   "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" --offscreen --timeout $timeout \
   --stats "$work/serve.jsonl" >"$work/serve.out" 2>"$work/serve.err" &
@@ -143,8 +145,10 @@ kill -TERM "$job"
 waitFor 20 sh -c "! kill -0 $job 2>/dev/null" || fail "the job did not stop on SIGTERM"
 job=""
 kill -USR1 "$serve"
-waitFor 20 sh -c "! kill -0 $serve 2>/dev/null && ! kill -0 $restarted 2>/dev/null" ||
+waitFor 20 sh -c "! kill -0 $serve 2>/dev/null && ! kill -0 $restarted 2>/dev/null" || {
+  ps -eo pid,stat,wchan:24,args | grep "[s]erve --wall $layout" | cut -c1-160
   fail "the wall did not stop on SIGUSR1"
+}
 wait "$serve" || fail "serve exited non-zero after SIGUSR1"
 wait "$restarted" || fail "the restarted process 3 exited non-zero"
 serve="" restarted=""
