@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <optional>
+#include <thread>
 
 #include "apps/Collectives.h"
 #include "apps/Failure.h"
@@ -164,7 +165,18 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
     wallService->run();
     wallService.reset();
     if (stats) std::fclose(stats);
-    return stopSignal ? exitCodeForStop(stopSignal) : 0;
+    const int code = stopSignal ? exitCodeForStop(stopSignal) : 0;
+    if (!alone) {
+      // MPI_Finalize (when this returns) is a fence among every process mpirun started; with one
+      // of them killed (mpirun --enable-recovery) it was seen to hang now and then under load.
+      // The wall has stopped and nothing is left to say over MPI: the process ends at the latest
+      // a timeout from now.
+      std::thread([code, timeout] {
+        std::this_thread::sleep_for(timeout);
+        std::_Exit(code);
+      }).detach();
+    }
+    return code;
   } catch (const std::exception& e) {
     failAlone(process, e.what());
   }

@@ -285,6 +285,7 @@ void WallNode::upload(const Slot& slot, std::vector<std::pair<int, int>>& batch)
 
 PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   PresentReport report;
+  if (options_.alive) options_.alive();
   const auto start = Clock::now();
   auto deadline = start + options_.timeout;
   std::int64_t uploadNs = 0;
@@ -323,8 +324,11 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
       if (ready()) break;
       deadline = std::max(start, waitFrom_) + options_.timeout;
       if (Clock::now() >= deadline) break;
+      if (options_.alive) options_.alive();
       if (!options_.onKeys) {
-        complete_.wait_until(lock, deadline);
+        complete_.wait_until(lock, options_.alive
+                                       ? std::min(deadline, Clock::now() + options_.aliveEvery)
+                                       : deadline);
         continue;
       }
       complete_.wait_until(lock, std::min(deadline, Clock::now() + options_.eventPoll));

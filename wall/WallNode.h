@@ -65,6 +65,11 @@ struct WallNodeOptions {
   // service can tell the other processes at once rather than at their deadlines).
   bool abandonOnFailure = false;
   std::function<void(const std::string& reason)> onAbandon;
+  // Called on the presenting thread at least every `aliveEvery` while presentFrame waits, and
+  // around each frame's work: a service wall process whose presenting thread stops calling it
+  // (a driver that hangs) stops saying it is alive, and the wall drops it.
+  std::function<void()> alive;
+  std::chrono::milliseconds aliveEvery{250};
 };
 
 struct PresentReport {

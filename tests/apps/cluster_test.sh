@@ -524,7 +524,8 @@ case "$scenario" in
     "$CLUSTER" link wall2 down --id "$id"
     t0=$(now)
     waitFor $((timeout + 5)) grep -q "lost wall process 2" "$work/serve.err" || fail "wall2's process 2 was not dropped"
-    [ "$(grep -c "lost wall process 3" "$work/serve.err")" -ge 2 ] || fail "wall2's process 3 was not dropped"
+    waitFor 3 sh -c "[ \$(grep -c 'lost wall process 3' '$work/serve.err') -ge 2 ]" ||
+      fail "wall2's process 3 was not dropped"
     lost 2 "$t0" r0c0 r0c1
     cut=$(latest r1c0)
     "$CLUSTER" link wall2 up --id "$id"

@@ -14,9 +14,8 @@ TEST(FrameAgreements, ABarrierWaitsForExactlyTheProcessesTakingPart) {
   FrameAgreements board(3);
   bool twoTakesPart = true;
   const auto takesPart = [&](int p, std::uint32_t) { return p != 2 || twoTakesPart; };
-  const auto t = Clock::now();
-  ASSERT_TRUE(board.arrive(0, 7, {1, -5}, t));
-  ASSERT_TRUE(board.arrive(1, 7, {3, -9}, t));
+  ASSERT_TRUE(board.arrive(0, 7, {1, -5}));
+  ASSERT_TRUE(board.arrive(1, 7, {3, -9}));
   EXPECT_TRUE(board.complete(takesPart).empty());  // process 2 is still awaited
   twoTakesPart = false;                            // dropped
   const auto released = board.complete(takesPart);
@@ -29,19 +28,8 @@ TEST(FrameAgreements, ABarrierWaitsForExactlyTheProcessesTakingPart) {
 
 TEST(FrameAgreements, AValueCountThatDiffersIsRefused) {
   FrameAgreements board(2);
-  ASSERT_TRUE(board.arrive(0, 1, {1, 2, 3}, Clock::now()));
-  EXPECT_FALSE(board.arrive(1, 1, {1, 2}, Clock::now()));
-}
-
-TEST(FrameAgreements, LateIsWhoHasNotArrivedATimeoutAfterTheFirstButNeverTheHead) {
-  FrameAgreements board(3);
-  const auto all = [](int, std::uint32_t) { return true; };
-  const auto t = Clock::now();
-  board.arrive(1, 4, {0}, t);
-  EXPECT_TRUE(board.late(all, t + 50ms, 100ms).empty());
-  const auto late = board.late(all, t + 150ms, 100ms);
-  ASSERT_EQ(late.size(), 1u);  // process 2; the head (0) is never named
-  EXPECT_EQ(late[0], std::make_pair(2, std::uint32_t{4}));
+  ASSERT_TRUE(board.arrive(0, 1, {1, 2, 3}));
+  EXPECT_FALSE(board.arrive(1, 1, {1, 2}));
 }
 
 TEST(FrameAgreements, AGatherCompletesWithEveryoneOrAtItsDeadlineWithGaps) {

@@ -46,6 +46,21 @@ struct Process {
   std::vector<ServiceCommand> got;
   std::atomic<std::uint32_t> firstFrame{0};
   ProcessLink* link = nullptr;
+  // The process's presenting thread, as far as the link sees it: alive until `hangs`.
+  std::atomic<bool> hangs{false}, stop{false};
+  std::thread presenting;
+  void startPresenting(MemberLink& member) {
+    presenting = std::thread([this, &member] {
+      while (!stop) {
+        if (!hangs) member.mainAlive();
+        std::this_thread::sleep_for(50ms);
+      }
+    });
+  }
+  ~Process() {
+    stop = true;
+    if (presenting.joinable()) presenting.join();
+  }
 
   void deliver(const ServiceCommand& c) {
     {
@@ -115,6 +130,7 @@ class WallLinkTest : public ::testing::Test {
     links[p] = std::make_unique<MemberLink>(std::move(setup));
     process->link = links[p].get();
     links[p]->start();
+    process->startPresenting(*links[p]);
   }
   // A job: its directory names every live process.
   void connectJob() {
@@ -145,8 +161,8 @@ class WallLinkTest : public ::testing::Test {
   Layout layout;
   std::unique_ptr<Desk> desk;
   Process head;
-  std::unique_ptr<Process> processes[3];
   std::unique_ptr<MemberLink> links[3];
+  std::unique_ptr<Process> processes[3];  // their presenting threads stop before the links go
   std::string address;
   FrameCredits credits;
   std::unique_ptr<ServiceClient> client;
@@ -168,6 +184,7 @@ TEST_F(WallLinkTest, ABarrierAgreesOnTheMaximumOfEveryProcessInTheJob) {
 TEST_F(WallLinkTest, ASilentProcessIsDroppedAndTheBarrierGoesOnWithoutIt) {
   connectJob();
   barrier(1, {0, 1, 2});
+  processes[2].reset();
   links[2].reset();  // process 2 dies: no beats, no barrier
   const auto start = Clock::now();
   // Frame 2: the head and process 1 arrive; process 2 never does. Released once it is dropped.
@@ -187,11 +204,26 @@ TEST_F(WallLinkTest, ASilentProcessIsDroppedAndTheBarrierGoesOnWithoutIt) {
   EXPECT_TRUE(jobError.empty()) << jobError;
 }
 
+TEST_F(WallLinkTest, AProcessWhosePresentingThreadHangsIsDroppedThoughItsLinkIsUp) {
+  connectJob();
+  barrier(1, {0, 1, 2});
+  processes[2]->hangs = true;  // a driver call that never returns
+  EXPECT_TRUE(eventually([&] { return desk->absentProcesses() == std::vector<int>{2}; },
+                         kTimeout + 1500ms));
+  // A slow frame is not a hang: process 1 arrives 2 timeouts after the head and is waited for.
+  auto headArrives = std::async(std::launch::async, [&] { return barrier(2, {0}); });
+  std::this_thread::sleep_for(2 * kTimeout);
+  EXPECT_TRUE(desk->absentProcesses() == std::vector<int>{2});
+  for (const auto& values : barrier(2, {1})) EXPECT_EQ(values[0], 10);
+  EXPECT_EQ(headArrives.get()[0][0], 10);
+}
+
 TEST_F(WallLinkTest, AProcessThatComesBackIsGivenTheFirstFrameTheJobCannotHaveStartedWithoutIt) {
   connectJob();
   barrier(1, {0, 1, 2});
   desk->presented(client->directory().session, 1, 0);
   ASSERT_TRUE(eventually([&] { return credits.lastPresented() == 1; }, 2s));
+  processes[2].reset();
   links[2].reset();
   barrier(2, {0, 1});
   // Process 2 starts again (a new link, a new incarnation) and joins the running job: Start

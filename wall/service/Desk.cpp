@@ -70,7 +70,8 @@ struct Desk::Impl {
   std::map<std::pair<std::uint64_t, std::uint32_t>, std::vector<std::int64_t>> releases;
   std::map<std::pair<std::uint64_t, std::uint32_t>, std::vector<std::vector<std::uint32_t>>>
       gathered;
-  std::vector<int> absent;  // copy of who is not joined, for absentProcesses()
+  std::vector<int> absent;       // copy of who is not joined, for absentProcesses()
+  std::uint64_t jobSession = 0;  // copy of job.session, for the head's barrier waits
 
   // The desk thread's own.
   struct Member {
@@ -220,6 +221,10 @@ struct Desk::Impl {
   // ---- jobs ----
   void startJob() {
     job.session = randomId();
+    {
+      std::lock_guard lock(mutex);
+      jobSession = job.session;
+    }
     job.started = Clock::now();
     failure.clear();
     lastPresented = bytes = 0;
@@ -273,6 +278,11 @@ struct Desk::Impl {
            std::to_string(processesRejoined) + ",\"seconds\":" + std::to_string(secs) +
            ",\"ended\":" + jsonText(failure.empty() ? "last frame" : failure) + "}");
     agreements.clear();
+    {
+      std::lock_guard lock(mutex);
+      jobSession = 0;
+      handedBack.notify_all();
+    }
     nextJob();
   }
 
@@ -608,7 +618,7 @@ struct Desk::Impl {
               const std::vector<std::int64_t>& values) {
     if (session != job.session || (state != State::Running && state != State::Ending)) return;
     if (!participates(p, frameId)) return;
-    if (!agreements.arrive(p, frameId, values, Clock::now()))
+    if (!agreements.arrive(p, frameId, values))
       return drop(p, "its swap barrier of frame " + std::to_string(frameId) + " has " +
                          std::to_string(values.size()) + " values, not the others' count");
     releaseWhatCan();
@@ -661,12 +671,6 @@ struct Desk::Impl {
       const Member& m = members[static_cast<size_t>(p)];
       if (m.live && now - m.lastHeard > timeout) drop(p, "no word from it for " + seconds(timeout));
     }
-    // A process alive on its link but stuck (a hung driver) never reaches the barrier.
-    const auto late = agreements.late(
-        [this](int p, std::uint32_t frameId) { return participates(p, frameId); }, now, timeout);
-    for (const auto& [p, frameId] : late)
-      drop(p, "it did not reach the swap barrier of frame " + std::to_string(frameId) + " within " +
-                  seconds(timeout) + " of the first process");
     releaseWhatCan();
     if (state == State::Running && now - job.lastHeard > timeout)
       endJob("no word from the job for " + seconds(timeout));
@@ -790,19 +794,21 @@ void Desk::toHead(const ServiceCommand& command, std::uint64_t) {
 }
 
 void Desk::agreeMax(std::uint64_t, std::uint64_t session, std::uint32_t frameId,
-                    std::int64_t* values, int count, Clock::time_point deadline) {
+                    std::int64_t* values, int count, Clock::time_point) {
   std::vector<std::int64_t> mine(values, values + count);
   impl_->post([this, session, frameId, mine] { impl_->arrive(0, session, frameId, mine); });
-  // The desk releases every barrier within the timeout of its first arrival (it drops whoever
-  // is late), so the node's own deadline is only a backstop.
-  const auto until = std::max(deadline, Clock::now() + 2 * impl_->timeout);
+  // The desk releases the barrier once every process in it arrived or was dropped (a process
+  // whose frame is slow is alive and waited for; a silent one is dropped at the timeout; a job
+  // that goes silent is aborted, and every node then arrives giving the frame up): no deadline
+  // of the node's applies here.
   std::unique_lock lock(impl_->mutex);
   const auto key = std::make_pair(session, frameId);
-  if (!impl_->handedBack.wait_until(
-          lock, until, [&] { return impl_->releases.count(key) > 0 || impl_->isClosed; }) ||
-      impl_->releases.count(key) == 0)
+  impl_->handedBack.wait(lock, [&] {
+    return impl_->releases.count(key) > 0 || impl_->isClosed || impl_->jobSession != session;
+  });
+  if (impl_->releases.count(key) == 0)
     throw Error("swap barrier of frame " + std::to_string(frameId) +
-                ": the desk did not release it");
+                ": the job is no longer the wall's");
   const std::vector<std::int64_t> agreed = std::move(impl_->releases[key]);
   impl_->releases.erase(key);
   std::copy(agreed.begin(), agreed.end(), values);

@@ -14,13 +14,12 @@ void FrameAgreements::clear() {
 }
 
 bool FrameAgreements::arrive(int process, std::uint32_t frameId,
-                             const std::vector<std::int64_t>& values, Clock::time_point now) {
+                             const std::vector<std::int64_t>& values) {
   auto [at, fresh] = barriers_.try_emplace(frameId);
   Barrier& b = at->second;
   if (fresh) {
     b.values = values;
     b.arrived.assign(static_cast<size_t>(processCount_), false);
-    b.first = now;
   } else {
     if (values.size() != b.values.size()) return false;
     for (size_t i = 0; i < values.size(); ++i) b.values[i] = std::max(b.values[i], values[i]);
@@ -47,17 +46,6 @@ std::vector<FrameAgreements::Release> FrameAgreements::complete(const TakesPart&
     out.push_back(std::move(r));
     at = barriers_.erase(at);
   }
-  return out;
-}
-
-std::vector<std::pair<int, std::uint32_t>> FrameAgreements::late(
-    const TakesPart& takesPart, Clock::time_point now, std::chrono::milliseconds timeout) const {
-  std::vector<std::pair<int, std::uint32_t>> out;
-  for (const auto& [frameId, b] : barriers_)
-    if (now - b.first > timeout)
-      for (int p = 1; p < processCount_; ++p)
-        if (takesPart(p, frameId) && !b.arrived[static_cast<size_t>(p)])
-          out.emplace_back(p, frameId);
   return out;
 }
 

@@ -24,8 +24,7 @@ class FrameAgreements {
 
   // Process p's values for frame F's barrier (the element-wise maximum is kept). False when
   // their count differs from the first arrival's: the caller treats p as broken.
-  bool arrive(int process, std::uint32_t frameId, const std::vector<std::int64_t>& values,
-              Clock::time_point now);
+  bool arrive(int process, std::uint32_t frameId, const std::vector<std::int64_t>& values);
   struct Release {
     std::uint32_t frameId = 0;
     std::vector<std::int64_t> values;
@@ -33,10 +32,6 @@ class FrameAgreements {
   };
   // Every barrier whose taking-part processes have all arrived, removed from the board.
   std::vector<Release> complete(const TakesPart& takesPart);
-  // (process, frame) for each process other than 0 that takes part in a barrier and has not
-  // arrived `timeout` after its first arrival (a process alive on its link but stuck).
-  std::vector<std::pair<int, std::uint32_t>> late(const TakesPart& takesPart, Clock::time_point now,
-                                                  std::chrono::milliseconds timeout) const;
 
   // A process's pixels of captured frame F; the head's own with its deadline.
   void pixels(int process, std::uint32_t frameId, std::vector<std::uint32_t> pixels);
@@ -54,7 +49,6 @@ class FrameAgreements {
   struct Barrier {
     std::vector<std::int64_t> values;
     std::vector<bool> arrived;
-    Clock::time_point first;
   };
   struct Gather {
     std::vector<std::vector<std::uint32_t>> pixels;

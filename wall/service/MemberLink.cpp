@@ -33,6 +33,7 @@ struct MemberLink::Impl {
   Waker waker;
   std::thread thread;
   std::atomic<bool> stop{false};
+  std::atomic<std::int64_t> mainAliveNs{Clock::now().time_since_epoch().count()};
 
   mutable std::mutex mutex;
   std::condition_variable changed;
@@ -161,13 +162,16 @@ struct MemberLink::Impl {
       }
       const auto now = Clock::now();
       for (messaging::Bytes& m : out) send(std::move(m));
-      if (!joinedNow && now - lastJoinSent >= kJoinEvery) {
+      const bool mainIsAlive = now.time_since_epoch().count() - mainAliveNs <
+                               std::chrono::duration_cast<Clock::duration>(s.timeout).count();
+      // A process whose presenting thread hangs stays out of the wall until it runs again.
+      if (!joinedNow && mainIsAlive && now - lastJoinSent >= kJoinEvery) {
         Join j = s.join;
         j.incarnation = incarnation;
         send(packJoin(j));
         lastJoinSent = now;
       }
-      if (joinedNow && now - lastBeat >= beat) {
+      if (joinedNow && mainIsAlive && now - lastBeat >= beat) {
         send(packControl(Kind::Beat, 0, incarnation));
         lastBeat = now;
       }
@@ -208,13 +212,18 @@ void MemberLink::start() {
 
 bool MemberLink::waitUntilJoined(Clock::time_point until) {
   std::unique_lock lock(impl_->mutex);
-  impl_->changed.wait_until(lock, until,
-                            [&] { return impl_->isJoined || !impl_->refusedWhy.empty(); });
+  // The process waits here on its presenting thread, alive.
+  while (Clock::now() < until && !impl_->isJoined && impl_->refusedWhy.empty()) {
+    impl_->mainAliveNs = Clock::now().time_since_epoch().count();
+    impl_->changed.wait_until(lock, std::min(until, Clock::now() + std::chrono::milliseconds(250)));
+  }
   if (!impl_->refusedWhy.empty())
     throw Error("the wall's head at " + impl_->s.head +
                 " refused this process: " + impl_->refusedWhy);
   return impl_->isJoined;
 }
+
+void MemberLink::mainAlive() { impl_->mainAliveNs = Clock::now().time_since_epoch().count(); }
 
 bool MemberLink::joined() const {
   std::lock_guard lock(impl_->mutex);
@@ -236,7 +245,7 @@ void MemberLink::toHead(const ServiceCommand& command, std::uint64_t epoch) {
 }
 
 void MemberLink::agreeMax(std::uint64_t epoch, std::uint64_t session, std::uint32_t frameId,
-                          std::int64_t* values, int count, Clock::time_point deadline) {
+                          std::int64_t* values, int count, Clock::time_point) {
   std::unique_lock lock(impl_->mutex);
   if (!impl_->isJoined || epoch != impl_->generation)
     throw Error("swap barrier of frame " + std::to_string(frameId) +
@@ -245,18 +254,19 @@ void MemberLink::agreeMax(std::uint64_t epoch, std::uint64_t session, std::uint3
   impl_->outbox.push_back(
       packBarrier(session, {frameId, std::vector<std::int64_t>(values, values + count)}));
   impl_->waker.notify();
-  // The head releases the barrier or drops this process within its timeout; a silent head is
-  // lost after the timeout. The node's own deadline is only a backstop.
-  const auto until = std::max(deadline, Clock::now() + 3 * impl_->s.timeout);
+  // The head releases the barrier once every process in it arrived or was dropped (a slow
+  // frame elsewhere is waited for: its process is alive), and a silent head is lost after the
+  // timeout (a new generation): no deadline of the node's applies here.
   const auto key = std::make_pair(session, frameId);
-  impl_->changed.wait_until(lock, until, [&] {
-    return impl_->releases.count(key) > 0 || impl_->generation != generation;
-  });
+  while (impl_->releases.count(key) == 0 && impl_->generation == generation) {
+    // Waiting here is not hanging: the presenting thread stays alive for the head.
+    impl_->mainAliveNs = Clock::now().time_since_epoch().count();
+    impl_->changed.wait_for(lock, std::chrono::milliseconds(250));
+  }
   auto found = impl_->releases.find(key);
   if (found == impl_->releases.end())
     throw Error("swap barrier of frame " + std::to_string(frameId) +
-                (impl_->generation != generation ? ": this process lost the wall's head"
-                                                 : ": the head did not release it in time"));
+                ": this process lost the wall's head");
   if (static_cast<int>(found->second.size()) != count)
     throw Error("swap barrier of frame " + std::to_string(frameId) + ": the head released " +
                 std::to_string(found->second.size()) + " values, not " + std::to_string(count));

@@ -4,6 +4,9 @@
 // up yet, or be restarting), sends a beat every quarter of the timeout, hands the head's
 // commands to the process, and carries the process's swap barriers, capture pixels and answers.
 //
+// The beats also say the process's presenting thread is alive (mainAlive): a link whose process
+// hangs goes quiet, and the head drops it as it drops a dead one.
+//
 // When the head goes silent for the timeout (it died, hangs, or the link is cut) or says this
 // process was dropped (it hung longer than the timeout, e.g. SIGSTOP), the link is lost:
 // `onLost` tells the process to give its job up, and the link joins again on a fresh socket with
@@ -39,6 +42,10 @@ class MemberLink : public ProcessLink {
   bool joined() const;
   // Non-empty once the head refused this process (a wrong token, another layout): fatal.
   std::string refusal() const;
+  // Thread-safe: the process's presenting thread is alive. The link beats only while it was
+  // last called within the timeout, so a process whose presenting thread hangs (a driver) is
+  // dropped by the head like a dead one.
+  void mainAlive();
 
   std::uint64_t epoch() const override;
   void toHead(const ServiceCommand& command, std::uint64_t epoch) override;

@@ -238,6 +238,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   o.timeout = options.timeout;
   o.framesAhead = start.header.framesInFlight + 2;
   o.abandonOnFailure = true;
+  if (link) o.alive = [this] { link->mainAlive(); };
   const std::uint64_t session = start.header.session;
   o.onAbandon = [this, session, epoch](const std::string& why) {
     ServiceCommand failed;
@@ -333,6 +334,7 @@ void WallService::run() {
       idleShown = true;
       wasJoined = joined;
     }
+    if (m.link) m.link->mainAlive();
     for (Presenter* p : m.presenters) p->pollEvents();
     bool closed = false;
     for (Presenter* p : m.presenters) closed = closed || p->closeRequested();
