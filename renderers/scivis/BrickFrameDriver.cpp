@@ -9,6 +9,7 @@
 #include "dfb/Timing.h"
 #include "renderers/Error.h"
 #include "renderers/Parallel.h"
+#include "renderers/scivis/BrickOcclusion.h"
 
 namespace renderers {
 namespace {
@@ -88,6 +89,10 @@ struct BrickFrameDriver::Impl {
   std::vector<std::unique_ptr<SciVisRenderer>> renderers;  // the same
   std::size_t bytes = 0;
   std::atomic<std::uint64_t> brickTiles{0};
+  // Every brick's occlusion summary (exchanged when the cut is exact for the scene).
+  bool occlusionExact = false;
+  BrickOcclusion occlusion;
+  std::atomic<std::uint64_t> raysSkipped{0};
 
   Impl(std::shared_ptr<const SceneDesc> d, const RenderSettings& s, BrickDriverOptions o, int r,
        int n)
@@ -119,6 +124,14 @@ BrickFrameDriver::BrickFrameDriver(std::shared_ptr<const SceneDesc> desc,
     held.push_back({b.id, b.content.bounds});
   }
   m.directory = exchangeBricks(held, comm, m.options.timeout);
+  // Every rank decides alike (the same description), so all join the exchange or none.
+  m.occlusionExact = BrickOcclusion::exactFor(*m.desc);
+  if (m.occlusionExact) {
+    std::vector<std::pair<int, const BrickContent*>> contents;
+    for (const HeldBrick& b : mine) contents.emplace_back(b.id, &b.content);
+    m.occlusion =
+        BrickOcclusion::exchange(*m.desc, m.directory.bricks, contents, comm, m.options.timeout);
+  }
   m.scenes.resize(m.directory.bricks.size());
   m.renderers.resize(m.directory.bricks.size());
   for (HeldBrick& b : mine) {
@@ -165,6 +178,7 @@ SciVisScene::IsosurfaceStats BrickFrameDriver::isosurfaceStats() const {
   return out;
 }
 std::uint64_t BrickFrameDriver::brickTilesRendered() const { return impl_->brickTiles.load(); }
+std::uint64_t BrickFrameDriver::raysSkipped() const { return impl_->raysSkipped.load(); }
 
 std::vector<HeldBrick> BrickFrameDriver::releaseBricks() {
   Impl& m = *impl_;
@@ -292,6 +306,17 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     const SciVisRenderer* renderer =
         job.brick < 0 ? nullptr : m.renderers[static_cast<std::size_t>(job.brick)].get();
     const Box3 bounds = plan ? plan->bounds : Box3{};
+    // The bricks that may hide this one's rays (BrickOcclusion.h): with one sample a frame every
+    // fragment is sorted by its own ray's entry into its brick, so a ray is hidden when it
+    // enters another brick first (ties: the lower id, as the compositor sorts) and certainly
+    // crosses an opaque isosurface there. That brick renders this tile too (its box meets the
+    // ray), its fragment has alpha exactly 1, and this one's would be multiplied by 0.
+    thread_local std::vector<int> occluders;
+    occluders.clear();
+    if (renderer && m.occlusionExact && m.options.occlusionCut && spp == 1)
+      for (int other : candidateBricks(cameraDesc, region))
+        if (other != job.brick) occluders.push_back(other);
+    std::uint64_t skipped = 0;
     // The brick's pieces of the tile's rays, rows at a time, integrated together
     // (SciVisRenderer batches the rays of its SIMD march); a ray that misses the brick adds
     // nothing.
@@ -314,14 +339,25 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
             camera.ray(static_cast<float>(x) + sampler.get(0),
                        static_cast<float>(y) + sampler.get(1), 0.5f, 0.5f, origin, dir);
             float a = 0, b = kInf;
-            const bool hit = renderer && clipToBox(bounds, origin, reciprocal(dir), a, b);
+            const Vec3 invDir = reciprocal(dir);
+            bool hit = renderer && clipToBox(bounds, origin, invDir, a, b), skippedRay = false;
+            for (std::size_t k = 0; hit && k < occluders.size(); ++k) {
+              const BrickPlan& front = m.directory.bricks[static_cast<std::size_t>(occluders[k])];
+              float frontA = 0, frontB = kInf;
+              if (!clipToBox(front.bounds, origin, invDir, frontA, frontB) ||
+                  !(frontA < a || (frontA == a && front.id < plan->id)))
+                continue;
+              if (m.occlusion.certainlyOpaque(occluders[k], origin, dir, invDir, frontA, frontB))
+                hit = false, skippedRay = true, ++skipped;
+            }
             hits.push_back(hit ? 1 : 0);
             if (!renderer || hit) rays.push_back({origin, dir, a, b, sampler});
             // Sorted by the first sample's ray: with one sample a frame (the usual progressive
             // case) every sample's fragments then composite in exactly its own ray's order,
             // also in pixels that see a brick border edge-on. (Where the ray enters the brick
-            // is `a`, brickDepth()'s own clip.)
-            if (renderer && s == 0) depths.push_back(hit ? a : brickDepth(bounds, origin, dir));
+            // is `a`, brickDepth()'s own clip; a hidden ray keeps it.)
+            if (renderer && s == 0)
+              depths.push_back(hit || skippedRay ? a : brickDepth(bounds, origin, dir));
           }
       fragments.resize(rays.size());
       if (renderer) renderer->integrate(rays.data(), rays.size(), fragments.data());
@@ -349,6 +385,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
         }
     }
     if (renderer) m.brickTiles.fetch_add(1, std::memory_order_relaxed);
+    if (skipped > 0) m.raysSkipped.fetch_add(skipped, std::memory_order_relaxed);
     dfb.setTile(std::move(tile));
   });
   const auto t3 = Clock::now();
