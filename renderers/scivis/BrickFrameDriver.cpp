@@ -324,41 +324,62 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     thread_local std::vector<Fragment> fragments;
     thread_local std::vector<std::uint8_t> hits;
     thread_local std::vector<float> depths;  // per pixel: brickDepth() of its first sample's ray
+    thread_local std::vector<Sampler> samplers;
+    thread_local std::vector<float> px, py;
+    thread_local std::vector<Vec3> dirs, invDirs, origins;
     const int rows =
         std::max(1, static_cast<int>(SciVisRenderer::kBatch /
                                      std::max<std::size_t>(1, std::size_t{spp} * region.width())));
     for (int y0 = region.y0; y0 < region.y1; y0 += rows) {
       const int y1 = std::min(region.y1, y0 + rows);
       rays.clear(), hits.clear(), depths.clear();
+      // The camera rays of SciVisRenderer::render, sample for sample: first every ray's random
+      // stream and canvas point, then their directions together (Camera::pinholeRays, the same
+      // bits as one at a time), then each ray's clip.
+      const std::size_t n =
+          static_cast<std::size_t>(y1 - y0) * static_cast<std::size_t>(region.width()) * spp;
+      samplers.resize(n), px.resize(n), py.resize(n), dirs.resize(n), invDirs.resize(n);
+      origins.resize(camera.pinhole() ? 0 : n);
+      std::size_t next = 0;
       for (int y = y0; y < y1; ++y)
         for (int x = region.x0; x < region.x1; ++x)
-          for (std::uint32_t s = 0; s < spp; ++s) {
-            // The camera ray of SciVisRenderer::render, sample for sample.
-            const Sampler sampler(m.settings.seed, x, y, accumulationId, s);
-            Vec3 origin, dir;
-            camera.ray(static_cast<float>(x) + sampler.get(0),
-                       static_cast<float>(y) + sampler.get(1), 0.5f, 0.5f, origin, dir);
-            float a = 0, b = kInf;
-            const Vec3 invDir = reciprocal(dir);
-            bool hit = renderer && clipToBox(bounds, origin, invDir, a, b), skippedRay = false;
-            for (std::size_t k = 0; hit && k < occluders.size(); ++k) {
-              const BrickPlan& front = m.directory.bricks[static_cast<std::size_t>(occluders[k])];
-              float frontA = 0, frontB = kInf;
-              if (!clipToBox(front.bounds, origin, invDir, frontA, frontB) ||
-                  !(frontA < a || (frontA == a && front.id < plan->id)))
-                continue;
-              if (m.occlusion.certainlyOpaque(occluders[k], origin, dir, invDir, frontA, frontB))
-                hit = false, skippedRay = true, ++skipped;
-            }
-            hits.push_back(hit ? 1 : 0);
-            if (!renderer || hit) rays.push_back({origin, dir, a, b, sampler});
-            // Sorted by the first sample's ray: with one sample a frame (the usual progressive
-            // case) every sample's fragments then composite in exactly its own ray's order,
-            // also in pixels that see a brick border edge-on. (Where the ray enters the brick
-            // is `a`, brickDepth()'s own clip; a hidden ray keeps it.)
-            if (renderer && s == 0)
-              depths.push_back(hit || skippedRay ? a : brickDepth(bounds, origin, dir));
+          for (std::uint32_t s = 0; s < spp; ++s, ++next) {
+            samplers[next] = Sampler(m.settings.seed, x, y, accumulationId, s);
+            px[next] = static_cast<float>(x) + samplers[next].get(0);
+            py[next] = static_cast<float>(y) + samplers[next].get(1);
           }
+      if (camera.pinhole()) {
+        camera.pinholeRays(n, px.data(), py.data(), dirs.data(), invDirs.data());
+      } else {
+        for (std::size_t r = 0; r < n; ++r) {
+          camera.ray(px[r], py[r], 0.5f, 0.5f, origins[r], dirs[r]);
+          invDirs[r] = reciprocal(dirs[r]);
+        }
+      }
+      const Vec3 pinholeOrigin = camera.position();
+      for (std::size_t r = 0; r < n; ++r) {
+        const Vec3 origin = origins.empty() ? pinholeOrigin : origins[r], dir = dirs[r],
+                   invDir = invDirs[r];
+        float a = 0, b = kInf;
+        bool hit = renderer && clipToBox(bounds, origin, invDir, a, b), skippedRay = false;
+        for (std::size_t k = 0; hit && k < occluders.size(); ++k) {
+          const BrickPlan& front = m.directory.bricks[static_cast<std::size_t>(occluders[k])];
+          float frontA = 0, frontB = kInf;
+          if (!clipToBox(front.bounds, origin, invDir, frontA, frontB) ||
+              !(frontA < a || (frontA == a && front.id < plan->id)))
+            continue;
+          if (m.occlusion.certainlyOpaque(occluders[k], origin, dir, invDir, frontA, frontB))
+            hit = false, skippedRay = true, ++skipped;
+        }
+        hits.push_back(hit ? 1 : 0);
+        if (!renderer || hit) rays.push_back({origin, dir, a, b, samplers[r]});
+        // Sorted by the first sample's ray: with one sample a frame (the usual progressive
+        // case) every sample's fragments then composite in exactly its own ray's order,
+        // also in pixels that see a brick border edge-on. (Where the ray enters the brick
+        // is `a`, brickDepth()'s own clip; a hidden ray keeps it.)
+        if (renderer && r % spp == 0)
+          depths.push_back(hit || skippedRay ? a : brickDepth(bounds, origin, dir));
+      }
       fragments.resize(rays.size());
       if (renderer) renderer->integrate(rays.data(), rays.size(), fragments.data());
       std::size_t sample = 0, ray = 0;
