@@ -75,6 +75,17 @@ float brickDepth(const Box3& b, Vec3 origin, Vec3 dir) {
   return length(nearest - origin);
 }
 
+// Whether a ray from `eye` can meet `front` before `back` (disjoint boxes): not when a plane
+// between them has the eye strictly on back's side (along that axis the ray must cross back's
+// side first). Only a filter: the per-ray test decides; leaving a brick out only skips less.
+bool mayComeFirst(const Box3& front, const Box3& back, Vec3 eye) {
+  for (int a = 0; a < 3; ++a) {
+    if (front.hi[a] <= back.lo[a] && eye[a] > front.hi[a]) return false;
+    if (back.hi[a] <= front.lo[a] && eye[a] < front.lo[a]) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 struct BrickFrameDriver::Impl {
@@ -315,8 +326,23 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     occluders.clear();
     if (renderer && m.occlusionExact && m.options.occlusionCut && spp == 1)
       for (int other : candidateBricks(cameraDesc, region))
-        if (other != job.brick) occluders.push_back(other);
+        if (other != job.brick &&
+            mayComeFirst(m.directory.bricks[static_cast<std::size_t>(other)].bounds, bounds,
+                         cameraDesc.position))
+          occluders.push_back(other);
     std::uint64_t skipped = 0;
+    if (!renderer && background.kind == Environment::Kind::Constant) {
+      // The background alone, the same everywhere: no rays needed (the sums below, as they are).
+      const Vec3 bg = background.color;
+      for (std::size_t p = 0; p < static_cast<std::size_t>(region.pixelCount()); ++p) {
+        float sum[4] = {0, 0, 0, 0};
+        for (std::uint32_t s = 0; s < spp; ++s)
+          sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
+        for (int c = 0; c < 4; ++c) tile.color[4 * p + static_cast<std::size_t>(c)] = sum[c] * inv;
+      }
+      dfb.setTile(std::move(tile));
+      return;
+    }
     // The brick's pieces of the tile's rays, rows at a time, integrated together
     // (SciVisRenderer batches the rays of its SIMD march); a ray that misses the brick adds
     // nothing.
