@@ -71,14 +71,17 @@ IsoFaces summariseIso(const Volume& volume, const Box3& bounds, float iso) {
   out.origin = g.origin, out.spacing = g.spacing;
   if (volume.box.empty()) return out;
   // The cells meeting the brick's (closed) bounds, per axis; none when the bounds reach beyond
-  // the grid's voxel centres (a point on such a face may lie in no cell at all).
+  // the grid's voxel centres (a point on such a face may lie in no cell at all). A bound on the
+  // first or last voxel plane may miss it by float rounding of the spacing: a thousandth of a
+  // cell is taken as on it (such a point is clamped into the border cell, which it touches).
+  constexpr double kSlack = 1e-3;
   int lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
     const double l = (double(bounds.lo[a]) - g.origin[a]) / g.spacing[a];
     const double h = (double(bounds.hi[a]) - g.origin[a]) / g.spacing[a];
-    if (!(l >= 0) || !(h <= double(g.dims[a] - 1)) || !(l <= h)) return out;
-    lo[a] = std::min(static_cast<int>(std::floor(l)), g.dims[a] - 2);
-    hi[a] = std::max(lo[a], std::min(static_cast<int>(std::ceil(h)) - 1, g.dims[a] - 2));
+    if (!(l >= -kSlack) || !(h <= double(g.dims[a] - 1) + kSlack) || !(l <= h)) return out;
+    lo[a] = std::clamp(static_cast<int>(std::floor(l)), 0, g.dims[a] - 2);
+    hi[a] = std::clamp(static_cast<int>(std::ceil(h)) - 1, lo[a], g.dims[a] - 2);
   }
   for (int f = 0; f < 6; ++f) {
     const int a = f / 2, u = (a + 1) % 3, v = (a + 2) % 3;
