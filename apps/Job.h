@@ -112,6 +112,9 @@ struct RankTotals {
   double role = 0;        // 0: render, 1: wall
   double sceneBytes = 0;  // render ranks: the scene data this rank holds (its bricks, or all)
   double brickTiles = 0;  // render ranks with --bricks: brick tiles rendered over the run
+  // Render ranks with --bricks: camera rays not traced, hidden behind a nearer brick's opaque
+  // isosurface (renderers/scivis/BrickOcclusion.h), over the run.
+  double brickRaysSkipped = 0;
   // Render ranks: isosurface triangles held (camera-visible and shading-only) and the seconds
   // making them and their BVHs at scene load.
   double isosurfaceTriangles = 0, shadingOnlyTriangles = 0, isosurfaceSeconds = 0;

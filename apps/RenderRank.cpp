@@ -527,7 +527,10 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
     if (!pending.empty() && pending.back().frameMs <= 0)
       pending.back().frameMs = msBetween(previousStart, Clock::now());
     writeReady(true);
-    if (brickDriver) totals.brickTiles = static_cast<double>(brickDriver->brickTilesRendered());
+    if (brickDriver) {
+      totals.brickTiles = static_cast<double>(brickDriver->brickTilesRendered());
+      totals.brickRaysSkipped = static_cast<double>(brickDriver->raysSkipped());
+    }
 
     if (job.worldRank == 0 && !o.image.empty() && lastFrame > 0) {
       if (endsWith(o.image, ".png"))

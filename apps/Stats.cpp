@@ -202,7 +202,10 @@ void StatsStream::writeEnd(const std::vector<RankTotals>& ranks, bool stoppedEar
     if (role && t.swapSpreadFrames > 0)
       line["swap_spread_ms"] = {{"max", t.swapSpreadMaxMs},
                                 {"mean", t.swapSpreadSumMs / t.swapSpreadFrames}};
-    if (!role && job_bricks_ > 0) line["brick_tiles_rendered"] = t.brickTiles;
+    if (!role && job_bricks_ > 0) {
+      line["brick_tiles_rendered"] = t.brickTiles;
+      line["brick_rays_skipped"] = t.brickRaysSkipped;
+    }
     writeLine(line.dump());
   }
   const double medianMs = frameMs_.median();

@@ -172,12 +172,17 @@ fig_paraview() {
         read -r pm pmad pn < <(for f in "$work"/pv-pv-$scene-$size-n$n-*.json; do pv_frames "$f"; done | medmad)
         ratio=$(awk -v a="$dm" -v b="$pm" 'BEGIN {printf "%.3g", b / a}')
         tri=$(grep -o '"triangles": *[0-9]*' "$work"/pv-pv-$scene-$size-n$n-1.json | sed 's/.*: *//')
+        # Camera rays the bricks did not trace, hidden behind a nearer brick's opaque isosurface
+        # (BrickOcclusion), over the run's frames and ranks.
+        local skipped
+        skipped=$({ grep -ho '"brick_rays_skipped": *[0-9.e+]*' "$work"/pv-dfb-$scene-$size-n$n-*.json || true; } |
+          sed 's/.*: *//' | awk '{s += $1} END {printf "%.0f\n", s}')
         awk -v r="$ratio" 'BEGIN {exit !(r < 3)}' && goal=missed
         ratios+="$ratio "
         rows+="${rows:+,}
     {\"scene\": \"$scene\", \"size\": $size, \"ranks\": $n, \"threads_per_rank\": $((($(nproc) + n - 1) / n)),
      \"dfbwall_s\": {\"median\": $dm, \"mad\": $dmad, \"frames\": $dn}, \"paraview_s\": {\"median\": $pm, \"mad\": $pmad, \"frames\": $pn},
-     \"paraview_over_dfbwall\": $ratio, \"paraview_triangles\": ${tri:-0}}"
+     \"paraview_over_dfbwall\": $ratio, \"paraview_triangles\": ${tri:-0}, \"dfbwall_rays_skipped\": ${skipped:-0}}"
         echo "  $scene ${size}^2 $n rank(s): dfbwall $dm s (MAD $dmad), ParaView $pm s (MAD $pmad) per frame: dfbwall ${ratio}x ParaView's frame rate"
         echo "$scene/${size}/${n}r $dm $dmad $pm $pmad $ratio" >>"$dat"
       done

@@ -2,6 +2,10 @@
 
 #include <cmath>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "renderers/Error.h"
 
 namespace renderers {
@@ -47,6 +51,48 @@ void Camera::ray(float px, float py, float u, float v, Vec3& origin, Vec3& direc
   const Vec3 focusPoint = origin_ + d * focus_;
   origin = origin_ + lens;
   direction = normalize(focusPoint - origin);
+}
+
+void Camera::pinholeRays(std::size_t n, const float* px, const float* py, Vec3* dirs,
+                         Vec3* invDirs) const {
+  // ray()'s arithmetic, operation for operation (no fused multiply-adds in this file), so every
+  // lane rounds as the scalar code does.
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  const __m128 two = _mm_set1_ps(2.0f), one = _mm_set1_ps(1.0f);
+  const __m128 invW = _mm_set1_ps(invWidth_), invH = _mm_set1_ps(invHeight_);
+  const __m128 halfW = _mm_set1_ps(halfWidth_), halfH = _mm_set1_ps(halfHeight_);
+  const __m128 f[3] = {_mm_set1_ps(forward_.x), _mm_set1_ps(forward_.y), _mm_set1_ps(forward_.z)};
+  const __m128 r[3] = {_mm_set1_ps(right_.x), _mm_set1_ps(right_.y), _mm_set1_ps(right_.z)};
+  const __m128 u[3] = {_mm_set1_ps(up_.x), _mm_set1_ps(up_.y), _mm_set1_ps(up_.z)};
+  for (; i + 4 <= n; i += 4) {
+    const __m128 sx =
+        _mm_mul_ps(_mm_sub_ps(_mm_mul_ps(_mm_mul_ps(two, _mm_loadu_ps(px + i)), invW), one), halfW);
+    const __m128 sy =
+        _mm_mul_ps(_mm_sub_ps(one, _mm_mul_ps(_mm_mul_ps(two, _mm_loadu_ps(py + i)), invH)), halfH);
+    __m128 d[3];
+    for (int a = 0; a < 3; ++a)
+      d[a] = _mm_add_ps(_mm_add_ps(f[a], _mm_mul_ps(r[a], sx)), _mm_mul_ps(u[a], sy));
+    const __m128 len = _mm_sqrt_ps(_mm_add_ps(
+        _mm_add_ps(_mm_mul_ps(d[0], d[0]), _mm_mul_ps(d[1], d[1])), _mm_mul_ps(d[2], d[2])));
+    const __m128 scale = _mm_div_ps(one, len);
+    alignas(16) float out[6][4];
+    for (int a = 0; a < 3; ++a) {
+      const __m128 dir = _mm_mul_ps(d[a], scale);
+      _mm_store_ps(out[a], dir);
+      _mm_store_ps(out[3 + a], _mm_div_ps(one, dir));
+    }
+    for (int k = 0; k < 4; ++k) {
+      dirs[i + k] = {out[0][k], out[1][k], out[2][k]};
+      invDirs[i + k] = {out[3][k], out[4][k], out[5][k]};
+    }
+  }
+#endif
+  for (; i < n; ++i) {
+    Vec3 origin;
+    ray(px[i], py[i], 0.5f, 0.5f, origin, dirs[i]);
+    invDirs[i] = {1.0f / dirs[i].x, 1.0f / dirs[i].y, 1.0f / dirs[i].z};
+  }
 }
 
 }  // namespace renderers

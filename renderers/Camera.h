@@ -1,6 +1,8 @@
 #pragma once
 // Pinhole camera (position, look-at, up, vertical field of view), optionally a thin lens.
 // Image plane coordinates are canvas pixels, x right and y down, as the DFB's tiles are.
+#include <cstddef>
+
 #include "renderers/Math.h"
 
 namespace renderers {
@@ -24,6 +26,14 @@ class Camera {
   Camera(const CameraDesc& desc, int width, int height);
   // The ray through canvas point (px, py); (u, v) in [0,1)^2 pick the point on the lens.
   void ray(float px, float py, float u, float v, Vec3& origin, Vec3& direction) const;
+  // Without a lens every ray starts at position(): pinholeRays() then gives many at once.
+  bool pinhole() const { return lensRadius_ <= 0; }
+  Vec3 position() const { return origin_; }
+  // Pinhole only: for i < n the direction ray() gives through canvas point (px[i], py[i]) and
+  // its per-axis reciprocal (1 / component, as clipToBox wants), the same bits, 4 rays at a time
+  // in SSE where the CPU has it (the per-ray set-up of a tile is latency-bound one at a time).
+  void pinholeRays(std::size_t n, const float* px, const float* py, Vec3* dirs,
+                   Vec3* invDirs) const;
 
  private:
   Vec3 origin_, forward_, right_, up_;

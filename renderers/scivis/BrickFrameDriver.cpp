@@ -9,6 +9,7 @@
 #include "dfb/Timing.h"
 #include "renderers/Error.h"
 #include "renderers/Parallel.h"
+#include "renderers/scivis/BrickOcclusion.h"
 
 namespace renderers {
 namespace {
@@ -74,6 +75,17 @@ float brickDepth(const Box3& b, Vec3 origin, Vec3 dir) {
   return length(nearest - origin);
 }
 
+// Whether a ray from `eye` can meet `front` before `back` (disjoint boxes): not when a plane
+// between them has the eye strictly on back's side (along that axis the ray must cross back's
+// side first). Only a filter: the per-ray test decides; leaving a brick out only skips less.
+bool mayComeFirst(const Box3& front, const Box3& back, Vec3 eye) {
+  for (int a = 0; a < 3; ++a) {
+    if (front.hi[a] <= back.lo[a] && eye[a] > front.hi[a]) return false;
+    if (back.hi[a] <= front.lo[a] && eye[a] < front.lo[a]) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 struct BrickFrameDriver::Impl {
@@ -88,6 +100,10 @@ struct BrickFrameDriver::Impl {
   std::vector<std::unique_ptr<SciVisRenderer>> renderers;  // the same
   std::size_t bytes = 0;
   std::atomic<std::uint64_t> brickTiles{0};
+  // Every brick's occlusion summary (exchanged when the cut is exact for the scene).
+  bool occlusionExact = false;
+  BrickOcclusion occlusion;
+  std::atomic<std::uint64_t> raysSkipped{0};
 
   Impl(std::shared_ptr<const SceneDesc> d, const RenderSettings& s, BrickDriverOptions o, int r,
        int n)
@@ -119,6 +135,14 @@ BrickFrameDriver::BrickFrameDriver(std::shared_ptr<const SceneDesc> desc,
     held.push_back({b.id, b.content.bounds});
   }
   m.directory = exchangeBricks(held, comm, m.options.timeout);
+  // Every rank decides alike (the same description), so all join the exchange or none.
+  m.occlusionExact = BrickOcclusion::exactFor(*m.desc);
+  if (m.occlusionExact) {
+    std::vector<std::pair<int, const BrickContent*>> contents;
+    for (const HeldBrick& b : mine) contents.emplace_back(b.id, &b.content);
+    m.occlusion =
+        BrickOcclusion::exchange(*m.desc, m.directory.bricks, contents, comm, m.options.timeout);
+  }
   m.scenes.resize(m.directory.bricks.size());
   m.renderers.resize(m.directory.bricks.size());
   for (HeldBrick& b : mine) {
@@ -165,6 +189,7 @@ SciVisScene::IsosurfaceStats BrickFrameDriver::isosurfaceStats() const {
   return out;
 }
 std::uint64_t BrickFrameDriver::brickTilesRendered() const { return impl_->brickTiles.load(); }
+std::uint64_t BrickFrameDriver::raysSkipped() const { return impl_->raysSkipped.load(); }
 
 std::vector<HeldBrick> BrickFrameDriver::releaseBricks() {
   Impl& m = *impl_;
@@ -292,6 +317,32 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     const SciVisRenderer* renderer =
         job.brick < 0 ? nullptr : m.renderers[static_cast<std::size_t>(job.brick)].get();
     const Box3 bounds = plan ? plan->bounds : Box3{};
+    // The bricks that may hide this one's rays (BrickOcclusion.h): with one sample a frame every
+    // fragment is sorted by its own ray's entry into its brick, so a ray is hidden when it
+    // enters another brick first (ties: the lower id, as the compositor sorts) and certainly
+    // crosses an opaque isosurface there. That brick renders this tile too (its box meets the
+    // ray), its fragment has alpha exactly 1, and this one's would be multiplied by 0.
+    thread_local std::vector<int> occluders;
+    occluders.clear();
+    if (renderer && m.occlusionExact && m.options.occlusionCut && spp == 1)
+      for (int other : candidateBricks(cameraDesc, region))
+        if (other != job.brick &&
+            mayComeFirst(m.directory.bricks[static_cast<std::size_t>(other)].bounds, bounds,
+                         cameraDesc.position))
+          occluders.push_back(other);
+    std::uint64_t skipped = 0;
+    if (!renderer && background.kind == Environment::Kind::Constant) {
+      // The background alone, the same everywhere: no rays needed (the sums below, as they are).
+      const Vec3 bg = background.color;
+      for (std::size_t p = 0; p < static_cast<std::size_t>(region.pixelCount()); ++p) {
+        float sum[4] = {0, 0, 0, 0};
+        for (std::uint32_t s = 0; s < spp; ++s)
+          sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
+        for (int c = 0; c < 4; ++c) tile.color[4 * p + static_cast<std::size_t>(c)] = sum[c] * inv;
+      }
+      dfb.setTile(std::move(tile));
+      return;
+    }
     // The brick's pieces of the tile's rays, rows at a time, integrated together
     // (SciVisRenderer batches the rays of its SIMD march); a ray that misses the brick adds
     // nothing.
@@ -299,30 +350,62 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     thread_local std::vector<Fragment> fragments;
     thread_local std::vector<std::uint8_t> hits;
     thread_local std::vector<float> depths;  // per pixel: brickDepth() of its first sample's ray
+    thread_local std::vector<Sampler> samplers;
+    thread_local std::vector<float> px, py;
+    thread_local std::vector<Vec3> dirs, invDirs, origins;
     const int rows =
         std::max(1, static_cast<int>(SciVisRenderer::kBatch /
                                      std::max<std::size_t>(1, std::size_t{spp} * region.width())));
     for (int y0 = region.y0; y0 < region.y1; y0 += rows) {
       const int y1 = std::min(region.y1, y0 + rows);
       rays.clear(), hits.clear(), depths.clear();
+      // The camera rays of SciVisRenderer::render, sample for sample: first every ray's random
+      // stream and canvas point, then their directions together (Camera::pinholeRays, the same
+      // bits as one at a time), then each ray's clip.
+      const std::size_t n =
+          static_cast<std::size_t>(y1 - y0) * static_cast<std::size_t>(region.width()) * spp;
+      samplers.resize(n), px.resize(n), py.resize(n), dirs.resize(n), invDirs.resize(n);
+      origins.resize(camera.pinhole() ? 0 : n);
+      std::size_t next = 0;
       for (int y = y0; y < y1; ++y)
         for (int x = region.x0; x < region.x1; ++x)
-          for (std::uint32_t s = 0; s < spp; ++s) {
-            // The camera ray of SciVisRenderer::render, sample for sample.
-            const Sampler sampler(m.settings.seed, x, y, accumulationId, s);
-            Vec3 origin, dir;
-            camera.ray(static_cast<float>(x) + sampler.get(0),
-                       static_cast<float>(y) + sampler.get(1), 0.5f, 0.5f, origin, dir);
-            float a = 0, b = kInf;
-            const bool hit = renderer && clipToBox(bounds, origin, reciprocal(dir), a, b);
-            hits.push_back(hit ? 1 : 0);
-            if (!renderer || hit) rays.push_back({origin, dir, a, b, sampler});
-            // Sorted by the first sample's ray: with one sample a frame (the usual progressive
-            // case) every sample's fragments then composite in exactly its own ray's order,
-            // also in pixels that see a brick border edge-on. (Where the ray enters the brick
-            // is `a`, brickDepth()'s own clip.)
-            if (renderer && s == 0) depths.push_back(hit ? a : brickDepth(bounds, origin, dir));
+          for (std::uint32_t s = 0; s < spp; ++s, ++next) {
+            samplers[next] = Sampler(m.settings.seed, x, y, accumulationId, s);
+            px[next] = static_cast<float>(x) + samplers[next].get(0);
+            py[next] = static_cast<float>(y) + samplers[next].get(1);
           }
+      if (camera.pinhole()) {
+        camera.pinholeRays(n, px.data(), py.data(), dirs.data(), invDirs.data());
+      } else {
+        for (std::size_t r = 0; r < n; ++r) {
+          camera.ray(px[r], py[r], 0.5f, 0.5f, origins[r], dirs[r]);
+          invDirs[r] = reciprocal(dirs[r]);
+        }
+      }
+      const Vec3 pinholeOrigin = camera.position();
+      for (std::size_t r = 0; r < n; ++r) {
+        const Vec3 origin = origins.empty() ? pinholeOrigin : origins[r], dir = dirs[r],
+                   invDir = invDirs[r];
+        float a = 0, b = kInf;
+        bool hit = renderer && clipToBox(bounds, origin, invDir, a, b), skippedRay = false;
+        for (std::size_t k = 0; hit && k < occluders.size(); ++k) {
+          const BrickPlan& front = m.directory.bricks[static_cast<std::size_t>(occluders[k])];
+          float frontA = 0, frontB = kInf;
+          if (!clipToBox(front.bounds, origin, invDir, frontA, frontB) ||
+              !(frontA < a || (frontA == a && front.id < plan->id)))
+            continue;
+          if (m.occlusion.certainlyOpaque(occluders[k], origin, dir, invDir, frontA, frontB))
+            hit = false, skippedRay = true, ++skipped;
+        }
+        hits.push_back(hit ? 1 : 0);
+        if (!renderer || hit) rays.push_back({origin, dir, a, b, samplers[r]});
+        // Sorted by the first sample's ray: with one sample a frame (the usual progressive
+        // case) every sample's fragments then composite in exactly its own ray's order,
+        // also in pixels that see a brick border edge-on. (Where the ray enters the brick
+        // is `a`, brickDepth()'s own clip; a hidden ray keeps it.)
+        if (renderer && r % spp == 0)
+          depths.push_back(hit || skippedRay ? a : brickDepth(bounds, origin, dir));
+      }
       fragments.resize(rays.size());
       if (renderer) renderer->integrate(rays.data(), rays.size(), fragments.data());
       std::size_t sample = 0, ray = 0;
@@ -349,6 +432,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
         }
     }
     if (renderer) m.brickTiles.fetch_add(1, std::memory_order_relaxed);
+    if (skipped > 0) m.raysSkipped.fetch_add(skipped, std::memory_order_relaxed);
     dfb.setTile(std::move(tile));
   });
   const auto t3 = Clock::now();

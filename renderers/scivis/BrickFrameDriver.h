@@ -8,10 +8,15 @@
 // so the result never depends on who rendered what) and averages the composited frames.
 // One brick per rank is data-parallel, every brick everywhere image-parallel, between mixed.
 //
+// A brick's rank does not trace a ray where a nearer brick certainly composites an opaque
+// isosurface in front of it (BrickOcclusion.h: a summary of every brick's faces, exchanged with
+// the bounds), so sort-last costs less than every brick's whole screen footprint.
+//
 // Contracts: construction takes this rank's bricks and is collective over `comm` (the render
 // ranks, the DFB's communicator): the ranks exchange their bricks' ids and bounds once
-// (exchangeBricks), so a new scene (new data) is a new driver. renderFrame() is collective over
-// the DFB's communicator like begin()/end(); the DFB must be built with options from configure().
+// (exchangeBricks), and their occlusion summaries, so a new scene (new data) is a new driver.
+// renderFrame() is collective over the DFB's communicator like begin()/end(); the DFB must be built
+// with options from configure().
 #include <mpi.h>
 
 #include <chrono>
@@ -32,6 +37,10 @@ struct BrickDriverOptions {
   int threads = 0;
   std::vector<bool> activeTiles;             // as FrameDriverOptions::activeTiles; empty: all
   std::chrono::milliseconds timeout{60000};  // for the bounds exchange
+  // Skip the rays of a brick that a nearer brick certainly hides behind an opaque isosurface
+  // (BrickOcclusion.h; only where that is exact: one sample per pixel a frame, no visible
+  // volume, every material opaque). The same image either way; false: trace them all.
+  bool occlusionCut = true;
 };
 
 // The DFB options every brick driver needs (the composite-then-accumulate operation, one root
@@ -65,6 +74,9 @@ class BrickFrameDriver {
   // This rank's bricks, moved out for the next scene version; the driver is spent afterwards.
   std::vector<HeldBrick> releaseBricks();
   std::uint64_t brickTilesRendered() const;
+  // Camera rays of this rank's bricks not traced since construction: a nearer brick certainly
+  // composites an opaque surface in front of them (BrickDriverOptions::occlusionCut).
+  std::uint64_t raysSkipped() const;
   // The holder of brick `brick` that renders it for tile `tile` (round robin over its holders,
   // offset by the tile, so neighbouring tiles of one brick go to different ranks).
   int tileBrickOwner(int tile, int brick) const;

@@ -366,6 +366,9 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   // empty piece), integrated together, then each pixel's samples summed in order.
   thread_local std::vector<RayPiece> rays;
   thread_local std::vector<Fragment> fragments;
+  thread_local std::vector<Sampler> samplers;
+  thread_local std::vector<float> px, py;
+  thread_local std::vector<Vec3> dirs, invDirs, origins;
   const int width = region.width();
   const int rows = std::max(
       1, static_cast<int>(kBatch / std::max<std::size_t>(1, std::size_t{samples} * width)));
@@ -373,17 +376,33 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   for (int y0 = region.y0; y0 < region.y1; y0 += rows) {
     const int y1 = std::min(region.y1, y0 + rows);
     rays.clear();
+    // Every ray's random stream and canvas point first, then their directions together
+    // (Camera::pinholeRays: the bits of one at a time, without its latency), then the clips.
+    const std::size_t n = static_cast<std::size_t>(y1 - y0) * width * samples;
+    samplers.resize(n), px.resize(n), py.resize(n), dirs.resize(n), invDirs.resize(n);
+    origins.resize(camera_.pinhole() ? 0 : n);
+    std::size_t filled = 0;
     for (int y = y0; y < y1; ++y)
       for (int x = region.x0; x < region.x1; ++x)
-        for (std::uint32_t s = firstSample; s < firstSample + samples; ++s) {
-          const Sampler sampler(settings_.seed, x, y, accumulationId, s);
-          Vec3 origin, dir;
-          camera_.ray(static_cast<float>(x) + sampler.get(0),
-                      static_cast<float>(y) + sampler.get(1), 0.5f, 0.5f, origin, dir);
-          float t0 = 0, t1 = kInf;
-          if (!clipToBox(bounds, origin, reciprocal(dir), t0, t1)) t0 = t1 = 0;
-          rays.push_back({origin, dir, t0, t1, sampler});
+        for (std::uint32_t s = firstSample; s < firstSample + samples; ++s, ++filled) {
+          samplers[filled] = Sampler(settings_.seed, x, y, accumulationId, s);
+          px[filled] = static_cast<float>(x) + samplers[filled].get(0);
+          py[filled] = static_cast<float>(y) + samplers[filled].get(1);
         }
+    if (camera_.pinhole()) {
+      camera_.pinholeRays(n, px.data(), py.data(), dirs.data(), invDirs.data());
+    } else {
+      for (std::size_t r = 0; r < n; ++r) {
+        camera_.ray(px[r], py[r], 0.5f, 0.5f, origins[r], dirs[r]);
+        invDirs[r] = reciprocal(dirs[r]);
+      }
+    }
+    for (std::size_t r = 0; r < n; ++r) {
+      const Vec3 origin = origins.empty() ? camera_.position() : origins[r];
+      float t0 = 0, t1 = kInf;
+      if (!clipToBox(bounds, origin, invDirs[r], t0, t1)) t0 = t1 = 0;
+      rays.push_back({origin, dirs[r], t0, t1, samplers[r]});
+    }
     fragments.resize(rays.size());
     integrate(rays.data(), rays.size(), fragments.data());
     std::size_t next = 0;

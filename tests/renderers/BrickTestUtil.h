@@ -15,12 +15,17 @@ namespace renderers::test {
 
 // The RGBAF32 image of `frames` accumulated frames of the bricks `held` on the ranks of `comm`
 // (rank 0's copy; empty elsewhere), rendered with 2 threads a rank in tiles of `tileSize`.
+// `occlusionCut`: BrickDriverOptions::occlusionCut; `raysSkipped` (if given): this rank's
+// BrickFrameDriver::raysSkipped() at the end.
 inline std::vector<float> renderHeldBricks(const std::shared_ptr<SceneDesc>& desc,
                                            const RenderSettings& settings,
                                            std::vector<HeldBrick> held, MPI_Comm comm, int tileSize,
-                                           int frames, std::chrono::milliseconds frameTimeout) {
+                                           int frames, std::chrono::milliseconds frameTimeout,
+                                           bool occlusionCut = true,
+                                           std::uint64_t* raysSkipped = nullptr) {
   BrickDriverOptions bo;
   bo.threads = 2;
+  bo.occlusionCut = occlusionCut;
   BrickFrameDriver driver(desc, settings, bo, std::move(held), comm);
   messaging::Messenger messenger(comm);
   dfb::DfbOptions options;
@@ -36,6 +41,7 @@ inline std::vector<float> renderHeldBricks(const std::shared_ptr<SceneDesc>& des
     image = fb.imageRgbaF32();
   }
   messenger.stop();
+  if (raysSkipped) *raysSkipped = driver.raysSkipped();
   return image;
 }
 
