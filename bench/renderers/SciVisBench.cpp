@@ -14,8 +14,8 @@
 // Cost per volume sample: "ns_per_volume_sample" is wall time x threads / samples (per core);
 // "cpu_ns_per_volume_sample" is the process's CPU time / samples, which other processes on a
 // shared machine disturb less ("median_cpu_frame_s" likewise beside "median_frame_s"; VTK's
-// script reports the same two). The environment variable SCIVIS_MARCH=sse|avx2 picks the volume
-// march's kernel (default: the fastest the CPU runs), to compare them in one build.
+// script reports the same two). The environment variable SCIVIS_MARCH=sse|avx2|avx512 picks the
+// volume march's kernel (default: the fastest the CPU runs), to compare them in one build.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -90,8 +90,9 @@ MarchKernel marchFromEnvironment() {
   const std::string n = name ? name : "auto";
   if (n == "sse") return MarchKernel::Sse;
   if (n == "avx2") return MarchKernel::Avx2;
+  if (n == "avx512") return MarchKernel::Avx512;
   if (n == "auto") return MarchKernel::Auto;
-  throw Error("SCIVIS_MARCH: '" + n + "' is none of sse, avx2, auto");
+  throw Error("SCIVIS_MARCH: '" + n + "' is none of sse, avx2, avx512, auto");
 }
 
 }  // namespace

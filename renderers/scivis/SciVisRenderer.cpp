@@ -301,13 +301,14 @@ bool SciVisRenderer::marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, flo
 
 void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment* out) const {
   const bool packets = layers_->size() == 1 && marchesPackets((*layers_)[0], march_);
+  const int packetSize = marchPacketSize(march_);
   MarchRay waiting[kMarchPacket];
   std::size_t waitingIndex[kMarchPacket];
   int waitingCount = 0;
   auto marchWaiting = [&] {
     MarchColor colors[kMarchPacket];
     std::uint32_t taken[kMarchPacket];
-    marchPacket((*layers_)[0], waiting, waitingCount, colors, taken);
+    marchPacket((*layers_)[0], march_, waiting, waitingCount, colors, taken);
     for (int i = 0; i < waitingCount; ++i) {
       Fragment& f = out[waitingIndex[i]];  // integrate()'s fragment of the march alone
       f = Fragment{};
@@ -345,7 +346,7 @@ void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment
       if (packets &&
           marchOnly(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, first, waiting[waitingCount])) {
         waitingIndex[waitingCount++] = i;
-        if (waitingCount == kMarchPacket) marchWaiting();
+        if (waitingCount == packetSize) marchWaiting();
         continue;
       }
       out[i] = integrate(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, &first);
