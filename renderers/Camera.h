@@ -25,6 +25,20 @@ class Camera {
   // The ray through canvas point (px, py); (u, v) in [0,1)^2 pick the point on the lens.
   void ray(float px, float py, float u, float v, Vec3& origin, Vec3& direction) const;
 
+  // What ray() computes a pinhole camera's rays from, for SIMD versions of it that give the
+  // same bits: direction = normalize((forward + right * sx) + up * sy) with
+  // sx = (2 px invWidth - 1) halfWidth and sy = (1 - 2 py invHeight) halfHeight. False (and
+  // nothing) for a thin lens.
+  struct Pinhole {
+    Vec3 origin, forward, right, up;
+    float halfWidth, halfHeight, invWidth, invHeight;
+  };
+  bool pinhole(Pinhole& out) const {
+    if (lensRadius_ > 0) return false;
+    out = {origin_, forward_, right_, up_, halfWidth_, halfHeight_, invWidth_, invHeight_};
+    return true;
+  }
+
  private:
   Vec3 origin_, forward_, right_, up_;
   float halfWidth_, halfHeight_, invWidth_, invHeight_, lensRadius_, focus_;

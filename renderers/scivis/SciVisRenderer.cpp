@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "renderers/PixelBlocks.h"
+#include "renderers/scivis/CameraRays.h"
 #include "renderers/scivis/VolumeMarch.h"
 
 namespace renderers {
@@ -371,20 +372,21 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   const int rows = std::max(
       1, static_cast<int>(kBatch / std::max<std::size_t>(1, std::size_t{samples} * width)));
   std::uint64_t volumeSamples = 0;
+  // The camera rays in SIMD lanes where the march runs AVX-512 (the same rays either way).
+  const RowRays row{&camera_,
+                    bounds,
+                    settings_.seed,
+                    accumulationId,
+                    firstSample,
+                    samples,
+                    march_ == MarchKernel::Avx512 && cameraRowSimdAvailable()};
   for (int y0 = region.y0; y0 < region.y1; y0 += rows) {
     const int y1 = std::min(region.y1, y0 + rows);
-    rays.clear();
+    const std::size_t rowRays = std::size_t{samples} * static_cast<std::size_t>(width);
+    rays.resize(static_cast<std::size_t>(y1 - y0) * rowRays);
     for (int y = y0; y < y1; ++y)
-      for (int x = region.x0; x < region.x1; ++x)
-        for (std::uint32_t s = firstSample; s < firstSample + samples; ++s) {
-          const Sampler sampler(settings_.seed, x, y, accumulationId, s);
-          Vec3 origin, dir;
-          camera_.ray(static_cast<float>(x) + sampler.get(0),
-                      static_cast<float>(y) + sampler.get(1), 0.5f, 0.5f, origin, dir);
-          float t0 = 0, t1 = kInf;
-          if (!clipToBox(bounds, origin, reciprocal(dir), t0, t1)) t0 = t1 = 0;
-          rays.push_back({origin, dir, t0, t1, sampler});
-        }
+      cameraRowRays(row, region.x0, region.x1, y,
+                    rays.data() + static_cast<std::size_t>(y - y0) * rowRays);
     fragments.resize(rays.size());
     integrate(rays.data(), rays.size(), fragments.data());
     std::size_t next = 0;
