@@ -361,7 +361,8 @@ __attribute__((target("avx2"))) void marchPacketAvx2(const SciVisScene::VolumeLa
 
 // Whether every voxel offset of the field fits the packet kernel's 32-bit lane arithmetic.
 bool offsetsFitInt(const VolumeField& field) {
-  return field.volume().voxels.size() / sizeof(float) <= static_cast<std::size_t>(INT_MAX);
+  return field.volume().voxels.size() / voxelBytes(field.volume().type) <=
+         static_cast<std::size_t>(INT_MAX);
 }
 
 }  // namespace
@@ -402,8 +403,10 @@ int marchPacketSize(MarchKernel kernel) {
 }
 
 bool marchesPackets(const SciVisScene::VolumeLayer& v, MarchKernel kernel) {
-  return (kernel == MarchKernel::Avx2 || kernel == MarchKernel::Avx512) && v.field &&
-         v.field->volume().type == VoxelType::Float32 && offsetsFitInt(*v.field);
+  if (!v.field || !offsetsFitInt(*v.field)) return false;
+  // AVX-512 widens integer voxels in its lanes; AVX2 packets take float voxels only.
+  return kernel == MarchKernel::Avx512 ||
+         (kernel == MarchKernel::Avx2 && v.field->volume().type == VoxelType::Float32);
 }
 
 void marchPacket(const SciVisScene::VolumeLayer& v, MarchKernel kernel, const MarchRay* rays,

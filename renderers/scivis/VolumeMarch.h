@@ -10,11 +10,12 @@
 // each at a time, one ray per lane (marchPacket: no serial compositing, no samples wasted past a
 // ray's end; VolumeMarchAvx512.cpp holds the AVX-512 kernel).
 // 8 samples of one ray at a time in AVX2 measured only about 10% faster than SSE's 4, so a ray
-// alone marches with SSE everywhere. Both compute every sample lane by lane as the scalar path
+// alone marches with SSE everywhere. All compute every sample lane by lane as the scalar path
 // does, without fused multiply-adds, and composite each ray in order, so they give the same
 // image bit for bit; they differ only in the benchmark's sample count (a jump over an empty
 // macrocell counts one sample, and the kernels jump from different places). Packets march
-// float voxels (whose offsets fit 32 bits); integer voxels march ray by ray.
+// voxels whose offsets fit 32 bits: AVX-512 packets float, uint8 and uint16 voxels (widened in
+// the lanes), AVX2 packets float voxels; other rays march one by one.
 #include <cstdint>
 
 #include "renderers/Math.h"

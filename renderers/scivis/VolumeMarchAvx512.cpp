@@ -11,6 +11,8 @@
 
 #include <bit>
 #include <cstdint>
+#include <cstring>
+#include <type_traits>
 
 #include "renderers/scivis/VolumeMarch.h"
 #include "renderers/scivis/VolumeMarchSteps.h"
@@ -46,10 +48,73 @@ AVX512_INLINE __m512 join(__m256 lo, __m256 hi) {
   return _mm512_insertf32x8(_mm512_castps256_ps512(lo), hi, 1);
 }
 
+// A lane's 8 cell corners as floats in VolumeField::interpolate()'s order, from integer voxels:
+// the x-pairs of rows (y, z), (y + 1, z), (y, z + 1), (y + 1, z + 1), widened exactly as
+// static_cast<float> does.
+AVX512_INLINE __m256 laneCorners(const std::uint16_t* v, int strideY, int strideZ) {
+  std::uint32_t pair[4];
+  std::memcpy(&pair[0], v, 4);
+  std::memcpy(&pair[1], v + strideY, 4);
+  std::memcpy(&pair[2], v + strideZ, 4);
+  std::memcpy(&pair[3], v + strideZ + strideY, 4);
+  const __m128i w = _mm_setr_epi32(static_cast<int>(pair[0]), static_cast<int>(pair[1]),
+                                   static_cast<int>(pair[2]), static_cast<int>(pair[3]));
+  return _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(w));
+}
+
+AVX512_INLINE __m256 laneCorners(const std::uint8_t* v, int strideY, int strideZ) {
+  std::uint16_t pair[4];
+  std::memcpy(&pair[0], v, 2);
+  std::memcpy(&pair[1], v + strideY, 2);
+  std::memcpy(&pair[2], v + strideZ, 2);
+  std::memcpy(&pair[3], v + strideZ + strideY, 2);
+  const __m128i w =
+      _mm_setr_epi16(static_cast<short>(pair[0]), static_cast<short>(pair[1]),
+                     static_cast<short>(pair[2]), static_cast<short>(pair[3]), 0, 0, 0, 0);
+  return _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(w));
+}
+
+// Rows r[i] (lane i's 8 values) to columns: out[k] holds value k of lanes 0 .. 7.
+AVX512_INLINE void transpose8(const __m256 r[8], __m256 out[8]) {
+  __m256 t[8], u[8];
+  for (int i = 0; i < 8; i += 2)
+    t[i] = _mm256_unpacklo_ps(r[i], r[i + 1]), t[i + 1] = _mm256_unpackhi_ps(r[i], r[i + 1]);
+  for (int i = 0; i < 8; i += 4) {
+    u[i] = _mm256_shuffle_ps(t[i], t[i + 2], 0x44);
+    u[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], 0xee);
+    u[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0x44);
+    u[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0xee);
+  }
+  for (int k = 0; k < 4; ++k) {
+    out[k] = _mm256_permute2f128_ps(u[k], u[k + 4], 0x20);
+    out[k + 4] = _mm256_permute2f128_ps(u[k], u[k + 4], 0x31);
+  }
+}
+
+// The 8 corners of the cells at offsets[l] (voxel indices) of 16 lanes, a register per corner.
+template <class T>
+AVX512_INLINE void corners16(const std::byte* bytes, const int offsets[16], int strideY,
+                             int strideZ, __m512 c[8]) {
+  const T* voxels = reinterpret_cast<const T*>(bytes);
+  __m256 half[2][8];
+  if constexpr (std::is_same_v<T, float>) {
+    corners8(voxels, offsets, strideY, strideZ, half[0]);
+    corners8(voxels, offsets + 8, strideY, strideZ, half[1]);
+  } else {
+    for (int h = 0; h < 2; ++h) {
+      __m256 rows[8];
+      for (int l = 0; l < 8; ++l)
+        rows[l] = laneCorners(voxels + offsets[8 * h + l], strideY, strideZ);
+      transpose8(rows, half[h]);
+    }
+  }
+  for (int n = 0; n < 8; ++n) c[n] = join(half[0][n], half[1][n]);
+}
+
 // What every lane of a packet shares: the field's geometry and voxels, the transfer function.
 struct Field16 {
   const VolumeField* field;
-  const float* voxels;
+  const std::byte* voxels;
   const std::uint8_t* empty;
   const float* table;
   int strideY, strideZ;
@@ -63,7 +128,7 @@ struct Field16 {
 AVX512_INLINE void setUp(Field16& f, const SciVisScene::VolumeLayer& v) {
   const FieldGeometry::Layout g = v.field->layout();
   f.field = v.field;
-  f.voxels = reinterpret_cast<const float*>(v.field->volume().voxels.data());
+  f.voxels = v.field->volume().voxels.data();
   f.empty = v.emptyMacrocells.data();
   f.table = v.table.data();
   f.strideY = static_cast<int>(g.strideY), f.strideZ = static_cast<int>(g.strideZ);
@@ -126,6 +191,7 @@ AVX512_INLINE void start(Packet16& p, const MarchRay* rays, int count, const Mar
 }
 
 // One sample of every ray still marching.
+template <class T>
 AVX512_INLINE void advance(Packet16& p, const Field16& f) {
   const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
   const __m512 ts = _mm512_mul_ps(_mm512_add_ps(p.ks, p.jitters), p.steps);
@@ -163,11 +229,8 @@ AVX512_INLINE void advance(Packet16& p, const Field16& f) {
     // The 8 corners in VolumeField::interpolate()'s order, 8 lanes at a time.
     alignas(64) int offsets[16];
     _mm512_store_si512(offsets, offset);
-    __m256 lo[8], hi[8];
-    corners8(f.voxels, offsets, f.strideY, f.strideZ, lo);
-    corners8(f.voxels, offsets + 8, f.strideY, f.strideZ, hi);
     __m512 c[8];
-    for (int n = 0; n < 8; ++n) c[n] = join(lo[n], hi[n]);
+    corners16<T>(f.voxels, offsets, f.strideY, f.strideZ, c);
     // VolumeField::interpolate(): along x, then y, then z.
     const __m512 x00 = lerp(c[0], c[1], wx), x10 = lerp(c[2], c[3], wx);
     const __m512 x01 = lerp(c[4], c[5], wx), x11 = lerp(c[6], c[7], wx);
@@ -264,17 +327,31 @@ AVX512_INLINE void finish(const Packet16& p, MarchColor* colors, std::uint32_t* 
   }
 }
 
-}  // namespace
-
-__attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) void marchPacketAvx512(
+template <class T>
+__attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) void marchPacket16(
     const SciVisScene::VolumeLayer& v, const MarchRay* rays, int count, MarchColor* colors,
     std::uint32_t* samples) {
   Field16 f;
   setUp(f, v);
   Packet16 p;
   start(p, rays, count, colors);
-  while (p.alive) advance(p, f);
+  while (p.alive) advance<T>(p, f);
   finish(p, colors, samples);
+}
+
+}  // namespace
+
+void marchPacketAvx512(const SciVisScene::VolumeLayer& v, const MarchRay* rays, int count,
+                       MarchColor* colors, std::uint32_t* samples) {
+  switch (v.field->volume().type) {
+    default:
+    case VoxelType::Float32:
+      return marchPacket16<float>(v, rays, count, colors, samples);
+    case VoxelType::UInt8:
+      return marchPacket16<std::uint8_t>(v, rays, count, colors, samples);
+    case VoxelType::UInt16:
+      return marchPacket16<std::uint16_t>(v, rays, count, colors, samples);
+  }
 }
 
 }  // namespace renderers::march
