@@ -168,11 +168,13 @@ struct Packet8 {
   int count;
   __m256 jitters, steps, t1s, ends, minTs, ox, oy, oz, dx, dy, dz;
   __m256 ks, red, green, blue, transmittance, depths;
+  __m256 aheadX, aheadY, aheadZ;  // kPrefetchAhead steps along the ray, in cells
   __m256i counts;
   unsigned alive;  // lanes still marching
 };
 
-AVX2_INLINE void start(Packet8& p, const MarchRay* rays, int count, const MarchColor* colors) {
+AVX2_INLINE void start(Packet8& p, const Field8& f, const MarchRay* rays, int count,
+                       const MarchColor* colors) {
   alignas(32) float k[8], jitter[8], step[8], ox[8], oy[8], oz[8], dx[8], dy[8], dz[8], t1[8],
       end[8], minT[8], r[8], g[8], b[8], tr[8], depth[8];
   static const MarchRay none{};  // the lanes past `count`: never marching
@@ -192,6 +194,10 @@ AVX2_INLINE void start(Packet8& p, const MarchRay* rays, int count, const MarchC
   p.t1s = _mm256_load_ps(t1), p.ends = _mm256_load_ps(end), p.minTs = _mm256_load_ps(minT);
   p.ox = _mm256_load_ps(ox), p.oy = _mm256_load_ps(oy), p.oz = _mm256_load_ps(oz);
   p.dx = _mm256_load_ps(dx), p.dy = _mm256_load_ps(dy), p.dz = _mm256_load_ps(dz);
+  const __m256 ahead = _mm256_mul_ps(_mm256_set1_ps(march::kPrefetchAhead), p.steps);
+  p.aheadX = _mm256_mul_ps(_mm256_mul_ps(ahead, p.dx), f.sx);
+  p.aheadY = _mm256_mul_ps(_mm256_mul_ps(ahead, p.dy), f.sy);
+  p.aheadZ = _mm256_mul_ps(_mm256_mul_ps(ahead, p.dz), f.sz);
   p.ks = _mm256_load_ps(k);
   p.red = _mm256_load_ps(r), p.green = _mm256_load_ps(g), p.blue = _mm256_load_ps(b);
   p.transmittance = _mm256_load_ps(tr), p.depths = _mm256_load_ps(depth);
@@ -207,6 +213,33 @@ AVX2_INLINE __m256 laneMask(unsigned bits) {
       _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(static_cast<int>(bits)),
                                           _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
                          _mm256_setzero_si256()));
+}
+
+// The held cell (relative to the first) of coordinate c + ahead, clamped to the held cells.
+AVX2_INLINE __m256i cellAhead(__m256 c, __m256 ahead, int first, int last, __m256i firsts) {
+  const __m256i i =
+      _mm256_min_epi32(_mm256_cvttps_epi32(_mm256_add_ps(c, ahead)), _mm256_set1_epi32(last));
+  return _mm256_sub_epi32(_mm256_max_epi32(i, _mm256_set1_epi32(first)), firsts);
+}
+
+// Asks for the voxels the lanes will read kPrefetchAhead samples on, as the AVX-512 kernel does
+// (VolumeMarchAvx512.cpp): a hint only, no value changes.
+AVX2_INLINE void prefetchAhead(const Packet8& p, const Field8& f, __m256 fx, __m256 fy, __m256 fz,
+                               unsigned lanes) {
+  const __m256i offset = _mm256_add_epi32(
+      cellAhead(fx, p.aheadX, f.first.x, f.lastCell.x, f.firstX),
+      _mm256_add_epi32(
+          _mm256_mullo_epi32(cellAhead(fy, p.aheadY, f.first.y, f.lastCell.y, f.firstY),
+                             f.strideYs),
+          _mm256_mullo_epi32(cellAhead(fz, p.aheadZ, f.first.z, f.lastCell.z, f.firstZ),
+                             f.strideZs)));
+  alignas(32) int at[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(at), offset);
+  for (; lanes; lanes &= lanes - 1) {
+    const float* v = f.voxels + at[std::countr_zero(lanes)];
+    for (const float* row : {v, v + f.strideY, v + f.strideZ, v + f.strideZ + f.strideY})
+      _mm_prefetch(reinterpret_cast<const char*>(row), _MM_HINT_T0);
+  }
 }
 
 // One sample of every ray still marching.
@@ -247,6 +280,7 @@ AVX2_INLINE void advance(Packet8& p, const Field8& f) {
                          _mm256_mullo_epi32(_mm256_sub_epi32(iz, f.firstZ), f.strideZs)));
     alignas(32) int offsets[8];
     _mm256_store_si256(reinterpret_cast<__m256i*>(offsets), offset);
+    prefetchAhead(p, f, fx, fy, fz, inside);
     __m256 c[8];
     corners8(f.voxels, offsets, f.strideY, f.strideZ, c);
     // VolumeField::interpolate(): along x, then y, then z.
@@ -354,7 +388,7 @@ __attribute__((target("avx2"))) void marchPacketAvx2(const SciVisScene::VolumeLa
   Field8 f;
   setUp(f, v);
   Packet8 p;
-  start(p, rays, count, colors);
+  start(p, f, rays, count, colors);
   while (p.alive) advance(p, f);
   finish(p, colors, samples);
 }

@@ -29,6 +29,10 @@ inline float lastBeforeExit(const VolumeField& field, int m, const MarchRay& r, 
   return std::floor(b / r.step - r.jitter) - 1;
 }
 
+// Samples ahead of the march the packet kernels prefetch each lane's voxels (2, 4, 6 and 8
+// measured with AVX-512; 4 best).
+constexpr float kPrefetchAhead = 4.0f;
+
 // The packet kernels' loads, 8 lanes at a time (the AVX-512 kernel takes its 16 lanes as two
 // halves: AVX-512's gathers measured slower than these loads and transposes).
 #define AVX2_INLINE __attribute__((target("avx2"), always_inline)) inline
