@@ -111,6 +111,31 @@ AVX512_INLINE void corners16(const std::byte* bytes, const int offsets[16], int 
   for (int n = 0; n < 8; ++n) c[n] = join(half[0][n], half[1][n]);
 }
 
+// Transfer-function entries at[l] and the next (8 floats from at[l]) of 16 lanes, a register
+// per float: out[0 .. 3] the entry's RGBA, out[4 .. 7] the next one's. Each lane's 8 floats are
+// one 256-bit load (lanes l and l + 8 share a register), then an 8x8 transpose in each half.
+AVX512_INLINE void tableEntries16(const float* table, const int at[16], __m512 out[8]) {
+  __m512 q[8], t[8], u[8];
+  for (int j = 0; j < 8; ++j)
+    q[j] = _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_loadu_ps(table + at[j])),
+                              _mm256_loadu_ps(table + at[j + 8]), 1);
+  for (int j = 0; j < 8; j += 2)
+    t[j] = _mm512_unpacklo_ps(q[j], q[j + 1]), t[j + 1] = _mm512_unpackhi_ps(q[j], q[j + 1]);
+  for (int j = 0; j < 8; j += 4) {
+    u[j] = _mm512_shuffle_ps(t[j], t[j + 2], 0x44);
+    u[j + 1] = _mm512_shuffle_ps(t[j], t[j + 2], 0xee);
+    u[j + 2] = _mm512_shuffle_ps(t[j + 1], t[j + 3], 0x44);
+    u[j + 3] = _mm512_shuffle_ps(t[j + 1], t[j + 3], 0xee);
+  }
+  // Blocks (128 bits) 0 and 2 of u[k] and u[k + 4] make value k; blocks 1 and 3 value k + 4.
+  const __m512i even = _mm512_setr_epi32(0, 1, 2, 3, 16, 17, 18, 19, 8, 9, 10, 11, 24, 25, 26, 27);
+  const __m512i odd = _mm512_setr_epi32(4, 5, 6, 7, 20, 21, 22, 23, 12, 13, 14, 15, 28, 29, 30, 31);
+  for (int k = 0; k < 4; ++k) {
+    out[k] = _mm512_permutex2var_ps(u[k], even, u[k + 4]);
+    out[k + 4] = _mm512_permutex2var_ps(u[k], odd, u[k + 4]);
+  }
+}
+
 // What every lane of a packet shares: the field's geometry and voxels, the transfer function.
 struct Field16 {
   const VolumeField* field;
@@ -288,13 +313,10 @@ AVX512_INLINE void advance(Packet16& p, const Field16& f) {
     // Entries i and i + 1 (4 floats each), 8 lanes at a time.
     alignas(64) int entry[16];
     _mm512_store_si512(entry, _mm512_slli_epi32(i, 2));
-    __m256 elo[2][4], ehi[2][4];
-    tableEntries8(f.table, entry, elo);
-    tableEntries8(f.table, entry + 8, ehi);
-    const __m512 r0 = join(elo[0][0], ehi[0][0]), g0 = join(elo[0][1], ehi[0][1]),
-                 b0 = join(elo[0][2], ehi[0][2]), a0 = join(elo[0][3], ehi[0][3]);
-    const __m512 r1 = join(elo[1][0], ehi[1][0]), g1 = join(elo[1][1], ehi[1][1]),
-                 b1 = join(elo[1][2], ehi[1][2]), a1 = join(elo[1][3], ehi[1][3]);
+    __m512 e[8];
+    tableEntries16(f.table, entry, e);
+    const __m512 r0 = e[0], g0 = e[1], b0 = e[2], a0 = e[3], r1 = e[4], g1 = e[5], b1 = e[6],
+                 a1 = e[7];
     const __m512 opacity = lerp(a0, a1, weight);
     const __mmask16 composited = _mm512_mask_cmp_ps_mask(inside, opacity, zero, _CMP_GT_OQ);
     if (composited) {
