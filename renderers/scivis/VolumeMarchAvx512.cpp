@@ -74,23 +74,6 @@ AVX512_INLINE __m256 laneCorners(const std::uint8_t* v, int strideY, int strideZ
   return _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(w));
 }
 
-// Rows r[i] (lane i's 8 values) to columns: out[k] holds value k of lanes 0 .. 7.
-AVX512_INLINE void transpose8(const __m256 r[8], __m256 out[8]) {
-  __m256 t[8], u[8];
-  for (int i = 0; i < 8; i += 2)
-    t[i] = _mm256_unpacklo_ps(r[i], r[i + 1]), t[i + 1] = _mm256_unpackhi_ps(r[i], r[i + 1]);
-  for (int i = 0; i < 8; i += 4) {
-    u[i] = _mm256_shuffle_ps(t[i], t[i + 2], 0x44);
-    u[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], 0xee);
-    u[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0x44);
-    u[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0xee);
-  }
-  for (int k = 0; k < 4; ++k) {
-    out[k] = _mm256_permute2f128_ps(u[k], u[k + 4], 0x20);
-    out[k + 4] = _mm256_permute2f128_ps(u[k], u[k + 4], 0x31);
-  }
-}
-
 // The 8 corners of the cells at offsets[l] (voxel indices) of 16 lanes, a register per corner.
 template <class T>
 AVX512_INLINE void corners16(const std::byte* bytes, const int offsets[16], int strideY,

@@ -65,21 +65,30 @@ AVX2_INLINE void corners8(const float* voxels, const int offsets[8], int strideY
   }
 }
 
-// Transfer-function entries at[l] (4 floats per entry) and the next of 8 lanes, loaded whole
-// and transposed to a register per channel: c[next][channel].
-AVX2_INLINE void tableEntries8(const float* table, const int at[8], __m256 c[2][4]) {
-  for (int next = 0; next < 2; ++next) {
-    __m256 q[4];
-    for (int l = 0; l < 4; ++l)
-      q[l] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(table + at[l] + 4 * next)),
-                                  _mm_loadu_ps(table + at[l + 4] + 4 * next), 1);
-    const __m256 t0 = _mm256_unpacklo_ps(q[0], q[1]), t1 = _mm256_unpackhi_ps(q[0], q[1]);
-    const __m256 t2 = _mm256_unpacklo_ps(q[2], q[3]), t3 = _mm256_unpackhi_ps(q[2], q[3]);
-    c[next][0] = _mm256_shuffle_ps(t0, t2, 0x44);
-    c[next][1] = _mm256_shuffle_ps(t0, t2, 0xee);
-    c[next][2] = _mm256_shuffle_ps(t1, t3, 0x44);
-    c[next][3] = _mm256_shuffle_ps(t1, t3, 0xee);
+// Rows r[i] (lane i's 8 values) to columns: out[k] holds value k of lanes 0 .. 7.
+AVX2_INLINE void transpose8(const __m256 r[8], __m256 out[8]) {
+  __m256 t[8], u[8];
+  for (int i = 0; i < 8; i += 2)
+    t[i] = _mm256_unpacklo_ps(r[i], r[i + 1]), t[i + 1] = _mm256_unpackhi_ps(r[i], r[i + 1]);
+  for (int i = 0; i < 8; i += 4) {
+    u[i] = _mm256_shuffle_ps(t[i], t[i + 2], 0x44);
+    u[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], 0xee);
+    u[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0x44);
+    u[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0xee);
   }
+  for (int k = 0; k < 4; ++k) {
+    out[k] = _mm256_permute2f128_ps(u[k], u[k + 4], 0x20);
+    out[k + 4] = _mm256_permute2f128_ps(u[k], u[k + 4], 0x31);
+  }
+}
+
+// Transfer-function entries at[l] (4 floats per entry) and the next of 8 lanes, a register per
+// float: c[next][channel]. Each lane's 8 floats are one 256-bit load, transposed 8x8.
+AVX2_INLINE void tableEntries8(const float* table, const int at[8], __m256 c[2][4]) {
+  __m256 rows[8], out[8];
+  for (int l = 0; l < 8; ++l) rows[l] = _mm256_loadu_ps(table + at[l]);
+  transpose8(rows, out);
+  for (int k = 0; k < 4; ++k) c[0][k] = out[k], c[1][k] = out[k + 4];
 }
 
 // The AVX-512 kernel (VolumeMarchAvx512.cpp): marchPacket() for up to 16 rays, where the CPU
