@@ -35,6 +35,20 @@ class Camera {
   void pinholeRays(std::size_t n, const float* px, const float* py, Vec3* dirs,
                    Vec3* invDirs) const;
 
+  // What ray() computes a pinhole camera's rays from, for SIMD versions of it that give the
+  // same bits: direction = normalize((forward + right * sx) + up * sy) with
+  // sx = (2 px invWidth - 1) halfWidth and sy = (1 - 2 py invHeight) halfHeight. False (and
+  // nothing) for a thin lens.
+  struct Pinhole {
+    Vec3 origin, forward, right, up;
+    float halfWidth, halfHeight, invWidth, invHeight;
+  };
+  bool pinhole(Pinhole& out) const {
+    if (lensRadius_ > 0) return false;
+    out = {origin_, forward_, right_, up_, halfWidth_, halfHeight_, invWidth_, invHeight_};
+    return true;
+  }
+
  private:
   Vec3 origin_, forward_, right_, up_;
   float halfWidth_, halfHeight_, invWidth_, invHeight_, lensRadius_, focus_;

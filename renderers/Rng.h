@@ -20,11 +20,26 @@ class Sampler {
   constexpr Sampler() = default;  // a placeholder, to be assigned a real one
   constexpr Sampler(std::uint64_t seed, int x, int y, std::uint32_t accumulationId,
                     std::uint32_t sampleIndex)
-      : key_(mix64(mix64(seed ^ 0x9e3779b97f4a7c15ull) ^
-                   mix64((static_cast<std::uint64_t>(static_cast<std::uint32_t>(y)) << 32) |
-                         static_cast<std::uint32_t>(x)) ^
-                   mix64((static_cast<std::uint64_t>(accumulationId) << 32 | sampleIndex) +
-                         0x632be59bd9b4e019ull))) {}
+      : key_(mix64(pixelKey(x, y) ^ sampleKey(seed, accumulationId, sampleIndex))) {}
+
+  // The constructor's key is mix64(pixelKey(x, y) ^ sampleKey(...)): SIMD code derives many
+  // pixels' keys at once from these parts, and makes their streams with fromKey().
+  static constexpr std::uint64_t pixelKey(int x, int y) {
+    return mix64((static_cast<std::uint64_t>(static_cast<std::uint32_t>(y)) << 32) |
+                 static_cast<std::uint32_t>(x));
+  }
+  static constexpr std::uint64_t sampleKey(std::uint64_t seed, std::uint32_t accumulationId,
+                                           std::uint32_t sampleIndex) {
+    return mix64(seed ^ kDimensionStep) ^
+           mix64((static_cast<std::uint64_t>(accumulationId) << 32 | sampleIndex) +
+                 0x632be59bd9b4e019ull);
+  }
+  static constexpr Sampler fromKey(std::uint64_t key) {
+    Sampler s;
+    s.key_ = key;
+    return s;
+  }
+  constexpr std::uint64_t key() const { return key_; }
 
   // A further stream of this sample, named by `salt`: e.g. the random numbers for shading one
   // surface hit, keyed by what was hit rather than by how many hits came before it, so a ray cut
@@ -37,9 +52,11 @@ class Sampler {
 
   // Uniform in [0, 1) for dimension `d`; the same (key, d) always gives the same value.
   constexpr float get(std::uint32_t d) const {
-    return static_cast<float>(mix64(key_ + (d + 1) * 0x9e3779b97f4a7c15ull) >> 40) *
-           (1.0f / 16777216.0f);
+    return static_cast<float>(mix64(key_ + (d + 1) * kDimensionStep) >> 40) * (1.0f / 16777216.0f);
   }
+
+  // get(d) hashes key() + (d + 1) kDimensionStep.
+  static constexpr std::uint64_t kDimensionStep = 0x9e3779b97f4a7c15ull;
 
  private:
   std::uint64_t key_ = 0;

@@ -4,6 +4,9 @@
 //   scivis_bench MODE RESOLUTION SIZE THREADS FRAMES [OUT.png | OUT.f32 (raw linear floats)]
 // MODE: "volume"  the wavelet as a volume (VTK's comparison: blue-white-red over 37..277,
 //                 opacity ramp 0..0.4 per voxel, one sample per voxel, no shading)
+//       "volume-uint8", "volume-uint16"  the same volume stored as integers (uint8: value - 30,
+//                 uint16: value x 200, rounded; written to a raw file in $TMPDIR or /tmp, read
+//                 back), its transfer function moved along: the march on integer voxels
 //       "iso"     two opaque isosurfaces (160, 215, as configs/scenes/wavelet256-contours.toml),
 //                 no shadows or AO: what a camera ray costs to find an isosurface
 //       "iso-ao"  two opaque isosurfaces with 4 ambient-occlusion rays and shadows per hit
@@ -14,28 +17,70 @@
 // Cost per volume sample: "ns_per_volume_sample" is wall time x threads / samples (per core);
 // "cpu_ns_per_volume_sample" is the process's CPU time / samples, which other processes on a
 // shared machine disturb less ("median_cpu_frame_s" likewise beside "median_frame_s"; VTK's
-// script reports the same two). The environment variable SCIVIS_MARCH=sse|avx2 picks the volume
-// march's kernel (default: the fastest the CPU runs), to compare them in one build.
+// script reports the same two). The environment variable SCIVIS_MARCH=sse|avx2|avx512 picks the
+// volume march's kernel (default: the fastest the CPU runs), to compare them in one build.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 #include "renderers/BuiltinScenes.h"
 #include "renderers/CanvasImage.h"
 #include "renderers/Error.h"
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/SciVisRenderer.h"
+#include "renderers/scivis/VolumeSource.h"
 #include "wall/Png.h"
 
 namespace {
 
 using namespace renderers;
+
+// The volume's voxels as integers in a raw file (see "volume-uint8" above), the transfer
+// function's values moved the same way.
+void toIntegers(VolumeDesc& v, VoxelType type) {
+  const VolumeSource wavelet = v.source;
+  const bool u8 = type == VoxelType::UInt8;
+  const float offset = u8 ? -30.0f : 0.0f, scale = u8 ? 1.0f : 200.0f;
+  const char* tmp = std::getenv("TMPDIR");
+  const std::string path = std::string(tmp && *tmp ? tmp : "/tmp") + "/scivis_bench-" +
+                           std::to_string(::getpid()) + "-" + voxelTypeName(type) + ".raw";
+  {
+    std::ofstream out(path, std::ios::binary);
+    const Index3 n = wavelet.grid.dims;
+    std::vector<char> row(static_cast<std::size_t>(n.x) * voxelBytes(type));
+    for (int k = 0; k < n.z; ++k)
+      for (int j = 0; j < n.y; ++j) {
+        for (int i = 0; i < n.x; ++i) {
+          const float value = (proceduralValue(wavelet, i, j, k) + offset) * scale;
+          const long u = std::lround(std::clamp(value, 0.0f, u8 ? 255.0f : 65535.0f));
+          if (u8) {
+            row[static_cast<std::size_t>(i)] = static_cast<char>(u);
+          } else {
+            const std::uint16_t w = static_cast<std::uint16_t>(u);
+            std::memcpy(&row[2 * static_cast<std::size_t>(i)], &w, 2);  // little-endian (x86)
+          }
+        }
+        out.write(row.data(), static_cast<std::streamsize>(row.size()));
+      }
+    if (!out) throw Error("scivis_bench: cannot write " + path);
+  }
+  v.source.kind = VolumeSource::Kind::RawFile;
+  v.source.type = type;
+  v.source.raw = {path, false, 0};
+  for (auto& c : v.transfer.colors) c.first = (c.first + offset) * scale;
+  for (auto& o : v.transfer.opacities) o.first = (o.first + offset) * scale;
+  v.transfer.valueMin = (v.transfer.valueMin + offset) * scale;
+  v.transfer.valueMax = (v.transfer.valueMax + offset) * scale;
+}
 
 SceneDesc benchScene(const std::string& mode, int resolution) {
   SceneDesc d = waveletScene(resolution);
@@ -51,8 +96,10 @@ SceneDesc benchScene(const std::string& mode, int resolution) {
   // VTK's ResetCamera: the bounding sphere fills a 30° view, looking down -z.
   const float radius = std::sqrt(3.0f), distance = radius / std::sin(15.0f * kPi / 180.0f);
   d.camera = {{0, 0, distance}, {0, 0, 0}, {0, 1, 0}, 30.0f, 0, 0};
-  if (mode == "volume") {
+  if (mode.rfind("volume", 0) == 0) {
     v.transfer.opacities = {{37.0f, 0.0f}, {277.0f, 0.4f}};
+    if (mode != "volume")
+      toIntegers(v, mode == "volume-uint8" ? VoxelType::UInt8 : VoxelType::UInt16);
   } else if (mode == "iso") {
     v.visible = false;
     Material a{"a", MaterialType::Diffuse, {0.55f, 0.7f, 1.0f}, {}, 0, 1.5f};
@@ -90,15 +137,18 @@ MarchKernel marchFromEnvironment() {
   const std::string n = name ? name : "auto";
   if (n == "sse") return MarchKernel::Sse;
   if (n == "avx2") return MarchKernel::Avx2;
+  if (n == "avx512") return MarchKernel::Avx512;
   if (n == "auto") return MarchKernel::Auto;
-  throw Error("SCIVIS_MARCH: '" + n + "' is none of sse, avx2, auto");
+  throw Error("SCIVIS_MARCH: '" + n + "' is none of sse, avx2, avx512, auto");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 6) {
-    std::fprintf(stderr, "usage: %s volume|iso|iso-ao RESOLUTION SIZE THREADS FRAMES [OUT.png]\n",
+    std::fprintf(stderr,
+                 "usage: %s volume|volume-uint8|volume-uint16|iso|iso-ao RESOLUTION SIZE THREADS "
+                 "FRAMES [OUT.png]\n",
                  argv[0]);
     return 2;
   }
@@ -108,7 +158,10 @@ int main(int argc, char** argv) {
     const int resolution = std::atoi(argv[2]), size = std::atoi(argv[3]);
     const int threads = std::atoi(argv[4]), frames = std::max(1, std::atoi(argv[5]));
     const auto t0 = Clock::now();
-    const RenderScene scene = buildRenderScene("scivis", benchScene(mode, resolution));
+    const SceneDesc desc = benchScene(mode, resolution);
+    const RenderScene scene = buildRenderScene("scivis", desc);
+    if (desc.volumes[0].source.kind == VolumeSource::Kind::RawFile)
+      std::remove(desc.volumes[0].source.raw.path.c_str());  // read: the voxels are in memory
     const double loadS = std::chrono::duration<double>(Clock::now() - t0).count();
     RenderSettings settings;
     settings.width = settings.height = size;

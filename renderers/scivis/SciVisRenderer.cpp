@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "renderers/PixelBlocks.h"
+#include "renderers/scivis/CameraRays.h"
 #include "renderers/scivis/VolumeMarch.h"
 
 namespace renderers {
@@ -301,13 +302,14 @@ bool SciVisRenderer::marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, flo
 
 void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment* out) const {
   const bool packets = layers_->size() == 1 && marchesPackets((*layers_)[0], march_);
+  const int packetSize = marchPacketSize(march_);
   MarchRay waiting[kMarchPacket];
   std::size_t waitingIndex[kMarchPacket];
   int waitingCount = 0;
   auto marchWaiting = [&] {
     MarchColor colors[kMarchPacket];
     std::uint32_t taken[kMarchPacket];
-    marchPacket((*layers_)[0], waiting, waitingCount, colors, taken);
+    marchPacket((*layers_)[0], march_, waiting, waitingCount, colors, taken);
     for (int i = 0; i < waitingCount; ++i) {
       Fragment& f = out[waitingIndex[i]];  // integrate()'s fragment of the march alone
       f = Fragment{};
@@ -345,7 +347,7 @@ void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment
       if (packets &&
           marchOnly(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, first, waiting[waitingCount])) {
         waitingIndex[waitingCount++] = i;
-        if (waitingCount == kMarchPacket) marchWaiting();
+        if (waitingCount == packetSize) marchWaiting();
         continue;
       }
       out[i] = integrate(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, &first);
@@ -373,35 +375,51 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   const int rows = std::max(
       1, static_cast<int>(kBatch / std::max<std::size_t>(1, std::size_t{samples} * width)));
   std::uint64_t volumeSamples = 0;
+  // The camera rays in SIMD lanes where the march runs AVX-512 (the same rays either way).
+  const RowRays row{&camera_,
+                    bounds,
+                    settings_.seed,
+                    accumulationId,
+                    firstSample,
+                    samples,
+                    march_ == MarchKernel::Avx512 && cameraRowSimdAvailable()};
   for (int y0 = region.y0; y0 < region.y1; y0 += rows) {
     const int y1 = std::min(region.y1, y0 + rows);
-    rays.clear();
-    // Every ray's random stream and canvas point first, then their directions together
-    // (Camera::pinholeRays: the bits of one at a time, without its latency), then the clips.
-    const std::size_t n = static_cast<std::size_t>(y1 - y0) * width * samples;
-    samplers.resize(n), px.resize(n), py.resize(n), dirs.resize(n), invDirs.resize(n);
-    origins.resize(camera_.pinhole() ? 0 : n);
-    std::size_t filled = 0;
-    for (int y = y0; y < y1; ++y)
-      for (int x = region.x0; x < region.x1; ++x)
-        for (std::uint32_t s = firstSample; s < firstSample + samples; ++s, ++filled) {
-          samplers[filled] = Sampler(settings_.seed, x, y, accumulationId, s);
-          px[filled] = static_cast<float>(x) + samplers[filled].get(0);
-          py[filled] = static_cast<float>(y) + samplers[filled].get(1);
-        }
-    if (camera_.pinhole()) {
-      camera_.pinholeRays(n, px.data(), py.data(), dirs.data(), invDirs.data());
+    if (row.simd) {  // AVX-512: 16 pixels' rays and streams at a time
+      const std::size_t rowRays = std::size_t{samples} * static_cast<std::size_t>(width);
+      rays.resize(static_cast<std::size_t>(y1 - y0) * rowRays);
+      for (int y = y0; y < y1; ++y)
+        cameraRowRays(row, region.x0, region.x1, y,
+                      rays.data() + static_cast<std::size_t>(y - y0) * rowRays);
     } else {
-      for (std::size_t r = 0; r < n; ++r) {
-        camera_.ray(px[r], py[r], 0.5f, 0.5f, origins[r], dirs[r]);
-        invDirs[r] = reciprocal(dirs[r]);
+      rays.clear();
+      // Every ray's random stream and canvas point first, then their directions together
+      // (Camera::pinholeRays: the bits of one at a time, without its latency), then the clips.
+      const std::size_t n = static_cast<std::size_t>(y1 - y0) * width * samples;
+      samplers.resize(n), px.resize(n), py.resize(n), dirs.resize(n), invDirs.resize(n);
+      origins.resize(camera_.pinhole() ? 0 : n);
+      std::size_t filled = 0;
+      for (int y = y0; y < y1; ++y)
+        for (int x = region.x0; x < region.x1; ++x)
+          for (std::uint32_t s = firstSample; s < firstSample + samples; ++s, ++filled) {
+            samplers[filled] = Sampler(settings_.seed, x, y, accumulationId, s);
+            px[filled] = static_cast<float>(x) + samplers[filled].get(0);
+            py[filled] = static_cast<float>(y) + samplers[filled].get(1);
+          }
+      if (camera_.pinhole()) {
+        camera_.pinholeRays(n, px.data(), py.data(), dirs.data(), invDirs.data());
+      } else {
+        for (std::size_t r = 0; r < n; ++r) {
+          camera_.ray(px[r], py[r], 0.5f, 0.5f, origins[r], dirs[r]);
+          invDirs[r] = reciprocal(dirs[r]);
+        }
       }
-    }
-    for (std::size_t r = 0; r < n; ++r) {
-      const Vec3 origin = origins.empty() ? camera_.position() : origins[r];
-      float t0 = 0, t1 = kInf;
-      if (!clipToBox(bounds, origin, invDirs[r], t0, t1)) t0 = t1 = 0;
-      rays.push_back({origin, dirs[r], t0, t1, samplers[r]});
+      for (std::size_t r = 0; r < n; ++r) {
+        const Vec3 origin = origins.empty() ? camera_.position() : origins[r];
+        float t0 = 0, t1 = kInf;
+        if (!clipToBox(bounds, origin, invDirs[r], t0, t1)) t0 = t1 = 0;
+        rays.push_back({origin, dirs[r], t0, t1, samplers[r]});
+      }
     }
     fragments.resize(rays.size());
     integrate(rays.data(), rays.size(), fragments.data());

@@ -9,29 +9,17 @@
 #include <string>
 
 #include "renderers/Error.h"
+#include "renderers/scivis/VolumeMarchSteps.h"
 
 namespace renderers {
 namespace {
 
 constexpr float kInf = Box3::kInf;
 
-// The first sample index of the march: the first k >= kStart with (k + jitter) step >= t0, as
-// the generic loop reaches it by counting up from kStart (the two loops mend rounding).
-float firstSample(const MarchRay& r) {
-  float k = std::max(r.kStart, std::ceil(r.t0 / r.step - r.jitter));
-  while (k > r.kStart && (k - 1 + r.jitter) * r.step >= r.t0) k -= 1;
-  while ((k + r.jitter) * r.step < r.t0) k += 1;
-  return k;
-}
-
-// Where the march may jump when the sample at t lies in empty macrocell m: one sample before
-// the sample before the macrocell's exit, as the generic loop does (the margin keeps rounding
-// from skipping a sample of the next macrocell).
-float lastBeforeExit(const VolumeField& field, int m, const MarchRay& r, float t) {
-  float a = t, b = kInf;
-  clipToBox(field.macroBounds(m), r.origin, r.invDir, a, b);
-  return std::floor(b / r.step - r.jitter) - 1;
-}
+using march::corners8;
+using march::firstSample;
+using march::lastBeforeExit;
+using march::tableEntries8;
 
 // Four samples of the ray at a time (SSE lanes, each computed as the scalar path does),
 // composited one by one in order; those past the end or past opacity are dropped. Samples in
@@ -112,8 +100,6 @@ std::uint32_t marchSse(const SciVisScene::VolumeLayer& v, const MarchRay& r, Mar
   return samples;
 }
 
-#define AVX2_INLINE __attribute__((target("avx2"), always_inline)) inline
-
 // min(int(f), last) in the lanes inside; the first held cell outside, so every lane reads held
 // voxels.
 AVX2_INLINE __m256i cellOf(__m256 f, int last, int first, __m256i inside) {
@@ -125,52 +111,12 @@ AVX2_INLINE __m256 lerp(__m256 a, __m256 b, __m256 f) {
   return _mm256_add_ps(a, _mm256_mul_ps(f, _mm256_sub_ps(b, a)));
 }
 
-// The 8 corner voxels of the cells at offsets[l] of 8 lanes, in VolumeField::interpolate()'s
-// order, a register per corner: pairs along x loaded 64 bits at a time and transposed.
-// (_mm_loadl_epi64 is an unaligned 64-bit load: a voxel pair is only 4-byte aligned, and
-// loading it as a double is undefined behaviour that UBSan reports.)
-AVX2_INLINE __m128 pairs(const float* a, const float* b) {
-  return _mm_castsi128_ps(_mm_unpacklo_epi64(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(a)),
-                                             _mm_loadl_epi64(reinterpret_cast<const __m128i*>(b))));
-}
-
-AVX2_INLINE void corners8(const float* voxels, const int offsets[8], int strideY, int strideZ,
-                          __m256 c[8]) {
-  for (int z = 0; z < 2; ++z) {
-    __m256 q[4];
-    for (int l = 0; l < 4; ++l) {
-      const float* v = voxels + offsets[l] + z * strideZ;
-      const float* w = voxels + offsets[l + 4] + z * strideZ;
-      q[l] = _mm256_insertf128_ps(_mm256_castps128_ps256(pairs(v, v + strideY)),
-                                  pairs(w, w + strideY), 1);
-    }
-    const __m256 t0 = _mm256_unpacklo_ps(q[0], q[1]), t1 = _mm256_unpackhi_ps(q[0], q[1]);
-    const __m256 t2 = _mm256_unpacklo_ps(q[2], q[3]), t3 = _mm256_unpackhi_ps(q[2], q[3]);
-    c[4 * z + 0] = _mm256_shuffle_ps(t0, t2, 0x44);
-    c[4 * z + 1] = _mm256_shuffle_ps(t0, t2, 0xee);
-    c[4 * z + 2] = _mm256_shuffle_ps(t1, t3, 0x44);
-    c[4 * z + 3] = _mm256_shuffle_ps(t1, t3, 0xee);
-  }
-}
-
 // The transfer function's colour and opacity of 8 lanes: entry at[l] (4 floats per entry) and
-// the next, interpolated with weight, as marchSse computes them. The entries are loaded whole
-// and transposed to a register per channel.
+// the next, interpolated with weight, as marchSse computes them.
 AVX2_INLINE void tableLerp(const float* table, const int at[8], __m256 weight, __m256& r, __m256& g,
                            __m256& b, __m256& a) {
   __m256 c[2][4];
-  for (int next = 0; next < 2; ++next) {
-    __m256 q[4];
-    for (int l = 0; l < 4; ++l)
-      q[l] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(table + at[l] + 4 * next)),
-                                  _mm_loadu_ps(table + at[l + 4] + 4 * next), 1);
-    const __m256 t0 = _mm256_unpacklo_ps(q[0], q[1]), t1 = _mm256_unpackhi_ps(q[0], q[1]);
-    const __m256 t2 = _mm256_unpacklo_ps(q[2], q[3]), t3 = _mm256_unpackhi_ps(q[2], q[3]);
-    c[next][0] = _mm256_shuffle_ps(t0, t2, 0x44);
-    c[next][1] = _mm256_shuffle_ps(t0, t2, 0xee);
-    c[next][2] = _mm256_shuffle_ps(t1, t3, 0x44);
-    c[next][3] = _mm256_shuffle_ps(t1, t3, 0xee);
-  }
+  tableEntries8(table, at, c);
   r = lerp(c[0][0], c[1][0], weight);
   g = lerp(c[0][1], c[1][1], weight);
   b = lerp(c[0][2], c[1][2], weight);
@@ -222,11 +168,13 @@ struct Packet8 {
   int count;
   __m256 jitters, steps, t1s, ends, minTs, ox, oy, oz, dx, dy, dz;
   __m256 ks, red, green, blue, transmittance, depths;
+  __m256 aheadX, aheadY, aheadZ;  // kPrefetchAhead steps along the ray, in cells
   __m256i counts;
   unsigned alive;  // lanes still marching
 };
 
-AVX2_INLINE void start(Packet8& p, const MarchRay* rays, int count, const MarchColor* colors) {
+AVX2_INLINE void start(Packet8& p, const Field8& f, const MarchRay* rays, int count,
+                       const MarchColor* colors) {
   alignas(32) float k[8], jitter[8], step[8], ox[8], oy[8], oz[8], dx[8], dy[8], dz[8], t1[8],
       end[8], minT[8], r[8], g[8], b[8], tr[8], depth[8];
   static const MarchRay none{};  // the lanes past `count`: never marching
@@ -246,6 +194,10 @@ AVX2_INLINE void start(Packet8& p, const MarchRay* rays, int count, const MarchC
   p.t1s = _mm256_load_ps(t1), p.ends = _mm256_load_ps(end), p.minTs = _mm256_load_ps(minT);
   p.ox = _mm256_load_ps(ox), p.oy = _mm256_load_ps(oy), p.oz = _mm256_load_ps(oz);
   p.dx = _mm256_load_ps(dx), p.dy = _mm256_load_ps(dy), p.dz = _mm256_load_ps(dz);
+  const __m256 ahead = _mm256_mul_ps(_mm256_set1_ps(march::kPrefetchAhead), p.steps);
+  p.aheadX = _mm256_mul_ps(_mm256_mul_ps(ahead, p.dx), f.sx);
+  p.aheadY = _mm256_mul_ps(_mm256_mul_ps(ahead, p.dy), f.sy);
+  p.aheadZ = _mm256_mul_ps(_mm256_mul_ps(ahead, p.dz), f.sz);
   p.ks = _mm256_load_ps(k);
   p.red = _mm256_load_ps(r), p.green = _mm256_load_ps(g), p.blue = _mm256_load_ps(b);
   p.transmittance = _mm256_load_ps(tr), p.depths = _mm256_load_ps(depth);
@@ -261,6 +213,33 @@ AVX2_INLINE __m256 laneMask(unsigned bits) {
       _mm256_cmpgt_epi32(_mm256_and_si256(_mm256_set1_epi32(static_cast<int>(bits)),
                                           _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
                          _mm256_setzero_si256()));
+}
+
+// The held cell (relative to the first) of coordinate c + ahead, clamped to the held cells.
+AVX2_INLINE __m256i cellAhead(__m256 c, __m256 ahead, int first, int last, __m256i firsts) {
+  const __m256i i =
+      _mm256_min_epi32(_mm256_cvttps_epi32(_mm256_add_ps(c, ahead)), _mm256_set1_epi32(last));
+  return _mm256_sub_epi32(_mm256_max_epi32(i, _mm256_set1_epi32(first)), firsts);
+}
+
+// Asks for the voxels the lanes will read kPrefetchAhead samples on, as the AVX-512 kernel does
+// (VolumeMarchAvx512.cpp): a hint only, no value changes.
+AVX2_INLINE void prefetchAhead(const Packet8& p, const Field8& f, __m256 fx, __m256 fy, __m256 fz,
+                               unsigned lanes) {
+  const __m256i offset = _mm256_add_epi32(
+      cellAhead(fx, p.aheadX, f.first.x, f.lastCell.x, f.firstX),
+      _mm256_add_epi32(
+          _mm256_mullo_epi32(cellAhead(fy, p.aheadY, f.first.y, f.lastCell.y, f.firstY),
+                             f.strideYs),
+          _mm256_mullo_epi32(cellAhead(fz, p.aheadZ, f.first.z, f.lastCell.z, f.firstZ),
+                             f.strideZs)));
+  alignas(32) int at[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(at), offset);
+  for (; lanes; lanes &= lanes - 1) {
+    const float* v = f.voxels + at[std::countr_zero(lanes)];
+    for (const float* row : {v, v + f.strideY, v + f.strideZ, v + f.strideZ + f.strideY})
+      _mm_prefetch(reinterpret_cast<const char*>(row), _MM_HINT_T0);
+  }
 }
 
 // One sample of every ray still marching.
@@ -301,6 +280,7 @@ AVX2_INLINE void advance(Packet8& p, const Field8& f) {
                          _mm256_mullo_epi32(_mm256_sub_epi32(iz, f.firstZ), f.strideZs)));
     alignas(32) int offsets[8];
     _mm256_store_si256(reinterpret_cast<__m256i*>(offsets), offset);
+    prefetchAhead(p, f, fx, fy, fz, inside);
     __m256 c[8];
     corners8(f.voxels, offsets, f.strideY, f.strideZ, c);
     // VolumeField::interpolate(): along x, then y, then z.
@@ -408,39 +388,69 @@ __attribute__((target("avx2"))) void marchPacketAvx2(const SciVisScene::VolumeLa
   Field8 f;
   setUp(f, v);
   Packet8 p;
-  start(p, rays, count, colors);
+  start(p, f, rays, count, colors);
   while (p.alive) advance(p, f);
   finish(p, colors, samples);
 }
 
 // Whether every voxel offset of the field fits the packet kernel's 32-bit lane arithmetic.
 bool offsetsFitInt(const VolumeField& field) {
-  return field.volume().voxels.size() / sizeof(float) <= static_cast<std::size_t>(INT_MAX);
+  return field.volume().voxels.size() / voxelBytes(field.volume().type) <=
+         static_cast<std::size_t>(INT_MAX);
 }
 
 }  // namespace
 
 bool marchKernelAvailable(MarchKernel kernel) {
-  return kernel != MarchKernel::Avx2 || __builtin_cpu_supports("avx2");
+  switch (kernel) {
+    case MarchKernel::Avx2:
+      return __builtin_cpu_supports("avx2");
+    case MarchKernel::Avx512:
+      return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+             __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vl");
+    default:
+      return true;
+  }
 }
 
 MarchKernel resolveMarchKernel(MarchKernel kernel) {
-  if (kernel == MarchKernel::Auto)
-    return marchKernelAvailable(MarchKernel::Avx2) ? MarchKernel::Avx2 : MarchKernel::Sse;
+  if (kernel == MarchKernel::Auto) {
+    for (MarchKernel best : {MarchKernel::Avx512, MarchKernel::Avx2})
+      if (marchKernelAvailable(best)) return best;
+    return MarchKernel::Sse;
+  }
   if (!marchKernelAvailable(kernel))
     throw Error(std::string("this CPU cannot run the ") + marchKernelName(kernel) +
                 " volume march");
   return kernel;
 }
 
-bool marchesPackets(const SciVisScene::VolumeLayer& v, MarchKernel kernel) {
-  return kernel == MarchKernel::Avx2 && v.field && v.field->volume().type == VoxelType::Float32 &&
-         offsetsFitInt(*v.field);
+int marchPacketSize(MarchKernel kernel) {
+  switch (kernel) {
+    case MarchKernel::Avx2:
+      return 8;
+    case MarchKernel::Avx512:
+      return 16;
+    default:
+      return 1;
+  }
 }
 
-void marchPacket(const SciVisScene::VolumeLayer& v, const MarchRay* rays, int count,
-                 MarchColor* colors, std::uint32_t* samples) {
-  if (count > 0) marchPacketAvx2(v, rays, std::min(count, kMarchPacket), colors, samples);
+bool marchesPackets(const SciVisScene::VolumeLayer& v, MarchKernel kernel) {
+  if (!v.field || !offsetsFitInt(*v.field)) return false;
+  // AVX-512 widens integer voxels in its lanes; AVX2 packets take float voxels only.
+  return kernel == MarchKernel::Avx512 ||
+         (kernel == MarchKernel::Avx2 && v.field->volume().type == VoxelType::Float32);
+}
+
+void marchPacket(const SciVisScene::VolumeLayer& v, MarchKernel kernel, const MarchRay* rays,
+                 int count, MarchColor* colors, std::uint32_t* samples) {
+  count = std::min(count, marchPacketSize(kernel));
+  if (count <= 0) return;
+  if (kernel == MarchKernel::Avx512)
+    march::marchPacketAvx512(v, rays, count, colors, samples);
+  else
+    marchPacketAvx2(v, rays, count, colors, samples);
 }
 
 const char* marchKernelName(MarchKernel kernel) {
@@ -449,6 +459,8 @@ const char* marchKernelName(MarchKernel kernel) {
       return "sse";
     case MarchKernel::Avx2:
       return "avx2";
+    case MarchKernel::Avx512:
+      return "avx512";
     default:
       return "auto";
   }

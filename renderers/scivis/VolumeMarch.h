@@ -5,15 +5,17 @@
 // bits): t_k = (k + jitter) step from the first k >= kStart with t_k >= t0, while t_k < t1,
 // t_k <= volumeEnd and more than minTransmittance of the light gets through.
 //
-// Two kernels: SSE2 (every x86-64) takes 4 samples of one ray at a time (marchOneVolume); where
-// the CPU runs AVX2 (chosen at run time), packets of 8 rays take one sample of each at a time,
-// one ray per lane (marchPacket: no serial compositing, no samples wasted past a ray's end).
+// Three kernels: SSE2 (every x86-64) takes 4 samples of one ray at a time (marchOneVolume); where
+// the CPU runs AVX2 or AVX-512 (chosen at run time), packets of 8 or 16 rays take one sample of
+// each at a time, one ray per lane (marchPacket: no serial compositing, no samples wasted past a
+// ray's end; VolumeMarchAvx512.cpp holds the AVX-512 kernel).
 // 8 samples of one ray at a time in AVX2 measured only about 10% faster than SSE's 4, so a ray
-// alone marches with SSE everywhere. Both compute every sample lane by lane as the scalar path
+// alone marches with SSE everywhere. All compute every sample lane by lane as the scalar path
 // does, without fused multiply-adds, and composite each ray in order, so they give the same
 // image bit for bit; they differ only in the benchmark's sample count (a jump over an empty
 // macrocell counts one sample, and the kernels jump from different places). Packets march
-// float voxels (whose offsets fit 32 bits); integer voxels march ray by ray.
+// voxels whose offsets fit 32 bits: AVX-512 packets float, uint8 and uint16 voxels (widened in
+// the lanes), AVX2 packets float voxels; other rays march one by one.
 #include <cstdint>
 
 #include "renderers/Math.h"
@@ -25,6 +27,7 @@ enum class MarchKernel {
   Auto,  // the fastest the CPU runs
   Sse,
   Avx2,
+  Avx512,
 };
 
 bool marchKernelAvailable(MarchKernel kernel);  // Auto and Sse: always
@@ -56,12 +59,15 @@ std::uint32_t marchOneVolume(const SciVisScene::VolumeLayer& v, const MarchRay& 
 
 // Rays marched together, one per SIMD lane: each lane composites its own ray exactly as
 // marchOneVolume does (the same bits), and no lane wastes samples past its ray's end.
-constexpr int kMarchPacket = 8;
-// Whether marchPacket() marches layer v's rays with `kernel` (resolved): AVX2, float voxels.
+constexpr int kMarchPacket = 16;  // the widest packet of any kernel
+// The rays of one packet of `kernel` (resolved): 8 for AVX2, 16 for AVX-512, 1 for SSE.
+int marchPacketSize(MarchKernel kernel);
+// Whether marchPacket() marches layer v's rays with `kernel` (resolved): AVX2 or AVX-512, float
+// voxels.
 bool marchesPackets(const SciVisScene::VolumeLayer& v, MarchKernel kernel);
-// Rays 0 .. count - 1 (count <= kMarchPacket) through layer v, where marchesPackets(v, Avx2):
-// colors[i] and samples[i] as marchOneVolume gives them for rays[i].
-void marchPacket(const SciVisScene::VolumeLayer& v, const MarchRay* rays, int count,
-                 MarchColor* colors, std::uint32_t* samples);
+// Rays 0 .. count - 1 (count <= marchPacketSize(kernel)) through layer v with `kernel`, where
+// marchesPackets(v, kernel): colors[i] and samples[i] as marchOneVolume gives them for rays[i].
+void marchPacket(const SciVisScene::VolumeLayer& v, MarchKernel kernel, const MarchRay* rays,
+                 int count, MarchColor* colors, std::uint32_t* samples);
 
 }  // namespace renderers

@@ -1,16 +1,22 @@
 // The one-volume march (VolumeMarch.h): its kernels (SSE, one ray 4 samples at a time; AVX2,
-// packets of 8 rays) give the same image bit for bit, and that image is the generic loop's.
-// Every kernel the machine runs is compared; SSE runs everywhere.
+// packets of 8 rays; AVX-512, packets of 16) give the same image bit for bit, and that image is the
+// generic loop's. Every kernel the machine runs is compared; SSE runs everywhere.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/SciVisRenderer.h"
 #include "renderers/scivis/VolumeMarch.h"
+#include "renderers/scivis/VolumeSource.h"
 #include "tests/renderers/RenderTestUtil.h"
 
 namespace renderers {
@@ -29,6 +35,7 @@ SceneDesc haze(float peak) {
 std::vector<MarchKernel> kernels() {
   std::vector<MarchKernel> out = {MarchKernel::Sse};
   if (marchKernelAvailable(MarchKernel::Avx2)) out.push_back(MarchKernel::Avx2);
+  if (marchKernelAvailable(MarchKernel::Avx512)) out.push_back(MarchKernel::Avx512);
   return out;
 }
 
@@ -115,6 +122,63 @@ TEST(VolumeMarch, CutRaysGiveTheSseFragments) {
       seen += want.rgba[3] > 0.01f;
     }
     EXPECT_GT(seen, 300) << "pieces that show the haze";
+  }
+}
+
+// The haze's wavelet stored as integers in a raw file (uint8: value - 30, uint16: value x 200,
+// rounded), its transfer function moved along: packets widen the voxels in their lanes, the
+// SSE march one ray at a time; both must give the same image.
+SceneDesc integerHaze(VoxelType type, float peak) {
+  SceneDesc d = haze(peak);
+  VolumeSource& s = d.volumes[0].source;
+  const VolumeSource wavelet = s;
+  const Index3 n = wavelet.grid.dims;
+  const float offset = type == VoxelType::UInt8 ? -30.0f : 0.0f;
+  const float scale = type == VoxelType::UInt8 ? 1.0f : 200.0f;
+  const std::filesystem::path path = std::filesystem::path(::testing::TempDir()) /
+                                     (std::string("dfbwall-march-") + voxelTypeName(type) + ".raw");
+  std::ofstream out(path, std::ios::binary);
+  for (int k = 0; k < n.z; ++k)
+    for (int j = 0; j < n.y; ++j)
+      for (int i = 0; i < n.x; ++i) {
+        const float v = (proceduralValue(wavelet, i, j, k) + offset) * scale;
+        const long u =
+            std::lround(std::clamp(v, 0.0f, type == VoxelType::UInt8 ? 255.0f : 65535.0f));
+        if (type == VoxelType::UInt8) {
+          out.put(static_cast<char>(u));
+        } else {
+          const std::uint16_t w = static_cast<std::uint16_t>(u);
+          out.write(reinterpret_cast<const char*>(&w), 2);  // little-endian (x86)
+        }
+      }
+  out.close();
+  s.kind = VolumeSource::Kind::RawFile;
+  s.type = type;
+  s.raw = {path.string(), false, 0};
+  TransferFunction& t = d.volumes[0].transfer;
+  for (auto& c : t.colors) c.first = (c.first + offset) * scale;
+  for (auto& o : t.opacities) o.first = (o.first + offset) * scale;
+  t.valueMin = (t.valueMin + offset) * scale, t.valueMax = (t.valueMax + offset) * scale;
+  return d;
+}
+
+TEST(VolumeMarch, IntegerVoxelsGiveTheSseImageInEveryKernel) {
+  for (VoxelType type : {VoxelType::UInt8, VoxelType::UInt16}) {
+    const RenderScene scene = buildRenderScene("scivis", integerHaze(type, 0.5f));
+    ASSERT_EQ(scene.scivis->volumes()[0].field->volume().type, type);
+    std::uint64_t samples = 0;
+    const auto sse = image(*scene.scivis, MarchKernel::Sse, &samples);
+    EXPECT_GT(samples, 10000u) << voxelTypeName(type);
+    const std::size_t centre = 4 * (static_cast<std::size_t>(kH / 2) * kW + kW / 2);
+    const std::size_t corner = 4 * (static_cast<std::size_t>(kH / 2) * kW + 0);
+    EXPECT_NE(sse[centre], sse[corner]) << voxelTypeName(type);
+    for (MarchKernel k : kernels()) {
+      EXPECT_TRUE(sameBits(sse, image(*scene.scivis, k, nullptr)))
+          << marchKernelName(k) << ", " << voxelTypeName(type);
+      if (k == MarchKernel::Avx512) {
+        EXPECT_TRUE(marchesPackets(scene.scivis->volumes()[0], k)) << voxelTypeName(type);
+      }
+    }
   }
 }
 
