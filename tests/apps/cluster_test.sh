@@ -47,7 +47,8 @@ ip netns del "$probe"
 
 build=$(cd "$(dirname "$DFBWALL")/.." && pwd)
 canvas() { "$COMPARE" --info "$1" | cut -d' ' -f2; }
-now() { date +%s.%N; }
+# now, latest, advanced, waitFor, freePort (since: its own, to a tenth of a second)
+source "$(dirname "${BASH_SOURCE[0]}")/wall_watch.sh"
 since() { awk -v a="$1" -v b="$(now)" 'BEGIN {printf "%.1f", b - a}'; }
 # Per-frame values of FIELD in a stats file, one per line.
 # (JSON Lines as dfbwall streams them: no space after the colon; older files had one.)
@@ -449,24 +450,6 @@ case "$scenario" in
       --token "$token" --renderer pattern --frames 0 --quiet --timeout 30 --capture "$work/cap" \
       --capture-every 1 --stats "$work/job.jsonl" >"$work/log" 2>&1 &
     job=$!
-    # The newest frame a display presented (captures older than the newest 40 are deleted).
-    latest() {
-      local dir="$work/cap/$1" newest
-      newest=$(ls "$dir" 2>/dev/null | tail -1)
-      [ -n "$newest" ] || { echo 0; return; }
-      ls "$dir" | head -n -40 | sed "s|^|$dir/|" | xargs -r rm -f
-      ls "$work"/cap/wall-*.png 2>/dev/null | head -n -40 | xargs -r rm -f
-      echo $((10#$(echo "$newest" | tr -dc 0-9)))
-    }
-    advanced() {  # FRAME DISPLAY...: every display presented a frame after FRAME
-      local frame=$1 d; shift
-      for d in "$@"; do [ "$(latest "$d")" -gt "$frame" ] || return 1; done
-    }
-    waitFor() {  # SECONDS CONDITION...
-      local until; until=$(awk -v a="$(now)" -v s="$1" 'BEGIN {printf "%.3f", a + s}'); shift
-      while awk -v t="$(now)" -v u="$until" 'BEGIN {exit !(t < u)}'; do "$@" && return 0; sleep 0.1; done
-      return 1
-    }
     wallPid() {  # the serve process of wall process N on HOST
       local p
       for p in $(ip netns pids "dfbw$id-$2" 2>/dev/null); do

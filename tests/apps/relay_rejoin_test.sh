@@ -28,41 +28,10 @@ fail() {
   for f in serve.err relay.err job.err restarted.err; do echo "--- $f:"; tail -20 "$work/$f" 2>/dev/null || true; done
   exit 1
 }
-now() { date +%s.%N; }
-since() { awk -v a="$1" -v b="$(now)" 'BEGIN {printf "%.2f", b - a}'; }
-# The newest frame a display has presented (its newest capture); older captures are deleted on
-# the way, so the run does not fill the disk.
-latest() {
-  local dir="$work/cap/$1" newest
-  newest=$(ls "$dir" 2>/dev/null | tail -1)
-  [ -n "$newest" ] || { echo 0; return; }
-  ls "$dir" | head -n -40 | sed "s|^|$dir/|" | xargs -r rm -f
-  ls "$work"/cap/wall-*.png 2>/dev/null | head -n -40 | xargs -r rm -f
-  echo $((10#$(echo "$newest" | tr -dc 0-9)))
-}
-pidOf() {  # wall process N's pid among mpirun's children
-  # mpirun's own children only: another test may run a wall of the same layout meanwhile.
-  for p in $(pgrep -P "$serve"); do
-    [ "$(cat /proc/"$p"/comm 2>/dev/null)" = dfbwall ] || continue
-    if tr '\0' '\n' <"/proc/$p/environ" | grep -qx "OMPI_COMM_WORLD_RANK=$1"; then echo "$p"; fi
-  done
-}
-waitFor() {  # waitFor SECONDS CONDITION...: polls CONDITION every 0.1 s
-  local until
-  until=$(awk -v a="$(now)" -v s="$1" 'BEGIN {printf "%.3f", a + s}'); shift  # not %.6g
-  while awk -v t="$(now)" -v u="$until" 'BEGIN {exit !(t < u)}'; do
-    "$@" && return 0
-    sleep 0.1
-  done
-  return 1
-}
-advanced() {  # advanced FRAME DISPLAY...: every display presented a frame after FRAME
-  local frame=$1 d; shift
-  for d in "$@"; do [ "$(latest "$d")" -gt "$frame" ] || return 1; done
-}
+# now, since, latest, advanced, waitFor, pidOf, freePort
+source "$(dirname "${BASH_SOURCE[0]}")/wall_watch.sh"
 
 timeout=3
-freePort() { python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
 port=$(freePort) relayPort=$(freePort)
 "$MPIEXEC" --enable-recovery --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 -np 4 \
   "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" --offscreen --timeout $timeout \

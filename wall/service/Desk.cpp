@@ -13,6 +13,7 @@
 
 #include "wall/Error.h"
 #include "wall/service/FrameAgreements.h"
+#include "wall/service/JsonText.h"
 #include "wall/service/LinkMessages.h"
 #include "wall/service/Protocol.h"
 #include "wall/service/Zmq.h"
@@ -31,16 +32,6 @@ std::uint64_t randomId() {
   std::uint64_t id = 0;
   while (id == 0) id = (static_cast<std::uint64_t>(device()) << 32) ^ device();
   return id;
-}
-
-std::string jsonText(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) continue;
-    out += c;
-  }
-  return out + "\"";
 }
 
 std::string seconds(std::chrono::milliseconds t) {

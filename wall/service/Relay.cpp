@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "wall/Error.h"
+#include "wall/service/JsonText.h"
 #include "wall/service/Protocol.h"
 #include "wall/service/RelayRoutes.h"
 #include "wall/service/Zmq.h"
@@ -47,16 +48,6 @@ std::string hex(const void* data, std::size_t size) {
     s += digits[b[i] & 15];
   }
   return s;
-}
-
-std::string jsonText(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) continue;
-    out += c;
-  }
-  return out + "\"";
 }
 
 }  // namespace
