@@ -577,15 +577,20 @@ void Messenger::quiesce() {
   // in a row with the same values, so no message can hide between two ranks' snapshots.
   while (true) {
     impl_->waitLocallyIdle(deadline);
-    std::uint64_t local[2] = {impl_->messagesSent.load(), impl_->messagesHandled.load()};
-    std::uint64_t global[2] = {0, 0};
+    // A collective cannot be cancelled: when a rank does not answer in time the reduction stays
+    // posted and may still complete later, so its buffers live on the heap and are left to it
+    // (a few bytes, once, on a path that ends in an error) rather than on this stack.
+    auto* counts =
+        new std::uint64_t[4]{impl_->messagesSent.load(), impl_->messagesHandled.load(), 0, 0};
     MPI_Request request;
-    checkMpi(MPI_Iallreduce(local, global, 2, MPI_UINT64_T, MPI_SUM, impl_->control, &request),
+    checkMpi(MPI_Iallreduce(counts, counts + 2, 2, MPI_UINT64_T, MPI_SUM, impl_->control, &request),
              "MPI_Iallreduce");
     waitWithDeadline(request, deadline,
                      "messaging did not quiesce within " +
                          std::to_string(impl_->options.quiesceTimeout.count()) +
                          " ms: another rank is not answering");
+    const std::uint64_t global[2] = {counts[2], counts[3]};
+    delete[] counts;
     if (global[0] == global[1] && global[0] == previous[0] && global[1] == previous[1]) return;
     previous[0] = global[0];
     previous[1] = global[1];
