@@ -10,6 +10,7 @@
 #include "renderers/Error.h"
 #include "renderers/Parallel.h"
 #include "renderers/scivis/BrickOcclusion.h"
+#include "renderers/scivis/RayBlocks.h"
 
 namespace renderers {
 namespace {
@@ -344,11 +345,13 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
       return;
     }
     // The brick's pieces of the tile's rays, rows at a time, integrated together
-    // (SciVisRenderer batches the rays of its SIMD march); a ray that misses the brick adds
-    // nothing.
-    thread_local std::vector<SciVisRenderer::RayPiece> rays;
+    // (SciVisRenderer batches the rays of its SIMD march) in 4x4 pixel blocks (RayBlocks.h: the
+    // Embree packets of the rays' first hits are compact squares); a ray that misses the brick
+    // adds nothing.
+    thread_local std::vector<SciVisRenderer::RayPiece> rays, pieces;
     thread_local std::vector<Fragment> fragments;
     thread_local std::vector<std::uint8_t> hits;
+    thread_local std::vector<std::uint32_t> order, slots;  // slots: each sample's piece
     thread_local std::vector<float> depths;  // per pixel: brickDepth() of its first sample's ray
     thread_local std::vector<Sampler> samplers;
     thread_local std::vector<float> px, py;
@@ -398,7 +401,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
             hit = false, skippedRay = true, ++skipped;
         }
         hits.push_back(hit ? 1 : 0);
-        if (!renderer || hit) rays.push_back({origin, dir, a, b, samplers[r]});
+        rays.push_back({origin, dir, a, b, samplers[r]});
         // Sorted by the first sample's ray: with one sample a frame (the usual progressive
         // case) every sample's fragments then composite in exactly its own ray's order,
         // also in pixels that see a brick border edge-on. (Where the ray enters the brick
@@ -406,20 +409,28 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
         if (renderer && r % spp == 0)
           depths.push_back(hit || skippedRay ? a : brickDepth(bounds, origin, dir));
       }
-      fragments.resize(rays.size());
-      if (renderer) renderer->integrate(rays.data(), rays.size(), fragments.data());
-      std::size_t sample = 0, ray = 0;
+      if (renderer) {
+        // The rays that meet the brick, in block order; slots[r]: ray r's piece among them.
+        rayBlockOrder(region.width(), y1 - y0, spp, order);
+        pieces.clear(), slots.resize(n);
+        for (const std::uint32_t r : order)
+          if (hits[r])
+            slots[r] = static_cast<std::uint32_t>(pieces.size()), pieces.push_back(rays[r]);
+        fragments.resize(pieces.size());
+        renderer->integrate(pieces.data(), pieces.size(), fragments.data());
+      }
+      std::size_t sample = 0;
       for (int y = y0; y < y1; ++y)
         for (int x = region.x0; x < region.x1; ++x) {
           float sum[4] = {0, 0, 0, 0};
           for (std::uint32_t s = 0; s < spp; ++s, ++sample) {
             if (!renderer) {
-              const Vec3 bg = background.radiance(rays[ray++].dir);
+              const Vec3 bg = background.radiance(rays[sample].dir);
               sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
               continue;
             }
             if (!hits[sample]) continue;
-            const Fragment& f = fragments[ray++];
+            const Fragment& f = fragments[slots[sample]];
             for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
           }
           const std::size_t p = static_cast<std::size_t>(y - region.y0) * region.width() +
