@@ -11,7 +11,10 @@ namespace {
 class CompositeAccumulateOperation final : public TileOperation {
  public:
   explicit CompositeAccumulateOperation(const Region& region)
-      : blend_(alphaBlendOperation()(region)), accumulate_(accumulateOperation()(region)) {}
+      : blend_(alphaBlendOperation()(region)), accumulate_(accumulateOperation()(region)) {
+    // Sized from the start, so the blend's second frame does not allocate its output again.
+    composited_.reset(region, true);
+  }
 
   void newFrame(const FrameInfo& frame, std::uint32_t accumulationId, int expectedInputs) override {
     accumulationId_ = accumulationId;
