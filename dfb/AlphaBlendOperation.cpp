@@ -11,6 +11,7 @@
 #include <limits>
 #include <map>
 #include <string>
+#include <utility>
 
 #include "dfb/Error.h"
 #include "dfb/TileOperation.h"
@@ -43,6 +44,9 @@ class AlphaBlendOperation final : public TileOperation {
   }
 
   const Tile& finished() const override { return finished_; }
+  // The caller's tile becomes the next frame's output buffer (blend() sizes it): a tile a frame
+  // less to allocate, and none to copy.
+  void exchangeFinished(Tile& other) override { std::swap(finished_, other); }
 
  private:
   std::string where() const {
@@ -79,6 +83,15 @@ class AlphaBlendOperation final : public TileOperation {
     });
     const size_t n = static_cast<size_t>(region_.pixelCount());
     const float infinity = std::numeric_limits<float>::infinity();
+    // Every pixel's colour and depth is written below: sized, not cleared (exchangeFinished()
+    // may have handed in any tile).
+    finished_.region = region_;
+    finished_.generation = finished_.children = 0;
+    finished_.accumulationId = finished_.sequence = 0;
+    finished_.weight = 1;
+    finished_.color.resize(4 * n);
+    finished_.depth.resize(n);
+    finished_.normal.clear(), finished_.albedo.clear(), finished_.rgba8.clear();
     std::vector<std::pair<float, const Tile*>> fragments(ordered.size());
     for (size_t p = 0; p < n; ++p) {
       for (size_t i = 0; i < ordered.size(); ++i)

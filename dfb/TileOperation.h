@@ -55,6 +55,11 @@ class TileOperation {
   virtual const Tile& finished() const = 0;
   // An estimate of the remaining error in the tile (0 when the operation keeps none).
   virtual float error() const { return 0.0f; }
+  // Exchanges the completed tile with `other` (one the caller no longer needs, e.g. last frame's
+  // result handed back), so an operation that consumes the result moves it on without copying
+  // it; finished() is unspecified afterwards until the next completion. Operations that do not
+  // give their result away copy it.
+  virtual void exchangeFinished(Tile& other) { other = finished(); }
   // Moves the completed tile's display pixels (Tile::rgba8) out, so the owner keeps them without
   // a copy; finished().rgba8 is empty afterwards. Operations that never take them return none.
   virtual std::vector<std::uint32_t> takeDisplayPixels() { return {}; }

@@ -10,6 +10,8 @@
 #include "renderers/Error.h"
 #include "renderers/Parallel.h"
 #include "renderers/scivis/BrickOcclusion.h"
+#include "renderers/scivis/CameraRays.h"
+#include "renderers/scivis/RayBlocks.h"
 
 namespace renderers {
 namespace {
@@ -301,6 +303,9 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
   const std::uint32_t spp = m.options.samplesPerPixel;
   const float inv = 1.0f / static_cast<float>(spp);
   const Environment& background = m.desc->environment;
+  // Camera rays 16 at a time in AVX-512 where the march runs it, as SciVisRenderer::render.
+  const bool simdRows =
+      resolveMarchKernel(MarchKernel::Auto) == MarchKernel::Avx512 && cameraRowSimdAvailable();
   parallelFor(jobs.size(), [&](std::size_t i) {
     enableFlushToZero();
     const Job& job = jobs[i];
@@ -344,82 +349,77 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
       return;
     }
     // The brick's pieces of the tile's rays, rows at a time, integrated together
-    // (SciVisRenderer batches the rays of its SIMD march); a ray that misses the brick adds
-    // nothing.
-    thread_local std::vector<SciVisRenderer::RayPiece> rays;
+    // (SciVisRenderer batches the rays of its SIMD march) in 4x4 pixel blocks (RayBlocks.h: the
+    // Embree packets of the rays' first hits are compact squares); a ray that misses the brick
+    // adds nothing.
+    thread_local std::vector<SciVisRenderer::RayPiece> rays, pieces;
     thread_local std::vector<Fragment> fragments;
     thread_local std::vector<std::uint8_t> hits;
+    thread_local std::vector<std::uint32_t> order, slots;  // slots: each sample's piece
     thread_local std::vector<float> depths;  // per pixel: brickDepth() of its first sample's ray
-    thread_local std::vector<Sampler> samplers;
-    thread_local std::vector<float> px, py;
-    thread_local std::vector<Vec3> dirs, invDirs, origins;
+    thread_local std::vector<std::uint8_t> inside;
+    const RowRays row{&camera, bounds, m.settings.seed, accumulationId, 0, spp, simdRows};
     const int rows =
         std::max(1, static_cast<int>(SciVisRenderer::kBatch /
                                      std::max<std::size_t>(1, std::size_t{spp} * region.width())));
     for (int y0 = region.y0; y0 < region.y1; y0 += rows) {
       const int y1 = std::min(region.y1, y0 + rows);
-      rays.clear(), hits.clear(), depths.clear();
-      // The camera rays of SciVisRenderer::render, sample for sample: first every ray's random
-      // stream and canvas point, then their directions together (Camera::pinholeRays, the same
-      // bits as one at a time), then each ray's clip.
-      const std::size_t n =
-          static_cast<std::size_t>(y1 - y0) * static_cast<std::size_t>(region.width()) * spp;
-      samplers.resize(n), px.resize(n), py.resize(n), dirs.resize(n), invDirs.resize(n);
-      origins.resize(camera.pinhole() ? 0 : n);
-      std::size_t next = 0;
-      for (int y = y0; y < y1; ++y)
-        for (int x = region.x0; x < region.x1; ++x)
-          for (std::uint32_t s = 0; s < spp; ++s, ++next) {
-            samplers[next] = Sampler(m.settings.seed, x, y, accumulationId, s);
-            px[next] = static_cast<float>(x) + samplers[next].get(0);
-            py[next] = static_cast<float>(y) + samplers[next].get(1);
-          }
-      if (camera.pinhole()) {
-        camera.pinholeRays(n, px.data(), py.data(), dirs.data(), invDirs.data());
-      } else {
-        for (std::size_t r = 0; r < n; ++r) {
-          camera.ray(px[r], py[r], 0.5f, 0.5f, origins[r], dirs[r]);
-          invDirs[r] = reciprocal(dirs[r]);
-        }
+      hits.clear(), depths.clear();
+      // The camera rays of SciVisRenderer::render, sample for sample, clipped to the brick
+      // (CameraRays.h: 16 pixels at a time in AVX-512 where the march runs it, the same bits).
+      const std::size_t rowRays = std::size_t{spp} * static_cast<std::size_t>(region.width());
+      const std::size_t n = static_cast<std::size_t>(y1 - y0) * rowRays;
+      rays.resize(n), inside.resize(n);
+      for (int y = y0; y < y1; ++y) {
+        const std::size_t first = static_cast<std::size_t>(y - y0) * rowRays;
+        cameraRowRays(row, region.x0, region.x1, y, rays.data() + first, inside.data() + first);
       }
-      const Vec3 pinholeOrigin = camera.position();
       for (std::size_t r = 0; r < n; ++r) {
-        const Vec3 origin = origins.empty() ? pinholeOrigin : origins[r], dir = dirs[r],
-                   invDir = invDirs[r];
-        float a = 0, b = kInf;
-        bool hit = renderer && clipToBox(bounds, origin, invDir, a, b), skippedRay = false;
-        for (std::size_t k = 0; hit && k < occluders.size(); ++k) {
-          const BrickPlan& front = m.directory.bricks[static_cast<std::size_t>(occluders[k])];
-          float frontA = 0, frontB = kInf;
-          if (!clipToBox(front.bounds, origin, invDir, frontA, frontB) ||
-              !(frontA < a || (frontA == a && front.id < plan->id)))
-            continue;
-          if (m.occlusion.certainlyOpaque(occluders[k], origin, dir, invDir, frontA, frontB))
-            hit = false, skippedRay = true, ++skipped;
+        const SciVisRenderer::RayPiece& ray = rays[r];
+        bool hit = renderer && inside[r], skippedRay = false;
+        if (hit && !occluders.empty()) {
+          const Vec3 invDir = reciprocal(ray.dir);
+          for (std::size_t k = 0; hit && k < occluders.size(); ++k) {
+            const BrickPlan& front = m.directory.bricks[static_cast<std::size_t>(occluders[k])];
+            float frontA = 0, frontB = kInf;
+            if (!clipToBox(front.bounds, ray.origin, invDir, frontA, frontB) ||
+                !(frontA < ray.t0 || (frontA == ray.t0 && front.id < plan->id)))
+              continue;
+            if (m.occlusion.certainlyOpaque(occluders[k], ray.origin, ray.dir, invDir, frontA,
+                                            frontB))
+              hit = false, skippedRay = true, ++skipped;
+          }
         }
         hits.push_back(hit ? 1 : 0);
-        if (!renderer || hit) rays.push_back({origin, dir, a, b, samplers[r]});
         // Sorted by the first sample's ray: with one sample a frame (the usual progressive
         // case) every sample's fragments then composite in exactly its own ray's order,
         // also in pixels that see a brick border edge-on. (Where the ray enters the brick
-        // is `a`, brickDepth()'s own clip; a hidden ray keeps it.)
+        // is t0, brickDepth()'s own clip; a hidden ray keeps it.)
         if (renderer && r % spp == 0)
-          depths.push_back(hit || skippedRay ? a : brickDepth(bounds, origin, dir));
+          depths.push_back(hit || skippedRay ? ray.t0 : brickDepth(bounds, ray.origin, ray.dir));
       }
-      fragments.resize(rays.size());
-      if (renderer) renderer->integrate(rays.data(), rays.size(), fragments.data());
-      std::size_t sample = 0, ray = 0;
+      if (renderer) {
+        // The rays that meet the brick, in block order; slots[r]: ray r's piece among them.
+        rayBlockOrder(region.width(), y1 - y0, spp, order);
+        pieces.clear(), slots.resize(n);
+        for (const std::uint32_t r : order)
+          if (hits[r])
+            slots[r] = static_cast<std::uint32_t>(pieces.size()), pieces.push_back(rays[r]);
+        fragments.resize(pieces.size());
+        renderer->integrate(pieces.data(), pieces.size(), fragments.data());
+      }
+      std::size_t sample = 0;
       for (int y = y0; y < y1; ++y)
         for (int x = region.x0; x < region.x1; ++x) {
           float sum[4] = {0, 0, 0, 0};
           for (std::uint32_t s = 0; s < spp; ++s, ++sample) {
             if (!renderer) {
-              const Vec3 bg = background.radiance(rays[ray++].dir);
+              const Vec3 bg = background.radiance(rays[sample].dir);
               sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
               continue;
             }
             if (!hits[sample]) continue;
-            const Fragment& f = fragments[ray++];
+            const Fragment& f = fragments[slots[sample]];
             for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
           }
           const std::size_t p = static_cast<std::size_t>(y - region.y0) * region.width() +

@@ -14,13 +14,15 @@ namespace {
 
 constexpr float kInf = Box3::kInf;
 
-SciVisRenderer::RayPiece scalarRay(const RowRays& row, int x, int y, std::uint32_t s) {
+SciVisRenderer::RayPiece scalarRay(const RowRays& row, int x, int y, std::uint32_t s,
+                                   bool& inside) {
   const Sampler sampler(row.seed, x, y, row.accumulationId, s);
   Vec3 origin, dir;
   row.camera->ray(static_cast<float>(x) + sampler.get(0), static_cast<float>(y) + sampler.get(1),
                   0.5f, 0.5f, origin, dir);
   float t0 = 0, t1 = kInf;
-  if (!clipToBox(row.bounds, origin, reciprocal(dir), t0, t1)) t0 = t1 = 0;
+  inside = clipToBox(row.bounds, origin, reciprocal(dir), t0, t1);
+  if (!inside) t0 = t1 = 0;
   return {origin, dir, t0, t1, sampler};
 }
 
@@ -69,7 +71,7 @@ AVX512_INLINE __m512 axis(float f, float r, float u, __m512 sx, __m512 sy) {
 // them, lane by lane.
 __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) void rays16(
     const RowRays& row, const Camera::Pinhole& cam, int x, int y, std::uint32_t s,
-    SciVisRenderer::RayPiece* out, std::size_t stride) {
+    SciVisRenderer::RayPiece* out, std::uint8_t* inside, std::size_t stride) {
   const std::uint64_t sampleKey = Sampler::sampleKey(row.seed, row.accumulationId, s);
   const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const __m512i xs = _mm512_add_epi32(_mm512_set1_epi32(x), lane);
@@ -117,6 +119,9 @@ __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) void rays16(
   for (int l = 0; l < 16; ++l)
     out[static_cast<std::size_t>(l) * stride] = {
         cam.origin, {ox[l], oy[l], oz[l]}, a[l], c[l], Sampler::fromKey(keys[l])};
+  if (inside)
+    for (int l = 0; l < 16; ++l)
+      inside[static_cast<std::size_t>(l) * stride] = static_cast<std::uint8_t>((hit >> l) & 1);
 }
 
 }  // namespace
@@ -126,19 +131,24 @@ bool cameraRowSimdAvailable() {
          __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vl");
 }
 
-void cameraRowRays(const RowRays& row, int x0, int x1, int y, SciVisRenderer::RayPiece* out) {
+void cameraRowRays(const RowRays& row, int x0, int x1, int y, SciVisRenderer::RayPiece* out,
+                   std::uint8_t* inside) {
   const std::size_t stride = row.samples;
   Camera::Pinhole cam;
   int x = x0;
   if (row.simd && row.camera->pinhole(cam))
     for (; x + 16 <= x1; x += 16)
-      for (std::uint32_t s = 0; s < row.samples; ++s)
-        rays16(row, cam, x, y, row.firstSample + s,
-               out + static_cast<std::size_t>(x - x0) * stride + s, stride);
+      for (std::uint32_t s = 0; s < row.samples; ++s) {
+        const std::size_t i = static_cast<std::size_t>(x - x0) * stride + s;
+        rays16(row, cam, x, y, row.firstSample + s, out + i, inside ? inside + i : nullptr, stride);
+      }
   for (; x < x1; ++x)
-    for (std::uint32_t s = 0; s < row.samples; ++s)
-      out[static_cast<std::size_t>(x - x0) * stride + s] =
-          scalarRay(row, x, y, row.firstSample + s);
+    for (std::uint32_t s = 0; s < row.samples; ++s) {
+      const std::size_t i = static_cast<std::size_t>(x - x0) * stride + s;
+      bool meets;
+      out[i] = scalarRay(row, x, y, row.firstSample + s, meets);
+      if (inside) inside[i] = meets ? 1 : 0;
+    }
 }
 
 }  // namespace renderers

@@ -22,7 +22,10 @@ struct RowRays {
 bool cameraRowSimdAvailable();
 
 // The rays of pixels x0 .. x1 - 1 of row y, samples firstSample .. firstSample + samples - 1 of
-// each: out[(x - x0) * samples + (s - firstSample)].
-void cameraRowRays(const RowRays& row, int x0, int x1, int y, SciVisRenderer::RayPiece* out);
+// each: out[(x - x0) * samples + (s - firstSample)]; and (unless null) inside[the same index]:
+// whether the ray meets `bounds` (clipToBox's answer, which an empty piece cannot tell from a
+// piece of length 0 at t = 0).
+void cameraRowRays(const RowRays& row, int x0, int x1, int y, SciVisRenderer::RayPiece* out,
+                   std::uint8_t* inside = nullptr);
 
 }  // namespace renderers

@@ -7,6 +7,7 @@
 
 #include "renderers/PixelBlocks.h"
 #include "renderers/scivis/CameraRays.h"
+#include "renderers/scivis/RayBlocks.h"
 #include "renderers/scivis/VolumeMarch.h"
 
 namespace renderers {
@@ -371,6 +372,12 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   thread_local std::vector<Sampler> samplers;
   thread_local std::vector<float> px, py;
   thread_local std::vector<Vec3> dirs, invDirs, origins;
+  // Where camera rays ask Embree for surfaces, they go in 4x4 pixel blocks (RayBlocks.h); a
+  // volume alone marches them in row order.
+  const bool blocks = scene_.hasCameraSurfaces();
+  thread_local std::vector<std::uint32_t> order;
+  thread_local std::vector<RayPiece> blockRays;
+  thread_local std::vector<Fragment> blockFragments;
   const int width = region.width();
   const int rows = std::max(
       1, static_cast<int>(kBatch / std::max<std::size_t>(1, std::size_t{samples} * width)));
@@ -422,7 +429,15 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
       }
     }
     fragments.resize(rays.size());
-    integrate(rays.data(), rays.size(), fragments.data());
+    if (blocks) {  // to Embree in 4x4 pixel blocks, the fragments back in row order
+      rayBlockOrder(width, y1 - y0, samples, order);
+      blockRays.resize(rays.size()), blockFragments.resize(rays.size());
+      for (std::size_t k = 0; k < order.size(); ++k) blockRays[k] = rays[order[k]];
+      integrate(blockRays.data(), blockRays.size(), blockFragments.data());
+      for (std::size_t k = 0; k < order.size(); ++k) fragments[order[k]] = blockFragments[k];
+    } else {
+      integrate(rays.data(), rays.size(), fragments.data());
+    }
     std::size_t next = 0;
     const std::size_t first = static_cast<std::size_t>(y0 - region.y0) * width;
     const std::size_t last = static_cast<std::size_t>(y1 - region.y0) * width;

@@ -167,6 +167,62 @@ TEST(AlphaBlendOperation, WaitsForTheWholeTreeAndBlendsByDepth) {
   EXPECT_FLOAT_EQ(op->finished().depth[0], 2.0f);
 }
 
+// CompositeAccumulateOperation hands the blended tile on by exchanging buffers with its parts
+// (exchangeFinished) instead of copying it: over frames of new and continued epochs its result
+// must stay, bit for bit, the blend's result accumulated as a copy.
+TEST(CompositeAccumulateOperation, EqualsTheBlendAccumulatedOverFrames) {
+  auto op = compositeAccumulateOperation()(kRegion);
+  auto blend = alphaBlendOperation()(kRegion);
+  auto accumulate = accumulateOperation()(kRegion);
+  std::mt19937 random(7);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  auto fragment = [&](int generation, int children, std::uint32_t id) {
+    Tile t;
+    t.reset(kRegion, true);
+    for (size_t p = 0; p < t.depth.size(); ++p) {
+      const float a = unit(random) < 0.3f ? 1.0f : unit(random);
+      t.depth[p] = unit(random) < 0.2f ? std::numeric_limits<float>::infinity() : unit(random);
+      for (int c = 0; c < 3; ++c) t.color[4 * p + static_cast<size_t>(c)] = a * unit(random);
+      t.color[4 * p + 3] = a;
+    }
+    t.generation = generation, t.children = children, t.accumulationId = id, t.sequence = 0;
+    return t;
+  };
+  // Epochs: a moving camera (a new epoch every frame), then a still one accumulating.
+  const std::uint32_t ids[] = {0, 0, 0, 1, 2, 0, 1};
+  std::uint32_t epoch = 0;
+  for (std::uint32_t id : ids) {
+    if (id == 0) ++epoch;
+    const FrameInfo frame{epoch * 10 + id, epoch};
+    op->newFrame(frame, id, 1);
+    blend->newFrame(frame, id, 1);
+    accumulate->newFrame(frame, id, 1);
+    std::vector<Tile> inputs;
+    inputs.push_back(fragment(1, 0, id));
+    inputs.push_back(fragment(1, 0, id));
+    inputs.back().sequence = 1;
+    inputs.push_back(fragment(0, 2, id));
+    for (size_t i = 0; i < inputs.size(); ++i) {
+      Tile copy = inputs[i];
+      EXPECT_EQ(op->process(std::move(copy)), i + 1 == inputs.size());
+      EXPECT_EQ(blend->process(std::move(inputs[i])), i + 1 == inputs.size());
+    }
+    Tile composited = blend->finished();
+    composited.accumulationId = id;
+    composited.generation = composited.children = 0;
+    composited.sequence = 0;
+    ASSERT_TRUE(accumulate->process(std::move(composited)));
+    const Tile& got = op->finished();
+    const Tile& want = accumulate->finished();
+    ASSERT_EQ(got.color.size(), want.color.size());
+    EXPECT_EQ(std::memcmp(got.color.data(), want.color.data(), got.color.size() * sizeof(float)), 0)
+        << "frame " << frame.frameId;
+    ASSERT_EQ(got.depth.size(), want.depth.size());
+    EXPECT_EQ(std::memcmp(got.depth.data(), want.depth.data(), got.depth.size() * sizeof(float)), 0)
+        << "frame " << frame.frameId;
+  }
+}
+
 TEST(AlphaBlendOperation, TooManyTilesInAGenerationIsAnError) {
   auto op = alphaBlendOperation()(kRegion);
   op->newFrame({}, 0, 1);

@@ -33,7 +33,8 @@ TEST(CameraRays, RowsGiveEachPixelItsOwnRayAndStream) {
         const RowRays row{&camera, bounds, 77, 5, 2, samples, simd};
         for (int y = 0; y < kH; ++y) {
           std::vector<SciVisRenderer::RayPiece> got(std::size_t{samples} * kW);
-          cameraRowRays(row, 0, kW, y, got.data());
+          std::vector<std::uint8_t> inside(got.size(), 2);
+          cameraRowRays(row, 0, kW, y, got.data(), inside.data());
           for (int x = 0; x < kW; ++x)
             for (std::uint32_t s = 0; s < samples; ++s) {
               // The ray as the renderer made it before rows: one pixel, one sample at a time.
@@ -42,12 +43,14 @@ TEST(CameraRays, RowsGiveEachPixelItsOwnRayAndStream) {
               camera.ray(static_cast<float>(x) + sampler.get(0),
                          static_cast<float>(y) + sampler.get(1), 0.5f, 0.5f, origin, dir);
               float t0 = 0, t1 = Box3::kInf;
-              if (!clipToBox(bounds, origin, reciprocal(dir), t0, t1)) t0 = t1 = 0;
+              const bool meets = clipToBox(bounds, origin, reciprocal(dir), t0, t1);
+              if (!meets) t0 = t1 = 0;
               const SciVisRenderer::RayPiece want{origin, dir, t0, t1, sampler};
               const auto& r = got[static_cast<std::size_t>(x) * samples + s];
               EXPECT_TRUE(sameBits(want, r)) << "simd " << simd << " degrees " << degrees
                                              << " pixel " << x << "," << y << " sample " << s;
               EXPECT_EQ(r.sampler.get(2), sampler.get(2));
+              EXPECT_EQ(inside[static_cast<std::size_t>(x) * samples + s], meets ? 1 : 0);
               (t0 < t1 ? hits : misses) += 1;
             }
         }
