@@ -69,7 +69,7 @@ restarted=$!
 start=$(now)
 waitFor 10 advanced "$dead" r1c1 || fail "the restarted process 3 presents nothing through the relay"
 back=$(since "$start")
-awk -v t="$back" 'BEGIN {exit !(t < 5)}' || fail "process 3 presented again only ${back} s after its restart"
+within "$back" 5 || fail "process 3 presented again only ${back} s after its restart"
 grep -q "wall process 3 moved from tcp://127.0.0.1:[0-9]* to tcp://127.0.0.1:[0-9]*" "$work/relay.err" ||
   fail "the relay did not move its connection to the restarted process"
 [ "$(sed -n 's/.*wall process 3: pieces on \(tcp:[^ ]*\).*/\1/p' "$work/relay.err")" = "$before" ] ||

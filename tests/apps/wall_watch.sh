@@ -44,3 +44,8 @@ pidOf() {
 }
 
 freePort() { python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
+
+# within SECONDS BOUND: true when SECONDS < BOUND. The bounds are the issue's, checked by the plain
+# build; a sanitizer build (CI's second pass: its processes start and draw 2-4x slower) stretches
+# them by DFBWALL_TIME_SCALE, which CMake sets for it.
+within() { awk -v t="$1" -v b="$2" -v s="${DFBWALL_TIME_SCALE:-1}" 'BEGIN {exit !(t < b * s)}'; }
