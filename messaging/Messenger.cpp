@@ -400,6 +400,17 @@ Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_
   impl_->uncaughtAtConstruction = std::uncaught_exceptions();
   checkMpi(MPI_Comm_dup(comm, &impl_->p2p), "MPI_Comm_dup");
   checkMpi(MPI_Comm_dup(comm, &impl_->control), "MPI_Comm_dup");
+  {
+    // No traffic on the new communicators until every rank has made them: OpenMPI 4.1 can take
+    // a fragment for a communicator that a rank is still making (it is in the lookup table, its
+    // matching state not yet) on another thread's progress, such as a live messenger's, and
+    // crashes there (a SEGV in mca_pml_ob1_recv_frag_callback_match, seen under ASan).
+    MPI_Request made;
+    checkMpi(MPI_Ibarrier(comm, &made), "MPI_Ibarrier");
+    waitWithDeadline(made, Clock::now() + options.quiesceTimeout,
+                     "starting the messenger: another rank did not join within " +
+                         std::to_string(options.quiesceTimeout.count()) + " ms");
+  }
   MPI_Comm_rank(impl_->p2p, &impl_->rank);
   MPI_Comm_size(impl_->p2p, &impl_->size);
   MPI_Comm host;
