@@ -265,7 +265,7 @@ case "$scenario" in
     port=7000  # a host of its own: nothing else listens there
     token=$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')
     "$CLUSTER" mpirun-hosts "${wallHosts[@]}" --id "$id" -- "$DFBWALL" serve --wall "$layout" \
-      --listen "0.0.0.0:$port" --offscreen --timeout 5 --token "$token" --stats "$work/serve.jsonl" \
+      --listen "0.0.0.0:$port" --offscreen --timeout $((5 * ${DFBWALL_TIME_SCALE:-1})) --token "$token" --stats "$work/serve.jsonl" \
       >"$work/serve.out" 2>"$work/serve.err" &
     serve=$!
     for _ in $(seq 200); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
