@@ -398,6 +398,8 @@ Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_
   impl_->options = options;
   impl_->owner = this;
   impl_->uncaughtAtConstruction = std::uncaught_exceptions();
+  const std::string notJoined = "starting the messenger: another rank did not join within " +
+                                std::to_string(options.quiesceTimeout.count()) + " ms";
   checkMpi(MPI_Comm_dup(comm, &impl_->p2p), "MPI_Comm_dup");
   checkMpi(MPI_Comm_dup(comm, &impl_->control), "MPI_Comm_dup");
   {
@@ -407,9 +409,7 @@ Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_
     // crashes there (a SEGV in mca_pml_ob1_recv_frag_callback_match, seen under ASan).
     MPI_Request made;
     checkMpi(MPI_Ibarrier(comm, &made), "MPI_Ibarrier");
-    waitWithDeadline(made, Clock::now() + options.quiesceTimeout,
-                     "starting the messenger: another rank did not join within " +
-                         std::to_string(options.quiesceTimeout.count()) + " ms");
+    waitWithDeadline(made, Clock::now() + options.quiesceTimeout, notJoined);
   }
   MPI_Comm_rank(impl_->p2p, &impl_->rank);
   MPI_Comm_size(impl_->p2p, &impl_->size);
@@ -437,9 +437,7 @@ Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_
   checkMpi(MPI_Iallgather(name, MPI_MAX_PROCESSOR_NAME, MPI_CHAR, names.data(),
                           MPI_MAX_PROCESSOR_NAME, MPI_CHAR, impl_->control, &request),
            "MPI_Iallgather");
-  waitWithDeadline(request, Clock::now() + options.quiesceTimeout,
-                   "starting the messenger: another rank did not join within " +
-                       std::to_string(options.quiesceTimeout.count()) + " ms");
+  waitWithDeadline(request, Clock::now() + options.quiesceTimeout, notJoined);
   for (int r = 0; r < impl_->size; ++r) {
     const char* n = names.data() + static_cast<size_t>(r) * MPI_MAX_PROCESSOR_NAME;
     impl_->hosts.emplace_back(n, strnlen(n, MPI_MAX_PROCESSOR_NAME));

@@ -355,7 +355,8 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     thread_local std::vector<SciVisRenderer::RayPiece> rays, pieces;
     thread_local std::vector<Fragment> fragments;
     thread_local std::vector<std::uint8_t> hits;
-    thread_local std::vector<std::uint32_t> order, slots;  // slots: each sample's piece
+    thread_local std::vector<std::uint32_t> slots;  // slots: each sample's piece
+    thread_local RayBlockOrderCache blockOrder;
     thread_local std::vector<float> depths;  // per pixel: brickDepth() of its first sample's ray
     thread_local std::vector<std::uint8_t> inside;
     const RowRays row{&camera, bounds, m.settings.seed, accumulationId, 0, spp, simdRows};
@@ -400,7 +401,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
       }
       if (renderer) {
         // The rays that meet the brick, in block order; slots[r]: ray r's piece among them.
-        rayBlockOrder(region.width(), y1 - y0, spp, order);
+        const std::vector<std::uint32_t>& order = blockOrder.of(region.width(), y1 - y0, spp);
         pieces.clear(), slots.resize(n);
         for (const std::uint32_t r : order)
           if (hits[r])

@@ -34,4 +34,22 @@ inline void rayBlockOrder(int width, int rows, std::uint32_t samples,
     }
 }
 
+// rayBlockOrder() of the last shape asked for, made again only when the shape changes: a tile's
+// row batches (and most tiles) share one, so the per-batch hot path only reads it.
+class RayBlockOrderCache {
+ public:
+  const std::vector<std::uint32_t>& of(int width, int rows, std::uint32_t samples) {
+    if (width != width_ || rows != rows_ || samples != samples_) {
+      rayBlockOrder(width, rows, samples, order_);
+      width_ = width, rows_ = rows, samples_ = samples;
+    }
+    return order_;
+  }
+
+ private:
+  int width_ = -1, rows_ = -1;
+  std::uint32_t samples_ = 0;
+  std::vector<std::uint32_t> order_;
+};
+
 }  // namespace renderers

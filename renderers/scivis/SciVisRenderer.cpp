@@ -375,7 +375,7 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   // Where camera rays ask Embree for surfaces, they go in 4x4 pixel blocks (RayBlocks.h); a
   // volume alone marches them in row order.
   const bool blocks = scene_.hasCameraSurfaces();
-  thread_local std::vector<std::uint32_t> order;
+  thread_local RayBlockOrderCache blockOrder;
   thread_local std::vector<RayPiece> blockRays;
   thread_local std::vector<Fragment> blockFragments;
   const int width = region.width();
@@ -430,7 +430,7 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
     }
     fragments.resize(rays.size());
     if (blocks) {  // to Embree in 4x4 pixel blocks, the fragments back in row order
-      rayBlockOrder(width, y1 - y0, samples, order);
+      const std::vector<std::uint32_t>& order = blockOrder.of(width, y1 - y0, samples);
       blockRays.resize(rays.size()), blockFragments.resize(rays.size());
       for (std::size_t k = 0; k < order.size(); ++k) blockRays[k] = rays[order[k]];
       integrate(blockRays.data(), blockRays.size(), blockFragments.data());
