@@ -359,6 +359,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     thread_local RayBlockOrderCache blockOrder;
     thread_local std::vector<float> depths;  // per pixel: brickDepth() of its first sample's ray
     thread_local std::vector<std::uint8_t> inside;
+    thread_local std::vector<SciVisRenderer::FirstSurface> firsts, pieceFirsts;
     const RowRays row{&camera, bounds, m.settings.seed, accumulationId, 0, spp, simdRows};
     const int rows =
         std::max(1, static_cast<int>(SciVisRenderer::kBatch /
@@ -399,7 +400,21 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
         if (renderer && r % spp == 0)
           depths.push_back(hit || skippedRay ? ray.t0 : brickDepth(bounds, ray.origin, ray.dir));
       }
-      if (renderer) {
+      if (renderer && renderer->firstHitsRasterised(spp)) {
+        // First hits from this frame's raster of the brick's triangles (FirstHitRaster.h), then
+        // the rays that meet the brick in row order; slots[r]: ray r's piece among them.
+        firsts.resize(n);
+        renderer->rasterFirstHits(region.x0, region.x1, y0, y1, rays.data(), hits.data(),
+                                  firsts.data());
+        pieces.clear(), pieceFirsts.clear(), slots.resize(n);
+        for (std::size_t r = 0; r < n; ++r)
+          if (hits[r]) {
+            slots[r] = static_cast<std::uint32_t>(pieces.size());
+            pieces.push_back(rays[r]), pieceFirsts.push_back(firsts[r]);
+          }
+        fragments.resize(pieces.size());
+        renderer->integrate(pieces.data(), pieces.size(), fragments.data(), pieceFirsts.data());
+      } else if (renderer) {
         // The rays that meet the brick, in block order; slots[r]: ray r's piece among them.
         const std::vector<std::uint32_t>& order = blockOrder.of(region.width(), y1 - y0, spp);
         pieces.clear(), slots.resize(n);

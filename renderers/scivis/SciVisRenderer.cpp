@@ -48,6 +48,19 @@ Vec3 cosineDirection(Vec3 n, float u0, float u1) {
 
 std::uint64_t bitsOf(float t) { return std::bit_cast<std::uint32_t>(t); }
 
+// Whether every corner of `box` (bounded) lies in front of the camera's plane.
+bool inFront(const Box3& box, const CameraDesc& c) {
+  if (box.empty()) return false;
+  const Vec3 forward = normalize(c.lookAt - c.position);
+  for (int i = 0; i < 8; ++i) {
+    const Vec3 p{(i & 1) ? box.hi.x : box.lo.x, (i & 2) ? box.hi.y : box.lo.y,
+                 (i & 4) ? box.hi.z : box.lo.z};
+    const Vec3 v = p - c.position;
+    if (!(dot(v, forward) > 1e-6f * (1.0f + length(v)))) return false;  // also inf, NaN
+  }
+  return true;
+}
+
 }  // namespace
 
 SciVisRenderer::SciVisRenderer(const SciVisScene& scene, const RenderSettings& settings,
@@ -58,10 +71,52 @@ SciVisRenderer::SciVisRenderer(const SciVisScene& scene, const RenderSettings& s
       layers_(&scene.volumes()),
       camera_(scene.desc().camera, settings.width, settings.height),
       march_(resolveMarchKernel(options.march)),
-      epsilon_(1e-4f * scene.extent() + 0.05f * scene.volumeStep()) {}
+      epsilon_(1e-4f * scene.extent() + 0.05f * scene.volumeStep()) {
+  if (!options.rasterFirstHits || !scene.opaqueCameraTriangles(rasterMeshes_))
+    rasterMeshes_.clear();
+}
 
 void SciVisRenderer::beginFrame(const dfb::FrameInfo& /*frame*/, const CameraDesc& camera) {
   camera_ = Camera(camera, settings_.width, settings_.height);
+  if (rasterMeshes_.empty()) return;
+  // A still camera (progressive frames) keeps the triangles binned as they are.
+  const auto same = [](const CameraDesc& a, const CameraDesc& b) {
+    return a.position == b.position && a.lookAt == b.lookAt && a.up == b.up && a.fovY == b.fovY &&
+           a.lensRadius == b.lensRadius && a.focusDistance == b.focusDistance;
+  };
+  if (raster_.ready() && same(camera, rasterCamera_)) return;
+  rasterCamera_ = camera;
+  // Only where the whole scene's domain lies in front of the camera: a decision every brick
+  // and the unbricked scene make alike, so all find their first hits one way (the hit distance
+  // keys a surface's random numbers, and the raster's may differ from Embree's in the last bit).
+  if (!inFront(scene_.domain(), camera))
+    raster_.clear();
+  else
+    raster_.prepare(camera_, settings_.width, settings_.height, rasterMeshes_);
+}
+
+void SciVisRenderer::rasterFirstHits(int x0, int x1, int y0, int y1, const RayPiece* rays,
+                                     const std::uint8_t* active, FirstSurface* out) const {
+  const std::size_t width = static_cast<std::size_t>(x1 - x0);
+  const std::size_t n = static_cast<std::size_t>(y1 - y0) * width;
+  thread_local std::vector<float> dx, dy, dz, t0, t1;
+  thread_local std::vector<FirstHitRaster::Hit> hits;
+  dx.resize(n), dy.resize(n), dz.resize(n), t0.resize(n), t1.resize(n), hits.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const RayPiece& r = rays[i];
+    dx[i] = r.dir.x, dy[i] = r.dir.y, dz[i] = r.dir.z;
+    const bool on = (!active || active[i]) && r.t0 < r.t1;  // integrate() skips t0 >= t1
+    t0[i] = on ? r.t0 : kInf, t1[i] = on ? r.t1 : -kInf;
+  }
+  raster_.firstHits(x0, x1, y0, y1, width, dx.data(), dy.data(), dz.data(), t0.data(), t1.data(),
+                    hits.data());
+  for (std::size_t i = 0; i < n; ++i) {
+    const FirstHitRaster::Hit& h = hits[i];
+    out[i].found = h.mesh != FirstHitRaster::kNone;
+    if (out[i].found)
+      scene_.fillSurfaceHit(h.mesh, h.triangle, h.u, h.v, h.t, rays[i].origin, rays[i].dir,
+                            out[i].hit);
+  }
 }
 
 void SciVisRenderer::setLiveSettings(const LiveSettings& live) {
@@ -302,6 +357,11 @@ bool SciVisRenderer::marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, flo
 }
 
 void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment* out) const {
+  integrate(rays, count, out, nullptr);
+}
+
+void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment* out,
+                               const FirstSurface* given) const {
   const bool packets = layers_->size() == 1 && marchesPackets((*layers_)[0], march_);
   const int packetSize = marchPacketSize(march_);
   MarchRay waiting[kMarchPacket];
@@ -325,6 +385,7 @@ void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment
   // (the same hits as one at a time), and handed to marchOnly() and integrate().
   constexpr int kSurfaces = SciVisScene::kSurfacePacket;
   const bool surfaces = scene_.hasCameraSurfaces();  // none: nothing to ask (a volume alone)
+  const bool ask = surfaces && !given;
   static const FirstSurface none{false, SurfaceHit{}};
   SciVisScene::SurfaceQuery queries[kSurfaces];
   SurfaceHit hits[kSurfaces];
@@ -332,7 +393,7 @@ void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment
   FirstSurface firsts[kSurfaces];
   for (std::size_t base = 0; base < count; base += kSurfaces) {
     const int n = static_cast<int>(std::min<std::size_t>(kSurfaces, count - base));
-    if (surfaces) {
+    if (ask) {
       for (int j = 0; j < n; ++j) {
         const RayPiece& r = rays[base + static_cast<std::size_t>(j)];
         queries[j] = {r.origin, r.dir, r.t0, r.t1, r.t0 < r.t1};
@@ -344,7 +405,7 @@ void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment
       const std::size_t i = base + static_cast<std::size_t>(j);
       const RayPiece& r = rays[i];
       const Vec3 invDir = reciprocal(r.dir);
-      const FirstSurface& first = surfaces ? firsts[j] : none;
+      const FirstSurface& first = given ? given[i] : surfaces ? firsts[j] : none;
       if (packets &&
           marchOnly(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, first, waiting[waitingCount])) {
         waitingIndex[waitingCount++] = i;
@@ -429,7 +490,12 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
       }
     }
     fragments.resize(rays.size());
-    if (blocks) {  // to Embree in 4x4 pixel blocks, the fragments back in row order
+    if (firstHitsRasterised(samples)) {  // first hits from this frame's raster, in row order
+      thread_local std::vector<FirstSurface> firsts;
+      firsts.resize(rays.size());
+      rasterFirstHits(region.x0, region.x1, y0, y1, rays.data(), nullptr, firsts.data());
+      integrate(rays.data(), rays.size(), fragments.data(), firsts.data());
+    } else if (blocks) {  // to Embree in 4x4 pixel blocks, the fragments back in row order
       const std::vector<std::uint32_t>& order = blockOrder.of(width, y1 - y0, samples);
       blockRays.resize(rays.size()), blockFragments.resize(rays.size());
       for (std::size_t k = 0; k < order.size(); ++k) blockRays[k] = rays[order[k]];

@@ -18,6 +18,7 @@
 #include "renderers/Camera.h"
 #include "renderers/Renderer.h"
 #include "renderers/Rng.h"
+#include "renderers/scivis/FirstHitRaster.h"
 #include "renderers/scivis/SciVisScene.h"
 #include "renderers/scivis/VolumeMarch.h"
 
@@ -37,6 +38,11 @@ struct SciVisOptions {
   bool background = true;
   // The instruction set of the one-volume march (VolumeMarch.h); all give the same image.
   MarchKernel march = MarchKernel::Auto;
+  // Camera rays' first hits by rasterising the triangles each frame (FirstHitRaster.h) where
+  // that finds what Embree would (one sample per pixel, a pinhole, every camera surface an
+  // opaque triangle, all in front of the camera); false: always Embree. Either finds the same
+  // surface for a ray; the distances may differ in their last bits.
+  bool rasterFirstHits = true;
 };
 
 class SciVisRenderer final : public Renderer {
@@ -64,6 +70,21 @@ class SciVisRenderer final : public Renderer {
   // out[i] = integrate(rays[i]) for i < count, the same bits; the rays of the one-volume march
   // go through it together in SIMD lanes where its kernel takes packets (VolumeMarch.h).
   void integrate(const RayPiece* rays, std::size_t count, Fragment* out) const;
+  // A ray's first surface in its [t0, t1], found before integrate() is called.
+  struct FirstSurface {
+    bool found;
+    SurfaceHit hit;
+  };
+  // integrate() with each ray's first surface given (firsts[i] for rays[i]; null: asked here).
+  void integrate(const RayPiece* rays, std::size_t count, Fragment* out,
+                 const FirstSurface* firsts) const;
+  // Whether rasterFirstHits() answers this frame for `samples` samples per pixel a frame.
+  bool firstHitsRasterised(std::uint32_t samples) const { return samples == 1 && raster_.ready(); }
+  // The first surfaces of the camera rays of pixels x0 .. x1 - 1 of rows y0 .. y1 - 1, one ray
+  // per pixel, row-major (as SciVisRenderer::render and the brick driver make them), from this
+  // frame's raster; a ray with active[i] == 0 (active null: all are) or t0 >= t1 finds none.
+  void rasterFirstHits(int x0, int x1, int y0, int y1, const RayPiece* rays,
+                       const std::uint8_t* active, FirstSurface* out) const;
   // How many rays a caller should hand integrate() at once, about: enough to fill the packets,
   // few enough to stay in cache.
   static constexpr std::size_t kBatch = 1024;
@@ -73,11 +94,6 @@ class SciVisRenderer final : public Renderer {
 
  private:
   struct March;
-  // The ray's first surface in [t0, t1], when the caller has already asked Embree for it.
-  struct FirstSurface {
-    bool found;
-    SurfaceHit hit;
-  };
   // integrate() with 1 / dir, which the caller has already, and the first surface (null: asked
   // here).
   Fragment integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1, const Sampler& sampler,
@@ -98,6 +114,9 @@ class SciVisRenderer final : public Renderer {
   const std::vector<SciVisScene::VolumeLayer>* layers_;
   LiveSettings live_;
   Camera camera_;
+  CameraDesc rasterCamera_;                         // what raster_ was prepared for
+  std::vector<FirstHitRaster::Mesh> rasterMeshes_;  // empty: no raster for this scene
+  FirstHitRaster raster_;
   MarchKernel march_;
   float epsilon_;
   mutable std::atomic<std::uint64_t> volumeSamples_{0};  // added once per tile

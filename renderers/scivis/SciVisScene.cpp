@@ -62,6 +62,10 @@ struct SciVisScene::Embree {
     // the scene) and per vertex the field's unit gradient there (zero where it has none).
     const std::uint32_t* triangles = nullptr;
     std::vector<Vec3> vertexNormals;
+    // Triangles (meshes, isosurfaces): Embree's buffers, alive as long as the scene.
+    const float* vertices = nullptr;
+    std::size_t vertexCount = 0, triangleCount = 0;
+    bool seenByCamera = false;
   };
   RTCDevice device = nullptr;
   RTCScene camera = nullptr, shading = nullptr;
@@ -113,6 +117,9 @@ struct SciVisScene::Embree {
         const Vec3 n = cross(mesh->mesh.positions[t[1]] - p0, mesh->mesh.positions[t[2]] - p0);
         info.normals.push_back(length(n) > 0 ? normalize(n) : Vec3{0, 0, 1});
       }
+      info.vertices = v, info.triangles = idx;
+      info.vertexCount = mesh->mesh.positions.size(),
+      info.triangleCount = mesh->mesh.triangles.size();
     } else {
       g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
       const std::size_t n = particles->centers.size();
@@ -153,12 +160,13 @@ struct SciVisScene::Embree {
     Geometry info;
     info.isosurface = &iso;
     info.field = field;
+    info.vertices = v, info.triangles = idx;
+    info.vertexCount = mesh.positions.size(), info.triangleCount = mesh.triangles.size();
     if (seenByCamera && field) {
       // The field's gradient at each vertex, once, instead of at every hit (6 trilinear samples
       // per camera ray). A vertex has the same bits in every brick that makes it (Isosurfaces.h)
       // and the gradient reads only voxels the brick holds with its ghost layer, so normals
       // match across bricks as the hit-point gradients did.
-      info.triangles = idx;
       info.vertexNormals.resize(mesh.positions.size());
       constexpr std::size_t kChunk = 16384;
       const std::size_t n = mesh.positions.size();
@@ -173,6 +181,7 @@ struct SciVisScene::Embree {
   }
 
   void attach(RTCGeometry g, Geometry info, bool seenByCamera) {
+    info.seenByCamera = seenByCamera;
     rtcCommitGeometry(g);
     const auto id = static_cast<unsigned>(geometries.size());
     if (seenByCamera)
@@ -285,8 +294,8 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
 
   // The scene's extent (for AO distances and ray offsets) from the whole scene's description,
   // not from what this brick holds: every brick offsets and reaches as the whole scene does.
-  const Box3 domain = sceneDomain(desc);
-  extent_ = std::max(1e-3f, maxComponent(domain.hi - domain.lo));
+  domain_ = sceneDomain(desc);
+  extent_ = std::max(1e-3f, maxComponent(domain_.hi - domain_.lo));
   aoDistance_ = settings.aoDistance > 0 ? settings.aoDistance : 0.25f * extent_;
 
   lights_ = resolveLights(desc);
@@ -473,6 +482,22 @@ bool SciVisScene::intersectSurface(Vec3 origin, Vec3 dir, float tNear, float tFa
 }
 
 bool SciVisScene::hasCameraSurfaces() const { return embree_->cameraGeometries > 0; }
+
+bool SciVisScene::opaqueCameraTriangles(std::vector<FirstHitRaster::Mesh>& out) const {
+  out.clear();
+  const Embree& e = *embree_;
+  if (!e.packetsExact) return false;  // spheres among the camera data
+  for (std::size_t id = 0; id < e.geometries.size(); ++id) {
+    const Embree::Geometry& g = e.geometries[id];
+    if (!g.seenByCamera) continue;
+    if (!g.vertices || !g.triangles) return false;
+    const std::uint32_t material = g.isosurface ? g.isosurface->material : g.mesh->material;
+    if (!(desc_->materials[material].opacity >= 1.0f)) return false;
+    out.push_back(
+        {g.vertices, g.vertexCount, g.triangles, g.triangleCount, static_cast<std::uint32_t>(id)});
+  }
+  return true;
+}
 
 void SciVisScene::intersectSurfaces(const SurfaceQuery* queries, int count, SurfaceHit* hits,
                                     bool* found) const {

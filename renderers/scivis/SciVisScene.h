@@ -13,6 +13,7 @@
 
 #include "renderers/SceneDesc.h"
 #include "renderers/scivis/Box.h"
+#include "renderers/scivis/FirstHitRaster.h"
 #include "renderers/scivis/ShadingShell.h"
 #include "renderers/scivis/Volume.h"
 #include "renderers/scivis/VolumeField.h"
@@ -107,6 +108,14 @@ class SciVisScene {
   bool hasCameraSurfaces() const;
   void intersectSurfaces(const SurfaceQuery* queries, int count, SurfaceHit* hits,
                          bool* found) const;
+  // The camera data as triangle meshes for FirstHitRaster (ids: the geometry IDs of hits), when
+  // they are all camera rays can meet (no spheres) and every one is opaque, so that a camera ray
+  // ends at its first surface and nothing behind it is asked for. Otherwise false.
+  bool opaqueCameraTriangles(std::vector<FirstHitRaster::Mesh>& out) const;
+  // A hit's shading data from its geometry ID, primitive, barycentric coordinates (of vertices
+  // 1 and 2) and distance along origin + t dir.
+  void fillSurfaceHit(std::uint32_t geomID, std::uint32_t prim, float u, float v, float t,
+                      Vec3 origin, Vec3 dir, SurfaceHit& hit) const;
   // Whether any surface (camera or ghost data) blocks origin + t dir, t in [tNear, tFar].
   bool surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const;
 
@@ -140,6 +149,8 @@ class SciVisScene {
   const std::vector<ResolvedLight>& lights() const { return lights_; }
   float aoDistance() const { return aoDistance_; }
   float extent() const { return extent_; }
+  // The whole scene's domain (sceneDomain(): every brick's scene has the same).
+  const Box3& domain() const { return domain_; }
 
  private:
   // Fills layer's table, visibility counts and empty macrocells for `tf` (opacities times
@@ -156,11 +167,9 @@ class SciVisScene {
   std::vector<VolumeLayer> volumes_;
   std::vector<ResolvedLight> lights_;
   float step_ = 1, aoDistance_ = 1, extent_ = 1;
+  Box3 domain_;
   IsosurfaceStats isosurfaceStats_;
   struct Embree;
-  // A hit's shading data from Embree's answer.
-  void fillSurfaceHit(std::uint32_t geomID, std::uint32_t prim, float u, float v, float t,
-                      Vec3 origin, Vec3 dir, SurfaceHit& hit) const;
   std::unique_ptr<Embree> embree_;
 };
 

@@ -209,6 +209,8 @@ void checkAgainstUnbricked(const std::shared_ptr<SceneDesc>& desc) {
   // The image-parallel render: the frames' mean, as the accumulate operation makes it.
   const RenderScene whole = buildRenderScene("scivis", *desc);
   const auto renderer = makeRenderer("scivis", whole, settings());
+  // As the frame driver does (and with it, camera rays' first hits as the bricks find them).
+  renderer->beginFrame(dfb::FrameInfo{}, desc->camera);
   std::vector<float> expected(bricked.size(), 0.0f);
   for (int f = 0; f < kFrames; ++f) {
     const auto frame =

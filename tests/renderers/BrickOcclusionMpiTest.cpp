@@ -85,6 +85,8 @@ TEST(BrickOcclusionMpi, SkippedRaysChangeNoByteOnAnyRankCountOrReplication) {
   // And the unbricked render, within float summation order.
   const RenderScene whole = buildRenderScene("scivis", *desc);
   const auto renderer = makeRenderer("scivis", whole, settings());
+  // As the frame driver does (and with it, camera rays' first hits as the bricks find them).
+  renderer->beginFrame(dfb::FrameInfo{}, desc->camera);
   std::vector<float> expected(on.size(), 0.0f);
   for (int f = 0; f < kFrames; ++f) {
     const auto frame =

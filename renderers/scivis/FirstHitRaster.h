@@ -1,0 +1,96 @@
+#pragma once
+// Camera rays' first hits on triangles by rasterising them, per frame, instead of asking Embree
+// ray by ray: at wall resolutions a BVH walk per pixel (~100 ns a ray here) costs far more than
+// visiting each triangle once over the few pixels it covers, as ParaView's rasteriser does.
+//
+// It finds exactly what a ray test finds, not an approximation of it: each pixel's own ray (its
+// jittered sample, its clip interval) is tested against each triangle whose screen box holds the
+// pixel, with a test made watertight by construction. All camera rays of a pinhole start at one
+// point O, so a ray d meets triangle ABC when the three edge values
+//   e0 = d . ((B-O) x (C-O)),  e1 = d . ((C-O) x (A-O)),  e2 = d . ((A-O) x (B-O))
+// share a sign; two triangles sharing an edge compute that edge's value from the same two
+// vertices in opposite order, which gives exactly the negated number (products commute, a - b =
+// -(b - a), no fused multiply-adds in this file), so a ray through a shared edge is never let
+// through, and one exactly on it sees both (the nearer, then the lower id, wins). The distance is
+// t = n . (A-O) / n . d with the plane's normal n = (B-A) x (C-A) (not the triple product of the
+// long vectors from the camera, which cancels badly), and the barycentric coordinates of B and C
+// are e1 / (e0 + e1 + e2) and e2 / (e0 + e1 + e2) (Embree's u and v).
+//
+// The result depends only on each ray and each triangle, not on binning, threads or which
+// triangles a brick holds beside it: a brick and the whole scene find the same hit for a ray.
+//
+// Contracts: prepare() once per frame (not thread-safe), then firstHits() from any thread.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "renderers/Camera.h"
+
+namespace renderers {
+
+class FirstHitRaster {
+ public:
+  // A triangle mesh as the raster reads it (the caller keeps it alive): xyz per vertex, three
+  // vertex indices (each below vertexCount: checked by whoever built the mesh) per triangle. `id`
+  // is what hits report as the mesh (Embree's geometry ID).
+  struct Mesh {
+    const float* vertices = nullptr;
+    std::size_t vertexCount = 0;
+    const std::uint32_t* triangles = nullptr;
+    std::size_t triangleCount = 0;
+    std::uint32_t id = 0;
+  };
+  static constexpr std::uint32_t kNone = ~std::uint32_t{0};
+  struct Hit {
+    float t = 0, u = 0, v = 0;
+    std::uint32_t mesh = kNone, triangle = 0;  // mesh kNone: no hit
+  };
+
+  // Bins every triangle by the screen cells its projection covers, for `camera` on a width x
+  // height canvas. False (and nothing binned) when rasterising cannot stand in for ray tests: a
+  // camera with a lens, or a vertex not in front of the camera. `simd`: AVX-512 where the CPU
+  // has it (false: the scalar kernel; both give the same bits).
+  bool prepare(const Camera& camera, int width, int height, const std::vector<Mesh>& meshes,
+               bool simd = true);
+  bool ready() const { return ready_; }
+  void clear();
+
+  // The first hit of the rays of pixels x0 .. x1 - 1 of rows y0 .. y1 - 1, one ray per pixel
+  // (row-major, `stride` rays a row): the camera ray through a point of the pixel (the pixel's
+  // own jitter) with unit direction (dx, dy, dz)[i], hits accepted at t0[i] <= t <= t1[i] (t1 <
+  // t0: an inactive ray). out[i] as the ray test would answer.
+  void firstHits(int x0, int x1, int y0, int y1, std::size_t stride, const float* dx,
+                 const float* dy, const float* dz, const float* t0, const float* t1,
+                 Hit* out) const;
+
+  // Triangles binned this frame and the cells' references to them (for benchmarks).
+  std::size_t binnedTriangles() const { return binned_; }
+
+  static constexpr int kCell = 16;  // screen cells are kCell x kCell pixels
+
+ private:
+  struct Vertex2 {
+    float x, y;
+  };
+  // A triangle this frame: its edge planes through the camera (three cross products, xyz
+  // each), its plane's normal n, n . (A - O) and the pixels it may cover (x0 > x1: none).
+  struct Setup {
+    float edges[9];
+    float normal[3];
+    float det;
+    std::int16_t x0, y0, x1, y1;
+  };
+  bool ready_ = false;
+  int width_ = 0, height_ = 0, cellsX_ = 0, cellsY_ = 0;
+  float originX_ = 0, originY_ = 0, originZ_ = 0;
+  std::vector<Mesh> meshes_;
+  std::vector<std::size_t> firstTriangle_;    // per mesh: its first global triangle index
+  std::vector<std::vector<Vertex2>> screen_;  // per mesh, per vertex: canvas position
+  std::vector<Setup> setup_;                  // per global triangle index
+  std::vector<std::uint32_t> cellStart_;      // per cell + 1: offsets into cellTriangles_
+  std::vector<std::uint32_t> cellTriangles_;  // global triangle indices, ascending per cell
+  std::size_t binned_ = 0;
+  bool simd_ = false;
+};
+
+}  // namespace renderers
