@@ -23,7 +23,8 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // How far a triangle's screen box is widened: a pixel's ray and the projection of the point it
 // hits agree to far less than this (float rounding of canvas coordinates below 2^14).
 constexpr float kMargin = 1.0f / 32.0f;
-constexpr std::size_t kChunk = 65536;  // triangles per binning task
+constexpr std::size_t kChunk = 65536;   // triangles per binning task
+constexpr std::uint32_t kPrefetch = 8;  // triangle records fetched ahead in a query
 
 struct PixelBox {
   int x0, y0, x1, y1;  // inclusive; empty when x0 > x1 or y0 > y1
@@ -213,7 +214,8 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   setup_.resize(total);
   const std::size_t cells = static_cast<std::size_t>(cellsX_) * static_cast<std::size_t>(cellsY_);
   const std::size_t chunks = (total + kChunk - 1) / kChunk;
-  std::vector<std::uint32_t> counts(chunks * cells, 0);
+  std::vector<std::uint32_t>& counts = counts_;  // kept: a fresh one page-faulted every frame
+  counts.assign(chunks * cells, 0);
   const auto cellsOf = [&](const Setup& t, std::size_t g, auto&& visit) {
     if (t.x0 > t.x1) return;
     for (int cy = t.y0 / kCell; cy <= t.y1 / kCell; ++cy)
@@ -310,7 +312,10 @@ void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t strid
                                static_cast<std::size_t>(cx);
       triangles.clear();
       for (auto& list : lists) list.clear();
-      for (std::uint32_t k = cellStart_[cell]; k < cellStart_[cell + 1]; ++k) {
+      const std::uint32_t end = cellStart_[cell + 1];
+      for (std::uint32_t k = cellStart_[cell]; k < end; ++k) {
+        // The records are read in the cell's order, scattered over the frame's: fetch ahead.
+        if (k + kPrefetch < end) __builtin_prefetch(&setup_[cellTriangles_[k + kPrefetch]]);
         const std::uint32_t g = cellTriangles_[k];
         const Setup& setup = setup_[g];
         const int bx0 = std::max<int>(setup.x0, ax), bx1 = std::min<int>(setup.x1, bx);

@@ -88,7 +88,9 @@ class FirstHitRaster {
   std::vector<std::vector<Vertex2>> screen_;  // per mesh, per vertex: canvas position
   std::vector<Setup> setup_;                  // per global triangle index
   std::vector<std::uint32_t> cellStart_;      // per cell + 1: offsets into cellTriangles_
-  std::vector<std::uint32_t> cellTriangles_;  // global triangle indices, ascending per cell
+  std::vector<std::uint32_t> cellTriangles_;
+  std::vector<std::uint32_t> counts_;  // binning's per chunk and cell counts  // global triangle
+                                       // indices, ascending per cell
   std::size_t binned_ = 0;
   bool simd_ = false;
 };
