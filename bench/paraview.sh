@@ -3,7 +3,7 @@
 # offscreen under Xvfb, IceT compositing) on the same data, ranks and image size.
 #  - Scenes: configs/scenes/wavelet256-volume.toml (the 256^3 wavelet as a volume: colour and
 #    opacity map of `scripts/bench scivis`, one sample per voxel) and wavelet256-contours.toml
-#    (two opaque isosurfaces of it). pvbatch reads the same files (bench/paraview_wavelet.py):
+#    (two opaque isosurfaces of it; PARAVIEW_SCENES="contours" runs one). pvbatch reads the same files (bench/paraview_wavelet.py):
 #    ParaView's Wavelet source at the extent [0, 255]^3 (the same field voxel for voxel), the
 #    volume representation or one Contour filter per value, the same camera turned the same way.
 #  - dfbwall --renderer scivis --bricks N on N ranks vs pvbatch on N ranks (N = 1, 2, 4), at
@@ -132,7 +132,8 @@ EOF
 fig_paraview() {
   local frames=5 sizes=(512 1024 2048) counts=(1 2 4) reps=1
   [ $quick = 1 ] && frames=4 sizes=(512)
-  local step=$((360 / 24)) scenes=(volume contours) mapper="${PARAVIEW_MAPPER:-GPU Based}"
+  local step=$((360 / 24)) mapper="${PARAVIEW_MAPPER:-GPU Based}" scenes
+  read -r -a scenes <<<"${PARAVIEW_SCENES:-volume contours}"
   pv_setup || return 1
   pv_xvfb_start || return 1
   local load0

@@ -154,7 +154,10 @@ BrickFrameDriver::BrickFrameDriver(std::shared_ptr<const SceneDesc> desc,
                                  m.directory.bricks.begin());
     m.scenes[i] = std::make_unique<SciVisScene>(m.desc, std::move(b.content));
     m.bytes += m.scenes[i]->bytes();
-    m.renderers[i] = std::make_unique<SciVisRenderer>(*m.scenes[i], settings, SciVisOptions{false});
+    SciVisOptions brickOptions;
+    brickOptions.background = false;
+    brickOptions.firstHits = m.options.firstHits;
+    m.renderers[i] = std::make_unique<SciVisRenderer>(*m.scenes[i], settings, brickOptions);
   }
 }
 

@@ -41,6 +41,8 @@ struct BrickDriverOptions {
   // (BrickOcclusion.h; only where that is exact: one sample per pixel a frame, no visible
   // volume, every material opaque). The same image either way; false: trace them all.
   bool occlusionCut = true;
+  // How the bricks' camera rays find their first hits (SciVisOptions::firstHits).
+  FirstHits firstHits = FirstHits::Auto;
 };
 
 // The DFB options every brick driver needs (the composite-then-accumulate operation, one root

@@ -164,8 +164,8 @@ WorldMesh selectTriangles(const WorldMesh& m, Keep keep) {
 }
 
 // The voxels of `g` around `region`, two beyond it: gradients look half a voxel around a hit
-// and the brick's isosurface cells reach a cell past its bounds. False: fewer than 2 voxels on an axis.
-// `whole`: widened to whole macrocells (their far faces included), so every macrocell has the
+// and the brick's isosurface cells reach a cell past its bounds. False: fewer than 2 voxels on an
+// axis. `whole`: widened to whole macrocells (their far faces included), so every macrocell has the
 // value range and bounds it has in the whole field, and shading rays skip exactly the stretches
 // they skip there.
 bool voxelsAround(const GridGeometry& g, const Box3& region, VoxelBox& box, bool whole = false) {

@@ -48,6 +48,20 @@ Vec3 cosineDirection(Vec3 n, float u0, float u1) {
 
 std::uint64_t bitsOf(float t) { return std::bit_cast<std::uint32_t>(t); }
 
+// How many pixels of a `height`-pixel canvas the finest isosurface's voxel spacing spans at the
+// centre of `domain` (0: no isosurfaces).
+float cellPixels(const SceneDesc& desc, const Box3& domain, const CameraDesc& camera, int height) {
+  float finest = kInf;
+  for (const IsosurfaceDesc& iso : desc.isosurfaces) {
+    const Vec3 s = desc.volumes.at(iso.volume).source.grid.spacing;
+    finest = std::min(finest, std::min(s.x, std::min(s.y, s.z)));
+  }
+  if (!(finest < kInf)) return 0;
+  const float distance = length((domain.lo + domain.hi) * 0.5f - camera.position);
+  const float halfHeight = std::tan(0.5f * camera.fovY * kPi / 180.0f);
+  return finest / (2.0f * distance * halfHeight) * static_cast<float>(height);
+}
+
 // Whether every corner of `box` (bounded) lies in front of the camera's plane.
 bool inFront(const Box3& box, const CameraDesc& c) {
   if (box.empty()) return false;
@@ -72,7 +86,7 @@ SciVisRenderer::SciVisRenderer(const SciVisScene& scene, const RenderSettings& s
       camera_(scene.desc().camera, settings.width, settings.height),
       march_(resolveMarchKernel(options.march)),
       epsilon_(1e-4f * scene.extent() + 0.05f * scene.volumeStep()) {
-  if (!options.rasterFirstHits || !scene.opaqueCameraTriangles(rasterMeshes_))
+  if (options.firstHits == FirstHits::Embree || !scene.opaqueCameraTriangles(rasterMeshes_))
     rasterMeshes_.clear();
 }
 
@@ -89,7 +103,9 @@ void SciVisRenderer::beginFrame(const dfb::FrameInfo& /*frame*/, const CameraDes
   // Only where the whole scene's domain lies in front of the camera: a decision every brick
   // and the unbricked scene make alike, so all find their first hits one way (the hit distance
   // keys a surface's random numbers, and the raster's may differ from Embree's in the last bit).
-  if (!inFront(scene_.domain(), camera))
+  if (!inFront(scene_.domain(), camera) ||
+      (options_.firstHits == FirstHits::Auto &&
+       cellPixels(scene_.desc(), scene_.domain(), camera, settings_.height) < kRasterCellPixels))
     raster_.clear();
   else
     raster_.prepare(camera_, settings_.width, settings_.height, rasterMeshes_);

@@ -32,17 +32,27 @@ struct Fragment {
   std::uint32_t volumeSamples = 0;  // taken inside [t0, t1), for benchmarks
 };
 
+enum class FirstHits { Auto, Raster, Embree };
+// Auto uses the raster where an isosurface voxel cell spans at least this many pixels: the raster
+// costs per triangle (about two a crossed cell), Embree per ray, so the raster wins as cells grow
+// on screen (the 256^3 contours on 1 and 2 ranks: Embree ahead at 2.8 pixels a cell, even at
+// 3.35, the raster ahead at 3.9 and 4.5).
+constexpr float kRasterCellPixels = 3.5f;
+
 struct SciVisOptions {
   // true: the background is composited under every pixel (alpha 1, image-parallel rendering);
   // false: pixels keep their alpha for sort-last compositing.
   bool background = true;
   // The instruction set of the one-volume march (VolumeMarch.h); all give the same image.
   MarchKernel march = MarchKernel::Auto;
-  // Camera rays' first hits by rasterising the triangles each frame (FirstHitRaster.h) where
-  // that finds what Embree would (one sample per pixel, a pinhole, every camera surface an
-  // opaque triangle, all in front of the camera); false: always Embree. Either finds the same
-  // surface for a ray; the distances may differ in their last bits.
-  bool rasterFirstHits = true;
+  // How camera rays find their first hits: Embree, or by rasterising the triangles each frame
+  // (FirstHitRaster.h). The raster only where it finds what Embree would (one sample per pixel,
+  // a pinhole, every camera surface an opaque triangle, the scene's domain in front of the
+  // camera); Auto: there, and only where it is the faster (the isosurfaces' voxel cells span at
+  // least kRasterCellPixels on the canvas). Either finds the same surface for a ray; the
+  // distances may differ in their last bits, so every brick and the unbricked scene choose
+  // alike (from the description, the camera and the canvas only).
+  FirstHits firstHits = FirstHits::Auto;
 };
 
 class SciVisRenderer final : public Renderer {

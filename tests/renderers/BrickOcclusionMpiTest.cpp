@@ -11,6 +11,7 @@
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/BrickFrameDriver.h"
 #include "renderers/scivis/BrickOcclusion.h"
+#include "renderers/scivis/SciVisRenderer.h"
 #include "tests/MpiTestUtil.h"
 #include "tests/renderers/BrickTestUtil.h"
 #include "tests/renderers/RenderTestUtil.h"
@@ -42,16 +43,17 @@ RenderSettings settings() {
 // The image of kFrames frames of `bricks` bricks on the first `ranks` ranks (rank 0's copy) and
 // the rays the ranks skipped, summed (on rank 0).
 std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int ranks, int bricks,
-                                int replication, bool cut, std::uint64_t& skipped) {
+                                int replication, bool cut, std::uint64_t& skipped,
+                                FirstHits firstHits = FirstHits::Auto) {
   MPI_Comm comm;
   const int rank = testutil::worldRank();
   MPI_Comm_split(MPI_COMM_WORLD, rank < ranks ? 0 : 1, rank, &comm);
   std::vector<float> image;
   std::uint64_t mine = 0;
   if (rank < ranks)
-    image = test::renderHeldBricks(desc, settings(),
-                                   loadOwnBricks(*desc, bricks, replication, rank, ranks), comm,
-                                   kTile, kFrames, std::chrono::milliseconds(30000), cut, &mine);
+    image = test::renderHeldBricks(
+        desc, settings(), loadOwnBricks(*desc, bricks, replication, rank, ranks), comm, kTile,
+        kFrames, std::chrono::milliseconds(30000), cut, &mine, firstHits);
   MPI_Comm_free(&comm);
   skipped = 0;
   MPI_Reduce(&mine, &skipped, 1, MPI_UINT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
@@ -62,46 +64,56 @@ bool sameBytes(const std::vector<float>& a, const std::vector<float>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 
+// With first hits from Embree (Auto at this size) and from the raster (FirstHitRaster.h: its hit
+// distances key the AO and shadow rays' random numbers as Embree's do, so the unbricked render
+// must find its first hits the same way).
 TEST(BrickOcclusionMpi, SkippedRaysChangeNoByteOnAnyRankCountOrReplication) {
   const auto desc = opaqueScene();
   ASSERT_TRUE(BrickOcclusion::exactFor(*desc));
   const int size = testutil::worldSize();
-  std::uint64_t skippedOff = 0, skippedOn = 0, skippedOne = 0, skippedReplicated = 0;
-  const std::vector<float> off = renderBricks(desc, size, 4, 1, false, skippedOff);
-  const std::vector<float> on = renderBricks(desc, size, 4, 1, true, skippedOn);
-  const std::vector<float> one = renderBricks(desc, 1, 4, 1, true, skippedOne);
-  const std::vector<float> replicated =
-      renderBricks(desc, size, 4, std::min(size, 2), true, skippedReplicated);
-  if (testutil::worldRank() != 0) return;
-  EXPECT_EQ(skippedOff, 0u);
-  // Every frame's tiles are cut the same whoever renders them: the same rays on every layout.
-  EXPECT_GT(skippedOn, 0u) << "the nearer bricks' isosurfaces should hide some rays";
-  EXPECT_EQ(skippedOne, skippedOn);
-  EXPECT_EQ(skippedReplicated, skippedOn);
-  EXPECT_TRUE(sameBytes(on, off)) << "skipping hidden rays changed the image";
-  EXPECT_TRUE(sameBytes(one, off)) << "1 rank";
-  EXPECT_TRUE(sameBytes(replicated, off)) << "replication " << std::min(size, 2);
+  for (const FirstHits firstHits : {FirstHits::Auto, FirstHits::Raster}) {
+    const char* how = firstHits == FirstHits::Raster ? "raster" : "Embree";
+    std::uint64_t skippedOff = 0, skippedOn = 0, skippedOne = 0, skippedReplicated = 0;
+    const std::vector<float> off = renderBricks(desc, size, 4, 1, false, skippedOff, firstHits);
+    const std::vector<float> on = renderBricks(desc, size, 4, 1, true, skippedOn, firstHits);
+    const std::vector<float> one = renderBricks(desc, 1, 4, 1, true, skippedOne, firstHits);
+    const std::vector<float> replicated =
+        renderBricks(desc, size, 4, std::min(size, 2), true, skippedReplicated, firstHits);
+    if (testutil::worldRank() != 0) continue;
+    EXPECT_EQ(skippedOff, 0u) << how;
+    // Every frame's tiles are cut the same whoever renders them: the same rays on every layout.
+    EXPECT_GT(skippedOn, 0u) << how << ": the nearer bricks' isosurfaces should hide some rays";
+    EXPECT_EQ(skippedOne, skippedOn) << how;
+    EXPECT_EQ(skippedReplicated, skippedOn) << how;
+    EXPECT_TRUE(sameBytes(on, off)) << how << ": skipping hidden rays changed the image";
+    EXPECT_TRUE(sameBytes(one, off)) << how << ": 1 rank";
+    EXPECT_TRUE(sameBytes(replicated, off)) << how << ": replication " << std::min(size, 2);
 
-  // And the unbricked render, within float summation order.
-  const RenderScene whole = buildRenderScene("scivis", *desc);
-  const auto renderer = makeRenderer("scivis", whole, settings());
-  // As the frame driver does (and with it, camera rays' first hits as the bricks find them).
-  renderer->beginFrame(dfb::FrameInfo{}, desc->camera);
-  std::vector<float> expected(on.size(), 0.0f);
-  for (int f = 0; f < kFrames; ++f) {
-    const auto frame =
-        test::renderImage(*renderer, kWidth, kHeight, kTile, 2, 1, static_cast<std::uint32_t>(f));
-    for (std::size_t i = 0; i < frame.size(); ++i) expected[i] += frame[i] / kFrames;
+    // And the unbricked render, within float summation order.
+    const SciVisScene whole(desc, wholeScene(*desc));
+    SciVisOptions options;
+    options.firstHits = firstHits;
+    SciVisRenderer renderer(whole, settings(), options);
+    // As the frame driver does (and with it, the raster's binning for this camera).
+    renderer.beginFrame(dfb::FrameInfo{}, desc->camera);
+    EXPECT_EQ(renderer.firstHitsRasterised(1), firstHits == FirstHits::Raster) << how;
+    std::vector<float> expected(on.size(), 0.0f);
+    for (int f = 0; f < kFrames; ++f) {
+      const auto frame =
+          test::renderImage(renderer, kWidth, kHeight, kTile, 2, 1, static_cast<std::uint32_t>(f));
+      for (std::size_t i = 0; i < frame.size(); ++i) expected[i] += frame[i] / kFrames;
+    }
+    ASSERT_EQ(on.size(), expected.size());
+    float worst = 0;
+    for (std::size_t i = 0; i < on.size(); ++i)
+      worst = std::max(worst, std::abs(on[i] - expected[i]));
+    EXPECT_LE(worst, 1e-4f) << how;
+    std::printf(
+        "4 bricks on %d rank(s), first hits by %s: %llu of %d camera rays skipped over %d "
+        "frames; %.3g from the unbricked render\n",
+        size, how, static_cast<unsigned long long>(skippedOn), kWidth * kHeight * kFrames, kFrames,
+        worst);
   }
-  ASSERT_EQ(on.size(), expected.size());
-  float worst = 0;
-  for (std::size_t i = 0; i < on.size(); ++i)
-    worst = std::max(worst, std::abs(on[i] - expected[i]));
-  EXPECT_LE(worst, 1e-4f);
-  std::printf(
-      "4 bricks on %d rank(s): %llu of %d camera rays skipped over %d frames; %.3g from "
-      "the unbricked render\n",
-      size, static_cast<unsigned long long>(skippedOn), kWidth * kHeight * kFrames, kFrames, worst);
 }
 
 // Where a fragment's alpha may lie between 0 and 1, an opaque crossing does not make the

@@ -22,10 +22,12 @@ inline std::vector<float> renderHeldBricks(const std::shared_ptr<SceneDesc>& des
                                            std::vector<HeldBrick> held, MPI_Comm comm, int tileSize,
                                            int frames, std::chrono::milliseconds frameTimeout,
                                            bool occlusionCut = true,
-                                           std::uint64_t* raysSkipped = nullptr) {
+                                           std::uint64_t* raysSkipped = nullptr,
+                                           FirstHits firstHits = FirstHits::Auto) {
   BrickDriverOptions bo;
   bo.threads = 2;
   bo.occlusionCut = occlusionCut;
+  bo.firstHits = firstHits;
   BrickFrameDriver driver(desc, settings, bo, std::move(held), comm);
   messaging::Messenger messenger(comm);
   dfb::DfbOptions options;

@@ -267,8 +267,9 @@ TEST(FirstHitRaster, RenderedImagesMatchEmbreesFirstHits) {
   const SciVisScene scene(desc, fieldContent(64, ripple));
   RenderSettings settings;
   settings.width = 120, settings.height = 96, settings.seed = 9;
-  SciVisOptions rasterOptions, embreeOptions;
-  embreeOptions.rasterFirstHits = false;
+  SciVisOptions rasterOptions, embreeOptions, autoOptions;
+  rasterOptions.firstHits = FirstHits::Raster;
+  embreeOptions.firstHits = FirstHits::Embree;
   SciVisRenderer rasterised(scene, settings, rasterOptions), traced(scene, settings, embreeOptions);
   const dfb::FrameInfo frame{};
   rasterised.beginFrame(frame, kCamera);
@@ -276,6 +277,16 @@ TEST(FirstHitRaster, RenderedImagesMatchEmbreesFirstHits) {
   ASSERT_TRUE(rasterised.firstHitsRasterised(1));
   ASSERT_FALSE(traced.firstHitsRasterised(1));
   ASSERT_FALSE(rasterised.firstHitsRasterised(2));  // more samples a frame: Embree
+  // Auto: here a voxel cell spans about 1.1 pixels, where Embree is the faster; at 4x the
+  // canvas, 4.4 pixels, the raster.
+  SciVisRenderer automatic(scene, settings, autoOptions);
+  automatic.beginFrame(frame, kCamera);
+  EXPECT_FALSE(automatic.firstHitsRasterised(1));
+  RenderSettings large = settings;
+  large.width *= 4, large.height *= 4;
+  SciVisRenderer automaticLarge(scene, large, autoOptions);
+  automaticLarge.beginFrame(frame, kCamera);
+  EXPECT_TRUE(automaticLarge.firstHitsRasterised(1));
   const auto a = test::renderImage(rasterised, 120, 96, 32, 2, 1);
   const auto b = test::renderImage(traced, 120, 96, 32, 2, 1);
   ASSERT_EQ(a.size(), b.size());
