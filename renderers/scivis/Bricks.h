@@ -40,11 +40,10 @@ enum class GhostMode {
   // brick swept towards each light that casts shadows, to the domain's boundary. A brick shades
   // its points exactly as the whole scene does, at the price of those regions (held sparsely).
   Reach,
-  // One ghost layer: only the voxels that interpolation, gradients and the brick's isosurface cells
-  // need
-  // at the brick's faces, no ghost particles or triangles. Shading rays see the brick's own data
-  // and that layer (as OSPRay's distributed renderer), so AO and shadows near brick faces
-  // differ (seams), and no shadow falls from one brick into another.
+  // One ghost layer: only the voxels that interpolation, gradients and the brick's isosurface
+  // cells need at the brick's faces, no ghost particles or triangles. Shading rays see the
+  // brick's own data and that layer (as OSPRay's distributed renderer), so AO and shadows near
+  // brick faces differ (seams), and no shadow falls from one brick into another.
   Layer,
 };
 // "reach" / "layer"; ghostModeFromName throws renderers::Error naming the choices otherwise.
