@@ -364,6 +364,20 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     thread_local std::vector<std::uint8_t> inside;
     thread_local std::vector<SciVisRenderer::FirstSurface> firsts, pieceFirsts;
     const RowRays row{&camera, bounds, m.settings.seed, accumulationId, 0, spp, simdRows};
+    // Where the raster accepts the brick's first hits: its bounds, but not at the faces it shares
+    // with the domain's boundary. The unbricked scene clips no ray there, and a surface that
+    // meets the boundary is hit within rounding of where the ray enters (or leaves) the domain:
+    // a brick must take that hit as the whole scene does. Between bricks the split stays exact.
+    Box3 accept = bounds;
+    if (renderer) {
+      const Box3& domain = m.scenes[static_cast<std::size_t>(job.brick)]->domain();
+      if (accept.lo.x <= domain.lo.x) accept.lo.x = -kInf;
+      if (accept.lo.y <= domain.lo.y) accept.lo.y = -kInf;
+      if (accept.lo.z <= domain.lo.z) accept.lo.z = -kInf;
+      if (accept.hi.x >= domain.hi.x) accept.hi.x = kInf;
+      if (accept.hi.y >= domain.hi.y) accept.hi.y = kInf;
+      if (accept.hi.z >= domain.hi.z) accept.hi.z = kInf;
+    }
     const int rows =
         std::max(1, static_cast<int>(SciVisRenderer::kBatch /
                                      std::max<std::size_t>(1, std::size_t{spp} * region.width())));
@@ -408,7 +422,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
         // the rays that meet the brick in row order; slots[r]: ray r's piece among them.
         firsts.resize(n);
         renderer->rasterFirstHits(region.x0, region.x1, y0, y1, rays.data(), hits.data(),
-                                  firsts.data());
+                                  firsts.data(), &accept);
         pieces.clear(), pieceFirsts.clear(), slots.resize(n);
         for (std::size_t r = 0; r < n; ++r)
           if (hits[r]) {

@@ -53,11 +53,32 @@ inline PixelBox pixelsOf(float ax, float ay, float bx, float by, float cx, float
 struct Vec {
   float x, y, z;
 };
-inline Vec minus(const float* p, float ox, float oy, float oz) {
-  return {p[0] - ox, p[1] - oy, p[2] - oz};
+
+inline Vec minus(Vec a, Vec b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline Vec at(const float* vertices, std::uint32_t i) {
+  const float* p = vertices + 3 * std::size_t{i};
+  return {p[0], p[1], p[2]};
 }
 inline Vec crossOf(Vec a, Vec b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline bool before(Vec a, Vec b) {
+  return a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z < b.z)));
+}
+
+// The plane through the camera at `o` and the edge from p to q, as its normal (p - o) x (q - p):
+// the same as (p - o) x (q - o), but from the short edge vector, not from two long, nearly
+// parallel ones whose cross product cancels (that moved the edges of small, far triangles by a
+// fraction of a pixel, and let through or caught rays near them). Computed from the endpoints
+// in one order (the first by coordinates) and negated for the other, so the two triangles
+// sharing an edge get exactly opposite normals: watertight, also across bricks (whose meshes
+// number their vertices differently but place them alike).
+inline Vec edgePlane(Vec p, Vec q, Vec o) {
+  if (before(q, p)) {
+    const Vec c = crossOf(minus(q, o), minus(p, q));
+    return {-c.x, -c.y, -c.z};
+  }
+  return crossOf(minus(p, o), minus(q, p));
 }
 inline float dotOf(Vec a, Vec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
@@ -174,6 +195,7 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   width_ = width, height_ = height;
   cellsX_ = (width + kCell - 1) / kCell, cellsY_ = (height + kCell - 1) / kCell;
   originX_ = cam.origin.x, originY_ = cam.origin.y, originZ_ = cam.origin.z;
+  const Vec origin{originX_, originY_, originZ_};
   simd_ = simd && avx512Available();
 
   // Every vertex on the canvas (Camera::ray() inverted); one behind or beside the camera's
@@ -241,14 +263,14 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
         t.x0 = 1, t.x1 = 0;
         continue;
       }
-      const Vec pa = minus(mesh.vertices + 3 * std::size_t{tri[0]}, originX_, originY_, originZ_);
-      const Vec pb = minus(mesh.vertices + 3 * std::size_t{tri[1]}, originX_, originY_, originZ_);
-      const Vec pc = minus(mesh.vertices + 3 * std::size_t{tri[2]}, originX_, originY_, originZ_);
-      const Vec c0 = crossOf(pb, pc), c1 = crossOf(pc, pa), c2 = crossOf(pa, pb);
+      const Vec a3 = at(mesh.vertices, tri[0]), b3 = at(mesh.vertices, tri[1]);
+      const Vec c3 = at(mesh.vertices, tri[2]);
+      const Vec c0 = edgePlane(b3, c3, origin), c1 = edgePlane(c3, a3, origin);
+      const Vec c2 = edgePlane(a3, b3, origin);
       // The plane's normal from the edges (well conditioned; the triple product of the three
       // long vectors from the camera is not: it lost 1e-3 of t at a few units' distance).
-      const Vec n =
-          crossOf({pb.x - pa.x, pb.y - pa.y, pb.z - pa.z}, {pc.x - pa.x, pc.y - pa.y, pc.z - pa.z});
+      const Vec n = crossOf(minus(b3, a3), minus(c3, a3));
+      const Vec pa = minus(a3, origin);
       t = {{c0.x, c0.y, c0.z, c1.x, c1.y, c1.z, c2.x, c2.y, c2.z},
            {n.x, n.y, n.z},
            dotOf(pa, n),

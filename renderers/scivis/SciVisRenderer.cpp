@@ -112,7 +112,8 @@ void SciVisRenderer::beginFrame(const dfb::FrameInfo& /*frame*/, const CameraDes
 }
 
 void SciVisRenderer::rasterFirstHits(int x0, int x1, int y0, int y1, const RayPiece* rays,
-                                     const std::uint8_t* active, FirstSurface* out) const {
+                                     const std::uint8_t* active, FirstSurface* out,
+                                     const Box3* accept) const {
   const std::size_t width = static_cast<std::size_t>(x1 - x0);
   const std::size_t n = static_cast<std::size_t>(y1 - y0) * width;
   thread_local std::vector<float> dx, dy, dz, t0, t1;
@@ -121,8 +122,13 @@ void SciVisRenderer::rasterFirstHits(int x0, int x1, int y0, int y1, const RayPi
   for (std::size_t i = 0; i < n; ++i) {
     const RayPiece& r = rays[i];
     dx[i] = r.dir.x, dy[i] = r.dir.y, dz[i] = r.dir.z;
-    const bool on = (!active || active[i]) && r.t0 < r.t1;  // integrate() skips t0 >= t1
-    t0[i] = on ? r.t0 : kInf, t1[i] = on ? r.t1 : -kInf;
+    bool on = (!active || active[i]) && r.t0 < r.t1;  // integrate() skips t0 >= t1
+    float a = r.t0, b = r.t1;
+    if (on && accept) {
+      a = 0, b = kInf;
+      on = clipToBox(*accept, r.origin, reciprocal(r.dir), a, b);
+    }
+    t0[i] = on ? a : kInf, t1[i] = on ? b : -kInf;
   }
   raster_.firstHits(x0, x1, y0, y1, width, dx.data(), dy.data(), dz.data(), t0.data(), t1.data(),
                     hits.data());

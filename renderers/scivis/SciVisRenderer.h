@@ -93,8 +93,11 @@ class SciVisRenderer final : public Renderer {
   // The first surfaces of the camera rays of pixels x0 .. x1 - 1 of rows y0 .. y1 - 1, one ray
   // per pixel, row-major (as SciVisRenderer::render and the brick driver make them), from this
   // frame's raster; a ray with active[i] == 0 (active null: all are) or t0 >= t1 finds none.
+  // `accept` (unless null): hits count where the ray is inside it, not in [t0, t1] (a brick's
+  // bounds without its faces on the domain's boundary, see BrickFrameDriver).
   void rasterFirstHits(int x0, int x1, int y0, int y1, const RayPiece* rays,
-                       const std::uint8_t* active, FirstSurface* out) const;
+                       const std::uint8_t* active, FirstSurface* out,
+                       const Box3* accept = nullptr) const;
   // How many rays a caller should hand integrate() at once, about: enough to fill the packets,
   // few enough to stay in cache.
   static constexpr std::size_t kBatch = 1024;
