@@ -119,14 +119,28 @@ void SciVisRenderer::rasterFirstHits(int x0, int x1, int y0, int y1, const RayPi
   thread_local std::vector<float> dx, dy, dz, t0, t1;
   thread_local std::vector<FirstHitRaster::Hit> hits;
   dx.resize(n), dy.resize(n), dz.resize(n), t0.resize(n), t1.resize(n), hits.resize(n);
+  bool bounded[3] = {false, false, false};
+  if (accept)
+    for (int axis = 0; axis < 3; ++axis)
+      bounded[axis] = accept->lo[axis] > -kInf || accept->hi[axis] < kInf;
   for (std::size_t i = 0; i < n; ++i) {
     const RayPiece& r = rays[i];
     dx[i] = r.dir.x, dy[i] = r.dir.y, dz[i] = r.dir.z;
     bool on = (!active || active[i]) && r.t0 < r.t1;  // integrate() skips t0 >= t1
     float a = r.t0, b = r.t1;
     if (on && accept) {
+      // clipToBox() along the axes where `accept` has a face (the others leave [0, inf) as it
+      // is; a brick that spans the domain has none).
       a = 0, b = kInf;
-      on = clipToBox(*accept, r.origin, reciprocal(r.dir), a, b);
+      for (int axis = 0; axis < 3; ++axis)
+        if (bounded[axis]) {  // clipToBox()'s step for this axis, the same bits
+          const float o = r.origin[axis], inv = 1.0f / r.dir[axis];
+          float near = (accept->lo[axis] - o) * inv, far = (accept->hi[axis] - o) * inv;
+          if (near > far) std::swap(near, far);
+          if (near == near) a = std::max(a, near);
+          if (far == far) b = std::min(b, far);
+        }
+      on = a <= b;
     }
     t0[i] = on ? a : kInf, t1[i] = on ? b : -kInf;
   }
