@@ -368,16 +368,10 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     // with the domain's boundary. The unbricked scene clips no ray there, and a surface that
     // meets the boundary is hit within rounding of where the ray enters (or leaves) the domain:
     // a brick must take that hit as the whole scene does. Between bricks the split stays exact.
-    Box3 accept = bounds;
-    if (renderer) {
-      const Box3& domain = m.scenes[static_cast<std::size_t>(job.brick)]->domain();
-      if (accept.lo.x <= domain.lo.x) accept.lo.x = -kInf;
-      if (accept.lo.y <= domain.lo.y) accept.lo.y = -kInf;
-      if (accept.lo.z <= domain.lo.z) accept.lo.z = -kInf;
-      if (accept.hi.x >= domain.hi.x) accept.hi.x = kInf;
-      if (accept.hi.y >= domain.hi.y) accept.hi.y = kInf;
-      if (accept.hi.z >= domain.hi.z) accept.hi.z = kInf;
-    }
+    const Box3 accept =
+        renderer
+            ? openAtDomainBoundary(bounds, m.scenes[static_cast<std::size_t>(job.brick)]->domain())
+            : bounds;
     const int rows =
         std::max(1, static_cast<int>(SciVisRenderer::kBatch /
                                      std::max<std::size_t>(1, std::size_t{spp} * region.width())));

@@ -268,6 +268,18 @@ void split(const Box3& box, int count, int& nextId, std::vector<BrickPlan>& out)
 
 }  // namespace
 
+Box3 openAtDomainBoundary(const Box3& bounds, const Box3& domain) {
+  constexpr float kInf = Box3::kInf;
+  Box3 out = bounds;
+  if (out.lo.x <= domain.lo.x) out.lo.x = -kInf;
+  if (out.lo.y <= domain.lo.y) out.lo.y = -kInf;
+  if (out.lo.z <= domain.lo.z) out.lo.z = -kInf;
+  if (out.hi.x >= domain.hi.x) out.hi.x = kInf;
+  if (out.hi.y >= domain.hi.y) out.hi.y = kInf;
+  if (out.hi.z >= domain.hi.z) out.hi.z = kInf;
+  return out;
+}
+
 Box3 sceneDomain(const SceneDesc& desc) {
   Box3 domain{Vec3{Box3::kInf}, Vec3{-Box3::kInf}};
   for (const VolumeDesc& v : desc.volumes) {

@@ -25,6 +25,10 @@ struct BrickPlan {
 
 // The bounds of everything in the scene (volumes' voxel centres, particles, meshes).
 Box3 sceneDomain(const SceneDesc& desc);
+// `bounds` with the faces it shares with `domain`'s boundary pushed to infinity: where a brick's
+// camera rays take first hits from the raster (FirstHitRaster.h) as the unbricked scene, which
+// clips no ray at the domain's boundary, does; between bricks the split stays `bounds`'.
+Box3 openAtDomainBoundary(const Box3& bounds, const Box3& domain);
 
 // `count` bricks: the domain halved (in brick counts) along its longest axis, recursively, at
 // the plane that gives each side its share of the volume. Ids are 0 .. count-1 in k-d order.

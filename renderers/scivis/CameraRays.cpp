@@ -2,12 +2,7 @@
 
 #include <immintrin.h>
 
-// GCC 12's AVX-512 intrinsics start their results from _mm512_undefined_*() and then warn that
-// it is (or may be) used uninitialized (GCC bug 105593, fixed in GCC 13).
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wuninitialized"
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
+#include "renderers/scivis/Avx512Warnings.h"
 
 namespace renderers {
 namespace {

@@ -105,16 +105,35 @@ std::vector<FirstHitRaster::Hit> rasterHits(const FirstHitRaster& raster, const 
 
 const CameraDesc kCamera{{1.7f, 1.2f, 2.9f}, {0.05f, -0.03f, 0}, {0, 1, 0}, 42.0f, 0, 0};
 
-TEST(FirstHitRaster, FindsTheSurfacesEmbreeFinds) {
-  const auto desc = isoScene(64, {0.55f, 0.85f}, kCamera);
-  const SciVisScene scene(desc, fieldContent(64, ripple));
+// A field's opaque isosurfaces (one mesh per level) seen by kCamera on w x h, binned.
+struct RasterCase {
+  RasterCase(int n, std::vector<float> levels, float (*field)(Vec3), int width, int height)
+      : desc(isoScene(n, levels, kCamera)),
+        scene(desc, fieldContent(n, field)),
+        camera(kCamera, width, height),
+        w(width),
+        h(height) {
+    ready = scene.opaqueCameraTriangles(meshes) && meshes.size() == levels.size() &&
+            raster.prepare(camera, w, h, meshes);
+  }
+  std::shared_ptr<SceneDesc> desc;
+  SciVisScene scene;
+  Camera camera;
+  int w, h;
   std::vector<FirstHitRaster::Mesh> meshes;
-  ASSERT_TRUE(scene.opaqueCameraTriangles(meshes));
-  ASSERT_EQ(meshes.size(), 2u);
-  const int w = 160, h = 120;
-  const Camera camera(kCamera, w, h);
   FirstHitRaster raster;
-  ASSERT_TRUE(raster.prepare(camera, w, h, meshes));
+  bool ready = false;
+};
+
+float distanceFromCentre(Vec3 p) { return length(p); }
+
+TEST(FirstHitRaster, FindsTheSurfacesEmbreeFinds) {
+  const RasterCase c(64, {0.55f, 0.85f}, ripple, 160, 120);
+  ASSERT_TRUE(c.ready);
+  const SciVisScene& scene = c.scene;
+  const FirstHitRaster& raster = c.raster;
+  const Camera& camera = c.camera;
+  const int w = c.w, h = c.h;
   const CanvasRays rays = canvasRays(camera, w, h);
   const auto hits = rasterHits(raster, rays);
   int both = 0, onlyOne = 0, otherSurface = 0;
@@ -153,15 +172,12 @@ TEST(FirstHitRaster, FindsTheSurfacesEmbreeFinds) {
 // rays aimed exactly at its vertices and at its edges' midpoints, where two or more triangles
 // meet (the places a ray test that is not watertight lets rays through).
 TEST(FirstHitRaster, LetsNoRayThroughAClosedSurface) {
-  const auto desc = isoScene(40, {0.6f}, kCamera);
-  const SciVisScene scene(desc, fieldContent(40, [](Vec3 p) { return length(p); }));
-  std::vector<FirstHitRaster::Mesh> meshes;
-  ASSERT_TRUE(scene.opaqueCameraTriangles(meshes));
-  ASSERT_EQ(meshes.size(), 1u);
-  const int w = 200, h = 150;
-  const Camera camera(kCamera, w, h);
-  FirstHitRaster raster;
-  ASSERT_TRUE(raster.prepare(camera, w, h, meshes));
+  const RasterCase c(40, {0.6f}, distanceFromCentre, 200, 150);
+  ASSERT_TRUE(c.ready);
+  const FirstHitRaster& raster = c.raster;
+  const Camera& camera = c.camera;
+  const std::vector<FirstHitRaster::Mesh>& meshes = c.meshes;
+  const int w = c.w, h = c.h;
   const Vec3 eye = kCamera.position;
   const float innerAngle = std::asin(0.58f / length(eye));
   // Rays through the pixels whose ray passes inside radius 0.58 all hit.
@@ -335,15 +351,8 @@ TEST(FirstHitRaster, BricksFindWhatTheWholeSceneFinds) {
     CanvasRays clipped = rays;
     for (std::size_t i = 0; i < rays.dx.size(); ++i) {
       const Vec3 d{rays.dx[i], rays.dy[i], rays.dz[i]};
-      // The brick driver's accept box: the bounds without the faces on the domain's boundary.
-      Box3 accept = scene.bounds();
-      const Box3& domain = scene.domain();
-      if (accept.lo.x <= domain.lo.x) accept.lo.x = -kInf;
-      if (accept.lo.y <= domain.lo.y) accept.lo.y = -kInf;
-      if (accept.lo.z <= domain.lo.z) accept.lo.z = -kInf;
-      if (accept.hi.x >= domain.hi.x) accept.hi.x = kInf;
-      if (accept.hi.y >= domain.hi.y) accept.hi.y = kInf;
-      if (accept.hi.z >= domain.hi.z) accept.hi.z = kInf;
+      // As the brick driver accepts them: up to the domain's boundary where the brick meets it.
+      const Box3 accept = openAtDomainBoundary(scene.bounds(), scene.domain());
       float t0 = 0, t1 = kInf;
       if (!clipToBox(accept, rays.origin, reciprocal(d), t0, t1)) t0 = kInf, t1 = -kInf;
       clipped.t0[i] = t0, clipped.t1[i] = t1;
