@@ -180,6 +180,8 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
   dfbOptions.toneMap.exposure = o.exposure;
   dfbOptions.toneMap.filmic = o.filmic;
   dfbOptions.frameTimeout = std::chrono::seconds(o.timeoutSeconds);
+  // Without a wall the gathered image is only --image's, written once after the last frame.
+  dfbOptions.gatherEveryFrame = hasWall;
   if (route) {
     // Tiles no display shows are never rendered; the rest are owned where they are rendered.
     driving.activeTiles = wall::tilesShownByAnyDisplay(*job.layout, o.tileSize);
@@ -532,6 +534,7 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
       totals.brickRaysSkipped = static_cast<double>(brickDriver->raysSkipped());
     }
 
+    if (!dfbOptions.gatherEveryFrame && !o.image.empty() && lastFrame > 0) dfb.gatherImage();
     if (job.worldRank == 0 && !o.image.empty() && lastFrame > 0) {
       if (endsWith(o.image, ".png"))
         wall::writePng(o.image, dfb.imageRgba8().data(), job.canvasWidth, job.canvasHeight);

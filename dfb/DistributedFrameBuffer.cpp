@@ -391,8 +391,13 @@ GatherCounts DistributedFrameBuffer::Impl::gather(Clock::time_point deadline) {
     if (rgba8) return reinterpret_cast<const std::byte*>(owned.rgba8.data());
     return reinterpret_cast<const std::byte*>(owned.operation->finished().color.data());
   };
-  return gatherImage(comm, grid, bytesPerPixel, options.compressGather, ownedTiles, tilesOf,
-                     pixelsOf, image, deadline, gatherBuffers);
+  return dfb::gatherImage(comm, grid, bytesPerPixel, options.compressGather, ownedTiles, tilesOf,
+                          pixelsOf, image, deadline, gatherBuffers);
+}
+
+void DistributedFrameBuffer::gatherImage() {
+  Impl& d = *impl_;
+  d.gather(Clock::now() + 2 * d.options.frameTimeout);
 }
 
 void DistributedFrameBuffer::end() {
@@ -446,7 +451,8 @@ void DistributedFrameBuffer::end() {
   checkMpi(MPI_Iallreduce(d.errorsLocal.data(), d.errorsGlobal.data(), static_cast<int>(count),
                           MPI_FLOAT, MPI_MAX, d.comm, &request),
            "MPI_Iallreduce");
-  const GatherCounts counts = d.gather(collectiveDeadline);
+  const GatherCounts counts =
+      d.options.gatherEveryFrame ? d.gather(collectiveDeadline) : GatherCounts{};
   messaging::waitWithDeadline(request, collectiveDeadline,
                               "frame " + std::to_string(d.frame.frameId) +
                                   ": another rank did not finish the frame within " +

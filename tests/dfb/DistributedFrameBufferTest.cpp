@@ -90,6 +90,29 @@ TEST(Dfb, GatheredRgbaF32EqualsTheReference) {
   EXPECT_EQ(total, static_cast<std::uint64_t>(dfb.grid().tileCount()));
 }
 
+// A run that wants only its last frame (dfbwall --image without a wall) gathers it once, after
+// the last end(): frames before gather nothing, and gatherImage() gives that frame's image.
+TEST(Dfb, GatheringOnlyTheLastFrameGivesItsImage) {
+  messaging::Messenger messenger(MPI_COMM_WORLD);
+  DfbOptions o = options(DisplayFormat::RGBAF32);
+  o.gatherEveryFrame = false;
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
+  for (std::uint32_t frame = 1; frame <= 3; ++frame) {
+    renderFrame(dfb, frame);
+    EXPECT_EQ(dfb.stats().pixelBytesReceived, 0u) << "frame " << frame;
+    EXPECT_TRUE(dfb.imageRgbaF32().empty()) << "frame " << frame;
+  }
+  dfb.gatherImage();
+  if (worldRank() != 0) return;
+  const auto& image = dfb.imageRgbaF32();
+  ASSERT_EQ(image.size(), static_cast<size_t>(4 * kWidth * kHeight));
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x)
+      for (int c = 0; c < 4; ++c)
+        ASSERT_EQ(image[static_cast<size_t>(4 * (y * kWidth + x) + c)], pixelValue(x, y, 3, c))
+            << x << "," << y << " channel " << c;
+}
+
 class GatherRgba8 : public ::testing::TestWithParam<bool> {};
 
 TEST_P(GatherRgba8, EqualsTheToneMappedReference) {
