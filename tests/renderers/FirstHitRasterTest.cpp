@@ -320,6 +320,35 @@ TEST(FirstHitRaster, RenderedImagesMatchEmbreesFirstHits) {
   EXPECT_GT(lit, 2000);
 }
 
+// The same with the volume drawn too: rays march it up to the first (opaque) surface the
+// raster found, as they do up to Embree's.
+TEST(FirstHitRaster, AVisibleVolumeMarchesUpToTheRastersSurface) {
+  auto desc = isoScene(64, {0.55f, 0.85f}, kCamera);
+  desc->volumes[0].visible = true;
+  desc->volumes[0].transfer.colors = {{0.0f, Vec3{1, 0.5f, 0.2f}}, {2.0f, Vec3{0.2f, 0.5f, 1}}};
+  desc->volumes[0].transfer.opacities = {{0.0f, 0.02f}, {2.0f, 0.05f}};
+  const SciVisScene scene(desc, fieldContent(64, ripple));
+  RenderSettings settings;
+  settings.width = 120, settings.height = 96, settings.seed = 9;
+  SciVisOptions rasterOptions, embreeOptions;
+  rasterOptions.firstHits = FirstHits::Raster;
+  embreeOptions.firstHits = FirstHits::Embree;
+  SciVisRenderer rasterised(scene, settings, rasterOptions), traced(scene, settings, embreeOptions);
+  rasterised.beginFrame(dfb::FrameInfo{}, kCamera);
+  traced.beginFrame(dfb::FrameInfo{}, kCamera);
+  ASSERT_TRUE(rasterised.firstHitsRasterised(1));
+  const auto a = test::renderImage(rasterised, 120, 96, 32, 2, 1);
+  const auto b = test::renderImage(traced, 120, 96, 32, 2, 1);
+  ASSERT_EQ(a.size(), b.size());
+  float worst = 0, haze = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    worst = std::max(worst, std::abs(a[i] - b[i]));
+    if (i % 4 == 2) haze = std::max(haze, a[i]);
+  }
+  EXPECT_LT(worst, 1e-3f);
+  EXPECT_GT(haze, 0.05f) << "the volume should show";
+}
+
 }  // namespace
 }  // namespace renderers
 
