@@ -14,7 +14,14 @@ struct CameraDesc {
   float fovY = 45.0f;          // degrees
   float lensRadius = 0.0f;     // 0: pinhole
   float focusDistance = 0.0f;  // 0: the distance to lookAt
+  bool operator==(const CameraDesc&) const = default;
 };
+
+// Whether the point at offset `v` from a camera looking along unit `forward` lies in front of
+// the camera's plane by more than rounding (its screen position is then finite and meaningful).
+inline bool inFrontOfCamera(Vec3 v, Vec3 forward) {
+  return dot(v, forward) > 1e-6f * (1.0f + length(v));  // false for inf and NaN too
+}
 
 // `desc` with its position turned about lookAt around the up axis by `degrees` (right-handed
 // about up). Pure arithmetic on the description, so every rank that asks for the same angle gets

@@ -22,15 +22,18 @@ inline Vec3 reciprocal(Vec3 d) { return {1.0f / d.x, 1.0f / d.y, 1.0f / d.z}; }
 
 // Narrows [t0, t1] to the part of origin + t * dir inside `box` (invDir = 1 / dir per axis, inf
 // for a zero component). False when nothing is left. Infinite boxes give back [t0, t1].
+// One axis of clipToBox(): [t0, t1] narrowed to the slab lo <= origin + t dir <= hi along it
+// (o: the origin's coordinate, inv: 1 / the direction's).
+inline void clipToSlab(float lo, float hi, float o, float inv, float& t0, float& t1) {
+  float near = (lo - o) * inv, far = (hi - o) * inv;
+  if (near > far) std::swap(near, far);
+  // A ray parallel to a slab and inside it gives (-inf, inf); on its plane, NaN: keep it in.
+  if (near == near) t0 = std::max(t0, near);
+  if (far == far) t1 = std::min(t1, far);
+}
+
 inline bool clipToBox(const Box3& box, Vec3 origin, Vec3 invDir, float& t0, float& t1) {
-  for (int a = 0; a < 3; ++a) {
-    const float o = origin[a], inv = invDir[a];
-    float near = (box.lo[a] - o) * inv, far = (box.hi[a] - o) * inv;
-    if (near > far) std::swap(near, far);
-    // A ray parallel to a slab and inside it gives (-inf, inf); on its plane, NaN: keep it in.
-    if (near == near) t0 = std::max(t0, near);
-    if (far == far) t1 = std::min(t1, far);
-  }
+  for (int a = 0; a < 3; ++a) clipToSlab(box.lo[a], box.hi[a], origin[a], invDir[a], t0, t1);
   return t0 <= t1;
 }
 

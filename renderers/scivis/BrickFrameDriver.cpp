@@ -33,8 +33,8 @@ bool projectBox(const CameraDesc& c, int width, int height, const Box3& box, flo
     const Vec3 p{(i & 1) ? box.hi.x : box.lo.x, (i & 2) ? box.hi.y : box.lo.y,
                  (i & 4) ? box.hi.z : box.lo.z};
     const Vec3 v = p - c.position;
+    if (!inFrontOfCamera(v, forward)) return false;
     const float depth = dot(v, forward);
-    if (!(depth > 1e-6f * (1.0f + length(v)))) return false;
     const float sx = dot(v, right) / (depth * halfWidth), sy = dot(v, up) / (depth * halfHeight);
     const float px = (sx + 1) * 0.5f * static_cast<float>(width);
     const float py = (1 - sy) * 0.5f * static_cast<float>(height);

@@ -77,13 +77,7 @@ inline Vec edgePlane(Vec p, Vec q, Vec o) {
 }
 inline float dotOf(Vec a, Vec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
-// One triangle's edge planes through the camera, its numerator of t, its index and the pixels
-// of the current cell it may cover.
-struct Triangle {
-  Vec c0, c1, c2, n;
-  float det;
-  std::uint32_t id;
-};
+using Setup = FirstHitRaster::Setup;
 
 // The rays of one 4 x 4 pixel block, lane k = pixel (k % 4, k / 4) of the block (an inactive
 // lane: t0 = inf, t1 = -inf), and the best hit of each so far.
@@ -93,24 +87,24 @@ struct alignas(64) Block {
   std::uint32_t id[16];
 };
 
-// Each lane against the listed triangles in order, one lane at a time.
-void blockScalar(const Triangle* triangles, const std::uint32_t* list, std::size_t count,
-                 Block& b) {
+// Each lane against the listed triangles (global indices into `setups`) in order, one lane at a
+// time.
+void blockScalar(const Setup* setups, const std::uint32_t* list, std::size_t count, Block& b) {
   for (int k = 0; k < 16; ++k) {
     const float x = b.dx[k], y = b.dy[k], z = b.dz[k];
     float bestT = kInf, bestS = 0, bestE1 = 0, bestE2 = 0;
     std::uint32_t bestId = FirstHitRaster::kNone;
     for (std::size_t j = 0; j < count; ++j) {
-      const Triangle& g = triangles[list[j]];
-      const float e0 = g.c0.x * x + g.c0.y * y + g.c0.z * z;
-      const float e1 = g.c1.x * x + g.c1.y * y + g.c1.z * z;
-      const float e2 = g.c2.x * x + g.c2.y * y + g.c2.z * z;
+      const Setup& g = setups[list[j]];
+      const float e0 = g.c0[0] * x + g.c0[1] * y + g.c0[2] * z;
+      const float e1 = g.c1[0] * x + g.c1[1] * y + g.c1[2] * z;
+      const float e2 = g.c2[0] * x + g.c2[1] * y + g.c2[2] * z;
       const bool inside = (e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0);
       const float s = e0 + e1 + e2;
       if (!inside || s == 0) continue;
-      const float t = g.det / (g.n.x * x + g.n.y * y + g.n.z * z);
+      const float t = g.det / (g.n[0] * x + g.n[1] * y + g.n[2] * z);
       if (t >= b.t0[k] && t <= b.t1[k] && t < bestT)
-        bestT = t, bestS = s, bestE1 = e1, bestE2 = e2, bestId = g.id;
+        bestT = t, bestS = s, bestE1 = e1, bestE2 = e2, bestId = list[j];
     }
     b.t[k] = bestT, b.s[k] = bestS, b.e1[k] = bestE1, b.e2[k] = bestE2, b.id[k] = bestId;
   }
@@ -120,23 +114,23 @@ void blockScalar(const Triangle* triangles, const std::uint32_t* list, std::size
   __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"), always_inline)) inline
 
 // c . d in 16 lanes, as blockScalar() sums it.
-AVX512_INLINE __m512 edge16(Vec c, __m512 x, __m512 y, __m512 z) {
+AVX512_INLINE __m512 edge16(const float* c, __m512 x, __m512 y, __m512 z) {
   return _mm512_add_ps(
-      _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(c.x), x), _mm512_mul_ps(_mm512_set1_ps(c.y), y)),
-      _mm512_mul_ps(_mm512_set1_ps(c.z), z));
+      _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(c[0]), x), _mm512_mul_ps(_mm512_set1_ps(c[1]), y)),
+      _mm512_mul_ps(_mm512_set1_ps(c[2]), z));
 }
 
 // blockScalar() with the 16 lanes together, the same operations in the same order (so the
 // same bits); the block's best hits stay in registers over all its triangles.
 __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) void block16(
-    const Triangle* triangles, const std::uint32_t* list, std::size_t count, Block& b) {
+    const Setup* setups, const std::uint32_t* list, std::size_t count, Block& b) {
   const __m512 x = _mm512_load_ps(b.dx), y = _mm512_load_ps(b.dy), z = _mm512_load_ps(b.dz);
   const __m512 t0 = _mm512_load_ps(b.t0), t1 = _mm512_load_ps(b.t1);
   const __m512 zero = _mm512_setzero_ps();
   __m512 bestT = _mm512_set1_ps(kInf), bestS = zero, bestE1 = zero, bestE2 = zero;
   __m512i bestId = _mm512_set1_epi32(-1);
   for (std::size_t j = 0; j < count; ++j) {
-    const Triangle& g = triangles[list[j]];
+    const Setup& g = setups[list[j]];
     const __m512 e0 = edge16(g.c0, x, y, z), e1 = edge16(g.c1, x, y, z), e2 = edge16(g.c2, x, y, z);
     const __mmask16 positive = _mm512_mask_cmp_ps_mask(
         _mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(e0, zero, _CMP_GE_OQ), e1, zero, _CMP_GE_OQ), e2,
@@ -156,7 +150,7 @@ __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) void block16(
     bestS = _mm512_mask_mov_ps(bestS, take, s);
     bestE1 = _mm512_mask_mov_ps(bestE1, take, e1);
     bestE2 = _mm512_mask_mov_ps(bestE2, take, e2);
-    bestId = _mm512_mask_mov_epi32(bestId, take, _mm512_set1_epi32(static_cast<int>(g.id)));
+    bestId = _mm512_mask_mov_epi32(bestId, take, _mm512_set1_epi32(static_cast<int>(list[j])));
   }
   _mm512_store_ps(b.t, bestT), _mm512_store_ps(b.s, bestS);
   _mm512_store_ps(b.e1, bestE1), _mm512_store_ps(b.e2, bestE2);
@@ -173,7 +167,6 @@ bool avx512Available() {
 void FirstHitRaster::clear() {
   ready_ = false;
   meshes_.clear();
-  binned_ = 0;
 }
 
 bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
@@ -207,11 +200,11 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
       for (std::size_t i = c * kChunk; i < end; ++i) {
         const float* p = mesh.vertices + 3 * i;
         const Vec3 v{p[0] - cam.origin.x, p[1] - cam.origin.y, p[2] - cam.origin.z};
-        const float depth = dot(v, cam.forward);
-        if (!(depth > 1e-6f * (1.0f + length(v)))) {
+        if (!inFrontOfCamera(v, cam.forward)) {
           behind.store(true, std::memory_order_relaxed);
           return;
         }
+        const float depth = dot(v, cam.forward);
         const float sx = dot(v, cam.right) / depth, sy = dot(v, cam.up) / depth;
         screen[i] = {(sx / cam.halfWidth + 1.0f) * 0.5f * w,
                      (1.0f - sy / cam.halfHeight) * 0.5f * h};
@@ -266,7 +259,9 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
       // long vectors from the camera is not: it lost 1e-3 of t at a few units' distance).
       const Vec n = crossOf(minus(b3, a3), minus(c3, a3));
       const Vec pa = minus(a3, origin);
-      t = {{c0.x, c0.y, c0.z, c1.x, c1.y, c1.z, c2.x, c2.y, c2.z},
+      t = {{c0.x, c0.y, c0.z},
+           {c1.x, c1.y, c1.z},
+           {c2.x, c2.y, c2.z},
            {n.x, n.y, n.z},
            dotOf(pa, n),
            static_cast<std::int16_t>(box.x0),
@@ -301,7 +296,6 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
               [&](std::size_t cell, std::uint32_t id) { cellTriangles_[next[cell]++] = id; });
   });
   meshes_ = meshes;
-  binned_ = running;
   ready_ = true;
   return true;
 }
@@ -313,7 +307,6 @@ void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t strid
   for (std::size_t i = 0; i < count; ++i) out[i] = Hit{};
   if (!ready_ || x0 >= x1 || y0 >= y1) return;
   constexpr int kBlocks = kCell / 4;  // 4 x 4 pixel blocks per cell side
-  thread_local std::vector<Triangle> triangles;
   thread_local std::vector<std::uint32_t> lists[kBlocks * kBlocks];
   alignas(64) Block block;
   const int cx0 = x0 / kCell, cx1 = (x1 - 1) / kCell, cy0 = y0 / kCell, cy1 = (y1 - 1) / kCell;
@@ -327,7 +320,6 @@ void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t strid
       const int ay = std::max(y0, oy), by = std::min(y1 - 1, oy + kCell - 1);
       const std::size_t cell = static_cast<std::size_t>(cy) * static_cast<std::size_t>(cellsX_) +
                                static_cast<std::size_t>(cx);
-      triangles.clear();
       for (auto& list : lists) list.clear();
       const std::uint32_t end = cellStart_[cell + 1];
       for (std::uint32_t k = cellStart_[cell]; k < end; ++k) {
@@ -338,17 +330,9 @@ void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t strid
         const int bx0 = std::max<int>(setup.x0, ax), bx1 = std::min<int>(setup.x1, bx);
         const int by0 = std::max<int>(setup.y0, ay), by1 = std::min<int>(setup.y1, by);
         if (bx0 > bx1 || by0 > by1) continue;
-        const float* c = setup.edges;
-        const auto index = static_cast<std::uint32_t>(triangles.size());
-        triangles.push_back({{c[0], c[1], c[2]},
-                             {c[3], c[4], c[5]},
-                             {c[6], c[7], c[8]},
-                             {setup.normal[0], setup.normal[1], setup.normal[2]},
-                             setup.det,
-                             g});
         for (int by4 = (by0 - oy) / 4; by4 <= (by1 - oy) / 4; ++by4)
           for (int bx4 = (bx0 - ox) / 4; bx4 <= (bx1 - ox) / 4; ++bx4)
-            lists[by4 * kBlocks + bx4].push_back(index);
+            lists[by4 * kBlocks + bx4].push_back(g);
       }
       for (int b = 0; b < kBlocks * kBlocks; ++b) {
         const std::vector<std::uint32_t>& list = lists[b];
@@ -365,9 +349,9 @@ void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t strid
           block.t0[k] = on ? t0[i] : kInf, block.t1[k] = on ? t1[i] : -kInf;
         }
         if (simd_)
-          block16(triangles.data(), list.data(), list.size(), block);
+          block16(setup_.data(), list.data(), list.size(), block);
         else
-          blockScalar(triangles.data(), list.data(), list.size(), block);
+          blockScalar(setup_.data(), list.data(), list.size(), block);
         for (int k = 0; k < 16; ++k) {
           const std::uint32_t g = block.id[k];
           if (g == kNone) continue;  // also every lane off the query

@@ -63,22 +63,20 @@ class FirstHitRaster {
                  const float* dy, const float* dz, const float* t0, const float* t1,
                  Hit* out) const;
 
-  // Triangles binned this frame and the cells' references to them (for benchmarks).
-  std::size_t binnedTriangles() const { return binned_; }
-
   static constexpr int kCell = 16;  // screen cells are kCell x kCell pixels
+
+  // A triangle this frame: its edge planes through the camera (c0 opposite its first vertex,
+  // c1, c2), its plane's normal n, n . (A - O) and the pixels it may cover (x0 > x1: none).
+  // The queries' kernels read it as it is.
+  struct Setup {
+    float c0[3], c1[3], c2[3], n[3];
+    float det;
+    std::int16_t x0, y0, x1, y1;
+  };
 
  private:
   struct Vertex2 {
     float x, y;
-  };
-  // A triangle this frame: its edge planes through the camera (three cross products, xyz
-  // each), its plane's normal n, n . (A - O) and the pixels it may cover (x0 > x1: none).
-  struct Setup {
-    float edges[9];
-    float normal[3];
-    float det;
-    std::int16_t x0, y0, x1, y1;
   };
   bool ready_ = false;
   int width_ = 0, height_ = 0, cellsX_ = 0, cellsY_ = 0;
@@ -88,10 +86,8 @@ class FirstHitRaster {
   std::vector<std::vector<Vertex2>> screen_;  // per mesh, per vertex: canvas position
   std::vector<Setup> setup_;                  // per global triangle index
   std::vector<std::uint32_t> cellStart_;      // per cell + 1: offsets into cellTriangles_
-  std::vector<std::uint32_t> cellTriangles_;
-  std::vector<std::uint32_t> counts_;  // binning's per chunk and cell counts  // global triangle
-                                       // indices, ascending per cell
-  std::size_t binned_ = 0;
+  std::vector<std::uint32_t> cellTriangles_;  // global triangle indices, ascending per cell
+  std::vector<std::uint32_t> counts_;         // binning's per chunk and cell counts
   bool simd_ = false;
 };
 

@@ -69,8 +69,7 @@ bool inFront(const Box3& box, const CameraDesc& c) {
   for (int i = 0; i < 8; ++i) {
     const Vec3 p{(i & 1) ? box.hi.x : box.lo.x, (i & 2) ? box.hi.y : box.lo.y,
                  (i & 4) ? box.hi.z : box.lo.z};
-    const Vec3 v = p - c.position;
-    if (!(dot(v, forward) > 1e-6f * (1.0f + length(v)))) return false;  // also inf, NaN
+    if (!inFrontOfCamera(p - c.position, forward)) return false;
   }
   return true;
 }
@@ -94,11 +93,7 @@ void SciVisRenderer::beginFrame(const dfb::FrameInfo& /*frame*/, const CameraDes
   camera_ = Camera(camera, settings_.width, settings_.height);
   if (rasterMeshes_.empty()) return;
   // A still camera (progressive frames) keeps the triangles binned as they are.
-  const auto same = [](const CameraDesc& a, const CameraDesc& b) {
-    return a.position == b.position && a.lookAt == b.lookAt && a.up == b.up && a.fovY == b.fovY &&
-           a.lensRadius == b.lensRadius && a.focusDistance == b.focusDistance;
-  };
-  if (raster_.ready() && same(camera, rasterCamera_)) return;
+  if (raster_.ready() && camera == rasterCamera_) return;
   rasterCamera_ = camera;
   // Only where the whole scene's domain lies in front of the camera: a decision every brick
   // and the unbricked scene make alike, so all find their first hits one way (the hit distance
@@ -133,13 +128,8 @@ void SciVisRenderer::rasterFirstHits(int x0, int x1, int y0, int y1, const RayPi
       // is; a brick that spans the domain has none).
       a = 0, b = kInf;
       for (int axis = 0; axis < 3; ++axis)
-        if (bounded[axis]) {  // clipToBox()'s step for this axis, the same bits
-          const float o = r.origin[axis], inv = 1.0f / r.dir[axis];
-          float near = (accept->lo[axis] - o) * inv, far = (accept->hi[axis] - o) * inv;
-          if (near > far) std::swap(near, far);
-          if (near == near) a = std::max(a, near);
-          if (far == far) b = std::min(b, far);
-        }
+        if (bounded[axis])
+          clipToSlab(accept->lo[axis], accept->hi[axis], r.origin[axis], 1.0f / r.dir[axis], a, b);
       on = a <= b;
     }
     t0[i] = on ? a : kInf, t1[i] = on ? b : -kInf;

@@ -67,6 +67,16 @@ DfbOptions options(DisplayFormat format, TileOperationFactory operation = writeO
   return o;
 }
 
+// The gathered RGBAF32 image is every pixel's pixelValue() of `frame`.
+void expectImageOfFrame(const std::vector<float>& image, std::uint32_t frame) {
+  ASSERT_EQ(image.size(), static_cast<size_t>(4 * kWidth * kHeight));
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x)
+      for (int c = 0; c < 4; ++c)
+        ASSERT_EQ(image[static_cast<size_t>(4 * (y * kWidth + x) + c)], pixelValue(x, y, frame, c))
+            << x << "," << y << " channel " << c << " frame " << frame;
+}
+
 TEST(Dfb, GatheredRgbaF32EqualsTheReference) {
   messaging::Messenger messenger(MPI_COMM_WORLD);
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::RGBAF32));
@@ -74,14 +84,8 @@ TEST(Dfb, GatheredRgbaF32EqualsTheReference) {
   for (std::uint32_t frame = 1; frame <= 3; ++frame) {
     renderFrame(dfb, frame);
     if (worldRank() != 0) continue;
-    const auto& image = dfb.imageRgbaF32();
-    ASSERT_EQ(image.size(), static_cast<size_t>(4 * kWidth * kHeight));
-    for (int y = 0; y < kHeight; ++y)
-      for (int x = 0; x < kWidth; ++x)
-        for (int c = 0; c < 4; ++c)
-          ASSERT_EQ(image[static_cast<size_t>(4 * (y * kWidth + x) + c)],
-                    pixelValue(x, y, frame, c))
-              << x << "," << y << " channel " << c << " frame " << frame;
+    expectImageOfFrame(dfb.imageRgbaF32(), frame);
+    if (HasFatalFailure()) return;
     EXPECT_EQ(dfb.stats().pixelBytesReceived, static_cast<std::uint64_t>(16 * kWidth * kHeight));
     EXPECT_EQ(dfb.stats().gatherBytesSent, 0u) << "rank 0 places its own tiles, sends none";
   }
@@ -104,13 +108,7 @@ TEST(Dfb, GatheringOnlyTheLastFrameGivesItsImage) {
   }
   dfb.gatherImage();
   if (worldRank() != 0) return;
-  const auto& image = dfb.imageRgbaF32();
-  ASSERT_EQ(image.size(), static_cast<size_t>(4 * kWidth * kHeight));
-  for (int y = 0; y < kHeight; ++y)
-    for (int x = 0; x < kWidth; ++x)
-      for (int c = 0; c < 4; ++c)
-        ASSERT_EQ(image[static_cast<size_t>(4 * (y * kWidth + x) + c)], pixelValue(x, y, 3, c))
-            << x << "," << y << " channel " << c;
+  expectImageOfFrame(dfb.imageRgbaF32(), 3);
 }
 
 class GatherRgba8 : public ::testing::TestWithParam<bool> {};
