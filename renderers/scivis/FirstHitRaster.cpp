@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -18,8 +19,8 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // How far a triangle's screen box is widened: a pixel's ray and the projection of the point it
 // hits agree to far less than this (float rounding of canvas coordinates below 2^14).
 constexpr float kMargin = 1.0f / 32.0f;
-constexpr std::size_t kChunk = 65536;   // triangles per binning task
-constexpr std::uint32_t kPrefetch = 8;  // triangle records fetched ahead in a query
+constexpr std::size_t kChunk = 65536;  // triangles per binning task
+constexpr int kBuckets = 4096;         // depth buckets a frame's triangles are sorted in
 
 struct PixelBox {
   int x0, y0, x1, y1;  // inclusive; empty when x0 > x1 or y0 > y1
@@ -57,8 +58,13 @@ inline Vec at(const float* vertices, std::uint32_t i) {
 inline Vec crossOf(Vec a, Vec b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
+// Without branches: which way an edge runs is as good as random, so a branch would often be
+// mispredicted.
 inline bool before(Vec a, Vec b) {
-  return a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z < b.z)));
+  return (a.x < b.x) | ((a.x == b.x) & ((a.y < b.y) | ((a.y == b.y) & (a.z < b.z))));
+}
+inline Vec select(bool first, Vec a, Vec b) {
+  return {first ? a.x : b.x, first ? a.y : b.y, first ? a.z : b.z};
 }
 
 // The plane through the camera at `o` and the edge from p to q, as its normal (p - o) x (q - p):
@@ -69,92 +75,108 @@ inline bool before(Vec a, Vec b) {
 // sharing an edge get exactly opposite normals: watertight, also across bricks (whose meshes
 // number their vertices differently but place them alike).
 inline Vec edgePlane(Vec p, Vec q, Vec o) {
-  if (before(q, p)) {
-    const Vec c = crossOf(minus(q, o), minus(p, q));
-    return {-c.x, -c.y, -c.z};
-  }
-  return crossOf(minus(p, o), minus(q, p));
+  const bool reversed = before(q, p);
+  const Vec from = select(reversed, q, p), to = select(reversed, p, q);
+  const Vec c = crossOf(minus(from, o), minus(to, from));
+  return select(reversed, Vec{-c.x, -c.y, -c.z}, c);
 }
 inline float dotOf(Vec a, Vec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
 using Setup = FirstHitRaster::Setup;
 
-// The rays of one 4 x 4 pixel block, lane k = pixel (k % 4, k / 4) of the block (an inactive
-// lane: t0 = inf, t1 = -inf), and the best hit of each so far.
+// The rays of one 4 x 4 pixel block, lane k = pixel (k % 4, k / 4) of the block (a lane off the
+// query: t0 = inf, t1 = -inf), each ray's direction's share along the camera's axis (cos: depth
+// = t cos), the best hit of each so far (`at`: its global triangle index, kNone: no hit), and
+// the greatest depth at which a triangle could still change one of them.
 struct alignas(64) Block {
-  float dx[16], dy[16], dz[16], t0[16], t1[16];
+  float dx[16], dy[16], dz[16], t0[16], t1[16], cos[16];
   float t[16], s[16], e1[16], e2[16];
-  std::uint32_t id[16];
+  std::uint32_t at[16];
+  float reach;
 };
 
-// Each lane against the listed triangles (global indices into `setups`) in order, one lane at a
-// time.
-void blockScalar(const Setup* setups, const std::uint32_t* list, std::size_t count, Block& b) {
+// max over the lanes of min(t, t1) cos: a triangle wholly deeper than that hits no lane nearer
+// than what the lane holds (or within its interval; see the kernels' depth test).
+float reachOf(const Block& b) {
+  float reach = -kInf;
+  for (int k = 0; k < 16; ++k) reach = std::max(reach, std::min(b.t[k], b.t1[k]) * b.cos[k]);
+  return reach;
+}
+
+// Whether hit distance t (finite) of triangle `at` beats lane k's best: nearer, or as near and
+// the lower index, so the answer does not depend on the order the triangles come in.
+inline bool beats(float t, std::uint32_t at, const Block& b, int k) {
+  return t < b.t[k] || (t == b.t[k] && at < b.at[k]);
+}
+
+// Triangle record `at` against each lane of the block, one lane at a time. True when a lane's
+// best hit changed.
+bool testScalar(const Setup& g, std::uint32_t at, Block& b) {
+  bool changed = false;
   for (int k = 0; k < 16; ++k) {
     const float x = b.dx[k], y = b.dy[k], z = b.dz[k];
-    float bestT = kInf, bestS = 0, bestE1 = 0, bestE2 = 0;
-    std::uint32_t bestId = FirstHitRaster::kNone;
-    for (std::size_t j = 0; j < count; ++j) {
-      const Setup& g = setups[list[j]];
-      const float e0 = g.c0[0] * x + g.c0[1] * y + g.c0[2] * z;
-      const float e1 = g.c1[0] * x + g.c1[1] * y + g.c1[2] * z;
-      const float e2 = g.c2[0] * x + g.c2[1] * y + g.c2[2] * z;
-      const bool inside = (e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0);
-      const float s = e0 + e1 + e2;
-      if (!inside || s == 0) continue;
-      const float t = g.det / (g.n[0] * x + g.n[1] * y + g.n[2] * z);
-      if (t >= b.t0[k] && t <= b.t1[k] && t < bestT)
-        bestT = t, bestS = s, bestE1 = e1, bestE2 = e2, bestId = list[j];
+    const float e0 = g.c0[0] * x + g.c0[1] * y + g.c0[2] * z;
+    const float e1 = g.c1[0] * x + g.c1[1] * y + g.c1[2] * z;
+    const float e2 = g.c2[0] * x + g.c2[1] * y + g.c2[2] * z;
+    const bool inside = (e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0);
+    const float s = e0 + e1 + e2;
+    if (!inside || s == 0) continue;
+    const float t = g.det / (g.n[0] * x + g.n[1] * y + g.n[2] * z);
+    if (t >= b.t0[k] && t * b.cos[k] >= g.near && t <= b.t1[k] && t < kInf && beats(t, at, b, k)) {
+      b.t[k] = t, b.s[k] = s, b.e1[k] = e1, b.e2[k] = e2, b.at[k] = at;
+      changed = true;
     }
-    b.t[k] = bestT, b.s[k] = bestS, b.e1[k] = bestE1, b.e2[k] = bestE2, b.id[k] = bestId;
   }
+  return changed;
 }
 
 #define AVX512_INLINE \
   __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"), always_inline)) inline
 
-// c . d in 16 lanes, as blockScalar() sums it.
+// c . d in 16 lanes, as testScalar() sums it.
 AVX512_INLINE __m512 edge16(const float* c, __m512 x, __m512 y, __m512 z) {
   return _mm512_add_ps(
       _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(c[0]), x), _mm512_mul_ps(_mm512_set1_ps(c[1]), y)),
       _mm512_mul_ps(_mm512_set1_ps(c[2]), z));
 }
 
-// blockScalar() with the 16 lanes together, the same operations in the same order (so the
-// same bits); the block's best hits stay in registers over all its triangles.
-__attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) void block16(
-    const Setup* setups, const std::uint32_t* list, std::size_t count, Block& b) {
+// testScalar() with the 16 lanes together, the same operations in the same order (so the same
+// bits).
+__attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) bool test16(const Setup& g,
+                                                                          std::uint32_t at,
+                                                                          Block& b) {
   const __m512 x = _mm512_load_ps(b.dx), y = _mm512_load_ps(b.dy), z = _mm512_load_ps(b.dz);
-  const __m512 t0 = _mm512_load_ps(b.t0), t1 = _mm512_load_ps(b.t1);
   const __m512 zero = _mm512_setzero_ps();
-  __m512 bestT = _mm512_set1_ps(kInf), bestS = zero, bestE1 = zero, bestE2 = zero;
-  __m512i bestId = _mm512_set1_epi32(-1);
-  for (std::size_t j = 0; j < count; ++j) {
-    const Setup& g = setups[list[j]];
-    const __m512 e0 = edge16(g.c0, x, y, z), e1 = edge16(g.c1, x, y, z), e2 = edge16(g.c2, x, y, z);
-    const __mmask16 positive = _mm512_mask_cmp_ps_mask(
-        _mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(e0, zero, _CMP_GE_OQ), e1, zero, _CMP_GE_OQ), e2,
-        zero, _CMP_GE_OQ);
-    const __mmask16 negative = _mm512_mask_cmp_ps_mask(
-        _mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(e0, zero, _CMP_LE_OQ), e1, zero, _CMP_LE_OQ), e2,
-        zero, _CMP_LE_OQ);
-    const __m512 s = _mm512_add_ps(_mm512_add_ps(e0, e1), e2);
-    __mmask16 take =
-        _mm512_mask_cmp_ps_mask(static_cast<__mmask16>(positive | negative), s, zero, _CMP_NEQ_OQ);
-    if (!take) continue;
-    const __m512 t = _mm512_maskz_div_ps(take, _mm512_set1_ps(g.det), edge16(g.n, x, y, z));
-    take = _mm512_mask_cmp_ps_mask(take, t, t0, _CMP_GE_OQ);
-    take = _mm512_mask_cmp_ps_mask(take, t, t1, _CMP_LE_OQ);
-    take = _mm512_mask_cmp_ps_mask(take, t, bestT, _CMP_LT_OQ);
-    bestT = _mm512_mask_mov_ps(bestT, take, t);
-    bestS = _mm512_mask_mov_ps(bestS, take, s);
-    bestE1 = _mm512_mask_mov_ps(bestE1, take, e1);
-    bestE2 = _mm512_mask_mov_ps(bestE2, take, e2);
-    bestId = _mm512_mask_mov_epi32(bestId, take, _mm512_set1_epi32(static_cast<int>(list[j])));
-  }
-  _mm512_store_ps(b.t, bestT), _mm512_store_ps(b.s, bestS);
-  _mm512_store_ps(b.e1, bestE1), _mm512_store_ps(b.e2, bestE2);
-  _mm512_store_si512(reinterpret_cast<__m512i*>(b.id), bestId);
+  const __m512 e0 = edge16(g.c0, x, y, z), e1 = edge16(g.c1, x, y, z), e2 = edge16(g.c2, x, y, z);
+  const __mmask16 positive = _mm512_mask_cmp_ps_mask(
+      _mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(e0, zero, _CMP_GE_OQ), e1, zero, _CMP_GE_OQ), e2,
+      zero, _CMP_GE_OQ);
+  const __mmask16 negative = _mm512_mask_cmp_ps_mask(
+      _mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(e0, zero, _CMP_LE_OQ), e1, zero, _CMP_LE_OQ), e2,
+      zero, _CMP_LE_OQ);
+  const __m512 s = _mm512_add_ps(_mm512_add_ps(e0, e1), e2);
+  __mmask16 take =
+      _mm512_mask_cmp_ps_mask(static_cast<__mmask16>(positive | negative), s, zero, _CMP_NEQ_OQ);
+  if (!take) return false;
+  const __m512 t = _mm512_maskz_div_ps(take, _mm512_set1_ps(g.det), edge16(g.n, x, y, z));
+  take = _mm512_mask_cmp_ps_mask(take, t, _mm512_load_ps(b.t0), _CMP_GE_OQ);
+  take = _mm512_mask_cmp_ps_mask(take, _mm512_mul_ps(t, _mm512_load_ps(b.cos)),
+                                 _mm512_set1_ps(g.near), _CMP_GE_OQ);
+  take = _mm512_mask_cmp_ps_mask(take, t, _mm512_load_ps(b.t1), _CMP_LE_OQ);
+  take = _mm512_mask_cmp_ps_mask(take, t, _mm512_set1_ps(kInf), _CMP_LT_OQ);
+  const __m512 bestT = _mm512_load_ps(b.t);
+  // As near as a lane's best: the lower index wins (a ray through an edge two triangles share).
+  const __mmask16 tie = _mm512_mask_cmp_ps_mask(take, t, bestT, _CMP_EQ_OQ);
+  take = _mm512_mask_cmp_ps_mask(take, t, bestT, _CMP_LT_OQ) |
+         _mm512_mask_cmplt_epu32_mask(tie, _mm512_set1_epi32(static_cast<int>(at)),
+                                      _mm512_load_si512(b.at));
+  if (!take) return false;
+  _mm512_mask_store_ps(b.t, take, t);
+  _mm512_mask_store_ps(b.s, take, s);
+  _mm512_mask_store_ps(b.e1, take, e1);
+  _mm512_mask_store_ps(b.e2, take, e2);
+  _mm512_mask_store_epi32(b.at, take, _mm512_set1_epi32(static_cast<int>(at)));
+  return true;
 }
 
 bool avx512Available() {
@@ -167,6 +189,13 @@ bool avx512Available() {
 void FirstHitRaster::clear() {
   ready_ = false;
   meshes_.clear();
+}
+
+int FirstHitRaster::bucketOf(float distance) const {
+  // Monotone in `distance` (a subtraction, a product by a non-negative number, a clamp), which
+  // is all the queries' early stop needs.
+  const float x = (distance - bucketFrom_) * bucketScale_;
+  return static_cast<int>(std::min(std::max(x, 0.0f), static_cast<float>(kBuckets - 1)));
 }
 
 bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
@@ -183,20 +212,25 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   width_ = width, height_ = height;
   cellsX_ = (width + kCell - 1) / kCell, cellsY_ = (height + kCell - 1) / kCell;
   originX_ = cam.origin.x, originY_ = cam.origin.y, originZ_ = cam.origin.z;
-  const Vec origin{originX_, originY_, originZ_};
   simd_ = simd && avx512Available();
 
-  // Every vertex on the canvas (Camera::ray() inverted); one behind or beside the camera's
-  // plane: no raster this frame.
+  // Every vertex on the canvas (Camera::ray() inverted) with its depth along the camera's axis,
+  // and the range of depths (the buckets' span); one behind or beside the camera's plane: no
+  // raster this frame.
   screen_.resize(meshes.size());
   std::atomic<bool> behind{false};
   const float w = static_cast<float>(width), h = static_cast<float>(height);
+  forwardX_ = cam.forward.x, forwardY_ = cam.forward.y, forwardZ_ = cam.forward.z;
+  float nearest = kInf, farthest = 0;
   for (std::size_t m = 0; m < meshes.size(); ++m) {
     const Mesh& mesh = meshes[m];
     std::vector<Vertex2>& screen = screen_[m];
     screen.resize(mesh.vertexCount);
-    parallelFor((mesh.vertexCount + kChunk - 1) / kChunk, [&](std::size_t c) {
+    const std::size_t chunks = (mesh.vertexCount + kChunk - 1) / kChunk;
+    std::vector<float> chunkNearest(chunks, kInf), chunkFarthest(chunks, 0.0f);
+    parallelFor(chunks, [&](std::size_t c) {
       const std::size_t end = std::min(mesh.vertexCount, (c + 1) * kChunk);
+      float lo = kInf, hi = 0;
       for (std::size_t i = c * kChunk; i < end; ++i) {
         const float* p = mesh.vertices + 3 * i;
         const Vec3 v{p[0] - cam.origin.x, p[1] - cam.origin.y, p[2] - cam.origin.z};
@@ -207,75 +241,104 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
         const float depth = dot(v, cam.forward);
         const float sx = dot(v, cam.right) / depth, sy = dot(v, cam.up) / depth;
         screen[i] = {(sx / cam.halfWidth + 1.0f) * 0.5f * w,
-                     (1.0f - sy / cam.halfHeight) * 0.5f * h};
+                     (1.0f - sy / cam.halfHeight) * 0.5f * h, depth};
+        lo = std::min(lo, depth), hi = std::max(hi, depth);
       }
+      chunkNearest[c] = lo, chunkFarthest[c] = hi;
     });
     if (behind.load()) {
       clear();
       return false;
     }
+    for (std::size_t c = 0; c < chunks; ++c)
+      nearest = std::min(nearest, chunkNearest[c]), farthest = std::max(farthest, chunkFarthest[c]);
   }
+  bucketFrom_ = nearest;
+  bucketScale_ = farthest > nearest ? static_cast<float>(kBuckets) / (farthest - nearest) : 0.0f;
 
-  // Per triangle its edge planes through the camera and its pixels (made once a frame, in
-  // triangle order: the queries then read one record per triangle instead of its indices and
-  // vertices). Binning: count per chunk and cell, offsets, then each chunk writes its
-  // triangles, so every cell lists its triangles in ascending global index whatever the
-  // threads did.
-  setup_.resize(total);
-  const std::size_t cells = static_cast<std::size_t>(cellsX_) * static_cast<std::size_t>(cellsY_);
+  // Per triangle its pixels and its least depth (a vertex's: depth is linear over the triangle),
+  // less a margin for rounding, so the depth of every hit the ray test finds on it lies beyond.
+  // The record of edge planes the test needs is made where a query reaches the triangle.
+  const auto binnedOf = [&](std::size_t m, std::size_t g) {
+    const std::uint32_t* tri = meshes[m].triangles + 3 * (g - firstTriangle_[m]);
+    const Vertex2 a = screen_[m][tri[0]], b = screen_[m][tri[1]], d = screen_[m][tri[2]];
+    const PixelBox box = pixelsOf(a.x, a.y, b.x, b.y, d.x, d.y, width, height);
+    const float least = std::min(a.depth, std::min(b.depth, d.depth));
+    return Binned{static_cast<std::uint32_t>(g),
+                  least - 1e-4f * least,
+                  {static_cast<std::int16_t>(box.x0), static_cast<std::int16_t>(box.y0),
+                   static_cast<std::int16_t>(box.x1), static_cast<std::int16_t>(box.y1)}};
+  };
+  const auto meshOf = [&](std::size_t g) {
+    return static_cast<std::size_t>(
+        std::upper_bound(firstTriangle_.begin(), firstTriangle_.end(), g) - firstTriangle_.begin() -
+        1);
+  };
+  // The triangles sorted by depth bucket, ascending within one: counted per chunk and bucket,
+  // so the order does not depend on the threads. A triangle covering no pixel is left out.
   const std::size_t chunks = (total + kChunk - 1) / kChunk;
+  constexpr std::uint16_t kOff = 0xffff;
+  static_assert(kBuckets < kOff);
+  buckets_.resize(total);
   std::vector<std::uint32_t>& counts = counts_;  // kept: a fresh one page-faulted every frame
-  counts.assign(chunks * cells, 0);
-  const auto cellsOf = [&](const Setup& t, std::size_t g, auto&& visit) {
-    if (t.x0 > t.x1) return;
+  counts.assign(chunks * kBuckets, 0);
+  parallelFor(chunks, [&](std::size_t c) {
+    std::uint32_t* count = counts.data() + c * kBuckets;
+    const std::size_t begin = c * kChunk, end = std::min(total, begin + kChunk);
+    std::size_t m = meshOf(begin);
+    for (std::size_t g = begin; g < end; ++g) {
+      while (g >= firstTriangle_[m] + meshes[m].triangleCount) ++m;
+      const Binned t = binnedOf(m, g);
+      if (t.box.x0 > t.box.x1 || t.box.y0 > t.box.y1) {
+        buckets_[g] = kOff;
+        continue;
+      }
+      const int bucket = bucketOf(t.near);
+      buckets_[g] = static_cast<std::uint16_t>(bucket);
+      ++count[bucket];
+    }
+  });
+  std::size_t binned = 0;
+  for (int bucket = 0; bucket < kBuckets; ++bucket)
+    for (std::size_t c = 0; c < chunks; ++c) {
+      std::uint32_t& n = counts[c * kBuckets + static_cast<std::size_t>(bucket)];
+      const std::uint32_t here = n;
+      n = static_cast<std::uint32_t>(binned);  // now: where chunk c writes this bucket's next
+      binned += here;
+    }
+  order_.resize(binned);
+  parallelFor(chunks, [&](std::size_t c) {
+    std::uint32_t* next = counts.data() + c * kBuckets;
+    const std::size_t begin = c * kChunk, end = std::min(total, begin + kChunk);
+    std::size_t m = meshOf(begin);
+    for (std::size_t g = begin; g < end; ++g) {
+      while (g >= firstTriangle_[m] + meshes[m].triangleCount) ++m;
+      if (buckets_[g] != kOff) order_[next[buckets_[g]]++] = binnedOf(m, g);
+    }
+  });
+
+  // Binning in that order: count per chunk (of order_) and cell, offsets, then each chunk
+  // writes its triangles, so every cell lists them nearest bucket first.
+  const std::size_t cells = static_cast<std::size_t>(cellsX_) * static_cast<std::size_t>(cellsY_);
+  const std::size_t orderChunks = (binned + kChunk - 1) / kChunk;
+  counts.assign(orderChunks * cells, 0);
+  const auto cellsOf = [&](const ScreenBox& t, auto&& visit) {
     for (int cy = t.y0 / kCell; cy <= t.y1 / kCell; ++cy)
       for (int cx = t.x0 / kCell; cx <= t.x1 / kCell; ++cx)
         visit(static_cast<std::size_t>(cy) * static_cast<std::size_t>(cellsX_) +
-                  static_cast<std::size_t>(cx),
-              static_cast<std::uint32_t>(g));
+              static_cast<std::size_t>(cx));
   };
-  parallelFor(chunks, [&](std::size_t c) {
+  parallelFor(orderChunks, [&](std::size_t c) {
     std::uint32_t* count = counts.data() + c * cells;
-    const std::size_t begin = c * kChunk, end = std::min(total, begin + kChunk);
-    std::size_t m = static_cast<std::size_t>(
-        std::upper_bound(firstTriangle_.begin(), firstTriangle_.end(), begin) -
-        firstTriangle_.begin() - 1);
-    for (std::size_t g = begin; g < end; ++g) {
-      while (g >= firstTriangle_[m] + meshes[m].triangleCount) ++m;
-      const Mesh& mesh = meshes[m];
-      const std::uint32_t* tri = mesh.triangles + 3 * (g - firstTriangle_[m]);
-      const Vertex2 a = screen_[m][tri[0]], b = screen_[m][tri[1]], d = screen_[m][tri[2]];
-      const PixelBox box = pixelsOf(a.x, a.y, b.x, b.y, d.x, d.y, width, height);
-      Setup& t = setup_[g];
-      if (box.x0 > box.x1 || box.y0 > box.y1) {
-        t.x0 = 1, t.x1 = 0;
-        continue;
-      }
-      const Vec a3 = at(mesh.vertices, tri[0]), b3 = at(mesh.vertices, tri[1]);
-      const Vec c3 = at(mesh.vertices, tri[2]);
-      const Vec c0 = edgePlane(b3, c3, origin), c1 = edgePlane(c3, a3, origin);
-      const Vec c2 = edgePlane(a3, b3, origin);
-      // The plane's normal from the edges (well conditioned; the triple product of the three
-      // long vectors from the camera is not: it lost 1e-3 of t at a few units' distance).
-      const Vec n = crossOf(minus(b3, a3), minus(c3, a3));
-      const Vec pa = minus(a3, origin);
-      t = {{c0.x, c0.y, c0.z},
-           {c1.x, c1.y, c1.z},
-           {c2.x, c2.y, c2.z},
-           {n.x, n.y, n.z},
-           dotOf(pa, n),
-           static_cast<std::int16_t>(box.x0),
-           static_cast<std::int16_t>(box.y0),
-           static_cast<std::int16_t>(box.x1),
-           static_cast<std::int16_t>(box.y1)};
-      cellsOf(t, g, [&](std::size_t cell, std::uint32_t) { ++count[cell]; });
-    }
+    const std::size_t begin = c * kChunk, end = std::min(binned, begin + kChunk);
+    for (std::size_t i = begin; i < end; ++i)
+      cellsOf(order_[i].box, [&](std::size_t cell) { ++count[cell]; });
   });
   cellStart_.assign(cells + 1, 0);
   std::size_t running = 0;
   for (std::size_t cell = 0; cell < cells; ++cell) {
     cellStart_[cell] = static_cast<std::uint32_t>(running);
-    for (std::size_t c = 0; c < chunks; ++c) {
+    for (std::size_t c = 0; c < orderChunks; ++c) {
       std::uint32_t& n = counts[c * cells + cell];
       const std::uint32_t here = n;
       n = static_cast<std::uint32_t>(running);  // now: where chunk c writes this cell's next
@@ -288,16 +351,33 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   }
   cellStart_[cells] = static_cast<std::uint32_t>(running);
   cellTriangles_.resize(running);
-  parallelFor(chunks, [&](std::size_t c) {
+  parallelFor(orderChunks, [&](std::size_t c) {
     std::uint32_t* next = counts.data() + c * cells;
-    const std::size_t begin = c * kChunk, end = std::min(total, begin + kChunk);
-    for (std::size_t g = begin; g < end; ++g)
-      cellsOf(setup_[g], g,
-              [&](std::size_t cell, std::uint32_t id) { cellTriangles_[next[cell]++] = id; });
+    const std::size_t begin = c * kChunk, end = std::min(binned, begin + kChunk);
+    for (std::size_t i = begin; i < end; ++i)
+      cellsOf(order_[i].box, [&](std::size_t cell) { cellTriangles_[next[cell]++] = order_[i]; });
   });
   meshes_ = meshes;
   ready_ = true;
   return true;
+}
+
+FirstHitRaster::Setup FirstHitRaster::setupOf(std::uint32_t g, float near) const {
+  const std::size_t m = static_cast<std::size_t>(
+      std::upper_bound(firstTriangle_.begin(), firstTriangle_.end(), std::size_t{g}) -
+      firstTriangle_.begin() - 1);
+  const Mesh& mesh = meshes_[m];
+  const std::uint32_t* tri = mesh.triangles + 3 * (g - firstTriangle_[m]);
+  const Vec origin{originX_, originY_, originZ_};
+  const Vec a = at(mesh.vertices, tri[0]), b = at(mesh.vertices, tri[1]);
+  const Vec c = at(mesh.vertices, tri[2]);
+  const Vec c0 = edgePlane(b, c, origin), c1 = edgePlane(c, a, origin);
+  const Vec c2 = edgePlane(a, b, origin);
+  // The plane's normal from the edges (well conditioned; the triple product of the three long
+  // vectors from the camera is not: it lost 1e-3 of t at a few units' distance).
+  const Vec n = crossOf(minus(b, a), minus(c, a));
+  return {{c0.x, c0.y, c0.z}, {c1.x, c1.y, c1.z},         {c2.x, c2.y, c2.z},
+          {n.x, n.y, n.z},    dotOf(minus(a, origin), n), near};
 }
 
 void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t stride, const float* dx,
@@ -307,36 +387,18 @@ void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t strid
   for (std::size_t i = 0; i < count; ++i) out[i] = Hit{};
   if (!ready_ || x0 >= x1 || y0 >= y1) return;
   constexpr int kBlocks = kCell / 4;  // 4 x 4 pixel blocks per cell side
-  thread_local std::vector<std::uint32_t> lists[kBlocks * kBlocks];
-  alignas(64) Block block;
+  alignas(64) Block blocks[kBlocks * kBlocks];
+  const auto test = simd_ ? test16 : testScalar;
   const int cx0 = x0 / kCell, cx1 = (x1 - 1) / kCell, cy0 = y0 / kCell, cy1 = (y1 - 1) / kCell;
   for (int cy = cy0; cy <= cy1; ++cy)
     for (int cx = cx0; cx <= cx1; ++cx) {
-      // This cell's part of the query. Each pixel lies in one cell, and a cell lists its
-      // triangles in ascending index, so a pixel meets its triangles in that order and a tie in
-      // t keeps the lower index.
+      // This cell's part of the query, its rays in blocks.
       const int ox = cx * kCell, oy = cy * kCell;
       const int ax = std::max(x0, ox), bx = std::min(x1 - 1, ox + kCell - 1);
       const int ay = std::max(y0, oy), by = std::min(y1 - 1, oy + kCell - 1);
-      const std::size_t cell = static_cast<std::size_t>(cy) * static_cast<std::size_t>(cellsX_) +
-                               static_cast<std::size_t>(cx);
-      for (auto& list : lists) list.clear();
-      const std::uint32_t end = cellStart_[cell + 1];
-      for (std::uint32_t k = cellStart_[cell]; k < end; ++k) {
-        // The records are read in the cell's order, scattered over the frame's: fetch ahead.
-        if (k + kPrefetch < end) __builtin_prefetch(&setup_[cellTriangles_[k + kPrefetch]]);
-        const std::uint32_t g = cellTriangles_[k];
-        const Setup& setup = setup_[g];
-        const int bx0 = std::max<int>(setup.x0, ax), bx1 = std::min<int>(setup.x1, bx);
-        const int by0 = std::max<int>(setup.y0, ay), by1 = std::min<int>(setup.y1, by);
-        if (bx0 > bx1 || by0 > by1) continue;
-        for (int by4 = (by0 - oy) / 4; by4 <= (by1 - oy) / 4; ++by4)
-          for (int bx4 = (bx0 - ox) / 4; bx4 <= (bx1 - ox) / 4; ++bx4)
-            lists[by4 * kBlocks + bx4].push_back(g);
-      }
+      float reach = -kInf;  // the greatest of the blocks' reaches
       for (int b = 0; b < kBlocks * kBlocks; ++b) {
-        const std::vector<std::uint32_t>& list = lists[b];
-        if (list.empty()) continue;
+        Block& block = blocks[b];
         const int px0 = ox + 4 * (b % kBlocks), py0 = oy + 4 * (b / kBlocks);
         for (int k = 0; k < 16; ++k) {
           const int px = px0 + k % 4, py = py0 + k / 4;
@@ -347,19 +409,57 @@ void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t strid
           block.dx[k] = on ? dx[i] : 0.0f, block.dy[k] = on ? dy[i] : 0.0f;
           block.dz[k] = on ? dz[i] : 1.0f;
           block.t0[k] = on ? t0[i] : kInf, block.t1[k] = on ? t1[i] : -kInf;
+          block.cos[k] = on ? dx[i] * forwardX_ + dy[i] * forwardY_ + dz[i] * forwardZ_ : 1.0f;
+          block.t[k] = kInf, block.at[k] = kNone;
         }
-        if (simd_)
-          block16(setup_.data(), list.data(), list.size(), block);
-        else
-          blockScalar(setup_.data(), list.data(), list.size(), block);
+        block.reach = reachOf(block);
+        reach = std::max(reach, block.reach);
+      }
+      // The cell's triangles nearest bucket first: past the bucket of the cell's reach, none
+      // can change a hit.
+      int lastBucket = bucketOf(reach);
+      const std::size_t cell = static_cast<std::size_t>(cy) * static_cast<std::size_t>(cellsX_) +
+                               static_cast<std::size_t>(cx);
+      const std::uint32_t end = reach > -kInf ? cellStart_[cell + 1] : cellStart_[cell];
+      for (std::uint32_t k = cellStart_[cell]; k < end; ++k) {
+        const Binned& triangle = cellTriangles_[k];
+        if (triangle.near > reach) {
+          if (bucketOf(triangle.near) > lastBucket) break;
+          continue;
+        }
+        const int bx0 = std::max<int>(triangle.box.x0, ax),
+                  bx1 = std::min<int>(triangle.box.x1, bx);
+        const int by0 = std::max<int>(triangle.box.y0, ay),
+                  by1 = std::min<int>(triangle.box.y1, by);
+        if (bx0 > bx1 || by0 > by1) continue;
+        Setup setup;
+        bool made = false, changed = false;
+        for (int by4 = (by0 - oy) / 4; by4 <= (by1 - oy) / 4; ++by4)
+          for (int bx4 = (bx0 - ox) / 4; bx4 <= (bx1 - ox) / 4; ++bx4) {
+            Block& block = blocks[by4 * kBlocks + bx4];
+            if (triangle.near > block.reach) continue;
+            if (!made) setup = setupOf(triangle.triangle, triangle.near), made = true;
+            if (!test(setup, triangle.triangle, block)) continue;
+            block.reach = reachOf(block);
+            changed = true;
+          }
+        if (changed) {
+          reach = -kInf;
+          for (const Block& block : blocks) reach = std::max(reach, block.reach);
+          lastBucket = bucketOf(reach);
+        }
+      }
+      for (int b = 0; b < kBlocks * kBlocks; ++b) {
+        const Block& block = blocks[b];
+        const int px0 = ox + 4 * (b % kBlocks), py0 = oy + 4 * (b / kBlocks);
         for (int k = 0; k < 16; ++k) {
-          const std::uint32_t g = block.id[k];
-          if (g == kNone) continue;  // also every lane off the query
+          if (block.at[k] == kNone) continue;  // also every lane off the query
+          const std::size_t g = block.at[k];
           const int px = px0 + k % 4, py = py0 + k / 4;
           Hit& h =
               out[static_cast<std::size_t>(py - y0) * stride + static_cast<std::size_t>(px - x0)];
           const std::size_t mesh = static_cast<std::size_t>(
-              std::upper_bound(firstTriangle_.begin(), firstTriangle_.end(), std::size_t{g}) -
+              std::upper_bound(firstTriangle_.begin(), firstTriangle_.end(), g) -
               firstTriangle_.begin() - 1);
           h.t = block.t[k];
           h.u = block.e1[k] / block.s[k];

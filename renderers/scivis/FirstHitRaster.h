@@ -16,7 +16,16 @@
 // long vectors from the camera, which cancels badly), and the barycentric coordinates of B and C
 // are e1 / (e0 + e1 + e2) and e2 / (e0 + e1 + e2) (Embree's u and v).
 //
-// The result depends only on each ray and each triangle, not on binning, threads or which
+// Most triangles of a contour lie behind nearer ones, so a cell lists its triangles nearest
+// first (sorted into buckets by their least depth along the camera's axis, a vertex's), a 4 x 4
+// pixel block skips a triangle that lies wholly deeper than every hit its rays already hold, and
+// a cell stops once its rays' hits all lie nearer than the next bucket. A triangle's record
+// (edge planes, plane) is made only where a query reaches it (about a quarter of the listed
+// ones at 2048^2 on the wavelet's contours). A hit shallower than its triangle's least depth
+// (only rounding in a ray grazing the plane makes one) is no hit, so the bound holds for every
+// hit found and the skipping never changes an answer.
+//
+// The result depends only on each ray and each triangle, not on binning, order, threads or which
 // triangles a brick holds beside it: a brick and the whole scene find the same hit for a ray.
 //
 // Contracts: prepare() once per frame (not thread-safe), then firstHits() from any thread.
@@ -65,29 +74,41 @@ class FirstHitRaster {
 
   static constexpr int kCell = 16;  // screen cells are kCell x kCell pixels
 
-  // A triangle this frame: its edge planes through the camera (c0 opposite its first vertex,
-  // c1, c2), its plane's normal n, n . (A - O) and the pixels it may cover (x0 > x1: none).
-  // The queries' kernels read it as it is.
+  // A triangle this frame as the queries' kernels read it: its edge planes through the camera
+  // (c0 opposite its first vertex, c1, c2), its plane's normal n, n . (A - O), and a depth along
+  // the camera's axis no point of it lies nearer than.
   struct Setup {
     float c0[3], c1[3], c2[3], n[3];
-    float det;
-    std::int16_t x0, y0, x1, y1;
+    float det, near;
   };
 
  private:
   struct Vertex2 {
-    float x, y;
+    float x, y, depth;
   };
+  struct ScreenBox {
+    std::int16_t x0, y0, x1, y1;  // the pixels a triangle may cover (inclusive)
+  };
+  struct Binned {
+    std::uint32_t triangle;  // global index
+    float near;              // Setup::near
+    ScreenBox box;
+  };
+  int bucketOf(float depth) const;
+  Setup setupOf(std::uint32_t triangle, float near) const;
   bool ready_ = false;
   int width_ = 0, height_ = 0, cellsX_ = 0, cellsY_ = 0;
   float originX_ = 0, originY_ = 0, originZ_ = 0;
+  float forwardX_ = 0, forwardY_ = 0, forwardZ_ = 0;
   std::vector<Mesh> meshes_;
   std::vector<std::size_t> firstTriangle_;    // per mesh: its first global triangle index
-  std::vector<std::vector<Vertex2>> screen_;  // per mesh, per vertex: canvas position
-  std::vector<Setup> setup_;                  // per global triangle index
+  std::vector<std::vector<Vertex2>> screen_;  // per mesh, per vertex: canvas position, depth
+  std::vector<std::uint16_t> buckets_;        // per global triangle: its depth bucket
+  std::vector<Binned> order_;                 // the binned triangles, nearest bucket first
   std::vector<std::uint32_t> cellStart_;      // per cell + 1: offsets into cellTriangles_
-  std::vector<std::uint32_t> cellTriangles_;  // global triangle indices, ascending per cell
-  std::vector<std::uint32_t> counts_;         // binning's per chunk and cell counts
+  std::vector<Binned> cellTriangles_;         // per cell, in order_'s order
+  std::vector<std::uint32_t> counts_;         // per chunk and bucket or cell: counts, offsets
+  float bucketFrom_ = 0, bucketScale_ = 0;    // bucketOf()'s mapping of depths
   bool simd_ = false;
 };
 
