@@ -19,20 +19,19 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // How far a triangle's screen box is widened: a pixel's ray and the projection of the point it
 // hits agree to far less than this (float rounding of canvas coordinates below 2^14).
 constexpr float kMargin = 1.0f / 32.0f;
-constexpr std::size_t kChunk = 65536;  // triangles per binning task
-constexpr int kBuckets = 4096;         // depth buckets a frame's triangles are sorted in
+constexpr std::size_t kChunk = 65536;        // triangles per binning task
+constexpr int kBuckets = 4096;               // depth buckets a frame's clusters are sorted in
+constexpr std::uint32_t kClusterSize = 16;   // triangles a cluster
+constexpr std::size_t kClusterChunk = 4096;  // clusters per binning task
 
 struct PixelBox {
   int x0, y0, x1, y1;  // inclusive; empty when x0 > x1 or y0 > y1
 };
 
-// The pixels whose sample point may lie in the projection of (a, b, c), clamped to the canvas.
-inline PixelBox pixelsOf(float ax, float ay, float bx, float by, float cx, float cy, int width,
-                         int height) {
-  const float minX = std::min(ax, std::min(bx, cx)) - kMargin;
-  const float maxX = std::max(ax, std::max(bx, cx)) + kMargin;
-  const float minY = std::min(ay, std::min(by, cy)) - kMargin;
-  const float maxY = std::max(ay, std::max(by, cy)) + kMargin;
+// The pixels whose sample point may lie in [minX, maxX] x [minY, maxY] (canvas coordinates),
+// clamped to the canvas.
+inline PixelBox pixelsIn(float minX, float maxX, float minY, float maxY, int width, int height) {
+  minX -= kMargin, maxX += kMargin, minY -= kMargin, maxY += kMargin;
   // Clamped in float first: a vertex near the camera's plane projects far off the canvas. NaN
   // (never made by prepare()) would give an empty box.
   const float w = static_cast<float>(width), h = static_cast<float>(height);
@@ -44,6 +43,13 @@ inline PixelBox pixelsOf(float ax, float ay, float bx, float by, float cx, float
   box.x0 = std::max(box.x0, 0), box.y0 = std::max(box.y0, 0);
   box.x1 = std::min(box.x1, width - 1), box.y1 = std::min(box.y1, height - 1);
   return box;
+}
+
+// The pixels whose sample point may lie in the projection of (a, b, c).
+inline PixelBox pixelsOf(float ax, float ay, float bx, float by, float cx, float cy, int width,
+                         int height) {
+  return pixelsIn(std::min(ax, std::min(bx, cx)), std::max(ax, std::max(bx, cx)),
+                  std::min(ay, std::min(by, cy)), std::max(ay, std::max(by, cy)), width, height);
 }
 
 struct Vec {
@@ -214,25 +220,29 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   originX_ = cam.origin.x, originY_ = cam.origin.y, originZ_ = cam.origin.z;
   simd_ = simd && avx512Available();
 
-  // Every vertex on the canvas (Camera::ray() inverted) with its depth along the camera's axis,
-  // and the range of depths (the buckets' span); one behind or beside the camera's plane: no
-  // raster this frame.
-  screen_.resize(meshes.size());
+  forwardX_ = cam.forward.x, forwardY_ = cam.forward.y, forwardZ_ = cam.forward.z;
+  if (!sameMeshes(meshes)) makeClusters(meshes, total);
+
+  // Every cluster's points on the canvas (Camera::ray() inverted) with their depths along the
+  // camera's axis, the pixels the cluster may cover (its points' span) and its least depth, less
+  // twice a triangle's margin, so each of its triangles' bounds (a vertex's depth less 1e-4 of
+  // it) lies beyond. A point behind or beside the camera's plane: no raster this frame.
+  const std::size_t clusterCount = clusters_.size();
+  const std::size_t chunks = (clusterCount + kClusterChunk - 1) / kClusterChunk;
+  clusterScreen_.resize(clusterPoints_.size() / 3);
+  placed_.resize(clusterCount);
   std::atomic<bool> behind{false};
   const float w = static_cast<float>(width), h = static_cast<float>(height);
-  forwardX_ = cam.forward.x, forwardY_ = cam.forward.y, forwardZ_ = cam.forward.z;
-  float nearest = kInf, farthest = 0;
-  for (std::size_t m = 0; m < meshes.size(); ++m) {
-    const Mesh& mesh = meshes[m];
-    std::vector<Vertex2>& screen = screen_[m];
-    screen.resize(mesh.vertexCount);
-    const std::size_t chunks = (mesh.vertexCount + kChunk - 1) / kChunk;
-    std::vector<float> chunkNearest(chunks, kInf), chunkFarthest(chunks, 0.0f);
-    parallelFor(chunks, [&](std::size_t c) {
-      const std::size_t end = std::min(mesh.vertexCount, (c + 1) * kChunk);
-      float lo = kInf, hi = 0;
-      for (std::size_t i = c * kChunk; i < end; ++i) {
-        const float* p = mesh.vertices + 3 * i;
+  std::vector<float> chunkNearest(chunks, kInf), chunkFarthest(chunks, 0.0f);
+  parallelFor(chunks, [&](std::size_t c) {
+    const std::size_t begin = c * kClusterChunk,
+                      end = std::min(clusterCount, begin + kClusterChunk);
+    float lo = kInf, hi = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+      const Cluster& cluster = clusters_[i];
+      float minX = kInf, maxX = -kInf, minY = kInf, maxY = -kInf, least = kInf;
+      for (std::uint32_t k = cluster.points; k < cluster.points + cluster.pointCount; ++k) {
+        const float* p = clusterPoints_.data() + 3 * std::size_t{k};
         const Vec3 v{p[0] - cam.origin.x, p[1] - cam.origin.y, p[2] - cam.origin.z};
         if (!inFrontOfCamera(v, cam.forward)) {
           behind.store(true, std::memory_order_relaxed);
@@ -240,64 +250,54 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
         }
         const float depth = dot(v, cam.forward);
         const float sx = dot(v, cam.right) / depth, sy = dot(v, cam.up) / depth;
-        screen[i] = {(sx / cam.halfWidth + 1.0f) * 0.5f * w,
-                     (1.0f - sy / cam.halfHeight) * 0.5f * h, depth};
-        lo = std::min(lo, depth), hi = std::max(hi, depth);
+        const Vertex2 s{(sx / cam.halfWidth + 1.0f) * 0.5f * w,
+                        (1.0f - sy / cam.halfHeight) * 0.5f * h, depth};
+        clusterScreen_[k] = s;
+        minX = std::min(minX, s.x), maxX = std::max(maxX, s.x);
+        minY = std::min(minY, s.y), maxY = std::max(maxY, s.y);
+        least = std::min(least, depth), hi = std::max(hi, depth);
       }
-      chunkNearest[c] = lo, chunkFarthest[c] = hi;
-    });
-    if (behind.load()) {
-      clear();
-      return false;
+      lo = std::min(lo, least);
+      const PixelBox box = pixelsIn(minX, maxX, minY, maxY, width, height);
+      placed_[i] = {static_cast<std::uint32_t>(i),
+                    least - 2e-4f * least,
+                    {static_cast<std::int16_t>(box.x0), static_cast<std::int16_t>(box.y0),
+                     static_cast<std::int16_t>(box.x1), static_cast<std::int16_t>(box.y1)}};
     }
-    for (std::size_t c = 0; c < chunks; ++c)
-      nearest = std::min(nearest, chunkNearest[c]), farthest = std::max(farthest, chunkFarthest[c]);
+    chunkNearest[c] = lo, chunkFarthest[c] = hi;
+  });
+  if (behind.load()) {
+    clear();
+    return false;
   }
+  float nearest = kInf, farthest = 0;
+  for (std::size_t c = 0; c < chunks; ++c)
+    nearest = std::min(nearest, chunkNearest[c]), farthest = std::max(farthest, chunkFarthest[c]);
   bucketFrom_ = nearest;
   bucketScale_ = farthest > nearest ? static_cast<float>(kBuckets) / (farthest - nearest) : 0.0f;
 
-  // Per triangle its pixels and its least depth (a vertex's: depth is linear over the triangle),
-  // less a margin for rounding, so the depth of every hit the ray test finds on it lies beyond.
-  // The record of edge planes the test needs is made where a query reaches the triangle.
-  const auto binnedOf = [&](std::size_t m, std::size_t g) {
-    const std::uint32_t* tri = meshes[m].triangles + 3 * (g - firstTriangle_[m]);
-    const Vertex2 a = screen_[m][tri[0]], b = screen_[m][tri[1]], d = screen_[m][tri[2]];
-    const PixelBox box = pixelsOf(a.x, a.y, b.x, b.y, d.x, d.y, width, height);
-    const float least = std::min(a.depth, std::min(b.depth, d.depth));
-    return Binned{static_cast<std::uint32_t>(g),
-                  least - 1e-4f * least,
-                  {static_cast<std::int16_t>(box.x0), static_cast<std::int16_t>(box.y0),
-                   static_cast<std::int16_t>(box.x1), static_cast<std::int16_t>(box.y1)}};
-  };
-  const auto meshOf = [&](std::size_t g) {
-    return static_cast<std::size_t>(
-        std::upper_bound(firstTriangle_.begin(), firstTriangle_.end(), g) - firstTriangle_.begin() -
-        1);
-  };
-  // The triangles sorted by depth bucket, ascending within one: counted per chunk and bucket,
-  // so the order does not depend on the threads. A triangle covering no pixel is left out.
-  const std::size_t chunks = (total + kChunk - 1) / kChunk;
   constexpr std::uint16_t kOff = 0xffff;
   static_assert(kBuckets < kOff);
-  buckets_.resize(total);
+  buckets_.resize(clusterCount);
   std::vector<std::uint32_t>& counts = counts_;  // kept: a fresh one page-faulted every frame
   counts.assign(chunks * kBuckets, 0);
   parallelFor(chunks, [&](std::size_t c) {
     std::uint32_t* count = counts.data() + c * kBuckets;
-    const std::size_t begin = c * kChunk, end = std::min(total, begin + kChunk);
-    std::size_t m = meshOf(begin);
-    for (std::size_t g = begin; g < end; ++g) {
-      while (g >= firstTriangle_[m] + meshes[m].triangleCount) ++m;
-      const Binned t = binnedOf(m, g);
-      if (t.box.x0 > t.box.x1 || t.box.y0 > t.box.y1) {
-        buckets_[g] = kOff;
+    const std::size_t begin = c * kClusterChunk,
+                      end = std::min(clusterCount, begin + kClusterChunk);
+    for (std::size_t i = begin; i < end; ++i) {
+      const Placed& placed = placed_[i];
+      if (placed.box.x0 > placed.box.x1 || placed.box.y0 > placed.box.y1) {
+        buckets_[i] = kOff;
         continue;
       }
-      const int bucket = bucketOf(t.near);
-      buckets_[g] = static_cast<std::uint16_t>(bucket);
+      const int bucket = bucketOf(placed.near);
+      buckets_[i] = static_cast<std::uint16_t>(bucket);
       ++count[bucket];
     }
   });
+  // The clusters sorted by depth bucket, ascending within one (counted per chunk and bucket, so
+  // the order does not depend on the threads). A cluster covering no pixel is left out.
   std::size_t binned = 0;
   for (int bucket = 0; bucket < kBuckets; ++bucket)
     for (std::size_t c = 0; c < chunks; ++c) {
@@ -309,18 +309,16 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   order_.resize(binned);
   parallelFor(chunks, [&](std::size_t c) {
     std::uint32_t* next = counts.data() + c * kBuckets;
-    const std::size_t begin = c * kChunk, end = std::min(total, begin + kChunk);
-    std::size_t m = meshOf(begin);
-    for (std::size_t g = begin; g < end; ++g) {
-      while (g >= firstTriangle_[m] + meshes[m].triangleCount) ++m;
-      if (buckets_[g] != kOff) order_[next[buckets_[g]]++] = binnedOf(m, g);
-    }
+    const std::size_t begin = c * kClusterChunk,
+                      end = std::min(clusterCount, begin + kClusterChunk);
+    for (std::size_t i = begin; i < end; ++i)
+      if (buckets_[i] != kOff) order_[next[buckets_[i]]++] = placed_[i];
   });
 
   // Binning in that order: count per chunk (of order_) and cell, offsets, then each chunk
-  // writes its triangles, so every cell lists them nearest bucket first.
+  // writes its clusters, so every cell lists them nearest bucket first.
   const std::size_t cells = static_cast<std::size_t>(cellsX_) * static_cast<std::size_t>(cellsY_);
-  const std::size_t orderChunks = (binned + kChunk - 1) / kChunk;
+  const std::size_t orderChunks = (binned + kClusterChunk - 1) / kClusterChunk;
   counts.assign(orderChunks * cells, 0);
   const auto cellsOf = [&](const ScreenBox& t, auto&& visit) {
     for (int cy = t.y0 / kCell; cy <= t.y1 / kCell; ++cy)
@@ -330,7 +328,7 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   };
   parallelFor(orderChunks, [&](std::size_t c) {
     std::uint32_t* count = counts.data() + c * cells;
-    const std::size_t begin = c * kChunk, end = std::min(binned, begin + kChunk);
+    const std::size_t begin = c * kClusterChunk, end = std::min(binned, begin + kClusterChunk);
     for (std::size_t i = begin; i < end; ++i)
       cellsOf(order_[i].box, [&](std::size_t cell) { ++count[cell]; });
   });
@@ -350,27 +348,118 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
     return false;
   }
   cellStart_[cells] = static_cast<std::uint32_t>(running);
-  cellTriangles_.resize(running);
+  cellClusters_.resize(running);
   parallelFor(orderChunks, [&](std::size_t c) {
     std::uint32_t* next = counts.data() + c * cells;
-    const std::size_t begin = c * kChunk, end = std::min(binned, begin + kChunk);
+    const std::size_t begin = c * kClusterChunk, end = std::min(binned, begin + kClusterChunk);
     for (std::size_t i = begin; i < end; ++i)
-      cellsOf(order_[i].box, [&](std::size_t cell) { cellTriangles_[next[cell]++] = order_[i]; });
+      cellsOf(order_[i].box, [&](std::size_t cell) { cellClusters_[next[cell]++] = order_[i]; });
   });
   meshes_ = meshes;
   ready_ = true;
   return true;
 }
 
-FirstHitRaster::Setup FirstHitRaster::setupOf(std::uint32_t g, float near) const {
-  const std::size_t m = static_cast<std::size_t>(
-      std::upper_bound(firstTriangle_.begin(), firstTriangle_.end(), std::size_t{g}) -
+std::size_t FirstHitRaster::meshOf(std::size_t triangle) const {
+  return static_cast<std::size_t>(
+      std::upper_bound(firstTriangle_.begin(), firstTriangle_.end(), triangle) -
       firstTriangle_.begin() - 1);
-  const Mesh& mesh = meshes_[m];
-  const std::uint32_t* tri = mesh.triangles + 3 * (g - firstTriangle_[m]);
+}
+
+bool FirstHitRaster::sameMeshes(const std::vector<Mesh>& meshes) const {
+  return std::equal(meshes.begin(), meshes.end(), clusteredMeshes_.begin(), clusteredMeshes_.end(),
+                    [](const Mesh& a, const Mesh& b) {
+                      return a.vertices == b.vertices && a.vertexCount == b.vertexCount &&
+                             a.triangles == b.triangles && a.triangleCount == b.triangleCount;
+                    });
+}
+
+void FirstHitRaster::makeClusters(const std::vector<Mesh>& meshes, std::size_t total) {
+  // The triangles in Morton order of their centroids (over the meshes' bounds, 2^10 steps an
+  // axis), cut into runs of kClusterSize: neighbours in space, so a cluster's box is small.
+  float lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+  for (const Mesh& mesh : meshes)
+    for (std::size_t i = 0; i < mesh.vertexCount; ++i)
+      for (int a = 0; a < 3; ++a)
+        lo[a] = std::min(lo[a], mesh.vertices[3 * i + a]),
+        hi[a] = std::max(hi[a], mesh.vertices[3 * i + a]);
+  float scale[3];
+  for (int a = 0; a < 3; ++a) scale[a] = hi[a] > lo[a] ? 1023.0f / (hi[a] - lo[a]) : 0.0f;
+  const auto spread = [](std::uint64_t v) {  // bit i to bit 3i
+    v &= 0x3ff;
+    v = (v | (v << 16)) & 0x30000ff;
+    v = (v | (v << 8)) & 0x300f00f;
+    v = (v | (v << 4)) & 0x30c30c3;
+    return (v | (v << 2)) & 0x9249249;
+  };
+  std::vector<std::uint64_t> keys(total);
+  const std::size_t chunks = (total + kChunk - 1) / kChunk;
+  // The key's top two bits keep one mesh's triangles together (a cluster holds one mesh's; more
+  // meshes than four only make more clusters cut at a mesh's end).
+  parallelFor(chunks, [&](std::size_t c) {
+    const std::size_t begin = c * kChunk, end = std::min(total, begin + kChunk);
+    std::size_t m = meshOf(begin);
+    for (std::size_t g = begin; g < end; ++g) {
+      while (g >= firstTriangle_[m] + meshes[m].triangleCount) ++m;
+      const std::uint32_t* tri = meshes[m].triangles + 3 * (g - firstTriangle_[m]);
+      std::uint64_t code = 0;
+      for (int a = 0; a < 3; ++a) {
+        const float centre =
+            (meshes[m].vertices[3 * tri[0] + a] + meshes[m].vertices[3 * tri[1] + a] +
+             meshes[m].vertices[3 * tri[2] + a]) /
+            3.0f;
+        const float q = std::clamp((centre - lo[a]) * scale[a], 0.0f, 1023.0f);
+        code |= spread(static_cast<std::uint64_t>(q)) << a;
+      }
+      keys[g] = (std::uint64_t{m & 3} << 62) | code << 32 | g;
+    }
+  });
+  std::sort(keys.begin(), keys.end());
+  clustered_.resize(total);
+  for (std::size_t i = 0; i < total; ++i) clustered_[i] = static_cast<std::uint32_t>(keys[i]);
+  // Runs of up to kClusterSize triangles of one mesh.
+  clusters_.clear();
+  for (std::size_t i = 0; i < total;) {
+    const std::uint32_t m = static_cast<std::uint32_t>(meshOf(clustered_[i]));
+    Cluster cluster{static_cast<std::uint32_t>(i), 0, m, 0, 0};
+    for (; i < total && cluster.count < kClusterSize && meshOf(clustered_[i]) == m; ++i)
+      ++cluster.count;
+    clusters_.push_back(cluster);
+  }
+  // Each cluster's own copy of its triangles' vertices (a vertex shared by clusters is copied
+  // to each: a query then reads one cluster's points together) and its triangles' corners as
+  // indices into them.
+  clusterPoints_.clear();
+  clusterCorners_.resize(3 * total);
+  for (Cluster& cluster : clusters_) {
+    const Mesh& mesh = meshes[cluster.mesh];
+    std::uint32_t local[3 * kClusterSize];
+    std::uint32_t count = 0;
+    cluster.points = static_cast<std::uint32_t>(clusterPoints_.size() / 3);
+    for (std::uint32_t k = cluster.first; k < cluster.first + cluster.count; ++k) {
+      const std::uint32_t* tri =
+          mesh.triangles + 3 * (clustered_[k] - firstTriangle_[cluster.mesh]);
+      for (int j = 0; j < 3; ++j) {
+        std::uint32_t at = 0;
+        while (at < count && local[at] != tri[j]) ++at;
+        if (at == count) {
+          local[count++] = tri[j];
+          clusterPoints_.insert(clusterPoints_.end(), mesh.vertices + 3 * std::size_t{tri[j]},
+                                mesh.vertices + 3 * std::size_t{tri[j]} + 3);
+        }
+        clusterCorners_[3 * std::size_t{k} + static_cast<std::size_t>(j)] =
+            static_cast<std::uint8_t>(at);
+      }
+    }
+    cluster.pointCount = count;
+  }
+  clusteredMeshes_ = meshes;
+}
+
+FirstHitRaster::Setup FirstHitRaster::setupOf(const float* pa, const float* pb, const float* pc,
+                                              float near) const {
   const Vec origin{originX_, originY_, originZ_};
-  const Vec a = at(mesh.vertices, tri[0]), b = at(mesh.vertices, tri[1]);
-  const Vec c = at(mesh.vertices, tri[2]);
+  const Vec a{pa[0], pa[1], pa[2]}, b{pb[0], pb[1], pb[2]}, c{pc[0], pc[1], pc[2]};
   const Vec c0 = edgePlane(b, c, origin), c1 = edgePlane(c, a, origin);
   const Vec c2 = edgePlane(a, b, origin);
   // The plane's normal from the edges (well conditioned; the triple product of the three long
@@ -415,38 +504,61 @@ void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t strid
         block.reach = reachOf(block);
         reach = std::max(reach, block.reach);
       }
-      // The cell's triangles nearest bucket first: past the bucket of the cell's reach, none
-      // can change a hit.
+      // Canvas coordinates beyond which a triangle's pixels miss this cell's part (its box's
+      // margin and a pixel's width beyond).
+      const float spanX0 = static_cast<float>(ax) - 1.0f, spanX1 = static_cast<float>(bx) + 2.0f;
+      const float spanY0 = static_cast<float>(ay) - 1.0f, spanY1 = static_cast<float>(by) + 2.0f;
+      // The cell's clusters nearest bucket first: past the bucket of the cell's reach, none can
+      // change a hit.
       int lastBucket = bucketOf(reach);
       const std::size_t cell = static_cast<std::size_t>(cy) * static_cast<std::size_t>(cellsX_) +
                                static_cast<std::size_t>(cx);
       const std::uint32_t end = reach > -kInf ? cellStart_[cell + 1] : cellStart_[cell];
       for (std::uint32_t k = cellStart_[cell]; k < end; ++k) {
-        const Binned& triangle = cellTriangles_[k];
-        if (triangle.near > reach) {
-          if (bucketOf(triangle.near) > lastBucket) break;
+        const Placed& placed = cellClusters_[k];
+        if (placed.near > reach) {
+          if (bucketOf(placed.near) > lastBucket) break;
           continue;
         }
-        const int bx0 = std::max<int>(triangle.box.x0, ax),
-                  bx1 = std::min<int>(triangle.box.x1, bx);
-        const int by0 = std::max<int>(triangle.box.y0, ay),
-                  by1 = std::min<int>(triangle.box.y1, by);
-        if (bx0 > bx1 || by0 > by1) continue;
-        Setup setup;
-        bool made = false, changed = false;
-        for (int by4 = (by0 - oy) / 4; by4 <= (by1 - oy) / 4; ++by4)
-          for (int bx4 = (bx0 - ox) / 4; bx4 <= (bx1 - ox) / 4; ++bx4) {
-            Block& block = blocks[by4 * kBlocks + bx4];
-            if (triangle.near > block.reach) continue;
-            if (!made) setup = setupOf(triangle.triangle, triangle.near), made = true;
-            if (!test(setup, triangle.triangle, block)) continue;
-            block.reach = reachOf(block);
-            changed = true;
+        const Cluster& cluster = clusters_[placed.cluster];
+        const Vertex2* screen = clusterScreen_.data() + cluster.points;
+        const float* points = clusterPoints_.data() + 3 * std::size_t{cluster.points};
+        for (std::uint32_t j = cluster.first; j < cluster.first + cluster.count; ++j) {
+          // The triangle's pixels and least depth, as the cluster's were made. Most of a
+          // cluster's triangles lie in other cells: out first, before rounding to pixels.
+          const std::uint8_t* tri = clusterCorners_.data() + 3 * std::size_t{j};
+          const Vertex2 va = screen[tri[0]], vb = screen[tri[1]], vc = screen[tri[2]];
+          if (std::max(va.x, std::max(vb.x, vc.x)) < spanX0 ||
+              std::min(va.x, std::min(vb.x, vc.x)) > spanX1 ||
+              std::max(va.y, std::max(vb.y, vc.y)) < spanY0 ||
+              std::min(va.y, std::min(vb.y, vc.y)) > spanY1)
+            continue;
+          const float least = std::min(va.depth, std::min(vb.depth, vc.depth));
+          const float near = least - 1e-4f * least;
+          if (near > reach) continue;
+          const PixelBox box = pixelsOf(va.x, va.y, vb.x, vb.y, vc.x, vc.y, width_, height_);
+          const int bx0 = std::max(box.x0, ax), bx1 = std::min(box.x1, bx);
+          const int by0 = std::max(box.y0, ay), by1 = std::min(box.y1, by);
+          if (bx0 > bx1 || by0 > by1) continue;
+          Setup setup;
+          bool made = false, changed = false;
+          for (int by4 = (by0 - oy) / 4; by4 <= (by1 - oy) / 4; ++by4)
+            for (int bx4 = (bx0 - ox) / 4; bx4 <= (bx1 - ox) / 4; ++bx4) {
+              Block& block = blocks[by4 * kBlocks + bx4];
+              if (near > block.reach) continue;
+              if (!made)
+                setup =
+                    setupOf(points + 3 * tri[0], points + 3 * tri[1], points + 3 * tri[2], near),
+                made = true;
+              if (!test(setup, clustered_[j], block)) continue;
+              block.reach = reachOf(block);
+              changed = true;
+            }
+          if (changed) {
+            reach = -kInf;
+            for (const Block& block : blocks) reach = std::max(reach, block.reach);
+            lastBucket = bucketOf(reach);
           }
-        if (changed) {
-          reach = -kInf;
-          for (const Block& block : blocks) reach = std::max(reach, block.reach);
-          lastBucket = bucketOf(reach);
         }
       }
       for (int b = 0; b < kBlocks * kBlocks; ++b) {

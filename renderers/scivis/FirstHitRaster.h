@@ -89,26 +89,41 @@ class FirstHitRaster {
   struct ScreenBox {
     std::int16_t x0, y0, x1, y1;  // the pixels a triangle may cover (inclusive)
   };
-  struct Binned {
-    std::uint32_t triangle;  // global index
-    float near;              // Setup::near
+  // A run of triangles near one another in space (in clustered_) and their box: what the
+  // raster bins, made once for a set of meshes.
+  struct Cluster {
+    std::uint32_t first, count, mesh;  // its triangles: clustered_[first .. first + count - 1]
+    std::uint32_t points, pointCount;  // its vertices' copies in clusterPoints_
+  };
+  struct Placed {
+    std::uint32_t cluster;
+    float near;  // no triangle of the cluster lies at a lesser depth (below its Setup::near)
     ScreenBox box;
   };
   int bucketOf(float depth) const;
-  Setup setupOf(std::uint32_t triangle, float near) const;
+  std::size_t meshOf(std::size_t triangle) const;  // global index to mesh
+  bool sameMeshes(const std::vector<Mesh>& meshes) const;
+  void makeClusters(const std::vector<Mesh>& meshes, std::size_t total);
+  Setup setupOf(const float* a, const float* b, const float* c, float near) const;
   bool ready_ = false;
   int width_ = 0, height_ = 0, cellsX_ = 0, cellsY_ = 0;
   float originX_ = 0, originY_ = 0, originZ_ = 0;
   float forwardX_ = 0, forwardY_ = 0, forwardZ_ = 0;
   std::vector<Mesh> meshes_;
   std::vector<std::size_t> firstTriangle_;    // per mesh: its first global triangle index
-  std::vector<std::vector<Vertex2>> screen_;  // per mesh, per vertex: canvas position, depth
-  std::vector<std::uint16_t> buckets_;        // per global triangle: its depth bucket
-  std::vector<Binned> order_;                 // the binned triangles, nearest bucket first
-  std::vector<std::uint32_t> cellStart_;      // per cell + 1: offsets into cellTriangles_
-  std::vector<Binned> cellTriangles_;         // per cell, in order_'s order
-  std::vector<std::uint32_t> counts_;         // per chunk and bucket or cell: counts, offsets
-  float bucketFrom_ = 0, bucketScale_ = 0;    // bucketOf()'s mapping of depths
+  std::vector<Mesh> clusteredMeshes_;         // what clusters_ were made of
+  std::vector<std::uint32_t> clustered_;      // global triangle indices, cluster by cluster
+  std::vector<std::uint8_t> clusterCorners_;  // their vertices (3 each) in their cluster's points
+  std::vector<float> clusterPoints_;          // xyz per point, cluster by cluster
+  std::vector<Cluster> clusters_;
+  std::vector<Vertex2> clusterScreen_;      // per point: canvas position, depth
+  std::vector<Placed> placed_;              // per cluster, this frame
+  std::vector<std::uint16_t> buckets_;      // per cluster: its depth bucket
+  std::vector<Placed> order_;               // the binned clusters, nearest bucket first
+  std::vector<std::uint32_t> cellStart_;    // per cell + 1: offsets into cellClusters_
+  std::vector<Placed> cellClusters_;        // per cell, in order_'s order
+  std::vector<std::uint32_t> counts_;       // per chunk and bucket or cell: counts, offsets
+  float bucketFrom_ = 0, bucketScale_ = 0;  // bucketOf()'s mapping of depths
   bool simd_ = false;
 };
 

@@ -35,9 +35,9 @@ struct Fragment {
 enum class FirstHits { Auto, Raster, Embree };
 // Auto uses the raster where an isosurface voxel cell spans at least this many pixels: the raster
 // costs per triangle (about two a crossed cell), Embree per ray, so the raster wins as cells grow
-// on screen (the 256^3 contours on 1 and 2 ranks: Embree ahead at 2.8 pixels a cell, even at
-// 3.35, the raster ahead at 3.9 and 4.5).
-constexpr float kRasterCellPixels = 3.5f;
+// on screen. The 256^3 contours, raster / Embree frame time: 1 rank x 2 threads 1.09 at 2.25
+// pixels a cell, 0.89 at 2.8, 0.76 at 3.4; 2 ranks x 1 thread 1.18 at 2.25, 0.98 at 2.8.
+constexpr float kRasterCellPixels = 2.75f;
 
 struct SciVisOptions {
   // true: the background is composited under every pixel (alpha 1, image-parallel rendering);
