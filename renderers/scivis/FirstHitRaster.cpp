@@ -259,7 +259,9 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
       }
       lo = std::min(lo, least);
       const PixelBox box = pixelsIn(minX, maxX, minY, maxY, width, height);
-      placed_[i] = {static_cast<std::uint32_t>(i),
+      placed_[i] = {cluster.first,
+                    cluster.points,
+                    cluster.count,
                     least - 2e-4f * least,
                     {static_cast<std::int16_t>(box.x0), static_cast<std::int16_t>(box.y0),
                      static_cast<std::int16_t>(box.x1), static_cast<std::int16_t>(box.y1)}};
@@ -520,10 +522,9 @@ void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t strid
           if (bucketOf(placed.near) > lastBucket) break;
           continue;
         }
-        const Cluster& cluster = clusters_[placed.cluster];
-        const Vertex2* screen = clusterScreen_.data() + cluster.points;
-        const float* points = clusterPoints_.data() + 3 * std::size_t{cluster.points};
-        for (std::uint32_t j = cluster.first; j < cluster.first + cluster.count; ++j) {
+        const Vertex2* screen = clusterScreen_.data() + placed.points;
+        const float* points = clusterPoints_.data() + 3 * std::size_t{placed.points};
+        for (std::uint32_t j = placed.first; j < placed.first + placed.count; ++j) {
           // The triangle's pixels and least depth, as the cluster's were made. Most of a
           // cluster's triangles lie in other cells: out first, before rounding to pixels.
           const std::uint8_t* tri = clusterCorners_.data() + 3 * std::size_t{j};

@@ -95,8 +95,8 @@ class FirstHitRaster {
     std::uint32_t first, count, mesh;  // its triangles: clustered_[first .. first + count - 1]
     std::uint32_t points, pointCount;  // its vertices' copies in clusterPoints_
   };
-  struct Placed {
-    std::uint32_t cluster;
+  struct Placed {                        // a cluster this frame
+    std::uint32_t first, points, count;  // as its Cluster's
     float near;  // no triangle of the cluster lies at a lesser depth (below its Setup::near)
     ScreenBox box;
   };
