@@ -200,8 +200,10 @@ void FirstHitRaster::clear() {
 int FirstHitRaster::bucketOf(float distance) const {
   // Monotone in `distance` (a subtraction, a product by a non-negative number, a clamp), which
   // is all the queries' early stop needs.
+  // NaN (an infinite depth times a zero scale: all depths alike, or nothing binned) is bucket 0.
   const float x = (distance - bucketFrom_) * bucketScale_;
-  return static_cast<int>(std::min(std::max(x, 0.0f), static_cast<float>(kBuckets - 1)));
+  if (!(x > 0.0f)) return 0;
+  return x < static_cast<float>(kBuckets - 1) ? static_cast<int>(x) : kBuckets - 1;
 }
 
 bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
@@ -275,7 +277,7 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   float nearest = kInf, farthest = 0;
   for (std::size_t c = 0; c < chunks; ++c)
     nearest = std::min(nearest, chunkNearest[c]), farthest = std::max(farthest, chunkFarthest[c]);
-  bucketFrom_ = nearest;
+  bucketFrom_ = nearest < kInf ? nearest : 0.0f;
   bucketScale_ = farthest > nearest ? static_cast<float>(kBuckets) / (farthest - nearest) : 0.0f;
 
   constexpr std::uint16_t kOff = 0xffff;

@@ -55,10 +55,12 @@ class FirstHitRaster {
     std::uint32_t mesh = kNone, triangle = 0;  // mesh kNone: no hit
   };
 
-  // Bins every triangle by the screen cells its projection covers, for `camera` on a width x
+  // Bins the triangles' clusters by the screen cells they cover, for `camera` on a width x
   // height canvas. False (and nothing binned) when rasterising cannot stand in for ray tests: a
   // camera with a lens, or a vertex not in front of the camera. `simd`: AVX-512 where the CPU
-  // has it (false: the scalar kernel; both give the same bits).
+  // has it (false: the scalar kernel; both give the same bits). The clusters (and their copies
+  // of the vertices) are made again only when a mesh's pointers or counts differ from the last
+  // call's: meshes whose contents change in place need a new FirstHitRaster.
   bool prepare(const Camera& camera, int width, int height, const std::vector<Mesh>& meshes,
                bool simd = true);
   bool ready() const { return ready_; }

@@ -319,6 +319,21 @@ TEST(FirstHitRaster, TheTrianglesOrderDoesNotChangeAnAnswer) {
   }
 }
 
+// Nothing to bin (a mesh without triangles: an isovalue outside the field's range) is a raster
+// that finds nothing, with either kernel.
+TEST(FirstHitRaster, NoTrianglesFindNothing) {
+  const float vertex[3] = {0, 0, 0};
+  const std::vector<FirstHitRaster::Mesh> meshes{{vertex, 1, nullptr, 0, 0}};
+  const int w = 40, h = 30;
+  const Camera camera(kCamera, w, h);
+  const CanvasRays rays = canvasRays(camera, w, h);
+  for (const bool simd : {true, false}) {
+    FirstHitRaster raster;
+    ASSERT_TRUE(raster.prepare(camera, w, h, meshes, simd));
+    for (const auto& hit : rasterHits(raster, rays)) EXPECT_EQ(hit.mesh, FirstHitRaster::kNone);
+  }
+}
+
 // The renderer with its first hits rasterised against the renderer asking Embree: the same
 // surfaces, shaded alike up to the last bits of the hit distances.
 TEST(FirstHitRaster, RenderedImagesMatchEmbreesFirstHits) {
