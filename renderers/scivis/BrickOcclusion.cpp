@@ -23,10 +23,12 @@ struct FaceMap {
   std::int32_t u0 = 0, nu = 0, v0 = 0, nv = 0;  // cell indices of the whole field
   std::vector<std::uint8_t> sides;              // nu * nv, u fastest
 
-  Side at(Vec3 p, int axis, const Vec3& origin, const Vec3& spacing) const {
+  // `perCell`: 1 / spacing. A product instead of a quotient may land a point a rounding away
+  // in the neighbouring cell, which the erosion makes the same side or unsure, never the other.
+  Side at(Vec3 p, int axis, const Vec3& origin, const Vec3& perCell) const {
     if (nu == 0 || nv == 0) return kUnsure;
-    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    const float fu = (p[u] - origin[u]) / spacing[u], fv = (p[v] - origin[v]) / spacing[v];
+    const int u = axis == 2 ? 0 : axis + 1, v = axis == 0 ? 2 : axis - 1;
+    const float fu = (p[u] - origin[u]) * perCell[u], fv = (p[v] - origin[v]) * perCell[v];
     if (!(fu == fu) || !(fv == fv)) return kUnsure;
     // Clamped to the face: a point a rounding beyond it lands on the border, which is unsure.
     const float cu =
@@ -41,7 +43,7 @@ struct FaceMap {
 
 // One isosurface of one brick: the grid its cells lie on and its 6 faces (-x, +x, -y, +y, -z, +z).
 struct IsoFaces {
-  Vec3 origin, spacing{1.0f};
+  Vec3 origin, spacing{1.0f}, perCell{1.0f};  // perCell = 1 / spacing
   std::array<FaceMap, 6> faces;
 };
 
@@ -137,6 +139,7 @@ BrickSummary parse(const std::vector<std::uint8_t>& in, std::size_t& at, std::si
     float g[6];
     for (float& x : g) x = take<float>(in, at);
     iso.origin = {g[0], g[1], g[2]}, iso.spacing = {g[3], g[4], g[5]};
+    iso.perCell = {1.0f / g[3], 1.0f / g[4], 1.0f / g[5]};
     for (FaceMap& f : iso.faces) {
       f.u0 = take<std::int32_t>(in, at), f.nu = take<std::int32_t>(in, at);
       f.v0 = take<std::int32_t>(in, at), f.nv = take<std::int32_t>(in, at);
@@ -280,10 +283,10 @@ bool BrickOcclusion::certainlyOpaque(int brick, Vec3 origin, Vec3 dir, Vec3 invD
   const Vec3 p0 = origin + dir * t0, p1 = origin + dir * t1;
   for (const IsoFaces& iso : s.isos) {
     const Side in = iso.faces[static_cast<std::size_t>(entryFace)].at(p0, entryFace / 2, iso.origin,
-                                                                      iso.spacing);
+                                                                      iso.perCell);
     if (in == kUnsure) continue;
     const Side out =
-        iso.faces[static_cast<std::size_t>(exitFace)].at(p1, exitFace / 2, iso.origin, iso.spacing);
+        iso.faces[static_cast<std::size_t>(exitFace)].at(p1, exitFace / 2, iso.origin, iso.perCell);
     if (out != kUnsure && out != in) return true;
   }
   return false;
