@@ -20,8 +20,6 @@ struct Box3 {
 
 inline Vec3 reciprocal(Vec3 d) { return {1.0f / d.x, 1.0f / d.y, 1.0f / d.z}; }
 
-// Narrows [t0, t1] to the part of origin + t * dir inside `box` (invDir = 1 / dir per axis, inf
-// for a zero component). False when nothing is left. Infinite boxes give back [t0, t1].
 // One axis of clipToBox(): [t0, t1] narrowed to the slab lo <= origin + t dir <= hi along it
 // (o: the origin's coordinate, inv: 1 / the direction's).
 inline void clipToSlab(float lo, float hi, float o, float inv, float& t0, float& t1) {
@@ -32,6 +30,8 @@ inline void clipToSlab(float lo, float hi, float o, float inv, float& t0, float&
   if (far == far) t1 = std::min(t1, far);
 }
 
+// Narrows [t0, t1] to the part of origin + t * dir inside `box` (invDir = 1 / dir per axis, inf
+// for a zero component). False when nothing is left. Infinite boxes give back [t0, t1].
 inline bool clipToBox(const Box3& box, Vec3 origin, Vec3 invDir, float& t0, float& t1) {
   for (int a = 0; a < 3; ++a) clipToSlab(box.lo[a], box.hi[a], origin[a], invDir[a], t0, t1);
   return t0 <= t1;

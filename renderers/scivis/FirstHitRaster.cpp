@@ -19,10 +19,16 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // How far a triangle's screen box is widened: a pixel's ray and the projection of the point it
 // hits agree to far less than this (float rounding of canvas coordinates below 2^14).
 constexpr float kMargin = 1.0f / 32.0f;
-constexpr std::size_t kChunk = 65536;        // triangles per binning task
+constexpr std::size_t kChunk = 65536;        // triangles per task making the clusters' keys
 constexpr int kBuckets = 4096;               // depth buckets a frame's clusters are sorted in
 constexpr std::uint32_t kClusterSize = 16;   // triangles a cluster
 constexpr std::size_t kClusterChunk = 4096;  // clusters per binning task
+// A triangle's least depth is its vertices' least less this share of it (so every hit the ray
+// test finds on it lies deeper); a cluster's, its points' less twice that, so it lies below
+// each of its triangles' whatever the rounding.
+constexpr float kNearMargin = 1e-4f;
+inline float triangleNear(float least) { return least - kNearMargin * least; }
+inline float clusterNear(float least) { return least - 2 * kNearMargin * least; }
 
 struct PixelBox {
   int x0, y0, x1, y1;  // inclusive; empty when x0 > x1 or y0 > y1
@@ -57,10 +63,6 @@ struct Vec {
 };
 
 inline Vec minus(Vec a, Vec b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline Vec at(const float* vertices, std::uint32_t i) {
-  const float* p = vertices + 3 * std::size_t{i};
-  return {p[0], p[1], p[2]};
-}
 inline Vec crossOf(Vec a, Vec b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
@@ -226,9 +228,8 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   if (!sameMeshes(meshes)) makeClusters(meshes, total);
 
   // Every cluster's points on the canvas (Camera::ray() inverted) with their depths along the
-  // camera's axis, the pixels the cluster may cover (its points' span) and its least depth, less
-  // twice a triangle's margin, so each of its triangles' bounds (a vertex's depth less 1e-4 of
-  // it) lies beyond. A point behind or beside the camera's plane: no raster this frame.
+  // camera's axis, the pixels the cluster may cover (its points' span) and its least depth
+  // (clusterNear). A point behind or beside the camera's plane: no raster this frame.
   const std::size_t clusterCount = clusters_.size();
   const std::size_t chunks = (clusterCount + kClusterChunk - 1) / kClusterChunk;
   clusterScreen_.resize(clusterPoints_.size() / 3);
@@ -264,7 +265,7 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
       placed_[i] = {cluster.first,
                     cluster.points,
                     cluster.count,
-                    least - 2e-4f * least,
+                    clusterNear(least),
                     {static_cast<std::int16_t>(box.x0), static_cast<std::int16_t>(box.y0),
                      static_cast<std::int16_t>(box.x1), static_cast<std::int16_t>(box.y1)}};
     }
@@ -280,28 +281,22 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   bucketFrom_ = nearest < kInf ? nearest : 0.0f;
   bucketScale_ = farthest > nearest ? static_cast<float>(kBuckets) / (farthest - nearest) : 0.0f;
 
-  constexpr std::uint16_t kOff = 0xffff;
-  static_assert(kBuckets < kOff);
-  buckets_.resize(clusterCount);
+  // A cluster's depth bucket, -1 for one that covers no pixel (left out).
+  const auto bucketOfPlaced = [&](const Placed& placed) {
+    return placed.box.x0 > placed.box.x1 || placed.box.y0 > placed.box.y1 ? -1
+                                                                          : bucketOf(placed.near);
+  };
   std::vector<std::uint32_t>& counts = counts_;  // kept: a fresh one page-faulted every frame
   counts.assign(chunks * kBuckets, 0);
   parallelFor(chunks, [&](std::size_t c) {
     std::uint32_t* count = counts.data() + c * kBuckets;
     const std::size_t begin = c * kClusterChunk,
                       end = std::min(clusterCount, begin + kClusterChunk);
-    for (std::size_t i = begin; i < end; ++i) {
-      const Placed& placed = placed_[i];
-      if (placed.box.x0 > placed.box.x1 || placed.box.y0 > placed.box.y1) {
-        buckets_[i] = kOff;
-        continue;
-      }
-      const int bucket = bucketOf(placed.near);
-      buckets_[i] = static_cast<std::uint16_t>(bucket);
-      ++count[bucket];
-    }
+    for (std::size_t i = begin; i < end; ++i)
+      if (const int bucket = bucketOfPlaced(placed_[i]); bucket >= 0) ++count[bucket];
   });
   // The clusters sorted by depth bucket, ascending within one (counted per chunk and bucket, so
-  // the order does not depend on the threads). A cluster covering no pixel is left out.
+  // the order does not depend on the threads).
   std::size_t binned = 0;
   for (int bucket = 0; bucket < kBuckets; ++bucket)
     for (std::size_t c = 0; c < chunks; ++c) {
@@ -316,7 +311,8 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
     const std::size_t begin = c * kClusterChunk,
                       end = std::min(clusterCount, begin + kClusterChunk);
     for (std::size_t i = begin; i < end; ++i)
-      if (buckets_[i] != kOff) order_[next[buckets_[i]]++] = placed_[i];
+      if (const int bucket = bucketOfPlaced(placed_[i]); bucket >= 0)
+        order_[next[bucket]++] = placed_[i];
   });
 
   // Binning in that order: count per chunk (of order_) and cell, offsets, then each chunk
@@ -536,8 +532,7 @@ void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t strid
               std::max(va.y, std::max(vb.y, vc.y)) < spanY0 ||
               std::min(va.y, std::min(vb.y, vc.y)) > spanY1)
             continue;
-          const float least = std::min(va.depth, std::min(vb.depth, vc.depth));
-          const float near = least - 1e-4f * least;
+          const float near = triangleNear(std::min(va.depth, std::min(vb.depth, vc.depth)));
           if (near > reach) continue;
           const PixelBox box = pixelsOf(va.x, va.y, vb.x, vb.y, vc.x, vc.y, width_, height_);
           const int bx0 = std::max(box.x0, ax), bx1 = std::min(box.x1, bx);
@@ -573,9 +568,7 @@ void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t strid
           const int px = px0 + k % 4, py = py0 + k / 4;
           Hit& h =
               out[static_cast<std::size_t>(py - y0) * stride + static_cast<std::size_t>(px - x0)];
-          const std::size_t mesh = static_cast<std::size_t>(
-              std::upper_bound(firstTriangle_.begin(), firstTriangle_.end(), g) -
-              firstTriangle_.begin() - 1);
+          const std::size_t mesh = meshOf(g);
           h.t = block.t[k];
           h.u = block.e1[k] / block.s[k];
           h.v = block.e2[k] / block.s[k];

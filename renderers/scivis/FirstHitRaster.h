@@ -120,7 +120,6 @@ class FirstHitRaster {
   std::vector<Cluster> clusters_;
   std::vector<Vertex2> clusterScreen_;      // per point: canvas position, depth
   std::vector<Placed> placed_;              // per cluster, this frame
-  std::vector<std::uint16_t> buckets_;      // per cluster: its depth bucket
   std::vector<Placed> order_;               // the binned clusters, nearest bucket first
   std::vector<std::uint32_t> cellStart_;    // per cell + 1: offsets into cellClusters_
   std::vector<Placed> cellClusters_;        // per cell, in order_'s order
