@@ -226,15 +226,19 @@ plot '$dat' using 2:3:xtic(1) title "dfbwall scivis" lc rgb "#3070b0", \
      '' using (\$0):(\$4 * 1.6):(sprintf("%.1fx", \$6)) with labels font ",8" notitle
 unset logscale y; unset border; unset tics; unset key; unset ylabel
 set size ratio -1
-set origin 0.00, 0; set size 0.25, 0.42; set title "dfbwall, volume (${s0}^2, $nl ranks)" font ",10"
-plot '$work/pv-dfb-volume.png' binary filetype=png with rgbimage
-set origin 0.25, 0; set title "ParaView, volume"
-plot '$work/pv-pv-volume-$s0-n$nl.png' binary filetype=png with rgbimage
-set origin 0.50, 0; set title "dfbwall, contours"
-plot '$work/pv-dfb-contours.png' binary filetype=png with rgbimage
-set origin 0.75, 0; set title "ParaView, contours"
-plot '$work/pv-pv-contours-$s0-n$nl.png' binary filetype=png with rgbimage
-unset multiplot
 EOF
+  # Each scene that ran: dfbwall's image and ParaView's, side by side.
+  local column=0
+  for scene in "${scenes[@]}"; do
+    cat >>"$work/pv.gp" <<EOF
+set origin $(awk "BEGIN {print $column * 0.25}"), 0; set size 0.25, 0.42
+set title "dfbwall, $scene (${s0}^2, $nl ranks)" font ",10"
+plot '$work/pv-dfb-$scene.png' binary filetype=png with rgbimage
+set origin $(awk "BEGIN {print ($column + 1) * 0.25}"), 0; set title "ParaView, $scene"
+plot '$work/pv-pv-$scene-$s0-n$nl.png' binary filetype=png with rgbimage
+EOF
+    column=$((column + 2))
+  done
+  echo "unset multiplot" >>"$work/pv.gp"
   gnuplot -e "set terminal pngcairo size 1400,1000 noenhanced; set output '$results/paraview.png'" "$work/pv.gp"
 }
