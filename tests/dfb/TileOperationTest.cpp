@@ -167,6 +167,52 @@ TEST(AlphaBlendOperation, WaitsForTheWholeTreeAndBlendsByDepth) {
   EXPECT_FLOAT_EQ(op->finished().depth[0], 2.0f);
 }
 
+// A tree of two tiles (the background and one brick: the common case) takes a path of its own;
+// it must give the bits of the front-to-back composite, ties in depth to the root, empty depth
+// as infinitely far, -0 colours as +0 (the blend adds to 0).
+TEST(AlphaBlendOperation, TwoTilesBlendAsTheSerialCompositeBitForBit) {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int trial = 0; trial < 3; ++trial) {
+    Tile root, child;
+    root.reset(kRegion, true), child.reset(kRegion, true);
+    if (trial == 0) root.depth.clear();  // a background tile: no depth
+    for (Tile* t : {&root, &child})
+      for (size_t p = 0; p < t->color.size() / 4; ++p) {
+        const float a = unit(random) < 0.3f ? 1.0f : unit(random);
+        for (int c = 0; c < 3; ++c)
+          t->color[4 * p + static_cast<size_t>(c)] = unit(random) < 0.1f ? -0.0f : a * unit(random);
+        t->color[4 * p + 3] = a;
+        if (!t->depth.empty()) {
+          const float d = unit(random);
+          t->depth[p] = d < 0.3f ? 1.0f : (d < 0.6f ? 2.0f : (d < 0.8f ? inf : d));
+        }
+      }
+    root.generation = 0, root.children = 1;
+    child.generation = 1, child.children = 0;
+    auto op = alphaBlendOperation()(kRegion);
+    op->newFrame({}, 0, 1);
+    EXPECT_FALSE(op->process(Tile(child)));
+    ASSERT_TRUE(op->process(Tile(root)));
+    const Tile& got = op->finished();
+    for (size_t p = 0; p < got.depth.size(); ++p) {
+      const float dr = root.depth.empty() ? inf : root.depth[p], dc = child.depth[p];
+      const bool childFirst = dc < dr;
+      const float* front = childFirst ? &child.color[4 * p] : &root.color[4 * p];
+      const float* back = childFirst ? &root.color[4 * p] : &child.color[4 * p];
+      float want[4] = {0, 0, 0, 0};
+      for (int k = 0; k < 4; ++k) want[k] += 1.0f * front[k];
+      const float transmitted = 1.0f - want[3];
+      for (int k = 0; k < 4; ++k) want[k] += transmitted * back[k];
+      ASSERT_EQ(std::memcmp(want, &got.color[4 * p], sizeof want), 0)
+          << "trial " << trial << " pixel " << p;
+      const float depth = childFirst ? dc : dr;
+      ASSERT_EQ(std::memcmp(&depth, &got.depth[p], sizeof depth), 0);
+    }
+  }
+}
+
 // CompositeAccumulateOperation hands the blended tile on by exchanging buffers with its parts
 // (exchangeFinished) instead of copying it: over frames of new and continued epochs its result
 // must stay, bit for bit, the blend's result accumulated as a copy.
