@@ -394,12 +394,8 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
           const Vec3 invDir = reciprocal(ray.dir);
           for (std::size_t k = 0; hit && k < occluders.size(); ++k) {
             const BrickPlan& front = m.directory.bricks[static_cast<std::size_t>(occluders[k])];
-            float frontA = 0, frontB = kInf;
-            if (!clipToBox(front.bounds, ray.origin, invDir, frontA, frontB) ||
-                !(frontA < ray.t0 || (frontA == ray.t0 && front.id < plan->id)))
-              continue;
-            if (m.occlusion.certainlyOpaque(occluders[k], ray.origin, ray.dir, invDir, frontA,
-                                            frontB))
+            if (m.occlusion.hides(occluders[k], ray.origin, ray.dir, invDir, ray.t0,
+                                  front.id < plan->id))
               hit = false, skippedRay = true, ++skipped;
           }
         }

@@ -261,13 +261,15 @@ BrickOcclusion BrickOcclusion::exchange(
 
 std::size_t BrickOcclusion::bytes() const { return impl_->bytes; }
 
-bool BrickOcclusion::certainlyOpaque(int brick, Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
-                                     float t1) const {
+bool BrickOcclusion::hides(int brick, Vec3 origin, Vec3 dir, Vec3 invDir, float before,
+                           bool winsTie) const {
   const Impl& m = *impl_;
   if (brick < 0 || static_cast<std::size_t>(brick) >= m.summaries.size()) return false;
   const BrickSummary& s = m.summaries[static_cast<std::size_t>(brick)];
-  if (s.isos.empty() || !(t0 < t1)) return false;
-  // The faces the piece enters and leaves by: the slabs that set t0 and t1 (clipToBox's).
+  if (s.isos.empty()) return false;
+  // clipToBox's slabs, keeping the faces that set the entry and the exit. NaN slabs (a ray on
+  // a face's plane) are skipped as clipToBox skips them, so from [0, inf) its t0 is `entry` when
+  // that is >= 0, and its t1 is `exit`.
   const Box3& box = m.bounds[static_cast<std::size_t>(brick)];
   float entry = -Box3::kInf, exit = Box3::kInf;
   int entryFace = -1, exitFace = -1;
@@ -280,6 +282,8 @@ bool BrickOcclusion::certainlyOpaque(int brick, Vec3 origin, Vec3 dir, Vec3 invD
   }
   // A ray starting inside the brick (the camera in it) does not enter by a face.
   if (entryFace < 0 || exitFace < 0 || !(entry >= 0)) return false;
+  const float t0 = entry, t1 = exit;
+  if (!(t0 < t1) || !(t0 < before || (t0 == before && winsTie))) return false;
   const Vec3 p0 = origin + dir * t0, p1 = origin + dir * t1;
   for (const IsoFaces& iso : s.isos) {
     const Side in = iso.faces[static_cast<std::size_t>(entryFace)].at(p0, entryFace / 2, iso.origin,

@@ -51,10 +51,12 @@ class BrickOcclusion {
   // The summary of one brick's content (what exchange() sends): pure, for tests.
   static std::vector<std::uint8_t> summarise(const SceneDesc& desc, const BrickContent& content);
 
-  // Whether the piece [t0, t1] of origin + t dir (t0 < t1: the ray clipped to brick `brick`'s
-  // bounds by clipToBox from [0, inf), as the brick's renderer clips it) certainly crosses an
-  // isosurface inside the brick. False when unsure.
-  bool certainlyOpaque(int brick, Vec3 origin, Vec3 dir, Vec3 invDir, float t0, float t1) const;
+  // Whether origin + t dir enters brick `brick` before `before` (at `before` too when
+  // `winsTie`) and its piece [t0, t1] there (t0 < t1: the ray clipped to the brick's bounds by
+  // clipToBox from [0, inf), as the brick's renderer clips it) certainly crosses an isosurface
+  // inside the brick. False when unsure. One pass over the slabs gives the piece and the faces
+  // it enters and leaves by.
+  bool hides(int brick, Vec3 origin, Vec3 dir, Vec3 invDir, float before, bool winsTie) const;
   std::size_t bytes() const;  // the summaries held
 
  private:

@@ -173,7 +173,12 @@ TEST(BrickOcclusionMpi, ACrossingIsCertainOnlyBetweenCellsOnBothSides) {
     const Vec3 inv = reciprocal(dir);
     float t0 = 0, t1 = Box3::kInf;
     EXPECT_TRUE(clipToBox(plans[static_cast<std::size_t>(brick)].bounds, origin, inv, t0, t1));
-    return occlusion.certainlyOpaque(brick, origin, dir, inv, t0, t1);
+    // Nothing nearer (before = inf), or the ray's own entry with the tie won: the same answer.
+    const bool any = occlusion.hides(brick, origin, dir, inv, Box3::kInf, false);
+    EXPECT_EQ(any, occlusion.hides(brick, origin, dir, inv, t0, true));
+    EXPECT_FALSE(occlusion.hides(brick, origin, dir, inv, t0, false))
+        << "entering at t0 is no earlier";
+    return any;
   };
   EXPECT_TRUE(certain(0, 0.0f)) << "through the middle, out by the shared face";
   EXPECT_FALSE(certain(0, 0.85f)) << "near the domain's edge: below 160 all along";
