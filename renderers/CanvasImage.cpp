@@ -11,25 +11,14 @@ namespace renderers {
 std::vector<float> renderCanvas(const Renderer& renderer, int width, int height, int tileSize,
                                 int threads, std::uint32_t spp, std::uint32_t accumulationId,
                                 std::uint32_t firstSample) {
-  std::vector<float> image;
-  renderCanvasInto(image, renderer, width, height, tileSize, threads, spp, accumulationId,
-                   firstSample);
-  return image;
-}
-
-void renderCanvasInto(std::vector<float>& image, const Renderer& renderer, int width, int height,
-                      int tileSize, int threads, std::uint32_t spp, std::uint32_t accumulationId,
-                      std::uint32_t firstSample) {
-  // The tiles cover the canvas, so nothing needs clearing.
-  image.resize(4 * static_cast<std::size_t>(width) * height);
+  std::vector<float> image(4 * static_cast<std::size_t>(width) * height, -1.0f);
   std::vector<dfb::Region> regions;
   for (int y = 0; y < height; y += tileSize)
     for (int x = 0; x < width; x += tileSize)
       regions.push_back({x, y, std::min(width, x + tileSize), std::min(height, y + tileSize)});
   ThreadLimit limit(threads);
   parallelFor(regions.size(), [&](std::size_t i) {
-    // A tile's buffers kept by each thread from tile to tile (render() sizes and clears them).
-    thread_local dfb::Tile tile;
+    dfb::Tile tile;
     renderer.render(regions[i], accumulationId, firstSample, spp, tile);
     const dfb::Region& g = tile.region;
     for (int y = g.y0; y < g.y1; ++y)
@@ -37,6 +26,7 @@ void renderCanvasInto(std::vector<float>& image, const Renderer& renderer, int w
                   &tile.color[4 * static_cast<std::size_t>(y - g.y0) * g.width()],
                   4 * sizeof(float) * g.width());
   });
+  return image;
 }
 
 }  // namespace renderers

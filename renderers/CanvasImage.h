@@ -14,10 +14,5 @@ namespace renderers {
 std::vector<float> renderCanvas(const Renderer& renderer, int width, int height, int tileSize,
                                 int threads, std::uint32_t spp, std::uint32_t accumulationId = 0,
                                 std::uint32_t firstSample = 0);
-// The same into `image` (resized; every pixel written): a caller rendering frame after frame
-// keeps one buffer instead of faulting in a fresh canvas a frame (16 MB at 1024^2).
-void renderCanvasInto(std::vector<float>& image, const Renderer& renderer, int width, int height,
-                      int tileSize, int threads, std::uint32_t spp,
-                      std::uint32_t accumulationId = 0, std::uint32_t firstSample = 0);
 
 }  // namespace renderers
