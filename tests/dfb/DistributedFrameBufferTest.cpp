@@ -368,10 +368,22 @@ TEST(Dfb, AlphaBlendOfRandomTreesInRandomOrderEqualsSerialComposite) {
 
 TEST(Dfb, TilesForTheNextFrameArrivingEarlyAreHeldAndApplied) {
   messaging::Messenger messenger(MPI_COMM_WORLD);
-  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, options(DisplayFormat::RGBAF32));
+  const DfbOptions o = options(DisplayFormat::RGBAF32);
+  DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
   renderFrame(dfb, 1);
-  // Rank 0 starts frame 2 late, so the other ranks' tiles for it arrive before its begin().
-  if (worldRank() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  // Rank 0 starts frame 2 late, so the other ranks' tiles for it arrive before its begin(): it
+  // waits until as many messages came as the tiles others send it (a fixed sleep was too short
+  // on a loaded machine), at most 20 s.
+  if (worldRank() == 0) {
+    std::uint64_t fromOthers = 0;
+    for (int t = 0; t < dfb.grid().tileCount(); ++t)
+      if (dfb.ownerOf(t) == 0 && !renders(t)) ++fromOthers;
+    const std::uint64_t before = messenger.traffic(o.objectId).messagesReceived;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (messenger.traffic(o.objectId).messagesReceived < before + fromOthers &&
+           std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
   renderFrame(dfb, 2);
   std::uint64_t early = dfb.stats().earlyInputs, total = 0;
   MPI_Allreduce(&early, &total, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD);
