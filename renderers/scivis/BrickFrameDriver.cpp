@@ -88,6 +88,36 @@ bool mayComeFirst(const Box3& front, const Box3& back, Vec3 eye) {
   return true;
 }
 
+// A brick's pixel (colour `rgba`, depth `depth`) blended over the background of the pixel's
+// `spp` rays as the DFB's alpha blend of the two tiles would (dfb/AlphaBlendOperation.cpp): the
+// background tile's pixel made as its own job makes it, depth infinite, blended first on a tie;
+// the nearer one first, the other under it, every operation the blend's, so the same bits.
+void blendOverBackground(const Environment& background, const SciVisRenderer::RayPiece* rays,
+                         std::uint32_t spp, float inv, float rgba[4], float& depth) {
+  float sum[4] = {0, 0, 0, 0};
+  if (background.kind == Environment::Kind::Constant) {
+    const Vec3 bg = background.color;
+    for (std::uint32_t s = 0; s < spp; ++s)
+      sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
+  } else {
+    for (std::uint32_t s = 0; s < spp; ++s) {
+      const Vec3 bg = background.radiance(rays[s].dir);
+      sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
+    }
+  }
+  float bg[4];
+  for (int c = 0; c < 4; ++c) bg[c] = sum[c] * inv;
+  const bool brickFirst = depth < kInf;
+  const float* front = brickFirst ? rgba : bg;
+  const float* back = brickFirst ? bg : rgba;
+  float out[4] = {0, 0, 0, 0};
+  for (int c = 0; c < 4; ++c) out[c] += 1.0f * front[c];
+  const float transmitted = 1.0f - out[3];
+  for (int c = 0; c < 4; ++c) out[c] += transmitted * back[c];
+  for (int c = 0; c < 4; ++c) rgba[c] = out[c];
+  if (!brickFirst) depth = kInf;
+}
+
 }  // namespace
 
 struct BrickFrameDriver::Impl {
@@ -277,8 +307,13 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
   // (the tiles it owns, the tile-bricks it renders). Candidates come from the bricks' screen
   // projections, and each candidate is confirmed by the tile's own sample rays (raysMeetBox),
   // which every rank traces identically. A job is (tile, brick index), brick -1 the background.
+  // A tile whose rays meet one brick only, which its owner renders, is one job that blends the
+  // background in itself (withBackground): the root of a tree without children, no second tile
+  // to fill, hand over and blend (most tiles on one rank). The same bits: it blends as the DFB's
+  // blend of the two tiles would, and the blend of a lone root returns it as it is.
   struct Job {
     int tile, brick, children;
+    bool withBackground = false;
   };
   const dfb::TileGrid& grid = dfb.grid();
   std::vector<std::vector<Job>> perTile(static_cast<std::size_t>(grid.tileCount()));
@@ -300,6 +335,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
       if (renders) mine.push_back({t, b, 0});
     }
     if (owner) mine.front().children = children;
+    if (owner && children == 1 && mine.size() == 2) mine = {{t, mine.back().brick, 0, true}};
   });
   std::vector<Job> jobs;
   for (const auto& tileJobs : perTile) jobs.insert(jobs.end(), tileJobs.begin(), tileJobs.end());
@@ -316,12 +352,12 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     dfb::Tile tile;
     prepareTile(region, accumulationId, 0, spp, tile);
     tile.depth.assign(static_cast<std::size_t>(region.pixelCount()), kInf);
-    tile.generation = job.brick < 0 ? 0 : 1;
+    tile.generation = job.brick < 0 || job.withBackground ? 0 : 1;
     tile.children = job.children;
     const BrickPlan* plan =
         job.brick < 0 ? nullptr : &m.directory.bricks[static_cast<std::size_t>(job.brick)];
     // Fragments of one depth composite by brick id: the same order whoever rendered them.
-    tile.sequence = plan ? static_cast<std::uint32_t>(plan->id) : 0;
+    tile.sequence = plan && !job.withBackground ? static_cast<std::uint32_t>(plan->id) : 0;
     const SciVisRenderer* renderer =
         job.brick < 0 ? nullptr : m.renderers[static_cast<std::size_t>(job.brick)].get();
     const Box3 bounds = plan ? plan->bounds : Box3{};
@@ -434,6 +470,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
       std::size_t sample = 0;
       for (int y = y0; y < y1; ++y)
         for (int x = region.x0; x < region.x1; ++x) {
+          const std::size_t first = sample;
           float sum[4] = {0, 0, 0, 0};
           for (std::uint32_t s = 0; s < spp; ++s, ++sample) {
             if (!renderer) {
@@ -447,11 +484,14 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
           }
           const std::size_t p = static_cast<std::size_t>(y - region.y0) * region.width() +
                                 static_cast<std::size_t>(x - region.x0);
-          for (int c = 0; c < 4; ++c)
-            tile.color[4 * p + static_cast<std::size_t>(c)] = sum[c] * inv;
-          if (renderer)
-            tile.depth[p] = depths[static_cast<std::size_t>(y - y0) * region.width() +
-                                   static_cast<std::size_t>(x - region.x0)];
+          float* out = &tile.color[4 * p];
+          for (int c = 0; c < 4; ++c) out[c] = sum[c] * inv;
+          if (!renderer) continue;
+          float& depth = tile.depth[p];
+          depth = depths[static_cast<std::size_t>(y - y0) * region.width() +
+                         static_cast<std::size_t>(x - region.x0)];
+          if (job.withBackground)
+            blendOverBackground(background, rays.data() + first, spp, inv, out, depth);
         }
     }
     if (renderer) m.brickTiles.fetch_add(1, std::memory_order_relaxed);
