@@ -92,6 +92,7 @@ class AlphaBlendOperation final : public TileOperation {
     finished_.color.resize(4 * n);
     finished_.depth.resize(n);
     finished_.normal.clear(), finished_.albedo.clear(), finished_.rgba8.clear();
+    if (ordered.size() == 1) return blendOne(*ordered[0]);
     if (ordered.size() == 2) return blendTwo(*ordered[0], *ordered[1]);
     std::vector<std::pair<float, const Tile*>> fragments(ordered.size());
     for (size_t p = 0; p < n; ++p) {
@@ -114,6 +115,18 @@ class AlphaBlendOperation final : public TileOperation {
       for (int k = 0; k < 4; ++k) finished_.color[4 * p + static_cast<size_t>(k)] = out[k];
       finished_.depth[p] = fragments.empty() ? infinity : fragments.front().first;
     }
+  }
+
+  // blend() of a lone tile (a root without children: a tile with one brick whose renderer
+  // blended the background in itself), the same operations: each value added to 0.
+  void blendOne(const Tile& a) {
+    const size_t n = static_cast<size_t>(region_.pixelCount());
+    const float infinity = std::numeric_limits<float>::infinity();
+    for (size_t i = 0; i < 4 * n; ++i) finished_.color[i] = 0.0f + 1.0f * a.color[i];
+    if (a.depth.empty())
+      std::fill(finished_.depth.begin(), finished_.depth.end(), infinity);
+    else
+      std::copy(a.depth.begin(), a.depth.end(), finished_.depth.begin());
   }
 
   // blend() of two tiles in that order (the common tree: the background and one brick), with

@@ -213,6 +213,30 @@ TEST(AlphaBlendOperation, TwoTilesBlendAsTheSerialCompositeBitForBit) {
   }
 }
 
+// A lone root (a tile with one brick that blended the background in itself): its colours added
+// to 0 (-0 becomes +0), its depth as it is, or infinity where it has none.
+TEST(AlphaBlendOperation, ALoneRootIsItsOwnBlend) {
+  for (const bool withDepth : {true, false}) {
+    Tile root;
+    root.reset(kRegion, true);
+    for (size_t i = 0; i < root.color.size(); ++i)
+      root.color[i] = i % 7 == 0 ? -0.0f : 0.25f * static_cast<float>(i % 5);
+    for (size_t p = 0; p < root.depth.size(); ++p) root.depth[p] = static_cast<float>(p % 3);
+    if (!withDepth) root.depth.clear();
+    auto op = alphaBlendOperation()(kRegion);
+    op->newFrame({}, 0, 1);
+    ASSERT_TRUE(op->process(Tile(root)));
+    const Tile& got = op->finished();
+    ASSERT_EQ(got.color.size(), root.color.size());
+    for (size_t i = 0; i < root.color.size(); ++i) {
+      const float want = 0.0f + root.color[i];
+      ASSERT_EQ(std::memcmp(&want, &got.color[i], sizeof want), 0) << i;
+    }
+    for (size_t p = 0; p < got.depth.size(); ++p)
+      EXPECT_EQ(got.depth[p], withDepth ? root.depth[p] : std::numeric_limits<float>::infinity());
+  }
+}
+
 // CompositeAccumulateOperation hands the blended tile on by exchanging buffers with its parts
 // (exchangeFinished) instead of copying it: over frames of new and continued epochs its result
 // must stay, bit for bit, the blend's result accumulated as a copy.
