@@ -15,6 +15,7 @@
 #include <cstring>
 #include <type_traits>
 
+#include "renderers/scivis/Transpose16.h"
 #include "renderers/scivis/VolumeMarch.h"
 #include "renderers/scivis/VolumeMarchSteps.h"
 
@@ -173,38 +174,77 @@ struct Packet16 {
   __mmask16 alive;  // lanes still marching
 };
 
-AVX512_INLINE void start(Packet16& p, const Field16& f, const MarchRay* rays, int count,
-                         const MarchColor* colors) {
-  alignas(64) float k[16], jitter[16], step[16], ox[16], oy[16], oz[16], dx[16], dy[16], dz[16],
-      t1[16], end[16], minT[16], r[16], g[16], b[16], tr[16], depth[16];
-  static const MarchRay none{};  // the lanes past `count`: never marching
-  static const MarchColor black{};
-  for (int l = 0; l < 16; ++l) {
-    const MarchRay& ray = l < count ? rays[l] : none;
-    const MarchColor& c = l < count ? colors[l] : black;
-    k[l] = l < count ? firstSample(ray) : 0;
-    jitter[l] = ray.jitter, step[l] = ray.step, t1[l] = ray.t1, end[l] = ray.volumeEnd;
-    minT[l] = ray.minTransmittance;
-    ox[l] = ray.origin.x, oy[l] = ray.origin.y, oz[l] = ray.origin.z;
-    dx[l] = ray.dir.x, dy[l] = ray.dir.y, dz[l] = ray.dir.z;
-    r[l] = c.rgb.x, g[l] = c.rgb.y, b[l] = c.rgb.z, tr[l] = c.transmittance, depth[l] = c.depth;
+// MarchRay's floats in its order: a ray is one 512-bit load, and 16 of them transposed are a
+// register per field.
+static_assert(sizeof(MarchRay) == 16 * sizeof(float));
+enum RayFloat : int {
+  kOx = 0,
+  kOy,
+  kOz,
+  kDx,
+  kDy,
+  kDz,
+  kT0 = 9,
+  kT1,
+  kKStart,
+  kVolumeEnd,
+  kStep,
+  kJitter,
+  kMinT,
+};
+static_assert(offsetof(MarchRay, dir) == kDx * sizeof(float) &&
+              offsetof(MarchRay, t0) == kT0 * sizeof(float) &&
+              offsetof(MarchRay, kStart) == kKStart * sizeof(float) &&
+              offsetof(MarchRay, minTransmittance) == kMinT * sizeof(float));
+
+// firstSample() lane by lane: the same operations, its loops run while any lane still steps.
+AVX512_INLINE __m512 firstSamples(const __m512 ray[16], __mmask16 lanes) {
+  const __m512 one = _mm512_set1_ps(1.0f), t0 = ray[kT0], step = ray[kStep];
+  const __m512 jitter = ray[kJitter], kStart = ray[kKStart];
+  const __m512 c = _mm512_roundscale_ps(_mm512_sub_ps(_mm512_div_ps(t0, step), jitter),
+                                        _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
+  // std::max(kStart, c): c where kStart < c, else kStart (NaN c too).
+  __m512 k = _mm512_maskz_max_ps(lanes, c, kStart);
+  for (__mmask16 down = lanes;;) {
+    down = _mm512_mask_cmp_ps_mask(down, k, kStart, _CMP_GT_OQ);
+    down = _mm512_mask_cmp_ps_mask(
+        down, _mm512_mul_ps(_mm512_add_ps(_mm512_sub_ps(k, one), jitter), step), t0, _CMP_GE_OQ);
+    if (!down) break;
+    k = _mm512_mask_sub_ps(k, down, k, one);
   }
+  for (__mmask16 up = lanes;;) {
+    up = _mm512_mask_cmp_ps_mask(up, _mm512_mul_ps(_mm512_add_ps(k, jitter), step), t0, _CMP_LT_OQ);
+    if (!up) break;
+    k = _mm512_mask_add_ps(k, up, k, one);
+  }
+  return k;
+}
+
+// Rays 0 .. count - 1 in the lanes, nothing composited yet; the lanes past `count` march none.
+AVX512_INLINE void start(Packet16& p, const Field16& f, const MarchRay* rays, int count) {
+  __m512 ray[16];
+  for (int l = 0; l < 16; ++l)
+    ray[l] = l < count ? _mm512_loadu_ps(reinterpret_cast<const float*>(rays + l))
+                       : _mm512_setzero_ps();  // MarchRay{}
+  lanes::transpose16(ray);
+  const __mmask16 lanes = static_cast<__mmask16>((1u << count) - 1);
   p.rays = rays, p.count = count;
-  p.jitters = _mm512_load_ps(jitter), p.steps = _mm512_load_ps(step);
-  p.t1s = _mm512_load_ps(t1), p.ends = _mm512_load_ps(end), p.minTs = _mm512_load_ps(minT);
-  p.ox = _mm512_load_ps(ox), p.oy = _mm512_load_ps(oy), p.oz = _mm512_load_ps(oz);
-  p.dx = _mm512_load_ps(dx), p.dy = _mm512_load_ps(dy), p.dz = _mm512_load_ps(dz);
+  p.jitters = ray[kJitter], p.steps = ray[kStep];
+  p.t1s = ray[kT1], p.ends = ray[kVolumeEnd], p.minTs = ray[kMinT];
+  p.ox = ray[kOx], p.oy = ray[kOy], p.oz = ray[kOz];
+  p.dx = ray[kDx], p.dy = ray[kDy], p.dz = ray[kDz];
   const __m512 ahead = _mm512_mul_ps(_mm512_set1_ps(kPrefetchAhead), p.steps);
   p.aheadX = _mm512_mul_ps(_mm512_mul_ps(ahead, p.dx), f.sx);
   p.aheadY = _mm512_mul_ps(_mm512_mul_ps(ahead, p.dy), f.sy);
   p.aheadZ = _mm512_mul_ps(_mm512_mul_ps(ahead, p.dz), f.sz);
-  p.ks = _mm512_load_ps(k);
-  p.red = _mm512_load_ps(r), p.green = _mm512_load_ps(g), p.blue = _mm512_load_ps(b);
-  p.transmittance = _mm512_load_ps(tr), p.depths = _mm512_load_ps(depth);
+  p.ks = firstSamples(ray, lanes);
+  const MarchColor black{};
+  p.red = _mm512_set1_ps(black.rgb.x), p.green = _mm512_set1_ps(black.rgb.y);
+  p.blue = _mm512_set1_ps(black.rgb.z), p.transmittance = _mm512_set1_ps(black.transmittance);
+  p.depths = _mm512_set1_ps(black.depth);
   p.counts = _mm512_setzero_si512();
   // marchSse's loop test: light gets through.
-  p.alive = _mm512_cmp_ps_mask(p.transmittance, p.minTs, _CMP_GT_OQ) &
-            static_cast<__mmask16>((1u << count) - 1);
+  p.alive = _mm512_mask_cmp_ps_mask(lanes, p.transmittance, p.minTs, _CMP_GT_OQ);
 }
 
 // The held cell (relative to the first) of coordinate c + ahead, clamped to the held cells.
@@ -384,7 +424,7 @@ __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) void marchPacket16
   Field16 f;
   setUp(f, v);
   Packet16 p;
-  start(p, f, rays, count, colors);
+  start(p, f, rays, count);
   while (p.alive) advance<T>(p, f);
   finish(p, colors, samples);
 }
