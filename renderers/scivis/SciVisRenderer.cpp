@@ -426,8 +426,10 @@ void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment
           waitingIndex[waitingCount++] = i;
           continue;
         }
-        const RayPiece& r = rays[i];
-        out[i] = integrate(r.origin, r.dir, reciprocal(r.dir), r.t0, r.t1, r.sampler, &none);
+        // A piece the march does not take is empty or misses the data (integrate() clips it
+        // to them as marchRayOf does): with nothing else in the scene, integrate() gives it the
+        // empty fragment. (Half the bench's camera rays: the scene's bounds are unbounded.)
+        out[i] = Fragment{};
       }
       if (waitingCount >= packetSize) marchWaiting();
     }
