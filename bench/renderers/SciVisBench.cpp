@@ -182,7 +182,7 @@ int main(int argc, char** argv) {
           orbitCamera(scene.desc->camera, orbitDegreesPerFrame * static_cast<float>(f - 1)));
       const auto a = Clock::now();
       const double cpuStart = processCpuSeconds();
-      image = renderCanvas(*renderer, size, size, 64, threads, 1);
+      renderCanvas(*renderer, size, size, 64, threads, 1, image);
       seconds.push_back(std::chrono::duration<double>(Clock::now() - a).count());
       cpuSeconds.push_back(processCpuSeconds() - cpuStart);
     }

@@ -448,9 +448,9 @@ void marchPacket(const SciVisScene::VolumeLayer& v, MarchKernel kernel, const Ma
   count = std::min(count, marchPacketSize(kernel));
   if (count <= 0) return;
   if (kernel == MarchKernel::Avx512)
-    march::marchPacketAvx512(v, rays, count, colors, samples);
-  else
-    marchPacketAvx2(v, rays, count, colors, samples);
+    return march::marchPacketAvx512(v, rays, count, colors, samples);
+  std::fill(colors, colors + count, MarchColor{});
+  marchPacketAvx2(v, rays, count, colors, samples);
 }
 
 const char* marchKernelName(MarchKernel kernel) {

@@ -66,7 +66,8 @@ int marchPacketSize(MarchKernel kernel);
 // voxels.
 bool marchesPackets(const SciVisScene::VolumeLayer& v, MarchKernel kernel);
 // Rays 0 .. count - 1 (count <= marchPacketSize(kernel)) through layer v with `kernel`, where
-// marchesPackets(v, kernel): colors[i] and samples[i] as marchOneVolume gives them for rays[i].
+// marchesPackets(v, kernel), each from nothing composited: colors[i] (written, not read) and
+// samples[i] as marchOneVolume gives them for rays[i] and a MarchColor{}.
 void marchPacket(const SciVisScene::VolumeLayer& v, MarchKernel kernel, const MarchRay* rays,
                  int count, MarchColor* colors, std::uint32_t* samples);
 

@@ -14,6 +14,7 @@
 
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
+#include "renderers/scivis/MarchOnly.h"
 #include "renderers/scivis/SciVisRenderer.h"
 #include "renderers/scivis/VolumeMarch.h"
 #include "renderers/scivis/VolumeSource.h"
@@ -123,6 +124,50 @@ TEST(VolumeMarch, CutRaysGiveTheSseFragments) {
     }
     EXPECT_GT(seen, 300) << "pieces that show the haze";
   }
+}
+
+// marchOnly16 takes the pieces marchRayOf takes one at a time, their MarchRays bit for bit:
+// pieces through the data, beside it (a box larger than the data's), cut, empty and reversed.
+TEST(VolumeMarch, SixteenPiecesSetUpAsOneAtATime) {
+  if (!marchKernelAvailable(MarchKernel::Avx512)) GTEST_SKIP() << "no AVX-512 here";
+  const RenderScene scene = buildRenderScene("scivis", haze(0.5f));
+  const Box3& data = scene.scivis->volumes()[0].field->dataBounds();
+  const float step = scene.scivis->volumeStep(), minT = 1.0f / 128.0f;
+  Camera camera(scene.desc->camera, 48, 48);
+  std::vector<SciVisRenderer::RayPiece> pieces;
+  for (const test::PixelRay& r :
+       test::pixelRaysThrough(camera, 48, 48, 0, 1, 0, 1, Box3{Vec3{-1.6f}, Vec3{1.6f}})) {
+    const Sampler sampler(4, r.x, r.y, 0, 0);
+    const float tc = r.t0 + 0.37f * (r.t1 - r.t0);
+    pieces.push_back({r.origin, r.dir, r.t0, r.t1, sampler});
+    pieces.push_back({r.origin, r.dir, r.t0, tc, sampler});
+    pieces.push_back({r.origin, r.dir, tc, r.t1, sampler});
+    pieces.push_back({r.origin, r.dir, tc, tc, sampler});      // empty
+    pieces.push_back({r.origin, r.dir, r.t1, r.t0, sampler});  // reversed
+  }
+  pieces.resize(pieces.size() / 16 * 16);
+  ASSERT_GT(pieces.size(), 5000u);
+  int taken = 0, missed = 0;
+  for (std::size_t base = 0; base < pieces.size(); base += 16) {
+    MarchRay got[16] = {};
+    const unsigned mask = marchOnly16(pieces.data() + base, data, step, minT, got);
+    int n = 0;
+    for (int l = 0; l < 16; ++l) {
+      const SciVisRenderer::RayPiece& r = pieces[base + static_cast<std::size_t>(l)];
+      MarchRay want;
+      const bool takes = marchRayOf(r, reciprocal(r.dir), data, step, minT, want);
+      ASSERT_EQ(takes, ((mask >> l) & 1u) != 0) << "piece " << base + static_cast<std::size_t>(l);
+      if (!takes) {
+        ++missed;
+        continue;
+      }
+      EXPECT_EQ(std::memcmp(&want, &got[n++], sizeof want), 0)
+          << "piece " << base + static_cast<std::size_t>(l);
+      ++taken;
+    }
+  }
+  EXPECT_GT(taken, 1000);
+  EXPECT_GT(missed, 1000);
 }
 
 // The haze's wavelet stored as integers in a raw file (uint8: value - 30, uint16: value x 200,
