@@ -197,18 +197,21 @@ TEST(AlphaBlendOperation, TwoTilesBlendAsTheSerialCompositeBitForBit) {
     ASSERT_TRUE(op->process(Tile(root)));
     const Tile& got = op->finished();
     for (size_t p = 0; p < got.depth.size(); ++p) {
-      const float dr = root.depth.empty() ? inf : root.depth[p], dc = child.depth[p];
-      const bool childFirst = dc < dr;
-      const float* front = childFirst ? &child.color[4 * p] : &root.color[4 * p];
-      const float* back = childFirst ? &root.color[4 * p] : &child.color[4 * p];
+      // The definition: the fragments in tree order, stably sorted by depth, composited front
+      // to back onto nothing.
+      std::vector<std::pair<float, const float*>> fragments = {
+          {root.depth.empty() ? inf : root.depth[p], &root.color[4 * p]},
+          {child.depth[p], &child.color[4 * p]}};
+      std::stable_sort(fragments.begin(), fragments.end(),
+                       [](const auto& a, const auto& b) { return a.first < b.first; });
       float want[4] = {0, 0, 0, 0};
-      for (int k = 0; k < 4; ++k) want[k] += 1.0f * front[k];
-      const float transmitted = 1.0f - want[3];
-      for (int k = 0; k < 4; ++k) want[k] += transmitted * back[k];
+      for (const auto& fragment : fragments) {
+        const float transmitted = 1.0f - want[3];
+        for (int k = 0; k < 4; ++k) want[k] += transmitted * fragment.second[k];
+      }
       ASSERT_EQ(std::memcmp(want, &got.color[4 * p], sizeof want), 0)
           << "trial " << trial << " pixel " << p;
-      const float depth = childFirst ? dc : dr;
-      ASSERT_EQ(std::memcmp(&depth, &got.depth[p], sizeof depth), 0);
+      ASSERT_EQ(std::memcmp(&fragments.front().first, &got.depth[p], sizeof(float)), 0);
     }
   }
 }
