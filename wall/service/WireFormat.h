@@ -14,6 +14,10 @@ namespace wall::service {
 class Writer {
  public:
   explicit Writer(Kind kind, std::uint64_t session) {
+    // Room for a header and the fields after it: fewer reallocations, and GCC 12 at -O3 no
+    // longer sees a growth from the header's exact size that it warns about falsely
+    // (-Wstringop-overflow in BatchWriter::start).
+    bytes_.reserve(kReservedBytes);
     MessageHeader h;
     h.kind = static_cast<std::uint16_t>(kind);
     h.session = session;
@@ -42,6 +46,7 @@ class Writer {
   messaging::Bytes take() { return std::move(bytes_); }
 
  private:
+  static constexpr std::size_t kReservedBytes = 64;
   messaging::Bytes bytes_;
 };
 
