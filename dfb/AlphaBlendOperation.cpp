@@ -129,25 +129,15 @@ class AlphaBlendOperation final : public TileOperation {
       std::copy(a.depth.begin(), a.depth.end(), finished_.depth.begin());
   }
 
-  // blend() of two tiles in that order (the common tree: the background and one brick), with
-  // the same operations per pixel, so the same bits, without the per-pixel sort: a fragment
-  // goes first when it is strictly nearer or, at equal depth, the first tile's.
+  // blend() of two tiles in that order (the common tree: the background and one brick),
+  // blendPixelPair's operations, without the per-pixel fragment list and sort.
   void blendTwo(const Tile& a, const Tile& b) {
     const size_t n = static_cast<size_t>(region_.pixelCount());
     const float infinity = std::numeric_limits<float>::infinity();
-    for (size_t p = 0; p < n; ++p) {
-      const float da = a.depth.empty() ? infinity : a.depth[p];
-      const float db = b.depth.empty() ? infinity : b.depth[p];
-      const bool bFirst = db < da;
-      const float* front = bFirst ? &b.color[4 * p] : &a.color[4 * p];
-      const float* back = bFirst ? &a.color[4 * p] : &b.color[4 * p];
-      float out[4] = {0, 0, 0, 0};
-      for (int k = 0; k < 4; ++k) out[k] += 1.0f * front[k];
-      const float transmitted = 1.0f - out[3];
-      for (int k = 0; k < 4; ++k) out[k] += transmitted * back[k];
-      for (int k = 0; k < 4; ++k) finished_.color[4 * p + static_cast<size_t>(k)] = out[k];
-      finished_.depth[p] = bFirst ? db : da;
-    }
+    for (size_t p = 0; p < n; ++p)
+      finished_.depth[p] =
+          blendPixelPair(&a.color[4 * p], a.depth.empty() ? infinity : a.depth[p], &b.color[4 * p],
+                         b.depth.empty() ? infinity : b.depth[p], &finished_.color[4 * p]);
   }
 
   Region region_;

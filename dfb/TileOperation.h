@@ -77,6 +77,20 @@ TileOperationFactory accumulateOperation();
 // parents), then per pixel sorts fragments by depth and blends front to back. Colors are
 // premultiplied by alpha.
 TileOperationFactory alphaBlendOperation();
+// One pixel of two fragments as alphaBlendOperation() blends them, bit for bit: `a` (depth
+// `da`) comes first in the tree's order, so it goes in front on a tie. Writes the blended RGBA
+// to `out` and returns the blended depth (the front one's). Also for a renderer that blends a
+// tile's two fragments itself and hands the DFB the result as a lone root.
+inline float blendPixelPair(const float a[4], float da, const float b[4], float db, float out[4]) {
+  const bool bFirst = db < da;
+  const float* front = bFirst ? b : a;
+  const float* back = bFirst ? a : b;
+  float sum[4] = {0, 0, 0, 0};  // the blend adds to nothing: a -0 becomes +0, as there
+  for (int k = 0; k < 4; ++k) sum[k] += 1.0f * front[k];
+  const float transmitted = 1.0f - sum[3];
+  for (int k = 0; k < 4; ++k) out[k] = sum[k] + transmitted * back[k];
+  return bFirst ? db : da;
+}
 // Sort-last compositing with progressive refinement: each frame's tree is alpha-blended, then the
 // composited tiles of the epoch are averaged (weighted by the root tile's `weight`).
 TileOperationFactory compositeAccumulateOperation();

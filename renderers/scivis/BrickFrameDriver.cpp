@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "dfb/TileOperation.h"
 #include "dfb/Timing.h"
 #include "renderers/Error.h"
 #include "renderers/Parallel.h"
@@ -88,34 +89,18 @@ bool mayComeFirst(const Box3& front, const Box3& back, Vec3 eye) {
   return true;
 }
 
-// A brick's pixel (colour `rgba`, depth `depth`) blended over the background of the pixel's
-// `spp` rays as the DFB's alpha blend of the two tiles would (dfb/AlphaBlendOperation.cpp): the
-// background tile's pixel made as its own job makes it, depth infinite, blended first on a tie;
-// the nearer one first, the other under it, every operation the blend's, so the same bits.
-void blendOverBackground(const Environment& background, const SciVisRenderer::RayPiece* rays,
-                         std::uint32_t spp, float inv, float rgba[4], float& depth) {
+// A pixel of the background tile: the mean of the background along its `spp` rays (a constant
+// background needs none: `rays` may be null).
+void backgroundPixel(const Environment& background, const SciVisRenderer::RayPiece* rays,
+                     std::uint32_t spp, float inv, float out[4]) {
   float sum[4] = {0, 0, 0, 0};
-  if (background.kind == Environment::Kind::Constant) {
-    const Vec3 bg = background.color;
-    for (std::uint32_t s = 0; s < spp; ++s)
-      sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
-  } else {
-    for (std::uint32_t s = 0; s < spp; ++s) {
-      const Vec3 bg = background.radiance(rays[s].dir);
-      sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
-    }
+  for (std::uint32_t s = 0; s < spp; ++s) {
+    const Vec3 bg = background.kind == Environment::Kind::Constant
+                        ? background.color
+                        : background.radiance(rays[s].dir);
+    sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
   }
-  float bg[4];
-  for (int c = 0; c < 4; ++c) bg[c] = sum[c] * inv;
-  const bool brickFirst = depth < kInf;
-  const float* front = brickFirst ? rgba : bg;
-  const float* back = brickFirst ? bg : rgba;
-  float out[4] = {0, 0, 0, 0};
-  for (int c = 0; c < 4; ++c) out[c] += 1.0f * front[c];
-  const float transmitted = 1.0f - out[3];
-  for (int c = 0; c < 4; ++c) out[c] += transmitted * back[c];
-  for (int c = 0; c < 4; ++c) rgba[c] = out[c];
-  if (!brickFirst) depth = kInf;
+  for (int c = 0; c < 4; ++c) out[c] = sum[c] * inv;
 }
 
 }  // namespace
@@ -375,15 +360,13 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
                          cameraDesc.position))
           occluders.push_back(other);
     std::uint64_t skipped = 0;
-    if (!renderer && background.kind == Environment::Kind::Constant) {
-      // The background alone, the same everywhere: no rays needed (the sums below, as they are).
-      const Vec3 bg = background.color;
-      for (std::size_t p = 0; p < static_cast<std::size_t>(region.pixelCount()); ++p) {
-        float sum[4] = {0, 0, 0, 0};
-        for (std::uint32_t s = 0; s < spp; ++s)
-          sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
-        for (int c = 0; c < 4; ++c) tile.color[4 * p + static_cast<std::size_t>(c)] = sum[c] * inv;
-      }
+    // A constant background is the same in every pixel: worked out once, no rays needed.
+    const bool constantBackground = background.kind == Environment::Kind::Constant;
+    float constantPixel[4] = {0, 0, 0, 0};
+    if (constantBackground) backgroundPixel(background, nullptr, spp, inv, constantPixel);
+    if (!renderer && constantBackground) {
+      for (std::size_t p = 0; p < static_cast<std::size_t>(region.pixelCount()); ++p)
+        std::copy(constantPixel, constantPixel + 4, &tile.color[4 * p]);
       dfb.setTile(std::move(tile));
       return;
     }
@@ -471,27 +454,34 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
       for (int y = y0; y < y1; ++y)
         for (int x = region.x0; x < region.x1; ++x) {
           const std::size_t first = sample;
-          float sum[4] = {0, 0, 0, 0};
-          for (std::uint32_t s = 0; s < spp; ++s, ++sample) {
-            if (!renderer) {
-              const Vec3 bg = background.radiance(rays[sample].dir);
-              sum[0] += bg.x, sum[1] += bg.y, sum[2] += bg.z, sum[3] += 1.0f;
-              continue;
-            }
-            if (!hits[sample]) continue;
-            const Fragment& f = fragments[slots[sample]];
-            for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
-          }
+          sample += spp;
           const std::size_t p = static_cast<std::size_t>(y - region.y0) * region.width() +
                                 static_cast<std::size_t>(x - region.x0);
           float* out = &tile.color[4 * p];
+          if (!renderer) {
+            backgroundPixel(background, rays.data() + first, spp, inv, out);
+            continue;
+          }
+          float sum[4] = {0, 0, 0, 0};
+          for (std::size_t r = first; r < sample; ++r) {
+            if (!hits[r]) continue;
+            const Fragment& f = fragments[slots[r]];
+            for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
+          }
           for (int c = 0; c < 4; ++c) out[c] = sum[c] * inv;
-          if (!renderer) continue;
           float& depth = tile.depth[p];
           depth = depths[static_cast<std::size_t>(y - y0) * region.width() +
                          static_cast<std::size_t>(x - region.x0)];
-          if (job.withBackground)
-            blendOverBackground(background, rays.data() + first, spp, inv, out, depth);
+          if (job.withBackground) {
+            // The background tile's pixel (depth infinite, first in the tree) and this one, as
+            // the DFB would blend the two.
+            float bg[4];
+            if (constantBackground)
+              std::copy(constantPixel, constantPixel + 4, bg);
+            else
+              backgroundPixel(background, rays.data() + first, spp, inv, bg);
+            depth = dfb::blendPixelPair(bg, kInf, out, depth, out);
+          }
         }
     }
     if (renderer) m.brickTiles.fetch_add(1, std::memory_order_relaxed);

@@ -260,14 +260,13 @@ int splitAxis(Vec3 size, const CameraDesc& camera) {
   constexpr float kNearlyLongest = 0.9f;
   const float longest = std::max({size.x, size.y, size.z});
   const Vec3 up = normalize(camera.up), forward = normalize(camera.lookAt - camera.position);
+  // Lower ranks better: nearer up, then more across the view.
+  const auto rank = [&](int axis) {
+    return std::pair{-std::abs(up[axis]), std::abs(forward[axis])};
+  };
   int best = -1;
-  for (int a = 0; a < 3; ++a) {
-    if (!(size[a] >= kNearlyLongest * longest)) continue;
-    const auto rank = [&](int axis) {
-      return std::pair{-std::abs(up[axis]), std::abs(forward[axis])};
-    };
-    if (best < 0 || rank(a) < rank(best)) best = a;
-  }
+  for (int a = 0; a < 3; ++a)
+    if (size[a] >= kNearlyLongest * longest && (best < 0 || rank(a) < rank(best))) best = a;
   return best < 0 ? 0 : best;
 }
 
