@@ -47,7 +47,8 @@ ip netns del "$probe"
 
 build=$(cd "$(dirname "$DFBWALL")/.." && pwd)
 canvas() { "$COMPARE" --info "$1" | cut -d' ' -f2; }
-# now, latest, advanced, waitFor, freePort (since: its own, to a tenth of a second)
+# now, latest, advanced, presentedSince, waitFor, freePort (since: its own, to a tenth of a
+# second)
 source "$(dirname "${BASH_SOURCE[0]}")/wall_watch.sh"
 since() { awk -v a="$1" -v b="$(now)" 'BEGIN {printf "%.1f", b - a}'; }
 # Per-frame values of FIELD in a stats file, one per line.
@@ -466,7 +467,7 @@ case "$scenario" in
         fail "wall process $process was not dropped"
       frame=$(latest "$1")
       waitFor 5 advanced "$frame" "$@" || fail "$* did not present new frames without process $process"
-      local took; took=$(since "$t0")
+      local took; took=$(presentedSince "$t0" "$frame" "$@")
       within "$took" $((timeout + 2)) ||
         fail "the other displays presented again $took s after process $process went (timeout $timeout s)"
       kill -0 "$job" 2>/dev/null || fail "the job stopped when wall process $process went"
@@ -484,7 +485,7 @@ case "$scenario" in
     restarted=$!
     t0=$(now)
     waitFor 10 advanced "$dead" r1c1 || { cat "$work/restarted.err"; fail "the restarted process 3 presents nothing"; }
-    back=$(since "$t0")
+    back=$(presentedSince "$t0" "$dead" r1c1)
     within "$back" 3 || fail "process 3 presented again only $back s after its restart"
     frame=$(latest r1c1)
     mkdir -p "$work/check/r1c1"

@@ -28,7 +28,7 @@ fail() {
   for f in serve.err relay.err job.err restarted.err; do echo "--- $f:"; tail -20 "$work/$f" 2>/dev/null || true; done
   exit 1
 }
-# now, since, latest, advanced, waitFor, pidOf, freePort
+# now, since, latest, advanced, presentedSince, waitFor, pidOf, freePort
 source "$(dirname "${BASH_SOURCE[0]}")/wall_watch.sh"
 
 timeout=3
@@ -68,7 +68,7 @@ dead=$(latest r1c1)
 restarted=$!
 start=$(now)
 waitFor 10 advanced "$dead" r1c1 || fail "the restarted process 3 presents nothing through the relay"
-back=$(since "$start")
+back=$(presentedSince "$start" "$dead" r1c1)
 within "$back" 5 || fail "process 3 presented again only ${back} s after its restart"
 grep -q "wall process 3 moved from tcp://127.0.0.1:[0-9]* to tcp://127.0.0.1:[0-9]*" "$work/relay.err" ||
   fail "the relay did not move its connection to the restarted process"

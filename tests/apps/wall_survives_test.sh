@@ -28,7 +28,7 @@ fail() {
   for f in serve.err job.err restarted.err; do echo "--- $f:"; tail -20 "$work/$f" 2>/dev/null || true; done
   exit 1
 }
-# now, since, latest, advanced, waitFor, pidOf, freePort
+# now, since, latest, advanced, presentedSince, waitFor, pidOf, freePort
 source "$(dirname "${BASH_SOURCE[0]}")/wall_watch.sh"
 status() { python3 -c "import json,sys,urllib.request; print(json.load(urllib.request.urlopen('http://127.0.0.1:$cport/api/status'))['lost_displays'])"; }
 
@@ -55,7 +55,7 @@ start=$(now)
 waitFor $((timeout + 5)) grep -q "lost wall process 3" "$work/serve.err" || fail "process 3 was not dropped"
 frame=$(latest r0c0)
 waitFor 5 advanced "$frame" r0c0 r0c1 r1c0 || fail "the other displays did not present new frames"
-resumed=$(since "$start")
+resumed=$(presentedSince "$start" "$frame" r0c0 r0c1 r1c0)
 within "$resumed" $((timeout + 2)) ||
   fail "the other displays presented again only ${resumed} s after the kill (timeout $timeout s)"
 kill -0 "$job" || fail "the job stopped when a wall process died"
@@ -73,7 +73,7 @@ dead=$(latest r1c1)
 restarted=$!
 start=$(now)
 waitFor 10 advanced "$dead" r1c1 || fail "the restarted process 3 presents nothing"
-back=$(since "$start")
+back=$(presentedSince "$start" "$dead" r1c1)
 within "$back" 3 || fail "process 3 presented again only ${back} s after its restart"
 frame=$(latest r1c1)
 rejoinedFrame=$frame

@@ -23,6 +23,22 @@ advanced() {
   for d in "$@"; do [ "$(latest "$d")" -gt "$frame" ] || return 1; done
 }
 
+# presentedSince T0 FRAME DISPLAY...: the seconds from T0 (a `now`) until the last of the displays
+# wrote its first capture after FRAME, read from the captures' times: when the wall presented
+# again, not when a poll of the captures saw it (a poll's own delay, its processes started every
+# 0.1 s, grows with the machine's load). Fails when a display has no capture after FRAME.
+presentedSince() {
+  local t0=$1 frame=$2 d first t last=0; shift 2
+  for d in "$@"; do
+    first=$(ls "$work/cap/$d" 2>/dev/null |
+      awk -v n="$frame" '{x = $0; gsub(/[^0-9]/, "", x); if (x + 0 > n) {print; exit}}')
+    [ -n "$first" ] || return 1
+    t=$(stat -c %.3Y "$work/cap/$d/$first")
+    last=$(awk -v a="$last" -v b="$t" 'BEGIN {print (b > a) ? b : a}')
+  done
+  awk -v a="$t0" -v b="$last" 'BEGIN {printf "%.2f", b - a}'
+}
+
 # waitFor SECONDS CONDITION...: polls CONDITION every 0.1 s; false when it never held.
 waitFor() {
   local until
