@@ -4,7 +4,7 @@
 
 #include "renderers/scivis/SamplerAvx512.h"
 
-#include "renderers/scivis/Avx512Warnings.h"
+#include "renderers/scivis/Avx512.h"
 
 namespace renderers {
 namespace {
@@ -25,9 +25,6 @@ SciVisRenderer::RayPiece scalarRay(const RowRays& row, int x, int y, std::uint32
   if (!inside) t0 = t1 = 0;
   return {origin, dir, t0, t1, sampler};
 }
-
-#define AVX512_INLINE \
-  __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"), always_inline)) inline
 
 AVX512_INLINE __m512 join(__m256 lo, __m256 hi) {
   return _mm512_insertf32x8(_mm512_castps256_ps512(lo), hi, 1);
@@ -52,9 +49,9 @@ AVX512_INLINE __m512 axis(float f, float r, float u, __m512 sx, __m512 sy) {
 
 // 16 pixels x .. x + 15 of row y, sample s: Camera::ray() and clipToBox() as scalarRay() does
 // them, lane by lane.
-__attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) void rays16(
-    const RowRays& row, const Camera::Pinhole& cam, int x, int y, std::uint32_t s,
-    SciVisRenderer::RayPiece* out, std::uint8_t* inside, std::size_t stride) {
+AVX512_TARGET void rays16(const RowRays& row, const Camera::Pinhole& cam, int x, int y,
+                          std::uint32_t s, SciVisRenderer::RayPiece* out, std::uint8_t* inside,
+                          std::size_t stride) {
   const std::uint64_t sampleKey = Sampler::sampleKey(row.seed, row.accumulationId, s);
   const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const __m512i xs = _mm512_add_epi32(_mm512_set1_epi32(x), lane);

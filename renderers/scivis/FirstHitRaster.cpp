@@ -10,7 +10,7 @@
 
 #include "renderers/Parallel.h"
 
-#include "renderers/scivis/Avx512Warnings.h"
+#include "renderers/scivis/Avx512.h"
 
 namespace renderers {
 namespace {
@@ -138,9 +138,6 @@ bool testScalar(const Setup& g, std::uint32_t at, Block& b) {
   return changed;
 }
 
-#define AVX512_INLINE \
-  __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"), always_inline)) inline
-
 // c . d in 16 lanes, as testScalar() sums it.
 AVX512_INLINE __m512 edge16(const float* c, __m512 x, __m512 y, __m512 z) {
   return _mm512_add_ps(
@@ -150,9 +147,7 @@ AVX512_INLINE __m512 edge16(const float* c, __m512 x, __m512 y, __m512 z) {
 
 // testScalar() with the 16 lanes together, the same operations in the same order (so the same
 // bits).
-__attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) bool test16(const Setup& g,
-                                                                          std::uint32_t at,
-                                                                          Block& b) {
+AVX512_TARGET bool test16(const Setup& g, std::uint32_t at, Block& b) {
   const __m512 x = _mm512_load_ps(b.dx), y = _mm512_load_ps(b.dy), z = _mm512_load_ps(b.dz);
   const __m512 zero = _mm512_setzero_ps();
   const __m512 e0 = edge16(g.c0, x, y, z), e1 = edge16(g.c1, x, y, z), e2 = edge16(g.c2, x, y, z);

@@ -7,13 +7,10 @@
 #include "renderers/scivis/SamplerAvx512.h"
 #include "renderers/scivis/Transpose16.h"
 
-#include "renderers/scivis/Avx512Warnings.h"
+#include "renderers/scivis/Avx512.h"
 
 namespace renderers {
 namespace {
-
-#define AVX512_INLINE \
-  __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"), always_inline)) inline
 
 using RayPiece = SciVisRenderer::RayPiece;
 
@@ -38,9 +35,8 @@ AVX512_INLINE void clipSlab(float lo, float hi, __m512 o, __m512 inv, __m512& t0
 
 }  // namespace
 
-__attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) unsigned marchOnly16(
-    const RayPiece* rays, const Box3& dataBounds, float step, float minTransmittance,
-    MarchRay* out) {
+AVX512_TARGET unsigned marchOnly16(const RayPiece* rays, const Box3& dataBounds, float step,
+                                   float minTransmittance, MarchRay* out) {
   __m512 c[16];
   for (int l = 0; l < 16; ++l)
     c[l] = _mm512_maskz_loadu_ps(0x3ff, reinterpret_cast<const float*>(rays + l));

@@ -6,14 +6,12 @@
 #include <cstdint>
 
 #include "renderers/Rng.h"
+#include "renderers/scivis/Avx512.h"
 
 namespace renderers::lanes {
 
-#define SAMPLER_AVX512_INLINE \
-  __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"), always_inline)) inline
-
 // mix64 (Rng.h) in 8 lanes.
-SAMPLER_AVX512_INLINE __m512i mix64x8(__m512i z) {
+AVX512_INLINE __m512i mix64x8(__m512i z) {
   z = _mm512_mullo_epi64(_mm512_xor_si512(z, _mm512_srli_epi64(z, 30)),
                          _mm512_set1_epi64(static_cast<long long>(0xbf58476d1ce4e5b9ull)));
   z = _mm512_mullo_epi64(_mm512_xor_si512(z, _mm512_srli_epi64(z, 27)),
@@ -22,13 +20,11 @@ SAMPLER_AVX512_INLINE __m512i mix64x8(__m512i z) {
 }
 
 // Sampler::get(d) of 8 keys.
-SAMPLER_AVX512_INLINE __m256 get8(__m512i keys, std::uint32_t d) {
+AVX512_INLINE __m256 get8(__m512i keys, std::uint32_t d) {
   const __m512i h = mix64x8(_mm512_add_epi64(
       keys, _mm512_set1_epi64(static_cast<long long>((d + 1) * Sampler::kDimensionStep))));
   return _mm256_mul_ps(_mm512_cvtepi64_ps(_mm512_srli_epi64(h, 40)),
                        _mm256_set1_ps(1.0f / 16777216.0f));
 }
-
-#undef SAMPLER_AVX512_INLINE
 
 }  // namespace renderers::lanes

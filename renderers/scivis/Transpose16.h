@@ -4,10 +4,12 @@
 // fields one lane at a time through memory took a store and a load per float).
 #include <immintrin.h>
 
+#include "renderers/scivis/Avx512.h"
+
 namespace renderers::lanes {
 
 // Rows r[i] (16 values each) to columns: afterwards r[k] holds value k of rows 0 .. 15.
-__attribute__((target("avx512f"), always_inline)) inline void transpose16(__m512 r[16]) {
+AVX512_INLINE void transpose16(__m512 r[16]) {
   __m512 t[16];
   for (int i = 0; i < 16; i += 2)
     t[i] = _mm512_unpacklo_ps(r[i], r[i + 1]), t[i + 1] = _mm512_unpackhi_ps(r[i], r[i + 1]);

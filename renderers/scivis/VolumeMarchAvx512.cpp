@@ -19,13 +19,10 @@
 #include "renderers/scivis/VolumeMarch.h"
 #include "renderers/scivis/VolumeMarchSteps.h"
 
-#include "renderers/scivis/Avx512Warnings.h"
+#include "renderers/scivis/Avx512.h"
 
 namespace renderers::march {
 namespace {
-
-#define AVX512_INLINE \
-  __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"), always_inline)) inline
 
 constexpr float kInf = Box3::kInf;
 
@@ -418,9 +415,8 @@ AVX512_INLINE void finish(const Packet16& p, MarchColor* colors, std::uint32_t* 
 }
 
 template <class T>
-__attribute__((target("avx512f,avx512dq,avx512bw,avx512vl"))) void marchPacket16(
-    const SciVisScene::VolumeLayer& v, const MarchRay* rays, int count, MarchColor* colors,
-    std::uint32_t* samples) {
+AVX512_TARGET void marchPacket16(const SciVisScene::VolumeLayer& v, const MarchRay* rays, int count,
+                                 MarchColor* colors, std::uint32_t* samples) {
   Field16 f;
   setUp(f, v);
   Packet16 p;
