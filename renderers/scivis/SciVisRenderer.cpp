@@ -477,9 +477,12 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   thread_local std::vector<Sampler> samplers;
   thread_local std::vector<float> px, py;
   thread_local std::vector<Vec3> dirs, invDirs, origins;
-  // Where camera rays ask Embree for surfaces, they go in 4x4 pixel blocks (RayBlocks.h); a
-  // volume alone marches them in row order.
-  const bool blocks = scene_.hasCameraSurfaces();
+  // Camera rays go in 4x4 pixel blocks (RayBlocks.h) where they ask Embree for surfaces, and
+  // where a volume marches them in SIMD packets: a packet of a square's rays reads fewer voxel
+  // cache lines than one of a 16-pixel run (the scivis bench: 5-7% less time a sample where a
+  // voxel covers a pixel or less, the same where it covers more). One ray at a time, row order.
+  const bool blocks =
+      scene_.hasCameraSurfaces() || (layers_->size() == 1 && marchesPackets((*layers_)[0], march_));
   thread_local RayBlockOrderCache blockOrder;
   thread_local std::vector<RayPiece> blockRays;
   thread_local std::vector<Fragment> blockFragments;
