@@ -294,12 +294,15 @@ AVX512_INLINE void advance(Packet16& p, const Field16& f) {
       _mm512_mul_ps(_mm512_sub_ps(_mm512_add_ps(p.oy, _mm512_mul_ps(p.dy, ts)), f.gy), f.sy);
   const __m512 fz =
       _mm512_mul_ps(_mm512_sub_ps(_mm512_add_ps(p.oz, _mm512_mul_ps(p.dz, ts)), f.gz), f.sz);
-  __mmask16 in = _mm512_cmp_ps_mask(fx, f.lox, _CMP_GE_OQ);
-  in = _mm512_mask_cmp_ps_mask(in, fx, f.hix, _CMP_LE_OQ);
-  in = _mm512_mask_cmp_ps_mask(in, fy, f.loy, _CMP_GE_OQ);
-  in = _mm512_mask_cmp_ps_mask(in, fy, f.hiy, _CMP_LE_OQ);
-  in = _mm512_mask_cmp_ps_mask(in, fz, f.loz, _CMP_GE_OQ);
-  in = _mm512_mask_cmp_ps_mask(in, fz, f.hiz, _CMP_LE_OQ);
+  // Six independent compares, their masks and-ed as a tree: a chain of masked compares, each
+  // waiting for the one before, made the march's longest path (the cell, then the loads) longer.
+  const __mmask16 inX =
+      _mm512_cmp_ps_mask(fx, f.lox, _CMP_GE_OQ) & _mm512_cmp_ps_mask(fx, f.hix, _CMP_LE_OQ);
+  const __mmask16 inY =
+      _mm512_cmp_ps_mask(fy, f.loy, _CMP_GE_OQ) & _mm512_cmp_ps_mask(fy, f.hiy, _CMP_LE_OQ);
+  const __mmask16 inZ =
+      _mm512_cmp_ps_mask(fz, f.loz, _CMP_GE_OQ) & _mm512_cmp_ps_mask(fz, f.hiz, _CMP_LE_OQ);
+  const __mmask16 in = inX & inY & inZ;
   const __mmask16 inside = in & p.alive;
   // Every marching lane takes (and counts) this sample; all but those that jump then step on.
   const __mmask16 taken = p.alive;
@@ -330,11 +333,12 @@ AVX512_INLINE void advance(Packet16& p, const Field16& f) {
     const __m512 lastEntry = _mm512_set1_ps(static_cast<float>(SciVisScene::kTableSize - 1));
     const __m512i lastLower = _mm512_set1_epi32(SciVisScene::kTableSize - 2);
     __m512 x = _mm512_mul_ps(_mm512_sub_ps(values, f.valueMin), f.tableScale);
-    x = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(x, zero, _CMP_LT_OQ), x, zero);
-    x = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(lastEntry, x, _CMP_LT_OQ), x, lastEntry);
-    __m512i i = _mm512_cvttps_epi32(x);
-    i = _mm512_mask_blend_epi32(_mm512_cmpgt_epi32_mask(i, lastLower), i, lastLower);
-    i = _mm512_maskz_mov_epi32(_mm512_cmpgt_epi32_mask(i, _mm512_set1_epi32(-1)), i);
+    // vmaxps / vminps give their second operand unless the first is greater / less (NaN
+    // compares false): max(0, x) is x < 0 ? 0 : x and min(last, x) is x > last ? last : x, NaN
+    // and -0 kept as the compare and blend of marchSse keep them.
+    x = _mm512_min_ps(lastEntry, _mm512_max_ps(zero, x));
+    __m512i i = _mm512_min_epi32(_mm512_cvttps_epi32(x), lastLower);
+    i = _mm512_max_epi32(i, _mm512_setzero_si512());  // NaN's 0x80000000: entry 0
     const __m512 weight = _mm512_sub_ps(x, _mm512_cvtepi32_ps(i));
     // Entries i and i + 1 (4 floats each), 8 lanes at a time.
     alignas(64) int entry[16];
