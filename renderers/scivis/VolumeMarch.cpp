@@ -291,13 +291,11 @@ AVX2_INLINE void advance(Packet8& p, const Field8& f) {
     const __m256 lastEntry = _mm256_set1_ps(static_cast<float>(SciVisScene::kTableSize - 1));
     const __m256i lastLower = _mm256_set1_epi32(SciVisScene::kTableSize - 2);
     __m256 x = _mm256_mul_ps(_mm256_sub_ps(values, f.valueMin), f.tableScale);
-    x = _mm256_andnot_ps(_mm256_cmp_ps(x, zero, _CMP_LT_OQ), x);
-    const __m256 over = _mm256_cmp_ps(lastEntry, x, _CMP_LT_OQ);
-    x = _mm256_or_ps(_mm256_and_ps(over, lastEntry), _mm256_andnot_ps(over, x));
-    __m256i i = _mm256_cvttps_epi32(x);
-    const __m256i high = _mm256_cmpgt_epi32(i, lastLower);
-    i = _mm256_or_si256(_mm256_and_si256(high, lastLower), _mm256_andnot_si256(high, i));
-    i = _mm256_and_si256(i, _mm256_cmpgt_epi32(i, _mm256_set1_epi32(-1)));  // NaN: entry 0
+    // vmaxps / vminps give their second operand unless the first is greater / less (NaN
+    // compares false): the clamps of marchSse, NaN and -0 kept, in one instruction each.
+    x = _mm256_min_ps(lastEntry, _mm256_max_ps(zero, x));
+    __m256i i = _mm256_min_epi32(_mm256_cvttps_epi32(x), lastLower);
+    i = _mm256_max_epi32(i, _mm256_setzero_si256());  // NaN's 0x80000000: entry 0
     const __m256 weight = _mm256_sub_ps(x, _mm256_cvtepi32_ps(i));
     alignas(32) int entry[8];
     _mm256_store_si256(reinterpret_cast<__m256i*>(entry), _mm256_slli_epi32(i, 2));
