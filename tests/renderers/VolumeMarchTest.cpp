@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -225,6 +226,53 @@ TEST(VolumeMarch, IntegerVoxelsGiveTheSseImageInEveryKernel) {
       }
     }
   }
+}
+
+// The haze's wavelet as float voxels in a raw file with what the transfer function's lookup
+// must clamp: a slab of NaN voxels (missing values), a slab below the function's range (-50)
+// and the wavelet's top above it (range 0 .. 200, the wavelet reaches 277), every value seen.
+SceneDesc clampedHaze() {
+  SceneDesc d = haze(0.5f);
+  VolumeSource& s = d.volumes[0].source;
+  const VolumeSource wavelet = s;
+  const Index3 n = wavelet.grid.dims;
+  const std::filesystem::path path =
+      std::filesystem::path(::testing::TempDir()) / "dfbwall-march-clamped.raw";
+  std::ofstream out(path, std::ios::binary);
+  for (int k = 0; k < n.z; ++k)
+    for (int j = 0; j < n.y; ++j)
+      for (int i = 0; i < n.x; ++i) {
+        float v = proceduralValue(wavelet, i, j, k);
+        if (i >= 10 && i < 14) v = std::numeric_limits<float>::quiet_NaN();
+        if (i >= 20 && i < 24) v = -50.0f;
+        out.write(reinterpret_cast<const char*>(&v), sizeof v);  // little-endian (x86)
+      }
+  out.close();
+  s.kind = VolumeSource::Kind::RawFile;
+  s.type = VoxelType::Float32;
+  s.raw = {path.string(), false, 0};
+  TransferFunction& t = d.volumes[0].transfer;
+  t.valueMin = 0.0f, t.valueMax = 200.0f;
+  t.opacities = {{0.0f, 0.3f}, {200.0f, 0.05f}};
+  return d;
+}
+
+// The lookup's clamps (below the range, above it, NaN) in every kernel: the SSE image, which is
+// the generic loop's, bit for bit, and no NaN in it.
+TEST(VolumeMarch, ClampsAndMissingValuesGiveTheSseImageInEveryKernel) {
+  SceneDesc twin = clampedHaze();
+  twin.volumes.push_back(twin.volumes[0]);
+  twin.volumes[1].name = "twin";
+  twin.volumes[1].visible = false;
+  const RenderScene scene = buildRenderScene("scivis", clampedHaze());
+  const RenderScene generic = buildRenderScene("scivis", twin);
+  std::uint64_t samples = 0;
+  const auto sse = image(*scene.scivis, MarchKernel::Sse, &samples);
+  EXPECT_GT(samples, 10000u);
+  for (std::size_t i = 0; i < sse.size(); ++i) ASSERT_FALSE(std::isnan(sse[i])) << "value " << i;
+  EXPECT_TRUE(sameBits(sse, image(*generic.scivis, MarchKernel::Sse, nullptr)));
+  for (MarchKernel k : kernels())
+    EXPECT_TRUE(sameBits(sse, image(*scene.scivis, k, nullptr))) << marchKernelName(k);
 }
 
 TEST(VolumeMarch, KernelNames) {
