@@ -34,8 +34,8 @@ inline void lookup(const SciVisScene::VolumeLayer& v, float value, float rgba[4]
                              static_cast<float>(SciVisScene::kTableSize - 1));
   const int i = std::min(static_cast<int>(x), SciVisScene::kTableSize - 2);
   const float f = x - static_cast<float>(i);
-  const float* a = &v.table[4 * static_cast<std::size_t>(i)];
-  for (int c = 0; c < 4; ++c) rgba[c] = a[c] + f * (a[4 + c] - a[c]);
+  const float* a = &v.table[SciVisScene::kTableEntryFloats * static_cast<std::size_t>(i)];
+  for (int c = 0; c < 4; ++c) rgba[c] = a[c] + f * a[4 + c];
 }
 
 // A cosine-weighted direction about unit n.

@@ -423,7 +423,7 @@ void SciVisScene::bake(VolumeLayer& layer, const VolumeDesc& vd, const TransferF
   const float exponent = step_ / unit;
   layer.valueMin = tf.valueMin;
   layer.tableScale = static_cast<float>(kTableSize - 1) / (tf.valueMax - tf.valueMin);
-  layer.table.assign(4 * kTableSize, 0.0f);
+  layer.table.assign(kTableEntryFloats * kTableSize, 0.0f);
   layer.visibleUpTo.assign(kTableSize + 1, 0);
   for (int e = 0; e < kTableSize; ++e) {
     const float value = tf.valueMin + static_cast<float>(e) / layer.tableScale;
@@ -431,8 +431,10 @@ void SciVisScene::bake(VolumeLayer& layer, const VolumeDesc& vd, const TransferF
     const float a = std::clamp(tf.opacity(value) * opacityScale, 0.0f, 1.0f);
     // Opacity for the step: 1 - (1 - a)^(step / unit).
     const float corrected = a >= 1.0f ? 1.0f : 1.0f - std::pow(1.0f - a, exponent);
-    float* t = &layer.table[4 * static_cast<std::size_t>(e)];
+    float* t = &layer.table[kTableEntryFloats * static_cast<std::size_t>(e)];
     t[0] = c.x, t[1] = c.y, t[2] = c.z, t[3] = vd.visible ? corrected : 0.0f;
+    if (e > 0)
+      for (int k = 0; k < 4; ++k) t[k - 4] = t[k] - t[k - kTableEntryFloats];
     layer.visibleUpTo[static_cast<std::size_t>(e) + 1] =
         layer.visibleUpTo[static_cast<std::size_t>(e)] + (t[3] > 0 ? 1u : 0u);
   }

@@ -120,9 +120,13 @@ class SciVisScene {
   bool surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar) const;
 
   struct VolumeLayer {
-    const VolumeField* field = nullptr;      // null when this brick holds none of the volume
-    const ShadingShell* shell = nullptr;     // what shading rays test instead of `field`, if set
-    std::vector<float> table;                // kTableSize x RGBA, opacity per renderer step
+    const VolumeField* field = nullptr;   // null when this brick holds none of the volume
+    const ShadingShell* shell = nullptr;  // what shading rays test instead of `field`, if set
+    // kTableSize entries of 8 floats: RGBA (opacity per renderer step), then the next entry's
+    // RGBA minus this one's (float subtraction; 0 in the last entry, which no lookup starts
+    // from). A lookup is entry + weight x difference: the bits of entry + weight x (next -
+    // entry), one subtraction shorter on the march's longest path.
+    std::vector<float> table;
     std::vector<std::uint32_t> visibleUpTo;  // prefix counts of entries with opacity > 0
     float valueMin = 0, tableScale = 0;
     bool visible = true;
@@ -133,6 +137,7 @@ class SciVisScene {
     std::vector<std::uint8_t> emptyMacrocells;
   };
   static constexpr int kTableSize = 4096;
+  static constexpr int kTableEntryFloats = 8;  // RGBA and the difference to the next entry
   // The volumes one scene may hold: the renderer keeps each volume's samples along a ray in
   // arrays of this size. Scene files with more are refused when read (SciVisToml.cpp), other
   // descriptions when the scene is built.

@@ -81,9 +81,10 @@ std::uint32_t marchSse(const SciVisScene::VolumeLayer& v, const MarchRay& r, Mar
       }
       ++samples;
       if (!(inside >> lane & 1)) continue;
-      const float* e = table + 4 * static_cast<std::size_t>(entry[lane]);
-      const __m128 a = _mm_loadu_ps(e), b = _mm_loadu_ps(e + 4);
-      const __m128 rgba = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(weight[lane]), _mm_sub_ps(b, a)));
+      const float* e =
+          table + SciVisScene::kTableEntryFloats * static_cast<std::size_t>(entry[lane]);
+      const __m128 a = _mm_loadu_ps(e), d = _mm_loadu_ps(e + 4);
+      const __m128 rgba = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(weight[lane]), d));
       const float alpha = _mm_cvtss_f32(_mm_shuffle_ps(rgba, rgba, _MM_SHUFFLE(3, 3, 3, 3)));
       if (!(alpha > 0)) continue;
       // Accumulator::add, channel by channel.
@@ -111,16 +112,16 @@ AVX2_INLINE __m256 lerp(__m256 a, __m256 b, __m256 f) {
   return _mm256_add_ps(a, _mm256_mul_ps(f, _mm256_sub_ps(b, a)));
 }
 
-// The transfer function's colour and opacity of 8 lanes: entry at[l] (4 floats per entry) and
-// the next, interpolated with weight, as marchSse computes them.
+// The transfer function's colour and opacity of 8 lanes: the entries at[l] (floats from the
+// table's start) interpolated with weight, as marchSse computes them.
 AVX2_INLINE void tableLerp(const float* table, const int at[8], __m256 weight, __m256& r, __m256& g,
                            __m256& b, __m256& a) {
   __m256 c[2][4];
   tableEntries8(table, at, c);
-  r = lerp(c[0][0], c[1][0], weight);
-  g = lerp(c[0][1], c[1][1], weight);
-  b = lerp(c[0][2], c[1][2], weight);
-  a = lerp(c[0][3], c[1][3], weight);
+  r = _mm256_add_ps(c[0][0], _mm256_mul_ps(weight, c[1][0]));
+  g = _mm256_add_ps(c[0][1], _mm256_mul_ps(weight, c[1][1]));
+  b = _mm256_add_ps(c[0][2], _mm256_mul_ps(weight, c[1][2]));
+  a = _mm256_add_ps(c[0][3], _mm256_mul_ps(weight, c[1][3]));
 }
 
 // What every lane of a packet shares: the field's geometry and voxels, the transfer function.
@@ -298,7 +299,7 @@ AVX2_INLINE void advance(Packet8& p, const Field8& f) {
     i = _mm256_max_epi32(i, _mm256_setzero_si256());  // NaN's 0x80000000: entry 0
     const __m256 weight = _mm256_sub_ps(x, _mm256_cvtepi32_ps(i));
     alignas(32) int entry[8];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(entry), _mm256_slli_epi32(i, 2));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(entry), _mm256_slli_epi32(i, 3));
     __m256 r, g, b, opacity;
     tableLerp(f.table, entry, weight, r, g, b, opacity);
     const unsigned composited =

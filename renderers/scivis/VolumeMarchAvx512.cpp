@@ -35,6 +35,11 @@ AVX512_INLINE __m512 lerp(__m512 a, __m512 b, __m512 f) {
   return _mm512_add_ps(a, _mm512_mul_ps(f, _mm512_sub_ps(b, a)));
 }
 
+// lerp(entry, next, f) from a transfer-function entry and its difference to the next.
+AVX512_INLINE __m512 fromEntry(__m512 entry, __m512 difference, __m512 f) {
+  return _mm512_add_ps(entry, _mm512_mul_ps(f, difference));
+}
+
 // min(int(f), last) in the lanes inside; the first held cell outside, so every lane reads held
 // voxels.
 AVX512_INLINE __m512i cellOf(__m512 f, int last, int first, __mmask16 inside) {
@@ -93,9 +98,10 @@ AVX512_INLINE void corners16(const std::byte* bytes, const int offsets[16], int 
   for (int n = 0; n < 8; ++n) c[n] = join(half[0][n], half[1][n]);
 }
 
-// Transfer-function entries at[l] and the next (8 floats from at[l]) of 16 lanes, a register
-// per float: out[0 .. 3] the entry's RGBA, out[4 .. 7] the next one's. Each lane's 8 floats are
-// one 256-bit load (lanes l and l + 8 share a register), then an 8x8 transpose in each half.
+// Transfer-function entries at[l] (8 floats from at[l]) of 16 lanes, a register per float:
+// out[0 .. 3] the entry's RGBA, out[4 .. 7] its difference to the next
+// (SciVisScene::VolumeLayer::table). Each lane's 8 floats are one 256-bit load (lanes l and
+// l + 8 share a register), then an 8x8 transpose in each half.
 AVX512_INLINE void tableEntries16(const float* table, const int at[16], __m512 out[8]) {
   __m512 q[8], t[8], u[8];
   for (int j = 0; j < 8; ++j)
@@ -340,23 +346,23 @@ AVX512_INLINE void advance(Packet16& p, const Field16& f) {
     __m512i i = _mm512_min_epi32(_mm512_cvttps_epi32(x), lastLower);
     i = _mm512_max_epi32(i, _mm512_setzero_si512());  // NaN's 0x80000000: entry 0
     const __m512 weight = _mm512_sub_ps(x, _mm512_cvtepi32_ps(i));
-    // Entries i and i + 1 (4 floats each), 8 lanes at a time.
+    // Entry i: RGBA and the difference to entry i + 1, 8 lanes at a time.
     alignas(64) int entry[16];
-    _mm512_store_si512(entry, _mm512_slli_epi32(i, 2));
+    _mm512_store_si512(entry, _mm512_slli_epi32(i, 3));
     __m512 e[8];
     tableEntries16(f.table, entry, e);
-    const __m512 r0 = e[0], g0 = e[1], b0 = e[2], a0 = e[3], r1 = e[4], g1 = e[5], b1 = e[6],
-                 a1 = e[7];
-    const __m512 opacity = lerp(a0, a1, weight);
+    // entry + weight x difference: the bits of lerp(entry, next, weight).
+    const __m512 opacity = fromEntry(e[3], e[7], weight);
     const __mmask16 composited = _mm512_mask_cmp_ps_mask(inside, opacity, zero, _CMP_GT_OQ);
     if (composited) {
       // Accumulator::add in the lanes that composite.
       const __m512 w = _mm512_mul_ps(p.transmittance, opacity);
-      p.red = _mm512_mask_add_ps(p.red, composited, p.red, _mm512_mul_ps(lerp(r0, r1, weight), w));
-      p.green =
-          _mm512_mask_add_ps(p.green, composited, p.green, _mm512_mul_ps(lerp(g0, g1, weight), w));
-      p.blue =
-          _mm512_mask_add_ps(p.blue, composited, p.blue, _mm512_mul_ps(lerp(b0, b1, weight), w));
+      p.red = _mm512_mask_add_ps(p.red, composited, p.red,
+                                 _mm512_mul_ps(fromEntry(e[0], e[4], weight), w));
+      p.green = _mm512_mask_add_ps(p.green, composited, p.green,
+                                   _mm512_mul_ps(fromEntry(e[1], e[5], weight), w));
+      p.blue = _mm512_mask_add_ps(p.blue, composited, p.blue,
+                                  _mm512_mul_ps(fromEntry(e[2], e[6], weight), w));
       p.transmittance = _mm512_mask_mul_ps(p.transmittance, composited, p.transmittance,
                                            _mm512_sub_ps(one, opacity));
       const __mmask16 reached =

@@ -82,8 +82,9 @@ AVX2_INLINE void transpose8(const __m256 r[8], __m256 out[8]) {
   }
 }
 
-// Transfer-function entries at[l] (4 floats per entry) and the next of 8 lanes, a register per
-// float: c[next][channel]. Each lane's 8 floats are one 256-bit load, transposed 8x8.
+// Transfer-function entries at[l] (floats from the table's start) of 8 lanes, a register per
+// float: c[0][channel] the entry's RGBA, c[1][channel] its difference to the next
+// (SciVisScene::VolumeLayer::table). Each lane's 8 floats are one 256-bit load, transposed 8x8.
 AVX2_INLINE void tableEntries8(const float* table, const int at[8], __m256 c[2][4]) {
   __m256 rows[8], out[8];
   for (int l = 0; l < 8; ++l) rows[l] = _mm256_loadu_ps(table + at[l]);
