@@ -512,4 +512,11 @@ const std::vector<float>& DistributedFrameBuffer::imageRgbaF32() const {
 }
 FrameStats DistributedFrameBuffer::stats() const { return impl_->lastStats; }
 
+std::size_t DistributedFrameBuffer::heldInputs() const {
+  std::lock_guard lock(impl_->frameMutex);
+  std::size_t held = 0;
+  for (const auto& [frame, inputs] : impl_->early) held += inputs.size();
+  return held;
+}
+
 }  // namespace dfb

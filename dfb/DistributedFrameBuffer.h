@@ -127,6 +127,9 @@ class DistributedFrameBuffer final : public messaging::MessageHandler {
   const std::vector<float>& imageRgbaF32() const;
 
   FrameStats stats() const;  // of the last frame, this rank
+  // Inputs that came for frames after the active one, held until their begin() (stats()
+  // counts them as earlyInputs of that frame).
+  std::size_t heldInputs() const;
 
   void incoming(int fromRank, messaging::Bytes&& payload) override;
   // Tile inputs are combined in any order, under each tile's own lock (as from the renderers'

@@ -372,17 +372,18 @@ TEST(Dfb, TilesForTheNextFrameArrivingEarlyAreHeldAndApplied) {
   DistributedFrameBuffer dfb(messenger, MPI_COMM_WORLD, o);
   renderFrame(dfb, 1);
   // Rank 0 starts frame 2 late, so the other ranks' tiles for it arrive before its begin(): it
-  // waits until as many messages came as the tiles others send it (a fixed sleep was too short
-  // on a loaded machine), at most 20 s.
+  // waits until it holds every tile others send it (a fixed sleep was too short on a loaded
+  // machine), at most 10 s. (Counting the messages received since frame 1 raced: a fast rank's
+  // frame-2 tiles could come before the count was first read, and rank 0 then waited out its
+  // whole wait while the other rank's frame timed out.)
   if (worldRank() == 0) {
-    std::uint64_t fromOthers = 0;
+    std::size_t fromOthers = 0;
     for (int t = 0; t < dfb.grid().tileCount(); ++t)
       if (dfb.ownerOf(t) == 0 && !renders(t)) ++fromOthers;
-    const std::uint64_t before = messenger.traffic(o.objectId).messagesReceived;
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-    while (messenger.traffic(o.objectId).messagesReceived < before + fromOthers &&
-           std::chrono::steady_clock::now() < deadline)
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (dfb.heldInputs() < fromOthers && std::chrono::steady_clock::now() < deadline)
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    EXPECT_EQ(dfb.heldInputs(), fromOthers);
   }
   renderFrame(dfb, 2);
   std::uint64_t early = dfb.stats().earlyInputs, total = 0;
