@@ -433,8 +433,10 @@ void SciVisScene::bake(VolumeLayer& layer, const VolumeDesc& vd, const TransferF
     const float corrected = a >= 1.0f ? 1.0f : 1.0f - std::pow(1.0f - a, exponent);
     float* t = &layer.table[kTableEntryFloats * static_cast<std::size_t>(e)];
     t[0] = c.x, t[1] = c.y, t[2] = c.z, t[3] = vd.visible ? corrected : 0.0f;
-    if (e > 0)
-      for (int k = 0; k < 4; ++k) t[k - 4] = t[k] - t[k - kTableEntryFloats];
+    if (e > 0) {  // the previous entry's difference to this one
+      float* previous = t - kTableEntryFloats;
+      for (int k = 0; k < 4; ++k) previous[4 + k] = t[k] - previous[k];
+    }
     layer.visibleUpTo[static_cast<std::size_t>(e) + 1] =
         layer.visibleUpTo[static_cast<std::size_t>(e)] + (t[3] > 0 ? 1u : 0u);
   }
