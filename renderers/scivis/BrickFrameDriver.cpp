@@ -382,6 +382,13 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     thread_local std::vector<float> depths;  // per pixel: brickDepth() of its first sample's ray
     thread_local std::vector<std::uint8_t> inside;
     thread_local std::vector<SciVisRenderer::FirstSurface> firsts, pieceFirsts;
+    // The background tile's pixel whose rays start at rays[first].
+    const auto backgroundAt = [&](std::size_t first, float out[4]) {
+      if (constantBackground)
+        std::copy(constantPixel, constantPixel + 4, out);
+      else
+        backgroundPixel(background, rays.data() + first, spp, inv, out);
+    };
     const RowRays row{&camera, bounds, m.settings.seed, accumulationId, 0, spp, simdRows};
     // Where the raster accepts the brick's first hits: its bounds, but not at the faces it shares
     // with the domain's boundary. The unbricked scene clips no ray there, and a surface that
@@ -459,7 +466,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
                                 static_cast<std::size_t>(x - region.x0);
           float* out = &tile.color[4 * p];
           if (!renderer) {
-            backgroundPixel(background, rays.data() + first, spp, inv, out);
+            backgroundAt(first, out);
             continue;
           }
           float sum[4] = {0, 0, 0, 0};
@@ -476,10 +483,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
             // The background tile's pixel (depth infinite, first in the tree) and this one, as
             // the DFB would blend the two.
             float bg[4];
-            if (constantBackground)
-              std::copy(constantPixel, constantPixel + 4, bg);
-            else
-              backgroundPixel(background, rays.data() + first, spp, inv, bg);
+            backgroundAt(first, bg);
             depth = dfb::blendPixelPair(bg, kInf, out, depth, out);
           }
         }

@@ -374,13 +374,17 @@ bool SciVisRenderer::marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, flo
                     scene_.volumeStep(), scene_.desc().scivis.minTransmittance, ray);
 }
 
+bool SciVisRenderer::marchesPacketsHere() const {
+  return layers_->size() == 1 && marchesPackets((*layers_)[0], march_);
+}
+
 void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment* out) const {
   integrate(rays, count, out, nullptr);
 }
 
 void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment* out,
                                const FirstSurface* given) const {
-  const bool packets = layers_->size() == 1 && marchesPackets((*layers_)[0], march_);
+  const bool packets = marchesPacketsHere();
   const int packetSize = marchPacketSize(march_);
   // Rays for the march, a packet at a time (up to a packet more wait while one goes).
   MarchRay waiting[2 * kMarchPacket];
@@ -481,8 +485,7 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   // where a volume marches them in SIMD packets: a packet of a square's rays reads fewer voxel
   // cache lines than one of a 16-pixel run (the scivis bench: 5-7% less time a sample where a
   // voxel covers a pixel or less, the same where it covers more). One ray at a time, row order.
-  const bool blocks =
-      scene_.hasCameraSurfaces() || (layers_->size() == 1 && marchesPackets((*layers_)[0], march_));
+  const bool blocks = scene_.hasCameraSurfaces() || marchesPacketsHere();
   thread_local RayBlockOrderCache blockOrder;
   thread_local std::vector<RayPiece> blockRays;
   thread_local std::vector<Fragment> blockFragments;

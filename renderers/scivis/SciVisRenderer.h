@@ -118,6 +118,9 @@ class SciVisRenderer final : public Renderer {
   Vec3 shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, const Material& m,
              const Sampler& hitSampler) const;
   bool occluded(Vec3 origin, Vec3 dir, float tFar) const;
+  // Whether a ray's one-volume march takes it in SIMD packets (VolumeMarch.h): one volume layer
+  // that the kernel marches packets of.
+  bool marchesPacketsHere() const;
 
   const SciVisScene& scene_;
   RenderSettings settings_;

@@ -299,6 +299,7 @@ AVX2_INLINE void advance(Packet8& p, const Field8& f) {
     i = _mm256_max_epi32(i, _mm256_setzero_si256());  // NaN's 0x80000000: entry 0
     const __m256 weight = _mm256_sub_ps(x, _mm256_cvtepi32_ps(i));
     alignas(32) int entry[8];
+    static_assert(SciVisScene::kTableEntryFloats == 1 << 3, "entry i starts at float 8 i");
     _mm256_store_si256(reinterpret_cast<__m256i*>(entry), _mm256_slli_epi32(i, 3));
     __m256 r, g, b, opacity;
     tableLerp(f.table, entry, weight, r, g, b, opacity);

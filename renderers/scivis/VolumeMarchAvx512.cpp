@@ -348,6 +348,7 @@ AVX512_INLINE void advance(Packet16& p, const Field16& f) {
     const __m512 weight = _mm512_sub_ps(x, _mm512_cvtepi32_ps(i));
     // Entry i: RGBA and the difference to entry i + 1, 8 lanes at a time.
     alignas(64) int entry[16];
+    static_assert(SciVisScene::kTableEntryFloats == 1 << 3, "entry i starts at float 8 i");
     _mm512_store_si512(entry, _mm512_slli_epi32(i, 3));
     __m512 e[8];
     tableEntries16(f.table, entry, e);
