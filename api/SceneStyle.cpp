@@ -200,8 +200,7 @@ renderers::BrickContent brickContent(const Style& style, const Brick& brick) {
         if (box.hi[a] - box.lo[a] < 2) fail(brick, name + ": the voxel box is under 2 voxels wide");
       if (!part->voxels) fail(brick, name + ": voxels is null");
       volume.box = box;
-      const std::size_t bytes = box.voxelCount() * renderers::voxelBytes(volume.type);
-      volume.voxels = renderers::allocateVoxelBytes(bytes);
+      volume.voxels = renderers::allocateVoxelBytes(box, volume.type);
       convertVoxels(part->type, part->voxels, volume.voxels.data(), box.voxelCount());
       volume.updateRange();
     }

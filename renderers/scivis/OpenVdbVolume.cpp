@@ -111,7 +111,7 @@ Volume sample(const VolumeSource& source, const VoxelBox& box) {
   v.grid = source.grid;
   v.box = box;
   v.type = VoxelType::Float32;
-  v.voxels = allocateVoxelBytes(box.voxelCount() * sizeof(float));
+  v.voxels = allocateVoxelBytes(box, v.type);
   const Index3 s = box.size();
   std::byte* out = v.voxels.data();
   parallelFor(static_cast<std::size_t>(s.y) * static_cast<std::size_t>(s.z), [&](std::size_t row) {

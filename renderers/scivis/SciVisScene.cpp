@@ -239,6 +239,7 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   }
   step_ = finest > 0 ? finest / settings.samplingRate : 1.0f;
   for (std::size_t i = 0; i < content_.volumes.size(); ++i) {
+    content_.volumes[i].spreadSlices();  // before any field or isosurface reads them
     const Volume& v = content_.volumes[i];
     const VolumeDesc& vd = desc.volumes[i];
     VolumeLayer layer;

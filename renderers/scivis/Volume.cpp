@@ -92,13 +92,7 @@ std::string GridGeometry::problem() const {
 
 namespace {
 
-std::size_t offsetOf(const VoxelBox& box, int i, int j, int k) {
-  const Index3 s = box.size();
-  return (static_cast<std::size_t>(k - box.lo.z) * static_cast<std::size_t>(s.y) +
-          static_cast<std::size_t>(j - box.lo.y)) *
-             static_cast<std::size_t>(s.x) +
-         static_cast<std::size_t>(i - box.lo.x);
-}
+constexpr std::size_t kCacheLine = 64;
 
 // Voxel n of the held voxels as a float; the buffer is not necessarily aligned for the type.
 float valueAt(const std::byte* voxels, VoxelType type, std::size_t n) {
@@ -122,17 +116,55 @@ float valueAt(const std::byte* voxels, VoxelType type, std::size_t n) {
 }  // namespace
 
 float Volume::at(int i, int j, int k) const {
-  return valueAt(voxels.data(), type, offsetOf(box, i, j, k));
+  const std::size_t n =
+      static_cast<std::size_t>(k - box.lo.z) * sliceStride() +
+      static_cast<std::size_t>(j - box.lo.y) * static_cast<std::size_t>(box.size().x) +
+      static_cast<std::size_t>(i - box.lo.x);
+  return valueAt(voxels.data(), type, n);
 }
 
-std::vector<std::byte> allocateVoxelBytes(std::size_t bytes) {
+std::size_t Volume::sliceVoxels() const {
+  const Index3 s = box.size();
+  return box.empty() ? 0 : static_cast<std::size_t>(s.x) * static_cast<std::size_t>(s.y);
+}
+
+std::size_t slicePaddingFor(const VoxelBox& box, VoxelType type) {
+  if (box.empty()) return 0;
+  const Index3 s = box.size();
+  const std::size_t sliceBytes =
+      static_cast<std::size_t>(s.x) * static_cast<std::size_t>(s.y) * voxelBytes(type);
+  return sliceBytes % 1024 == 0 ? kCacheLine / voxelBytes(type) : 0;
+}
+
+void Volume::spreadSlices() {
+  const std::size_t padding = slicePaddingFor(box, type);
+  if (slicePadding != 0 || padding == 0) return;
+  const std::size_t width = voxelBytes(type), slice = sliceVoxels() * width;
+  const std::size_t slices = static_cast<std::size_t>(box.size().z),
+                    stride = slice + padding * width;
+  if (voxels.size() != slice * slices) return;  // not dense voxels of the box: left as they are
+  voxels.resize(stride * slices);
+  // From the last slice down: each moves up, past slices already moved, never over one not yet.
+  std::byte* data = voxels.data();
+  for (std::size_t z = slices; z-- > 1;) {
+    std::memmove(data + z * stride, data + z * slice, slice);
+    std::memset(data + z * stride - padding * width, 0, padding * width);
+  }
+  std::memset(data + slices * stride - padding * width, 0, padding * width);
+  slicePadding = padding;
+}
+
+std::vector<std::byte> allocateVoxelBytes(const VoxelBox& box, VoxelType type) {
+  const std::size_t bytes = box.voxelCount() * voxelBytes(type);
+  const std::size_t padded = bytes + slicePaddingFor(box, type) * voxelBytes(type) *
+                                         static_cast<std::size_t>(box.empty() ? 0 : box.size().z);
   std::vector<std::byte> v;
-  v.reserve(bytes);  // allocated, not touched yet
+  v.reserve(padded);  // allocated, not touched yet
   constexpr std::uintptr_t kHugePage = std::uintptr_t{2} << 20;
-  if (bytes >= 4 * kHugePage) {
+  if (padded >= 4 * kHugePage) {
     const auto begin = reinterpret_cast<std::uintptr_t>(v.data());
     const std::uintptr_t first = (begin + kHugePage - 1) & ~(kHugePage - 1);
-    const std::uintptr_t last = (begin + bytes) & ~(kHugePage - 1);
+    const std::uintptr_t last = (begin + padded) & ~(kHugePage - 1);
     // Advice only: where the kernel has no huge pages this fails and nothing changes.
     if (last > first) ::madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
   }
@@ -142,19 +174,21 @@ std::vector<std::byte> allocateVoxelBytes(std::size_t bytes) {
 
 void Volume::updateRange() {
   const std::size_t count = box.voxelCount();
-  if (count == 0 || voxels.size() < count * voxelBytes(type)) {
+  if (count == 0 ||
+      voxels.size() <
+          (count + slicePadding * static_cast<std::size_t>(box.size().z)) * voxelBytes(type)) {
     valueMin = valueMax = 0;
     return;
   }
-  // One slab per task; NaN voxels (possible in float files) are left out so one bad voxel does
+  // One slice per task; NaN voxels (possible in float files) are left out so one bad voxel does
   // not make the whole range NaN.
-  const std::size_t slab = count / static_cast<std::size_t>(box.size().z);
+  const std::size_t slab = sliceVoxels(), stride = sliceStride();
   const std::size_t slabs = static_cast<std::size_t>(box.size().z);
   std::vector<float> lo(slabs, std::numeric_limits<float>::infinity());
   std::vector<float> hi(slabs, -std::numeric_limits<float>::infinity());
   parallelFor(slabs, [&](std::size_t z) {
     float l = lo[z], h = hi[z];
-    for (std::size_t n = z * slab, end = n + slab; n < end; ++n) {
+    for (std::size_t n = z * stride, end = n + slab; n < end; ++n) {
       const float v = valueAt(voxels.data(), type, n);
       if (v < l) l = v;
       if (v > h) h = v;

@@ -46,6 +46,7 @@ Index3 FieldGeometry::macroOrigin(int m) const {
 
 VolumeField::VolumeField(const Volume& volume)
     : FieldGeometry(volume.grid, volume.box), volume_(&volume) {
+  strideZ_ = volume.sliceStride();
   const VoxelBox& b = volume.box;
   parallelFor(static_cast<std::size_t>(macroCells_.z), [&](std::size_t zIndex) {
     const int mz = static_cast<int>(zIndex);

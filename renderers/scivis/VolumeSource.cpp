@@ -101,7 +101,7 @@ Volume fillProcedural(const VolumeSource& source, const VoxelBox& box, MakeAxis 
   v.grid = source.grid;
   v.box = box;
   v.type = VoxelType::Float32;
-  v.voxels = allocateVoxelBytes(box.voxelCount() * sizeof(float));
+  v.voxels = allocateVoxelBytes(box, v.type);
   std::vector<Axis> axes[3];
   for (int a = 0; a < 3; ++a)
     for (int i = box.lo[a]; i < box.hi[a]; ++i)
@@ -193,7 +193,7 @@ Volume loadRaw(const VolumeSource& source, const VoxelBox& box) {
   v.box = box;
   v.type = source.type;
   const std::size_t width = voxelBytes(source.type);
-  v.voxels = allocateVoxelBytes(box.voxelCount() * width);
+  v.voxels = allocateVoxelBytes(box, v.type);
   const Index3 d = source.grid.dims, s = box.size();
   const bool wholeRows = s.x == d.x, wholeSlabs = wholeRows && s.y == d.y;
   const int runsPerSlab = wholeRows ? 1 : s.y, slabsPerRun = wholeSlabs ? s.z : 1;

@@ -26,8 +26,8 @@ namespace {
 
 // The wavelet as a haze without isosurfaces: nothing below 150 (empty macrocells to jump), an
 // opacity ramp above, `peak` at the top (a high peak ends rays early).
-SceneDesc haze(float peak) {
-  SceneDesc d = waveletScene(40);
+SceneDesc haze(float peak, int resolution = 40) {
+  SceneDesc d = waveletScene(resolution);
   d.isosurfaces.clear();
   d.volumes[0].transfer.opacities = {{37.0f, 0.0f}, {150.0f, 0.0f}, {277.0f, peak}};
   d.scivis.aoSamples = 0;
@@ -88,6 +88,23 @@ TEST(VolumeMarch, MarchesAsTheGenericLoop) {
   two.volumes[1].visible = false;
   const RenderScene a = buildRenderScene("scivis", one), b = buildRenderScene("scivis", two);
   const auto generic = image(*b.scivis, MarchKernel::Sse, nullptr);
+  for (MarchKernel k : kernels())
+    EXPECT_TRUE(sameBits(generic, image(*a.scivis, k, nullptr))) << marchKernelName(k);
+}
+
+// A 64³ float volume's 16 KiB slices are laid a cache line apart in the scene
+// (Volume::spreadSlices): every kernel and the generic loop read them so.
+TEST(VolumeMarch, SpreadSlicesGiveTheGenericLoopsImageInEveryKernel) {
+  const SceneDesc one = haze(0.5f, 64);
+  SceneDesc two = one;
+  two.volumes.push_back(two.volumes[0]);
+  two.volumes[1].name = "twin";
+  two.volumes[1].visible = false;
+  const RenderScene a = buildRenderScene("scivis", one), b = buildRenderScene("scivis", two);
+  ASSERT_EQ(a.scivis->content().volumes[0].slicePadding, 16u);
+  std::uint64_t samples = 0;
+  const auto generic = image(*b.scivis, MarchKernel::Sse, &samples);
+  EXPECT_GT(samples, 10000u);
   for (MarchKernel k : kernels())
     EXPECT_TRUE(sameBits(generic, image(*a.scivis, k, nullptr))) << marchKernelName(k);
 }

@@ -11,6 +11,7 @@
 #include <fstream>
 
 #include "renderers/Error.h"
+#include "renderers/scivis/VolumeField.h"
 #include "renderers/scivis/VolumeSource.h"
 
 namespace renderers {
@@ -91,6 +92,68 @@ TEST(Volume, AtReadsEachTypeAndUpdateRangeSpansThem) {
   v.updateRange();
   EXPECT_EQ(v.valueMin, -3.5f);
   EXPECT_EQ(v.valueMax, -3.5f);
+}
+
+// Slices whose bytes are a multiple of 1 KiB get a cache line after each, in the buffer they
+// came in (its capacity holds the padding); every voxel keeps its value, the range stays, and
+// a field samples the spread voxels to the same bits as the dense ones.
+TEST(Volume, SpreadSlicesMoveNoValueAndPadOnlyWhereSlicesAlias) {
+  const VolumeSource wavelet = procedural(VolumeSource::Kind::Wavelet, {64, 32, 9});
+  const VoxelBox box{{0, 0, 0}, {64, 32, 9}};  // 64 x 32 floats: 8 KiB slices
+  EXPECT_EQ(slicePaddingFor(box, VoxelType::Float32), 16u);
+  EXPECT_EQ(slicePaddingFor(box, VoxelType::UInt16), 32u);
+  EXPECT_EQ(slicePaddingFor(box, VoxelType::UInt8), 64u);
+  EXPECT_EQ(slicePaddingFor({{0, 0, 0}, {60, 32, 9}}, VoxelType::Float32), 0u);  // 7.5 KiB
+  EXPECT_EQ(slicePaddingFor({{0, 0, 0}, {0, 32, 9}}, VoxelType::Float32), 0u);
+
+  const Volume dense = loadVolume(wavelet, box);
+  ASSERT_EQ(dense.slicePadding, 0u);
+  Volume spread = dense;
+  spread.voxels = allocateVoxelBytes(box, spread.type);
+  std::memcpy(spread.voxels.data(), dense.voxels.data(), dense.voxels.size());
+  const std::byte* buffer = spread.voxels.data();
+  spread.spreadSlices();
+  EXPECT_EQ(spread.voxels.data(), buffer) << "moved out of its buffer";
+  EXPECT_EQ(spread.slicePadding, 16u);
+  EXPECT_EQ(spread.sliceStride(), 64u * 32u + 16u);
+  EXPECT_EQ(spread.bytes(), dense.bytes() + 9 * 64);
+  expectSameVoxels(dense, spread);
+  for (std::size_t z = 0; z < 9; ++z)
+    for (std::size_t b = 0; b < 64; ++b)
+      EXPECT_EQ(spread.voxels[(z * spread.sliceStride() + 64 * 32) * 4 + b], std::byte{0});
+  spread.updateRange();
+  EXPECT_EQ(spread.valueMin, dense.valueMin);
+  EXPECT_EQ(spread.valueMax, dense.valueMax);
+  const std::vector<std::byte> once = spread.voxels;
+  spread.spreadSlices();  // already spread: nothing moves
+  EXPECT_EQ(spread.voxels, once);
+
+  const VolumeField a(dense), b(spread);
+  EXPECT_EQ(b.layout().strideZ, spread.sliceStride());
+  int sampled = 0;
+  for (float z = -0.5f; z < 9.5f; z += 0.37f)
+    for (float y = -0.5f; y < 32.5f; y += 1.13f)
+      for (float x = -0.5f; x < 64.5f; x += 1.71f) {
+        const Vec3 p = dense.grid.worldOf(x, y, z);
+        float va = 0, vb = 0;
+        const bool ina = a.sample(p, va), inb = b.sample(p, vb);
+        ASSERT_EQ(ina, inb);
+        if (!ina) continue;
+        ASSERT_EQ(std::bit_cast<std::uint32_t>(va), std::bit_cast<std::uint32_t>(vb));
+        ++sampled;
+      }
+  EXPECT_GT(sampled, 10000);
+  for (int m = 0; m < a.macroCount(); ++m) {
+    EXPECT_EQ(a.macroMin(m), b.macroMin(m));
+    EXPECT_EQ(a.macroMax(m), b.macroMax(m));
+  }
+
+  // Slices that do not alias are left dense.
+  Volume odd = loadVolume(wavelet, {{2, 0, 0}, {62, 32, 9}});
+  const std::vector<std::byte> before = odd.voxels;
+  odd.spreadSlices();
+  EXPECT_EQ(odd.slicePadding, 0u);
+  EXPECT_EQ(odd.voxels, before);
 }
 
 // Reference values from VTK 9.1 (Debian's python3-vtk9):

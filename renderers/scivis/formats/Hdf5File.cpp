@@ -151,7 +151,7 @@ Volume loadHdf5Box(const VolumeSource& source, const VoxelBox& box) {
   v.grid = source.grid;
   v.box = box;
   v.type = source.type;
-  v.voxels = allocateVoxelBytes(box.voxelCount() * voxelBytes(v.type));
+  v.voxels = allocateVoxelBytes(box, v.type);
   const hid_t memType = v.type == VoxelType::UInt8    ? H5T_NATIVE_UCHAR
                         : v.type == VoxelType::UInt16 ? H5T_NATIVE_USHORT
                                                       : H5T_NATIVE_FLOAT;

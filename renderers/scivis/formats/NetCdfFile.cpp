@@ -166,7 +166,7 @@ Volume loadNetCdfBox(const VolumeSource& source, const VoxelBox& box) {
   v.grid = source.grid;
   v.box = box;
   v.type = source.type;
-  v.voxels = allocateVoxelBytes(box.voxelCount() * voxelBytes(v.type));
+  v.voxels = allocateVoxelBytes(box, v.type);
   void* to = v.voxels.data();
   const int rc =
       v.type == VoxelType::UInt8

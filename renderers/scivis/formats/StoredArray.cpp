@@ -299,7 +299,7 @@ Volume readStoredBox(const StoredArray& array, const GridGeometry& grid, const V
   v.box = box;
   v.type = heldVoxelType(array);
   const std::size_t width = fileTypeBytes(array.type), heldWidth = voxelBytes(v.type);
-  v.voxels = allocateVoxelBytes(box.voxelCount() * heldWidth);
+  v.voxels = allocateVoxelBytes(box, v.type);
   const Index3 d = grid.dims, s = box.size();
   // Runs of voxels contiguous in the file: rows, or whole slabs, or the whole box.
   const bool wholeRows = s.x == d.x, wholeSlabs = wholeRows && s.y == d.y;
