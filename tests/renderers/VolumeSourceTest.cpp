@@ -156,6 +156,48 @@ TEST(Volume, SpreadSlicesMoveNoValueAndPadOnlyWhereSlicesAlias) {
   EXPECT_EQ(odd.voxels, before);
 }
 
+// Each macrocell's range is the least and greatest of the voxels its cells interpolate (its far
+// face included, NaN left out), for a box that starts off the macrocell grid, in every type.
+TEST(VolumeField, MacrocellRangesSpanTheirVoxels) {
+  const VolumeSource wavelet = procedural(VolumeSource::Kind::Wavelet, {48, 40, 36});
+  const VoxelBox box{{3, 5, 2}, {45, 40, 29}};
+  for (VoxelType type : {VoxelType::Float32, VoxelType::UInt8, VoxelType::UInt16}) {
+    Volume v = loadVolume(wavelet, box);
+    if (type != VoxelType::Float32) {  // the same values, rounded, in the integer type
+      Volume u = v;
+      u.type = type;
+      u.voxels.assign(box.voxelCount() * voxelBytes(type), std::byte{0});
+      for (std::size_t n = 0; n < box.voxelCount(); ++n) {
+        float f;
+        std::memcpy(&f, v.voxels.data() + 4 * n, 4);
+        const auto w =
+            static_cast<std::uint16_t>(std::lround(f) & (type == VoxelType::UInt8 ? 0xff : 0xffff));
+        std::memcpy(u.voxels.data() + n * voxelBytes(type), &w, voxelBytes(type));
+      }
+      v = u;
+    } else {
+      const float nan = NAN;  // missing values in two places
+      std::memcpy(v.voxels.data() + 4 * 7, &nan, 4);
+      std::memcpy(v.voxels.data() + 4 * (box.voxelCount() / 2), &nan, 4);
+    }
+    const VolumeField field(v);
+    ASSERT_GT(field.macroCount(), 20);
+    for (int m = 0; m < field.macroCount(); ++m) {
+      const Index3 c0 = field.macroOrigin(m);
+      float lo = INFINITY, hi = -INFINITY;
+      for (int k = std::max(c0.z, box.lo.z); k <= std::min(c0.z + 8, box.hi.z - 1); ++k)
+        for (int j = std::max(c0.y, box.lo.y); j <= std::min(c0.y + 8, box.hi.y - 1); ++j)
+          for (int i = std::max(c0.x, box.lo.x); i <= std::min(c0.x + 8, box.hi.x - 1); ++i) {
+            const float value = v.at(i, j, k);
+            if (value < lo) lo = value;
+            if (value > hi) hi = value;
+          }
+      ASSERT_EQ(field.macroMin(m), lo) << voxelTypeName(type) << " macrocell " << m;
+      ASSERT_EQ(field.macroMax(m), hi) << voxelTypeName(type) << " macrocell " << m;
+    }
+  }
+}
+
 // Reference values from VTK 9.1 (Debian's python3-vtk9):
 //   s = vtk.vtkRTAnalyticSource(); s.Update()
 //   s.GetOutput().GetScalarComponentAsDouble(i - 10, j - 10, k - 10, 0)
