@@ -175,8 +175,7 @@ std::vector<std::byte> allocateVoxelBytes(const VoxelBox& box, VoxelType type) {
 void Volume::updateRange() {
   const std::size_t count = box.voxelCount();
   if (count == 0 ||
-      voxels.size() <
-          (count + slicePadding * static_cast<std::size_t>(box.size().z)) * voxelBytes(type)) {
+      voxels.size() < sliceStride() * static_cast<std::size_t>(box.size().z) * voxelBytes(type)) {
     valueMin = valueMax = 0;
     return;
   }

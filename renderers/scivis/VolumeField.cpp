@@ -9,7 +9,7 @@
 #include "renderers/Parallel.h"
 
 namespace renderers {
-FieldGeometry::FieldGeometry(const GridGeometry& grid, const VoxelBox& box)
+FieldGeometry::FieldGeometry(const GridGeometry& grid, const VoxelBox& box, std::size_t sliceStride)
     : grid_(grid), box_(box) {
   const Index3 n = box.size();
   if (n.x < 2 || n.y < 2 || n.z < 2)
@@ -24,7 +24,8 @@ FieldGeometry::FieldGeometry(const GridGeometry& grid, const VoxelBox& box)
   hi_ = {static_cast<float>(b.hi.x - 1), static_cast<float>(b.hi.y - 1),
          static_cast<float>(b.hi.z - 1)};
   strideY_ = static_cast<std::size_t>(n.x);
-  strideZ_ = static_cast<std::size_t>(n.x) * static_cast<std::size_t>(n.y);
+  strideZ_ =
+      sliceStride > 0 ? sliceStride : static_cast<std::size_t>(n.x) * static_cast<std::size_t>(n.y);
   bounds_.lo = g.worldOf(lo_.x, lo_.y, lo_.z);
   bounds_.hi = g.worldOf(hi_.x, hi_.y, hi_.z);
 
@@ -99,8 +100,7 @@ void slabRanges(const T* voxels, std::size_t strideY, std::size_t strideZ, const
 }  // namespace
 
 VolumeField::VolumeField(const Volume& volume)
-    : FieldGeometry(volume.grid, volume.box), volume_(&volume) {
-  strideZ_ = volume.sliceStride();
+    : FieldGeometry(volume.grid, volume.box, volume.sliceStride()), volume_(&volume) {
   const VoxelBox& b = volume.box;
   const MacroSpans x(macroFirst_.x, macroCells_.x, b.lo.x, b.hi.x);
   const MacroSpans y(macroFirst_.y, macroCells_.y, b.lo.y, b.hi.y);

@@ -107,8 +107,9 @@ class FieldGeometry {
  protected:
   FieldGeometry() = default;
   // The geometry of `box` of `grid` (at least 2 voxels per axis; throws renderers::Error
-  // otherwise), voxels stored densely over the box; macrocell ranges all zero.
-  FieldGeometry(const GridGeometry& grid, const VoxelBox& box);
+  // otherwise), voxels stored x fastest, then y, then z, slices `sliceStride` voxels apart (0:
+  // dense, box.size().x * box.size().y); macrocell ranges all zero.
+  FieldGeometry(const GridGeometry& grid, const VoxelBox& box, std::size_t sliceStride = 0);
 
   GridGeometry grid_;
   VoxelBox box_;
