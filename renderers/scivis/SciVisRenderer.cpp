@@ -386,15 +386,16 @@ void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment
                                const FirstSurface* given) const {
   const bool packets = marchesPacketsHere();
   const int packetSize = marchPacketSize(march_);
-  // Rays for the march, a packet at a time (up to a packet more wait while one goes).
-  MarchRay waiting[2 * kMarchPacket];
-  std::size_t waitingIndex[2 * kMarchPacket];
+  // Rays for the march, a packet at a time; the next packet's rays wait while one goes, so the
+  // march can ask for their first voxels (marchPacket's `next`).
+  MarchRay waiting[3 * kMarchPacket];
+  std::size_t waitingIndex[3 * kMarchPacket];
   int waitingCount = 0;
   auto marchWaiting = [&] {
     MarchColor colors[kMarchPacket];
     std::uint32_t taken[kMarchPacket];
     const int n = std::min(waitingCount, packetSize);
-    marchPacket((*layers_)[0], march_, waiting, n, colors, taken);
+    marchPacket((*layers_)[0], march_, waiting, n, colors, taken, waiting + n, waitingCount - n);
     for (int i = 0; i < n; ++i) {
       Fragment& f = out[waitingIndex[i]];  // integrate()'s fragment of the march alone
       f = Fragment{};
@@ -436,7 +437,7 @@ void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment
         // scene's bounds but miss the data.)
         out[i] = Fragment{};
       }
-      if (waitingCount >= packetSize) marchWaiting();
+      if (waitingCount >= 2 * packetSize) marchWaiting();
     }
   }
   for (std::size_t base = done; base < count; base += kSurfaces) {
@@ -457,7 +458,7 @@ void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment
       if (packets &&
           marchOnly(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, first, waiting[waitingCount])) {
         waitingIndex[waitingCount++] = i;
-        if (waitingCount >= packetSize) marchWaiting();
+        if (waitingCount >= 2 * packetSize) marchWaiting();
         continue;
       }
       out[i] = integrate(r.origin, r.dir, invDir, r.t0, r.t1, r.sampler, &first);

@@ -225,14 +225,13 @@ AVX2_INLINE __m256i cellAhead(__m256 c, __m256 ahead, int first, int last, __m25
 
 // Asks for the voxels the lanes will read kPrefetchAhead samples on, as the AVX-512 kernel does
 // (VolumeMarchAvx512.cpp): a hint only, no value changes.
-AVX2_INLINE void prefetchAhead(const Packet8& p, const Field8& f, __m256 fx, __m256 fy, __m256 fz,
-                               unsigned lanes) {
+AVX2_INLINE void prefetchCells(const Field8& f, __m256 fx, __m256 fy, __m256 fz, __m256 aheadX,
+                               __m256 aheadY, __m256 aheadZ, unsigned lanes) {
   const __m256i offset = _mm256_add_epi32(
-      cellAhead(fx, p.aheadX, f.first.x, f.lastCell.x, f.firstX),
+      cellAhead(fx, aheadX, f.first.x, f.lastCell.x, f.firstX),
       _mm256_add_epi32(
-          _mm256_mullo_epi32(cellAhead(fy, p.aheadY, f.first.y, f.lastCell.y, f.firstY),
-                             f.strideYs),
-          _mm256_mullo_epi32(cellAhead(fz, p.aheadZ, f.first.z, f.lastCell.z, f.firstZ),
+          _mm256_mullo_epi32(cellAhead(fy, aheadY, f.first.y, f.lastCell.y, f.firstY), f.strideYs),
+          _mm256_mullo_epi32(cellAhead(fz, aheadZ, f.first.z, f.lastCell.z, f.firstZ),
                              f.strideZs)));
   alignas(32) int at[8];
   _mm256_store_si256(reinterpret_cast<__m256i*>(at), offset);
@@ -240,6 +239,35 @@ AVX2_INLINE void prefetchAhead(const Packet8& p, const Field8& f, __m256 fx, __m
     const float* v = f.voxels + at[std::countr_zero(lanes)];
     for (const float* row : {v, v + f.strideY, v + f.strideZ, v + f.strideZ + f.strideY})
       _mm_prefetch(reinterpret_cast<const char*>(row), _MM_HINT_T0);
+  }
+}
+
+AVX2_INLINE void prefetchAhead(const Packet8& p, const Field8& f, __m256 fx, __m256 fy, __m256 fz,
+                               unsigned lanes) {
+  prefetchCells(f, fx, fy, fz, p.aheadX, p.aheadY, p.aheadZ, lanes);
+}
+
+// The first kPrefetchAhead samples' voxels of the packet that marches next, as the AVX-512
+// kernel asks for them (prefetchStarts there).
+AVX2_INLINE void prefetchStarts(const Field8& f, const MarchRay* rays, int count) {
+  alignas(32) float x[8], y[8], z[8], ex[8], ey[8], ez[8];
+  for (int l = 0; l < 8; ++l) {
+    const MarchRay& r = rays[l < count ? l : 0];
+    const float t = std::max(r.t0, (r.kStart + r.jitter) * r.step);
+    x[l] = r.origin.x + r.dir.x * t, y[l] = r.origin.y + r.dir.y * t;
+    z[l] = r.origin.z + r.dir.z * t;
+    ex[l] = r.step * r.dir.x, ey[l] = r.step * r.dir.y, ez[l] = r.step * r.dir.z;
+  }
+  const __m256 fx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(x), f.gx), f.sx);
+  const __m256 fy = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(y), f.gy), f.sy);
+  const __m256 fz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(z), f.gz), f.sz);
+  const __m256 sx = _mm256_mul_ps(_mm256_load_ps(ex), f.sx);
+  const __m256 sy = _mm256_mul_ps(_mm256_load_ps(ey), f.sy);
+  const __m256 sz = _mm256_mul_ps(_mm256_load_ps(ez), f.sz);
+  for (int j = 0; j < static_cast<int>(march::kPrefetchAhead); ++j) {
+    const __m256 a = _mm256_set1_ps(static_cast<float>(j));
+    prefetchCells(f, fx, fy, fz, _mm256_mul_ps(a, sx), _mm256_mul_ps(a, sy), _mm256_mul_ps(a, sz),
+                  0xffu);
   }
 }
 
@@ -384,11 +412,13 @@ AVX2_INLINE void finish(const Packet8& p, MarchColor* colors, std::uint32_t* sam
 // no faster.)
 __attribute__((target("avx2"))) void marchPacketAvx2(const SciVisScene::VolumeLayer& v,
                                                      const MarchRay* rays, int count,
-                                                     MarchColor* colors, std::uint32_t* samples) {
+                                                     MarchColor* colors, std::uint32_t* samples,
+                                                     const MarchRay* next, int nextCount) {
   Field8 f;
   setUp(f, v);
   Packet8 p;
   start(p, f, rays, count, colors);
+  if (nextCount > 0) prefetchStarts(f, next, nextCount);
   while (p.alive) advance(p, f);
   finish(p, colors, samples);
 }
@@ -444,13 +474,16 @@ bool marchesPackets(const SciVisScene::VolumeLayer& v, MarchKernel kernel) {
 }
 
 void marchPacket(const SciVisScene::VolumeLayer& v, MarchKernel kernel, const MarchRay* rays,
-                 int count, MarchColor* colors, std::uint32_t* samples) {
+                 int count, MarchColor* colors, std::uint32_t* samples, const MarchRay* next,
+                 int nextCount) {
   count = std::min(count, marchPacketSize(kernel));
   if (count <= 0) return;
   if (kernel == MarchKernel::Avx512)
-    return march::marchPacketAvx512(v, rays, count, colors, samples);
+    return march::marchPacketAvx512(v, rays, count, colors, samples, next,
+                                    std::min(nextCount, marchPacketSize(kernel)));
   std::fill(colors, colors + count, MarchColor{});
-  marchPacketAvx2(v, rays, count, colors, samples);
+  marchPacketAvx2(v, rays, count, colors, samples, next,
+                  std::min(nextCount, marchPacketSize(kernel)));
 }
 
 const char* marchKernelName(MarchKernel kernel) {

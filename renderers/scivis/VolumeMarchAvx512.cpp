@@ -265,14 +265,13 @@ AVX512_INLINE __m512i cellAhead(__m512 c, __m512 ahead, int first, int last, __m
 // not (its cell is a held one): a loop over the marching lanes only mispredicted its exit nearly
 // every step.
 template <class T>
-AVX512_INLINE void prefetchAhead(const Packet16& p, const Field16& f, __m512 fx, __m512 fy,
-                                 __m512 fz) {
+AVX512_INLINE void prefetchCells(const Field16& f, __m512 fx, __m512 fy, __m512 fz, __m512 aheadX,
+                                 __m512 aheadY, __m512 aheadZ) {
   const __m512i offset = _mm512_add_epi32(
-      cellAhead(fx, p.aheadX, f.first.x, f.lastCell.x, f.firstX),
+      cellAhead(fx, aheadX, f.first.x, f.lastCell.x, f.firstX),
       _mm512_add_epi32(
-          _mm512_mullo_epi32(cellAhead(fy, p.aheadY, f.first.y, f.lastCell.y, f.firstY),
-                             f.strideYs),
-          _mm512_mullo_epi32(cellAhead(fz, p.aheadZ, f.first.z, f.lastCell.z, f.firstZ),
+          _mm512_mullo_epi32(cellAhead(fy, aheadY, f.first.y, f.lastCell.y, f.firstY), f.strideYs),
+          _mm512_mullo_epi32(cellAhead(fz, aheadZ, f.first.z, f.lastCell.z, f.firstZ),
                              f.strideZs)));
   alignas(64) int at[16];
   _mm512_store_si512(at, offset);
@@ -282,6 +281,43 @@ AVX512_INLINE void prefetchAhead(const Packet16& p, const Field16& f, __m512 fx,
     const T* v = voxels + at[l];
     for (const T* row : {v, v + f.strideY, v + f.strideZ, v + f.strideZ + f.strideY})
       _mm_prefetch(reinterpret_cast<const char*>(row), _MM_HINT_T0);
+  }
+}
+
+template <class T>
+AVX512_INLINE void prefetchAhead(const Packet16& p, const Field16& f, __m512 fx, __m512 fy,
+                                 __m512 fz) {
+  prefetchCells<T>(f, fx, fy, fz, p.aheadX, p.aheadY, p.aheadZ);
+}
+
+// Asks for the voxels of the first kPrefetchAhead samples of rays 0 .. count - 1 (the packet
+// that marches next), from about where each ray's march starts (its first sample lies within a
+// step of it): no step asks for them, and in a dense volume a ray takes only about 16 samples.
+// Asked while the packet before marches, they are in the cache when it starts (scivis bench,
+// 512^3 at 512^2: 5.40 -> 4.97 ns a sample; asked when their own packet starts: 5.12; both: no
+// better than this alone).
+template <class T>
+AVX512_INLINE void prefetchStarts(const Field16& f, const MarchRay* rays, int count) {
+  __m512 ray[16];
+  for (int l = 0; l < 16; ++l)
+    ray[l] = _mm512_loadu_ps(reinterpret_cast<const float*>(rays + (l < count ? l : 0)));
+  lanes::transpose16(ray);
+  const __m512 steps = ray[kStep];
+  const __m512 ts =
+      _mm512_max_ps(ray[kT0], _mm512_mul_ps(_mm512_add_ps(ray[kKStart], ray[kJitter]), steps));
+  const __m512 fx = _mm512_mul_ps(
+      _mm512_sub_ps(_mm512_add_ps(ray[kOx], _mm512_mul_ps(ray[kDx], ts)), f.gx), f.sx);
+  const __m512 fy = _mm512_mul_ps(
+      _mm512_sub_ps(_mm512_add_ps(ray[kOy], _mm512_mul_ps(ray[kDy], ts)), f.gy), f.sy);
+  const __m512 fz = _mm512_mul_ps(
+      _mm512_sub_ps(_mm512_add_ps(ray[kOz], _mm512_mul_ps(ray[kDz], ts)), f.gz), f.sz);
+  const __m512 ex = _mm512_mul_ps(_mm512_mul_ps(steps, ray[kDx]), f.sx);
+  const __m512 ey = _mm512_mul_ps(_mm512_mul_ps(steps, ray[kDy]), f.sy);
+  const __m512 ez = _mm512_mul_ps(_mm512_mul_ps(steps, ray[kDz]), f.sz);
+  for (int j = 0; j < static_cast<int>(kPrefetchAhead); ++j) {
+    const __m512 a = _mm512_set1_ps(static_cast<float>(j));
+    prefetchCells<T>(f, fx, fy, fz, _mm512_mul_ps(a, ex), _mm512_mul_ps(a, ey),
+                     _mm512_mul_ps(a, ez));
   }
 }
 
@@ -427,11 +463,13 @@ AVX512_INLINE void finish(const Packet16& p, MarchColor* colors, std::uint32_t* 
 
 template <class T>
 AVX512_TARGET void marchPacket16(const SciVisScene::VolumeLayer& v, const MarchRay* rays, int count,
-                                 MarchColor* colors, std::uint32_t* samples) {
+                                 MarchColor* colors, std::uint32_t* samples, const MarchRay* next,
+                                 int nextCount) {
   Field16 f;
   setUp(f, v);
   Packet16 p;
   start(p, f, rays, count);
+  if (f.prefetch && nextCount > 0) prefetchStarts<T>(f, next, nextCount);
   while (p.alive) advance<T>(p, f);
   finish(p, colors, samples);
 }
@@ -439,15 +477,16 @@ AVX512_TARGET void marchPacket16(const SciVisScene::VolumeLayer& v, const MarchR
 }  // namespace
 
 void marchPacketAvx512(const SciVisScene::VolumeLayer& v, const MarchRay* rays, int count,
-                       MarchColor* colors, std::uint32_t* samples) {
+                       MarchColor* colors, std::uint32_t* samples, const MarchRay* next,
+                       int nextCount) {
   switch (v.field->volume().type) {
     default:
     case VoxelType::Float32:
-      return marchPacket16<float>(v, rays, count, colors, samples);
+      return marchPacket16<float>(v, rays, count, colors, samples, next, nextCount);
     case VoxelType::UInt8:
-      return marchPacket16<std::uint8_t>(v, rays, count, colors, samples);
+      return marchPacket16<std::uint8_t>(v, rays, count, colors, samples, next, nextCount);
     case VoxelType::UInt16:
-      return marchPacket16<std::uint16_t>(v, rays, count, colors, samples);
+      return marchPacket16<std::uint16_t>(v, rays, count, colors, samples, next, nextCount);
   }
 }
 

@@ -95,6 +95,7 @@ AVX2_INLINE void tableEntries8(const float* table, const int at[8], __m256 c[2][
 // The AVX-512 kernel (VolumeMarchAvx512.cpp): marchPacket() for up to 16 rays, where the CPU
 // runs AVX-512 F, DQ, BW and VL.
 void marchPacketAvx512(const SciVisScene::VolumeLayer& v, const MarchRay* rays, int count,
-                       MarchColor* colors, std::uint32_t* samples);
+                       MarchColor* colors, std::uint32_t* samples, const MarchRay* next,
+                       int nextCount);
 
 }  // namespace renderers::march
