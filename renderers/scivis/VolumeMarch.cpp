@@ -131,6 +131,7 @@ struct Field8 {
   const std::uint8_t* empty;
   const float* table;
   int strideY, strideZ;
+  bool prefetch;
   Index3 first, lastCell;
   __m256 gx, gy, gz, sx, sy, sz, lox, loy, loz, hix, hiy, hiz;
   __m256i strideYs, strideZs, firstX, firstY, firstZ;
@@ -145,6 +146,7 @@ AVX2_INLINE void setUp(Field8& f, const SciVisScene::VolumeLayer& v) {
   f.empty = v.emptyMacrocells.data();
   f.table = v.table.data();
   f.strideY = static_cast<int>(g.strideY), f.strideZ = static_cast<int>(g.strideZ);
+  f.prefetch = v.field->volume().bytes() > march::kPrefetchAboveBytes;
   f.first = g.first, f.lastCell = g.lastCell;
   f.gx = _mm256_set1_ps(g.origin.x), f.gy = _mm256_set1_ps(g.origin.y);
   f.gz = _mm256_set1_ps(g.origin.z);
@@ -309,7 +311,7 @@ AVX2_INLINE void advance(Packet8& p, const Field8& f) {
                          _mm256_mullo_epi32(_mm256_sub_epi32(iz, f.firstZ), f.strideZs)));
     alignas(32) int offsets[8];
     _mm256_store_si256(reinterpret_cast<__m256i*>(offsets), offset);
-    prefetchAhead(p, f, fx, fy, fz, inside);
+    if (f.prefetch) prefetchAhead(p, f, fx, fy, fz, inside);
     __m256 c[8];
     corners8(f.voxels, offsets, f.strideY, f.strideZ, c);
     // VolumeField::interpolate(): along x, then y, then z.
@@ -418,7 +420,7 @@ __attribute__((target("avx2"))) void marchPacketAvx2(const SciVisScene::VolumeLa
   setUp(f, v);
   Packet8 p;
   start(p, f, rays, count, colors);
-  if (nextCount > 0) prefetchStarts(f, next, nextCount);
+  if (f.prefetch && nextCount > 0) prefetchStarts(f, next, nextCount);
   while (p.alive) advance(p, f);
   finish(p, colors, samples);
 }
