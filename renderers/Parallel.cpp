@@ -3,6 +3,7 @@
 #include <pmmintrin.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 #include <xmmintrin.h>
 
@@ -53,6 +54,10 @@ void parallelFor(std::size_t count, const std::function<void(std::size_t)>& body
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t i = r.begin(); i != r.end(); ++i) body(i);
                     });
+}
+
+void parallelSort(std::vector<std::uint64_t>& values) {
+  tbb::parallel_sort(values.begin(), values.end());
 }
 
 }  // namespace renderers

@@ -2,8 +2,10 @@
 // All TBB use of the renderers, behind these names, and the floating-point mode their threads
 // render in.
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <memory>
+#include <vector>
 
 namespace renderers {
 
@@ -63,5 +65,9 @@ class FloatModeGuard {
 // per task (tiles are coarse enough), and returns when all are done. An exception in a body is
 // rethrown here.
 void parallelFor(std::size_t count, const std::function<void(std::size_t)>& body);
+
+// Sorts `values` ascending on the TBB workers (of the current arena). Not stable: equal values
+// may come out in any order, which for integers changes nothing.
+void parallelSort(std::vector<std::uint64_t>& values);
 
 }  // namespace renderers

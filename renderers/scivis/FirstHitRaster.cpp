@@ -416,7 +416,7 @@ void FirstHitRaster::makeClusters(const std::vector<Mesh>& meshes, std::size_t t
       keys[g] = (std::uint64_t{m & 3} << 62) | code << 32 | g;
     }
   });
-  std::sort(keys.begin(), keys.end());
+  parallelSort(keys);  // the keys are distinct (each holds its triangle): one order
   clustered_.resize(total);
   for (std::size_t i = 0; i < total; ++i) clustered_[i] = static_cast<std::uint32_t>(keys[i]);
   // Runs of up to kClusterSize triangles of one mesh.
@@ -429,32 +429,52 @@ void FirstHitRaster::makeClusters(const std::vector<Mesh>& meshes, std::size_t t
     clusters_.push_back(cluster);
   }
   // Each cluster's own copy of its triangles' vertices (a vertex shared by clusters is copied
-  // to each: a query then reads one cluster's points together) and its triangles' corners as
-  // indices into them.
-  clusterPoints_.clear();
+  // to each: a query then reads one cluster's points together), in the order its triangles
+  // first name them, and its triangles' corners as indices into them. Clusters are independent,
+  // so in parallel: their distinct vertices found (and corners set) first, then, placed by the
+  // counts' running sum, copied. (Serially, with a search that stopped at its match, this took
+  // 60 of the 117 ms of clustering the wavelet's 1.6 M contour triangles.)
+  const auto eachCluster = [&](const auto& body) {
+    parallelFor((clusters_.size() + kClusterChunk - 1) / kClusterChunk, [&](std::size_t chunk) {
+      const std::size_t end = std::min(clusters_.size(), (chunk + 1) * kClusterChunk);
+      for (std::size_t i = chunk * kClusterChunk; i < end; ++i) body(clusters_[i]);
+    });
+  };
+  // A cluster's distinct vertex ids from 3 x its first triangle on (at most 3 a triangle).
+  std::vector<std::uint32_t> distinct(3 * total);
   clusterCorners_.resize(3 * total);
-  for (Cluster& cluster : clusters_) {
+  eachCluster([&](Cluster& cluster) {
     const Mesh& mesh = meshes[cluster.mesh];
-    std::uint32_t local[3 * kClusterSize];
+    // The triangles' corners first: loads that do not wait for each other (a cluster's
+    // triangles lie far apart in the mesh).
+    std::uint32_t corners[3 * kClusterSize];
+    for (std::uint32_t t = 0; t < cluster.count; ++t)
+      std::copy_n(
+          mesh.triangles + 3 * (clustered_[cluster.first + t] - firstTriangle_[cluster.mesh]), 3,
+          corners + 3 * t);
+    std::uint32_t* held = distinct.data() + 3 * std::size_t{cluster.first};
     std::uint32_t count = 0;
-    cluster.points = static_cast<std::uint32_t>(clusterPoints_.size() / 3);
-    for (std::uint32_t k = cluster.first; k < cluster.first + cluster.count; ++k) {
-      const std::uint32_t* tri =
-          mesh.triangles + 3 * (clustered_[k] - firstTriangle_[cluster.mesh]);
-      for (int j = 0; j < 3; ++j) {
-        std::uint32_t at = 0;
-        while (at < count && local[at] != tri[j]) ++at;
-        if (at == count) {
-          local[count++] = tri[j];
-          clusterPoints_.insert(clusterPoints_.end(), mesh.vertices + 3 * std::size_t{tri[j]},
-                                mesh.vertices + 3 * std::size_t{tri[j]} + 3);
-        }
-        clusterCorners_[3 * std::size_t{k} + static_cast<std::size_t>(j)] =
-            static_cast<std::uint8_t>(at);
-      }
+    for (std::uint32_t corner = 0; corner < 3 * cluster.count; ++corner) {
+      // A scan of all held rather than a search that stops at the match: the stop was a
+      // mispredicted branch nearly every corner. The held ids are distinct: one match at most.
+      std::uint32_t at = count;
+      for (std::uint32_t h = 0; h < count; ++h) at = held[h] == corners[corner] ? h : at;
+      if (at == count) held[count++] = corners[corner];
+      clusterCorners_[3 * std::size_t{cluster.first} + corner] = static_cast<std::uint8_t>(at);
     }
     cluster.pointCount = count;
-  }
+  });
+  std::size_t points = 0;
+  for (Cluster& cluster : clusters_)
+    cluster.points = static_cast<std::uint32_t>(points), points += cluster.pointCount;
+  clusterPoints_.resize(3 * points);
+  eachCluster([&](const Cluster& cluster) {
+    const float* vertices = meshes[cluster.mesh].vertices;
+    const std::uint32_t* held = distinct.data() + 3 * std::size_t{cluster.first};
+    float* to = clusterPoints_.data() + 3 * std::size_t{cluster.points};
+    for (std::uint32_t p = 0; p < cluster.pointCount; ++p)
+      std::copy_n(vertices + 3 * std::size_t{held[p]}, 3, to + 3 * std::size_t{p});
+  });
   clusteredMeshes_ = meshes;
 }
 

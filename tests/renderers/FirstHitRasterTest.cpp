@@ -319,6 +319,33 @@ TEST(FirstHitRaster, TheTrianglesOrderDoesNotChangeAnAnswer) {
   }
 }
 
+// A raster whose meshes change (an isovalue steered: new triangles) clusters them afresh over
+// the buffers of the last ones and answers bit for bit as a raster that never saw the old ones,
+// from many meshes too (clusters are made in parallel, each from its own triangles).
+TEST(FirstHitRaster, NewMeshesAnswerAsAFreshRaster) {
+  RasterCase before(64, {0.45f, 0.6f, 0.75f, 0.9f, 1.05f}, ripple, 160, 120);
+  const RasterCase after(48, {0.7f}, distanceFromCentre, 160, 120);
+  ASSERT_TRUE(before.ready);
+  ASSERT_TRUE(after.ready);
+  const CanvasRays rays = canvasRays(after.camera, after.w, after.h);
+  const auto beforeHits = rasterHits(before.raster, rays);
+  ASSERT_TRUE(before.raster.prepare(after.camera, after.w, after.h, after.meshes));
+  const auto fresh = rasterHits(after.raster, rays), reused = rasterHits(before.raster, rays);
+  int found = 0, changed = 0;
+  for (std::size_t i = 0; i < fresh.size(); ++i) {
+    ASSERT_EQ(fresh[i].mesh, reused[i].mesh) << "pixel " << i;
+    changed += beforeHits[i].mesh != fresh[i].mesh || beforeHits[i].triangle != fresh[i].triangle;
+    if (fresh[i].mesh == FirstHitRaster::kNone) continue;
+    ++found;
+    EXPECT_EQ(fresh[i].triangle, reused[i].triangle) << "pixel " << i;
+    EXPECT_EQ(std::memcmp(&fresh[i].t, &reused[i].t, sizeof(float)), 0) << "pixel " << i;
+    EXPECT_EQ(std::memcmp(&fresh[i].u, &reused[i].u, sizeof(float)), 0) << "pixel " << i;
+    EXPECT_EQ(std::memcmp(&fresh[i].v, &reused[i].v, sizeof(float)), 0) << "pixel " << i;
+  }
+  EXPECT_GT(found, after.w * after.h / 10);
+  EXPECT_GT(changed, after.w * after.h / 10);  // the old meshes did answer otherwise
+}
+
 // Nothing to bin (a mesh without triangles: an isovalue outside the field's range) is a raster
 // that finds nothing, with either kernel.
 TEST(FirstHitRaster, NoTrianglesFindNothing) {
