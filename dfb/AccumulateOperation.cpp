@@ -109,10 +109,10 @@ class AccumulateOperation final : public TileOperation {
 
   // The sums startEpoch() left out, from its finished tile: sum = 0.0 + double(1 * c) is
   // double(finished) exactly, and the luminance of the finished colour gives the same double
-  // sums as the input's (a zero's sign changes neither a non-zero sum nor 0.0 + lum).
+  // sums as the input's (a zero's sign changes neither a non-zero sum nor 0.0 + lum). combine()
+  // allocates the sums (holdSums) before it calls this.
   void materializeSums() {
     const size_t n = static_cast<size_t>(region_.pixelCount());
-    holdSums();
     for (size_t p = 0; p < n; ++p) {
       const float* c = &finished_.color[4 * p];
       for (int k = 0; k < 4; ++k) sum_[4 * p + static_cast<size_t>(k)] = static_cast<double>(c[k]);
@@ -134,8 +134,8 @@ class AccumulateOperation final : public TileOperation {
   // `inputs` in ascending sequence order.
   void combine(std::span<const Tile* const> inputs) {
     const size_t n = static_cast<size_t>(region_.pixelCount());
-    if (sumsPending_) materializeSums();
     holdSums();
+    if (sumsPending_) materializeSums();
     std::uint64_t frameWeight = 0;
     for (const Tile* t : inputs) frameWeight += t->weight;
     const float invFrameWeight = 1.0f / static_cast<float>(frameWeight);

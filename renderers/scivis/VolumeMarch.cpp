@@ -225,7 +225,7 @@ AVX2_INLINE __m256i cellAhead(__m256 c, __m256 ahead, int first, int last, __m25
   return _mm256_sub_epi32(_mm256_max_epi32(i, _mm256_set1_epi32(first)), firsts);
 }
 
-// Asks for the voxels the lanes will read kPrefetchAhead samples on, as the AVX-512 kernel does
+// Asks for the voxels of cell (fx, fy, fz) + ahead of `lanes`, as the AVX-512 kernel does
 // (VolumeMarchAvx512.cpp): a hint only, no value changes.
 AVX2_INLINE void prefetchCells(const Field8& f, __m256 fx, __m256 fy, __m256 fz, __m256 aheadX,
                                __m256 aheadY, __m256 aheadZ, unsigned lanes) {
@@ -242,11 +242,6 @@ AVX2_INLINE void prefetchCells(const Field8& f, __m256 fx, __m256 fy, __m256 fz,
     for (const float* row : {v, v + f.strideY, v + f.strideZ, v + f.strideZ + f.strideY})
       _mm_prefetch(reinterpret_cast<const char*>(row), _MM_HINT_T0);
   }
-}
-
-AVX2_INLINE void prefetchAhead(const Packet8& p, const Field8& f, __m256 fx, __m256 fy, __m256 fz,
-                               unsigned lanes) {
-  prefetchCells(f, fx, fy, fz, p.aheadX, p.aheadY, p.aheadZ, lanes);
 }
 
 // The first kPrefetchAhead samples' voxels of the packet that marches next, as the AVX-512
@@ -311,7 +306,7 @@ AVX2_INLINE void advance(Packet8& p, const Field8& f) {
                          _mm256_mullo_epi32(_mm256_sub_epi32(iz, f.firstZ), f.strideZs)));
     alignas(32) int offsets[8];
     _mm256_store_si256(reinterpret_cast<__m256i*>(offsets), offset);
-    if (f.prefetch) prefetchAhead(p, f, fx, fy, fz, inside);
+    if (f.prefetch) prefetchCells(f, fx, fy, fz, p.aheadX, p.aheadY, p.aheadZ, inside);
     __m256 c[8];
     corners8(f.voxels, offsets, f.strideY, f.strideZ, c);
     // VolumeField::interpolate(): along x, then y, then z.
@@ -479,13 +474,12 @@ void marchPacket(const SciVisScene::VolumeLayer& v, MarchKernel kernel, const Ma
                  int count, MarchColor* colors, std::uint32_t* samples, const MarchRay* next,
                  int nextCount) {
   count = std::min(count, marchPacketSize(kernel));
+  nextCount = std::min(nextCount, marchPacketSize(kernel));
   if (count <= 0) return;
   if (kernel == MarchKernel::Avx512)
-    return march::marchPacketAvx512(v, rays, count, colors, samples, next,
-                                    std::min(nextCount, marchPacketSize(kernel)));
+    return march::marchPacketAvx512(v, rays, count, colors, samples, next, nextCount);
   std::fill(colors, colors + count, MarchColor{});
-  marchPacketAvx2(v, rays, count, colors, samples, next,
-                  std::min(nextCount, marchPacketSize(kernel)));
+  marchPacketAvx2(v, rays, count, colors, samples, next, nextCount);
 }
 
 const char* marchKernelName(MarchKernel kernel) {

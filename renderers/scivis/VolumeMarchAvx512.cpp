@@ -126,7 +126,7 @@ struct Field16 {
   const std::uint8_t* empty;
   const float* table;
   int strideY, strideZ;
-  bool prefetch;  // whether the voxels are too many for the caches (prefetchAhead)
+  bool prefetch;  // whether the voxels are too many for the caches (prefetchCells)
   Index3 first, lastCell;
   __m512 gx, gy, gz, sx, sy, sz, lox, loy, loz, hix, hiy, hiz;
   __m512i strideYs, strideZs, firstX, firstY, firstZ;
@@ -252,13 +252,13 @@ AVX512_INLINE __m512i cellAhead(__m512 c, __m512 ahead, int first, int last, __m
   return _mm512_sub_epi32(_mm512_max_epi32(i, _mm512_set1_epi32(first)), firsts);
 }
 
-// Asks for the voxels the lanes will read kPrefetchAhead samples on (cell fx + ahead, clamped to
-// the held cells): the march reads cells far apart in memory (a ray crosses a z slice every few
-// samples), and a load that misses the cache stalls the packet's whole step. Only a hint: no
-// value changes. Measured 7% faster on the 256³ bench, 20% on 512³ at 512² (fewer rays per
-// voxel, fewer shared cache lines; at 1024² it measured about even). Every lane asks, marching or
-// not (its cell is a held one): a loop over the marching lanes only mispredicted its exit nearly
-// every step.
+// Asks for the voxels of cell (fx, fy, fz) + ahead of every lane, clamped to the held cells (the
+// march asks for those kPrefetchAhead samples on, Packet16::ahead*): the march reads cells far
+// apart in memory (a ray crosses a z slice every few samples), and a load that misses the cache
+// stalls the packet's whole step. Only a hint: no value changes. Measured 7% faster on the 256³
+// bench, 20% on 512³ at 512² (fewer rays per voxel, fewer shared cache lines; at 1024² it measured
+// about even). Every lane asks, marching or not (its cell is a held one): a loop over the marching
+// lanes only mispredicted its exit nearly every step.
 template <class T>
 AVX512_INLINE void prefetchCells(const Field16& f, __m512 fx, __m512 fy, __m512 fz, __m512 aheadX,
                                  __m512 aheadY, __m512 aheadZ) {
@@ -277,12 +277,6 @@ AVX512_INLINE void prefetchCells(const Field16& f, __m512 fx, __m512 fy, __m512 
     for (const T* row : {v, v + f.strideY, v + f.strideZ, v + f.strideZ + f.strideY})
       _mm_prefetch(reinterpret_cast<const char*>(row), _MM_HINT_T0);
   }
-}
-
-template <class T>
-AVX512_INLINE void prefetchAhead(const Packet16& p, const Field16& f, __m512 fx, __m512 fy,
-                                 __m512 fz) {
-  prefetchCells<T>(f, fx, fy, fz, p.aheadX, p.aheadY, p.aheadZ);
 }
 
 // Asks for the voxels of the first kPrefetchAhead samples of rays 0 .. count - 1 (the packet
@@ -358,7 +352,7 @@ AVX512_INLINE void advance(Packet16& p, const Field16& f) {
     // The 8 corners in VolumeField::interpolate()'s order, 8 lanes at a time.
     alignas(64) int offsets[16];
     _mm512_store_si512(offsets, offset);
-    if (f.prefetch) prefetchAhead<T>(p, f, fx, fy, fz);
+    if (f.prefetch) prefetchCells<T>(f, fx, fy, fz, p.aheadX, p.aheadY, p.aheadZ);
     __m512 c[8];
     corners16<T>(f.voxels, offsets, f.strideY, f.strideZ, c);
     // VolumeField::interpolate(): along x, then y, then z.
