@@ -16,13 +16,13 @@
 #include "api/SceneStyle.h"
 #include "api/SessionTesting.h"
 #include "api/WallStop.h"
-#include "dfb/AtomicFile.h"
+#include "base/AtomicFile.h"
+#include "base/BoundedWait.h"
+#include "base/Error.h"
+#include "base/Parallel.h"
 #include "dfb/DistributedFrameBuffer.h"
-#include "dfb/Error.h"
-#include "messaging/BoundedWait.h"
 #include "messaging/Messenger.h"
 #include "renderers/FrameDriver.h"
-#include "renderers/Parallel.h"
 #include "renderers/scivis/BrickFrameDriver.h"
 #include "wall/DisplayPresenters.h"
 #include "wall/DisplayRoutingOp.h"
@@ -41,7 +41,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 void bounded(MPI_Request& request, std::chrono::milliseconds timeout, const std::string& what) {
-  messaging::waitWithDeadline(
+  base::waitWithDeadline(
       request, Clock::now() + timeout,
       what + ": another rank did not join within " + std::to_string(timeout.count()) + " ms");
 }
@@ -130,7 +130,7 @@ struct Session::Impl {
   std::unique_ptr<renderers::BrickFrameDriver> driver;
   // Where all of this rank's rendering runs: at most options.threads threads of its own, no cap
   // on the program's TBB parallelism (renderers/Parallel.h).
-  std::unique_ptr<renderers::TaskArena> arena;
+  std::unique_ptr<base::TaskArena> arena;
   Style style;
   std::uint64_t hashOfStyle = 0;  // styleHash(style)
   bool styleSet = false, dirty = false, replacing = false;
@@ -155,7 +155,7 @@ Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make
   if (level < MPI_THREAD_MULTIPLE)
     throw std::runtime_error(
         "dfbwall: MPI must be initialised with MPI_Init_thread(..., MPI_THREAD_MULTIPLE, ...)");
-  dfb::checkMpi(MPI_Comm_dup(comm, &m.own), "MPI_Comm_dup");
+  base::checkMpi(MPI_Comm_dup(comm, &m.own), "MPI_Comm_dup");
   MPI_Comm_rank(m.own, &m.rank);
   MPI_Comm_size(m.own, &m.size);
   // Setup problems (a bad layout, a rank count it does not fit, a capture folder a wall rank
@@ -169,8 +169,8 @@ Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make
   }
   int failing = problem.empty() ? m.size : m.rank, first = 0;
   MPI_Request request;
-  dfb::checkMpi(MPI_Iallreduce(&failing, &first, 1, MPI_INT, MPI_MIN, m.own, &request),
-                "MPI_Iallreduce");
+  base::checkMpi(MPI_Iallreduce(&failing, &first, 1, MPI_INT, MPI_MIN, m.own, &request),
+                 "MPI_Iallreduce");
   bounded(request, m.timeout, "dfbwall session setup");
   if (first < m.size) {
     MPI_Comm_free(&m.own);
@@ -184,7 +184,7 @@ Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make
     m.width = m.layout->canvasWidth;
     m.height = m.layout->canvasHeight;
   }
-  dfb::checkMpi(MPI_Comm_split(m.own, m.isWall() ? 1 : 0, m.rank, &m.role), "MPI_Comm_split");
+  base::checkMpi(MPI_Comm_split(m.own, m.isWall() ? 1 : 0, m.rank, &m.role), "MPI_Comm_split");
   messaging::MessengerOptions messaging;
   messaging.quiesceTimeout = m.timeout;
   // The session's thread budget covers the tile inputs the messenger combines too (the dfbwall
@@ -222,7 +222,7 @@ void Session::Impl::startRendering() {
   // The driver's operation (composite, then accumulate): the same for every scene version.
   renderers::configureBrickDfb(dfbOptions, activeTiles);
   fb = std::make_unique<dfb::DistributedFrameBuffer>(*messenger, role, dfbOptions);
-  arena = std::make_unique<renderers::TaskArena>(options.threads);
+  arena = std::make_unique<base::TaskArena>(options.threads);
   if (route && directory) {
     serviceSink = std::make_shared<wall::service::ServicePieceSink>(
         *directory, rank, wall::service::parseCodec(options.codec),
@@ -243,7 +243,7 @@ void Session::Impl::startRendering() {
   }
   // Pairs with runWall's: every object of every rank is registered before anyone sends.
   MPI_Request request;
-  dfb::checkMpi(MPI_Ibarrier(own, &request), "MPI_Ibarrier");
+  base::checkMpi(MPI_Ibarrier(own, &request), "MPI_Ibarrier");
   bounded(request, timeout, "dfbwall session start-up");
 }
 
@@ -277,9 +277,9 @@ void Session::Impl::setUp() {
   if (isWall() && !options.captureDir.empty())
     for (int d : layout->displaysOfProcess(roles.processOfRank(rank)))
       if (std::string problem =
-              dfb::checkWritableFolder((std::filesystem::path(options.captureDir) /
-                                        layout->displays[static_cast<std::size_t>(d)].name)
-                                           .string());
+              base::checkWritableFolder((std::filesystem::path(options.captureDir) /
+                                         layout->displays[static_cast<std::size_t>(d)].name)
+                                            .string());
           !problem.empty())
         throw std::runtime_error("dfbwall: capture folder " + problem);
 }
@@ -304,7 +304,7 @@ void Session::runWall() try {
   Impl& m = *impl_;
   if (!m.isWall()) throw std::logic_error("dfbwall: runWall() on a render rank");
   const int process = m.roles.processOfRank(m.rank);
-  renderers::FloatModeGuard callersMode;  // a GL implementation may change it (llvmpipe)
+  base::FloatModeGuard callersMode;  // a GL implementation may change it (llvmpipe)
   const auto presenters = wall::makeDisplayPresenters(*m.layout, process, m.options.offscreen);
   wall::WallNodeOptions options;
   options.tileSize = m.options.tileSize;
@@ -322,7 +322,7 @@ void Session::runWall() try {
     const std::unique_ptr<WallStop, void (*)(WallStop*)> forget(
         m.wallStop.get(), [](WallStop* stop) { stop->onLastFrame({}); });
     MPI_Request request;
-    dfb::checkMpi(MPI_Ibarrier(m.own, &request), "MPI_Ibarrier");
+    base::checkMpi(MPI_Ibarrier(m.own, &request), "MPI_Ibarrier");
     bounded(request, m.timeout, "dfbwall session start-up");
     for (std::uint32_t frameId = 1;; ++frameId) {
       if (node.presentFrame(frameId).stopped) break;
@@ -396,7 +396,7 @@ void Session::renderFrame() {
   if (m.closed) throw std::logic_error("dfbwall: renderFrame() after close()");
   // Render tasks set flush-to-zero and denormals-are-zero on the threads that run them, this one
   // included: the program gets its own mode back, also when the frame throws.
-  renderers::FloatModeGuard callersMode;
+  base::FloatModeGuard callersMode;
   try {
     m.arena->execute([&m] { m.renderFrame(); });
   } catch (const std::exception& e) {
@@ -418,7 +418,7 @@ void Session::Impl::renderFrame() {
   order.styleHash = hashOfStyle;
   if (service) order.rosterVersion = service->rosterVersion();
   MPI_Request request;
-  dfb::checkMpi(MPI_Ibcast(&order, sizeof order, MPI_BYTE, 0, role, &request), "MPI_Ibcast");
+  base::checkMpi(MPI_Ibcast(&order, sizeof order, MPI_BYTE, 0, role, &request), "MPI_Ibcast");
   bounded(request, 2 * timeout, "frame " + std::to_string(next));  // rank 0 may wait for the wall
   if (serviceSink && order.rosterVersion != rosterVersion) {
     // The wall lost a process or got one back: its pieces stop, or go to its new endpoint.
@@ -435,8 +435,8 @@ void Session::Impl::renderFrame() {
   int mine[4] = {dirty || !driver ? 1 : 0, styleSet ? 0 : mark,
                  styleSet && hashOfStyle != order.styleHash ? mark : 0, failed ? mark : 0};
   int agreed[4] = {0, 0, 0, 0};
-  dfb::checkMpi(MPI_Iallreduce(mine, agreed, 4, MPI_INT, MPI_MAX, role, &request),
-                "MPI_Iallreduce");
+  base::checkMpi(MPI_Iallreduce(mine, agreed, 4, MPI_INT, MPI_MAX, role, &request),
+                 "MPI_Iallreduce");
   bounded(request, timeout, "frame " + std::to_string(next));
   if (failed) error->raise();
   if (agreed[3])

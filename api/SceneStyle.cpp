@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "dfb/Error.h"
-#include "messaging/BoundedWait.h"
+#include "base/BoundedWait.h"
+#include "base/Error.h"
 #include "renderers/scivis/TransferFunction.h"
 
 namespace dfbwall {
@@ -243,12 +243,12 @@ renderers::SceneDesc sceneDesc(const Style& style, const std::vector<renderers::
                                    [](const VolumeStyle& v) { return v.autoRange; });
   if (anyAuto && n > 0) {
     MPI_Request request;
-    dfb::checkMpi(MPI_Iallreduce(local.data(), global.data(), static_cast<int>(2 * n), MPI_FLOAT,
-                                 MPI_MAX, renderComm, &request),
-                  "MPI_Iallreduce");
-    messaging::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
-                                "value ranges of a new scene version: another render rank did not "
-                                "join in time");
+    base::checkMpi(MPI_Iallreduce(local.data(), global.data(), static_cast<int>(2 * n), MPI_FLOAT,
+                                  MPI_MAX, renderComm, &request),
+                   "MPI_Iallreduce");
+    base::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
+                           "value ranges of a new scene version: another render rank did not "
+                           "join in time");
   }
   for (std::size_t v = 0; v < n; ++v) {
     const VolumeStyle& s = style.volumes[v];

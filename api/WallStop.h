@@ -11,11 +11,12 @@
 #include <mutex>
 #include <optional>
 
+#include "base/ObjectIds.h"
 #include "messaging/Messenger.h"
 
 namespace dfbwall {
 
-constexpr messaging::ObjectId kWallStopObject = 0x5709'0002;
+constexpr messaging::ObjectId kWallStopObject = base::objectId(base::MessageObject::kWallStop);
 
 class WallStop : public messaging::MessageHandler {
  public:

@@ -15,10 +15,10 @@ CameraPath CameraPath::load(const std::string& path, const renderers::CameraDesc
   } catch (const toml::parse_error& e) {
     // Line 0: the file could not be read at all.
     if (e.source().begin.line == 0)
-      throw renderers::Error(path + ": cannot read the camera path (" +
-                             std::string(e.description()) + ")");
-    throw renderers::Error(path + ":" + std::to_string(e.source().begin.line) + ": " +
-                           std::string(e.description()));
+      throw base::Error(path + ": cannot read the camera path (" + std::string(e.description()) +
+                        ")");
+    throw base::Error(path + ":" + std::to_string(e.source().begin.line) + ": " +
+                      std::string(e.description()));
   }
   r.onlyKeys(root, "the camera path", {"fps", "loop", "keyframe"});
   CameraPath out;
@@ -26,8 +26,7 @@ CameraPath CameraPath::load(const std::string& path, const renderers::CameraDesc
   if (!(out.fps_ > 0 && out.fps_ <= 1000)) r.fail(*root.get("fps"), "fps must be in (0, 1000]");
   out.loop_ = r.boolean(root, "loop", "the camera path", false);
   const std::vector<const toml::table*> keys = r.arrayOfTables(root, "keyframe");
-  if (keys.empty())
-    throw renderers::Error(path + ":1: the camera path needs at least one [[keyframe]]");
+  if (keys.empty()) throw base::Error(path + ":1: the camera path needs at least one [[keyframe]]");
   renderers::CameraDesc previous = sceneCamera;
   for (const toml::table* t : keys) {
     const std::string what = "keyframe";

@@ -6,8 +6,8 @@
 #include <cstdlib>
 #include <new>
 
-#include "dfb/Error.h"
-#include "dfb/MemoryBudget.h"
+#include "base/Error.h"
+#include "base/MemoryBudget.h"
 
 namespace app {
 
@@ -27,8 +27,8 @@ void FailurePath::fail(const std::exception& e) {
   std::string what = e.what();
   // Loaders name what they load (dfb/MemoryBudget.h); this is the net for the rest.
   if (dynamic_cast<const std::bad_alloc*>(&e))
-    what = "out of memory (an allocation failed); this rank may hold " + dfb::memoryLimitText();
-  if (dynamic_cast<const dfb::DeadlineError*>(&e)) {
+    what = "out of memory (an allocation failed); this rank may hold " + base::memoryLimitText();
+  if (dynamic_cast<const base::DeadlineError*>(&e)) {
     std::function<std::string()> ask;
     {
       std::lock_guard lock(mutex_);

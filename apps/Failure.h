@@ -20,7 +20,7 @@ class FailurePath {
   // Thread-safe. A second failure on this rank (another thread) waits here until MPI_Abort
   // ends the process, so the rank prints one cause.
   [[noreturn]] void fail(const std::string& what);
-  // As above; a passed deadline (dfb::DeadlineError) first asks `whoIsSilent` which ranks do
+  // As above; a passed deadline (base::DeadlineError) first asks `whoIsSilent` which ranks do
   // not answer, so the cause names the stalled rank rather than only the one that waited.
   [[noreturn]] void fail(const std::exception& e);
   // Set while the messenger runs (it answers the question), cleared before it stops.

@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <cstdlib>
 
-#include "dfb/MemoryBudget.h"
+#include "base/MemoryBudget.h"
 
 namespace app {
 namespace {
@@ -32,17 +32,17 @@ std::string canvasMemoryProblem(const Job& job) {
   if (!job.isWallRank()) {
     const std::uint64_t ranks =
         std::uint64_t(job.roles.renderRanks > 0 ? job.roles.renderRanks : 1);
-    std::uint64_t bytes = dfb::bytesTimes((pixels + ranks - 1) / ranks, kOwnedPixelBytes);
+    std::uint64_t bytes = base::bytesTimes((pixels + ranks - 1) / ranks, kOwnedPixelBytes);
     std::string what = sizeText(job) + ": the frame buffer tiles a render rank owns (1/" +
                        std::to_string(ranks) + " of " + std::to_string(pixels) + " pixels, " +
                        std::to_string(kOwnedPixelBytes) + " bytes each)";
     if (job.worldRank == 0 && !o.image.empty()) {
       // The gathered image and the file's copy of it.
       const bool pfm = o.image.size() >= 4 && o.image.compare(o.image.size() - 4, 4, ".pfm") == 0;
-      bytes = dfb::bytesPlus(bytes, dfb::bytesTimes(pixels, pfm ? 32 : 8));
+      bytes = base::bytesPlus(bytes, base::bytesTimes(pixels, pfm ? 32 : 8));
       what += " and the image --image " + o.image + " gathers on rank 0";
     }
-    const std::string problem = dfb::memoryProblem(bytes);
+    const std::string problem = base::memoryProblem(bytes);
     return problem.empty() ? problem : what + " " + problem;
   }
   if (!job.layout) return {};
@@ -50,21 +50,21 @@ std::string canvasMemoryProblem(const Job& job) {
   std::uint64_t mine = 0;
   for (int d : job.layout->displaysOfProcess(process))
     mine += std::uint64_t(job.layout->displays[static_cast<std::size_t>(d)].rect.pixelCount());
-  std::uint64_t bytes = dfb::bytesTimes(mine, kDisplayPixelBytes);
+  std::uint64_t bytes = base::bytesTimes(mine, kDisplayPixelBytes);
   std::string what = o.wall + ": the displays of wall process " + std::to_string(process) + " (" +
                      std::to_string(mine) + " pixels, " + std::to_string(kDisplayPixelBytes) +
                      " bytes each)";
   if (!o.captureDir.empty()) {
     // Captures read each display back (4 bytes a pixel) and wall process 0 gathers every
     // display's pixels and composes the canvas (4 + 4 bytes a canvas pixel).
-    bytes = dfb::bytesPlus(bytes, dfb::bytesTimes(mine, 4));
-    if (process == 0) bytes = dfb::bytesPlus(bytes, dfb::bytesTimes(pixels, 8));
+    bytes = base::bytesPlus(bytes, base::bytesTimes(mine, 4));
+    if (process == 0) bytes = base::bytesPlus(bytes, base::bytesTimes(pixels, 8));
     what += " with --capture" + std::string(process == 0
                                                 ? " (the whole-wall preview of " +
                                                       std::to_string(pixels) + " pixels included)"
                                                 : "");
   }
-  const std::string problem = dfb::memoryProblem(bytes);
+  const std::string problem = base::memoryProblem(bytes);
   return problem.empty() ? problem : what + " " + problem;
 }
 

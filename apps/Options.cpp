@@ -2,7 +2,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "dfb/MemoryBudget.h"
+#include "base/MemoryBudget.h"
 #include "wall/Layout.h"
 #include "wall/service/Codec.h"
 
@@ -225,7 +225,7 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
     }
   }
   if (!memoryLimit.empty()) {
-    const std::optional<std::uint64_t> bytes = dfb::parseByteSize(memoryLimit);
+    const std::optional<std::uint64_t> bytes = base::parseByteSize(memoryLimit);
     if (!bytes)
       return fail("--memory-limit must be BYTES or a number with K, M, G or T (e.g. 4G), not '" +
                   memoryLimit + "'");

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "apps/Job.h"
-#include "dfb/AtomicFile.h"
+#include "base/AtomicFile.h"
 
 namespace app {
 
@@ -28,7 +28,7 @@ double peakRssKiB() {
 }
 
 void writePfm(const std::string& path, const float* rgba, int width, int height) {
-  dfb::AtomicFile file(path);
+  base::AtomicFile file(path);
   FILE* out = file.stream();
   std::fprintf(out, "PF\n%d %d\n-1.0\n", width, height);  // negative scale: little-endian
   std::vector<float> row(3 * static_cast<size_t>(width));

@@ -1,6 +1,6 @@
 #include "apps/Preview.h"
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "wall/Png.h"
 #include "wall/Routing.h"
 
@@ -46,8 +46,8 @@ void Preview::setLostDisplays(std::vector<bool> lost) {
 void Preview::finish(std::uint32_t lastFrame, std::chrono::milliseconds timeout) const {
   if (!assembler_ || lastFrame == 0) return;
   if (!assembler_->waitFor(lastFrame, std::chrono::steady_clock::now() + timeout))
-    throw dfb::Error("the preview of frame " + std::to_string(lastFrame) +
-                     " did not arrive within --timeout");
+    throw base::Error("the preview of frame " + std::to_string(lastFrame) +
+                      " did not arrive within --timeout");
   if (job_.options.previewFile.empty()) return;
   const auto snapshot = assembler_->latest();
   const wall::Layout* layout = job_.layout ? &*job_.layout : nullptr;

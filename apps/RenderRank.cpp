@@ -6,7 +6,6 @@
 #include <optional>
 
 #include "apps/CameraPath.h"
-#include "apps/Collectives.h"
 #include "apps/FrameDirector.h"
 #include "apps/FrameOrder.h"
 #include "apps/Job.h"
@@ -15,16 +14,16 @@
 #include "apps/Stats.h"
 #include "apps/StatusBoard.h"
 #include "apps/Steering.h"
+#include "base/BoundedWait.h"
+#include "base/Collectives.h"
+#include "base/Error.h"
+#include "base/Timing.h"
 #include "dfb/DistributedFrameBuffer.h"
-#include "dfb/Error.h"
-#include "dfb/Timing.h"
-#include "messaging/BoundedWait.h"
 #include "renderers/FrameDriver.h"
 #include "renderers/Renderer.h"
 #include "renderers/WorkDistribution.h"
 #include "renderers/scivis/BrickFrameDriver.h"
 #include "wall/DisplayRoutingOp.h"
-#include "wall/Error.h"
 #include "wall/FrameCredits.h"
 #include "wall/PieceMessage.h"
 #include "wall/Png.h"
@@ -34,8 +33,8 @@
 namespace app {
 namespace {
 
-using dfb::Clock;
-using dfb::msBetween;
+using base::Clock;
+using base::msBetween;
 
 // Rank 0, idle: how often it looks at signals while waiting for a request.
 constexpr auto kSignalPoll = std::chrono::milliseconds(100);
@@ -111,11 +110,11 @@ std::vector<RankFrame> gatherRankFrames(const RankFrame& mine, MPI_Comm comm,
   MPI_Comm_size(comm, &size);
   std::vector<RankFrame> all(rank == 0 ? static_cast<size_t>(size) : 0);
   MPI_Request request;
-  dfb::checkMpi(MPI_Igather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, 0,
-                            comm, &request),
-                "MPI_Igather");
-  messaging::waitWithDeadline(request, Clock::now() + timeout,
-                              "frame statistics: another render rank did not send them in time");
+  base::checkMpi(MPI_Igather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, 0,
+                             comm, &request),
+                 "MPI_Igather");
+  base::waitWithDeadline(request, Clock::now() + timeout,
+                         "frame statistics: another render rank did not send them in time");
   return all;
 }
 
@@ -306,8 +305,8 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
   try {
     // Every object of every rank is registered before anyone sends.
     const auto timeout = std::chrono::seconds(o.timeoutSeconds);
-    boundedBarrier(MPI_COMM_WORLD, timeout, "start-up");
-    const std::int64_t cpuAtStart = dfb::processCpuNs();
+    base::boundedBarrier(MPI_COMM_WORLD, timeout, "start-up");
+    const std::int64_t cpuAtStart = base::processCpuNs();
 
     // The statistics of a frame are written once its frame time (at the next frame's start) and
     // its wall acknowledgement are known: at most frames-in-flight + 1 records wait here.
@@ -369,7 +368,7 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
           // Converged: wait for a change without spinning, looking at signals now and then.
           // The last frame's time ends here, not when the wall wakes up.
           if (!pending.empty() && pending.back().frameMs <= 0)
-            pending.back().frameMs = msBetween(previousStart, Clock::now());
+            pending.back().frameMs = base::msBetween(previousStart, Clock::now());
           const auto until = Clock::now() + heartbeat;
           while (Clock::now() < until && !control.stopRequested()) {
             if (steering.waitForRequest(std::min(until, Clock::now() + kSignalPoll))) break;
@@ -387,9 +386,9 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
       }
       // Rank 0 may first wait for the wall's credit (up to the timeout) or idle: twice that is
       // the bound. After an idle order the wait is long, so it backs off to (nearly) no CPU.
-      boundedBcast(&order, sizeof order, renderComm, 2 * timeout,
-                   "frame " + std::to_string(frameId),
-                   idling ? kIdlePoll : std::chrono::microseconds(20));
+      base::boundedBcast(&order, sizeof order, renderComm, 2 * timeout,
+                         "frame " + std::to_string(frameId),
+                         idling ? kIdlePoll : std::chrono::microseconds(20));
       if (serviceSink && order.rosterVersion != rosterVersion) {
         // The pieces of this frame on go where the wall now is (Protocol.h, Roster).
         const wall::service::Roster roster =
@@ -434,7 +433,7 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
       const dfb::FrameInfo frame = order.frame;
       const auto start = Clock::now();
       if (!pending.empty() && pending.back().frameMs <= 0)
-        pending.back().frameMs = msBetween(previousStart, start);
+        pending.back().frameMs = base::msBetween(previousStart, start);
       previousStart = start;
       writeReady(false);
 
@@ -455,7 +454,7 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
       }
       const std::uint64_t compressed = messenger.counters().messagesCompressed;
       StageTimes& t = totals.stages;
-      t.gatherRelay += msBetween(relayStart, Clock::now());
+      t.gatherRelay += base::msBetween(relayStart, Clock::now());
       t.render += report.renderMs;
       t.renderCpu += report.renderCpuMs;
       t.tileUnpack += stats.unpackMs;
@@ -501,9 +500,9 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
       publish(frameId, false);
 
       if (job.worldRank == 0 && !o.quiet &&
-          (msBetween(lastProgress, Clock::now()) > 1000 || frameId == frames)) {
+          (base::msBetween(lastProgress, Clock::now()) > 1000 || frameId == frames)) {
         lastProgress = Clock::now();
-        const double seconds = msBetween(runStart, lastProgress) / 1000;
+        const double seconds = base::msBetween(runStart, lastProgress) / 1000;
         std::printf("frame %u/%s  %.2f fps  %u spp accumulated\n", frameId,
                     frames ? std::to_string(frames).c_str() : "-", frameId / seconds,
                     (dfb.accumulationId() + 1) * static_cast<unsigned>(current.spp));
@@ -525,9 +524,9 @@ int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm rend
     if (job.service && !stopped) job.service->bye(lastFrame);
     if (credits) credits->waitForPresented(lastFrame, timeout);
     if (preview) preview->finish(lastFrame, timeout);
-    totals.stages.processCpu = static_cast<double>(dfb::processCpuNs() - cpuAtStart) * 1e-6;
+    totals.stages.processCpu = static_cast<double>(base::processCpuNs() - cpuAtStart) * 1e-6;
     if (!pending.empty() && pending.back().frameMs <= 0)
-      pending.back().frameMs = msBetween(previousStart, Clock::now());
+      pending.back().frameMs = base::msBetween(previousStart, Clock::now());
     writeReady(true);
     if (brickDriver) {
       totals.brickTiles = static_cast<double>(brickDriver->brickTilesRendered());

@@ -8,7 +8,6 @@
 #include <new>
 #include <string>
 
-#include "apps/Collectives.h"
 #include "apps/ControlServer.h"
 #include "apps/Failure.h"
 #include "apps/Job.h"
@@ -20,14 +19,14 @@
 #include "apps/Steering.h"
 #include "apps/StopSignals.h"
 #include "apps/control/PageRoutes.h"
-#include "dfb/AtomicFile.h"
-#include "dfb/Error.h"
-#include "dfb/MemoryBudget.h"
-#include "messaging/BoundedWait.h"
+#include "base/AtomicFile.h"
+#include "base/BoundedWait.h"
+#include "base/Collectives.h"
+#include "base/Error.h"
+#include "base/MemoryBudget.h"
 #include "messaging/MpiSession.h"
 #include "renderers/BuiltinScenes.h"
 #include "renderers/scivis/Bricks.h"
-#include "wall/Error.h"
 #include "wall/service/ServiceClient.h"
 
 namespace app {
@@ -37,7 +36,7 @@ namespace {
 // problem every rank finds (a bad layout) is printed once. True when every rank is fine.
 bool agree(const std::string& problem, int rank, std::chrono::milliseconds timeout) {
   int failing = problem.empty() ? 1 << 30 : rank, first = 0;
-  boundedAllreduce(&failing, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD, timeout, "setup");
+  base::boundedAllreduce(&failing, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD, timeout, "setup");
   if (first == rank) std::fprintf(stderr, "dfbwall: error: %s\n", problem.c_str());
   return first == 1 << 30;
 }
@@ -88,19 +87,19 @@ std::string checkOutputs(const Job& job) {
       const std::string folder =
           (std::filesystem::path(o.captureDir) / job.layout->displays[static_cast<size_t>(d)].name)
               .string();
-      if (std::string problem = dfb::checkWritableFolder(folder); !problem.empty())
+      if (std::string problem = base::checkWritableFolder(folder); !problem.empty())
         return "--capture " + problem;
     }
   }
   if (job.worldRank == 0 && !o.image.empty()) {
     const std::string folder = std::filesystem::path(o.image).parent_path().string();
-    if (std::string problem = dfb::checkWritableFolder(folder.empty() ? "." : folder);
+    if (std::string problem = base::checkWritableFolder(folder.empty() ? "." : folder);
         !problem.empty())
       return "--image " + problem;
   }
   if (job.worldRank == 0 && !o.previewFile.empty()) {
     const std::string folder = std::filesystem::path(o.previewFile).parent_path().string();
-    if (std::string problem = dfb::checkWritableFolder(folder.empty() ? "." : folder);
+    if (std::string problem = base::checkWritableFolder(folder.empty() ? "." : folder);
         !problem.empty())
       return "--preview " + problem;
   }
@@ -179,7 +178,7 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
     // Loaders name what they load; this is the net for whatever else allocates at setup.
     return "out of memory while setting up (the layout, the scene and its buffers); this rank "
            "may hold " +
-           dfb::memoryLimitText();
+           base::memoryLimitText();
   } catch (const std::exception& e) {
     return e.what();
   }
@@ -191,8 +190,8 @@ std::string compareInputs(const Job& job, const InputHashes& mine,
                           std::chrono::milliseconds timeout) {
   std::uint64_t local[4] = {mine.layout, ~mine.layout, mine.scene, mine.scene ? ~mine.scene : 0};
   std::uint64_t high[4] = {0, 0, 0, 0};
-  boundedAllreduce(local, high, 4, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD, timeout,
-                   "comparing inputs");
+  base::boundedAllreduce(local, high, 4, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD, timeout,
+                         "comparing inputs");
   // max(h) == min(h) exactly when every rank's hash is the same; min(h) = ~max(~h).
   if (high[0] != ~high[1])
     return job.options.wall +
@@ -214,12 +213,11 @@ std::vector<RankTotals> collectTotals(const Job& job, RankTotals mine,
   mine.peakRssKiB = peakRssKiB();
   std::vector<RankTotals> all(job.worldRank == 0 ? static_cast<size_t>(size) : 0);
   MPI_Request request;
-  dfb::checkMpi(MPI_Igather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, 0,
-                            MPI_COMM_WORLD, &request),
-                "MPI_Igather");
-  messaging::waitWithDeadline(
-      request, std::chrono::steady_clock::now() + timeout,
-      "collecting statistics: another rank did not send its totals in time");
+  base::checkMpi(MPI_Igather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, 0,
+                             MPI_COMM_WORLD, &request),
+                 "MPI_Igather");
+  base::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
+                         "collecting statistics: another rank did not send its totals in time");
   return all;
 }
 
@@ -253,8 +251,8 @@ int run(int argc, char** argv) {
   job.failure = &failure;
   const int parsed = parseOptions(argc, argv, job.options, job.worldRank == 0);
   if (parsed >= 0) return parsed;
-  dfb::setMemoryLimit(job.options.memoryLimit);
-  dfb::setRanksOnHost(ranksOnThisHost());
+  base::setMemoryLimit(job.options.memoryLimit);
+  base::setRanksOnHost(ranksOnThisHost());
   if (job.options.serve) return runServe(job.options, job.worldRank, signals, failure);
   const std::chrono::milliseconds timeout = std::chrono::seconds(job.options.timeoutSeconds);
 
@@ -274,7 +272,7 @@ int run(int argc, char** argv) {
     }
 
     MPI_Comm roleComm;
-    dfb::checkMpi(
+    base::checkMpi(
         MPI_Comm_split(MPI_COMM_WORLD, job.isWallRank() ? 1 : 0, job.worldRank, &roleComm),
         "MPI_Comm_split");
     messaging::MessengerOptions messaging;

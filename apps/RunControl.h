@@ -14,11 +14,12 @@
 #include <optional>
 
 #include "apps/StopSignals.h"
+#include "base/ObjectIds.h"
 #include "messaging/Messenger.h"
 
 namespace app {
 
-constexpr messaging::ObjectId kRunControlObject = 0x5709'0001;
+constexpr messaging::ObjectId kRunControlObject = base::objectId(base::MessageObject::kRunControl);
 
 class RunControl : public messaging::MessageHandler {
  public:

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <utility>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 
 namespace app {
 namespace {
@@ -92,7 +92,7 @@ double LogHistogram::mad() const {
 StatsStream::StatsStream(const std::string& path) : path_(path) {
   fd_ = open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
   if (fd_ < 0)
-    throw dfb::Error(path + ": cannot create the statistics file: " + std::strerror(errno));
+    throw base::Error(path + ": cannot create the statistics file: " + std::strerror(errno));
 }
 
 StatsStream::~StatsStream() {
@@ -105,8 +105,8 @@ void StatsStream::writeLine(const std::string& json) {
   // and a full disk is an error here.
   const ssize_t written = write(fd_, line.data(), line.size());
   if (written != static_cast<ssize_t>(line.size()))
-    throw dfb::Error(path_ + ": cannot write the statistics: " +
-                     (written < 0 ? std::strerror(errno) : "short write (disk full?)"));
+    throw base::Error(path_ + ": cannot write the statistics: " +
+                      (written < 0 ? std::strerror(errno) : "short write (disk full?)"));
 }
 
 void StatsStream::writeWallRoster(std::uint32_t version, std::uint32_t frame,

@@ -38,7 +38,7 @@ class LogHistogram {
 
 class StatsStream {
  public:
-  // Rank 0, at setup: creates (or truncates) the file. Throws dfb::Error naming it.
+  // Rank 0, at setup: creates (or truncates) the file. Throws base::Error naming it.
   explicit StatsStream(const std::string& path);
   ~StatsStream();
   StatsStream(const StatsStream&) = delete;

@@ -19,12 +19,13 @@
 #include <string>
 #include <vector>
 
+#include "base/ObjectIds.h"
 #include "messaging/Messenger.h"
 #include "renderers/Math.h"
 
 namespace app {
 
-constexpr messaging::ObjectId kSteeringObject = 0x5709'0002;
+constexpr messaging::ObjectId kSteeringObject = base::objectId(base::MessageObject::kSteering);
 
 // One request; trivially copyable (it travels from wall ranks to rank 0 as bytes). `fields`
 // says which of the values are set; the rest are ignored.

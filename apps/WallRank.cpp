@@ -4,13 +4,13 @@
 #include <optional>
 #include <utility>
 
-#include "apps/Collectives.h"
 #include "apps/Job.h"
 #include "apps/RunControl.h"
 #include "apps/Steering.h"
 #include "apps/ThreadCpu.h"
 #include "apps/WallKeys.h"
-#include "dfb/Timing.h"
+#include "base/Collectives.h"
+#include "base/Timing.h"
 #include "wall/DisplayPresenters.h"
 #include "wall/PieceMessage.h"
 #include "wall/WallNode.h"
@@ -76,8 +76,8 @@ int runWallRank(const Job& job, messaging::Messenger& messenger, MPI_Comm wallCo
     });
     try {
       // Pairs with the render ranks' barrier: every object of every rank is registered.
-      boundedBarrier(MPI_COMM_WORLD, options.timeout, "start-up");
-      const std::int64_t cpuAtStart = dfb::processCpuNs(), mainAtStart = dfb::threadCpuNs(),
+      base::boundedBarrier(MPI_COMM_WORLD, options.timeout, "start-up");
+      const std::int64_t cpuAtStart = base::processCpuNs(), mainAtStart = base::threadCpuNs(),
                          glAtStart = cpuNsOfThreadsNamed(kGlThreadPrefix);
       bool closed = false;
       const std::uint32_t frames = static_cast<std::uint32_t>(o.frames);  // 0: until stopped
@@ -107,8 +107,8 @@ int runWallRank(const Job& job, messaging::Messenger& messenger, MPI_Comm wallCo
         }
       }
       StageTimes& t = totals.stages;
-      t.processCpu = static_cast<double>(dfb::processCpuNs() - cpuAtStart) * 1e-6;
-      t.mainThreadCpu = static_cast<double>(dfb::threadCpuNs() - mainAtStart) * 1e-6;
+      t.processCpu = static_cast<double>(base::processCpuNs() - cpuAtStart) * 1e-6;
+      t.mainThreadCpu = static_cast<double>(base::threadCpuNs() - mainAtStart) * 1e-6;
       t.glThreadsCpu = static_cast<double>(cpuNsOfThreadsNamed(kGlThreadPrefix) - glAtStart) * 1e-6;
       node.finish();  // the last frame's captures, when the run stopped early
     } catch (const std::exception& e) {

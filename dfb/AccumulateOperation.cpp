@@ -19,7 +19,7 @@
 #include <span>
 #include <string>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "dfb/TileOperation.h"
 
 namespace dfb {
@@ -54,7 +54,8 @@ class AccumulateOperation final : public TileOperation {
 
   bool process(Tile&& input) override {
     if (received_ >= expected_)
-      throw Error(where() + ": more than the " + std::to_string(expected_) + " expected inputs");
+      throw base::Error(where() + ": more than the " + std::to_string(expected_) +
+                        " expected inputs");
     ++received_;
     if (expected_ == 1 && accumulationId_ == 0 && input.weight == 1) {
       startEpoch(std::move(input));
@@ -72,8 +73,9 @@ class AccumulateOperation final : public TileOperation {
     std::vector<const Tile*> ordered;
     for (size_t i = 0; i < inputs_.size(); ++i) {
       if (i > 0 && inputs_[i].sequence == inputs_[i - 1].sequence)
-        throw Error(where() + ": two inputs with sequence " + std::to_string(inputs_[i].sequence) +
-                    "; redundant inputs need distinct sequences to be combined deterministically");
+        throw base::Error(
+            where() + ": two inputs with sequence " + std::to_string(inputs_[i].sequence) +
+            "; redundant inputs need distinct sequences to be combined deterministically");
       ordered.push_back(&inputs_[i]);
     }
     combine(ordered);

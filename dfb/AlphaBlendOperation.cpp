@@ -13,7 +13,7 @@
 #include <string>
 #include <utility>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "dfb/TileOperation.h"
 
 namespace dfb {
@@ -60,8 +60,9 @@ class AlphaBlendOperation final : public TileOperation {
       auto found = received_.find(g);
       const long got = found == received_.end() ? 0 : found->second;
       if (got > expected)
-        throw Error(where() + ": generation " + std::to_string(g) + " got " + std::to_string(got) +
-                    " tiles, but the generation before announced " + std::to_string(expected));
+        throw base::Error(where() + ": generation " + std::to_string(g) + " got " +
+                          std::to_string(got) + " tiles, but the generation before announced " +
+                          std::to_string(expected));
       if (got < expected) return false;
       total += static_cast<size_t>(got);
       auto next = announced_.find(g);
@@ -69,7 +70,7 @@ class AlphaBlendOperation final : public TileOperation {
       if (expected == 0) break;
     }
     if (total != inputs_.size())
-      throw Error(where() + ": tiles in generations beyond the end of the dependency tree");
+      throw base::Error(where() + ": tiles in generations beyond the end of the dependency tree");
     return true;
   }
 

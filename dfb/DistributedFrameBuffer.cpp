@@ -10,12 +10,12 @@
 #include <mutex>
 #include <string>
 
-#include "dfb/Error.h"
+#include "base/BoundedWait.h"
+#include "base/Error.h"
+#include "base/Timing.h"
 #include "dfb/ImageGather.h"
 #include "dfb/TileDoor.h"
 #include "dfb/TileMessage.h"
-#include "dfb/Timing.h"
-#include "messaging/BoundedWait.h"
 
 namespace dfb {
 
@@ -75,7 +75,7 @@ struct DistributedFrameBuffer::Impl {
   // Stage timers in nanoseconds of the working thread's CPU time (dfb/Timing.h), read once or
   // twice per stage per tile.
   std::atomic<std::int64_t> unpackNs{0}, operationNs{0}, toneMapNs{0}, pixelOpsNs{0};
-  Clock::time_point frameStart;
+  base::Clock::time_point frameStart;
   messaging::Messenger::ObjectTraffic trafficAtBegin;
   messaging::MessengerCounters countersAtBegin;
   FrameStats lastStats;
@@ -89,7 +89,7 @@ struct DistributedFrameBuffer::Impl {
   void finishTile(int tileIndex, OwnedTile& owned);
   void deliver(int fromRank, messaging::Bytes&& bytes);
   // The display-format gather of the finished frame to rank 0 (nothing with NONE).
-  GatherCounts gather(Clock::time_point deadline);
+  GatherCounts gather(base::Clock::time_point deadline);
   void failInput(const std::string& message) {
     std::lock_guard lock(frameMutex);
     inputErrors.push_back(message);
@@ -101,18 +101,19 @@ DistributedFrameBuffer::DistributedFrameBuffer(messaging::Messenger& messenger, 
                                                DfbOptions options)
     : impl_(std::make_unique<Impl>(messenger, std::move(options))) {
   Impl& d = *impl_;
-  checkMpi(MPI_Comm_dup(comm, &d.comm), "MPI_Comm_dup");
+  base::checkMpi(MPI_Comm_dup(comm, &d.comm), "MPI_Comm_dup");
   MPI_Comm_rank(d.comm, &d.rank);
   MPI_Comm_size(d.comm, &d.size);
   d.messengerRank.resize(static_cast<size_t>(d.size));
   int mine = messenger.rank();
-  const auto deadline = Clock::now() + d.options.frameTimeout;
+  const auto deadline = base::Clock::now() + d.options.frameTimeout;
   const std::string late = "creating the frame buffer: another rank did not join within " +
                            std::to_string(d.options.frameTimeout.count()) + " ms";
   MPI_Request request;
-  checkMpi(MPI_Iallgather(&mine, 1, MPI_INT, d.messengerRank.data(), 1, MPI_INT, d.comm, &request),
-           "MPI_Iallgather");
-  messaging::waitWithDeadline(request, deadline, late);
+  base::checkMpi(
+      MPI_Iallgather(&mine, 1, MPI_INT, d.messengerRank.data(), 1, MPI_INT, d.comm, &request),
+      "MPI_Iallgather");
+  base::waitWithDeadline(request, deadline, late);
 
   const int count = d.grid.tileCount();
   d.owner.resize(static_cast<size_t>(count));
@@ -121,8 +122,8 @@ DistributedFrameBuffer::DistributedFrameBuffer(messaging::Messenger& messenger, 
   for (int t = 0; t < count; ++t) {
     const int o = d.options.ownership(t, count, d.size);
     if (o < 0 || o >= d.size)
-      throw Error("the ownership function gave tile " + std::to_string(t) + " to rank " +
-                  std::to_string(o) + " of " + std::to_string(d.size));
+      throw base::Error("the ownership function gave tile " + std::to_string(t) + " to rank " +
+                        std::to_string(o) + " of " + std::to_string(d.size));
     d.owner[static_cast<size_t>(t)] = o;
     if (o == d.rank) {
       d.ownedTiles.push_back(t);
@@ -132,8 +133,8 @@ DistributedFrameBuffer::DistributedFrameBuffer(messaging::Messenger& messenger, 
   d.pixelOps.push_back(std::make_shared<ToneMapOp>(d.options.toneMap));
   messenger.registerObject(d.options.objectId, this);
   // Nobody may send to this object before every rank has registered it.
-  checkMpi(MPI_Ibarrier(d.comm, &request), "MPI_Ibarrier");
-  messaging::waitWithDeadline(request, deadline, late);
+  base::checkMpi(MPI_Ibarrier(d.comm, &request), "MPI_Ibarrier");
+  base::waitWithDeadline(request, deadline, late);
 }
 
 DistributedFrameBuffer::~DistributedFrameBuffer() {
@@ -158,13 +159,13 @@ void DistributedFrameBuffer::begin(const FrameInfo& frame) {
   {
     std::lock_guard lock(d.frameMutex);
     // A bad input that came between frames is this rank's failure (end() took those before).
-    if (!d.inputErrors.empty()) throw Error(d.inputErrors.front());
+    if (!d.inputErrors.empty()) throw base::Error(d.inputErrors.front());
     if (d.inFrame)
-      throw Error("begin(" + std::to_string(frame.frameId) + ") inside frame " +
-                  std::to_string(d.frame.frameId));
+      throw base::Error("begin(" + std::to_string(frame.frameId) + ") inside frame " +
+                        std::to_string(d.frame.frameId));
     if (static_cast<std::int64_t>(frame.frameId) <= d.activeFrame)
-      throw Error("frame ids must increase: begin(" + std::to_string(frame.frameId) +
-                  ") after frame " + std::to_string(d.activeFrame));
+      throw base::Error("frame ids must increase: begin(" + std::to_string(frame.frameId) +
+                        ") after frame " + std::to_string(d.activeFrame));
     if (!d.haveEpoch || frame.epoch != d.frame.epoch)
       d.accumulationId = 0;
     else
@@ -199,7 +200,7 @@ void DistributedFrameBuffer::begin(const FrameInfo& frame) {
     d.staleInputs = d.earlyInputs = 0;
     d.lastSetTileNs = 0;
     d.unpackNs = d.operationNs = d.toneMapNs = d.pixelOpsNs = 0;
-    d.frameStart = Clock::now();
+    d.frameStart = base::Clock::now();
     d.activeFrame = frame.frameId;
     d.inFrame = true;
     auto found = d.early.find(frame.frameId);
@@ -220,20 +221,21 @@ void DistributedFrameBuffer::begin(const FrameInfo& frame) {
 
 void DistributedFrameBuffer::setTile(Tile tile) {
   Impl& d = *impl_;
-  if (!d.open) throw Error("setTile outside a frame: tiles are set between begin() and end()");
+  if (!d.open)
+    throw base::Error("setTile outside a frame: tiles are set between begin() and end()");
   // The tile is rendered when it comes here: compositing overhead counts from this moment (a
   // tile this rank owns is composited, and maybe routed, inside this call). Threads race: keep
   // the latest.
-  const std::int64_t now = Clock::now().time_since_epoch().count();
+  const std::int64_t now = base::Clock::now().time_since_epoch().count();
   for (std::int64_t seen = d.lastSetTileNs; seen < now;)
     if (d.lastSetTileNs.compare_exchange_weak(seen, now)) break;
   const int index = d.grid.indexOfOrigin(tile.region.x0, tile.region.y0);
   if (index < 0 || d.grid.region(index) != tile.region)
-    throw Error("setTile: region [" + std::to_string(tile.region.x0) + ", " +
-                std::to_string(tile.region.x1) + ") x [" + std::to_string(tile.region.y0) + ", " +
-                std::to_string(tile.region.y1) + ") is not a tile of the " +
-                std::to_string(d.grid.width()) + "x" + std::to_string(d.grid.height()) +
-                " image at tile size " + std::to_string(d.grid.tileSize()));
+    throw base::Error("setTile: region [" + std::to_string(tile.region.x0) + ", " +
+                      std::to_string(tile.region.x1) + ") x [" + std::to_string(tile.region.y0) +
+                      ", " + std::to_string(tile.region.y1) + ") is not a tile of the " +
+                      std::to_string(d.grid.width()) + "x" + std::to_string(d.grid.height()) +
+                      " image at tile size " + std::to_string(d.grid.tileSize()));
   d.tilesSet++;
   const int owner = d.owner[static_cast<size_t>(index)];
   if (owner == d.rank) {
@@ -261,15 +263,15 @@ std::string DistributedFrameBuffer::Impl::whichInput(int tileIndex, std::uint32_
 void DistributedFrameBuffer::Impl::deliver(int fromRank, messaging::Bytes&& bytes) {
   TileMessageHeader header;
   Tile tile;
-  const std::int64_t start = threadCpuNs();
+  const std::int64_t start = base::threadCpuNs();
   try {
     tile = unpackTile(bytes, header);
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     failInput("a tile message from rank " + std::to_string(fromRank) + " (" +
               messenger.hostOf(fromRank) + "): " + e.what());
     return;
   }
-  unpackNs += threadCpuNs() - start;
+  unpackNs += base::threadCpuNs() - start;
   {
     std::lock_guard lock(frameMutex);
     if (static_cast<std::int64_t>(header.frameId) > activeFrame + options.framesAhead) {
@@ -309,9 +311,9 @@ void DistributedFrameBuffer::Impl::processInput(int tileIndex, Tile&& input, con
       staleInputs++;
       return;
     }
-    const std::int64_t start = threadCpuNs();
+    const std::int64_t start = base::threadCpuNs();
     done = owned.operation->process(std::move(input));
-    operationNs += threadCpuNs() - start;
+    operationNs += base::threadCpuNs() - start;
     if (done) finishTile(tileIndex, owned);
   } catch (const std::exception& e) {
     failInput(whichInput(tileIndex, label.frameId, fromRank) + e.what());
@@ -335,7 +337,7 @@ void DistributedFrameBuffer::Impl::finishTile(int tileIndex, OwnedTile& owned) {
   finished.linear = &owned.operation->finished();
   finished.rgba8 = &owned.rgba8;
   finished.error = owned.operation->error();
-  const std::int64_t start = threadCpuNs();
+  const std::int64_t start = base::threadCpuNs();
   // Tone mapping comes first, but only when something reads its RGBA8: the display format or a
   // later op. A linear-only frame (RGBAF32 or NONE without ops) skips the per-pixel work, and a
   // tile that came as display pixels (Tile::rgba8) has them already: they move over (a copy was
@@ -349,10 +351,10 @@ void DistributedFrameBuffer::Impl::finishTile(int tileIndex, OwnedTile& owned) {
       owned.rgba8 = finished.linear->rgba8;
   } else if (options.format == DisplayFormat::RGBA8 || pixelOps.size() > 1)
     pixelOps.front()->process(finished);
-  const std::int64_t now = threadCpuNs();
+  const std::int64_t now = base::threadCpuNs();
   toneMapNs += now - start;
   for (size_t i = 1; i < pixelOps.size(); ++i) pixelOps[i]->process(finished);
-  if (pixelOps.size() > 1) pixelOpsNs += threadCpuNs() - now;
+  if (pixelOps.size() > 1) pixelOpsNs += base::threadCpuNs() - now;
   // NaN (from NaN pixels) would make the frame-end MAX reduction differ between ranks, and the
   // ranks then plan the next frame differently; an unknown error counts as "needs samples".
   tileErrors[static_cast<size_t>(tileIndex)] =
@@ -360,7 +362,7 @@ void DistributedFrameBuffer::Impl::finishTile(int tileIndex, OwnedTile& owned) {
   tilesCompleted++;
 }
 
-GatherCounts DistributedFrameBuffer::Impl::gather(Clock::time_point deadline) {
+GatherCounts DistributedFrameBuffer::Impl::gather(base::Clock::time_point deadline) {
   if (options.format == DisplayFormat::NONE) return {};
   const bool rgba8 = options.format == DisplayFormat::RGBA8;
   const int bytesPerPixel = rgba8 ? 4 : 16;
@@ -397,17 +399,17 @@ GatherCounts DistributedFrameBuffer::Impl::gather(Clock::time_point deadline) {
 
 void DistributedFrameBuffer::gatherImage() {
   Impl& d = *impl_;
-  d.gather(Clock::now() + 2 * d.options.frameTimeout);
+  d.gather(base::Clock::now() + 2 * d.options.frameTimeout);
 }
 
 void DistributedFrameBuffer::end() {
   Impl& d = *impl_;
-  const auto deadline = Clock::now() + d.options.frameTimeout;
+  const auto deadline = base::Clock::now() + d.options.frameTimeout;
   {
     std::string failure;
     bool late = false;
     std::unique_lock lock(d.frameMutex);
-    if (!d.inFrame) throw Error("end() without begin()");
+    if (!d.inFrame) throw base::Error("end() without begin()");
     d.open = false;  // setTile() after end() has begun is refused
     d.frameDone.wait_until(lock, deadline,
                            [&] { return d.remaining == 0 || !d.inputErrors.empty(); });
@@ -431,8 +433,8 @@ void DistributedFrameBuffer::end() {
     }
     if (!failure.empty()) {
       d.inFrame = false;
-      if (late) throw DeadlineError(failure);  // at once: no collective on a failure path
-      throw Error(failure);
+      if (late) throw base::DeadlineError(failure);  // at once: no collective on a failure path
+      throw base::Error(failure);
     }
   }
 
@@ -448,16 +450,16 @@ void DistributedFrameBuffer::end() {
     d.errorsLocal[static_cast<size_t>(t)] = d.tileErrors[static_cast<size_t>(t)];
   const auto collectiveDeadline = deadline + d.options.frameTimeout;
   MPI_Request request;
-  checkMpi(MPI_Iallreduce(d.errorsLocal.data(), d.errorsGlobal.data(), static_cast<int>(count),
-                          MPI_FLOAT, MPI_MAX, d.comm, &request),
-           "MPI_Iallreduce");
+  base::checkMpi(MPI_Iallreduce(d.errorsLocal.data(), d.errorsGlobal.data(),
+                                static_cast<int>(count), MPI_FLOAT, MPI_MAX, d.comm, &request),
+                 "MPI_Iallreduce");
   const GatherCounts counts =
       d.options.gatherEveryFrame ? d.gather(collectiveDeadline) : GatherCounts{};
-  messaging::waitWithDeadline(request, collectiveDeadline,
-                              "frame " + std::to_string(d.frame.frameId) +
-                                  ": another rank did not finish the frame within " +
-                                  std::to_string(2 * d.options.frameTimeout.count()) + " ms");
-  const auto complete = Clock::now();
+  base::waitWithDeadline(request, collectiveDeadline,
+                         "frame " + std::to_string(d.frame.frameId) +
+                             ": another rank did not finish the frame within " +
+                             std::to_string(2 * d.options.frameTimeout.count()) + " ms");
+  const auto complete = base::Clock::now();
   {
     std::lock_guard lock(d.frameMutex);
     d.inFrame = false;
@@ -485,14 +487,15 @@ void DistributedFrameBuffer::end() {
   stats.toneMapMs = ms(d.toneMapNs);
   stats.pixelOpsMs = ms(d.pixelOpsNs);
   if (lastSet != 0)
-    stats.lastSetTileToCompleteMs = std::chrono::duration<double, std::milli>(
-                                        complete.time_since_epoch() - Clock::duration(lastSet))
-                                        .count();
+    stats.lastSetTileToCompleteMs =
+        std::chrono::duration<double, std::milli>(complete.time_since_epoch() -
+                                                  base::Clock::duration(lastSet))
+            .count();
 
   stats.gatherBytesSent = counts.bytesSent;
   stats.gatherBytesReceived = counts.bytesReceived;
   stats.pixelBytesReceived = counts.pixelBytesReceived;
-  stats.frameMs = msBetween(d.frameStart, Clock::now());
+  stats.frameMs = base::msBetween(d.frameStart, base::Clock::now());
   d.lastStats = stats;
 }
 

@@ -14,11 +14,11 @@
 //    frame it throws).
 //  - Every input, set here or received, passes one door (dfb/TileDoor.h) under the lock of the
 //    tile it is for: region, channels (the operation's InputNeeds), frame, epoch, pass and tree
-//    counts. A bad one is a dfb::Error naming the tile, the frame and the sender, thrown by
+//    counts. A bad one is a base::Error naming the tile, the frame and the sender, thrown by
 //    end() (or by the next begin() when it came between frames), never undefined behaviour.
 //  - Tile messages carry their frame: inputs for a frame a rank has not begun yet are held and
 //    applied at its begin(); inputs for a past frame are rejected and counted.
-//  - Every wait is bounded by DfbOptions::frameTimeout; a timeout is a dfb::Error naming the
+//  - Every wait is bounded by DfbOptions::frameTimeout; a timeout is a base::Error naming the
 //    incomplete tiles, on every rank. A rank that finds a problem itself (a timeout, a bad
 //    input) throws at once, without the frame-end collective, so the caller can end the job
 //    (docs/design.md, "Failures"); the others fail at their own deadline if they are not ended
@@ -33,6 +33,7 @@
 #include <memory>
 #include <vector>
 
+#include "base/ObjectIds.h"
 #include "dfb/PixelOp.h"
 #include "dfb/Tile.h"
 #include "dfb/TileOperation.h"
@@ -66,7 +67,7 @@ struct DfbOptions {
   // was 5-8% of a frame).
   bool gatherEveryFrame = true;
   // Distinct per DFB sharing a messenger; the same on every rank.
-  messaging::ObjectId objectId = 0xDFB0;
+  messaging::ObjectId objectId = base::objectId(base::MessageObject::kFrameBuffer);
   std::chrono::milliseconds frameTimeout{60000};
   // Inputs for a frame more than this many frames past the current one are an error instead of
   // being held (a corrupt frame id would otherwise hold memory forever).

@@ -4,8 +4,8 @@
 #include <limits>
 #include <string>
 
-#include "dfb/Error.h"
-#include "messaging/BoundedWait.h"
+#include "base/BoundedWait.h"
+#include "base/Error.h"
 
 namespace dfb {
 namespace {
@@ -91,22 +91,22 @@ GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel,
 
   constexpr std::uint64_t kMaxCount = std::numeric_limits<int>::max();
   if (b.block.size() > kMaxCount)
-    throw Error("gather: rank " + std::to_string(rank) + " holds " +
-                std::to_string(b.block.size()) +
-                " bytes of the image, more than one MPI message carries (2^31-1)");
+    throw base::Error("gather: rank " + std::to_string(rank) + " holds " +
+                      std::to_string(b.block.size()) +
+                      " bytes of the image, more than one MPI message carries (2^31-1)");
   const std::string late = "gather of the image: another rank did not join in time";
   int blockSize = static_cast<int>(b.block.size());
   b.sizes.resize(rank == 0 ? static_cast<size_t>(size) : 0);
   MPI_Request request;
-  checkMpi(MPI_Igather(&blockSize, 1, MPI_INT, b.sizes.data(), 1, MPI_INT, 0, comm, &request),
-           "MPI_Igather");
-  messaging::waitWithDeadline(request, deadline, late);
+  base::checkMpi(MPI_Igather(&blockSize, 1, MPI_INT, b.sizes.data(), 1, MPI_INT, 0, comm, &request),
+                 "MPI_Igather");
+  base::waitWithDeadline(request, deadline, late);
   b.offsets.resize(b.sizes.size());
   if (rank == 0) {
     std::uint64_t total = 0;
     for (size_t r = 0; r < b.sizes.size(); ++r) {
       if (total > kMaxCount)
-        throw Error(
+        throw base::Error(
             "gather: the image's blocks add up to more than 2^31-1 bytes; use fewer, "
             "smaller images (or --image .png instead of .pfm)");
       b.offsets[r] = static_cast<int>(total);
@@ -114,16 +114,16 @@ GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel,
     }
     b.all.resize(total);
   }
-  checkMpi(MPI_Igatherv(b.block.data(), blockSize, MPI_BYTE, b.all.data(), b.sizes.data(),
-                        b.offsets.data(), MPI_BYTE, 0, comm, &request),
-           "MPI_Igatherv");
+  base::checkMpi(MPI_Igatherv(b.block.data(), blockSize, MPI_BYTE, b.all.data(), b.sizes.data(),
+                              b.offsets.data(), MPI_BYTE, 0, comm, &request),
+                 "MPI_Igatherv");
   if (rank == 0) {
     for (int tile : ownedTiles) {
       placeTile(grid, tile, bytesPerPixel, pixelsOf(tile), image);
       counts.pixelBytesReceived += tileBytes(grid, tile, bytesPerPixel);
     }
   }
-  messaging::waitWithDeadline(request, deadline, late);
+  base::waitWithDeadline(request, deadline, late);
   if (rank != 0) return counts;
 
   for (int r = 1; r < size; ++r) {
@@ -131,17 +131,19 @@ GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel,
     counts.bytesReceived += blockBytes;
     const std::byte* at = b.all.data() + b.offsets[static_cast<size_t>(r)];
     if (blockBytes < sizeof(BlockHeader))
-      throw Error("gather: rank " + std::to_string(r) + " sent a block shorter than its header");
+      throw base::Error("gather: rank " + std::to_string(r) +
+                        " sent a block shorter than its header");
     BlockHeader h;
     std::memcpy(&h, at, sizeof h);
     const std::span<const std::byte> data(at + sizeof h, blockBytes - sizeof h);
     const std::byte* pixels = data.data();
     if (!h.compressed && h.rawBytes != data.size())
-      throw Error("gather: rank " + std::to_string(r) + " sent " + std::to_string(data.size()) +
-                  " raw bytes, its header says " + std::to_string(h.rawBytes));
+      throw base::Error("gather: rank " + std::to_string(r) + " sent " +
+                        std::to_string(data.size()) + " raw bytes, its header says " +
+                        std::to_string(h.rawBytes));
     if (h.compressed > 2)
-      throw Error("gather: rank " + std::to_string(r) + " sent a block of unknown encoding " +
-                  std::to_string(h.compressed));
+      throw base::Error("gather: rank " + std::to_string(r) + " sent a block of unknown encoding " +
+                        std::to_string(h.compressed));
     if (h.compressed) {
       try {
         messaging::decompress(data, h.rawBytes, b.unpacked);
@@ -150,22 +152,23 @@ GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel,
           messaging::planeDeltaDecode(b.unpacked, 4, b.unfiltered);
           pixels = b.unfiltered.data();
         }
-      } catch (const messaging::Error& e) {
-        throw Error("gather: rank " + std::to_string(r) + ": " + e.what());
+      } catch (const base::Error& e) {
+        throw base::Error("gather: rank " + std::to_string(r) + ": " + e.what());
       }
     }
     size_t used = 0;
     for (int tile : tilesOf(r)) {
       const size_t bytes = tileBytes(grid, tile, bytesPerPixel);
       if (used + bytes > h.rawBytes)
-        throw Error("gather: rank " + std::to_string(r) + " sent fewer pixel bytes (" +
-                    std::to_string(h.rawBytes) + ") than its tiles need");
+        throw base::Error("gather: rank " + std::to_string(r) + " sent fewer pixel bytes (" +
+                          std::to_string(h.rawBytes) + ") than its tiles need");
       placeTile(grid, tile, bytesPerPixel, pixels + used, image);
       used += bytes;
     }
     if (used != h.rawBytes)
-      throw Error("gather: rank " + std::to_string(r) + " sent " + std::to_string(h.rawBytes) +
-                  " pixel bytes for tiles that need " + std::to_string(used));
+      throw base::Error("gather: rank " + std::to_string(r) + " sent " +
+                        std::to_string(h.rawBytes) + " pixel bytes for tiles that need " +
+                        std::to_string(used));
     counts.pixelBytesReceived += used;
   }
   return counts;

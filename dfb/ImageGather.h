@@ -33,7 +33,7 @@ struct GatherBuffers {
 // `tilesOf(rank)` gives another rank's list on the root. `pixelsOf(tile)` points at the final
 // pixels of an owned tile. The root's `image` is width*height*bytesPerPixel bytes. Sizes are
 // 64-bit; MPI's int counts limit one rank's block, and the gathered total, to 2^31-1 bytes (a
-// dfb::Error says so). Throws dfb::Error when another rank does not join by `deadline`.
+// base::Error says so). Throws base::Error when another rank does not join by `deadline`.
 GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel, bool compress,
                          const std::vector<int>& ownedTiles,
                          const std::function<std::vector<int>(int rank)>& tilesOf,

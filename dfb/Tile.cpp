@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <string>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 
 namespace dfb {
 
@@ -31,8 +31,8 @@ void Tile::reset(const Region& r, bool withDepth) {
 TileGrid::TileGrid(int width, int height, int tileSize)
     : width_(width), height_(height), tileSize_(tileSize) {
   if (width <= 0 || height <= 0 || tileSize <= 0)
-    throw Error("image " + std::to_string(width) + "x" + std::to_string(height) +
-                " with tile size " + std::to_string(tileSize) + ": all must be positive");
+    throw base::Error("image " + std::to_string(width) + "x" + std::to_string(height) +
+                      " with tile size " + std::to_string(tileSize) + ": all must be positive");
   tilesX_ = (width + tileSize - 1) / tileSize;
   tilesY_ = (height + tileSize - 1) / tileSize;
 }

@@ -23,7 +23,7 @@ enum class Admission {
   Stale,  // it belongs to a frame this tile has left (a surplus input): drop it and count it
 };
 
-// Throws dfb::Error saying what is wrong with any input that is neither (a region that is not
+// Throws base::Error saying what is wrong with any input that is neither (a region that is not
 // the tile's, a channel missing or of the wrong size, another epoch, a generation or children
 // count out of bounds, another accumulation pass, weight 0, a tile that expects no more inputs).
 // `label`: the frame the input says it belongs to (its message's header, or this rank's frame

@@ -3,7 +3,7 @@
 #include <cstring>
 #include <string>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "messaging/Messenger.h"
 
 namespace dfb {
@@ -27,11 +27,13 @@ messaging::Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId
   const size_t n = static_cast<size_t>(tile.pixelCount());
   const bool rgba8 = !tile.rgba8.empty();
   if (rgba8 && tile.rgba8.size() != n)
-    throw Error("tile " + std::to_string(tileIndex) + " has " + std::to_string(tile.rgba8.size()) +
-                " RGBA8 pixels for " + std::to_string(n) + " pixels");
+    throw base::Error("tile " + std::to_string(tileIndex) + " has " +
+                      std::to_string(tile.rgba8.size()) + " RGBA8 pixels for " + std::to_string(n) +
+                      " pixels");
   if (tile.color.size() != 4 * n && !(rgba8 && tile.color.empty()))
-    throw Error("tile " + std::to_string(tileIndex) + " has " + std::to_string(tile.color.size()) +
-                " color floats for " + std::to_string(n) + " pixels");
+    throw base::Error("tile " + std::to_string(tileIndex) + " has " +
+                      std::to_string(tile.color.size()) + " color floats for " + std::to_string(n) +
+                      " pixels");
   TileMessageHeader header{};
   header.magic = kTileMagic;
   header.frameId = frameId;
@@ -70,10 +72,10 @@ messaging::Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId
 
 Tile unpackTile(const messaging::Bytes& bytes, TileMessageHeader& header) {
   if (bytes.size() < sizeof header)
-    throw Error("tile message of " + std::to_string(bytes.size()) +
-                " bytes is shorter than its header");
+    throw base::Error("tile message of " + std::to_string(bytes.size()) +
+                      " bytes is shorter than its header");
   std::memcpy(&header, bytes.data(), sizeof header);
-  if (header.magic != kTileMagic) throw Error("message is not a tile (bad magic)");
+  if (header.magic != kTileMagic) throw base::Error("message is not a tile (bad magic)");
   Tile tile;
   tile.region = Region{header.x0, header.y0, header.x1, header.y1};
   tile.generation = header.generation;
@@ -85,22 +87,22 @@ Tile unpackTile(const messaging::Bytes& bytes, TileMessageHeader& header) {
   // width times height overflowed an int before this check.
   constexpr int kMaxTileSide = 4096;
   if (!isSaneRegion(tile.region, kMaxTileSide))
-    throw Error("tile message for tile " + std::to_string(header.tileIndex) +
-                " has an empty or oversized region");
+    throw base::Error("tile message for tile " + std::to_string(header.tileIndex) +
+                      " has an empty or oversized region");
   const size_t n = static_cast<size_t>(tile.region.pixelCount());
   const bool noColor = header.channels & kNoColor, rgba8 = header.channels & kHasRgba8;
   if (noColor && !rgba8)
-    throw Error("tile message for tile " + std::to_string(header.tileIndex) +
-                " has neither color nor RGBA8 pixels");
+    throw base::Error("tile message for tile " + std::to_string(header.tileIndex) +
+                      " has neither color nor RGBA8 pixels");
   size_t floats = noColor ? 0 : 4 * n;
   if (header.channels & kHasDepth) floats += n;
   if (header.channels & kHasNormal) floats += 3 * n;
   if (header.channels & kHasAlbedo) floats += 3 * n;
   const size_t payload = floats * sizeof(float) + (rgba8 ? n * sizeof(std::uint32_t) : 0);
   if (header.payloadBytes != payload || bytes.size() != sizeof header + header.payloadBytes)
-    throw Error("tile message for tile " + std::to_string(header.tileIndex) + " has " +
-                std::to_string(bytes.size() - sizeof header) +
-                " payload bytes, its header implies " + std::to_string(payload));
+    throw base::Error("tile message for tile " + std::to_string(header.tileIndex) + " has " +
+                      std::to_string(bytes.size() - sizeof header) +
+                      " payload bytes, its header implies " + std::to_string(payload));
   size_t at = sizeof header;
   if (!noColor) take(bytes, at, tile.color, 4 * n);
   if (header.channels & kHasDepth) take(bytes, at, tile.depth, n);

@@ -31,7 +31,7 @@ constexpr std::uint32_t kHasRgba8 = 8, kNoColor = 16;
 
 messaging::Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId,
                           std::uint32_t epoch);
-// Throws dfb::Error when the bytes are not a well-formed tile message.
+// Throws base::Error when the bytes are not a well-formed tile message.
 Tile unpackTile(const messaging::Bytes& bytes, TileMessageHeader& header);
 
 }  // namespace dfb

@@ -47,7 +47,7 @@ class TileOperation {
   virtual InputNeeds needs() const = 0;
   // Takes one input (moved in: an operation keeps it without a copy when it needs to) that
   // passed the door (dfb/TileDoor.h) with needs(). Returns true exactly once per frame: when the
-  // tile is complete, after which finished() holds the result. Throws dfb::Error on an input
+  // tile is complete, after which finished() holds the result. Throws base::Error on an input
   // that does not fit what came before it this frame (one too many, a repeated sequence, a
   // generation the tree did not announce).
   virtual bool process(Tile&& input) = 0;

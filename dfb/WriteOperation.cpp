@@ -1,7 +1,7 @@
 // Image-parallel write: one input per tile and frame, taken as it is.
 #include <string>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "dfb/TileOperation.h"
 
 namespace dfb {
@@ -17,8 +17,9 @@ class WriteOperation final : public TileOperation {
 
   bool process(Tile&& input) override {
     if (++received_ > 1)
-      throw Error("tile at (" + std::to_string(region_.x0) + ", " + std::to_string(region_.y0) +
-                  ") got a second input in one frame; the write operation takes exactly one");
+      throw base::Error("tile at (" + std::to_string(region_.x0) + ", " +
+                        std::to_string(region_.y0) +
+                        ") got a second input in one frame; the write operation takes exactly one");
     finished_ = std::move(input);  // the image-parallel hot path: no copy
     return true;
   }

@@ -13,7 +13,7 @@ using Bytes = std::vector<std::byte>;
 // Snappy-compresses `raw` into `out`; returns false (and leaves `out` empty) when the result
 // would not be smaller than `raw`.
 bool compressIfSmaller(std::span<const std::byte> raw, Bytes& out);
-// Inverse of compressIfSmaller; throws messaging::Error on corrupt input or a size mismatch.
+// Inverse of compressIfSmaller; throws base::Error on corrupt input or a size mismatch.
 void decompress(std::span<const std::byte> compressed, std::size_t rawSize, Bytes& out);
 
 // Reorders interleaved `channels`-byte pixels into planes (all R, all G, ...) and replaces each

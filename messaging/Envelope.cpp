@@ -5,8 +5,8 @@
 #include <span>
 #include <string>
 
+#include "base/Error.h"
 #include "messaging/Compression.h"
-#include "messaging/Error.h"
 
 namespace messaging {
 namespace {
@@ -27,8 +27,8 @@ void checkPayloadSize(std::size_t payloadBytes, std::size_t maxPayloadBytes,
                       const std::string& what) {
   const std::size_t limit = std::min(maxPayloadBytes, kLargestPayload);
   if (payloadBytes > limit)
-    throw Error(what + " of " + std::to_string(payloadBytes) + " bytes, more than the limit of " +
-                std::to_string(limit));
+    throw base::Error(what + " of " + std::to_string(payloadBytes) +
+                      " bytes, more than the limit of " + std::to_string(limit));
 }
 
 Bytes sealEnvelope(Bytes payload, ObjectId object, bool compress, bool* compressed) {
@@ -50,7 +50,7 @@ Bytes sealEnvelope(Bytes payload, ObjectId object, bool compress, bool* compress
 Envelope peekEnvelope(const Bytes& wire) {
   WireTrailer trailer;
   if (wire.size() < sizeof trailer)
-    throw Error("truncated message of " + std::to_string(wire.size()) + " bytes");
+    throw base::Error("truncated message of " + std::to_string(wire.size()) + " bytes");
   std::memcpy(&trailer, wire.data() + wire.size() - sizeof trailer, sizeof trailer);
   return Envelope{trailer.object, trailer.rawBytes, trailer.flags};
 }
@@ -59,15 +59,15 @@ Envelope openEnvelope(Bytes&& wire, std::size_t maxPayloadBytes, Bytes& payload)
   const Envelope envelope = peekEnvelope(wire);
   const std::string what = "message to object id " + std::to_string(envelope.object);
   if (envelope.flags & ~kKnownFlags)
-    throw Error(what + " has unknown flags " + std::to_string(envelope.flags));
+    throw base::Error(what + " has unknown flags " + std::to_string(envelope.flags));
   checkPayloadSize(envelope.rawBytes, maxPayloadBytes, what);
   const size_t bodyBytes = wire.size() - kEnvelopeBytes;
   if (envelope.flags & kCompressed) {
     decompress(std::span<const std::byte>(wire.data(), bodyBytes), envelope.rawBytes, payload);
   } else {
     if (bodyBytes != envelope.rawBytes)
-      throw Error(what + " says " + std::to_string(envelope.rawBytes) + " bytes but carries " +
-                  std::to_string(bodyBytes));
+      throw base::Error(what + " says " + std::to_string(envelope.rawBytes) +
+                        " bytes but carries " + std::to_string(bodyBytes));
     payload = std::move(wire);
     payload.resize(bodyBytes);
   }

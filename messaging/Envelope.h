@@ -10,11 +10,12 @@
 #include <string>
 #include <vector>
 
+#include "base/ObjectIds.h"
 #include "messaging/Compression.h"
 
 namespace messaging {
 
-using ObjectId = std::uint64_t;
+using base::ObjectId;
 
 // The largest payload any message may carry: the wire buffer (payload and envelope; a compressed
 // body is only used when smaller) must fit MPI's int count.
@@ -22,7 +23,7 @@ inline constexpr std::size_t kEnvelopeBytes = 16;
 inline constexpr std::size_t kLargestPayload = 0x7FFF'FFFF - kEnvelopeBytes;
 
 // The one size cap, applied by the sender before a message is sealed and by the receiver before
-// it allocates: throws messaging::Error naming `what` (e.g. "message to object id 5") when
+// it allocates: throws base::Error naming `what` (e.g. "message to object id 5") when
 // `payloadBytes` is above `maxPayloadBytes` or kLargestPayload.
 void checkPayloadSize(std::size_t payloadBytes, std::size_t maxPayloadBytes,
                       const std::string& what);
@@ -37,10 +38,10 @@ struct Envelope {
 // and that makes it smaller (then `*compressed` is set). Payloads above kLargestPayload are
 // refused.
 Bytes sealEnvelope(Bytes payload, ObjectId object, bool compress, bool* compressed = nullptr);
-// The envelope of a wire buffer without opening it; throws messaging::Error when it is too short.
+// The envelope of a wire buffer without opening it; throws base::Error when it is too short.
 Envelope peekEnvelope(const Bytes& wire);
 // Checks the envelope of `wire` (size limit `maxPayloadBytes`, flags, sizes) and returns it with
-// the payload moved into `payload` (decompressed when needed). Throws messaging::Error naming what
+// the payload moved into `payload` (decompressed when needed). Throws base::Error naming what
 // is wrong; never allocates more than `maxPayloadBytes` for a hostile size.
 Envelope openEnvelope(Bytes&& wire, std::size_t maxPayloadBytes, Bytes& payload);
 

@@ -16,17 +16,19 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "messaging/BoundedWait.h"
+#include "base/BoundedWait.h"
+#include "base/Error.h"
+#include "base/ObjectIds.h"
 #include "messaging/Envelope.h"
-#include "messaging/Error.h"
 
 namespace messaging {
 namespace {
 
 constexpr int kTag = 7;
 // The messenger's own objects: probePeers() asks, every rank's inbox thread answers.
-constexpr ObjectId kProbeRequestObject = 0xFFFF'FFFF'FFFF'FF01ull;
-constexpr ObjectId kProbeAnswerObject = 0xFFFF'FFFF'FFFF'FF02ull;
+constexpr ObjectId kProbeRequestObject =
+    base::objectId(base::MessageObject::kMessengerProbeRequest);
+constexpr ObjectId kProbeAnswerObject = base::objectId(base::MessageObject::kMessengerProbeAnswer);
 
 struct Packet {
   int rank;  // destination when outgoing, source when incoming
@@ -144,7 +146,7 @@ struct Messenger::Impl {
   bool mpiOk(int code, const char* call, const std::string& context = {}) {
     if (code == MPI_SUCCESS) return true;
     try {
-      checkMpi(code, call);
+      base::checkMpi(code, call);
     } catch (const std::exception& e) {
       report(std::string("MPI thread: ") + e.what() + context);
     }
@@ -392,30 +394,31 @@ void Messenger::Impl::waitLocallyIdle(Clock::time_point deadline) {
 
 Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_unique<Impl>()) {
   if (options.maxMessageBytes > kLargestPayload)
-    throw Error("messenger: a message limit of " + std::to_string(options.maxMessageBytes) +
-                " bytes is more than MPI can send in one message (" +
-                std::to_string(kLargestPayload) + ")");
+    throw base::Error("messenger: a message limit of " + std::to_string(options.maxMessageBytes) +
+                      " bytes is more than MPI can send in one message (" +
+                      std::to_string(kLargestPayload) + ")");
   impl_->options = options;
   impl_->owner = this;
   impl_->uncaughtAtConstruction = std::uncaught_exceptions();
   const std::string notJoined = "starting the messenger: another rank did not join within " +
                                 std::to_string(options.quiesceTimeout.count()) + " ms";
-  checkMpi(MPI_Comm_dup(comm, &impl_->p2p), "MPI_Comm_dup");
-  checkMpi(MPI_Comm_dup(comm, &impl_->control), "MPI_Comm_dup");
+  base::checkMpi(MPI_Comm_dup(comm, &impl_->p2p), "MPI_Comm_dup");
+  base::checkMpi(MPI_Comm_dup(comm, &impl_->control), "MPI_Comm_dup");
   {
     // No traffic on the new communicators until every rank has made them: OpenMPI 4.1 can take
     // a fragment for a communicator that a rank is still making (it is in the lookup table, its
     // matching state not yet) on another thread's progress, such as a live messenger's, and
     // crashes there (a SEGV in mca_pml_ob1_recv_frag_callback_match, seen under ASan).
     MPI_Request made;
-    checkMpi(MPI_Ibarrier(comm, &made), "MPI_Ibarrier");
-    waitWithDeadline(made, Clock::now() + options.quiesceTimeout, notJoined);
+    base::checkMpi(MPI_Ibarrier(comm, &made), "MPI_Ibarrier");
+    base::waitWithDeadline(made, Clock::now() + options.quiesceTimeout, notJoined);
   }
   MPI_Comm_rank(impl_->p2p, &impl_->rank);
   MPI_Comm_size(impl_->p2p, &impl_->size);
   MPI_Comm host;
-  checkMpi(MPI_Comm_split_type(impl_->p2p, MPI_COMM_TYPE_SHARED, impl_->rank, MPI_INFO_NULL, &host),
-           "MPI_Comm_split_type");
+  base::checkMpi(
+      MPI_Comm_split_type(impl_->p2p, MPI_COMM_TYPE_SHARED, impl_->rank, MPI_INFO_NULL, &host),
+      "MPI_Comm_split_type");
   MPI_Group hostGroup, allGroup;
   MPI_Comm_group(host, &hostGroup);
   MPI_Comm_group(impl_->p2p, &allGroup);
@@ -434,10 +437,10 @@ Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_
   MPI_Get_processor_name(name, &length);
   std::vector<char> names(static_cast<size_t>(impl_->size) * MPI_MAX_PROCESSOR_NAME);
   MPI_Request request;
-  checkMpi(MPI_Iallgather(name, MPI_MAX_PROCESSOR_NAME, MPI_CHAR, names.data(),
-                          MPI_MAX_PROCESSOR_NAME, MPI_CHAR, impl_->control, &request),
-           "MPI_Iallgather");
-  waitWithDeadline(request, Clock::now() + options.quiesceTimeout, notJoined);
+  base::checkMpi(MPI_Iallgather(name, MPI_MAX_PROCESSOR_NAME, MPI_CHAR, names.data(),
+                                MPI_MAX_PROCESSOR_NAME, MPI_CHAR, impl_->control, &request),
+                 "MPI_Iallgather");
+  base::waitWithDeadline(request, Clock::now() + options.quiesceTimeout, notJoined);
   for (int r = 0; r < impl_->size; ++r) {
     const char* n = names.data() + static_cast<size_t>(r) * MPI_MAX_PROCESSOR_NAME;
     impl_->hosts.emplace_back(n, strnlen(n, MPI_MAX_PROCESSOR_NAME));
@@ -478,8 +481,8 @@ int Messenger::size() const { return impl_->size; }
 void Messenger::registerObject(ObjectId id, MessageHandler* handler) {
   std::lock_guard lock(impl_->registryMutex);
   if (!impl_->handlers.emplace(id, handler).second)
-    throw Error("object id " + std::to_string(id) + " is already registered on rank " +
-                std::to_string(impl_->rank));
+    throw base::Error("object id " + std::to_string(id) + " is already registered on rank " +
+                      std::to_string(impl_->rank));
 }
 
 void Messenger::unregisterObject(ObjectId id) {
@@ -494,8 +497,8 @@ void Messenger::unregisterObject(ObjectId id) {
 
 void Messenger::send(int toRank, ObjectId id, Bytes payload) {
   if (toRank < 0 || toRank >= impl_->size)
-    throw Error("send to rank " + std::to_string(toRank) + " of a messenger with " +
-                std::to_string(impl_->size) + " ranks");
+    throw base::Error("send to rank " + std::to_string(toRank) + " of a messenger with " +
+                      std::to_string(impl_->size) + " ranks");
   const size_t rawBytes = payload.size();
   checkPayloadSize(
       rawBytes, impl_->options.maxMessageBytes,
@@ -561,7 +564,7 @@ std::string Messenger::probePeers(std::chrono::milliseconds wait) {
 
 void Messenger::Impl::handleProbe(int fromRank, ObjectId object, const Bytes& payload) {
   std::uint64_t round = 0;
-  if (payload.size() != sizeof round) throw Error("malformed probe");
+  if (payload.size() != sizeof round) throw base::Error("malformed probe");
   std::memcpy(&round, payload.data(), sizeof round);
   if (object == kProbeRequestObject) {
     owner->send(fromRank, kProbeAnswerObject, Bytes(payload));
@@ -592,12 +595,13 @@ void Messenger::quiesce() {
     auto* counts =
         new std::uint64_t[4]{impl_->messagesSent.load(), impl_->messagesHandled.load(), 0, 0};
     MPI_Request request;
-    checkMpi(MPI_Iallreduce(counts, counts + 2, 2, MPI_UINT64_T, MPI_SUM, impl_->control, &request),
-             "MPI_Iallreduce");
-    waitWithDeadline(request, deadline,
-                     "messaging did not quiesce within " +
-                         std::to_string(impl_->options.quiesceTimeout.count()) +
-                         " ms: another rank is not answering");
+    base::checkMpi(
+        MPI_Iallreduce(counts, counts + 2, 2, MPI_UINT64_T, MPI_SUM, impl_->control, &request),
+        "MPI_Iallreduce");
+    base::waitWithDeadline(request, deadline,
+                           "messaging did not quiesce within " +
+                               std::to_string(impl_->options.quiesceTimeout.count()) +
+                               " ms: another rank is not answering");
     const std::uint64_t global[2] = {counts[2], counts[3]};
     delete[] counts;
     if (global[0] == global[1] && global[0] == previous[0] && global[1] == previous[1]) return;

@@ -57,7 +57,7 @@ struct MessengerOptions {
   // Longest sleep of an idle MPI thread; bounds the added receive latency.
   std::chrono::microseconds maxIdleSleep{200};
   std::chrono::microseconds restingSleep{10000};  // see setResting
-  // The messenger's collectives give up with a DeadlineError after this long: the start-up
+  // The messenger's collectives give up with a base::DeadlineError after this long: the start-up
   // exchange in the constructor, quiesce() and stop().
   std::chrono::milliseconds quiesceTimeout{30000};
   // Threads that decompress and handle messages for concurrent handlers at once, the inbox
@@ -90,8 +90,8 @@ class Messenger {
 
   // Collective over `comm`, which it duplicates (twice: point-to-point traffic and its own
   // collectives never share a communicator with the caller's collectives). The exchange of host
-  // names is bounded by quiesceTimeout (a DeadlineError); the communicator splits before it have
-  // no non-blocking form (docs/design.md, "Deadlines").
+  // names is bounded by quiesceTimeout (a base::DeadlineError); the communicator splits before it
+  // have no non-blocking form (docs/design.md, "Deadlines").
   explicit Messenger(MPI_Comm comm, MessengerOptions options = {});
   ~Messenger();  // stop()s if still running (collective then too), unless unwinding (above).
   Messenger(const Messenger&) = delete;
@@ -108,7 +108,7 @@ class Messenger {
   // A payload with this much spare capacity (reserve(size + kSpareCapacity)) goes out without
   // being copied.
   static constexpr std::size_t kSpareCapacity = kEnvelopeBytes;
-  // Throws messaging::Error, sending nothing, for a payload above maxMessageBytes (the receiver's
+  // Throws base::Error, sending nothing, for a payload above maxMessageBytes (the receiver's
   // cap). A send that MPI refuses later is reported through the error callback.
   void send(int toRank, ObjectId id, Bytes payload);
   // Whether `rank` shares this rank's host (MPI_COMM_TYPE_SHARED), and whether a message to it
@@ -130,7 +130,7 @@ class Messenger {
   std::string probePeers(std::chrono::milliseconds wait);
 
   // Returns once every message sent by any rank before it entered quiesce() (and every message
-  // those sent while being handled) has been handled. Throws Error on timeout.
+  // those sent while being handled) has been handled. Throws base::Error on timeout.
   void quiesce();
   // quiesce(), then joins both threads. Idempotent.
   void stop();

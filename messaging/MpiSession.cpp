@@ -2,17 +2,9 @@
 
 #include <string>
 
-#include "messaging/Error.h"
+#include "base/Error.h"
 
 namespace messaging {
-
-void checkMpi(int code, const char* call) {
-  if (code == MPI_SUCCESS) return;
-  char text[MPI_MAX_ERROR_STRING];
-  int length = 0;
-  MPI_Error_string(code, text, &length);
-  throw Error(std::string(call) + " failed: " + std::string(text, static_cast<size_t>(length)));
-}
 
 namespace {
 const char* levelName(int level) {
@@ -31,14 +23,14 @@ const char* levelName(int level) {
 
 MpiSession::MpiSession(int* argc, char*** argv) {
   int provided = MPI_THREAD_SINGLE;
-  checkMpi(MPI_Init_thread(argc, argv, MPI_THREAD_MULTIPLE, &provided), "MPI_Init_thread");
+  base::checkMpi(MPI_Init_thread(argc, argv, MPI_THREAD_MULTIPLE, &provided), "MPI_Init_thread");
   if (provided < MPI_THREAD_MULTIPLE) {
     MPI_Finalize();
-    throw Error(std::string("this MPI provides only ") + levelName(provided) +
-                "; dfbwall's messaging thread needs MPI_THREAD_MULTIPLE (OpenMPI built with "
-                "thread support, as Debian's openmpi-bin is)");
+    throw base::Error(std::string("this MPI provides only ") + levelName(provided) +
+                      "; dfbwall's messaging thread needs MPI_THREAD_MULTIPLE (OpenMPI built with "
+                      "thread support, as Debian's openmpi-bin is)");
   }
-  // Errors come back as return codes (checkMpi turns them into a messaging::Error naming the call)
+  // Errors come back as return codes (checkMpi turns them into a base::Error naming the call)
   // instead of MPI's own abort; communicators duplicated from the world inherit this.
   MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);

@@ -1,6 +1,6 @@
 #include "renderers/BuiltinScenes.h"
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/Rng.h"
 #include "renderers/SceneToml.h"
 #include "renderers/scivis/Particles.h"
@@ -175,7 +175,7 @@ SceneDesc loadSceneDesc(const std::string& spec) {
   if (name == "particles") return particleScene();
   std::string names;
   for (const auto& n : builtinSceneNames()) names += (names.empty() ? "" : ", ") + n;
-  throw Error("unknown built-in scene '" + name + "' (choose " + names + ")");
+  throw base::Error("unknown built-in scene '" + name + "' (choose " + names + ")");
 }
 
 }  // namespace renderers

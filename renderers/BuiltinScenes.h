@@ -23,7 +23,7 @@ SceneDesc particleScene(std::size_t count = 1'000'000);
 
 std::vector<std::string> builtinSceneNames();
 // "builtin:NAME" → that scene; anything else is a TOML file path (SceneToml.h).
-// Throws renderers::Error, listing the built-in names for an unknown one.
+// Throws base::Error, listing the built-in names for an unknown one.
 SceneDesc loadSceneDesc(const std::string& spec);
 
 }  // namespace renderers

@@ -6,7 +6,7 @@
 #include <emmintrin.h>
 #endif
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 
 namespace renderers {
 
@@ -19,10 +19,10 @@ CameraDesc orbitCamera(const CameraDesc& desc, float degrees) {
 }
 
 Camera::Camera(const CameraDesc& d, int width, int height) : origin_(d.position) {
-  if (width <= 0 || height <= 0) throw Error("camera: image size must be positive");
+  if (width <= 0 || height <= 0) throw base::Error("camera: image size must be positive");
   const Vec3 view = d.lookAt - d.position;
   if (length(view) <= 0 || length(cross(view, d.up)) <= 0)
-    throw Error("camera: look_at must differ from position and not lie along up");
+    throw base::Error("camera: look_at must differ from position and not lie along up");
   forward_ = normalize(view);
   // forward x up points to image right for a right-handed world: the classic Cornell box camera
   // (looking down +z, up +y) then shows the red wall (x = 556) on the left, as published.

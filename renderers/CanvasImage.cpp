@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "base/Parallel.h"
 #include "dfb/Tile.h"
-#include "renderers/Parallel.h"
 
 namespace renderers {
 
@@ -16,8 +16,8 @@ void renderCanvas(const Renderer& renderer, int width, int height, int tileSize,
   for (int y = 0; y < height; y += tileSize)
     for (int x = 0; x < width; x += tileSize)
       regions.push_back({x, y, std::min(width, x + tileSize), std::min(height, y + tileSize)});
-  ThreadLimit limit(threads);
-  parallelFor(regions.size(), [&](std::size_t i) {
+  base::ThreadLimit limit(threads);
+  base::parallelFor(regions.size(), [&](std::size_t i) {
     dfb::Tile tile;
     renderer.render(regions[i], accumulationId, firstSample, spp, tile);
     const dfb::Region& g = tile.region;

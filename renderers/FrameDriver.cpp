@@ -2,15 +2,15 @@
 
 #include <atomic>
 
-#include "dfb/Timing.h"
-#include "renderers/Parallel.h"
+#include "base/Parallel.h"
+#include "base/Timing.h"
 
 namespace renderers {
 
 struct FrameDriver::Impl {
   Renderer& renderer;
   FrameDriverOptions options;
-  ThreadLimit threads;
+  base::ThreadLimit threads;
   // Shared with the DFB's expectedInputs callback, which begin() calls on this thread.
   std::shared_ptr<WorkPlan> plan = std::make_shared<WorkPlan>();
   Impl(Renderer& r, FrameDriverOptions o) : renderer(r), options(o), threads(o.threads) {}
@@ -77,7 +77,7 @@ void FrameDriver::setSamplesPerPixel(std::uint32_t samples) {
 
 FrameReport FrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb, const dfb::FrameInfo& frame,
                                      const CameraDesc& camera) {
-  using dfb::Clock;
+  using base::Clock;
   const auto t0 = Clock::now();
   Impl& m = *impl_;
   const dfb::TileGrid& grid = dfb.grid();
@@ -96,12 +96,12 @@ FrameReport FrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb, const dfb
   // Rendering alone, in CPU time: setTile() may do the owner's per-pixel work (tone mapping,
   // routing) on this thread too, and the DFB times that itself.
   std::atomic<std::int64_t> renderCpuNs{0};
-  parallelFor(mine.size(), [&](std::size_t i) {
+  base::parallelFor(mine.size(), [&](std::size_t i) {
     dfb::Tile tile;
     const Assignment& a = mine[i];
-    const std::int64_t cpu = dfb::threadCpuNs();
+    const std::int64_t cpu = base::threadCpuNs();
     m.renderer.render(grid.region(a.tile), accumulationId, a.firstSample, a.samples, tile);
-    renderCpuNs += dfb::threadCpuNs() - cpu;
+    renderCpuNs += base::threadCpuNs() - cpu;
     dfb.setTile(std::move(tile));
   });
   const auto t2 = Clock::now();
@@ -109,9 +109,9 @@ FrameReport FrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb, const dfb
   report.tilesRendered = static_cast<int>(mine.size());
   for (const Assignment& a : mine)
     report.samples += std::uint64_t{a.samples} * grid.region(a.tile).pixelCount();
-  report.renderMs = dfb::msBetween(t1, t2);
+  report.renderMs = base::msBetween(t1, t2);
   report.renderCpuMs = static_cast<double>(renderCpuNs.load()) * 1e-6;
-  report.frameMs = dfb::msBetween(t0, Clock::now());
+  report.frameMs = base::msBetween(t0, Clock::now());
   return report;
 }
 

@@ -7,8 +7,8 @@
 
 #include <string>
 
-#include "dfb/MemoryBudget.h"
-#include "renderers/Error.h"
+#include "base/Error.h"
+#include "base/MemoryBudget.h"
 
 namespace renderers {
 
@@ -25,9 +25,9 @@ TriangleMesh importMesh(const std::string& path) {
     // would reach the user as a bare "std::bad_alloc".
     const std::string why = importer.GetErrorString();
     if (why.find("bad_alloc") != std::string::npos)
-      throw Error(path + ": out of memory while importing it; this rank may hold " +
-                  dfb::memoryLimitText());
-    throw Error(path + ": " + why);
+      throw base::Error(path + ": out of memory while importing it; this rank may hold " +
+                        base::memoryLimitText());
+    throw base::Error(path + ": " + why);
   }
   TriangleMesh out;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
@@ -44,7 +44,7 @@ TriangleMesh importMesh(const std::string& path) {
           {base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
     }
   }
-  if (out.triangles.empty()) throw Error(path + ": no triangles in the file");
+  if (out.triangles.empty()) throw base::Error(path + ": no triangles in the file");
   return out;
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 // Reads a triangle mesh from any format Assimp knows (OBJ, PLY, OFF, STL, glTF, ...): every mesh
 // of the file, node transforms applied, polygons triangulated, merged into one TriangleMesh.
-// Throws renderers::Error naming the file and Assimp's reason.
+// Throws base::Error naming the file and Assimp's reason.
 #include <string>
 
 #include "renderers/SceneDesc.h"

@@ -18,9 +18,8 @@ struct RenderScene {
 
 // Builds what `renderer` draws from `desc` (the whole scene); with `distributed` only the
 // description (the bricks load their own parts: scivis/BrickFrameDriver.h). Throws
-// renderers::Error.
-RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc,
-                             bool distributed = false);
+// base::Error.
+RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc, bool distributed = false);
 
 // Any renderer by name: "pathtracer", "primary", "pattern" or "scivis". `scene` must outlive it.
 std::unique_ptr<Renderer> makeRenderer(const std::string& name, const RenderScene& scene,

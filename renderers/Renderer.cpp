@@ -6,8 +6,8 @@
 #include <cmath>
 #include <new>
 
-#include "dfb/MemoryBudget.h"
-#include "renderers/Error.h"
+#include "base/Error.h"
+#include "base/MemoryBudget.h"
 #include "renderers/PathTracer.h"
 #include "renderers/PatternRenderer.h"
 #include "renderers/PrimaryRenderer.h"
@@ -19,13 +19,14 @@ namespace renderers {
 std::unique_ptr<Renderer> makeRenderer(const std::string& name, const Scene& scene,
                                        const RenderSettings& settings) {
   if (settings.width <= 0 || settings.height <= 0)
-    throw Error("renderer: canvas size must be positive");
+    throw base::Error("renderer: canvas size must be positive");
   if (name == "pathtracer") return std::make_unique<PathTracer>(scene, settings);
   if (name == "primary") return std::make_unique<PrimaryRenderer>(scene, settings);
   if (name == "pattern") return std::make_unique<PatternRenderer>(settings);
   if (name == "scivis")
-    throw Error("the scivis renderer draws a scivis scene: build it with buildRenderScene");
-  throw Error("unknown renderer '" + name + "' (choose pathtracer, primary, pattern or scivis)");
+    throw base::Error("the scivis renderer draws a scivis scene: build it with buildRenderScene");
+  throw base::Error("unknown renderer '" + name +
+                    "' (choose pathtracer, primary, pattern or scivis)");
 }
 
 namespace {
@@ -38,9 +39,10 @@ RenderScene buildScene(const std::string& renderer, SceneDesc desc, bool distrib
     out.scivis = std::make_shared<const SciVisScene>(out.desc, wholeScene(*out.desc));
   } else if (renderer != "pattern") {
     if (out.desc->instances.empty())
-      throw Error("renderer " + renderer +
-                  " draws meshes and spheres, and the scene has none (its volumes and particles "
-                  "are drawn by --renderer scivis)");
+      throw base::Error(
+          "renderer " + renderer +
+          " draws meshes and spheres, and the scene has none (its volumes and particles "
+          "are drawn by --renderer scivis)");
     out.surfaces = std::make_shared<const Scene>(*out.desc);
   }
   return out;
@@ -52,10 +54,11 @@ RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc, bool d
   try {
     return buildScene(renderer, std::move(desc), distributed);
   } catch (const std::bad_alloc&) {
-    throw Error("building the scene for the " + renderer +
-                " renderer (its volumes and bounding volume hierarchies): out of memory; this "
-                "rank may hold " +
-                dfb::memoryLimitText());
+    throw base::Error(
+        "building the scene for the " + renderer +
+        " renderer (its volumes and bounding volume hierarchies): out of memory; this "
+        "rank may hold " +
+        base::memoryLimitText());
   }
 }
 
@@ -63,12 +66,12 @@ std::unique_ptr<Renderer> makeRenderer(const std::string& name, const RenderScen
                                        const RenderSettings& settings) {
   if (name == "scivis") {
     if (settings.width <= 0 || settings.height <= 0)
-      throw Error("renderer: canvas size must be positive");
-    if (!scene.scivis) throw Error("renderer scivis: the scene was not built for it");
+      throw base::Error("renderer: canvas size must be positive");
+    if (!scene.scivis) throw base::Error("renderer scivis: the scene was not built for it");
     return std::make_unique<SciVisRenderer>(*scene.scivis, settings);
   }
   if (name == "pattern") return std::make_unique<PatternRenderer>(settings);
-  if (!scene.surfaces) throw Error("renderer " + name + ": the scene was built for scivis");
+  if (!scene.surfaces) throw base::Error("renderer " + name + ": the scene was built for scivis");
   return makeRenderer(name, *scene.surfaces, settings);
 }
 

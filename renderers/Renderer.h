@@ -57,7 +57,7 @@ class Renderer {
 };
 
 // "pathtracer", "primary" or "pattern"; `scene` must outlive the renderer (unused by
-// "pattern"). Throws renderers::Error naming the choices for an unknown name.
+// "pattern"). Throws base::Error naming the choices for an unknown name.
 std::unique_ptr<Renderer> makeRenderer(const std::string& name, const Scene& scene,
                                        const RenderSettings& settings);
 

@@ -6,9 +6,9 @@
 #include <limits>
 #include <string>
 
-#include "dfb/MemoryBudget.h"
+#include "base/Error.h"
+#include "base/MemoryBudget.h"
 #include "renderers/EmbreeRays.h"
-#include "renderers/Error.h"
 
 namespace renderers {
 
@@ -69,17 +69,17 @@ void checkMemory(const SceneDesc& d) {
   std::size_t largest = 0;
   for (const Instance& inst : d.instances) {
     const Shape& shape = d.shapes.at(inst.shape);
-    const std::uint64_t bytes = dfb::bytesTimes(shape.primitiveCount(), kBvhBytesPerPrimitive);
-    total = dfb::bytesPlus(total, bytes);
+    const std::uint64_t bytes = base::bytesTimes(shape.primitiveCount(), kBvhBytesPerPrimitive);
+    total = base::bytesPlus(total, bytes);
     if (bytes > largestBytes) largestBytes = bytes, largest = inst.shape;
   }
-  if (const std::string problem = dfb::memoryProblem(total); !problem.empty()) {
+  if (const std::string problem = base::memoryProblem(total); !problem.empty()) {
     const Shape& s = d.shapes[largest];
-    throw Error((s.isSpheres() ? "sphere '" : "mesh '") + s.name + "'" +
-                (s.file.empty() ? std::string() : " (" + s.file + ")") + ": the scene's " +
-                "bounding volume hierarchy over its " + std::to_string(s.primitiveCount()) +
-                " primitives (about " + std::to_string(kBvhBytesPerPrimitive) +
-                " bytes each, per placement) and the rest of the scene " + problem);
+    throw base::Error((s.isSpheres() ? "sphere '" : "mesh '") + s.name + "'" +
+                      (s.file.empty() ? std::string() : " (" + s.file + ")") + ": the scene's " +
+                      "bounding volume hierarchy over its " + std::to_string(s.primitiveCount()) +
+                      " primitives (about " + std::to_string(kBvhBytesPerPrimitive) +
+                      " bytes each, per placement) and the rest of the scene " + problem);
   }
 }
 
@@ -89,21 +89,23 @@ void validate(const SceneDesc& d) {
     for (const auto& t : s.mesh.triangles)
       for (auto i : t)
         if (i >= s.mesh.positions.size())
-          throw Error("shape '" + s.name + "': vertex index " + std::to_string(i) +
-                      " out of range (" + std::to_string(s.mesh.positions.size()) + " vertices)");
+          throw base::Error("shape '" + s.name + "': vertex index " + std::to_string(i) +
+                            " out of range (" + std::to_string(s.mesh.positions.size()) +
+                            " vertices)");
     for (float r : s.spheres.radii)
-      if (!(r > 0)) throw Error("shape '" + s.name + "': sphere radius must be positive");
+      if (!(r > 0)) throw base::Error("shape '" + s.name + "': sphere radius must be positive");
     if (s.spheres.radii.size() != s.spheres.centers.size())
-      throw Error("shape '" + s.name + "': sphere centers and radii differ in count");
+      throw base::Error("shape '" + s.name + "': sphere centers and radii differ in count");
     if (!s.primitiveMaterials.empty() && s.primitiveMaterials.size() != s.primitiveCount())
-      throw Error("shape '" + s.name + "': one material per primitive expected");
+      throw base::Error("shape '" + s.name + "': one material per primitive expected");
     for (auto m : s.primitiveMaterials)
-      if (m >= nm) throw Error("shape '" + s.name + "': material index out of range");
+      if (m >= nm) throw base::Error("shape '" + s.name + "': material index out of range");
   }
   for (const Instance& i : d.instances) {
-    if (i.shape >= d.shapes.size()) throw Error("instance of an undefined shape");
+    if (i.shape >= d.shapes.size()) throw base::Error("instance of an undefined shape");
     if (i.material >= nm)
-      throw Error("instance of '" + d.shapes[i.shape].name + "': material index out of range");
+      throw base::Error("instance of '" + d.shapes[i.shape].name +
+                        "': material index out of range");
   }
 }
 
@@ -147,7 +149,8 @@ struct Scene::Impl {
                Vec3 direction, Hit& hit) const;
 
   void check(const char* what) {
-    if (!embreeMessage.empty()) throw Error(std::string("Embree: ") + what + ": " + embreeMessage);
+    if (!embreeMessage.empty())
+      throw base::Error(std::string("Embree: ") + what + ": " + embreeMessage);
   }
 
   // The Embree geometry of `s`, its vertices moved by `toWorld` (identity for a shared shape,
@@ -238,7 +241,7 @@ Scene::Scene(SceneDesc desc) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.desc = std::move(desc);
   m.device = rtcNewDevice(nullptr);
-  if (!m.device) throw Error("Embree: cannot create a device");
+  if (!m.device) throw base::Error("Embree: cannot create a device");
   rtcSetDeviceErrorFunction(m.device, embree::keepFirstError, &m.embreeMessage);
   // A shape placed once goes into the top-level scene itself, moved to world space: Embree then
   // skips the instance step (a ray transform and a second BVH entry per ray), 13% of the

@@ -2,7 +2,7 @@
 // A scene ready to trace: one Embree 3 device and a two-level BVH (every Instance is an Embree
 // instance of its Shape's scene), plus the list of emissive triangles sampled as area lights.
 //
-// Contracts: construction builds everything and throws renderers::Error on invalid input or an
+// Contracts: construction builds everything and throws base::Error on invalid input or an
 // Embree error; afterwards every const method is thread-safe and never blocks.
 #include <cstdint>
 #include <memory>

@@ -8,8 +8,8 @@
 #include <new>
 #include <string_view>
 
-#include "dfb/MemoryBudget.h"
-#include "renderers/Error.h"
+#include "base/Error.h"
+#include "base/MemoryBudget.h"
 #include "renderers/MeshImport.h"
 #include "renderers/TomlReader.h"
 #include "renderers/scivis/SciVisToml.h"
@@ -158,25 +158,25 @@ TriangleMesh readInlineMesh(const TomlReader& r, const toml::table& t, const std
 }  // namespace
 
 SceneDesc readSceneToml(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) throw Error(path + ": scene file not found");
+  if (!std::filesystem::is_regular_file(path)) throw base::Error(path + ": scene file not found");
   // TOML++ holds every value as a node of some 50-70 bytes (the number's text: 2 or more).
   constexpr std::uint64_t kTomlBytesPerFileByte = 40;
   std::error_code ec;
   const std::uint64_t fileBytes = std::filesystem::file_size(path, ec);
-  if (std::string problem = dfb::memoryProblem(dfb::bytesTimes(fileBytes, kTomlBytesPerFileByte));
+  if (std::string problem = base::memoryProblem(base::bytesTimes(fileBytes, kTomlBytesPerFileByte));
       !ec && !problem.empty())
-    throw Error(path + ":1: the scene file (" + std::to_string(fileBytes) +
-                " bytes; reading TOML takes up to " + std::to_string(kTomlBytesPerFileByte) +
-                " times that) " + problem);
+    throw base::Error(path + ":1: the scene file (" + std::to_string(fileBytes) +
+                      " bytes; reading TOML takes up to " + std::to_string(kTomlBytesPerFileByte) +
+                      " times that) " + problem);
   toml::table root;
   try {
     root = toml::parse_file(path);
   } catch (const toml::parse_error& e) {
-    throw Error(path + ":" + std::to_string(e.source().begin.line) + ": " +
-                std::string(e.description()));
+    throw base::Error(path + ":" + std::to_string(e.source().begin.line) + ": " +
+                      std::string(e.description()));
   } catch (const std::bad_alloc&) {
-    throw Error(path + ": out of memory while reading the scene file; this rank may hold " +
-                dfb::memoryLimitText());
+    throw base::Error(path + ": out of memory while reading the scene file; this rank may hold " +
+                      base::memoryLimitText());
   }
   const TomlReader r(path);
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
@@ -211,7 +211,7 @@ SceneDesc readSceneToml(const std::string& path) {
       s.mesh = r.loading(*f, what + ".file", [&] {
         try {
           return importMesh(file.string());
-        } catch (const Error& e) {
+        } catch (const base::Error& e) {
           r.fail(*f, what + ": " + e.what());
         }
       });

@@ -1,6 +1,6 @@
 #pragma once
 // Scene files in TOML (configs/scenes/cornell.toml shows every field). Every problem is a
-// renderers::Error reading "FILE:LINE: what is wrong", naming the field, e.g.
+// base::Error reading "FILE:LINE: what is wrong", naming the field, e.g.
 //   configs/x.toml:12: material 'foo' of mesh 'bunny' is not defined
 #include <string>
 

@@ -14,8 +14,8 @@
 #include <string_view>
 #include <vector>
 
-#include "dfb/MemoryBudget.h"
-#include "renderers/Error.h"
+#include "base/Error.h"
+#include "base/MemoryBudget.h"
 #include "renderers/Math.h"
 #include "renderers/SceneDesc.h"
 
@@ -26,7 +26,7 @@ class TomlReader {
   explicit TomlReader(std::string path) : path_(std::move(path)) {}
 
   [[noreturn]] void fail(const toml::node& at, const std::string& what) const {
-    throw Error(path_ + ":" + std::to_string(at.source().begin.line) + ": " + what);
+    throw base::Error(path_ + ":" + std::to_string(at.source().begin.line) + ": " + what);
   }
 
   const toml::table& table(const toml::node& n, const std::string& what) const {
@@ -54,7 +54,7 @@ class TomlReader {
   // The memory budget (dfb/MemoryBudget.h): fails naming `at` when `bytes` (all this rank will
   // hold once `what` is loaded: what it holds already included) exceed what it may hold.
   void budget(const toml::node& at, const std::string& what, std::uint64_t bytes) const {
-    if (std::string problem = dfb::memoryProblem(bytes); !problem.empty())
+    if (std::string problem = base::memoryProblem(bytes); !problem.empty())
       fail(at, what + " " + problem);
   }
 
@@ -65,8 +65,8 @@ class TomlReader {
     try {
       return load();
     } catch (const std::bad_alloc&) {
-      fail(at,
-           what + ": out of memory while loading it; this rank may hold " + dfb::memoryLimitText());
+      fail(at, what + ": out of memory while loading it; this rank may hold " +
+                   base::memoryLimitText());
     } catch (const std::length_error&) {
       fail(at, what + ": out of memory while loading it (a size beyond what a container holds)");
     }

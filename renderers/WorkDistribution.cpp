@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numeric>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 
 namespace renderers {
 
@@ -12,12 +12,13 @@ Distribution distributionFromName(const std::string& name) {
   if (name == "static") return Distribution::Static;
   if (name == "roundrobin") return Distribution::RoundRobin;
   if (name == "dynamic") return Distribution::Dynamic;
-  throw Error("unknown work distribution '" + name + "' (choose static, roundrobin or dynamic)");
+  throw base::Error("unknown work distribution '" + name +
+                    "' (choose static, roundrobin or dynamic)");
 }
 
 WorkPlan planWork(int tileCount, int ranks, std::uint32_t spp, std::span<const float> errors,
                   Distribution distribution, const DynamicOptions& dynamic) {
-  if (tileCount < 0 || ranks <= 0) throw Error("work distribution: need at least one rank");
+  if (tileCount < 0 || ranks <= 0) throw base::Error("work distribution: need at least one rank");
   WorkPlan plan;
   plan.perRank.resize(static_cast<std::size_t>(ranks));
   plan.inputsPerTile.assign(static_cast<std::size_t>(tileCount), 1);

@@ -18,7 +18,7 @@ namespace renderers {
 
 enum class Distribution { Static, RoundRobin, Dynamic };
 
-// "static", "roundrobin" or "dynamic"; throws renderers::Error naming the choices otherwise.
+// "static", "roundrobin" or "dynamic"; throws base::Error naming the choices otherwise.
 Distribution distributionFromName(const std::string& name);
 
 struct Assignment {

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The layering of docs/design.md, checked on every include: messaging/ includes nothing of ours;
+# The layering of docs/design.md, checked on every include: base/ includes nothing of ours;
+# messaging/ only base/;
 # dfb/ uses messaging/ only; renderers/ and wall/ use dfb/ and messaging/ but not each other (nor
 # apps/, api/); only apps/ and api/ (the data-distributed API) tie them together, and neither
 # includes the other; bench/ and examples/ never include tests/.
@@ -16,6 +17,7 @@ forbid() {  # forbid FOLDER PATTERN...
     fi
   done
 }
+forbid base messaging dfb renderers wall apps api
 forbid messaging dfb renderers wall apps api
 forbid dfb renderers wall apps api
 forbid renderers wall apps api
@@ -30,5 +32,5 @@ if hits=$(grep -nE '#include +"' "$root/api/DataDistributed.h"); then
   echo "FAIL: api/DataDistributed.h must include only <mpi.h> and standard headers:"; echo "$hits"
   status=1
 fi
-[ $status -eq 0 ] && echo "messaging/ -> nothing; dfb/ -> messaging/ only; renderers/, wall/ -> dfb/, messaging/ only; api/ self-contained; bench/, examples/ -> no tests/: holds"
+[ $status -eq 0 ] && echo "base/ -> nothing; messaging/ -> base/ only; dfb/ -> messaging/ only; renderers/, wall/ -> dfb/, messaging/ only; api/ self-contained; bench/, examples/ -> no tests/: holds"
 exit $status

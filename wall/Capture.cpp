@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <system_error>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Png.h"
 
 namespace wall {
@@ -33,7 +33,7 @@ std::string writeDisplayCapture(const std::string& dir, const Layout& layout, in
   const std::string path = displayCapturePath(dir, d.name, frameId);
   std::error_code ec;
   std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
-  if (ec) throw Error(path + ": cannot create the capture folder: " + ec.message());
+  if (ec) throw base::Error(path + ": cannot create the capture folder: " + ec.message());
   writePng(path, rgba8, d.rect.width(), d.rect.height());
   return path;
 }
@@ -41,8 +41,8 @@ std::string writeDisplayCapture(const std::string& dir, const Layout& layout, in
 Image composeWallPreview(const Layout& layout,
                          const std::vector<const std::uint32_t*>& displayPixels) {
   if (displayPixels.size() != layout.displays.size())
-    throw Error("composeWallPreview: " + std::to_string(displayPixels.size()) +
-                " pixel buffers for " + std::to_string(layout.displays.size()) + " displays");
+    throw base::Error("composeWallPreview: " + std::to_string(displayPixels.size()) +
+                      " pixel buffers for " + std::to_string(layout.displays.size()) + " displays");
   Image canvas(layout.canvasWidth, layout.canvasHeight, kBezelColor);
   for (size_t i = 0; i < layout.displays.size(); ++i) {
     if (!displayPixels[i]) continue;

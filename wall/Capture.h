@@ -20,7 +20,7 @@ std::string displayCapturePath(const std::string& dir, const std::string& displa
 std::string wallPreviewPath(const std::string& dir, std::uint32_t frameId);
 
 // Writes display `display`'s frame (rect width x height pixels) to its capture path, creating
-// DIR/<name>/ when needed; returns the path. Throws wall::Error.
+// DIR/<name>/ when needed; returns the path. Throws base::Error.
 std::string writeDisplayCapture(const std::string& dir, const Layout& layout, int display,
                                 std::uint32_t frameId, const std::uint32_t* rgba8);
 

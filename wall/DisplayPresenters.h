@@ -19,7 +19,7 @@ struct DisplayPresenters {
   std::vector<Presenter*> list() const;
 };
 
-// Throws wall::Error when a window or context cannot be made.
+// Throws base::Error when a window or context cannot be made.
 std::unique_ptr<DisplayPresenters> makeDisplayPresenters(const Layout& layout, int process,
                                                          bool offscreen);
 

@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 
 namespace wall {
 
@@ -25,12 +25,12 @@ void DisplayRoutingOp::process(dfb::FinishedTile& tile) {
   if (tile.tileIndex < 0 || tile.tileIndex >= tiles_.tileCount() ||
       tiles_.region(tile.tileIndex) != tile.region) {
     const dfb::Region& r = tile.region;
-    throw Error("display routing: finished tile " + std::to_string(tile.tileIndex) + " [" +
-                std::to_string(r.x0) + ", " + std::to_string(r.x1) + ") x [" +
-                std::to_string(r.y0) + ", " + std::to_string(r.y1) +
-                ") is not a tile of the wall's " + std::to_string(tiles_.width()) + "x" +
-                std::to_string(tiles_.height()) + " canvas in tiles of " +
-                std::to_string(tiles_.tileSize()) + " (the DFB's tile size must be the op's)");
+    throw base::Error(
+        "display routing: finished tile " + std::to_string(tile.tileIndex) + " [" +
+        std::to_string(r.x0) + ", " + std::to_string(r.x1) + ") x [" + std::to_string(r.y0) + ", " +
+        std::to_string(r.y1) + ") is not a tile of the wall's " + std::to_string(tiles_.width()) +
+        "x" + std::to_string(tiles_.height()) + " canvas in tiles of " +
+        std::to_string(tiles_.tileSize()) + " (the DFB's tile size must be the op's)");
   }
   const auto& pieces = piecesOfTile_[static_cast<size_t>(tile.tileIndex)];
   for (const Piece& piece : pieces) {

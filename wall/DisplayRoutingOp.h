@@ -22,7 +22,7 @@ class DisplayRoutingOp : public dfb::PixelOp {
  public:
   // `tileSize` must be the DFB's; the cut of every tile is computed once, here. `sink` carries
   // the pieces (the job's messenger or a service link). A finished tile that is not one of the
-  // canvas's tiles at that size (another size, another canvas) throws wall::Error saying so.
+  // canvas's tiles at that size (another size, another canvas) throws base::Error saying so.
   DisplayRoutingOp(std::shared_ptr<PieceSink> sink, const Layout& layout, int tileSize);
   // The single-job wall: pieces to the wall ranks of `roles` through `messenger`.
   DisplayRoutingOp(messaging::Messenger& messenger, const Layout& layout, const RankRoles& roles,

@@ -3,7 +3,7 @@
 #include <cstring>
 #include <string>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/PieceMessage.h"
 
 namespace wall {
@@ -19,9 +19,9 @@ FrameCredits::~FrameCredits() {
 void FrameCredits::waitForPresented(std::int64_t frameId, std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
   if (!presented_.wait_for(lock, timeout, [&] { return lastPresented_ >= frameId; }))
-    throw dfb::DeadlineError("the wall did not present frame " + std::to_string(frameId) +
-                             " within " + std::to_string(timeout.count()) +
-                             " ms (last presented: " + std::to_string(lastPresented_) + ")");
+    throw base::DeadlineError("the wall did not present frame " + std::to_string(frameId) +
+                              " within " + std::to_string(timeout.count()) +
+                              " ms (last presented: " + std::to_string(lastPresented_) + ")");
 }
 
 std::int64_t FrameCredits::lastPresented() const {
@@ -49,8 +49,8 @@ struct Acknowledgement {
 void FrameCredits::incoming(int fromRank, messaging::Bytes&& payload) {
   Acknowledgement ack;
   if (payload.size() != sizeof ack)
-    throw Error("malformed frame acknowledgement of " + std::to_string(payload.size()) +
-                " bytes from rank " + std::to_string(fromRank));
+    throw base::Error("malformed frame acknowledgement of " + std::to_string(payload.size()) +
+                      " bytes from rank " + std::to_string(fromRank));
   std::memcpy(&ack, payload.data(), sizeof ack);
   acknowledged(ack.frameId, ack.completeNs, "rank " + std::to_string(fromRank));
 }
@@ -60,8 +60,8 @@ void FrameCredits::acknowledged(std::uint32_t frameId, std::int64_t completeNs,
   {
     std::lock_guard lock(mutex_);
     if (frameId != lastPresented_ + 1)
-      throw Error("frame acknowledgement for frame " + std::to_string(frameId) + " from " + from +
-                  " after frame " + std::to_string(lastPresented_));
+      throw base::Error("frame acknowledgement for frame " + std::to_string(frameId) + " from " +
+                        from + " after frame " + std::to_string(lastPresented_));
     lastPresented_ = frameId;
     times_[frameId] = {completeNs, std::chrono::steady_clock::now().time_since_epoch().count()};
     // Kept only until the frame's statistics are written; a run without them never asks.

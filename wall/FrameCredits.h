@@ -24,7 +24,7 @@ class FrameCredits : public messaging::MessageHandler {
   ~FrameCredits() override;
 
   // Blocks until frame `frameId` has been presented on every display (ids below 1 return at
-  // once). Throws wall::Error after `timeout`.
+  // once). Throws base::Error after `timeout`.
   void waitForPresented(std::int64_t frameId, std::chrono::milliseconds timeout);
   std::int64_t lastPresented() const;
   struct AckTimes {
@@ -37,7 +37,7 @@ class FrameCredits : public messaging::MessageHandler {
 
   void incoming(int fromRank, messaging::Bytes&& payload) override;
   // Every display presented `frameId` (the last display had every piece at `completeNs`).
-  // Frames are acknowledged in order; anything else throws wall::Error naming `from`.
+  // Frames are acknowledged in order; anything else throws base::Error naming `from`.
   void acknowledged(std::uint32_t frameId, std::int64_t completeNs, const std::string& from);
 
  private:

@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <string>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 
 namespace wall {
 namespace {
@@ -68,7 +68,8 @@ GlFunctions loadFunctions(GlProcLoader loader) {
   if (!gl.name) missing += std::string(missing.empty() ? "" : ", ") + #name;
   WALL_GL_FUNCTIONS(WALL_GL_LOAD)
 #undef WALL_GL_LOAD
-  if (!missing.empty()) throw Error("OpenGL functions not found through the loader: " + missing);
+  if (!missing.empty())
+    throw base::Error("OpenGL functions not found through the loader: " + missing);
   return gl;
 }
 
@@ -106,7 +107,7 @@ struct GlFrameDrawer::Impl {
     if (e != GL_NO_ERROR) {
       char code[16];
       std::snprintf(code, sizeof code, "0x%04x", e);
-      throw Error(std::string("OpenGL error ") + code + " in " + what);
+      throw base::Error(std::string("OpenGL error ") + code + " in " + what);
     }
   }
 
@@ -120,9 +121,9 @@ struct GlFrameDrawer::Impl {
       char log[2048] = "";
       gl.glGetShaderInfoLog(s, sizeof log, nullptr, log);
       gl.glDeleteShader(s);
-      throw Error(std::string("the presenter's ") +
-                  (kind == GL_VERTEX_SHADER ? "vertex" : "fragment") +
-                  " shader does not compile: " + log);
+      throw base::Error(std::string("the presenter's ") +
+                        (kind == GL_VERTEX_SHADER ? "vertex" : "fragment") +
+                        " shader does not compile: " + log);
     }
     return s;
   }
@@ -133,7 +134,7 @@ GlFrameDrawer::GlFrameDrawer(GlProcLoader loader) : impl_(std::make_unique<Impl>
   m.gl = loadFunctions(loader);
   const GlFunctions& gl = m.gl;
   if (!gl.glGetString(GL_VERSION))
-    throw Error("no current OpenGL context answers (glGetString(GL_VERSION) is null)");
+    throw base::Error("no current OpenGL context answers (glGetString(GL_VERSION) is null)");
   const GLuint vs = m.compile(GL_VERTEX_SHADER, kVertexShader);
   const GLuint fs = m.compile(GL_FRAGMENT_SHADER, kFragmentShader);
   m.program = gl.glCreateProgram();
@@ -147,7 +148,7 @@ GlFrameDrawer::GlFrameDrawer(GlProcLoader loader) : impl_(std::make_unique<Impl>
   if (!linked) {
     char log[2048] = "";
     gl.glGetProgramInfoLog(m.program, sizeof log, nullptr, log);
-    throw Error(std::string("the presenter's shader program does not link: ") + log);
+    throw base::Error(std::string("the presenter's shader program does not link: ") + log);
   }
   m.originLocation = gl.glGetUniformLocation(m.program, "origin");
   m.heightLocation = gl.glGetUniformLocation(m.program, "frameHeight");

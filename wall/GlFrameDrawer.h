@@ -17,7 +17,7 @@ using GlProcLoader = GlProc (*)(const char* name);
 class GlFrameDrawer {
  public:
   // Needs a current OpenGL 3.3 core context; resolves the GL functions with `loader` and builds
-  // the shader. Throws wall::Error naming a missing function or the shader log.
+  // the shader. Throws base::Error naming a missing function or the shader log.
   explicit GlFrameDrawer(GlProcLoader loader);
   // Frees the GL objects: the same context must be current.
   ~GlFrameDrawer();

@@ -9,7 +9,7 @@
 #include <optional>
 #include <utility>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/GlFrameDrawer.h"
 
 // From GLFW/glfw3native.h, which cannot be included here: with GLFW_EXPOSE_NATIVE_X11 it wants
@@ -49,7 +49,8 @@ Image readWindow(GLFWwindow* glfwWindow, const std::string& title, int width, in
   XWindowAttributes a;
   if (!display || !window || !XGetWindowAttributes(display, window, &a) ||
       a.map_state != IsViewable)
-    throw Error("display '" + title + "': the window is not visible, so it cannot be read back");
+    throw base::Error("display '" + title +
+                      "': the window is not visible, so it cannot be read back");
   int rootX = 0, rootY = 0;
   Window child;
   XTranslateCoordinates(display, window, a.root, 0, 0, &rootX, &rootY, &child);
@@ -58,10 +59,11 @@ Image readWindow(GLFWwindow* glfwWindow, const std::string& title, int width, in
   // XGetImage of a window not wholly on screen is an X error, which ends the process.
   if (width > a.width || height > a.height || rootX < 0 || rootY < 0 ||
       rootX + width > root.width || rootY + height > root.height)
-    throw Error("display '" + title + "': the window is not wholly on screen; cannot read it back");
+    throw base::Error("display '" + title +
+                      "': the window is not wholly on screen; cannot read it back");
   XImage* x = XGetImage(display, window, 0, 0, static_cast<unsigned>(width),
                         static_cast<unsigned>(height), AllPlanes, ZPixmap);
-  if (!x) throw Error("display '" + title + "': XGetImage failed");
+  if (!x) throw base::Error("display '" + title + "': XGetImage failed");
   Image out(width, height);
   for (int y = 0; y < height; ++y) {
     for (int col = 0; col < width; ++col) {
@@ -82,8 +84,8 @@ class GlfwPresenter : public Presenter {
       int count = 0;
       GLFWmonitor** monitors = glfwGetMonitors(&count);
       if (o.monitor < 0 || o.monitor >= count)
-        throw Error("display '" + o.title + "': monitor " + std::to_string(o.monitor) +
-                    " requested, but " + std::to_string(count) + " monitor(s) are connected");
+        throw base::Error("display '" + o.title + "': monitor " + std::to_string(o.monitor) +
+                          " requested, but " + std::to_string(count) + " monitor(s) are connected");
       monitor = monitors[o.monitor];
     }
     glfwDefaultWindowHints();
@@ -96,10 +98,10 @@ class GlfwPresenter : public Presenter {
     glfwWindowHint(GLFW_VISIBLE, GLFW_FALSE);       // placed first, then shown
     window_ = glfwCreateWindow(o.width, o.height, o.title.c_str(), monitor, nullptr);
     if (!window_)
-      throw Error("display '" + o.title +
-                  "': cannot open a window with an OpenGL 3.3 core "
-                  "context: " +
-                  glfwProblem());
+      throw base::Error("display '" + o.title +
+                        "': cannot open a window with an OpenGL 3.3 core "
+                        "context: " +
+                        glfwProblem());
     if (!monitor && o.x >= 0 && o.y >= 0) glfwSetWindowPos(window_, o.x, o.y);
     glfwSetWindowUserPointer(window_, this);
     glfwSetKeyCallback(window_, &GlfwPresenter::onKey);
@@ -218,8 +220,9 @@ class GlfwPresenter : public Presenter {
 
 GlfwSession::GlfwSession() {
   if (!glfwInit())
-    throw Error("GLFW cannot start (is there an X display? offscreen walls use --offscreen): " +
-                glfwProblem());
+    throw base::Error(
+        "GLFW cannot start (is there an X display? offscreen walls use --offscreen): " +
+        glfwProblem());
 }
 
 GlfwSession::~GlfwSession() { glfwTerminate(); }

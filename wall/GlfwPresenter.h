@@ -12,7 +12,7 @@
 namespace wall {
 
 // GLFW's library state (glfwInit ... glfwTerminate), held by the caller instead of a global.
-// Outlives every presenter made with it. Throws wall::Error when GLFW cannot start (no display).
+// Outlives every presenter made with it. Throws base::Error when GLFW cannot start (no display).
 class GlfwSession {
  public:
   GlfwSession();
@@ -34,7 +34,7 @@ struct WindowOptions {
 // The options layout display `d` asks for (position left to the window system).
 WindowOptions windowOptionsFor(const Display& d);
 
-// Opens the window; throws wall::Error naming the display when GLFW cannot (no such monitor, no
+// Opens the window; throws base::Error naming the display when GLFW cannot (no such monitor, no
 // OpenGL 3.3 core context). Its readBack() reads what the X server shows in the window
 // (XGetImage; opaque), so the window must be wholly on screen and unobscured for that.
 std::unique_ptr<Presenter> makeGlfwPresenter(GlfwSession& session, const WindowOptions& options);

@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 
 namespace wall {
 namespace {
@@ -396,8 +396,8 @@ Image renderIdleScreen(int width, int height, const IdleText& text, std::string*
 Image renderIdleScreen(int width, int height, const IdleText& text, const IdleFonts& fonts,
                        std::string* warning) {
   if (width <= 0 || height <= 0)
-    throw Error("idle screen: size " + std::to_string(width) + "x" + std::to_string(height) +
-                " is not a display's size (both must be positive)");
+    throw base::Error("idle screen: size " + std::to_string(width) + "x" + std::to_string(height) +
+                      " is not a display's size (both must be positive)");
   const std::vector<Placed> placed = layoutText(width, height, text, fonts, warning);
   Image img(width, height);
   fillBackground(img);

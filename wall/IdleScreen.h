@@ -27,7 +27,7 @@ struct IdleFonts {
   std::string bold = "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf";
 };
 
-// An opaque RGBA8 image of `width` x `height` (both > 0, else throws wall::Error). The title is
+// An opaque RGBA8 image of `width` x `height` (both > 0, else throws base::Error). The title is
 // about 1/8 of the height, the lines about 1/24 (at least 10 px); the whole text is centred and
 // shrunk until it fits inside a margin (a line too wide gets smaller, never cut). On a display too
 // small for legible text (a few pixels high) the lines and then the title are left out. The same

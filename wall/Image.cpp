@@ -3,17 +3,17 @@
 #include <algorithm>
 #include <string>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 
 namespace wall {
 namespace {
 
 void requireInside(int w, int h, const dfb::Region& r, const char* what) {
   if (r.x0 < 0 || r.y0 < 0 || r.x1 > w || r.y1 > h || r.x1 < r.x0 || r.y1 < r.y0)
-    throw Error(std::string(what) + ": rectangle [" + std::to_string(r.x0) + ", " +
-                std::to_string(r.y0) + "] to [" + std::to_string(r.x1) + ", " +
-                std::to_string(r.y1) + ") is not inside the " + std::to_string(w) + "x" +
-                std::to_string(h) + " image");
+    throw base::Error(std::string(what) + ": rectangle [" + std::to_string(r.x0) + ", " +
+                      std::to_string(r.y0) + "] to [" + std::to_string(r.x1) + ", " +
+                      std::to_string(r.y1) + ") is not inside the " + std::to_string(w) + "x" +
+                      std::to_string(h) + " image");
 }
 
 }  // namespace

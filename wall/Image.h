@@ -29,7 +29,7 @@ constexpr std::uint32_t rgba8(std::uint8_t r, std::uint8_t g, std::uint8_t b,
 }
 
 // Copies the `w` x `h` pixels at `src` (rows of `w`) into `dst` with their top-left at (x, y).
-// The rectangle must lie inside `dst`; throws wall::Error otherwise.
+// The rectangle must lie inside `dst`; throws base::Error otherwise.
 void blit(Image& dst, int x, int y, const std::uint32_t* src, int w, int h);
 
 // The pixels of `region` of `src` as a new image (region must lie inside `src`). Tests cut each

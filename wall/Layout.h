@@ -66,7 +66,7 @@ LayoutResult readLayoutText(std::string_view toml, const std::string& fileName);
 // displays overlapping, process indices 0..W-1 without gaps. Returns every problem.
 Problems validateLayout(const Layout& layout);
 
-// Reads and validates a layout file; throws wall::Error carrying every problem otherwise.
+// Reads and validates a layout file; throws base::Error carrying every problem otherwise.
 Layout loadLayout(const std::string& path);
 
 // Moves the displays so the canvas starts at (0, 0), then sets the canvas size and processCount

@@ -11,7 +11,7 @@
 #include <string>
 #include <string_view>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Layout.h"
 #include "wall/LayoutChecks.h"
 

@@ -9,7 +9,7 @@
 #include <set>
 #include <sstream>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Layout.h"
 #include "wall/LayoutChecks.h"
 
@@ -185,7 +185,7 @@ LayoutResult readLayoutFile(const std::string& path) {
 
 Layout loadLayout(const std::string& path) {
   LayoutResult result = readLayoutFile(path);
-  if (!result.ok()) throw Error(joinProblems(result.problems));
+  if (!result.ok()) throw base::Error(joinProblems(result.problems));
   return std::move(result.layout);
 }
 

@@ -1,4 +1,4 @@
-#include "dfb/Timing.h"
+#include "base/Timing.h"
 #include "wall/PieceMessage.h"
 #include "wall/PieceSink.h"
 
@@ -17,14 +17,14 @@ MessengerPieceSink::MessengerPieceSink(messaging::Messenger& messenger, const La
 
 std::size_t MessengerPieceSink::send(std::uint32_t frameId, int display, const dfb::Region& local,
                                      const std::uint32_t* pixels, int stride) {
-  const std::int64_t t0 = dfb::threadCpuNs();
+  const std::int64_t t0 = base::threadCpuNs();
   messaging::Bytes bytes = packPiece(frameId, display, local, pixels, stride, 0, 0,
                                      planeDelta_[static_cast<size_t>(display)]);
   const std::size_t size = bytes.size();
-  const std::int64_t t1 = dfb::threadCpuNs();
+  const std::int64_t t1 = base::threadCpuNs();
   messenger_.send(rankOfDisplay_[static_cast<size_t>(display)], kWallNodeObject, std::move(bytes));
   cutNs_ += t1 - t0;
-  sendNs_ += dfb::threadCpuNs() - t1;
+  sendNs_ += base::threadCpuNs() - t1;
   return size;
 }
 

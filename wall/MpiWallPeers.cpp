@@ -1,9 +1,8 @@
 #include <limits>
 #include <string>
 
-#include "dfb/Error.h"
-#include "messaging/BoundedWait.h"
-#include "wall/Error.h"
+#include "base/BoundedWait.h"
+#include "base/Error.h"
 #include "wall/FrameCredits.h"
 #include "wall/WallPeers.h"
 
@@ -18,14 +17,14 @@ MpiWallPeers::MpiWallPeers(messaging::Messenger& messenger, MPI_Comm wallComm,
 MpiWallPeers::MpiWallPeers(MPI_Comm wallComm, std::chrono::milliseconds timeout,
                            std::function<void(std::uint32_t, std::int64_t)> onPresented)
     : onPresented_(std::move(onPresented)) {
-  dfb::checkMpi(MPI_Comm_dup(wallComm, &comm_), "MPI_Comm_dup");
+  base::checkMpi(MPI_Comm_dup(wallComm, &comm_), "MPI_Comm_dup");
   MPI_Comm_rank(comm_, &rank_);
   MPI_Comm_size(comm_, &size_);
   MPI_Request barrier;
-  dfb::checkMpi(MPI_Ibarrier(comm_, &barrier), "MPI_Ibarrier");
-  messaging::waitWithDeadline(barrier, Clock::now() + timeout,
-                              "starting the wall: another wall process did not join within " +
-                                  std::to_string(timeout.count()) + " ms");
+  base::checkMpi(MPI_Ibarrier(comm_, &barrier), "MPI_Ibarrier");
+  base::waitWithDeadline(barrier, Clock::now() + timeout,
+                         "starting the wall: another wall process did not join within " +
+                             std::to_string(timeout.count()) + " ms");
 }
 
 MpiWallPeers::~MpiWallPeers() { MPI_Comm_free(&comm_); }
@@ -34,11 +33,11 @@ void MpiWallPeers::agreeMax(std::uint32_t frameId, std::int64_t* values, int cou
                             Clock::time_point deadline) {
   std::vector<std::int64_t> mine(values, values + count);
   MPI_Request request;
-  dfb::checkMpi(MPI_Iallreduce(mine.data(), values, count, MPI_INT64_T, MPI_MAX, comm_, &request),
-                "MPI_Iallreduce");
-  messaging::waitWithDeadline(request, deadline,
-                              "swap barrier of frame " + std::to_string(frameId) +
-                                  ": another wall process did not complete it in time");
+  base::checkMpi(MPI_Iallreduce(mine.data(), values, count, MPI_INT64_T, MPI_MAX, comm_, &request),
+                 "MPI_Iallreduce");
+  base::waitWithDeadline(request, deadline,
+                         "swap barrier of frame " + std::to_string(frameId) +
+                             ": another wall process did not complete it in time");
 }
 
 std::vector<std::vector<std::uint32_t>> MpiWallPeers::gatherToFirst(std::uint32_t frameId,
@@ -49,9 +48,9 @@ std::vector<std::vector<std::uint32_t>> MpiWallPeers::gatherToFirst(std::uint32_
   const int count = static_cast<int>(mine.size());
   std::vector<int> counts(static_cast<size_t>(size_)), offsets(static_cast<size_t>(size_));
   MPI_Request request;
-  dfb::checkMpi(MPI_Igather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm_, &request),
-                "MPI_Igather");
-  messaging::waitWithDeadline(request, deadline, late);
+  base::checkMpi(MPI_Igather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm_, &request),
+                 "MPI_Igather");
+  base::waitWithDeadline(request, deadline, late);
   std::vector<std::uint32_t> all;
   if (rank_ == 0) {
     std::int64_t total = 0;
@@ -61,13 +60,13 @@ std::vector<std::vector<std::uint32_t>> MpiWallPeers::gatherToFirst(std::uint32_
     }
     // MPI counts are ints; the layout's canvas cap keeps every display's pixels far below.
     if (total > std::numeric_limits<int>::max())
-      throw Error(std::to_string(total) + " pixels do not fit one MPI gather");
+      throw base::Error(std::to_string(total) + " pixels do not fit one MPI gather");
     all.resize(static_cast<size_t>(total));
   }
-  dfb::checkMpi(MPI_Igatherv(mine.data(), count, MPI_UINT32_T, all.data(), counts.data(),
-                             offsets.data(), MPI_UINT32_T, 0, comm_, &request),
-                "MPI_Igatherv");
-  messaging::waitWithDeadline(request, deadline, late);
+  base::checkMpi(MPI_Igatherv(mine.data(), count, MPI_UINT32_T, all.data(), counts.data(),
+                              offsets.data(), MPI_UINT32_T, 0, comm_, &request),
+                 "MPI_Igatherv");
+  base::waitWithDeadline(request, deadline, late);
   std::vector<std::vector<std::uint32_t>> out;
   if (rank_ != 0) return out;
   for (int r = 0; r < size_; ++r) {

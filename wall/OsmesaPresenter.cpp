@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/GlFrameDrawer.h"
 
 namespace wall {
@@ -20,8 +20,8 @@ class OsmesaPresenter : public Presenter {
  public:
   OsmesaPresenter(int width, int height) {
     if (width <= 0 || height <= 0)
-      throw Error("OSMesa presenter: size " + std::to_string(width) + "x" + std::to_string(height) +
-                  " must be positive");
+      throw base::Error("OSMesa presenter: size " + std::to_string(width) + "x" +
+                        std::to_string(height) + " must be positive");
     const int attributes[] = {OSMESA_FORMAT,
                               OSMESA_RGBA,
                               OSMESA_DEPTH_BITS,
@@ -38,7 +38,7 @@ class OsmesaPresenter : public Presenter {
                               3,
                               0};
     context_ = OSMesaCreateContextAttribs(attributes, nullptr);
-    if (!context_) throw Error("OSMesa cannot create an OpenGL 3.3 core profile context");
+    if (!context_) throw base::Error("OSMesa cannot create an OpenGL 3.3 core profile context");
     try {
       resize(width, height);
       drawer_.emplace(&osmesaProc);
@@ -92,7 +92,7 @@ class OsmesaPresenter : public Presenter {
     // this presenter ever binds its buffer, so the buffer is ours then too).
     if (OSMesaGetCurrentContext() == context_) return;
     if (!OSMesaMakeCurrent(context_, buffer_.data(), GL_UNSIGNED_BYTE, width_, height_))
-      throw Error("OSMesaMakeCurrent failed");
+      throw base::Error("OSMesaMakeCurrent failed");
   }
 
   void resize(int width, int height) {
@@ -101,7 +101,7 @@ class OsmesaPresenter : public Presenter {
     buffer_.assign(static_cast<size_t>(width) * height, 0);
     // A new buffer: bind it even when the context is current.
     if (!OSMesaMakeCurrent(context_, buffer_.data(), GL_UNSIGNED_BYTE, width_, height_))
-      throw Error("OSMesaMakeCurrent failed");
+      throw base::Error("OSMesaMakeCurrent failed");
   }
 
   OSMesaContext context_ = nullptr;

@@ -8,7 +8,7 @@
 namespace wall {
 
 // A presenter with a `width` x `height` offscreen drawable (the display's size). A frame of
-// another size is drawn into a drawable resized to match. Throws wall::Error when OSMesa cannot
+// another size is drawn into a drawable resized to match. Throws base::Error when OSMesa cannot
 // make a 3.3 core context.
 std::unique_ptr<Presenter> makeOsmesaPresenter(int width, int height);
 

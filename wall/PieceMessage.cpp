@@ -8,7 +8,7 @@
 #include <emmintrin.h>
 #endif
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Layout.h"
 
 namespace wall {
@@ -70,29 +70,29 @@ messaging::Bytes packPiece(std::uint32_t frameId, int display, const dfb::Region
 
 PieceHeader readPieceHeader(const messaging::Bytes& bytes) {
   PieceHeader header;
-  if (bytes.size() < sizeof header) throw Error("piece message shorter than its header");
+  if (bytes.size() < sizeof header) throw base::Error("piece message shorter than its header");
   std::memcpy(&header, bytes.data(), sizeof header);
   const dfb::Region local{header.x0, header.y0, header.x1, header.y1};
   // Checked in 64 bits before width() or pixelCount() is used: the fuzzer found rectangles
   // whose int product overflowed (and could then match the message size).
   if (header.magic != kPieceMagic || !dfb::isSaneRegion(local, kMaxCanvasSide))
-    throw Error("malformed piece message (bad magic, or an empty or oversized rectangle)");
+    throw base::Error("malformed piece message (bad magic, or an empty or oversized rectangle)");
   // Sides of up to 2^20 make a product past an int: the count is taken in 64 bits.
   const size_t count = static_cast<size_t>(local.width()) * static_cast<size_t>(local.height());
   if (bytes.size() != sizeof header + 4 * count)
-    throw Error("piece message for display " + std::to_string(header.display) + " has " +
-                std::to_string(bytes.size() - sizeof header) +
-                " pixel bytes, its rectangle needs " + std::to_string(4 * count));
+    throw base::Error("piece message for display " + std::to_string(header.display) + " has " +
+                      std::to_string(bytes.size() - sizeof header) +
+                      " pixel bytes, its rectangle needs " + std::to_string(4 * count));
   return header;
 }
 
 void copyPiece(const messaging::Bytes& bytes, const PieceHeader& header, Image& display) {
   const dfb::Region local{header.x0, header.y0, header.x1, header.y1};
   if (local.x0 < 0 || local.y0 < 0 || local.x1 > display.width || local.y1 > display.height)
-    throw Error("piece [" + std::to_string(local.x0) + ", " + std::to_string(local.x1) + ") x [" +
-                std::to_string(local.y0) + ", " + std::to_string(local.y1) +
-                ") lies outside its display of " + std::to_string(display.width) + "x" +
-                std::to_string(display.height));
+    throw base::Error("piece [" + std::to_string(local.x0) + ", " + std::to_string(local.x1) +
+                      ") x [" + std::to_string(local.y0) + ", " + std::to_string(local.y1) +
+                      ") lies outside its display of " + std::to_string(display.width) + "x" +
+                      std::to_string(display.height));
   const std::span<const std::byte> body(bytes.data() + sizeof header,
                                         4 * static_cast<size_t>(local.pixelCount()));
   const std::byte* pixels = body.data();

@@ -4,6 +4,7 @@
 // process 0 sends back to render rank 0 once every display has presented a frame.
 #include <cstdint>
 
+#include "base/ObjectIds.h"
 #include "dfb/Tile.h"
 #include "messaging/Compression.h"
 #include "messaging/Messenger.h"
@@ -12,8 +13,9 @@
 namespace wall {
 
 // Distributed-object ids on the job's messenger.
-constexpr messaging::ObjectId kWallNodeObject = 0x3A11'0001;
-constexpr messaging::ObjectId kFrameCreditsObject = 0x3A11'0002;
+constexpr messaging::ObjectId kWallNodeObject = base::objectId(base::MessageObject::kWallNode);
+constexpr messaging::ObjectId kFrameCreditsObject =
+    base::objectId(base::MessageObject::kFrameCredits);
 
 struct PieceHeader {
   std::uint32_t magic;
@@ -31,11 +33,11 @@ messaging::Bytes packPiece(std::uint32_t frameId, int display, const dfb::Region
                            const std::uint32_t* source, int sourceWidth, int sourceX, int sourceY,
                            bool planeDelta);
 
-// The header of a piece message, checked against the message's size; throws wall::Error on a
+// The header of a piece message, checked against the message's size; throws base::Error on a
 // malformed message.
 PieceHeader readPieceHeader(const messaging::Bytes& bytes);
 // Copies the piece's pixels to their place in its display's image (no intermediate buffer
-// unless the plane-delta filter must be undone); throws wall::Error if they do not fit.
+// unless the plane-delta filter must be undone); throws base::Error if they do not fit.
 void copyPiece(const messaging::Bytes& bytes, const PieceHeader& header, Image& display);
 
 }  // namespace wall

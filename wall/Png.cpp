@@ -9,8 +9,8 @@
 #include <cstring>
 #include <filesystem>
 
-#include "dfb/AtomicFile.h"
-#include "wall/Error.h"
+#include "base/AtomicFile.h"
+#include "base/Error.h"
 
 namespace wall {
 namespace {
@@ -23,21 +23,14 @@ static_assert(std::endian::native == std::endian::little,
 
 void writePng(const std::string& path, const std::uint32_t* rgba8, int width, int height) {
   if (width <= 0 || height <= 0)
-    throw Error(path + ": cannot write a " + std::to_string(width) + "x" + std::to_string(height) +
-                " PNG");
-  // wall/ reports wall::Error at its boundary; the atomic file speaks dfb::Error.
-  try {
-    writeAtomically(path, rgba8, width, height);
-  } catch (const Error&) {
-    throw;
-  } catch (const dfb::Error& e) {
-    throw Error(e.what());
-  }
+    throw base::Error(path + ": cannot write a " + std::to_string(width) + "x" +
+                      std::to_string(height) + " PNG");
+  writeAtomically(path, rgba8, width, height);
 }
 
 namespace {
 void writeAtomically(const std::string& path, const std::uint32_t* rgba8, int width, int height) {
-  dfb::AtomicFile file(path);
+  base::AtomicFile file(path);
   png_image image;
   std::memset(&image, 0, sizeof image);
   image.version = PNG_IMAGE_VERSION;
@@ -50,14 +43,15 @@ void writeAtomically(const std::string& path, const std::uint32_t* rgba8, int wi
   const std::string message = image.message;
   png_image_free(&image);
   if (!written)
-    throw Error(path + ": cannot write the PNG: " + message +
-                (error ? std::string(": ") + std::strerror(error) : std::string()));
-  file.commit();  // a full disk shows here (dfb::Error, naming the path)
+    throw base::Error(path + ": cannot write the PNG: " + message +
+                      (error ? std::string(": ") + std::strerror(error) : std::string()));
+  file.commit();  // a full disk shows here (base::Error, naming the path)
 }
 }  // namespace
 
 std::string encodePng(const Image& image) {
-  if (image.width <= 0 || image.height <= 0) throw Error("cannot encode an empty image as PNG");
+  if (image.width <= 0 || image.height <= 0)
+    throw base::Error("cannot encode an empty image as PNG");
   png_image png;
   std::memset(&png, 0, sizeof png);
   png.version = PNG_IMAGE_VERSION;
@@ -77,7 +71,7 @@ std::string encodePng(const Image& image) {
   }
   const std::string message = png.message;
   png_image_free(&png);
-  throw Error("cannot encode a PNG in memory: " + message);
+  throw base::Error("cannot encode a PNG in memory: " + message);
 }
 
 Image readPng(const std::string& path) {
@@ -85,13 +79,13 @@ Image readPng(const std::string& path) {
   std::memset(&image, 0, sizeof image);
   image.version = PNG_IMAGE_VERSION;
   if (!png_image_begin_read_from_file(&image, path.c_str()))
-    throw Error(path + ": cannot read the PNG: " + image.message);
+    throw base::Error(path + ": cannot read the PNG: " + image.message);
   image.format = PNG_FORMAT_RGBA;
   Image out(static_cast<int>(image.width), static_cast<int>(image.height));
   if (!png_image_finish_read(&image, nullptr, out.pixels.data(), 0, nullptr)) {
     const std::string message = image.message;
     png_image_free(&image);
-    throw Error(path + ": cannot decode the PNG: " + message);
+    throw base::Error(path + ": cannot decode the PNG: " + message);
   }
   return out;
 }

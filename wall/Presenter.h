@@ -35,7 +35,7 @@ class Presenter {
   //  4. swap(): makes what draw() drew visible (GLFW: swaps the buffers; OSMesa draws into its
   //     buffer directly, which has no front buffer, so this does nothing more).
   // The texture keeps its contents until the next upload, so upload for frame F+1 only after
-  // draw() of F. Throws wall::Error on a GL failure.
+  // draw() of F. Throws base::Error on a GL failure.
   virtual void beginFrame(int width, int height) = 0;
   virtual void upload(const std::uint32_t* frame, int stride, const dfb::Region& rect) = 0;
   virtual void draw() = 0;

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 
 namespace wall {
 
@@ -70,7 +70,7 @@ std::vector<std::uint32_t> downsample(const PreviewGrid& grid, const dfb::Region
 
 Image downsample(const PreviewGrid& grid, const Image& canvas) {
   if (canvas.width != grid.canvasWidth || canvas.height != grid.canvasHeight)
-    throw Error("downsample: the image is not the preview grid's canvas");
+    throw base::Error("downsample: the image is not the preview grid's canvas");
   Image out(grid.width(), grid.height());
   out.pixels =
       downsample(grid, {0, 0, canvas.width, canvas.height}, canvas.pixels.data(), canvas.width);

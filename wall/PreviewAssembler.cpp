@@ -4,7 +4,7 @@
 #include <cstring>
 #include <string>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/PreviewOp.h"
 
 namespace wall {
@@ -25,7 +25,7 @@ PreviewAssembler::PreviewAssembler(messaging::Messenger& messenger, PreviewGrid 
           static_cast<int>(std::count(tilesOfFrame_.begin(), tilesOfFrame_.end(), true))),
       latest_(std::make_shared<Snapshot>(Snapshot{0, Image(grid.width(), grid.height())})) {
   if (static_cast<int>(tilesOfFrame_.size()) != tiles_.tileCount())
-    throw Error("preview: the tile mask does not match the canvas's tiles");
+    throw base::Error("preview: the tile mask does not match the canvas's tiles");
   messenger_.registerObject(kPreviewObject, this);
 }
 
@@ -57,20 +57,20 @@ PreviewAssembler::Assembly& PreviewAssembler::assemblyOf(std::uint32_t frame) {
 void PreviewAssembler::incoming(int fromRank, messaging::Bytes&& payload) {
   PreviewHeader h;
   if (payload.size() < sizeof h)
-    throw Error("preview message from rank " + std::to_string(fromRank) + " is too short");
+    throw base::Error("preview message from rank " + std::to_string(fromRank) + " is too short");
   std::memcpy(&h, payload.data(), sizeof h);
   const dfb::Region region{h.x0, h.y0, h.x1, h.y1};
   const int tile = h.magic == kPreviewMagic && dfb::isSaneRegion(region, kMaxCanvasSide)
                        ? tiles_.indexOfOrigin(h.x0, h.y0)
                        : -1;
   if (tile < 0 || tiles_.region(tile) != region || !tilesOfFrame_[static_cast<size_t>(tile)])
-    throw Error("malformed preview message from rank " + std::to_string(fromRank) +
-                " (bad magic, or a rectangle that is no tile of the frame)");
+    throw base::Error("malformed preview message from rank " + std::to_string(fromRank) +
+                      " (bad magic, or a rectangle that is no tile of the frame)");
   const dfb::Region cells = grid_.cellsOf(region);
   if (payload.size() != sizeof h + 4 * static_cast<size_t>(cells.pixelCount()))
-    throw Error("preview message from rank " + std::to_string(fromRank) + " has " +
-                std::to_string(payload.size() - sizeof h) + " cell bytes, its tile needs " +
-                std::to_string(4 * cells.pixelCount()));
+    throw base::Error("preview message from rank " + std::to_string(fromRank) + " has " +
+                      std::to_string(payload.size() - sizeof h) + " cell bytes, its tile needs " +
+                      std::to_string(4 * cells.pixelCount()));
   std::vector<std::uint32_t> values(static_cast<size_t>(cells.pixelCount()));
   std::memcpy(values.data(), payload.data() + sizeof h, 4 * values.size());
 
@@ -78,12 +78,13 @@ void PreviewAssembler::incoming(int fromRank, messaging::Bytes&& payload) {
   const std::uint32_t published = latest_->frame;
   if (h.frameId <= published) return;  // a newer frame is out already: nobody wants this one
   if (h.frameId - published > kFramesAhead)
-    throw Error("preview message from rank " + std::to_string(fromRank) + " for frame " +
-                std::to_string(h.frameId) + ", far ahead of frame " + std::to_string(published));
+    throw base::Error("preview message from rank " + std::to_string(fromRank) + " for frame " +
+                      std::to_string(h.frameId) + ", far ahead of frame " +
+                      std::to_string(published));
   Assembly& a = assemblyOf(h.frameId);
   if (a.seen[static_cast<size_t>(tile)])
-    throw Error("preview of tile " + std::to_string(tile) + " of frame " +
-                std::to_string(h.frameId) + " arrived twice");
+    throw base::Error("preview of tile " + std::to_string(tile) + " of frame " +
+                      std::to_string(h.frameId) + " arrived twice");
   a.seen[static_cast<size_t>(tile)] = true;
   for (int cy = cells.y0; cy < cells.y1; ++cy)
     for (int cx = cells.x0; cx < cells.x1; ++cx) {

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstdint>
 
+#include "base/ObjectIds.h"
 #include "dfb/PixelOp.h"
 #include "messaging/Messenger.h"
 #include "wall/Preview.h"
@@ -17,7 +18,7 @@
 namespace wall {
 
 // Distributed-object id of the preview assembler on render rank 0.
-constexpr messaging::ObjectId kPreviewObject = 0x3A11'0003;
+constexpr messaging::ObjectId kPreviewObject = base::objectId(base::MessageObject::kPreview);
 
 struct PreviewHeader {
   std::uint32_t magic;

@@ -1,6 +1,6 @@
 #include "wall/Ranks.h"
 
-#include "wall/Error.h"
+#include "base/Error.h"
 
 namespace wall {
 
@@ -27,7 +27,7 @@ std::optional<std::string> checkRankCount(const Layout& layout, int worldSize,
 }
 
 RankRoles rankRoles(const Layout& layout, int worldSize, std::optional<int> renderRanks) {
-  if (auto problem = checkRankCount(layout, worldSize, renderRanks)) throw Error(*problem);
+  if (auto problem = checkRankCount(layout, worldSize, renderRanks)) throw base::Error(*problem);
   return RankRoles{worldSize - layout.processCount, layout.processCount};
 }
 

@@ -24,7 +24,7 @@ struct RankRoles {
 std::optional<std::string> checkRankCount(const Layout& layout, int worldSize,
                                           std::optional<int> renderRanks = std::nullopt);
 
-// The roles for a rank count that passed checkRankCount; throws wall::Error with its message
+// The roles for a rank count that passed checkRankCount; throws base::Error with its message
 // otherwise.
 RankRoles rankRoles(const Layout& layout, int worldSize,
                     std::optional<int> renderRanks = std::nullopt);

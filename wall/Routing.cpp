@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 
 namespace wall {
 std::vector<Piece> piecesOf(const Layout& layout, const dfb::Region& tile) {

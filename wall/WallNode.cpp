@@ -4,11 +4,10 @@
 #include <limits>
 #include <string>
 
-#include "dfb/Error.h"
-#include "dfb/Timing.h"
-#include "messaging/BoundedWait.h"
+#include "base/BoundedWait.h"
+#include "base/Error.h"
+#include "base/Timing.h"
 #include "wall/Capture.h"
-#include "wall/Error.h"
 #include "wall/FrameCredits.h"
 #include "wall/PieceMessage.h"
 #include "wall/Png.h"
@@ -17,9 +16,9 @@
 namespace wall {
 namespace {
 
-using dfb::Clock;
-using dfb::msBetween;
-using dfb::nsBetween;
+using base::Clock;
+using base::msBetween;
+using base::nsBetween;
 
 // While a frame's pieces arrive, the presenting thread is woken to upload them this many times
 // (and once more when the frame is complete).
@@ -39,9 +38,9 @@ WallNode::WallNode(const Layout& layout, WallPeers& peers, std::vector<Presenter
       mine_(layout.displaysOfProcess(process_)) {
   const int process = process_;
   if (presenters_.size() != mine_.size())
-    throw Error("wall process " + std::to_string(process) + " drives " +
-                std::to_string(mine_.size()) + " displays but got " +
-                std::to_string(presenters_.size()) + " presenters");
+    throw base::Error("wall process " + std::to_string(process) + " drives " +
+                      std::to_string(mine_.size()) + " displays but got " +
+                      std::to_string(presenters_.size()) + " presenters");
   positionOfDisplay_.assign(layout.displays.size(), -1);
   for (size_t i = 0; i < mine_.size(); ++i) {
     positionOfDisplay_[static_cast<size_t>(mine_[i])] = static_cast<int>(i);
@@ -107,7 +106,7 @@ int WallNode::expectedPieceIndex(size_t position, const dfb::Region& local) cons
 }
 
 void WallNode::incoming(int fromRank, messaging::Bytes&& payload) {
-  const std::int64_t start = dfb::threadCpuNs();  // stage CPU time (dfb/Timing.h)
+  const std::int64_t start = base::threadCpuNs();  // stage CPU time (dfb/Timing.h)
   PieceHeader h{};
   try {
     h = readPieceHeader(payload);
@@ -120,20 +119,20 @@ void WallNode::incoming(int fromRank, messaging::Bytes&& payload) {
   receivePiece(
       "rank " + std::to_string(fromRank), h.frameId, h.display, {h.x0, h.y0, h.x1, h.y1},
       [&](Image& image) { copyPiece(payload, h, image); }, payload.size(), nullptr,
-      dfb::threadCpuNs() - start);
+      base::threadCpuNs() - start);
 }
 
 bool WallNode::receivePiece(const std::string& sender, std::uint32_t frameId, int display,
                             const dfb::Region& local, const std::function<void(Image&)>& fill,
                             std::size_t bytes, std::string* why, std::int64_t unpackNs) {
   try {
-    const std::int64_t start = dfb::threadCpuNs();
+    const std::int64_t start = base::threadCpuNs();
     const int position = display >= 0 && static_cast<size_t>(display) < positionOfDisplay_.size()
                              ? positionOfDisplay_[static_cast<size_t>(display)]
                              : -1;
     if (position < 0)
-      throw Error(sender + " sent a piece of display " + std::to_string(display) +
-                  ", which wall process " + std::to_string(process_) + " does not drive");
+      throw base::Error(sender + " sent a piece of display " + std::to_string(display) +
+                        ", which wall process " + std::to_string(process_) + " does not drive");
     const size_t at = static_cast<size_t>(position);
     const std::string& name = layout_.displays[static_cast<size_t>(display)].name;
     Image* image = nullptr;
@@ -147,22 +146,25 @@ bool WallNode::receivePiece(const std::string& sender, std::uint32_t frameId, in
         return true;
       }
       if (static_cast<std::int64_t>(frameId) <= lastPresented_)
-        throw Error(sender + " sent a piece for frame " + std::to_string(frameId) +
-                    ", already presented");
+        throw base::Error(sender + " sent a piece for frame " + std::to_string(frameId) +
+                          ", already presented");
       if (static_cast<std::int64_t>(frameId) > lastPresented_ + options_.framesAhead)
-        throw Error(sender + " sent a piece for frame " + std::to_string(frameId) + ", more than " +
-                    std::to_string(options_.framesAhead) + " frames past the last presented (" +
-                    std::to_string(lastPresented_) + ")");
+        throw base::Error(sender + " sent a piece for frame " + std::to_string(frameId) +
+                          ", more than " + std::to_string(options_.framesAhead) +
+                          " frames past the last presented (" + std::to_string(lastPresented_) +
+                          ")");
       piece = expectedPieceIndex(at, local);
       if (piece < 0)
-        throw Error(sender + " sent display '" + name + "' a piece [" + std::to_string(local.x0) +
-                    ", " + std::to_string(local.x1) + ") x [" + std::to_string(local.y0) + ", " +
-                    std::to_string(local.y1) + ") that is none of its expected pieces");
+        throw base::Error(sender + " sent display '" + name + "' a piece [" +
+                          std::to_string(local.x0) + ", " + std::to_string(local.x1) + ") x [" +
+                          std::to_string(local.y0) + ", " + std::to_string(local.y1) +
+                          ") that is none of its expected pieces");
       Slot& slot = slotFor(frameId);
       if (slot.claimed[at][static_cast<size_t>(piece)])
-        throw Error("display '" + name + "' got piece [" + std::to_string(local.x0) + ", " +
-                    std::to_string(local.x1) + ") x [" + std::to_string(local.y0) + ", " +
-                    std::to_string(local.y1) + ") of frame " + std::to_string(frameId) + " twice");
+        throw base::Error("display '" + name + "' got piece [" + std::to_string(local.x0) + ", " +
+                          std::to_string(local.x1) + ") x [" + std::to_string(local.y0) + ", " +
+                          std::to_string(local.y1) + ") of frame " + std::to_string(frameId) +
+                          " twice");
       slot.claimed[at][static_cast<size_t>(piece)] = true;
       image = &slot.displays[at];
       bytesReceived_ += bytes;
@@ -170,7 +172,7 @@ bool WallNode::receivePiece(const std::string& sender, std::uint32_t frameId, in
     // Claimed pieces are disjoint, and the presenting thread reads a slot only once every piece
     // is counted below, so this copy needs no lock.
     fill(*image);
-    const std::int64_t assembledCpu = dfb::threadCpuNs();
+    const std::int64_t assembledCpu = base::threadCpuNs();
     const auto assembled = Clock::now();
     std::lock_guard lock(mutex_);
     unpackNs_ += unpackNs;
@@ -182,7 +184,7 @@ bool WallNode::receivePiece(const std::string& sender, std::uint32_t frameId, in
     // (a wake-up costs about what uploading a few pieces does).
     bool wake = slot.toUpload.size() == uploadBatch_;
     if (got == expectedPieces_[at] && ++slot.displaysComplete == static_cast<int>(mine_.size())) {
-      slot.completeNs = nsBetween(Clock::time_point{}, assembled);
+      slot.completeNs = base::nsBetween(Clock::time_point{}, assembled);
       wake = true;
     }
     if (wake) complete_.notify_all();
@@ -316,7 +318,7 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
           lock.unlock();                         // pieces keep arriving meanwhile
           const auto uploadStart = Clock::now();
           upload(arriving, uploading_);
-          uploadNs += nsBetween(uploadStart, Clock::now());
+          uploadNs += base::nsBetween(uploadStart, Clock::now());
           lock.lock();
           continue;
         }
@@ -338,7 +340,7 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
       lock.lock();
     }
     if (!error_.empty() && !options_.abandonOnFailure)
-      throw Error("wall process " + std::to_string(process_) + ": " + error_);
+      throw base::Error("wall process " + std::to_string(process_) + ": " + error_);
     if (stopsBefore()) {
       report.stopped = true;
       return report;
@@ -360,7 +362,7 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
                                " not complete on wall process " + std::to_string(process_) +
                                " after " + std::to_string(options_.timeout.count()) +
                                " ms:" + missing;
-      if (!options_.abandonOnFailure) throw dfb::DeadlineError(late);
+      if (!options_.abandonOnFailure) throw base::DeadlineError(late);
       report.failure = late;
     }
     if (report.failure.empty()) {
@@ -426,7 +428,7 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   const bool asked = agreed[1] > static_cast<std::int64_t>(captureDone_);
   if (asked) captureDone_ = static_cast<std::uint64_t>(agreed[1]);
   for (auto& presenter : presenters_) presenter->swap();
-  lastSwapNs_ = nsBetween(Clock::time_point{}, Clock::now());
+  lastSwapNs_ = base::nsBetween(Clock::time_point{}, Clock::now());
   // An operator closing a window asks the whole job to stop, a key asks for a camera change or a
   // stop; the app decides how.
   for (size_t i = 0; i < mine_.size(); ++i) {
@@ -455,11 +457,11 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     slots_.erase(frameId);
   }
   if (process_ == 0) peers_.presented(frameId, report.wallCompleteNs);
-  report.waitMs = msBetween(start, arrived);
+  report.waitMs = base::msBetween(start, arrived);
   report.uploadMs = static_cast<double>(uploadNs) * 1e-6;
-  report.drawMs = msBetween(arrived, drawn);
-  report.barrierMs = msBetween(drawn, released);
-  report.presentMs = msBetween(released, presented);
+  report.drawMs = base::msBetween(arrived, drawn);
+  report.barrierMs = base::msBetween(drawn, released);
+  report.presentMs = base::msBetween(released, presented);
   return report;
 }
 
@@ -503,10 +505,10 @@ void WallNode::capture(std::uint32_t frameId) {
     for (int d : layout_.displaysOfProcess(p))
       expected += static_cast<size_t>(layout_.displays[static_cast<size_t>(d)].rect.pixelCount());
     if (all[static_cast<size_t>(p)].size() != expected)
-      throw Error("capture of frame " + std::to_string(frameId) + ": wall process " +
-                  std::to_string(p) + " sent " +
-                  std::to_string(all[static_cast<size_t>(p)].size()) +
-                  " pixels for its displays' " + std::to_string(expected));
+      throw base::Error("capture of frame " + std::to_string(frameId) + ": wall process " +
+                        std::to_string(p) + " sent " +
+                        std::to_string(all[static_cast<size_t>(p)].size()) +
+                        " pixels for its displays' " + std::to_string(expected));
     for (int d : layout_.displaysOfProcess(p)) {
       pixels[static_cast<size_t>(d)] = at;
       at += static_cast<size_t>(layout_.displays[static_cast<size_t>(d)].rect.pixelCount());

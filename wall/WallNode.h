@@ -111,7 +111,7 @@ class WallNode : public messaging::MessageHandler {
   ~WallNode() override;
 
   // Waits for frame `frameId` on this process's displays, joins the swap barrier, presents,
-  // captures when asked, and (process 0) acknowledges the frame. Throws wall::Error on timeout
+  // captures when asked, and (process 0) acknowledges the frame. Throws base::Error on timeout
   // or a protocol error. A window an operator closed is reported, not thrown.
   PresentReport presentFrame(std::uint32_t frameId);
   // Thread-safe: the run ends after frame `lastFrame`; a presentFrame for a later frame returns

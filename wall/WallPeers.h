@@ -26,7 +26,7 @@ class WallPeers {
   virtual int process() const = 0;
   virtual int processCount() const = 0;
   // Every wall process calls this for the same frame with its `count` values; each gets the
-  // element-wise maximum over all of them in `values`. Throws dfb::DeadlineError once
+  // element-wise maximum over all of them in `values`. Throws base::DeadlineError once
   // `deadline` passes without every process having joined.
   virtual void agreeMax(std::uint32_t frameId, std::int64_t* values, int count,
                         Clock::time_point deadline) = 0;

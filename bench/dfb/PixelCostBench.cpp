@@ -20,7 +20,6 @@
 //
 //   pixel_cost_bench [--wall LAYOUT.toml] [--frames N] [--content pattern|float-noisy|all]
 //                    [--link same-host|other-host|all] [--json PATH]
-#include <time.h>
 
 #include <cstdio>
 #include <cstring>
@@ -31,6 +30,7 @@
 #include <utility>
 #include <vector>
 
+#include "base/Timing.h"
 #include "dfb/PixelOp.h"
 #include "dfb/TileOperation.h"
 #include "dfb/ToneMapKernel.h"
@@ -41,12 +41,6 @@
 #include "wall/Routing.h"
 
 namespace {
-
-std::int64_t threadCpuNs() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return std::int64_t{t.tv_sec} * 1000000000 + t.tv_nsec;
-}
 
 // One input tile per canvas tile, made once (rendering is not what is measured).
 std::vector<dfb::Tile> makeInputs(const dfb::TileGrid& grid, bool floatNoisy) {
@@ -156,9 +150,9 @@ Result run(const wall::Layout& layout, int tileSize, int frames, bool floatNoisy
       op.newFrame(dfb::FrameInfo{static_cast<std::uint32_t>(frame + 1),
                                  static_cast<std::uint32_t>(frame + 1)},
                   0, 1);
-      std::int64_t a = threadCpuNs();
+      std::int64_t a = base::threadCpuNs();
       const dfb::Tile& finishedTile = stageTileOperation(op, std::move(input));
-      std::int64_t b = threadCpuNs();
+      std::int64_t b = base::threadCpuNs();
       frameNs["tile_operation"] += b - a;
       dfb::FinishedTile finished;
       finished.tileIndex = t;
@@ -166,24 +160,24 @@ Result run(const wall::Layout& layout, int tileSize, int frames, bool floatNoisy
       finished.frameId = static_cast<std::uint32_t>(frame + 1);
       finished.linear = &finishedTile;
       finished.rgba8 = &rgba8[static_cast<size_t>(t)];
-      a = threadCpuNs();
+      a = base::threadCpuNs();
       stageToneMap(toneMap, op, finished, rgba8[static_cast<size_t>(t)]);
-      b = threadCpuNs();
+      b = base::threadCpuNs();
       frameNs["tone_map"] += b - a;
       for (const wall::Piece& piece : pieces[static_cast<size_t>(t)]) {
-        a = threadCpuNs();
+        a = base::threadCpuNs();
         messaging::Bytes bytes = stageCut(finished.frameId, piece, finished, otherHost);
-        b = threadCpuNs();
+        b = base::threadCpuNs();
         messaging::Bytes sealed = stageSeal(std::move(bytes), otherHost);
-        const std::int64_t c = threadCpuNs();
+        const std::int64_t c = base::threadCpuNs();
         if (counted) wire += sealed.size();
         // The wire: MPI moves the bytes (not measured here).
         stageOpen(std::move(sealed), payload);
-        const std::int64_t d = threadCpuNs();
+        const std::int64_t d = base::threadCpuNs();
         const wall::PieceHeader header = stagePieceUnpack(payload);
-        const std::int64_t e = threadCpuNs();
+        const std::int64_t e = base::threadCpuNs();
         stageAssemble(payload, header, displays[static_cast<size_t>(header.display)]);
-        const std::int64_t f = threadCpuNs();
+        const std::int64_t f = base::threadCpuNs();
         frameNs["cut"] += b - a;
         frameNs["seal"] += c - b;
         frameNs["open"] += d - c;
@@ -233,9 +227,9 @@ std::pair<double, double> toneMapKernelsNs() {
   std::vector<std::uint32_t> out(4096);
   constexpr int kRepeats = 2000;
   const auto time = [&](auto kernel) {
-    const std::int64_t start = threadCpuNs();
+    const std::int64_t start = base::threadCpuNs();
     for (int i = 0; i < kRepeats; ++i) kernel(rgba.data(), out.size(), out.data(), {});
-    return static_cast<double>(threadCpuNs() - start) / (kRepeats * 4096.0);
+    return static_cast<double>(base::threadCpuNs() - start) / (kRepeats * 4096.0);
   };
   const double scalar = time(dfb::toneMapPixelsScalar);
   return {scalar, dfb::toneMapAvx2Available() ? time(dfb::toneMapPixelsAvx2) : 0.0};
@@ -244,10 +238,10 @@ std::pair<double, double> toneMapKernelsNs() {
 // The cost of one clock read, subtracted from every span (each span holds one).
 double clockReadNs() {
   constexpr int kReads = 200000;
-  const std::int64_t start = threadCpuNs();
+  const std::int64_t start = base::threadCpuNs();
   std::int64_t sink = 0;
-  for (int i = 0; i < kReads; ++i) sink += threadCpuNs() & 1;
-  const std::int64_t end = threadCpuNs();
+  for (int i = 0; i < kReads; ++i) sink += base::threadCpuNs() & 1;
+  const std::int64_t end = base::threadCpuNs();
   return static_cast<double>(end - start - (sink < 0 ? 1 : 0)) / kReads;
 }
 

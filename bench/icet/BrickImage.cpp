@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <functional>
 
+#include "base/Error.h"
+#include "base/Parallel.h"
 #include "dfb/Tile.h"
 #include "renderers/Camera.h"
-#include "renderers/Error.h"
-#include "renderers/Parallel.h"
 #include "renderers/Rng.h"
 
 namespace icetbench {
@@ -70,7 +70,7 @@ void BrickImage::render(const dfb::FrameInfo& frame, const CameraDesc& cameraDes
     if (r.x0 >= x0 && r.x1 <= x1 && r.y0 >= y0 && r.y1 <= y1) inside.push_back(t);
   }
   const std::size_t width = static_cast<std::size_t>(settings_.width);
-  parallelFor(inside.size(), [&](std::size_t i) {
+  base::parallelFor(inside.size(), [&](std::size_t i) {
     const int t = inside[i];
     const dfb::Region region = grid.region(t);
     const bool rendered = std::binary_search(mine.begin(), mine.end(), t);
@@ -126,7 +126,7 @@ std::vector<int> visibilityOrder(const std::vector<BrickPlan>& bricks, Vec3 eye)
         first.insert(first.end(), second.begin(), second.end());
         return first;
       }
-    throw Error("bricks that no plane separates: not a k-d split");
+    throw base::Error("bricks that no plane separates: not a k-d split");
   };
   std::vector<int> all;
   for (const BrickPlan& b : bricks) all.push_back(b.id);

@@ -39,11 +39,11 @@
 #include <utility>
 #include <vector>
 
+#include "base/Timing.h"
 #include "bench/icet/BrickImage.h"
 #include "bench/icet/IcetCompositor.h"
 #include "bench/icet/PieceReceiver.h"
 #include "dfb/DistributedFrameBuffer.h"
-#include "dfb/Timing.h"
 #include "messaging/Messenger.h"
 #include "messaging/MpiSession.h"
 #include "renderers/BuiltinScenes.h"
@@ -55,7 +55,7 @@
 
 namespace {
 
-using dfb::Clock;
+using base::Clock;
 using Json = nlohmann::json;
 
 struct Options {
@@ -333,7 +333,7 @@ int run(int argc, char** argv) {
         image.render(frame, camera, driver);
         const auto t1 = Clock::now();
         s.rendered = ns(t1);
-        s.renderMs = dfb::msBetween(t0, t1);
+        s.renderMs = base::msBetween(t0, t1);
         icet.setStrategy(name == "icet-reduce" ? "reduce" : "radixk");
         const void* color = blend ? static_cast<const void*>(image.color().data())
                                   : static_cast<const void*>(image.rgba8().data());

@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#include "dfb/Timing.h"
+#include "base/Timing.h"
 #include "wall/PieceMessage.h"
 #include "wall/Routing.h"
 
@@ -56,7 +56,7 @@ void PieceReceiver::incoming(int fromRank, messaging::Bytes&& payload) {
                                std::to_string(fromRank));
     wall::copyPiece(payload, header, image_);
     if (++received_ == expectedPieces_) {
-      completeNs_ = dfb::Clock::now().time_since_epoch().count();
+      completeNs_ = base::Clock::now().time_since_epoch().count();
       done_.notify_all();
     }
   } catch (const std::exception& e) {

@@ -9,9 +9,9 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "base/Parallel.h"
 #include "renderers/BuiltinScenes.h"
 #include "renderers/Camera.h"
-#include "renderers/Parallel.h"
 #include "renderers/Scene.h"
 
 using namespace renderers;
@@ -20,7 +20,7 @@ template <int N, typename RayHitN, typename Fn>
 double run(const Scene& scene, const Camera& cam, int size, int pw, Fn intersect) {
   const auto t0 = std::chrono::steady_clock::now();
   std::atomic<long> hits{0};
-  parallelFor(static_cast<std::size_t>(size / (N / pw)), [&](std::size_t row) {
+  base::parallelFor(static_cast<std::size_t>(size / (N / pw)), [&](std::size_t row) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     long h = 0;
@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
   if (argc < 4) return std::fprintf(stderr, "usage: %s SCENE SIZE THREADS\n", argv[0]), 2;
   const Scene scene(loadSceneDesc(argv[1]));
   const int size = std::atoi(argv[2]);
-  ThreadLimit limit(std::atoi(argv[3]));
+  base::ThreadLimit limit(std::atoi(argv[3]));
   const Camera cam(scene.desc().camera, size, size);
   auto one = [](int* valid, RTCScene s, RTCIntersectContext* c, RTCRayHit8* rh) {
     // The same rays one at a time: unpack each lane into an RTCRayHit.

@@ -32,9 +32,9 @@
 
 #include <unistd.h>
 
+#include "base/Error.h"
 #include "renderers/BuiltinScenes.h"
 #include "renderers/CanvasImage.h"
-#include "renderers/Error.h"
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/SciVisRenderer.h"
 #include "renderers/scivis/VolumeSource.h"
@@ -71,7 +71,7 @@ void toIntegers(VolumeDesc& v, VoxelType type) {
         }
         out.write(row.data(), static_cast<std::streamsize>(row.size()));
       }
-    if (!out) throw Error("scivis_bench: cannot write " + path);
+    if (!out) throw base::Error("scivis_bench: cannot write " + path);
   }
   v.source.kind = VolumeSource::Kind::RawFile;
   v.source.type = type;
@@ -139,7 +139,7 @@ MarchKernel marchFromEnvironment() {
   if (n == "avx2") return MarchKernel::Avx2;
   if (n == "avx512") return MarchKernel::Avx512;
   if (n == "auto") return MarchKernel::Auto;
-  throw Error("SCIVIS_MARCH: '" + n + "' is none of sse, avx2, avx512, auto");
+  throw base::Error("SCIVIS_MARCH: '" + n + "' is none of sse, avx2, avx512, auto");
 }
 
 }  // namespace

@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
+#include "base/Error.h"
+#include "base/Parallel.h"
+#include "base/Timing.h"
 #include "dfb/TileOperation.h"
-#include "dfb/Timing.h"
-#include "renderers/Error.h"
-#include "renderers/Parallel.h"
 #include "renderers/scivis/BrickOcclusion.h"
 #include "renderers/scivis/CameraRays.h"
 #include "renderers/scivis/RayBlocks.h"
@@ -110,7 +110,7 @@ struct BrickFrameDriver::Impl {
   RenderSettings settings;
   BrickDriverOptions options;
   int rank = 0, ranks = 1;
-  ThreadLimit threads;
+  base::ThreadLimit threads;
   BrickDirectory directory;  // every brick by id, and its holders
   // This rank's bricks: scene and renderer (without background) per held brick.
   std::vector<std::unique_ptr<SciVisScene>> scenes;        // by brick index; null: not held
@@ -142,13 +142,13 @@ BrickFrameDriver::BrickFrameDriver(std::shared_ptr<const SceneDesc> desc,
   std::vector<BrickPlan> held;
   for (const HeldBrick& b : mine) {
     if (b.content.volumes.size() != m.desc->volumes.size())
-      throw Error("brick " + std::to_string(b.id) + " has " +
-                  std::to_string(b.content.volumes.size()) + " volumes, the scene " +
-                  std::to_string(m.desc->volumes.size()));
+      throw base::Error("brick " + std::to_string(b.id) + " has " +
+                        std::to_string(b.content.volumes.size()) + " volumes, the scene " +
+                        std::to_string(m.desc->volumes.size()));
     for (const BrickPlan& p : held)
       if (p.id == b.id)
-        throw Error("brick " + std::to_string(b.id) + " is added twice on render rank " +
-                    std::to_string(m.rank));
+        throw base::Error("brick " + std::to_string(b.id) + " is added twice on render rank " +
+                          std::to_string(m.rank));
     held.push_back({b.id, b.content.bounds});
   }
   m.directory = exchangeBricks(held, comm, m.options.timeout);
@@ -277,7 +277,7 @@ std::vector<int> BrickFrameDriver::bricksOfTile(const CameraDesc& cameraDesc,
 FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
                                           const dfb::FrameInfo& frame,
                                           const CameraDesc& cameraDesc) {
-  using dfb::Clock;
+  using base::Clock;
   const auto t0 = Clock::now();
   Impl& m = *impl_;
   const Camera camera(cameraDesc, m.settings.width, m.settings.height);
@@ -302,7 +302,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
   };
   const dfb::TileGrid& grid = dfb.grid();
   std::vector<std::vector<Job>> perTile(static_cast<std::size_t>(grid.tileCount()));
-  parallelFor(perTile.size(), [&](std::size_t i) {
+  base::parallelFor(perTile.size(), [&](std::size_t i) {
     const int t = static_cast<int>(i);
     if (!m.options.activeTiles.empty() && !m.options.activeTiles[i]) return;
     const bool owner = dfb.ownerOf(t) == dfb.rank();
@@ -330,7 +330,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
   // Camera rays 16 at a time in AVX-512 where the march runs it, as SciVisRenderer::render.
   const bool simdRows =
       resolveMarchKernel(MarchKernel::Auto) == MarchKernel::Avx512 && cameraRowSimdAvailable();
-  parallelFor(jobs.size(), [&](std::size_t i) {
+  base::parallelFor(jobs.size(), [&](std::size_t i) {
     enableFlushToZero();
     const Job& job = jobs[i];
     const dfb::Region region = grid.region(job.tile);
@@ -499,8 +499,8 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
   for (const Job& j : jobs)
     if (j.brick >= 0) report.samples += std::uint64_t{spp} * grid.region(j.tile).pixelCount();
   // Planning (the tiles' ray tests) included: it is this rank's work before its last tile.
-  report.renderMs = dfb::msBetween(t1, t3);
-  report.frameMs = dfb::msBetween(t0, Clock::now());
+  report.renderMs = base::msBetween(t1, t3);
+  report.frameMs = base::msBetween(t0, Clock::now());
   return report;
 }
 

@@ -6,9 +6,8 @@
 #include <cstring>
 #include <string>
 
-#include "dfb/Error.h"
-#include "messaging/BoundedWait.h"
-#include "renderers/Error.h"
+#include "base/BoundedWait.h"
+#include "base/Error.h"
 
 namespace renderers {
 namespace {
@@ -125,7 +124,7 @@ void put(std::vector<std::uint8_t>& out, const T& value) {
 }
 template <typename T>
 T take(const std::vector<std::uint8_t>& in, std::size_t& at) {
-  if (at + sizeof(T) > in.size()) throw Error("brick occlusion summary: truncated");
+  if (at + sizeof(T) > in.size()) throw base::Error("brick occlusion summary: truncated");
   T value;
   std::memcpy(&value, in.data() + at, sizeof(T));
   at += sizeof(T);
@@ -143,9 +142,9 @@ BrickSummary parse(const std::vector<std::uint8_t>& in, std::size_t& at, std::si
     for (FaceMap& f : iso.faces) {
       f.u0 = take<std::int32_t>(in, at), f.nu = take<std::int32_t>(in, at);
       f.v0 = take<std::int32_t>(in, at), f.nv = take<std::int32_t>(in, at);
-      if (f.nu < 0 || f.nv < 0) throw Error("brick occlusion summary: a negative face size");
+      if (f.nu < 0 || f.nv < 0) throw base::Error("brick occlusion summary: a negative face size");
       const std::size_t n = static_cast<std::size_t>(f.nu) * static_cast<std::size_t>(f.nv);
-      if (at + n > in.size()) throw Error("brick occlusion summary: truncated");
+      if (at + n > in.size()) throw base::Error("brick occlusion summary: truncated");
       f.sides.assign(in.begin() + static_cast<std::ptrdiff_t>(at),
                      in.begin() + static_cast<std::ptrdiff_t>(at + n));
       at += n;
@@ -207,31 +206,31 @@ BrickOcclusion BrickOcclusion::exchange(
     local.insert(local.end(), s.begin(), s.end());
   }
   if (local.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()))
-    throw Error("brick occlusion summaries of one rank exceed 2 GB");
+    throw base::Error("brick occlusion summaries of one rank exceed 2 GB");
   int ranks = 1;
   MPI_Comm_size(comm, &ranks);
   const int bytes = static_cast<int>(local.size());
   std::vector<int> counts(static_cast<std::size_t>(ranks)), offsets(counts.size());
   const auto wait = [&](MPI_Request& r) {
-    messaging::waitWithDeadline(r, std::chrono::steady_clock::now() + timeout,
-                                "exchanging brick occlusion summaries: another render rank did "
-                                "not join within " +
-                                    std::to_string(timeout.count()) + " ms");
+    base::waitWithDeadline(r, std::chrono::steady_clock::now() + timeout,
+                           "exchanging brick occlusion summaries: another render rank did "
+                           "not join within " +
+                               std::to_string(timeout.count()) + " ms");
   };
   MPI_Request request;
-  dfb::checkMpi(MPI_Iallgather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, comm, &request),
-                "MPI_Iallgather");
+  base::checkMpi(MPI_Iallgather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, comm, &request),
+                 "MPI_Iallgather");
   wait(request);
   long long total = 0;
   for (std::size_t r = 0; r < counts.size(); ++r) {
     offsets[r] = static_cast<int>(total), total += counts[r];
     if (total > std::numeric_limits<int>::max())
-      throw Error("brick occlusion summaries of the job exceed 2 GB");
+      throw base::Error("brick occlusion summaries of the job exceed 2 GB");
   }
   std::vector<std::uint8_t> all(static_cast<std::size_t>(total));
-  dfb::checkMpi(MPI_Iallgatherv(local.data(), bytes, MPI_BYTE, all.data(), counts.data(),
-                                offsets.data(), MPI_BYTE, comm, &request),
-                "MPI_Iallgatherv");
+  base::checkMpi(MPI_Iallgatherv(local.data(), bytes, MPI_BYTE, all.data(), counts.data(),
+                                 offsets.data(), MPI_BYTE, comm, &request),
+                 "MPI_Iallgatherv");
   wait(request);
 
   BrickOcclusion out;
@@ -243,7 +242,7 @@ BrickOcclusion BrickOcclusion::exchange(
   while (at < all.size()) {
     const int id = take<std::int32_t>(all, at);
     const std::size_t size = static_cast<std::size_t>(take<std::uint64_t>(all, at));
-    if (size > all.size() - at) throw Error("brick occlusion summary: truncated");
+    if (size > all.size() - at) throw base::Error("brick occlusion summary: truncated");
     const auto it =
         std::find_if(bricks.begin(), bricks.end(), [&](const BrickPlan& p) { return p.id == id; });
     const std::size_t end = at + size;

@@ -7,10 +7,9 @@
 #include <new>
 #include <string>
 
-#include "dfb/Error.h"
-#include "dfb/MemoryBudget.h"
-#include "messaging/BoundedWait.h"
-#include "renderers/Error.h"
+#include "base/BoundedWait.h"
+#include "base/Error.h"
+#include "base/MemoryBudget.h"
 
 namespace renderers {
 namespace {
@@ -237,15 +236,15 @@ std::uint64_t brickVolumeBytes(const SceneDesc& desc, std::size_t i, const Brick
       voxelBytes(source.type) * (source.kind == VolumeSource::Kind::OpenVdb ? 2 : 1);
   auto dense = [&](const VoxelBox& b) {
     const std::uint64_t voxels = b.voxelCount();
-    return dfb::bytesPlus(dfb::bytesTimes(voxels, width), voxels / 64);  // 8 bytes per 8³
+    return base::bytesPlus(base::bytesTimes(voxels, width), voxels / 64);  // 8 bytes per 8³
   };
   std::uint64_t bytes = 0;
   VoxelBox core, shell;
   if (voxelsAround(source.grid, plan.bounds, core)) bytes = dense(core);
   if (reach.beyond && hasIsosurface(desc, i) &&
       voxelsAround(source.grid, reach.region, shell, true))
-    bytes =
-        dfb::bytesPlus(bytes, dfb::bytesPlus(dense(shell), dfb::bytesTimes(shell.voxelCount(), 4)));
+    bytes = base::bytesPlus(bytes,
+                            base::bytesPlus(dense(shell), base::bytesTimes(shell.voxelCount(), 4)));
   return bytes;
 }
 
@@ -314,12 +313,12 @@ Box3 sceneDomain(const SceneDesc& desc) {
       grow(domain, p->centers[i] - Vec3{p->radius(i)}, p->centers[i] + Vec3{p->radius(i)});
   for (const WorldMesh& m : worldMeshes(desc))
     for (const Vec3& v : m.mesh.positions) grow(domain, v, v);
-  if (domain.empty()) throw Error("the scene is empty: nothing to cut into bricks");
+  if (domain.empty()) throw base::Error("the scene is empty: nothing to cut into bricks");
   return domain;
 }
 
 std::vector<BrickPlan> splitScene(const SceneDesc& desc, int count) {
-  if (count < 1) throw Error("--bricks must be at least 1");
+  if (count < 1) throw base::Error("--bricks must be at least 1");
   std::vector<BrickPlan> out;
   int nextId = 0;
   split(sceneDomain(desc), count, desc.camera, nextId, out);
@@ -339,8 +338,9 @@ const char* ghostModeName(GhostMode mode) { return mode == GhostMode::Layer ? "l
 GhostMode ghostModeFromName(const std::string& name) {
   if (name == "reach") return GhostMode::Reach;
   if (name == "layer") return GhostMode::Layer;
-  throw Error("ghost mode '" + name + "': choose reach (shading rays see what they reach) or " +
-              "layer (one ghost layer of voxels)");
+  throw base::Error("ghost mode '" + name +
+                    "': choose reach (shading rays see what they reach) or " +
+                    "layer (one ghost layer of voxels)");
 }
 
 float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode) {
@@ -436,8 +436,8 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const Ghost
   try {
     return loadBrickData(desc, plan, reach, part);
   } catch (const std::bad_alloc&) {
-    throw Error(part + ": out of memory while loading brick " + std::to_string(plan.id) +
-                "; this rank may hold " + dfb::memoryLimitText());
+    throw base::Error(part + ": out of memory while loading brick " + std::to_string(plan.id) +
+                      "; this rank may hold " + base::memoryLimitText());
   }
 }
 
@@ -453,7 +453,7 @@ void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans
   for (const BrickPlan& plan : plans) {
     const BrickReach reach = brickReach(desc, plan.bounds, ghosts);
     for (std::size_t i = 0; i < desc.volumes.size(); ++i)
-      volumes[i] = dfb::bytesPlus(volumes[i], brickVolumeBytes(desc, i, plan, reach));
+      volumes[i] = base::bytesPlus(volumes[i], brickVolumeBytes(desc, i, plan, reach));
     for (const ParticlesDesc* p : sets) {
       const std::uint64_t each = sizeof(Vec3) + (p->radii.size() > 1 ? 4 : 0) +
                                  (p->attribute.empty() ? 0 : 4) + kBvhBytesPerPrimitive;
@@ -461,13 +461,13 @@ void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans
       for (std::size_t i = 0; i < p->centers.size(); ++i)
         reached +=
             reach.reached(p->centers[i] - Vec3{p->radius(i)}, p->centers[i] + Vec3{p->radius(i)});
-      others = dfb::bytesPlus(others, reached * each);
+      others = base::bytesPlus(others, reached * each);
     }
     for (const WorldMesh& m : meshes) {
       // The world-space copy loadBrick makes of every mesh, and the triangles the brick reaches
       // with their share of the BVH.
-      others = dfb::bytesPlus(others, m.mesh.positions.size() * sizeof(Vec3) +
-                                          m.mesh.triangles.size() * sizeof(m.mesh.triangles[0]));
+      others = base::bytesPlus(others, m.mesh.positions.size() * sizeof(Vec3) +
+                                           m.mesh.triangles.size() * sizeof(m.mesh.triangles[0]));
       std::uint64_t reached = 0;
       for (const auto& t : m.mesh.triangles) {
         const Vec3 a = m.mesh.positions[t[0]], b = m.mesh.positions[t[1]],
@@ -476,17 +476,17 @@ void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans
             {std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})},
             {std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})});
       }
-      others = dfb::bytesPlus(others, reached * (3 * sizeof(Vec3) + sizeof(m.mesh.triangles[0]) +
-                                                 kBvhBytesPerPrimitive));
+      others = base::bytesPlus(others, reached * (3 * sizeof(Vec3) + sizeof(m.mesh.triangles[0]) +
+                                                  kBvhBytesPerPrimitive));
     }
   }
   std::uint64_t total = others;
   std::size_t largest = 0;
   for (std::size_t i = 0; i < volumes.size(); ++i) {
-    total = dfb::bytesPlus(total, volumes[i]);
+    total = base::bytesPlus(total, volumes[i]);
     if (volumes[i] > volumes[largest]) largest = i;
   }
-  const std::string problem = dfb::memoryProblem(total);
+  const std::string problem = base::memoryProblem(total);
   if (problem.empty()) return;
   const std::string bricks =
       plans.size() == 1 && plans[0].bounds == Box3{}
@@ -495,13 +495,15 @@ void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans
   if (!volumes.empty() && volumes[largest] >= others) {
     const VolumeDesc& v = desc.volumes[largest];
     const Index3 n = v.source.grid.dims;
-    throw Error(volumeName(v) + ": this rank holds " + std::to_string(volumes[largest]) +
-                " bytes of this " + std::to_string(n.x) + "x" + std::to_string(n.y) + "x" +
-                std::to_string(n.z) + " " + voxelTypeName(v.source.type) + " volume (" + bricks +
-                ", ghost voxels and macrocells included); its data in all " + problem);
+    throw base::Error(volumeName(v) + ": this rank holds " + std::to_string(volumes[largest]) +
+                      " bytes of this " + std::to_string(n.x) + "x" + std::to_string(n.y) + "x" +
+                      std::to_string(n.z) + " " + voxelTypeName(v.source.type) + " volume (" +
+                      bricks + ", ghost voxels and macrocells included); its data in all " +
+                      problem);
   }
-  throw Error("the scene's particles and triangles: this rank holds " + std::to_string(others) +
-              " bytes of them (" + bricks + "); its data in all " + problem);
+  throw base::Error("the scene's particles and triangles: this rank holds " +
+                    std::to_string(others) + " bytes of them (" + bricks + "); its data in all " +
+                    problem);
 }
 
 namespace {
@@ -510,7 +512,7 @@ namespace {
 std::vector<BrickPlan> ownPlans(const SceneDesc& desc, int bricks, int replication, int rank,
                                 int ranks) {
   const std::vector<BrickPlan> plans = splitScene(desc, bricks);
-  if (replication < 1) throw Error("--replication must be at least 1");
+  if (replication < 1) throw base::Error("--replication must be at least 1");
   std::vector<BrickPlan> mine;
   for (const BrickPlan& plan : plans) {
     const std::vector<int> h = brickHolders(plan.id, ranks, replication);
@@ -546,9 +548,9 @@ struct WireBrick {
 };
 
 void finish(MPI_Request& request, std::chrono::milliseconds timeout) {
-  messaging::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
-                              "exchanging brick bounds: another render rank did not join within " +
-                                  std::to_string(timeout.count()) + " ms");
+  base::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
+                         "exchanging brick bounds: another render rank did not join within " +
+                             std::to_string(timeout.count()) + " ms");
 }
 
 }  // namespace
@@ -559,7 +561,7 @@ BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
   MPI_Comm_size(comm, &ranks);
   std::vector<WireBrick> local;
   for (const BrickPlan& b : mine) {
-    if (b.id < 0) throw Error("brick id " + std::to_string(b.id) + " is negative");
+    if (b.id < 0) throw base::Error("brick id " + std::to_string(b.id) + " is negative");
     local.push_back({b.id,
                      {b.bounds.lo.x, b.bounds.lo.y, b.bounds.lo.z},
                      {b.bounds.hi.x, b.bounds.hi.y, b.bounds.hi.z}});
@@ -567,15 +569,15 @@ BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
   const int bytes = static_cast<int>(local.size() * sizeof(WireBrick));
   std::vector<int> counts(static_cast<std::size_t>(ranks)), offsets(counts.size());
   MPI_Request request;
-  dfb::checkMpi(MPI_Iallgather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, comm, &request),
-                "MPI_Iallgather");
+  base::checkMpi(MPI_Iallgather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, comm, &request),
+                 "MPI_Iallgather");
   finish(request, timeout);
   int total = 0;
   for (std::size_t r = 0; r < counts.size(); ++r) offsets[r] = total, total += counts[r];
   std::vector<WireBrick> all(static_cast<std::size_t>(total) / sizeof(WireBrick));
-  dfb::checkMpi(MPI_Iallgatherv(local.data(), bytes, MPI_BYTE, all.data(), counts.data(),
-                                offsets.data(), MPI_BYTE, comm, &request),
-                "MPI_Iallgatherv");
+  base::checkMpi(MPI_Iallgatherv(local.data(), bytes, MPI_BYTE, all.data(), counts.data(),
+                                 offsets.data(), MPI_BYTE, comm, &request),
+                 "MPI_Iallgatherv");
   finish(request, timeout);
 
   std::map<int, std::pair<Box3, std::vector<int>>> byId;
@@ -589,15 +591,15 @@ BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
       const Box3 bounds{{w.lo[0], w.lo[1], w.lo[2]}, {w.hi[0], w.hi[1], w.hi[2]}};
       auto [it, fresh] = byId.try_emplace(w.id, bounds, std::vector<int>{});
       if (!fresh && !(it->second.first == bounds))
-        throw Error("brick " + std::to_string(w.id) + ": render rank " + std::to_string(r) +
-                    " gives it other bounds than render rank " +
-                    std::to_string(it->second.second.front()) +
-                    " (ranks holding one brick id must hold the same brick)");
+        throw base::Error("brick " + std::to_string(w.id) + ": render rank " + std::to_string(r) +
+                          " gives it other bounds than render rank " +
+                          std::to_string(it->second.second.front()) +
+                          " (ranks holding one brick id must hold the same brick)");
       if (it->second.second.empty() || it->second.second.back() != r)
         it->second.second.push_back(r);
     }
   }
-  if (byId.empty()) throw Error("no render rank holds any brick: nothing to render");
+  if (byId.empty()) throw base::Error("no render rank holds any brick: nothing to render");
   BrickDirectory out;
   for (auto& [id, entry] : byId) {
     out.bricks.push_back({id, entry.first});

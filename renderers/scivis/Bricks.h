@@ -52,7 +52,7 @@ enum class GhostMode {
   // brick faces differ (seams), and no shadow falls from one brick into another.
   Layer,
 };
-// "reach" / "layer"; ghostModeFromName throws renderers::Error naming the choices otherwise.
+// "reach" / "layer"; ghostModeFromName throws base::Error naming the choices otherwise.
 const char* ghostModeName(GhostMode mode);
 GhostMode ghostModeFromName(const std::string& name);
 
@@ -77,14 +77,14 @@ GhostReach ghostReach(const SceneDesc& desc, GhostMode mode = GhostMode::Reach);
 // isovalue that those rays reach) or the dense bounding box when that is smaller; particles
 // and mesh triangles reaching into the bounds (drawn, clipped to them) and, as ghost data,
 // those that shading rays reach.
-// An allocation that fails is reported as renderers::Error naming the volume (or the particles
+// An allocation that fails is reported as base::Error naming the volume (or the particles
 // and triangles) it was loading.
 BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const GhostReach& reach);
 
 // The memory budget of loading `plans` with `reach` (dfb/MemoryBudget.h): what loadBrick holds
 // for them at most — dense voxel boxes with their ghost layers and macrocells, ghost shells
 // counted both sparse and dense, the particles and triangles they reach — with the scene
-// description itself. Throws renderers::Error before anything is loaded when that is more than
+// description itself. Throws base::Error before anything is loaded when that is more than
 // this rank may hold, naming the volume that asks most (its file, line and field, e.g.
 // "scene.toml:7: volume 'ct'.dims: ...") or the particles and triangles, and the bytes.
 // loadOwnBricks and wholeScene check this themselves.
@@ -114,7 +114,7 @@ struct BrickDirectory {
 };
 
 // Collective over `comm`: every rank gives the bricks it holds (id and clip bounds), every rank
-// gets the whole directory (one MPI_Iallgatherv, bounded by `timeout`). Throws renderers::Error
+// gets the whole directory (one MPI_Iallgatherv, bounded by `timeout`). Throws base::Error
 // when ranks disagree about a brick's bounds, an id is negative, or no rank holds any brick.
 BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
                               std::chrono::milliseconds timeout);

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <limits>
 
-#include "renderers/Parallel.h"
+#include "base/Parallel.h"
 
 #include "renderers/scivis/Avx512.h"
 
@@ -237,7 +237,7 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   std::atomic<bool> behind{false};
   const float w = static_cast<float>(width), h = static_cast<float>(height);
   std::vector<float> chunkNearest(chunks, kInf), chunkFarthest(chunks, 0.0f);
-  parallelFor(chunks, [&](std::size_t c) {
+  base::parallelFor(chunks, [&](std::size_t c) {
     const std::size_t begin = c * kClusterChunk,
                       end = std::min(clusterCount, begin + kClusterChunk);
     float lo = kInf, hi = 0;
@@ -289,7 +289,7 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   std::vector<std::uint32_t>& counts = counts_;  // kept: a fresh one page-faulted every frame
   const std::size_t bucketRow = kBuckets + kCountRowPad;
   counts.assign(chunks * bucketRow, 0);
-  parallelFor(chunks, [&](std::size_t c) {
+  base::parallelFor(chunks, [&](std::size_t c) {
     std::uint32_t* count = counts.data() + c * bucketRow;
     const std::size_t begin = c * kClusterChunk,
                       end = std::min(clusterCount, begin + kClusterChunk);
@@ -307,7 +307,7 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
       binned += here;
     }
   order_.resize(binned);
-  parallelFor(chunks, [&](std::size_t c) {
+  base::parallelFor(chunks, [&](std::size_t c) {
     std::uint32_t* next = counts.data() + c * bucketRow;
     const std::size_t begin = c * kClusterChunk,
                       end = std::min(clusterCount, begin + kClusterChunk);
@@ -328,7 +328,7 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
         visit(static_cast<std::size_t>(cy) * static_cast<std::size_t>(cellsX_) +
               static_cast<std::size_t>(cx));
   };
-  parallelFor(orderChunks, [&](std::size_t c) {
+  base::parallelFor(orderChunks, [&](std::size_t c) {
     std::uint32_t* count = counts.data() + c * cellRow;
     const std::size_t begin = c * kClusterChunk, end = std::min(binned, begin + kClusterChunk);
     for (std::size_t i = begin; i < end; ++i)
@@ -351,7 +351,7 @@ bool FirstHitRaster::prepare(const Camera& camera, int width, int height,
   }
   cellStart_[cells] = static_cast<std::uint32_t>(running);
   cellClusters_.resize(running);
-  parallelFor(orderChunks, [&](std::size_t c) {
+  base::parallelFor(orderChunks, [&](std::size_t c) {
     std::uint32_t* next = counts.data() + c * cellRow;
     const std::size_t begin = c * kClusterChunk, end = std::min(binned, begin + kClusterChunk);
     for (std::size_t i = begin; i < end; ++i)
@@ -398,7 +398,7 @@ void FirstHitRaster::makeClusters(const std::vector<Mesh>& meshes, std::size_t t
   const std::size_t chunks = (total + kChunk - 1) / kChunk;
   // The key's top two bits keep one mesh's triangles together (a cluster holds one mesh's; more
   // meshes than four only make more clusters cut at a mesh's end).
-  parallelFor(chunks, [&](std::size_t c) {
+  base::parallelFor(chunks, [&](std::size_t c) {
     const std::size_t begin = c * kChunk, end = std::min(total, begin + kChunk);
     std::size_t m = meshOf(begin);
     for (std::size_t g = begin; g < end; ++g) {
@@ -416,7 +416,7 @@ void FirstHitRaster::makeClusters(const std::vector<Mesh>& meshes, std::size_t t
       keys[g] = (std::uint64_t{m & 3} << 62) | code << 32 | g;
     }
   });
-  parallelSort(keys);  // the keys are distinct (each holds its triangle): one order
+  base::parallelSort(keys);  // the keys are distinct (each holds its triangle): one order
   clustered_.resize(total);
   for (std::size_t i = 0; i < total; ++i) clustered_[i] = static_cast<std::uint32_t>(keys[i]);
   // Runs of up to kClusterSize triangles of one mesh.
@@ -435,10 +435,11 @@ void FirstHitRaster::makeClusters(const std::vector<Mesh>& meshes, std::size_t t
   // counts' running sum, copied. (Serially, with a search that stopped at its match, this took
   // 60 of the 117 ms of clustering the wavelet's 1.6 M contour triangles.)
   const auto eachCluster = [&](const auto& body) {
-    parallelFor((clusters_.size() + kClusterChunk - 1) / kClusterChunk, [&](std::size_t chunk) {
-      const std::size_t end = std::min(clusters_.size(), (chunk + 1) * kClusterChunk);
-      for (std::size_t i = chunk * kClusterChunk; i < end; ++i) body(clusters_[i]);
-    });
+    base::parallelFor(
+        (clusters_.size() + kClusterChunk - 1) / kClusterChunk, [&](std::size_t chunk) {
+          const std::size_t end = std::min(clusters_.size(), (chunk + 1) * kClusterChunk);
+          for (std::size_t i = chunk * kClusterChunk; i < end; ++i) body(clusters_[i]);
+        });
   };
   // A cluster's distinct vertex ids from 3 x its first triangle on (at most 3 a triangle).
   std::vector<std::uint32_t> distinct(3 * total);

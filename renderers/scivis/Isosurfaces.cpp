@@ -4,7 +4,7 @@
 #include <bit>
 #include <unordered_map>
 
-#include "renderers/Parallel.h"
+#include "base/Parallel.h"
 
 namespace renderers {
 namespace {
@@ -198,7 +198,7 @@ std::vector<IsoMesh> polygonise(const GridGeometry& grid, const std::vector<Cell
                                 const std::vector<float>& isovalues, const BlockReader& read) {
   const std::size_t levels = isovalues.size();
   std::vector<BlockMesh> parts(blocks.size() * levels);
-  parallelFor(blocks.size(), [&](std::size_t b) {
+  base::parallelFor(blocks.size(), [&](std::size_t b) {
     const CellBlock& block = blocks[b];
     if (block.cells.empty()) return;
     const Index3 n = block.cells.size();

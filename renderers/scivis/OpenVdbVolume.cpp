@@ -8,8 +8,8 @@
 #include <cstring>
 #include <mutex>
 
-#include "renderers/Error.h"
-#include "renderers/Parallel.h"
+#include "base/Error.h"
+#include "base/Parallel.h"
 
 namespace renderers {
 namespace {
@@ -30,14 +30,14 @@ openvdb::GridBase::Ptr findGrid(openvdb::io::File& file, const std::string& path
     names += (names.empty() ? "'" : ", '") + g->getName() + "' (" + g->valueType() + ")";
     if (name.empty() ? g->valueType() == "float" : g->getName() == name) {
       if (g->valueType() != "float")
-        throw Error(path + ": OpenVDB grid '" + name + "' holds " + g->valueType() +
-                    " values; only float grids are volumes");
+        throw base::Error(path + ": OpenVDB grid '" + name + "' holds " + g->valueType() +
+                          " values; only float grids are volumes");
       return g;
     }
   }
-  throw Error(path + ": " +
-              (name.empty() ? std::string("no float grid") : "no grid named '" + name + "'") +
-              " in the file (grids: " + (names.empty() ? std::string("none") : names) + ")");
+  throw base::Error(path + ": " +
+                    (name.empty() ? std::string("no float grid") : "no grid named '" + name + "'") +
+                    " in the file (grids: " + (names.empty() ? std::string("none") : names) + ")");
 }
 
 // The active voxels' index bounding box, from the file's statistics when present (no voxels
@@ -56,7 +56,7 @@ void resolve(VolumeSource& source) {
   openvdb::GridBase::Ptr meta = findGrid(file, path, source.vdb.gridName);
   const openvdb::CoordBBox box = activeBox(file, *meta);
   if (box.empty())
-    throw Error(path + ": OpenVDB grid '" + meta->getName() + "' has no active voxels");
+    throw base::Error(path + ": OpenVDB grid '" + meta->getName() + "' has no active voxels");
   const openvdb::math::Transform& t = meta->transform();
   const openvdb::Vec3d o = t.indexToWorld(box.min());
   const openvdb::Vec3d axes[3] = {t.indexToWorld(box.min().offsetBy(1, 0, 0)) - o,
@@ -66,17 +66,19 @@ void resolve(VolumeSource& source) {
     for (int b = 0; b < 3; ++b) {
       // The dense grid is axis-aligned: a rotated or sheared index space would need resampling.
       if (a != b && std::abs(axes[a][b]) > 1e-6 * std::abs(axes[a][a]))
-        throw Error(path + ": OpenVDB grid '" + meta->getName() +
-                    "' has a rotated or sheared transform; only axis-aligned grids are volumes");
+        throw base::Error(
+            path + ": OpenVDB grid '" + meta->getName() +
+            "' has a rotated or sheared transform; only axis-aligned grids are volumes");
     }
     if (!(axes[a][a] > 0))
-      throw Error(path + ": OpenVDB grid '" + meta->getName() + "' has a non-positive voxel size");
+      throw base::Error(path + ": OpenVDB grid '" + meta->getName() +
+                        "' has a non-positive voxel size");
   }
   const openvdb::Coord extent = box.dim();
   for (int a = 0; a < 3; ++a) {
     if (extent[a] > (1 << 30))
-      throw Error(path + ": OpenVDB grid '" + meta->getName() +
-                  "' is too large to be a dense volume");
+      throw base::Error(path + ": OpenVDB grid '" + meta->getName() +
+                        "' is too large to be a dense volume");
   }
   source.vdb.gridName = meta->getName();
   source.vdb.indexOrigin = {box.min().x(), box.min().y(), box.min().z()};
@@ -105,7 +107,8 @@ Volume sample(const VolumeSource& source, const VoxelBox& box) {
   // Reads only the leaf nodes that touch the box.
   openvdb::FloatGrid::Ptr grid =
       openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(source.vdb.gridName, world));
-  if (!grid) throw Error(path + ": OpenVDB grid '" + source.vdb.gridName + "' is not a float grid");
+  if (!grid)
+    throw base::Error(path + ": OpenVDB grid '" + source.vdb.gridName + "' is not a float grid");
 
   Volume v;
   v.grid = source.grid;
@@ -114,16 +117,18 @@ Volume sample(const VolumeSource& source, const VoxelBox& box) {
   v.voxels = allocateVoxelBytes(box, v.type);
   const Index3 s = box.size();
   std::byte* out = v.voxels.data();
-  parallelFor(static_cast<std::size_t>(s.y) * static_cast<std::size_t>(s.z), [&](std::size_t row) {
-    auto accessor = grid->getConstAccessor();  // one per task: accessors cache, so are not shared
-    const int j = lo.y() + static_cast<int>(row % static_cast<std::size_t>(s.y));
-    const int k = lo.z() + static_cast<int>(row / static_cast<std::size_t>(s.y));
-    std::byte* dst = out + row * static_cast<std::size_t>(s.x) * sizeof(float);
-    for (int i = lo.x(); i <= hi.x(); ++i, dst += sizeof(float)) {
-      const float value = accessor.getValue(openvdb::Coord(i, j, k));
-      std::memcpy(dst, &value, sizeof value);
-    }
-  });
+  base::parallelFor(
+      static_cast<std::size_t>(s.y) * static_cast<std::size_t>(s.z), [&](std::size_t row) {
+        auto accessor =
+            grid->getConstAccessor();  // one per task: accessors cache, so are not shared
+        const int j = lo.y() + static_cast<int>(row % static_cast<std::size_t>(s.y));
+        const int k = lo.z() + static_cast<int>(row / static_cast<std::size_t>(s.y));
+        std::byte* dst = out + row * static_cast<std::size_t>(s.x) * sizeof(float);
+        for (int i = lo.x(); i <= hi.x(); ++i, dst += sizeof(float)) {
+          const float value = accessor.getValue(openvdb::Coord(i, j, k));
+          std::memcpy(dst, &value, sizeof value);
+        }
+      });
   v.updateRange();
   return v;
 }
@@ -135,7 +140,7 @@ void resolveOpenVdbGrid(VolumeSource& source) {
   try {
     resolve(source);
   } catch (const openvdb::Exception& e) {
-    throw Error(source.vdb.path + ": cannot read the OpenVDB file: " + e.what());
+    throw base::Error(source.vdb.path + ": cannot read the OpenVDB file: " + e.what());
   }
 }
 
@@ -144,7 +149,7 @@ Volume loadOpenVdbBox(const VolumeSource& source, const VoxelBox& box) {
   try {
     return sample(source, box);
   } catch (const openvdb::Exception& e) {
-    throw Error(source.vdb.path + ": cannot read the OpenVDB file: " + e.what());
+    throw base::Error(source.vdb.path + ": cannot read the OpenVDB file: " + e.what());
   }
 }
 

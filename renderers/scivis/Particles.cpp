@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "renderers/Error.h"
-#include "renderers/Parallel.h"
+#include "base/Error.h"
+#include "base/Parallel.h"
 #include "renderers/Rng.h"
 
 namespace renderers {
@@ -39,7 +39,7 @@ ParticlesDesc clusteredParticles(std::size_t count, std::uint64_t seed, Vec3 cen
   p.attribute.resize(count);
   p.radii = {radius};
   const float half = 0.5f * size;
-  parallelFor((count + 4095) / 4096, [&](std::size_t block) {
+  base::parallelFor((count + 4095) / 4096, [&](std::size_t block) {
     for (std::size_t i = block * 4096; i < std::min(count, (block + 1) * 4096); ++i) {
       const std::uint64_t key = mix64(base + i * 0x9e3779b97f4a7c15ull);
       if (unitFloat(key) < kBackground) {
@@ -84,23 +84,23 @@ void readParticleFile(const std::string& path, const std::string& layout, Partic
                 : layout[i] == 'a' ? &a
                                    : nullptr;
     if (!slot || *slot >= 0)
-      throw Error("layout '" + layout +
-                  "': use each of x, y, z, r, a at most once, and no other letter");
+      throw base::Error("layout '" + layout +
+                        "': use each of x, y, z, r, a at most once, and no other letter");
     *slot = static_cast<int>(i);
   }
-  if (x < 0 || y < 0 || z < 0) throw Error("layout '" + layout + "' needs x, y and z");
+  if (x < 0 || y < 0 || z < 0) throw base::Error("layout '" + layout + "' needs x, y and z");
   const std::size_t fields = layout.size(), recordBytes = fields * sizeof(float);
   std::error_code ec;
   const std::uintmax_t size = std::filesystem::file_size(path, ec);
-  if (ec) throw Error(path + ": cannot read (" + ec.message() + ")");
+  if (ec) throw base::Error(path + ": cannot read (" + ec.message() + ")");
   if (size == 0 || size % recordBytes != 0)
-    throw Error(path + ": " + std::to_string(size) + " bytes is not a whole number of " +
-                std::to_string(recordBytes) + "-byte records (layout '" + layout + "')");
+    throw base::Error(path + ": " + std::to_string(size) + " bytes is not a whole number of " +
+                      std::to_string(recordBytes) + "-byte records (layout '" + layout + "')");
   const std::size_t n = size / recordBytes;
   std::vector<float> data(n * fields);
   std::ifstream in(path, std::ios::binary);
   if (!in.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(size)))
-    throw Error(path + ": read failed");
+    throw base::Error(path + ": read failed");
   out.centers.resize(n);
   if (r >= 0) out.radii.resize(n);
   if (a >= 0) out.attribute.resize(n);
@@ -108,7 +108,7 @@ void readParticleFile(const std::string& path, const std::string& layout, Partic
     const float* rec = &data[i * fields];
     out.centers[i] = {rec[x], rec[y], rec[z]};
     if (!std::isfinite(rec[x] + rec[y] + rec[z]))
-      throw Error(path + ": particle " + std::to_string(i) + " has a non-finite position");
+      throw base::Error(path + ": particle " + std::to_string(i) + " has a non-finite position");
     if (r >= 0) out.radii[i] = rec[r];
     if (a >= 0) out.attribute[i] = rec[a];
   }

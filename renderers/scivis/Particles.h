@@ -17,7 +17,7 @@ ParticlesDesc clusteredParticles(std::size_t count, std::uint64_t seed, Vec3 cen
                                  float radius);
 
 // Records of float32 values in the order `layout` names: 'x' 'y' 'z' (required), 'r' (radius),
-// 'a' (attribute), each once, e.g. "xyz", "xyzr", "xyzra". Throws renderers::Error naming the
+// 'a' (attribute), each once, e.g. "xyz", "xyzr", "xyzra". Throws base::Error naming the
 // file when it cannot be read or its size is not a whole number of records.
 void readParticleFile(const std::string& path, const std::string& layout, ParticlesDesc& out);
 

@@ -8,9 +8,9 @@
 #include <cmath>
 #include <string>
 
+#include "base/Error.h"
+#include "base/Parallel.h"
 #include "renderers/EmbreeRays.h"
-#include "renderers/Error.h"
-#include "renderers/Parallel.h"
 #include "renderers/scivis/Bricks.h"
 #include "renderers/scivis/Isosurfaces.h"
 #include "renderers/scivis/TransferFunction.h"
@@ -110,7 +110,7 @@ struct SciVisScene::Embree {
         if (t[0] >= mesh->mesh.positions.size() || t[1] >= mesh->mesh.positions.size() ||
             t[2] >= mesh->mesh.positions.size()) {
           rtcReleaseGeometry(g);
-          throw Error("a mesh has a vertex index out of range");
+          throw base::Error("a mesh has a vertex index out of range");
         }
         std::copy(t.begin(), t.end(), idx + 3 * i);
         const Vec3 p0 = mesh->mesh.positions[t[0]];
@@ -149,7 +149,7 @@ struct SciVisScene::Embree {
                                 3 * sizeof(std::uint32_t), mesh.triangles.size()));
     if (!v || !idx) {
       rtcReleaseGeometry(g);
-      throw Error("Embree: cannot allocate an isosurface's buffers: " + message);
+      throw base::Error("Embree: cannot allocate an isosurface's buffers: " + message);
     }
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
       const Vec3 p = mesh.positions[i];
@@ -170,7 +170,7 @@ struct SciVisScene::Embree {
       info.vertexNormals.resize(mesh.positions.size());
       constexpr std::size_t kChunk = 16384;
       const std::size_t n = mesh.positions.size();
-      parallelFor((n + kChunk - 1) / kChunk, [&](std::size_t c) {
+      base::parallelFor((n + kChunk - 1) / kChunk, [&](std::size_t c) {
         for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
           const Vec3 grad = field->gradient(mesh.positions[i], 0.5f * field->minSpacing());
           info.vertexNormals[i] = length(grad) > 0 ? normalize(grad) : Vec3{};
@@ -200,25 +200,25 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   const SceneDesc& desc = *desc_;
   const SciVisSettings& settings = desc.scivis;
   if (desc.volumes.size() > kMaxVolumes)
-    throw Error("the scene has " + std::to_string(desc.volumes.size()) +
-                " volumes; the scivis renderer draws at most " + std::to_string(kMaxVolumes));
+    throw base::Error("the scene has " + std::to_string(desc.volumes.size()) +
+                      " volumes; the scivis renderer draws at most " + std::to_string(kMaxVolumes));
   if (content_.volumes.size() != desc.volumes.size())
-    throw Error("a scivis brick needs one (possibly empty) volume per scene volume");
+    throw base::Error("a scivis brick needs one (possibly empty) volume per scene volume");
   for (const auto* set : {&content_.particles, &content_.ghostParticles})
     for (const ParticlesDesc& p : *set) {
       if (p.material >= desc.materials.size())
-        throw Error("particles '" + p.name + "': no such material");
+        throw base::Error("particles '" + p.name + "': no such material");
       if (p.radii.size() != 1 && p.radii.size() != p.centers.size())
-        throw Error("particles '" + p.name + "': one radius, or one per particle");
+        throw base::Error("particles '" + p.name + "': one radius, or one per particle");
       if (!p.attribute.empty() && p.attribute.size() != p.centers.size())
-        throw Error("particles '" + p.name + "': one attribute per particle");
+        throw base::Error("particles '" + p.name + "': one attribute per particle");
     }
   for (const auto* set : {&content_.meshes, &content_.ghostMeshes})
     for (const WorldMesh& m : *set)
-      if (m.material >= desc.materials.size()) throw Error("a mesh has no such material");
+      if (m.material >= desc.materials.size()) throw base::Error("a mesh has no such material");
   for (const IsosurfaceDesc& iso : desc.isosurfaces)
     if (iso.volume >= desc.volumes.size() || iso.material >= desc.materials.size())
-      throw Error("an isosurface names a volume or material that does not exist");
+      throw base::Error("an isosurface names a volume or material that does not exist");
 
   // Volumes: one sampling step for all (the finest spacing over the sampling rate), and each
   // transfer function baked for that step.
@@ -226,7 +226,7 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   for (const Volume& v : content_.volumes) {
     const Vec3 s = v.grid.spacing;
     const float m = std::min(s.x, std::min(s.y, s.z));
-    if (!(m > 0)) throw Error("a volume's spacing must be positive");
+    if (!(m > 0)) throw base::Error("a volume's spacing must be positive");
     finest = finest > 0 ? std::min(finest, m) : m;
   }
   // Bricks must agree on the step with the whole scene: it comes from the scene's grids, not
@@ -259,7 +259,7 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   // Surfaces.
   Embree& e = *embree_;
   e.device = rtcNewDevice(nullptr);
-  if (!e.device) throw Error("Embree: cannot create a device");
+  if (!e.device) throw base::Error("Embree: cannot create a device");
   rtcSetDeviceErrorFunction(e.device, embree::keepFirstError, &e.message);
   rtcSetDeviceMemoryMonitorFunction(e.device, &Embree::monitor, &e);
   e.camera = rtcNewScene(e.device);
@@ -289,7 +289,7 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
     rtcCommitScene(e.shading);
     e.occluders = e.shading;
   }
-  if (!e.message.empty()) throw Error("Embree: building the scivis scene: " + e.message);
+  if (!e.message.empty()) throw base::Error("Embree: building the scivis scene: " + e.message);
   isosurfaceStats_.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - meshStart).count();
 
@@ -418,7 +418,7 @@ void SciVisScene::addIsosurfaces(std::size_t volume) {
 void SciVisScene::bake(VolumeLayer& layer, const VolumeDesc& vd, const TransferFunction& tf,
                        float opacityScale) const {
   if (!(tf.valueMax > tf.valueMin))
-    throw Error("volume '" + vd.name + "': the transfer function's range is empty");
+    throw base::Error("volume '" + vd.name + "': the transfer function's range is empty");
   const Vec3 s = vd.source.grid.spacing;
   const float unit = tf.unitDistance > 0 ? tf.unitDistance : std::min(s.x, std::min(s.y, s.z));
   const float exponent = step_ / unit;
@@ -507,7 +507,7 @@ bool SciVisScene::opaqueCameraTriangles(std::vector<FirstHitRaster::Mesh>& out) 
 void SciVisScene::intersectSurfaces(const SurfaceQuery* queries, int count, SurfaceHit* hits,
                                     bool* found) const {
   constexpr int n = kSurfacePacket;
-  if (count > n) throw Error("intersectSurfaces: more rays than a packet holds");
+  if (count > n) throw base::Error("intersectSurfaces: more rays than a packet holds");
   if (embree_->cameraGeometries == 0 || !embree_->packetsExact) {
     for (int i = 0; i < count; ++i) {
       const SurfaceQuery& q = queries[i];

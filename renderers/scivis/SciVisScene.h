@@ -6,7 +6,7 @@
 // exactly as the whole scene does when its ghosts hold what those rays can reach.
 //
 // Contracts: construction builds everything (Embree BVHs, macrocells) and throws
-// renderers::Error on invalid input; afterwards every const method is thread-safe.
+// base::Error on invalid input; afterwards every const method is thread-safe.
 #include <cstdint>
 #include <memory>
 #include <vector>

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "dfb/MemoryBudget.h"
+#include "base/MemoryBudget.h"
 #include "renderers/scivis/Particles.h"
 #include "renderers/scivis/SciVisScene.h"
 #include "renderers/scivis/VolumeToml.h"
@@ -87,11 +87,11 @@ void readParticles(const TomlReader& r, const toml::table& t, const std::filesys
     const std::uint64_t fileBytes = std::filesystem::file_size(p.file, ec);
     if (!ec)
       r.budget(*f, what + ".file (" + std::to_string(fileBytes) + " bytes)",
-               d.bytes() + dfb::bytesTimes(fileBytes, 2));
+               d.bytes() + base::bytesTimes(fileBytes, 2));
     r.loading(*f, what + ".file", [&] {
       try {
         readParticleFile(p.file, layout, p);
-      } catch (const Error& e) {
+      } catch (const base::Error& e) {
         r.fail(*f, what + ": " + e.what());
       }
     });

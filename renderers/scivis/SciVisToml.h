@@ -25,7 +25,7 @@
 namespace renderers {
 
 // Appends the volumes, isosurfaces, particles and lights of `root` to `d` and reads its
-// [scivis] settings; `d.materials` must already be read. Throws renderers::Error "FILE:LINE: ...".
+// [scivis] settings; `d.materials` must already be read. Throws base::Error "FILE:LINE: ...".
 void readSciVis(const TomlReader& r, const toml::table& root, const std::filesystem::path& folder,
                 SceneDesc& d);
 

@@ -4,7 +4,7 @@
 #include <bit>
 #include <cmath>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 
 namespace renderers {
 namespace {
@@ -37,8 +37,8 @@ float TransferFunction::opacity(float value) const { return evaluate(opacities, 
 TransferTable::TransferTable(const TransferFunction& tf, int size)
     : valueMin_(tf.valueMin), valueMax_(tf.valueMax), size_(std::max(size, 2)) {
   if (!(tf.valueMax > tf.valueMin))
-    throw Error("transfer function range [" + std::to_string(tf.valueMin) + ", " +
-                std::to_string(tf.valueMax) + "] is empty");
+    throw base::Error("transfer function range [" + std::to_string(tf.valueMin) + ", " +
+                      std::to_string(tf.valueMax) + "] is empty");
   const float width = valueMax_ - valueMin_;
   scale_ = static_cast<float>(size_ - 1) / width;
   auto valueOf = [&](int e) {

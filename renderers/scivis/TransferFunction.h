@@ -25,7 +25,7 @@ struct TransferFunction {
 
 // "cool-warm" (Moreland's diverging map), "viridis", "grayscale", "inferno", "rainbow" (see
 // transferFunctionPresetNames()) over [valueMin, valueMax] with a linear opacity ramp from 0 to
-// `maxOpacity`. Throws renderers::Error listing the names for an unknown one.
+// `maxOpacity`. Throws base::Error listing the names for an unknown one.
 TransferFunction transferFunctionPreset(const std::string& name, float valueMin, float valueMax,
                                         float maxOpacity = 1.0f);
 std::vector<std::string> transferFunctionPresetNames();
@@ -35,7 +35,7 @@ std::vector<std::string> transferFunctionPresetNames();
 class TransferTable {
  public:
   TransferTable() = default;  // empty: lookup gives 0, maxOpacity 0
-  // Throws renderers::Error when tf's range is empty (valueMax <= valueMin). size >= 2.
+  // Throws base::Error when tf's range is empty (valueMax <= valueMin). size >= 2.
   TransferTable(const TransferFunction& tf, int size = 1024);
   // RGB and opacity at `value` (clamped to the range).
   void lookup(float value, float rgba[4]) const;

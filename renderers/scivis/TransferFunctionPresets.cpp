@@ -10,7 +10,7 @@
 
 #include <algorithm>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 
 namespace renderers {
 namespace {
@@ -161,7 +161,7 @@ TransferFunction transferFunctionPreset(const std::string& name, float valueMin,
     std::string names;
     for (const std::string& n : transferFunctionPresetNames())
       names += (names.empty() ? "" : ", ") + n;
-    throw Error("unknown transfer function preset '" + name + "' (presets: " + names + ")");
+    throw base::Error("unknown transfer function preset '" + name + "' (presets: " + names + ")");
   }
   tf.opacities = {{valueMin, 0.0f}, {valueMax, maxOpacity}};
   return tf;

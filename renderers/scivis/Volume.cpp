@@ -9,8 +9,8 @@
 #include <cstring>
 #include <limits>
 
-#include "renderers/Error.h"
-#include "renderers/Parallel.h"
+#include "base/Error.h"
+#include "base/Parallel.h"
 
 namespace renderers {
 
@@ -23,7 +23,7 @@ std::size_t voxelBytes(VoxelType type) {
     case VoxelType::UInt16:
       return 2;
   }
-  throw Error("unknown voxel type");
+  throw base::Error("unknown voxel type");
 }
 
 const char* voxelTypeName(VoxelType type) {
@@ -185,7 +185,7 @@ void Volume::updateRange() {
   const std::size_t slabs = static_cast<std::size_t>(box.size().z);
   std::vector<float> lo(slabs, std::numeric_limits<float>::infinity());
   std::vector<float> hi(slabs, -std::numeric_limits<float>::infinity());
-  parallelFor(slabs, [&](std::size_t z) {
+  base::parallelFor(slabs, [&](std::size_t z) {
     float l = lo[z], h = hi[z];
     for (std::size_t n = z * stride, end = n + slab; n < end; ++n) {
       const float v = valueAt(voxels.data(), type, n);

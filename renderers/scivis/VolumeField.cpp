@@ -5,15 +5,15 @@
 #include <limits>
 #include <vector>
 
-#include "renderers/Error.h"
-#include "renderers/Parallel.h"
+#include "base/Error.h"
+#include "base/Parallel.h"
 
 namespace renderers {
 FieldGeometry::FieldGeometry(const GridGeometry& grid, const VoxelBox& box, std::size_t sliceStride)
     : grid_(grid), box_(box) {
   const Index3 n = box.size();
   if (n.x < 2 || n.y < 2 || n.z < 2)
-    throw Error("a volume brick needs at least 2 voxels per axis to interpolate");
+    throw base::Error("a volume brick needs at least 2 voxels per axis to interpolate");
   const GridGeometry& g = grid;
   const VoxelBox& b = box;
   origin_ = g.origin;
@@ -106,7 +106,7 @@ VolumeField::VolumeField(const Volume& volume)
   const MacroSpans y(macroFirst_.y, macroCells_.y, b.lo.y, b.hi.y);
   const MacroSpans z(macroFirst_.z, macroCells_.z, b.lo.z, b.hi.z);
   const std::size_t slab = static_cast<std::size_t>(macroCells_.x) * macroCells_.y;
-  parallelFor(static_cast<std::size_t>(macroCells_.z), [&](std::size_t mz) {
+  base::parallelFor(static_cast<std::size_t>(macroCells_.z), [&](std::size_t mz) {
     float* lo = &macroMin_[mz * slab];
     float* hi = &macroMax_[mz * slab];
     const int z0 = z.from[mz], z1 = z.to[mz];

@@ -106,7 +106,7 @@ class FieldGeometry {
 
  protected:
   FieldGeometry() = default;
-  // The geometry of `box` of `grid` (at least 2 voxels per axis; throws renderers::Error
+  // The geometry of `box` of `grid` (at least 2 voxels per axis; throws base::Error
   // otherwise), voxels stored x fastest, then y, then z, slices `sliceStride` voxels apart (0:
   // dense, box.size().x * box.size().y); macrocell ranges all zero.
   FieldGeometry(const GridGeometry& grid, const VoxelBox& box, std::size_t sliceStride = 0);

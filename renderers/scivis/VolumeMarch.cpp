@@ -8,7 +8,7 @@
 #include <cmath>
 #include <string>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/VolumeMarchSteps.h"
 
 namespace renderers {
@@ -447,8 +447,8 @@ MarchKernel resolveMarchKernel(MarchKernel kernel) {
     return MarchKernel::Sse;
   }
   if (!marchKernelAvailable(kernel))
-    throw Error(std::string("this CPU cannot run the ") + marchKernelName(kernel) +
-                " volume march");
+    throw base::Error(std::string("this CPU cannot run the ") + marchKernelName(kernel) +
+                      " volume march");
   return kernel;
 }
 

@@ -31,7 +31,7 @@ enum class MarchKernel {
 };
 
 bool marchKernelAvailable(MarchKernel kernel);  // Auto and Sse: always
-// `kernel`, or for Auto the fastest available one. Throws renderers::Error for one the CPU (or
+// `kernel`, or for Auto the fastest available one. Throws base::Error for one the CPU (or
 // the build) lacks.
 MarchKernel resolveMarchKernel(MarchKernel kernel);
 const char* marchKernelName(MarchKernel kernel);

@@ -13,8 +13,8 @@
 #include <utility>
 #include <vector>
 
-#include "renderers/Error.h"
-#include "renderers/Parallel.h"
+#include "base/Error.h"
+#include "base/Parallel.h"
 #include "renderers/scivis/OpenVdbVolume.h"
 #include "renderers/scivis/formats/VolumeFile.h"
 
@@ -109,7 +109,7 @@ Volume fillProcedural(const VolumeSource& source, const VoxelBox& box, MakeAxis 
   const Index3 s = box.size();
   const std::size_t rows = static_cast<std::size_t>(s.y) * static_cast<std::size_t>(s.z);
   std::byte* out = v.voxels.data();
-  parallelFor(rows, [&](std::size_t row) {
+  base::parallelFor(rows, [&](std::size_t row) {
     const Axis& y = axes[1][row % static_cast<std::size_t>(s.y)];
     const Axis& z = axes[2][row / static_cast<std::size_t>(s.y)];
     std::byte* dst = out + row * static_cast<std::size_t>(s.x) * sizeof(float);
@@ -144,7 +144,7 @@ class ReadOnlyFile {
   const char* openError() const { return std::strerror(openError_); }
   std::uint64_t size() const {
     struct stat st {};
-    if (::fstat(fd_, &st) != 0) throw Error(path_ + ": cannot stat: " + std::strerror(errno));
+    if (::fstat(fd_, &st) != 0) throw base::Error(path_ + ": cannot stat: " + std::strerror(errno));
     return static_cast<std::uint64_t>(st.st_size);
   }
   // Exactly `bytes` bytes at `offset`; pread loops since one call may return fewer.
@@ -153,8 +153,8 @@ class ReadOnlyFile {
       const ssize_t n = ::pread(fd_, to, bytes, static_cast<off_t>(offset));
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0)
-        throw Error(path_ + ": read failed at byte " + std::to_string(offset) + ": " +
-                    (n == 0 ? std::string("unexpected end of file") : std::strerror(errno)));
+        throw base::Error(path_ + ": read failed at byte " + std::to_string(offset) + ": " +
+                          (n == 0 ? std::string("unexpected end of file") : std::strerror(errno)));
       bytesReadOnThisThread += static_cast<std::uint64_t>(n);
       to += n;
       offset += static_cast<std::uint64_t>(n);
@@ -170,12 +170,12 @@ class ReadOnlyFile {
 
 void checkRawSize(const VolumeSource& source, const ReadOnlyFile& file) {
   if (!file.isOpen())
-    throw Error(source.raw.path + ": cannot open the raw volume file (" + file.openError() +
-                "); expected " + rawSizeText(source));
+    throw base::Error(source.raw.path + ": cannot open the raw volume file (" + file.openError() +
+                      "); expected " + rawSizeText(source));
   const std::uint64_t found = file.size();
   if (found != expectedRawFileBytes(source))
-    throw Error(source.raw.path + ": raw volume file is " + std::to_string(found) +
-                " bytes, expected " + rawSizeText(source));
+    throw base::Error(source.raw.path + ": raw volume file is " + std::to_string(found) +
+                      " bytes, expected " + rawSizeText(source));
 }
 
 void swapBytes(std::byte* data, std::size_t count, std::size_t width) {
@@ -236,7 +236,7 @@ float proceduralValue(const VolumeSource& source, int i, int j, int k) {
     case VolumeSource::Kind::File:
       break;
   }
-  throw Error("proceduralValue: the volume source is a file, not a procedural field");
+  throw base::Error("proceduralValue: the volume source is a file, not a procedural field");
 }
 
 std::uint64_t expectedRawFileBytes(const VolumeSource& source) {
@@ -287,9 +287,10 @@ Volume loadVolume(const VolumeSource& source, const VoxelBox& box) {
   }
   const Index3 d = source.grid.dims;
   if (d.x < 2 || d.y < 2 || d.z < 2)
-    throw Error("volume grid " + dimsText(d) + " needs at least 2 voxels per axis");
+    throw base::Error("volume grid " + dimsText(d) + " needs at least 2 voxels per axis");
   if (box.empty() || !source.grid.wholeBox().contains(box))
-    throw Error("volume box " + boxText(box) + " is empty or outside the grid " + dimsText(d));
+    throw base::Error("volume box " + boxText(box) + " is empty or outside the grid " +
+                      dimsText(d));
   switch (source.kind) {
     case VolumeSource::Kind::Wavelet: {
       const WaveletParams& p = source.wavelet;
@@ -313,7 +314,7 @@ Volume loadVolume(const VolumeSource& source, const VoxelBox& box) {
     case VolumeSource::Kind::File:
       return loadVolumeFile(source, box);
   }
-  throw Error("unknown volume source");
+  throw base::Error("unknown volume source");
 }
 
 }  // namespace renderers

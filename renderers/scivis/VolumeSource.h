@@ -80,7 +80,7 @@ struct VolumeSource {
 float proceduralValue(const VolumeSource& source, int i, int j, int k);
 
 // Raw files: the file size the grid, type and header call for. checkRawFile throws
-// renderers::Error naming the file, the expected size and the found one when the file is
+// base::Error naming the file, the expected size and the found one when the file is
 // missing or its size differs (a wrong dims/type/header would read garbage).
 std::uint64_t expectedRawFileBytes(const VolumeSource& source);
 void checkRawFile(const VolumeSource& source);
@@ -88,7 +88,7 @@ void checkRawFile(const VolumeSource& source);
 // OpenVDB files: reads the metadata only (no voxels) of source.vdb's grid (or of the first float
 // grid when gridName is empty, then filling gridName in) and sets source.grid from its active
 // bounding box and its transform: dims = the box's size (at least 2 per axis), spacing = the
-// voxel size, origin = the world position of the box's minimum. Throws renderers::Error naming
+// voxel size, origin = the world position of the box's minimum. Throws base::Error naming
 // the file for a missing file or grid, a non-float grid, an empty grid or a rotated transform.
 void resolveOpenVdbGrid(VolumeSource& source);
 
@@ -102,7 +102,7 @@ std::optional<std::pair<float, float>> knownValueRange(const VolumeSource& sourc
 // that a brick reads its own voxels and nothing else.
 std::uint64_t volumeFileBytesRead();
 
-// The voxels of `box` (non-empty, inside source.grid.wholeBox()). Throws renderers::Error
+// The voxels of `box` (non-empty, inside source.grid.wholeBox()). Throws base::Error
 // naming the file and what is wrong on any I/O problem (missing, too short, unreadable).
 Volume loadVolume(const VolumeSource& source, const VoxelBox& box);
 

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/formats/VolumeFile.h"
 
 namespace renderers {
@@ -128,7 +128,7 @@ void readRaw(const TomlReader& r, const toml::table& t, const std::string& what,
   }
   try {
     checkRawFile(s);
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     r.fail(file, what + ".file: " + e.what());
   }
 }
@@ -140,7 +140,7 @@ void readOpenVdb(const TomlReader& r, const toml::table& t, const std::string& w
   if (const toml::node* grid = t.get("grid")) s.vdb.gridName = r.string(*grid, what + ".grid");
   try {
     resolveOpenVdbGrid(s);
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     r.fail(file, what + ".file: " + e.what());
   }
   for (int a = 0; a < 3; ++a)
@@ -184,7 +184,7 @@ void readFile(const TomlReader& r, const toml::table& t, const std::string& what
   }
   try {
     resolveVolumeFile(s);
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     // Point at the field the problem is about: a dataset, variable or time step the file lacks.
     const std::string m = e.what();
     for (const std::string field : {"dataset", "variable", "time"})
@@ -261,7 +261,7 @@ TransferFunction readTransferFunction(const TomlReader& r, const toml::node& n,
     TransferFunction p;
     try {
       p = transferFunctionPreset(name, tf.valueMin, tf.valueMax, peak);
-    } catch (const Error& e) {
+    } catch (const base::Error& e) {
       r.fail(*preset, what + ".preset: " + e.what());
     }
     tf.colors = std::move(p.colors);

@@ -10,7 +10,7 @@
 
 #include "apps/CameraPath.h"
 #include "apps/FrameDirector.h"
-#include "renderers/Error.h"
+#include "base/Error.h"
 
 namespace app {
 namespace {
@@ -166,7 +166,7 @@ TEST(CameraPath, ErrorsNameFileAndLine) {
   try {
     CameraPath::load(file, {});
     FAIL() << "a camera looking along its up vector was accepted";
-  } catch (const renderers::Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find(file + ":1:"), std::string::npos) << e.what();
   }
   std::remove(file.c_str());

@@ -14,7 +14,7 @@
 #include <string>
 #include <thread>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "dfb/TileMessage.h"
 
 #include "tests/MpiTestUtil.h"
@@ -431,7 +431,7 @@ TEST(Dfb, AMissingTileFailsTheFrameOnEveryRankWithinTheTimeout) {
   std::string message;
   try {
     dfb.end();
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     message = e.what();
   }
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(3));
@@ -449,7 +449,7 @@ TEST(Dfb, SetTileRejectsARegionThatIsNoTile) {
   dfb.begin({1, 0});
   Tile bad;
   bad.reset(Region{3, 0, 35, 32});
-  EXPECT_THROW(dfb.setTile(bad), Error);
+  EXPECT_THROW(dfb.setTile(bad), base::Error);
   tbb::parallel_for(0, dfb.grid().tileCount(), [&](int t) {
     if (renders(t)) dfb.setTile(renderTile(dfb.grid().region(t), 1, 0));
   });
@@ -463,7 +463,7 @@ TEST(Dfb, SetTileOutsideAFrameIsRefused) {
   auto refusal = [&] {
     try {
       dfb.setTile(tile);
-    } catch (const Error& e) {
+    } catch (const base::Error& e) {
       return std::string(e.what());
     }
     return std::string();
@@ -487,7 +487,7 @@ TEST(Dfb, AMalformedMessageBetweenFramesFailsTheNextBegin) {
   try {
     dfb.begin({2, 0});
     ADD_FAILURE() << "begin() must throw the error that came between frames";
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     const std::string message = e.what();
     EXPECT_NE(message.find("a tile message from rank " + std::to_string(sender)), std::string::npos)
         << message;
@@ -576,7 +576,7 @@ TEST_P(DfbDoor, RefusesAMalformedInputByName) {
   std::string message;
   try {
     dfb.end();
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     message = e.what();
   }
   ASSERT_FALSE(message.empty()) << "end() must fail";

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "tests/MpiTestUtil.h"
 
 namespace dfb {
@@ -183,7 +183,7 @@ TEST(ImageGather, ABlockThatDoesNotMatchItsTilesIsRefusedNamingTheRank) {
     try {
       gather();
       ADD_FAILURE() << "rank 0 accepted the block";
-    } catch (const Error& e) {
+    } catch (const base::Error& e) {
       EXPECT_EQ(std::string(e.what()).rfind(c.expected, 0), 0u) << e.what();
     }
   }

@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "dfb/TileOperation.h"
 
 namespace dfb {
@@ -51,7 +51,7 @@ std::string refusal(const Tile& input, const TileState& state, FrameInfo label =
   try {
     admitInput(input, label, state);
     return {};
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     return e.what();
   }
 }

@@ -8,7 +8,7 @@
 #include <limits>
 #include <random>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "dfb/PixelOp.h"
 #include "dfb/TileMessage.h"
 #include "dfb/TileOperation.h"
@@ -31,7 +31,7 @@ TEST(WriteOperation, TakesExactlyOneInput) {
   op->newFrame({}, 0, 1);
   EXPECT_TRUE(op->process(constantTile(0.5f)));
   EXPECT_EQ(op->finished().color[7], 0.5f);
-  EXPECT_THROW(op->process(constantTile(0.5f)), Error);
+  EXPECT_THROW(op->process(constantTile(0.5f)), base::Error);
 }
 
 TEST(AccumulateOperation, IsTheRunningMeanAndResetsWithTheEpoch) {
@@ -311,7 +311,7 @@ TEST(AlphaBlendOperation, TooManyTilesInAGenerationIsAnError) {
         op->process(Tile(child));
         op->process(Tile(root));
       },
-      Error);
+      base::Error);
 }
 
 TEST(TileMessage, PacksAndUnpacksEveryChannel) {
@@ -342,7 +342,7 @@ TEST(TileMessage, PacksAndUnpacksEveryChannel) {
   EXPECT_EQ(back.accumulationId, 11u);
 
   messaging::Bytes truncated(bytes.begin(), bytes.end() - 4);
-  EXPECT_THROW(unpackTile(truncated, header), Error);
+  EXPECT_THROW(unpackTile(truncated, header), base::Error);
 
   // Display pixels only (the pattern renderer's RGBA8 path): no color floats on the wire.
   Tile d;
@@ -354,7 +354,7 @@ TEST(TileMessage, PacksAndUnpacksEveryChannel) {
   EXPECT_TRUE(dback.color.empty());
   EXPECT_EQ(dback.rgba8, d.rgba8);
   d.rgba8.pop_back();
-  EXPECT_THROW(packTile(d, 5, 99, 4), Error);
+  EXPECT_THROW(packTile(d, 5, 99, 4), base::Error);
 }
 
 // Found by fuzz_tile_message: a header whose region's width times height overflowed an int
@@ -368,7 +368,7 @@ TEST(TileMessage, RejectsARegionWhoseSizeOverflows) {
   header.x0 = -2000000000;
   header.x1 = 2000000000;
   std::memcpy(bytes.data(), &header, sizeof header);
-  EXPECT_THROW(unpackTile(bytes, header), Error);
+  EXPECT_THROW(unpackTile(bytes, header), base::Error);
 }
 
 TEST(ToneMap, EncodesSrgbAndClamps) {

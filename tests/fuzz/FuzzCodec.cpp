@@ -1,6 +1,6 @@
 // libFuzzer target: a piece's pixel bytes as they arrive at a remote wall process, decoded with
 // each codec of wall/service/Codec.h as a 64x64 rectangle into a buffer of exactly that size.
-// Anything but a clean decode or a wall::Error (a crash, a sanitizer report, another exception)
+// Anything but a clean decode or a base::Error (a crash, a sanitizer report, another exception)
 // is a finding. What decodes is decoded again into rows 72 pixels apart, the strided path. After
 // each input a valid piece of each codec must still decode: one hostile piece must not break the
 // thread's decoders (libjpeg-turbo 2.1's tjDecompressHeader3 did, see Codec.cpp).
@@ -11,7 +11,7 @@
 #include <cstdlib>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/service/Codec.h"
 
 namespace {
@@ -49,13 +49,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     try {
       wall::service::decodePixels(kCodecs[c], bytes, size, kSide, kSide, packed.data(), kSide);
       wall::service::decodePixels(kCodecs[c], bytes, size, kSide, kSide, strided.data(), kStride);
-    } catch (const wall::Error&) {
+    } catch (const base::Error&) {
     }
     const messaging::Bytes& valid = validPieces()[c];
     try {
       wall::service::decodePixels(kCodecs[c], valid.data(), valid.size(), kSide, kSide,
                                   packed.data(), kSide);
-    } catch (const wall::Error&) {
+    } catch (const base::Error&) {
       std::abort();  // the input left this thread unable to decode a valid piece
     }
   }

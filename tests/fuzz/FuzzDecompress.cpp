@@ -1,12 +1,12 @@
 // libFuzzer target: a compressed message body and the size its envelope announces (the first 4
-// bytes): corrupt input is a dfb::Error, and nothing is allocated for a size the stream cannot
+// bytes): corrupt input is a base::Error, and nothing is allocated for a size the stream cannot
 // produce.
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <span>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "messaging/Compression.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -19,7 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                           rawSize, out);
     messaging::Bytes back;
     if (!out.empty()) messaging::planeDeltaDecode(out, 4, back);
-  } catch (const dfb::Error&) {
+  } catch (const base::Error&) {
   }
   return 0;
 }

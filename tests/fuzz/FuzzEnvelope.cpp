@@ -1,12 +1,12 @@
 // libFuzzer target: a whole wire buffer as another rank could send it (body + envelope trailer).
-// Opening it either yields a payload of exactly the announced size or throws dfb::Error; a
+// Opening it either yields a payload of exactly the announced size or throws base::Error; a
 // hostile size never allocates more than the limit; sealing the payload again and reopening it
 // gives the same payload back.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "messaging/Envelope.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -16,7 +16,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   messaging::Envelope envelope;
   try {
     envelope = messaging::openEnvelope(messaging::Bytes(bytes, bytes + size), kLimit, payload);
-  } catch (const dfb::Error&) {
+  } catch (const base::Error&) {
     return 0;
   }
   if (payload.size() != envelope.rawBytes || payload.size() > kLimit) std::abort();

@@ -2,7 +2,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Image.h"
 #include "wall/PieceMessage.h"
 
@@ -13,7 +13,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const wall::PieceHeader header = wall::readPieceHeader(message);
     wall::copyPiece(message, header, display);
-  } catch (const dfb::Error&) {
+  } catch (const base::Error&) {
   }
   return 0;
 }

@@ -1,5 +1,5 @@
 // libFuzzer target: scene TOML text, read through a file as the app does. Problems are
-// renderers::Error (or another std::exception with a message), never a crash.
+// base::Error (or another std::exception with a message), never a crash.
 #include <unistd.h>
 
 #include <cstddef>

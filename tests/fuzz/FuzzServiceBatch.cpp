@@ -1,7 +1,7 @@
 // libFuzzer target: a piece batch as it arrives on a wall process's piece socket
 // (wall/service/Protocol.h, wall/service/Codec.h). The batch is parsed, then every piece of at
 // most 256x256 pixels is decoded into a buffer of exactly its size, as the piece receiver does
-// into a display image. Any bytes are accepted or refused with a wall::Error (anything else
+// into a display image. Any bytes are accepted or refused with a base::Error (anything else
 // escapes and is a crash); nothing is read or written out of bounds; a lossless piece that
 // decoded encodes and decodes back to the same pixels.
 #include <cstddef>
@@ -10,7 +10,7 @@
 #include <memory>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/service/Codec.h"
 #include "wall/service/Protocol.h"
 
@@ -20,13 +20,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size)
   const auto* data = reinterpret_cast<const std::byte*>(raw);
   try {
     parseHeader(data, size);
-  } catch (const wall::Error&) {
+  } catch (const base::Error&) {
   }
   std::vector<BatchPiece> pieces;
   BatchHeader header;
   try {
     header = parseBatch(data, size, pieces);
-  } catch (const wall::Error&) {
+  } catch (const base::Error&) {
     return 0;
   }
   if (pieces.size() != header.pieceCount) std::abort();
@@ -41,7 +41,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size)
     const std::unique_ptr<std::uint32_t[]> dest(new std::uint32_t[pixels]);
     try {
       decodePixels(header.codec, piece.data, piece.size, width, height, dest.get(), width);
-    } catch (const wall::Error&) {
+    } catch (const base::Error&) {
       continue;
     }
     if (header.codec == Codec::Jpeg) continue;

@@ -1,12 +1,12 @@
 // libFuzzer target: the directory a wall sends a job it accepted (wall/service/Protocol.h),
-// as a render job's rank 0 reads it. Any bytes are refused with a wall::Error (anything else
+// as a render job's rank 0 reads it. Any bytes are refused with a base::Error (anything else
 // escapes and is a crash) or give a directory whose layout passes the layout checks: displays
 // inside the canvas, processes 0..W-1 with an endpoint each; it packs and parses back the same.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Layout.h"
 #include "wall/service/Protocol.h"
 
@@ -16,7 +16,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size)
   Directory d;
   try {
     d = parseDirectory(data, size);
-  } catch (const wall::Error&) {
+  } catch (const base::Error&) {
     return 0;
   }
   const wall::Layout& l = d.layout;

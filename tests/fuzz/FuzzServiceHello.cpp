@@ -1,6 +1,6 @@
 // libFuzzer target: what a job's rank 0 or the wall's process 0 reads first on the wall
 // service's directory socket (wall/service/Protocol.h): the header, a hello, a control message,
-// a text message. Any bytes are accepted or refused with a wall::Error (anything else escapes and
+// a text message. Any bytes are accepted or refused with a base::Error (anything else escapes and
 // is a crash); whatever is accepted honours the caps and packs back to the same body.
 #include <cstddef>
 #include <cstdint>
@@ -8,7 +8,7 @@
 #include <cstring>
 #include <string>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/service/Protocol.h"
 
 namespace {
@@ -33,7 +33,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size)
         h.kind < static_cast<std::uint16_t>(Kind::Hello) ||
         h.kind > static_cast<std::uint16_t>(kLastKind))
       std::abort();  // a header past its checks
-  } catch (const wall::Error&) {
+  } catch (const base::Error&) {
   }
   try {
     const Hello hello = parseHello(data, size);
@@ -43,19 +43,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size)
         hello.codec.jpegQuality > 100)
       std::abort();  // a hello past the caps
     if (!sameBody(data, size, packHello(hello))) std::abort();
-  } catch (const wall::Error&) {
+  } catch (const base::Error&) {
   }
   try {
     const Control control = parseControl(data, size);
     if (!sameBody(data, size, packControl(Kind::Presented, 0, control.value, control.second)))
       std::abort();
-  } catch (const wall::Error&) {
+  } catch (const base::Error&) {
   }
   try {
     const std::string text = parseText(data, size);
     if (text.size() > kMaxStringBytes) std::abort();
     if (!sameBody(data, size, packText(Kind::Refused, 0, text))) std::abort();
-  } catch (const wall::Error&) {
+  } catch (const base::Error&) {
   }
   return 0;
 }

@@ -2,7 +2,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "dfb/TileMessage.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -11,7 +11,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   dfb::TileMessageHeader header;
   try {
     (void)dfb::unpackTile(message, header);
-  } catch (const dfb::Error&) {
+  } catch (const base::Error&) {
   }
   return 0;
 }

@@ -12,7 +12,7 @@
 #include <memory>
 #include <vector>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "dfb/PixelOp.h"
 #include "dfb/TileDoor.h"
 #include "dfb/TileMessage.h"
@@ -99,7 +99,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     dfb::Tile input;
     try {
       input = dfb::unpackTile(message, header);
-    } catch (const dfb::Error&) {
+    } catch (const base::Error&) {
       continue;
     }
     if (header.tileIndex < 0 || header.tileIndex >= grid.tileCount()) continue;  // not owned
@@ -112,7 +112,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         tile.state.complete = true;
         finish(tile, floatGather);
       }
-    } catch (const dfb::Error&) {
+    } catch (const base::Error&) {
     }
   }
   return 0;

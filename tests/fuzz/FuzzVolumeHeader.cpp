@@ -1,7 +1,7 @@
 // libFuzzer target: volume files as dfbwall reads them. The first byte picks the format (NRRD,
 // MetaImage, NIfTI, gzipped NIfTI), the rest is the file: its header is parsed and, when it
 // asks for at most 2^20 voxels, every voxel is read (raw data with pread, compressed data
-// through the streaming inflater). Problems are renderers::Error, never a crash or a hang.
+// through the streaming inflater). Problems are base::Error, never a crash or a hang.
 #include <unistd.h>
 
 #include <cstddef>

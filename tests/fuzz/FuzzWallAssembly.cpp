@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Layout.h"
 #include "wall/WallNode.h"
 #include "wall/WallPeers.h"

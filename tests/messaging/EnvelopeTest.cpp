@@ -4,7 +4,7 @@
 
 #include <cstring>
 
-#include "messaging/Error.h"
+#include "base/Error.h"
 
 namespace messaging {
 namespace {
@@ -54,15 +54,16 @@ TEST(Envelope, PeekDoesNotConsume) {
 
 TEST(Envelope, RejectsTruncatedUnknownFlagsWrongSizesAndHugeAnnouncements) {
   Bytes payload;
-  EXPECT_THROW(openEnvelope(Bytes(15), 1 << 20, payload), Error);
-  EXPECT_THROW(openEnvelope(withTrailer(text("abc"), 1, 3, 2), 1 << 20, payload), Error);
-  EXPECT_THROW(openEnvelope(withTrailer(text("abc"), 1, 4, 0), 1 << 20, payload), Error);
+  EXPECT_THROW(openEnvelope(Bytes(15), 1 << 20, payload), base::Error);
+  EXPECT_THROW(openEnvelope(withTrailer(text("abc"), 1, 3, 2), 1 << 20, payload), base::Error);
+  EXPECT_THROW(openEnvelope(withTrailer(text("abc"), 1, 4, 0), 1 << 20, payload), base::Error);
   // A 20-byte message announcing 4 GiB of compressed payload fails before allocating it.
-  EXPECT_THROW(openEnvelope(withTrailer(text("abcd"), 1, 0xFFFFFFFFu, 1), 1 << 20, payload), Error);
+  EXPECT_THROW(openEnvelope(withTrailer(text("abcd"), 1, 0xFFFFFFFFu, 1), 1 << 20, payload),
+               base::Error);
   try {
     openEnvelope(withTrailer(text("abcd"), 77, 2000000, 0), 1 << 20, payload);
     FAIL();
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("object id 77"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("limit"), std::string::npos) << e.what();
   }
@@ -74,17 +75,17 @@ TEST(Envelope, OneSizeCapForBothSides) {
   try {
     checkPayloadSize(5 * gib / 2, 4 * gib, "message to object id 3");
     FAIL();
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("message to object id 3 of 2684354560 bytes"),
               std::string::npos)
         << e.what();
   }
   EXPECT_NO_THROW(checkPayloadSize(kLargestPayload, 4 * gib, "m"));
-  EXPECT_THROW(checkPayloadSize(kLargestPayload + 1, 4 * gib, "m"), Error);
-  EXPECT_THROW(checkPayloadSize(1025, 1024, "m"), Error);
+  EXPECT_THROW(checkPayloadSize(kLargestPayload + 1, 4 * gib, "m"), base::Error);
+  EXPECT_THROW(checkPayloadSize(1025, 1024, "m"), base::Error);
   // The receiver applies the same cap to what a message announces.
   Bytes payload;
-  EXPECT_THROW(openEnvelope(withTrailer(text("abcd"), 1, 1025, 0), 1024, payload), Error);
+  EXPECT_THROW(openEnvelope(withTrailer(text("abcd"), 1, 1025, 0), 1024, payload), base::Error);
 }
 
 }  // namespace

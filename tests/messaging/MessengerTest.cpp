@@ -17,7 +17,7 @@
 #include <thread>
 #include <vector>
 
-#include "messaging/Error.h"
+#include "base/Error.h"
 #include "tests/MpiTestUtil.h"
 
 namespace messaging {
@@ -237,7 +237,7 @@ TEST(Messenger, SendRefusesAPayloadAboveTheReceiversCap) {
   try {
     messenger.send(next, 5, Bytes(4097));
     ADD_FAILURE() << "send() took a payload above the cap";
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("object id 5 on rank " + std::to_string(next) +
                                          " of 4097 bytes, more than the limit of 4096"),
               std::string::npos)
@@ -256,21 +256,21 @@ TEST(Messenger, SendRefusesAPayloadAboveTheReceiversCap) {
   if (worldRank() == 0) {
     Messenger defaults(MPI_COMM_SELF);
     Bytes huge(5 * gib / 2);
-    EXPECT_THROW(defaults.send(0, 5, std::move(huge)), Error);
+    EXPECT_THROW(defaults.send(0, 5, std::move(huge)), base::Error);
     EXPECT_EQ(defaults.counters().messagesSent, 0u);
     defaults.stop();
   }
   // The same check send() makes first, for the sizes the issue names.
   EXPECT_THROW(checkPayloadSize(5 * gib / 2, MessengerOptions{}.maxMessageBytes, "a payload"),
-               Error);
-  EXPECT_THROW(checkPayloadSize(5 * gib / 2, ~std::size_t{0}, "a payload"), Error);
+               base::Error);
+  EXPECT_THROW(checkPayloadSize(5 * gib / 2, ~std::size_t{0}, "a payload"), base::Error);
   EXPECT_NO_THROW(checkPayloadSize(gib, MessengerOptions{}.maxMessageBytes, "a payload"));
 }
 
 TEST(Messenger, ALimitAboveWhatMpiCanCountIsRefused) {
   MessengerOptions options;
   options.maxMessageBytes = std::size_t{3} << 30;
-  EXPECT_THROW(Messenger(MPI_COMM_WORLD, options), Error);
+  EXPECT_THROW(Messenger(MPI_COMM_WORLD, options), base::Error);
 }
 
 TEST(Messenger, StopWithMessagesInFlightLosesNothing) {

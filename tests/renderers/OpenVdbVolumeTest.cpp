@@ -6,7 +6,7 @@
 
 #include <filesystem>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/VolumeSource.h"
 
 namespace renderers {
@@ -54,7 +54,7 @@ VolumeSource vdbSource(const std::string& path, const std::string& grid = "") {
 std::string errorOf(VolumeSource s) {
   try {
     resolveOpenVdbGrid(s);
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     return e.what();
   }
   return "(no error)";

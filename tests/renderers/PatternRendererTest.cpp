@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
+#include "base/Error.h"
 #include "renderers/BuiltinScenes.h"
-#include "renderers/Error.h"
 #include "renderers/PatternRenderer.h"
 #include "renderers/Scene.h"
 #include "tests/renderers/RenderTestUtil.h"
@@ -75,7 +75,7 @@ TEST(Renderers, MakeByNameAndPrimaryShading) {
   try {
     makeRenderer("raster", scene, s);
     FAIL();
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_STREQ(e.what(),
                  "unknown renderer 'raster' (choose pathtracer, primary, pattern or scivis)");
   }

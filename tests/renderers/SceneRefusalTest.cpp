@@ -1,6 +1,6 @@
 // Scenes that must be refused when read or before they are loaded, each with an error naming
 // the file, the line and the field: more memory than the rank may hold (the memory budget, set
-// here with dfb::setMemoryLimit as dfbwall --memory-limit does), allocations that fail while
+// here with base::setMemoryLimit as dfbwall --memory-limit does), allocations that fail while
 // loading, degenerate geometry and geometry float cannot hold, more volumes than scivis draws.
 #include <gtest/gtest.h>
 
@@ -9,9 +9,9 @@
 #include <fstream>
 #include <new>
 
-#include "dfb/MemoryBudget.h"
+#include "base/Error.h"
+#include "base/MemoryBudget.h"
 #include "renderers/BuiltinScenes.h"
-#include "renderers/Error.h"
 #include "renderers/RenderScene.h"
 #include "renderers/TomlReader.h"
 #include "renderers/scivis/Bricks.h"
@@ -42,13 +42,13 @@ std::string sparseFile(const std::string& name, std::uint64_t bytes) {
   return p.string();
 }
 
-// The renderers::Error `step` throws for the scene at `path`, with the path replaced by "FILE",
+// The base::Error `step` throws for the scene at `path`, with the path replaced by "FILE",
 // or "(no error)". A bare std::bad_alloc (or any other exception) fails the test.
 template <class Step>
 std::string errorOf(const std::string& path, Step step) {
   try {
     step();
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     std::string m = e.what();
     if (m.rfind(path, 0) == 0) m = "FILE" + m.substr(path.size());
     return m;
@@ -86,8 +86,8 @@ std::string waveletVolume(const std::string& name, const std::string& dims) {
 // Sets a memory limit for one test and restores the machine's when it ends.
 class Budget {
  public:
-  explicit Budget(std::uint64_t bytes) { dfb::setMemoryLimit(bytes); }
-  ~Budget() { dfb::setMemoryLimit(0); }
+  explicit Budget(std::uint64_t bytes) { base::setMemoryLimit(bytes); }
+  ~Budget() { base::setMemoryLimit(0); }
 };
 
 constexpr std::uint64_t kMiB = 1 << 20;
@@ -116,11 +116,11 @@ TEST(SceneTomlBudget, AVolumeBeyondTheRankIsRefusedBeforeItsVoxelsNamingDimsAndB
   try {
     checkOwnBricksMemory(d, 4, 1, 0, 4);
     ADD_FAILURE() << "a brick of 128 MiB fitted in 64 MiB";
-  } catch (const Error& error) {
+  } catch (const base::Error& error) {
     EXPECT_TRUE(contains(error.what(), "volume 'w'.dims: this rank holds")) << error.what();
     EXPECT_TRUE(contains(error.what(), "(1 brick, ghost voxels")) << error.what();
   }
-  dfb::setMemoryLimit(256 * kMiB);
+  base::setMemoryLimit(256 * kMiB);
   EXPECT_NO_THROW(checkOwnBricksMemory(d, 4, 1, 0, 4));
 }
 
@@ -200,7 +200,7 @@ file = "strip.obj"
   try {
     buildRenderScene("pathtracer", std::move(d), false);
     ADD_FAILURE() << "the BVH fitted";
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     const std::string m = e.what();
     EXPECT_EQ(m.rfind("mesh 'strip' (", 0), 0u) << m;
     EXPECT_TRUE(contains(m,
@@ -218,7 +218,7 @@ TEST(SceneTomlBudget, AFailedAllocationWhileLoadingNamesWhatWasLoading) {
   try {
     r.loading(*root["thing"]["size"].node(), "thing.size", []() -> int { throw std::bad_alloc(); });
     ADD_FAILURE() << "no error";
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     const std::string m = e.what();
     EXPECT_EQ(
         m.rfind(path + ":2: thing.size: out of memory while loading it; this rank may hold ", 0),
@@ -398,7 +398,7 @@ TEST(SceneTomlSciVisLimits, ANinthVolumeIsRefusedWhereItIsDeclared) {
   try {
     SciVisScene scene(desc, BrickContent{});
     ADD_FAILURE() << "nine volumes accepted";
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_STREQ(e.what(), "the scene has 9 volumes; the scivis renderer draws at most 8");
   }
 }

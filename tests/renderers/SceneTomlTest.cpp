@@ -3,8 +3,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "base/Error.h"
 #include "renderers/BuiltinScenes.h"
-#include "renderers/Error.h"
 #include "renderers/MeshImport.h"
 #include "renderers/Scene.h"
 #include "renderers/SceneToml.h"
@@ -26,7 +26,7 @@ std::string writeFile(const std::string& name, const std::string& text) {
 std::string errorOf(const std::string& spec) {
   try {
     loadSceneDesc(spec);
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     return e.what();
   }
   return "(no error)";

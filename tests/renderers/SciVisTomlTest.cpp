@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "base/Error.h"
 #include "renderers/BuiltinScenes.h"
-#include "renderers/Error.h"
 
 namespace renderers {
 namespace {
@@ -24,7 +24,7 @@ std::string writeScene(const std::string& name, const std::string& text) {
 std::string errorOf(const std::string& path) {
   try {
     loadSceneDesc(path);
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     return e.what();
   }
   return "(no error)";

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/TransferFunction.h"
 
 namespace renderers {
@@ -72,7 +72,7 @@ TEST(TransferFunction, PresetsFollowThePublishedMaps) {
   try {
     transferFunctionPreset("jet", 0, 1);
     ADD_FAILURE() << "no error for an unknown preset";
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_STREQ(e.what(),
                  "unknown transfer function preset 'jet' (presets: cool-warm, viridis, "
                  "inferno, grayscale, rainbow)");
@@ -110,7 +110,7 @@ TEST(TransferTable, InterpolatesLinearlyAndClamps) {
     EXPECT_NEAR(rgba[3], cw.opacity(v), 1e-5f);
   }
   tf.valueMax = 0;
-  EXPECT_THROW(TransferTable{tf}, Error);
+  EXPECT_THROW(TransferTable{tf}, base::Error);
   const TransferTable none;
   none.lookup(3, rgba);
   EXPECT_EQ(rgba[3], 0.0f);

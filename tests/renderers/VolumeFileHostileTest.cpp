@@ -8,8 +8,8 @@
 #include <cstring>
 #include <limits>
 
+#include "base/Error.h"
 #include "renderers/BuiltinScenes.h"
-#include "renderers/Error.h"
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/VolumeField.h"
 #include "renderers/scivis/VolumeSource.h"
@@ -30,7 +30,7 @@ std::string errorOf(const fs::path& path, bool loadToo = true) {
   try {
     const VolumeSource s = fileSource(path);
     if (loadToo) loadVolume(s, {{0, 0, 0}, s.grid.dims});
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     message = e.what();
   }
   const double seconds =

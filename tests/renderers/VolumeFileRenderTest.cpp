@@ -8,8 +8,8 @@
 #include <cstring>
 #include <limits>
 
+#include "base/Error.h"
 #include "renderers/BuiltinScenes.h"
-#include "renderers/Error.h"
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/VolumeField.h"
 #include "renderers/scivis/VolumeSource.h"

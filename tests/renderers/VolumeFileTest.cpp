@@ -10,8 +10,8 @@
 #include <cstring>
 #include <limits>
 
+#include "base/Error.h"
 #include "renderers/BuiltinScenes.h"
-#include "renderers/Error.h"
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/VolumeField.h"
 #include "renderers/scivis/VolumeSource.h"
@@ -143,7 +143,7 @@ TEST(VolumeFile, Hdf5ContiguousChunkedAndFourDimensional) {
   try {
     libSource(folder() / "v.h5", "/nope");
     FAIL() << "no error";
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("v.h5: no dataset '/nope' (the 3-D/4-D datasets: /f32, "
                                          "/sim/i16, /u8)"),
               std::string::npos)

@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/VolumeField.h"
 #include "renderers/scivis/VolumeSource.h"
 
@@ -29,7 +29,7 @@ VolumeSource procedural(VolumeSource::Kind kind, Index3 dims) {
 std::string errorOf(const VolumeSource& s, const VoxelBox& box) {
   try {
     loadVolume(s, box);
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     return e.what();
   }
   return "(no error)";
@@ -399,7 +399,7 @@ TEST(RawVolume, MissingOrWrongSizedFilesNameTheFileAndTheExpectedSize) {
             s.raw.path +
                 ": cannot open the raw volume file (No such file or directory); expected "
                 "138 bytes (4x4x4 uint16 voxels of 2 bytes + 10 header bytes)");
-  EXPECT_THROW(checkRawFile(s), Error);
+  EXPECT_THROW(checkRawFile(s), base::Error);
 }
 
 }  // namespace

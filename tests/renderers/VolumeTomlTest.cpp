@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/VolumeToml.h"
 
 namespace renderers {
@@ -32,13 +32,13 @@ VolumeDesc readFirst(const std::string& path) {
   return readVolume(r, *root["volumes"][0].as_table(), fs::path(path).parent_path());
 }
 
-// "(no error)" or the message of the Error reading `text` (saved as `name`) throws; every
+// "(no error)" or the message of the base::Error reading `text` (saved as `name`) throws; every
 // message is expected to start with "<path>:".
 std::string errorOf(const std::string& name, const std::string& text) {
   const std::string path = writeFile(name, text);
   try {
     readFirst(path);
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     const std::string m = e.what();
     return m.rfind(path + ":", 0) == 0 ? m.substr(path.size()) : "(no file name) " + m;
   }

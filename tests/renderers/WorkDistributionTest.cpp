@@ -2,7 +2,7 @@
 
 #include <set>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/WorkDistribution.h"
 
 namespace renderers {
@@ -96,11 +96,11 @@ TEST(WorkDistribution, NamesAndErrors) {
   try {
     distributionFromName("random");
     FAIL() << "no error for an unknown name";
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("'random'"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("roundrobin"), std::string::npos);
   }
-  EXPECT_THROW(planWork(4, 0, 1, {}, Distribution::Static), Error);
+  EXPECT_THROW(planWork(4, 0, 1, {}, Distribution::Static), base::Error);
 }
 
 }  // namespace

@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/VolumeSource.h"
 #include "renderers/scivis/formats/VolumeFile.h"
 
@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
     s.kind = VolumeSource::Kind::File;
     s.file.path = argv[1];
     const auto format = volumeFormatOfPath(s.file.path);
-    if (!format) throw Error(s.file.path + ": unknown format");
+    if (!format) throw base::Error(s.file.path + ": unknown format");
     s.file.format = *format;
     const std::string name = argv[2];
     if (name != "-")
@@ -43,7 +43,7 @@ int main(int argc, char** argv) {
       std::printf("%.9g %.9g\n", whole.at(p.x, p.y, p.z), brick.at(p.x, p.y, p.z));
     }
     std::printf("range %.9g %.9g\n", whole.valueMin, whole.valueMax);
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 1;
   }

@@ -1,6 +1,6 @@
 // The wall service's pixel codecs (wall/service/Codec.h): --codec parsing, bit-exact raw and
 // Snappy round trips (strided rectangles, odd sizes), JPEG quality and size on a rendered-looking
-// image, and hostile input: every malformed piece is a wall::Error, never a crash (this suite
+// image, and hostile input: every malformed piece is a base::Error, never a crash (this suite
 // also runs under ASan+UBSan).
 #include <gtest/gtest.h>
 #include <turbojpeg.h>
@@ -15,7 +15,7 @@
 #include <thread>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Image.h"
 #include "wall/service/Codec.h"
 
@@ -171,7 +171,7 @@ TEST(Codec, RefusesBadStringsNamingTheOptionAndWhatIsAllowed) {
     try {
       parseCodec(text);
       ADD_FAILURE() << "accepted '" << text << "'";
-    } catch (const wall::Error& e) {
+    } catch (const base::Error& e) {
       const std::string message = e.what();
       EXPECT_NE(message.find("--codec"), std::string::npos) << message;
       EXPECT_NE(message.find("'" + std::string(text) + "'"), std::string::npos) << message;
@@ -183,7 +183,7 @@ TEST(Codec, RefusesBadStringsNamingTheOptionAndWhatIsAllowed) {
   }
   try {
     parseCodec("jpeg:0");
-  } catch (const wall::Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("quality"), std::string::npos) << e.what();
   }
 }
@@ -192,8 +192,8 @@ TEST(Codec, CodecFromByte) {
   EXPECT_EQ(codecFromByte(0), Codec::Raw);
   EXPECT_EQ(codecFromByte(1), Codec::Snappy);
   EXPECT_EQ(codecFromByte(2), Codec::Jpeg);
-  EXPECT_THROW(codecFromByte(3), wall::Error);
-  EXPECT_THROW(codecFromByte(255), wall::Error);
+  EXPECT_THROW(codecFromByte(3), base::Error);
+  EXPECT_THROW(codecFromByte(255), base::Error);
 }
 
 // ---- lossless round trips ----
@@ -339,16 +339,16 @@ TEST(Codec, EncodeAppendsAndChecksItsArguments) {
     encodePixels(spec, pixels.data(), 8, 8, 8, out);
     const messaging::Bytes alone = encode(spec, pixels, 8, 8);
     EXPECT_EQ(messaging::Bytes(out.begin() + 2, out.end()), alone);
-    EXPECT_THROW(encodePixels(spec, pixels.data(), 0, 8, 8, out), wall::Error);
-    EXPECT_THROW(encodePixels(spec, pixels.data(), 8, -1, 8, out), wall::Error);
-    EXPECT_THROW(encodePixels(spec, pixels.data(), 8, 8, 7, out), wall::Error);
-    EXPECT_THROW(encodePixels(spec, pixels.data(), 70000, 1, 70000, out), wall::Error);
+    EXPECT_THROW(encodePixels(spec, pixels.data(), 0, 8, 8, out), base::Error);
+    EXPECT_THROW(encodePixels(spec, pixels.data(), 8, -1, 8, out), base::Error);
+    EXPECT_THROW(encodePixels(spec, pixels.data(), 8, 8, 7, out), base::Error);
+    EXPECT_THROW(encodePixels(spec, pixels.data(), 70000, 1, 70000, out), base::Error);
   }
   messaging::Bytes out;
-  EXPECT_THROW(encodePixels(CodecSpec{Codec::Jpeg, 0}, pixels.data(), 8, 8, 8, out), wall::Error);
-  EXPECT_THROW(encodePixels(CodecSpec{Codec::Jpeg, 101}, pixels.data(), 8, 8, 8, out), wall::Error);
+  EXPECT_THROW(encodePixels(CodecSpec{Codec::Jpeg, 0}, pixels.data(), 8, 8, 8, out), base::Error);
+  EXPECT_THROW(encodePixels(CodecSpec{Codec::Jpeg, 101}, pixels.data(), 8, 8, 8, out), base::Error);
   EXPECT_THROW(encodePixels(CodecSpec{static_cast<Codec>(7)}, pixels.data(), 8, 8, 8, out),
-               wall::Error);
+               base::Error);
 }
 
 TEST(Codec, ThreadsEncodeAndDecodeAtOnce) {
@@ -379,26 +379,26 @@ void expectRefused(Codec codec, const messaging::Bytes& bytes, int width, int he
                    const std::string& what) {
   Pixels dest(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   EXPECT_THROW(decodePixels(codec, bytes.data(), bytes.size(), width, height, dest.data(), width),
-               wall::Error)
+               base::Error)
       << what << " (" << bytes.size() << " bytes)";
 }
 
-// Decodes, or throws wall::Error; anything else (a crash, a sanitizer report) fails the test.
+// Decodes, or throws base::Error; anything else (a crash, a sanitizer report) fails the test.
 void decodeOrRefuse(Codec codec, const messaging::Bytes& bytes, int width, int height) {
   Pixels dest(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   try {
     decodePixels(codec, bytes.data(), bytes.size(), width, height, dest.data(), width);
-  } catch (const wall::Error&) {
+  } catch (const base::Error&) {
   }
 }
 
 TEST(CodecHostile, EmptyData) {
   for (const Codec codec : {Codec::Raw, Codec::Snappy, Codec::Jpeg}) {
     std::uint32_t pixel = 0;
-    EXPECT_THROW(decodePixels(codec, nullptr, 0, 1, 1, &pixel, 1), wall::Error);
+    EXPECT_THROW(decodePixels(codec, nullptr, 0, 1, 1, &pixel, 1), base::Error);
     expectRefused(codec, {}, 16, 16, "empty");
   }
-  EXPECT_THROW(decodePixels(static_cast<Codec>(9), nullptr, 0, 1, 1, nullptr, 1), wall::Error);
+  EXPECT_THROW(decodePixels(static_cast<Codec>(9), nullptr, 0, 1, 1, nullptr, 1), base::Error);
 }
 
 TEST(CodecHostile, EveryTruncation) {
@@ -445,7 +445,7 @@ TEST(CodecHostile, JpegOfAnotherSize) {
   try {
     Pixels dest(64 * 64);
     decodePixels(Codec::Jpeg, jpeg.data(), jpeg.size(), 64, 64, dest.data(), 64);
-  } catch (const wall::Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("32x32"), std::string::npos) << e.what();
   }
 }

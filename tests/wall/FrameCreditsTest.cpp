@@ -10,9 +10,8 @@
 #include <cstring>
 #include <thread>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 #include "tests/Stopwatch.h"
-#include "wall/Error.h"
 
 namespace wall {
 namespace {
@@ -51,7 +50,7 @@ TEST(FrameCredits, AnAcknowledgementOutOfOrderIsAnErrorNamingItsSender) {
     try {
       credits.acknowledged(wrong, 0, "wall link 2");
       ADD_FAILURE() << "frame " << wrong << " accepted";
-    } catch (const Error& e) {
+    } catch (const base::Error& e) {
       EXPECT_EQ(std::string(e.what()), "frame acknowledgement for frame " + std::to_string(wrong) +
                                            " from wall link 2 after frame 1");
     }
@@ -65,7 +64,7 @@ TEST(FrameCredits, TheWaitIsBoundedAndEndsWithTheAcknowledgement) {
   try {
     credits.waitForPresented(1, 200ms);
     ADD_FAILURE() << "no acknowledgement came, yet the wait returned";
-  } catch (const dfb::DeadlineError& e) {
+  } catch (const base::DeadlineError& e) {
     EXPECT_STREQ(e.what(), "the wall did not present frame 1 within 200 ms (last presented: 0)");
   }
   EXPECT_GE(secondsSince(start), 0.19);
@@ -108,7 +107,7 @@ TEST(FrameCredits, AcknowledgementsTravelThroughTheMessenger) {
     try {
       credits.incoming(5, std::move(wrong));
       ADD_FAILURE() << "a 15-byte acknowledgement was accepted";
-    } catch (const Error& e) {
+    } catch (const base::Error& e) {
       EXPECT_STREQ(e.what(), "malformed frame acknowledgement of 15 bytes from rank 5");
     }
   }

@@ -7,7 +7,7 @@
 #include <random>
 #include <string>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/GlfwPresenter.h"
 #include "wall/Layout.h"
 #include "wall/OsmesaPresenter.h"
@@ -104,7 +104,7 @@ TEST_F(GlfwPresenter, MissingMonitorIsAClearError) {
   try {
     wall::makeGlfwPresenter(session_, {"r9c9", 100, 100, true, 7, false, -1, -1});
     FAIL() << "no exception";
-  } catch (const wall::Error& e) {
+  } catch (const base::Error& e) {
     const std::string m = e.what();
     EXPECT_NE(m.find("display 'r9c9': monitor 7 requested"), std::string::npos) << m;
   }

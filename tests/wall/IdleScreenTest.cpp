@@ -10,7 +10,7 @@
 #include <thread>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Image.h"
 #include "wall/Png.h"
 
@@ -130,8 +130,8 @@ TEST(IdleScreen, AnySizeFromOnePixelUp) {
     }
   }
   EXPECT_GT(findBright(wall::renderIdleScreen(3840, 2160, kExample)).count, 8000);
-  EXPECT_THROW(wall::renderIdleScreen(0, 10, kExample), wall::Error);
-  EXPECT_THROW(wall::renderIdleScreen(10, -1, kExample), wall::Error);
+  EXPECT_THROW(wall::renderIdleScreen(0, 10, kExample), base::Error);
+  EXPECT_THROW(wall::renderIdleScreen(10, -1, kExample), base::Error);
 }
 
 TEST(IdleScreen, TooWideTextIsShrunkToFit) {

@@ -6,8 +6,8 @@
 #include <random>
 #include <string>
 
+#include "base/Error.h"
 #include "wall/Capture.h"
-#include "wall/Error.h"
 #include "wall/Image.h"
 #include "wall/Layout.h"
 #include "wall/Png.h"
@@ -72,15 +72,15 @@ TEST_F(Png, ByteOrderIsRGBA) {
 }
 
 TEST_F(Png, FailuresNameTheFileAndLeaveNothing) {
-  EXPECT_THROW(wall::readPng((dir_ / "missing.png").string()), wall::Error);
+  EXPECT_THROW(wall::readPng((dir_ / "missing.png").string()), base::Error);
   const wall::Image img = noise(4, 4, 3);
   try {
     wall::writePng((dir_ / "no-such-dir" / "x.png").string(), img);
     FAIL() << "no exception";
-  } catch (const wall::Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("x.png"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(wall::writePng((dir_ / "empty.png").string(), nullptr, 0, 5), wall::Error);
+  EXPECT_THROW(wall::writePng((dir_ / "empty.png").string(), nullptr, 0, 5), base::Error);
   EXPECT_TRUE(filesIn(dir_).empty());
 }
 
@@ -125,7 +125,7 @@ TEST_F(Capture, DisplayCaptureAndPreview) {
   pointers[1] = nullptr;
   const wall::Image partial = wall::composeWallPreview(l, pointers);
   EXPECT_EQ(partial.at(300, 50), wall::kBezelColor);
-  EXPECT_THROW(wall::composeWallPreview(l, {}), wall::Error);
+  EXPECT_THROW(wall::composeWallPreview(l, {}), base::Error);
 }
 
 TEST(ImageOps, CropAndBlit) {
@@ -134,8 +134,8 @@ TEST(ImageOps, CropAndBlit) {
   wall::blit(canvas, 6, 5, patch.pixels.data(), 3, 2);
   EXPECT_TRUE(wall::crop(canvas, {6, 5, 9, 7}) == patch);
   EXPECT_EQ(canvas.at(5, 5), 0u);
-  EXPECT_THROW(wall::blit(canvas, 8, 5, patch.pixels.data(), 3, 2), wall::Error);
-  EXPECT_THROW(wall::crop(canvas, {0, 0, 11, 1}), wall::Error);
+  EXPECT_THROW(wall::blit(canvas, 8, 5, patch.pixels.data(), 3, 2), base::Error);
+  EXPECT_THROW(wall::crop(canvas, {0, 0, 11, 1}), base::Error);
 }
 
 }  // namespace

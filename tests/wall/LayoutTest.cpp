@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Layout.h"
 #include "wall/Ranks.h"
 
@@ -142,13 +142,13 @@ TEST(Layout, LoadLayoutThrowsWithEveryProblem) {
   try {
     wall::loadLayout(std::string(DFBWALL_SOURCE_DIR) + "/tests/wall/bad/overlap.toml");
     FAIL() << "no exception";
-  } catch (const wall::Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("overlap.toml:"), std::string::npos) << e.what();
   }
   try {
     wall::loadLayout(config("does-not-exist.toml"));
     FAIL() << "no exception";
-  } catch (const wall::Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("does-not-exist.toml: cannot read"), std::string::npos)
         << e.what();
   }
@@ -175,7 +175,7 @@ TEST(Ranks, TooFewRanksIsAClearError) {
   EXPECT_NE(message->find("4 wall processes"), std::string::npos) << *message;
   EXPECT_NE(message->find("at least 5"), std::string::npos) << *message;
   EXPECT_NE(message->find("but it is 4"), std::string::npos) << *message;
-  EXPECT_THROW(wall::rankRoles(l, 4), wall::Error);
+  EXPECT_THROW(wall::rankRoles(l, 4), base::Error);
 }
 
 TEST(Ranks, ExplicitRenderRanksMustAddUp) {

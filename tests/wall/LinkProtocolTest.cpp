@@ -1,13 +1,13 @@
 // The messages that let wall processes come and go (wall/service/Protocol.h: Roster and the live
 // flags of the directory; wall/service/LinkMessages.h: the wall's own link): round trips, and
-// every malformed variant refused with a wall::Error that says what was wrong.
+// every malformed variant refused with a base::Error that says what was wrong.
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <functional>
 #include <string>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/service/LinkMessages.h"
 #include "wall/service/Protocol.h"
 #include "wall/service/ServiceCommands.h"
@@ -18,7 +18,7 @@ namespace {
 std::string errorOf(const std::function<void()>& f) {
   try {
     f();
-  } catch (const wall::Error& e) {
+  } catch (const base::Error& e) {
     return e.what();
   }
   return "no error";

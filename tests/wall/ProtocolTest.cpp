@@ -1,6 +1,6 @@
 // The wall service's wire protocol (wall/service/Protocol.h): round trips of every message kind
 // (hello, directory, text, control, piece batches in each codec, built with BatchWriter::add and
-// with encodePiece + append), and hostile input: every malformed message is a wall::Error with a
+// with encodePiece + append), and hostile input: every malformed message is a base::Error with a
 // message a log can print, never a crash (this suite also runs under ASan+UBSan, and every
 // truncated message is copied into a buffer of exactly its size so an over-read is caught).
 //
@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Image.h"
 #include "wall/Layout.h"
 #include "wall/service/Codec.h"
@@ -52,15 +52,15 @@ void poke(messaging::Bytes& bytes, std::size_t at, T value) {
   std::memcpy(bytes.data() + at, &value, sizeof value);
 }
 
-// The message of the wall::Error `f` throws; a test failure when it throws nothing or another
+// The message of the base::Error `f` throws; a test failure when it throws nothing or another
 // type.
 std::string errorOf(const std::function<void()>& f) {
   try {
     f();
-  } catch (const wall::Error& e) {
+  } catch (const base::Error& e) {
     return e.what();
   } catch (const std::exception& e) {
-    ADD_FAILURE() << "not a wall::Error: " << e.what();
+    ADD_FAILURE() << "not a base::Error: " << e.what();
     return {};
   }
   ADD_FAILURE() << "no exception";
@@ -420,7 +420,7 @@ TEST(Protocol, AFailedAddLeavesTheBatchAsItWas) {
   const std::size_t before = writer.bytes();
   // An empty rectangle: the codec refuses it.
   EXPECT_THROW(writer.add(CodecSpec{Codec::Raw}, {4, 4, 4, 8}, source.at({4, 4, 5, 5}), 16),
-               wall::Error);
+               base::Error);
   EXPECT_EQ(writer.bytes(), before);
   EXPECT_EQ(writer.pieces(), 0u);
   writer.add(CodecSpec{Codec::Raw}, {0, 0, 16, 16}, source.pixels.data(), 16);
@@ -443,11 +443,11 @@ TEST(Protocol, PackRefusesWhatItCannotSay) {
 void expectEveryParserRefuses(const messaging::Bytes& message, const std::string& what) {
   const messaging::Bytes bytes(message);  // exactly sized
   std::vector<BatchPiece> pieces;
-  EXPECT_THROW(parseHello(bytes.data(), bytes.size()), wall::Error) << what;
-  EXPECT_THROW(parseDirectory(bytes.data(), bytes.size()), wall::Error) << what;
-  EXPECT_THROW(parseText(bytes.data(), bytes.size()), wall::Error) << what;
-  EXPECT_THROW(parseControl(bytes.data(), bytes.size()), wall::Error) << what;
-  EXPECT_THROW(parseBatch(bytes.data(), bytes.size(), pieces), wall::Error) << what;
+  EXPECT_THROW(parseHello(bytes.data(), bytes.size()), base::Error) << what;
+  EXPECT_THROW(parseDirectory(bytes.data(), bytes.size()), base::Error) << what;
+  EXPECT_THROW(parseText(bytes.data(), bytes.size()), base::Error) << what;
+  EXPECT_THROW(parseControl(bytes.data(), bytes.size()), base::Error) << what;
+  EXPECT_THROW(parseBatch(bytes.data(), bytes.size(), pieces), base::Error) << what;
 }
 
 TEST(ProtocolHostile, EmptyAndTinyMessages) {
@@ -597,7 +597,7 @@ TEST(ProtocolHostile, BadPieceRectangles) {
       // and its raw data is the wrong size for one pixel.
       parseBatch(bytes.data(), bytes.size(), pieces);
       ASSERT_EQ(pieces.size(), 1u);
-      EXPECT_THROW(decodePiece(Codec::Raw, pieces[0]), wall::Error);
+      EXPECT_THROW(decodePiece(Codec::Raw, pieces[0]), base::Error);
       continue;
     }
     EXPECT_ERROR_HAS(parseBatch(bytes.data(), bytes.size(), pieces),
@@ -744,7 +744,7 @@ TEST(ProtocolHostile, ACorruptJpegPieceDoesNotSpoilTheNextBatch) {
         std::vector<BatchPiece> bad;
         parseBatch(corrupt.data(), corrupt.size(), bad);
         decodePiece(h.codec, bad[0]);
-      } catch (const wall::Error&) {
+      } catch (const base::Error&) {
       }
       parseBatch(good.data(), good.size(), pieces);
       Pixels got;
@@ -789,11 +789,11 @@ TEST(ProtocolHostile, RandomBytesAndSingleByteCorruptions) {
   std::mt19937 random(11);
   std::vector<BatchPiece> pieces;
   const auto everyParser = [&](const messaging::Bytes& bytes) {
-    // Each may accept or refuse; none may crash or throw anything but wall::Error.
+    // Each may accept or refuse; none may crash or throw anything but base::Error.
     const auto tryOne = [](const std::function<void()>& f) {
       try {
         f();
-      } catch (const wall::Error&) {
+      } catch (const base::Error&) {
       }
     };
     tryOne([&] { parseHeader(bytes.data(), bytes.size()); });

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Layout.h"
 #include "wall/PieceMessage.h"
 #include "wall/Routing.h"
@@ -140,13 +140,13 @@ TEST(PieceMessage, RejectsARectangleWhoseSizeOverflows) {
   header.x0 = -2000000000;
   header.x1 = 2000000000;
   std::memcpy(bytes.data(), &header, sizeof header);
-  EXPECT_THROW(wall::readPieceHeader(bytes), wall::Error);
+  EXPECT_THROW(wall::readPieceHeader(bytes), base::Error);
   // Each side within the cap, the product past an int (found on the second fuzz run).
   header.x0 = 0;
   header.x1 = 393216;
   header.y1 = 262144;
   std::memcpy(bytes.data(), &header, sizeof header);
-  EXPECT_THROW(wall::readPieceHeader(bytes), wall::Error);
+  EXPECT_THROW(wall::readPieceHeader(bytes), base::Error);
 }
 
 }  // namespace

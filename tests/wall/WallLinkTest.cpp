@@ -17,7 +17,7 @@
 #include <thread>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/FrameCredits.h"
 #include "wall/service/Desk.h"
 #include "wall/service/LinkMessages.h"
@@ -272,7 +272,7 @@ TEST_F(WallLinkTest, AJoinWithAWrongTokenOrAnotherLayoutIsRefusedWithTheReason) 
   try {
     wrongToken.waitUntilJoined(Clock::now() + 5s);
     FAIL() << "joined with a wrong token";
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("wrong token"), std::string::npos) << e.what();
   }
   setup.join.token = "t";
@@ -282,7 +282,7 @@ TEST_F(WallLinkTest, AJoinWithAWrongTokenOrAnotherLayoutIsRefusedWithTheReason) 
   try {
     otherLayout.waitUntilJoined(Clock::now() + 5s);
     FAIL() << "joined with another layout";
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("layout"), std::string::npos) << e.what();
   }
   // The wall's own processes are untouched.

@@ -13,9 +13,9 @@
 #include <thread>
 #include <vector>
 
+#include "base/Error.h"
 #include "tests/Stopwatch.h"
 #include "wall/Capture.h"
-#include "wall/Error.h"
 #include "wall/OsmesaPresenter.h"
 #include "wall/PieceMessage.h"
 #include "wall/Png.h"
@@ -198,7 +198,7 @@ TEST(WallNodeProcess, ProtocolErrorsAreNamedAndThrownByPresentFrameAtOnce) {
       {"pixels that cannot be decoded",
        [](Wall& w, std::string* why) {
          return w.receive(2, 0, {0, 0, 16, 16}, why,
-                          [](Image&) { throw Error("piece of 12 bytes: not a JPEG"); });
+                          [](Image&) { throw base::Error("piece of 12 bytes: not a JPEG"); });
        },
        "piece of 12 bytes: not a JPEG"},
   };
@@ -215,7 +215,7 @@ TEST(WallNodeProcess, ProtocolErrorsAreNamedAndThrownByPresentFrameAtOnce) {
     try {
       wall.node->presentFrame(2);
       ADD_FAILURE() << "presentFrame did not throw";
-    } catch (const Error& e) {
+    } catch (const base::Error& e) {
       EXPECT_EQ(std::string(e.what()), "wall process 0: " + why);
     }
     EXPECT_LT(secondsSince(start), 5.0) << "thrown at the deadline, not at once";
@@ -235,7 +235,7 @@ TEST(WallNodeProcess, MalformedMessagesAreNamedToo) {
     try {
       wall.node->presentFrame(1);
       ADD_FAILURE() << "presentFrame did not throw";
-    } catch (const Error& e) {
+    } catch (const base::Error& e) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
     }
   }
@@ -246,12 +246,12 @@ TEST(WallNodeProcess, MalformedMessagesAreNamedToo) {
       {
         try {
           wall.node->presentFrame(1);
-        } catch (const Error& e) {
+        } catch (const base::Error& e) {
           EXPECT_STREQ(e.what(), "wall process 0: link 7: batch of 3 pieces says 4");
           throw;
         }
       },
-      Error);
+      base::Error);
 }
 
 // A service wall gives a broken frame up instead of throwing: onAbandon hears why first, the
@@ -297,7 +297,7 @@ TEST(WallNodeProcess, AnIncompleteFrameTimesOutNamingTheMissingPieces) {
   try {
     wall.node->presentFrame(1);
     ADD_FAILURE() << "presentFrame did not throw";
-  } catch (const dfb::DeadlineError& e) {
+  } catch (const base::DeadlineError& e) {
     EXPECT_STREQ(e.what(),
                  "frame 1 not complete on wall process 0 after 300 ms: 'solo' has 4/6 pieces;");
   }
@@ -370,7 +370,7 @@ TEST(WallNodeProcess, KeepWaitingMovesTheDeadline) {
   wall.expectShows(1);
   // The idling ended: the next wait has the plain timeout again.
   const auto again = Clock::now();
-  EXPECT_THROW(wall.node->presentFrame(2), dfb::DeadlineError);
+  EXPECT_THROW(wall.node->presentFrame(2), base::DeadlineError);
   EXPECT_LT(secondsSince(again), 3.0);
 }
 

@@ -13,10 +13,10 @@
 #include <string>
 #include <thread>
 
+#include "base/Error.h"
 #include "dfb/PixelOp.h"
 #include "wall/Capture.h"
 #include "wall/DisplayRoutingOp.h"
-#include "wall/Error.h"
 #include "wall/FrameCredits.h"
 #include "wall/OsmesaPresenter.h"
 #include "wall/PieceMessage.h"
@@ -233,7 +233,7 @@ TEST(DisplayRoutingOp, CutsTilesAtDisplayBordersAndTheDisplaysShowTheCanvas) {
       try {
         op.process(wrong);
         ADD_FAILURE() << "tile " << index << " routed";
-      } catch (const Error& e) {
+      } catch (const base::Error& e) {
         EXPECT_EQ(std::string(e.what()),
                   "display routing: finished tile " + std::to_string(index) +
                       " [0, 32) x [0, 30) is not a tile of the wall's 86x30 canvas in tiles of 16 "

@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 
 namespace wall::service {
 namespace {
@@ -17,8 +17,8 @@ namespace {
 const char* const kAllowed =
     "allowed: raw, snappy, jpeg, jpeg:QUALITY or jpeg:QUALITY:444|422|420, QUALITY 1 to 100";
 
-Error badCodec(const std::string& text, const std::string& why) {
-  return Error("--codec '" + text + "': " + why + " (" + kAllowed + ")");
+base::Error badCodec(const std::string& text, const std::string& why) {
+  return base::Error("--codec '" + text + "': " + why + " (" + kAllowed + ")");
 }
 
 std::string sizeText(int width, int height) {
@@ -31,7 +31,7 @@ std::size_t checkedPixelBytes(const char* what, int width, int height, int strid
   if (width < 1 || height < 1 || width > kMaxCodecSide || height > kMaxCodecSide ||
       stride < width || stride > INT_MAX / 4 ||
       4 * static_cast<std::size_t>(width) * static_cast<std::size_t>(height) > kMaxCodecPixelBytes)
-    throw Error(
+    throw base::Error(
         std::string(what) + ": a " + sizeText(width, height) + " rectangle with rows " +
         std::to_string(stride) + " pixels apart is outside the codecs' limits (sides 1 to " +
         std::to_string(kMaxCodecSide) + ", rows at least as far apart as the width, at most " +
@@ -87,27 +87,27 @@ void encodeSnappy(const std::uint32_t* pixels, int width, int height, int stride
 
 void decodeSnappy(const std::byte* data, std::size_t size, int width, int height,
                   std::size_t pixelBytes, std::uint32_t* dest, int destStride) {
-  if (size < 1) throw Error("snappy piece of " + sizeText(width, height) + " is empty");
+  if (size < 1) throw base::Error("snappy piece of " + sizeText(width, height) + " is empty");
   const auto flag = static_cast<std::uint8_t>(data[0]);
   const std::span<const std::byte> body(data + 1, size - 1);
   thread_local messaging::Bytes decompressed, unfiltered;
   const std::byte* filtered = nullptr;
   if (flag == kSnappyStored) {
     if (body.size() != pixelBytes)
-      throw Error("snappy piece of " + sizeText(width, height) + " stores " +
-                  std::to_string(body.size()) + " bytes, its rectangle needs " +
-                  std::to_string(pixelBytes));
+      throw base::Error("snappy piece of " + sizeText(width, height) + " stores " +
+                        std::to_string(body.size()) + " bytes, its rectangle needs " +
+                        std::to_string(pixelBytes));
     filtered = body.data();
   } else if (flag == kSnappyCompressed) {
     try {  // checks the announced size against pixelBytes before it allocates
       messaging::decompress(body, pixelBytes, decompressed);
-    } catch (const dfb::Error& e) {
-      throw Error("snappy piece of " + sizeText(width, height) + ": " + e.what());
+    } catch (const base::Error& e) {
+      throw base::Error("snappy piece of " + sizeText(width, height) + ": " + e.what());
     }
     filtered = decompressed.data();
   } else {
-    throw Error("snappy piece of " + sizeText(width, height) + " has an unknown flag byte " +
-                std::to_string(flag));
+    throw base::Error("snappy piece of " + sizeText(width, height) + " has an unknown flag byte " +
+                      std::to_string(flag));
   }
   const std::span<const std::byte> encoded(filtered, pixelBytes);
   if (destStride == width) {
@@ -135,7 +135,8 @@ class TurboJpegInstance {
   tjhandle get() {
     if (!handle_) handle_ = init_();
     if (!handle_)
-      throw Error(std::string("TurboJPEG could not create a ") + what_ + ": " + message(nullptr));
+      throw base::Error(std::string("TurboJPEG could not create a ") + what_ + ": " +
+                        message(nullptr));
     return handle_;
   }
   // The instance's error message; the instance is dropped, the next get() makes a fresh one.
@@ -179,18 +180,19 @@ int turboJpegSubsampling(ChromaSubsampling subsampling) {
     case ChromaSubsampling::S420:
       return TJSAMP_420;
   }
-  throw Error("unknown chroma subsampling " + std::to_string(static_cast<unsigned>(subsampling)));
+  throw base::Error("unknown chroma subsampling " +
+                    std::to_string(static_cast<unsigned>(subsampling)));
 }
 
 void encodeJpeg(const CodecSpec& spec, const std::uint32_t* pixels, int width, int height,
                 int stride, messaging::Bytes& out) {
   if (spec.jpegQuality < 1 || spec.jpegQuality > 100)
-    throw Error("JPEG quality " + std::to_string(spec.jpegQuality) + " is outside 1 to 100");
+    throw base::Error("JPEG quality " + std::to_string(spec.jpegQuality) + " is outside 1 to 100");
   const int subsampling = turboJpegSubsampling(spec.subsampling);
   // The worst case for the rectangle, so TurboJPEG never reallocates this thread's buffer.
   const unsigned long bound = tjBufSize(width, height, subsampling);
   if (bound == static_cast<unsigned long>(-1))
-    throw Error("TurboJPEG: no size bound for a " + sizeText(width, height) + " image");
+    throw base::Error("TurboJPEG: no size bound for a " + sizeText(width, height) + " image");
   thread_local std::vector<unsigned char> buffer;
   if (buffer.size() < bound) buffer.resize(bound);
   unsigned char* jpeg = buffer.data();
@@ -199,8 +201,8 @@ void encodeJpeg(const CodecSpec& spec, const std::uint32_t* pixels, int width, i
   if (tjCompress2(instance.get(), reinterpret_cast<const unsigned char*>(pixels), width, 4 * stride,
                   height, TJPF_RGBA, &jpeg, &jpegSize, subsampling, spec.jpegQuality,
                   TJFLAG_NOREALLOC) != 0)
-    throw Error("TurboJPEG could not compress a " + sizeText(width, height) +
-                " piece: " + instance.failure());
+    throw base::Error("TurboJPEG could not compress a " + sizeText(width, height) +
+                      " piece: " + instance.failure());
   append(out, reinterpret_cast<const std::byte*>(jpeg), jpegSize);
 }
 
@@ -215,8 +217,8 @@ bool isStartOfFrame(unsigned marker) {  // SOF0..SOF15 but DHT (C4), JPG (C8) an
 // encodePixels writes, decodes one row of blocks at a time.
 void checkJpegStructure(const unsigned char* data, std::size_t size, int width, int height) {
   const auto fail = [&](const std::string& why) {
-    return Error("jpeg piece of " + sizeText(width, height) + " (" + std::to_string(size) +
-                 " bytes): " + why);
+    return base::Error("jpeg piece of " + sizeText(width, height) + " (" + std::to_string(size) +
+                       " bytes): " + why);
   };
   if (size < 4 || data[0] != 0xFF || data[1] != 0xD8) throw fail("not a JPEG (no SOI marker)");
   std::size_t at = 2;
@@ -262,13 +264,14 @@ void decodeJpeg(const std::byte* data, std::size_t size, int width, int height, 
   int jpegWidth = 0, jpegHeight = 0, subsampling = 0, colorspace = 0;
   if (tjDecompressHeader3(instance.get(), jpeg, size, &jpegWidth, &jpegHeight, &subsampling,
                           &colorspace) != 0)
-    throw Error("jpeg piece of " + sizeText(width, height) + ": bad header: " + instance.failure());
+    throw base::Error("jpeg piece of " + sizeText(width, height) +
+                      ": bad header: " + instance.failure());
   if (jpegWidth != width || jpegHeight != height)
-    throw Error("jpeg piece of " + sizeText(width, height) + " holds a " +
-                sizeText(jpegWidth, jpegHeight) + " image");
+    throw base::Error("jpeg piece of " + sizeText(width, height) + " holds a " +
+                      sizeText(jpegWidth, jpegHeight) + " image");
   if (colorspace != TJCS_YCbCr) {
     const char* const names[] = {"RGB", "YCbCr", "greyscale", "CMYK", "YCCK"};
-    throw Error(
+    throw base::Error(
         "jpeg piece of " + sizeText(width, height) + " is " +
         (colorspace >= 0 && colorspace < 5 ? names[colorspace] : "of an unknown colour space") +
         ", not YCbCr");
@@ -277,7 +280,7 @@ void decodeJpeg(const std::byte* data, std::size_t size, int width, int height, 
   if (tjDecompress2(instance.get(), jpeg, size, reinterpret_cast<unsigned char*>(dest), width,
                     4 * destStride, height, TJPF_RGBA,
                     TJFLAG_STOPONWARNING | TJFLAG_LIMITSCANS) != 0)
-    throw Error("jpeg piece of " + sizeText(width, height) + ": " + instance.failure());
+    throw base::Error("jpeg piece of " + sizeText(width, height) + ": " + instance.failure());
 }
 
 }  // namespace
@@ -329,7 +332,7 @@ std::string codecName(const CodecSpec& spec) {
       break;
   }
   if (spec.codec != Codec::Jpeg)
-    throw Error("unknown codec " + std::to_string(static_cast<unsigned>(spec.codec)));
+    throw base::Error("unknown codec " + std::to_string(static_cast<unsigned>(spec.codec)));
   const char* subsampling = spec.subsampling == ChromaSubsampling::S444   ? "444"
                             : spec.subsampling == ChromaSubsampling::S422 ? "422"
                                                                           : "420";
@@ -338,7 +341,7 @@ std::string codecName(const CodecSpec& spec) {
 
 Codec codecFromByte(std::uint8_t value) {
   if (value > static_cast<std::uint8_t>(Codec::Jpeg))
-    throw Error("unknown codec " + std::to_string(value) + " (0 raw, 1 snappy, 2 jpeg)");
+    throw base::Error("unknown codec " + std::to_string(value) + " (0 raw, 1 snappy, 2 jpeg)");
   return static_cast<Codec>(value);
 }
 
@@ -359,18 +362,20 @@ void encodePixels(const CodecSpec& spec, const std::uint32_t* pixels, int width,
       encodeJpeg(spec, pixels, width, height, stride, out);
       return;
   }
-  throw Error("encodePixels: unknown codec " + std::to_string(static_cast<unsigned>(spec.codec)));
+  throw base::Error("encodePixels: unknown codec " +
+                    std::to_string(static_cast<unsigned>(spec.codec)));
 }
 
 void decodePixels(Codec codec, const std::byte* data, std::size_t size, int width, int height,
                   std::uint32_t* dest, int destStride) {
   const std::size_t pixelBytes = checkedPixelBytes("decodePixels", width, height, destStride);
-  if (size > 0 && !data) throw Error("decodePixels: no data");
+  if (size > 0 && !data) throw base::Error("decodePixels: no data");
   switch (codec) {
     case Codec::Raw:
       if (size != pixelBytes)
-        throw Error("raw piece of " + sizeText(width, height) + " has " + std::to_string(size) +
-                    " bytes, its rectangle needs " + std::to_string(pixelBytes));
+        throw base::Error("raw piece of " + sizeText(width, height) + " has " +
+                          std::to_string(size) + " bytes, its rectangle needs " +
+                          std::to_string(pixelBytes));
       unpackRows(data, width, height, dest, destStride);
       return;
     case Codec::Snappy:
@@ -380,7 +385,7 @@ void decodePixels(Codec codec, const std::byte* data, std::size_t size, int widt
       decodeJpeg(data, size, width, height, dest, destStride);
       return;
   }
-  throw Error("decodePixels: unknown codec " + std::to_string(static_cast<unsigned>(codec)));
+  throw base::Error("decodePixels: unknown codec " + std::to_string(static_cast<unsigned>(codec)));
 }
 
 }  // namespace wall::service

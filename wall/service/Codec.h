@@ -38,18 +38,18 @@ constexpr int kMaxCodecSide = 65535;
 constexpr std::size_t kMaxCodecPixelBytes = std::size_t{1} << 30;
 
 // "raw", "snappy", "jpeg", "jpeg:QUALITY", "jpeg:QUALITY:444|422|420" (QUALITY 1..100, default
-// 90; subsampling default 420). Throws wall::Error with a message naming the option (--codec)
+// 90; subsampling default 420). Throws base::Error with a message naming the option (--codec)
 // and what is allowed.
 CodecSpec parseCodec(const std::string& text);
 // "raw", "snappy" or "jpeg:QUALITY:SUBSAMPLING"; parseCodec(codecName(spec)) == spec for every
 // spec parseCodec returns (a raw or snappy spec's JPEG fields are not part of its name).
 std::string codecName(const CodecSpec& spec);
-// A codec byte read from the wire; throws wall::Error on an unknown value.
+// A codec byte read from the wire; throws base::Error on an unknown value.
 Codec codecFromByte(std::uint8_t value);
 
 // Appends the encoding of the width x height RGBA8 rectangle whose rows are `stride` pixels
 // apart to `out`. Thread-safe (TurboJPEG handles and scratch buffers are per thread). Throws
-// wall::Error on a rectangle outside the limits above, a stride below the width, or a spec
+// base::Error on a rectangle outside the limits above, a stride below the width, or a spec
 // outside its ranges.
 void encodePixels(const CodecSpec& spec, const std::uint32_t* pixels, int width, int height,
                   int stride, messaging::Bytes& out);
@@ -57,7 +57,7 @@ void encodePixels(const CodecSpec& spec, const std::uint32_t* pixels, int width,
 // Decodes exactly width x height pixels into dest (rows destStride pixels apart). Never trusts
 // the data: malformed, truncated or oversized input, and a JPEG whose header gives another size,
 // another colour space or a progressive / multi-scan / arithmetic-coded frame (which libjpeg
-// would buffer whole), throw wall::Error. Nothing is read or written out of
+// would buffer whole), throw base::Error. Nothing is read or written out of
 // bounds, and nothing larger than the rectangle (plus a small constant) is allocated.
 // Thread-safe. On an error, dest may hold part of the rectangle.
 void decodePixels(Codec codec, const std::byte* data, std::size_t size, int width, int height,

@@ -11,7 +11,7 @@
 #include <set>
 #include <thread>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/service/FrameAgreements.h"
 #include "wall/service/JsonText.h"
 #include "wall/service/LinkMessages.h"
@@ -757,7 +757,8 @@ std::string Desk::bind(const std::string& endpoint) {
   try {
     impl_->socket.bind(endpoint);
   } catch (const zmq::error_t& e) {
-    throw Error("--listen " + impl_->s.options.listen + ": cannot listen there (" + e.what() + ")");
+    throw base::Error("--listen " + impl_->s.options.listen + ": cannot listen there (" + e.what() +
+                      ")");
   }
   return lastEndpoint(impl_->socket);
 }
@@ -798,8 +799,8 @@ void Desk::agreeMax(std::uint64_t, std::uint64_t session, std::uint32_t frameId,
     return impl_->releases.count(key) > 0 || impl_->isClosed || impl_->jobSession != session;
   });
   if (impl_->releases.count(key) == 0)
-    throw Error("swap barrier of frame " + std::to_string(frameId) +
-                ": the job is no longer the wall's");
+    throw base::Error("swap barrier of frame " + std::to_string(frameId) +
+                      ": the job is no longer the wall's");
   const std::vector<std::int64_t> agreed = std::move(impl_->releases[key]);
   impl_->releases.erase(key);
   std::copy(agreed.begin(), agreed.end(), values);

@@ -39,7 +39,7 @@ class Desk : public ProcessLink {
   Desk(const Desk&) = delete;
   Desk& operator=(const Desk&) = delete;
 
-  // Binds the directory socket; throws wall::Error naming --listen on a bad address or a port in
+  // Binds the directory socket; throws base::Error naming --listen on a bad address or a port in
   // use. Returns the endpoint bound (with the real port).
   std::string bind(const std::string& endpoint);
   void start();

@@ -9,7 +9,7 @@
 #include <thread>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/service/Zmq.h"
 
 namespace wall::service {
@@ -218,8 +218,8 @@ bool MemberLink::waitUntilJoined(Clock::time_point until) {
     impl_->changed.wait_until(lock, std::min(until, Clock::now() + std::chrono::milliseconds(250)));
   }
   if (!impl_->refusedWhy.empty())
-    throw Error("the wall's head at " + impl_->s.head +
-                " refused this process: " + impl_->refusedWhy);
+    throw base::Error("the wall's head at " + impl_->s.head +
+                      " refused this process: " + impl_->refusedWhy);
   return impl_->isJoined;
 }
 
@@ -248,8 +248,8 @@ void MemberLink::agreeMax(std::uint64_t epoch, std::uint64_t session, std::uint3
                           std::int64_t* values, int count, Clock::time_point) {
   std::unique_lock lock(impl_->mutex);
   if (!impl_->isJoined || epoch != impl_->generation)
-    throw Error("swap barrier of frame " + std::to_string(frameId) +
-                ": this process is not in the wall (it lost the head)");
+    throw base::Error("swap barrier of frame " + std::to_string(frameId) +
+                      ": this process is not in the wall (it lost the head)");
   const std::uint64_t generation = impl_->generation;
   impl_->outbox.push_back(
       packBarrier(session, {frameId, std::vector<std::int64_t>(values, values + count)}));
@@ -265,11 +265,12 @@ void MemberLink::agreeMax(std::uint64_t epoch, std::uint64_t session, std::uint3
   }
   auto found = impl_->releases.find(key);
   if (found == impl_->releases.end())
-    throw Error("swap barrier of frame " + std::to_string(frameId) +
-                ": this process lost the wall's head");
+    throw base::Error("swap barrier of frame " + std::to_string(frameId) +
+                      ": this process lost the wall's head");
   if (static_cast<int>(found->second.size()) != count)
-    throw Error("swap barrier of frame " + std::to_string(frameId) + ": the head released " +
-                std::to_string(found->second.size()) + " values, not " + std::to_string(count));
+    throw base::Error("swap barrier of frame " + std::to_string(frameId) + ": the head released " +
+                      std::to_string(found->second.size()) + " values, not " +
+                      std::to_string(count));
   std::copy(found->second.begin(), found->second.end(), values);
   impl_->releases.erase(found);
 }

@@ -37,7 +37,7 @@ class MemberLink : public ProcessLink {
   MemberLink& operator=(const MemberLink&) = delete;
 
   void start();
-  // Until joined (true), refused by the head (throws wall::Error with its reason), or `until`.
+  // Until joined (true), refused by the head (throws base::Error with its reason), or `until`.
   bool waitUntilJoined(Clock::time_point until);
   bool joined() const;
   // Non-empty once the head refused this process (a wrong token, another layout): fatal.

@@ -2,7 +2,7 @@
 
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/Image.h"
 
 namespace wall::service {
@@ -93,7 +93,7 @@ void PieceReceiver::handle(std::string peer, zmq::message_t message) {
   try {
     const MessageHeader h = parseHeader(data, message.size());
     if (h.kind != static_cast<std::uint16_t>(Kind::Batch))
-      throw Error("message kind " + std::to_string(h.kind) + " is not a piece batch");
+      throw base::Error("message kind " + std::to_string(h.kind) + " is not a piece batch");
     session = h.session;
   } catch (const std::exception& e) {
     logOnce(peer, e.what());
@@ -124,10 +124,10 @@ void PieceReceiver::handle(std::string peer, zmq::message_t message) {
     std::string sender = "connection " + peer;
     try {
       const BatchHeader h = parseBatch(bytes, work->size(), pieces);
-      if (h.codec != codec) throw Error("a batch in another codec than the job's");
+      if (h.codec != codec) throw base::Error("a batch in another codec than the job's");
       if (h.renderRank >= static_cast<std::uint32_t>(renderRanks))
-        throw Error("a batch from render rank " + std::to_string(h.renderRank) + " of " +
-                    std::to_string(renderRanks));
+        throw base::Error("a batch from render rank " + std::to_string(h.renderRank) + " of " +
+                          std::to_string(renderRanks));
       sender = "render rank " + std::to_string(h.renderRank);
       for (const BatchPiece& p : pieces) {
         const bool ok = node->receivePiece(

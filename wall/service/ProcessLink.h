@@ -25,7 +25,7 @@ class ProcessLink {
   // a member is not joined (the head forgot its job then) or in a later epoch.
   virtual void toHead(const ServiceCommand& command, std::uint64_t epoch) = 0;
   // Frame `frameId`'s swap barrier of job `session` (WallPeers::agreeMax). Returns once the head
-  // released it, with the maximum over every process in it; throws wall::Error when this process
+  // released it, with the maximum over every process in it; throws base::Error when this process
   // lost the head or was dropped, or at `deadline`.
   virtual void agreeMax(std::uint64_t epoch, std::uint64_t session, std::uint32_t frameId,
                         std::int64_t* values, int count, Clock::time_point deadline) = 0;

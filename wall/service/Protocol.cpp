@@ -3,7 +3,7 @@
 #include <cstring>
 #include <string_view>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/service/WireFormat.h"
 
 namespace wall::service {
@@ -207,15 +207,15 @@ Control parseControl(const std::byte* data, std::size_t size) {
 MessageHeader parseHeader(const std::byte* data, std::size_t size) {
   MessageHeader h;
   if (size < sizeof h)
-    throw Error("not the dfbwall protocol: a message of " + std::to_string(size) + " bytes");
+    throw base::Error("not the dfbwall protocol: a message of " + std::to_string(size) + " bytes");
   std::memcpy(&h, data, sizeof h);
-  if (h.magic != kMagic) throw Error("not the dfbwall protocol (wrong magic number)");
+  if (h.magic != kMagic) throw base::Error("not the dfbwall protocol (wrong magic number)");
   if (h.version != kProtocolVersion)
-    throw Error("protocol version " + std::to_string(h.version) + ", this side speaks " +
-                std::to_string(kProtocolVersion) + ": use the same dfbwall on both sides");
+    throw base::Error("protocol version " + std::to_string(h.version) + ", this side speaks " +
+                      std::to_string(kProtocolVersion) + ": use the same dfbwall on both sides");
   if (h.kind < static_cast<std::uint16_t>(Kind::Hello) ||
       h.kind > static_cast<std::uint16_t>(kLastKind))
-    throw Error("unknown message kind " + std::to_string(h.kind));
+    throw base::Error("unknown message kind " + std::to_string(h.kind));
   return h;
 }
 

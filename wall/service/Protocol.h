@@ -15,7 +15,7 @@
 //
 // Every message starts with a MessageHeader (magic, protocol version, kind, session id). The
 // wall never trusts a length, count, rectangle, display index or frame number from the wire:
-// parse* functions check every field against the message's size and throw wall::Error naming
+// parse* functions check every field against the message's size and throw base::Error naming
 // what was wrong; callers check the rest against the session (wall/WallNode.h).
 #include <cstdint>
 #include <string>
@@ -117,7 +117,7 @@ messaging::Bytes packText(Kind kind, std::uint64_t session, const std::string& t
 messaging::Bytes packControl(Kind kind, std::uint64_t session, std::uint64_t value,
                              std::int64_t second = 0);
 
-// The header of any message, checked (magic, version, a known kind); throws wall::Error with a
+// The header of any message, checked (magic, version, a known kind); throws base::Error with a
 // message a log can print ("not the dfbwall protocol", "protocol version 7, this wall speaks 1").
 MessageHeader parseHeader(const std::byte* data, std::size_t size);
 Hello parseHello(const std::byte* data, std::size_t size);
@@ -174,7 +174,7 @@ void encodePiece(const CodecSpec& codec, const dfb::Region& local, const std::ui
                  int stride, messaging::Bytes& out);
 
 // Parses a whole batch; every piece's rectangle is non-empty and at most 4096 pixels a side,
-// every data range inside the message. Throws wall::Error.
+// every data range inside the message. Throws base::Error.
 BatchHeader parseBatch(const std::byte* data, std::size_t size, std::vector<BatchPiece>& pieces);
 
 }  // namespace wall::service

@@ -7,7 +7,7 @@
 #include <set>
 #include <vector>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/service/JsonText.h"
 #include "wall/service/Protocol.h"
 #include "wall/service/RelayRoutes.h"
@@ -361,7 +361,8 @@ Relay::Relay(RelayOptions options) : impl_(std::make_unique<Impl>()) {
   const std::string endpoint = tcpEndpoint(m.options.listen, "--listen");
   m.wallEndpoint = tcpEndpoint(m.options.wall, "--wall");
   if (m.options.wall.find(':') == std::string::npos)
-    throw Error("--wall '" + m.options.wall + "': expected HOST:PORT of the wall (serve --listen)");
+    throw base::Error("--wall '" + m.options.wall +
+                      "': expected HOST:PORT of the wall (serve --listen)");
   const std::string listenHost = hostOf(m.options.listen);
   // The piece sockets listen where the directory socket does; jobs are told the address they
   // can reach: the listen address, or this host's first when listening on every interface.
@@ -372,7 +373,7 @@ Relay::Relay(RelayOptions options) : impl_(std::make_unique<Impl>()) {
   try {
     m.front.bind(endpoint);
   } catch (const zmq::error_t& e) {
-    throw Error("--listen " + m.options.listen + ": cannot listen there (" + e.what() + ")");
+    throw base::Error("--listen " + m.options.listen + ": cannot listen there (" + e.what() + ")");
   }
   m.address = m.advertised + ":" + std::to_string(portOf(lastEndpoint(m.front)));
 }

@@ -35,7 +35,7 @@ struct RelayOptions {
 
 class Relay {
  public:
-  // Binds the listen socket; throws wall::Error on a bad address or a port in use.
+  // Binds the listen socket; throws base::Error on a bad address or a port in use.
   explicit Relay(RelayOptions options);
   ~Relay();
   Relay(const Relay&) = delete;

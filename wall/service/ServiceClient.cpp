@@ -4,10 +4,9 @@
 #include <cstdio>
 #include <cstring>
 
-#include "dfb/Error.h"
-#include "dfb/Timing.h"
-#include "messaging/BoundedWait.h"
-#include "wall/Error.h"
+#include "base/BoundedWait.h"
+#include "base/Error.h"
+#include "base/Timing.h"
 
 namespace wall::service {
 namespace {
@@ -39,9 +38,9 @@ ServiceClient::ServiceClient(const std::string& address, const Hello& hello,
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
     if (left.count() <= 0)
-      throw Error("no dfbwall wall answered at " + address + " within " +
-                  std::to_string(timeout.count() / 1000) +
-                  " s (is `dfbwall serve` running there?)");
+      throw base::Error("no dfbwall wall answered at " + address + " within " +
+                        std::to_string(timeout.count() / 1000) +
+                        " s (is `dfbwall serve` running there?)");
     zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
     if (zmq::poll(&item, 1, std::min<std::chrono::milliseconds>(left, kKeepalive)) == 0) {
       // Waiting in the wall's queue: say so every second, or the wall forgets the job.
@@ -58,16 +57,16 @@ ServiceClient::ServiceClient(const std::string& address, const Hello& hello,
         directoryBytes_.assign(bytesOf(reply), bytesOf(reply) + reply.size());
         return;
       case Kind::Refused:
-        throw Error("the wall at " + address +
-                    " refused the job: " + parseText(bytesOf(reply), reply.size()));
+        throw base::Error("the wall at " + address +
+                          " refused the job: " + parseText(bytesOf(reply), reply.size()));
       case Kind::Queued:
         if (onQueued && !queued) onQueued(parseText(bytesOf(reply), reply.size()));
         queued = true;
         deadline = Clock::now() + timeout;  // the wall answers; it is not dead
         break;
       default:
-        throw Error("the wall at " + address + " answered the hello with message kind " +
-                    std::to_string(h.kind));
+        throw base::Error("the wall at " + address + " answered the hello with message kind " +
+                          std::to_string(h.kind));
     }
   }
 }
@@ -164,9 +163,9 @@ void ServiceClient::run() {
         } else if (h.kind == static_cast<std::uint16_t>(Kind::Roster)) {
           const Roster roster = parseRoster(bytesOf(m), m.size());
           if (roster.processes.size() != directory_.processes.size())
-            throw Error("the wall at " + address_ + " sent a roster of " +
-                        std::to_string(roster.processes.size()) + " processes for " +
-                        std::to_string(directory_.processes.size()));
+            throw base::Error("the wall at " + address_ + " sent a roster of " +
+                              std::to_string(roster.processes.size()) + " processes for " +
+                              std::to_string(directory_.processes.size()));
           if (!roster.why.empty()) {
             std::fprintf(stderr, "dfbwall: the wall at %s: %s\n", address_.c_str(),
                          roster.why.c_str());
@@ -198,12 +197,13 @@ Directory shareDirectory(MPI_Comm comm, const ServiceClient* client,
   std::uint64_t size = bytes.size();
   const auto bounded = [&](void* data, int count) {
     MPI_Request request;
-    dfb::checkMpi(MPI_Ibcast(data, count, MPI_BYTE, 0, comm, &request), "MPI_Ibcast");
-    messaging::waitWithDeadline(request, Clock::now() + timeout,
-                                "sharing the wall's directory: a rank did not join in time");
+    base::checkMpi(MPI_Ibcast(data, count, MPI_BYTE, 0, comm, &request), "MPI_Ibcast");
+    base::waitWithDeadline(request, Clock::now() + timeout,
+                           "sharing the wall's directory: a rank did not join in time");
   };
   bounded(&size, sizeof size);
-  if (size > kMaxMessageBytes) throw Error("a directory of " + std::to_string(size) + " bytes");
+  if (size > kMaxMessageBytes)
+    throw base::Error("a directory of " + std::to_string(size) + " bytes");
   bytes.resize(size);
   bounded(bytes.data(), static_cast<int>(size));
   return parseDirectory(bytes.data(), bytes.size());
@@ -214,12 +214,12 @@ Roster shareRoster(MPI_Comm comm, const ServiceClient* client, std::chrono::mill
   std::uint64_t size = bytes.size();
   const auto bounded = [&](void* data, int count) {
     MPI_Request request;
-    dfb::checkMpi(MPI_Ibcast(data, count, MPI_BYTE, 0, comm, &request), "MPI_Ibcast");
-    messaging::waitWithDeadline(request, Clock::now() + timeout,
-                                "sharing the wall's roster: a rank did not join in time");
+    base::checkMpi(MPI_Ibcast(data, count, MPI_BYTE, 0, comm, &request), "MPI_Ibcast");
+    base::waitWithDeadline(request, Clock::now() + timeout,
+                           "sharing the wall's roster: a rank did not join in time");
   };
   bounded(&size, sizeof size);
-  if (size > kMaxMessageBytes) throw Error("a roster of " + std::to_string(size) + " bytes");
+  if (size > kMaxMessageBytes) throw base::Error("a roster of " + std::to_string(size) + " bytes");
   bytes.resize(size);
   bounded(bytes.data(), static_cast<int>(size));
   return parseRoster(bytes.data(), bytes.size());
@@ -280,8 +280,8 @@ void ServicePieceSink::connect(size_t process, const std::string& endpoint) {
 
 void ServicePieceSink::setRoster(const Roster& roster) {
   if (roster.processes.size() != sockets_.size())
-    throw Error("a roster of " + std::to_string(roster.processes.size()) + " wall processes for " +
-                std::to_string(sockets_.size()));
+    throw base::Error("a roster of " + std::to_string(roster.processes.size()) +
+                      " wall processes for " + std::to_string(sockets_.size()));
   for (size_t p = 0; p < sockets_.size(); ++p) {
     const DirectoryProcess& next = roster.processes[p];
     std::lock_guard lock(*socketMutex_[p]);
@@ -316,12 +316,12 @@ void ServicePieceSink::flush(int display, Batch& batch) {
   batch.open = false;
   const std::uint32_t pieces = batch.writer.pieces();
   messaging::Bytes bytes = batch.writer.take();
-  const std::int64_t t0 = dfb::threadCpuNs();
+  const std::int64_t t0 = base::threadCpuNs();
   wireBytes_ += bytes.size();
   messages_++;
   sendBounded(static_cast<size_t>(processOfDisplay_[static_cast<size_t>(display)]),
               std::move(bytes), pieces);
-  sendNs_ += dfb::threadCpuNs() - t0;
+  sendNs_ += base::threadCpuNs() - t0;
 }
 
 std::size_t ServicePieceSink::send(std::uint32_t frameId, int display, const dfb::Region& local,
@@ -331,10 +331,10 @@ std::size_t ServicePieceSink::send(std::uint32_t frameId, int display, const dfb
     ++dropped_;
     return 0;
   }
-  const std::int64_t t0 = dfb::threadCpuNs();
+  const std::int64_t t0 = base::threadCpuNs();
   thread_local messaging::Bytes piece;
   encodePiece(codec_, local, pixels, stride, piece);
-  cutNs_ += dfb::threadCpuNs() - t0;
+  cutNs_ += base::threadCpuNs() - t0;
   Batch& batch = *batches_.at(static_cast<size_t>(display));
   std::lock_guard lock(batch.mutex);
   if (batch.open && batch.frameId != frameId) flush(display, batch);

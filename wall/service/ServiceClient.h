@@ -32,7 +32,7 @@ class ServiceClient {
  public:
   // Connects to "HOST:PORT" and waits up to `timeout` for the directory. With hello.wait, a
   // busy wall queues the job: `onQueued(text)` is told, and the wait for the directory starts
-  // over each time the wall says where the job stands. Throws wall::Error with the wall's
+  // over each time the wall says where the job stands. Throws base::Error with the wall's
   // reason, or "no dfbwall wall answered at HOST:PORT within S s".
   ServiceClient(const std::string& address, const Hello& hello, std::chrono::milliseconds timeout,
                 const std::function<void(const std::string&)>& onQueued = {});
@@ -104,7 +104,7 @@ class ServicePieceSink : public PieceSink {
   bool otherHost(int) const override { return true; }
   // Between frames (no send in progress): the wall processes pieces go to from the next frame
   // on. A lost process's pieces are dropped here and counted; a process back at another
-  // endpoint (restarted) gets a fresh socket. Throws wall::Error when the roster does not fit the
+  // endpoint (restarted) gets a fresh socket. Throws base::Error when the roster does not fit the
   // directory.
   void setRoster(const Roster& roster);
   // Pieces not sent since the last call: their wall process was lost, or took nothing for the

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cstring>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/service/Protocol.h"
 
 namespace wall::service {
@@ -19,14 +19,14 @@ messaging::Bytes packCommand(const ServiceCommand& command) {
 
 ServiceCommand parseCommand(const messaging::Bytes& body) {
   ServiceCommand c;
-  if (body.size() < sizeof c.header) throw Error("malformed service command");
+  if (body.size() < sizeof c.header) throw base::Error("malformed service command");
   std::memcpy(&c.header, body.data(), sizeof c.header);
   if (body.size() != sizeof c.header + c.header.textBytes || c.header.textBytes > kMaxStringBytes)
-    throw Error("malformed service command");
+    throw base::Error("malformed service command");
   const auto kind = static_cast<std::uint32_t>(c.header.kind);
   if (kind < static_cast<std::uint32_t>(Command::Start) ||
       kind > static_cast<std::uint32_t>(Command::FirstFrame))
-    throw Error("unknown service command " + std::to_string(kind));
+    throw base::Error("unknown service command " + std::to_string(kind));
   c.text.assign(reinterpret_cast<const char*>(body.data() + sizeof c.header), c.header.textBytes);
   return c;
 }

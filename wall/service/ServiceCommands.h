@@ -42,7 +42,7 @@ struct ServiceCommand {
 };
 
 messaging::Bytes packCommand(const ServiceCommand& command);
-// Throws wall::Error on a body that is not a command.
+// Throws base::Error on a body that is not a command.
 ServiceCommand parseCommand(const messaging::Bytes& body);
 
 }  // namespace wall::service

@@ -9,8 +9,8 @@
 #include <random>
 #include <thread>
 
-#include "dfb/AtomicFile.h"
-#include "wall/Error.h"
+#include "base/AtomicFile.h"
+#include "base/Error.h"
 #include "wall/IdleScreen.h"
 #include "wall/WallNode.h"
 #include "wall/service/Desk.h"
@@ -211,7 +211,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   std::string problem;
   if (!captureDir.empty()) {
     for (int d : layout.displaysOfProcess(process)) {
-      problem = dfb::checkWritableFolder(
+      problem = base::checkWritableFolder(
           (std::filesystem::path(captureDir) / layout.displays[static_cast<size_t>(d)].name)
               .string());
       if (!problem.empty()) {
@@ -323,8 +323,8 @@ void WallService::run() {
       m.linkLost = false;
     }
     if (m.link && !m.link->refusal().empty())
-      throw Error("the wall's head at " + m.address +
-                  " refused this process: " + m.link->refusal());
+      throw base::Error("the wall's head at " + m.address +
+                        " refused this process: " + m.link->refusal());
     const bool joined = !m.link || m.link->joined();
     // Asked to stop, this process waits for the head's shutdown; without a head there is none.
     if (asked && !joined) return;

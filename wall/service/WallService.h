@@ -45,7 +45,7 @@ struct ServiceOptions {
 class WallService {
  public:
   // Binds this process's sockets (the head: its directory socket too) and starts its link; a
-  // member joins in the background. Throws wall::Error on a bad --listen / --join or a port in
+  // member joins in the background. Throws base::Error on a bad --listen / --join or a port in
   // use.
   WallService(const Layout& layout, std::vector<Presenter*> presenters, ServiceOptions options);
   ~WallService();
@@ -59,10 +59,10 @@ class WallService {
   std::string token() const;
   // The head: waits until every process joined, or `until`; returns those that did not.
   // Another process: waits until it joined (returns nothing) or `until` (returns itself); throws
-  // wall::Error when the head refused it (wrong token, another layout).
+  // base::Error when the head refused it (wrong token, another layout).
   std::vector<int> waitForProcesses(std::chrono::steady_clock::time_point until);
   // Presents jobs until the wall is asked to stop (or this process leaves it); returns then.
-  // Throws wall::Error when the head refuses this process.
+  // Throws base::Error when the head refuses this process.
   void run();
 
  private:

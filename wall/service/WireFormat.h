@@ -2,11 +2,11 @@
 // Reading and writing the fields of a wall-service message after its MessageHeader
 // (wall/service/Protocol.h): fixed-size values in the host's byte order (every dfbwall host is
 // little-endian x86-64 or arm64), texts with a 16-bit length. Reads past the end throw
-// wall::Error naming the message: nothing from the wire is trusted.
+// base::Error naming the message: nothing from the wire is trusted.
 #include <cstring>
 #include <string>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/service/Protocol.h"
 
 namespace wall::service {
@@ -38,8 +38,8 @@ class Writer {
   }
   void text(const std::string& s) {
     if (s.size() > kMaxStringBytes)
-      throw Error("a text field of " + std::to_string(s.size()) + " bytes (at most " +
-                  std::to_string(kMaxStringBytes) + ")");
+      throw base::Error("a text field of " + std::to_string(s.size()) + " bytes (at most " +
+                        std::to_string(kMaxStringBytes) + ")");
     put<std::uint16_t>(static_cast<std::uint16_t>(s.size()));
     raw(s.data(), s.size());
   }
@@ -89,7 +89,7 @@ class Reader {
     if (at_ != size_) fail(std::to_string(size_ - at_) + " bytes too many");
   }
   [[noreturn]] void fail(const std::string& why) const {
-    throw Error(std::string("malformed ") + what_ + ": " + why);
+    throw base::Error(std::string("malformed ") + what_ + ": " + why);
   }
 
  private:

@@ -8,7 +8,7 @@
 
 #include <cstdint>
 
-#include "wall/Error.h"
+#include "base/Error.h"
 #include "wall/service/Protocol.h"
 
 namespace wall::service {
@@ -42,7 +42,7 @@ std::string tcpEndpoint(const std::string& address, const std::string& option) {
   for (char c : port) digits = digits && c >= '0' && c <= '9';
   if (!digits || std::stoi(port) > 65535 || host.empty() ||
       host.find_first_of(" /\\\"'") != std::string::npos)
-    throw Error(option + " '" + address + "': expected [HOST:]PORT, e.g. 7000 or wall0:7000");
+    throw base::Error(option + " '" + address + "': expected [HOST:]PORT, e.g. 7000 or wall0:7000");
   return "tcp://" + host + ":" + port;
 }
 
@@ -76,7 +76,7 @@ int portOf(const std::string& endpoint) {
 }
 
 Waker::Waker() : fd_(eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
-  if (fd_ < 0) throw Error("eventfd failed");
+  if (fd_ < 0) throw base::Error("eventfd failed");
 }
 Waker::~Waker() { close(fd_); }
 void Waker::notify() {

@@ -23,7 +23,7 @@ zmq::message_t toMessage(messaging::Bytes&& bytes);
 // long closing the socket waits for messages still queued (a job's last pieces must reach the
 // wall after its rank is done; the wall's own sockets wait for nobody).
 void configureSocket(zmq::socket_t& socket, int deadPeerMs, int lingerMs = 0);
-// "HOST:PORT" or "PORT" (then 127.0.0.1) -> "tcp://HOST:PORT"; throws wall::Error naming
+// "HOST:PORT" or "PORT" (then 127.0.0.1) -> "tcp://HOST:PORT"; throws base::Error naming
 // `option` on anything else.
 std::string tcpEndpoint(const std::string& address, const std::string& option);
 // The host part of an address as `tcpEndpoint` reads it.

@@ -1,7 +1,7 @@
 #pragma once
 // What the header of an NRRD, NIfTI-1 or MetaImage file says: the grid and where its voxels are
 // stored. The parsers take the first bytes of the file (for .nii.gz: of the inflated stream) and
-// throw renderers::Error naming the file, the line (text headers) and the field on anything they
+// throw base::Error naming the file, the line (text headers) and the field on anything they
 // do not understand or do not believe (dims past the caps, sizes that overflow, unknown types or
 // encodings). They never read files themselves, so the fuzzer runs them on any bytes.
 #include <string>

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/formats/LibraryFormats.h"
 
 namespace renderers {
@@ -36,7 +36,7 @@ class Handle {
 hid_t openFile(const std::string& path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are ours to report
   const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (f < 0) throw Error(path + ": cannot open as an HDF5 file (missing or not HDF5)");
+  if (f < 0) throw base::Error(path + ": cannot open as an HDF5 file (missing or not HDF5)");
   return f;
 }
 
@@ -73,9 +73,9 @@ FileType fileTypeOf(hid_t type, const std::string& what) {
     if (size == 4) return FileType::Float32;
     if (size == 8) return FileType::Float64;
   }
-  throw Error(what +
-              ": the data type is not one dfbwall reads (8 to 32-bit integers, float32, "
-              "float64)");
+  throw base::Error(what +
+                    ": the data type is not one dfbwall reads (8 to 32-bit integers, float32, "
+                    "float64)");
 }
 
 // A numeric attribute's values (empty when absent).
@@ -102,8 +102,8 @@ void resolveHdf5(VolumeSource& source) {
   const std::vector<std::string> names = volumeDatasets(file.get());
   if (f.dataset.empty()) {
     if (names.size() != 1)
-      throw Error(f.path + ": the file has " + std::to_string(names.size()) +
-                  " 3-D/4-D datasets; say which with 'dataset' (" + listedNames(names) + ")");
+      throw base::Error(f.path + ": the file has " + std::to_string(names.size()) +
+                        " 3-D/4-D datasets; say which with 'dataset' (" + listedNames(names) + ")");
     f.dataset = names[0];
   }
   const Handle d(H5Lexists(file.get(), f.dataset.c_str(), H5P_DEFAULT) > 0
@@ -111,8 +111,8 @@ void resolveHdf5(VolumeSource& source) {
                      : -1,
                  H5Dclose);
   if (!d.ok())
-    throw Error(f.path + ": no dataset '" + f.dataset +
-                "' (the 3-D/4-D datasets: " + listedNames(names) + ")");
+    throw base::Error(f.path + ": no dataset '" + f.dataset +
+                      "' (the 3-D/4-D datasets: " + listedNames(names) + ")");
   const std::string what = f.path + ": dataset '" + f.dataset + "'";
   const Handle space(H5Dget_space(d.get()), H5Sclose);
   const int rank = H5Sget_simple_extent_ndims(space.get());
@@ -134,7 +134,7 @@ Volume loadHdf5Box(const VolumeSource& source, const VoxelBox& box) {
   const VolumeFileParams& f = source.file;
   const Handle file(openFile(f.path), H5Fclose);
   const Handle d(H5Dopen2(file.get(), f.dataset.c_str(), H5P_DEFAULT), H5Dclose);
-  if (!d.ok()) throw Error(f.path + ": no dataset '" + f.dataset + "'");
+  if (!d.ok()) throw base::Error(f.path + ": no dataset '" + f.dataset + "'");
   const Handle space(H5Dget_space(d.get()), H5Sclose);
   const int rank = H5Sget_simple_extent_ndims(space.get());
   const int t = rank - 3;
@@ -145,7 +145,7 @@ Volume loadHdf5Box(const VolumeSource& source, const VoxelBox& box) {
   count[t] = static_cast<hsize_t>(s.z), count[t + 1] = static_cast<hsize_t>(s.y),
   count[t + 2] = static_cast<hsize_t>(s.x);
   if (H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr) < 0)
-    throw Error(f.path + ": dataset '" + f.dataset + "': cannot select the brick's voxels");
+    throw base::Error(f.path + ": dataset '" + f.dataset + "': cannot select the brick's voxels");
   const Handle memory(H5Screate_simple(rank, count, nullptr), H5Sclose);
   Volume v;
   v.grid = source.grid;
@@ -156,9 +156,9 @@ Volume loadHdf5Box(const VolumeSource& source, const VoxelBox& box) {
                         : v.type == VoxelType::UInt16 ? H5T_NATIVE_USHORT
                                                       : H5T_NATIVE_FLOAT;
   if (H5Dread(d.get(), memType, memory.get(), space.get(), H5P_DEFAULT, v.voxels.data()) < 0)
-    throw Error(f.path + ": dataset '" + f.dataset +
-                "': reading the brick's voxels failed "
-                "(truncated or corrupt file?)");
+    throw base::Error(f.path + ": dataset '" + f.dataset +
+                      "': reading the brick's voxels failed "
+                      "(truncated or corrupt file?)");
   markMissing(v, f.missing, 1.0f, 0.0f);
   return v;
 }

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/formats/ArrayHeader.h"
 
 namespace renderers::headertext {
@@ -33,7 +33,7 @@ std::vector<double> numbers(std::string_view value, const std::string& where) {
     double v = 0;
     const auto [end, ec] = std::from_chars(value.data() + i, value.data() + j, v);
     if (ec != std::errc() || end != value.data() + j || !std::isfinite(v))
-      throw Error(where + ": '" + std::string(value.substr(i, j - i)) + "' is not a number");
+      throw base::Error(where + ": '" + std::string(value.substr(i, j - i)) + "' is not a number");
     out.push_back(v);
     i = j;
   }
@@ -43,8 +43,8 @@ std::vector<double> numbers(std::string_view value, const std::string& where) {
 std::vector<double> numbers(std::string_view value, std::size_t count, const std::string& where) {
   std::vector<double> out = numbers(value, where);
   if (out.size() != count)
-    throw Error(where + ": " + std::to_string(count) + " numbers expected, found " +
-                std::to_string(out.size()));
+    throw base::Error(where + ": " + std::to_string(count) + " numbers expected, found " +
+                      std::to_string(out.size()));
   return out;
 }
 
@@ -53,8 +53,8 @@ std::vector<long long> integers(std::string_view value, std::size_t count, long 
   std::vector<long long> out;
   for (double v : numbers(value, count, where)) {
     if (v != std::floor(v) || v < static_cast<double>(lo) || v > static_cast<double>(hi))
-      throw Error(where + ": " + std::to_string(v) + " is not an integer in [" +
-                  std::to_string(lo) + ", " + std::to_string(hi) + "]");
+      throw base::Error(where + ": " + std::to_string(v) + " is not an integer in [" +
+                        std::to_string(lo) + ", " + std::to_string(hi) + "]");
     out.push_back(static_cast<long long>(v));
   }
   return out;
@@ -64,8 +64,9 @@ Index3 fileDims(std::string_view value, const std::string& where) {
   const auto s = integers(value, 3, 0, 1LL << 40, where);
   for (int a = 0; a < 3; ++a)
     if (s[a] > kMaxFileDims)
-      throw Error(where + ": " + std::to_string(s[a]) + " voxels along axis " + std::to_string(a) +
-                  ", more than the cap of " + std::to_string(kMaxFileDims));
+      throw base::Error(where + ": " + std::to_string(s[a]) + " voxels along axis " +
+                        std::to_string(a) + ", more than the cap of " +
+                        std::to_string(kMaxFileDims));
   const Index3 dims{static_cast<int>(s[0]), static_cast<int>(s[1]), static_cast<int>(s[2])};
   checkFileDims(dims, where);
   return dims;

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <string>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/formats/ArrayHeader.h"
 #include "renderers/scivis/formats/HeaderText.h"
 
@@ -26,16 +26,17 @@ FileType metaType(const std::string& t, const std::string& where) {
                 {"MET_FLOAT", FileType::Float32}, {"MET_DOUBLE", FileType::Float64}};
   for (const auto& n : kNames)
     if (t == n.name) return n.type;
-  throw Error(where + ": ElementType '" + t +
-              "' is not one dfbwall reads (MET_CHAR, MET_UCHAR, MET_SHORT, MET_USHORT, MET_INT, "
-              "MET_UINT, MET_FLOAT, MET_DOUBLE)");
+  throw base::Error(
+      where + ": ElementType '" + t +
+      "' is not one dfbwall reads (MET_CHAR, MET_UCHAR, MET_SHORT, MET_USHORT, MET_INT, "
+      "MET_UINT, MET_FLOAT, MET_DOUBLE)");
 }
 
 bool boolean(std::string_view v, const std::string& where) {
   const std::string b = lower(v);
   if (b == "true" || b == "1") return true;
   if (b == "false" || b == "0") return false;
-  throw Error(where + ": must be True or False, not '" + std::string(v) + "'");
+  throw base::Error(where + ": must be True or False, not '" + std::string(v) + "'");
 }
 
 Vec3 vec3(std::string_view value, const std::string& where) {
@@ -63,23 +64,23 @@ ArrayHeader parseMetaImageHeader(std::string_view bytes, const std::string& path
     const std::string where = path + ":" + std::to_string(lineNumber);
     const std::size_t eq = line.find('=');
     if (eq == std::string_view::npos)
-      throw Error(where + ": '" + std::string(line.substr(0, 80)) +
-                  "' is not a 'Key = Value' line");
+      throw base::Error(where + ": '" + std::string(line.substr(0, 80)) +
+                        "' is not a 'Key = Value' line");
     const std::string key(trim(line.substr(0, eq)));
     const std::string_view value = trim(line.substr(eq + 1));
     const std::string fw = where + ": field '" + key + "'";
     if (key == "ObjectType") {
-      if (lower(value) != "image") throw Error(fw + ": only Image objects are read");
+      if (lower(value) != "image") throw base::Error(fw + ": only Image objects are read");
     } else if (key == "NDims") {
       if (integers(value, 1, 0, 1 << 20, fw)[0] != 3)
-        throw Error(fw + ": dfbwall reads 3-D images, not " + std::string(value) + "-D");
+        throw base::Error(fw + ": dfbwall reads 3-D images, not " + std::string(value) + "-D");
       haveNDims = true;
     } else if (key == "DimSize") {
       h.dims = fileDims(value, fw);
       haveDims = true;
     } else if (key == "ElementSpacing" || key == "ElementSize") {
       const Vec3 s = vec3(value, fw);
-      if (!(s.x != 0 && s.y != 0 && s.z != 0)) throw Error(fw + ": must not be 0");
+      if (!(s.x != 0 && s.y != 0 && s.z != 0)) throw base::Error(fw + ": must not be 0");
       if (key == "ElementSpacing" || h.spacing == Vec3{1.0f})
         h.spacing = {std::fabs(s.x), std::fabs(s.y), std::fabs(s.z)};
     } else if (key == "Offset" || key == "Origin" || key == "Position") {
@@ -93,14 +94,14 @@ ArrayHeader parseMetaImageHeader(std::string_view bytes, const std::string& path
       h.data.compressed = boolean(value, fw);
     } else if (key == "ElementNumberOfChannels") {
       if (integers(value, 1, 0, 1 << 20, fw)[0] != 1)
-        throw Error(fw + ": only single-channel (scalar) images are read");
+        throw base::Error(fw + ": only single-channel (scalar) images are read");
     } else if (key == "HeaderSize") {
       headerSize = integers(value, 1, 0, 1LL << 50, fw)[0];
     } else if (key == "ElementDataFile") {
-      if (value.empty()) throw Error(fw + ": empty");
+      if (value.empty()) throw base::Error(fw + ": empty");
       if (value != "LOCAL") {
         if (value.find('%') != std::string_view::npos || lower(value).rfind("list", 0) == 0)
-          throw Error(fw + ": only one data file is read");
+          throw base::Error(fw + ": only one data file is read");
         dataFile = besideFile(path, value);
       }
       ended = true;
@@ -113,17 +114,17 @@ ArrayHeader parseMetaImageHeader(std::string_view bytes, const std::string& path
                key == "ElementToIntensityFunctionOffset" || key == "AcquisitionDate") {
       // Not needed to place a scalar grid.
     } else {
-      throw Error(fw + ": unknown MetaImage field");
+      throw base::Error(fw + ": unknown MetaImage field");
     }
     if (!ended && at >= kMaxTextHeader)
-      throw Error(path + ": the MetaImage header does not end (ElementDataFile) within " +
-                  std::to_string(kMaxTextHeader) + " bytes");
+      throw base::Error(path + ": the MetaImage header does not end (ElementDataFile) within " +
+                        std::to_string(kMaxTextHeader) + " bytes");
   }
   const std::string what = path + ": MetaImage header";
-  if (!ended) throw Error(what + " misses field 'ElementDataFile' (its last line)");
-  if (!haveNDims) throw Error(what + " misses field 'NDims'");
-  if (!haveDims) throw Error(what + " misses field 'DimSize'");
-  if (!haveType) throw Error(what + " misses field 'ElementType'");
+  if (!ended) throw base::Error(what + " misses field 'ElementDataFile' (its last line)");
+  if (!haveNDims) throw base::Error(what + " misses field 'NDims'");
+  if (!haveDims) throw base::Error(what + " misses field 'DimSize'");
+  if (!haveType) throw base::Error(what + " misses field 'ElementType'");
   h.data.path = dataFile.empty() ? path : dataFile;
   h.data.fileOffset = dataFile.empty() ? at : static_cast<std::uint64_t>(headerSize);
   return h;

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/formats/LibraryFormats.h"
 
 namespace renderers {
@@ -19,14 +19,14 @@ class NcFile {
   explicit NcFile(const std::string& path) : path_(path) {
     const int rc = nc_open(path.c_str(), NC_NOWRITE, &id_);
     if (rc != NC_NOERR)
-      throw Error(path + ": cannot open as a NetCDF file (" + nc_strerror(rc) + ")");
+      throw base::Error(path + ": cannot open as a NetCDF file (" + nc_strerror(rc) + ")");
   }
   ~NcFile() { nc_close(id_); }
   NcFile(const NcFile&) = delete;
   NcFile& operator=(const NcFile&) = delete;
   int id() const { return id_; }
   void check(int rc, const std::string& what) const {
-    if (rc != NC_NOERR) throw Error(path_ + ": " + what + ": " + nc_strerror(rc));
+    if (rc != NC_NOERR) throw base::Error(path_ + ": " + what + ": " + nc_strerror(rc));
   }
 
  private:
@@ -69,9 +69,9 @@ FileType fileTypeOf(nc_type t, const std::string& what) {
     default:
       break;
   }
-  throw Error(what +
-              ": the variable's type is not one dfbwall reads (byte, ubyte, short, ushort, "
-              "int, uint, float, double)");
+  throw base::Error(what +
+                    ": the variable's type is not one dfbwall reads (byte, ubyte, short, ushort, "
+                    "int, uint, float, double)");
 }
 
 std::vector<double> attribute(int file, int var, const char* name) {
@@ -113,14 +113,15 @@ void resolveNetCdf(VolumeSource& source) {
   const std::vector<std::string> names = volumeVariables(file);
   if (f.variable.empty()) {
     if (names.size() != 1)
-      throw Error(f.path + ": the file has " + std::to_string(names.size()) +
-                  " 3-D/4-D variables; say which with 'variable' (" + listedNames(names) + ")");
+      throw base::Error(f.path + ": the file has " + std::to_string(names.size()) +
+                        " 3-D/4-D variables; say which with 'variable' (" + listedNames(names) +
+                        ")");
     f.variable = names[0];
   }
   int var = -1;
   if (nc_inq_varid(file.id(), f.variable.c_str(), &var) != NC_NOERR)
-    throw Error(f.path + ": no variable '" + f.variable +
-                "' (the 3-D/4-D variables: " + listedNames(names) + ")");
+    throw base::Error(f.path + ": no variable '" + f.variable +
+                      "' (the 3-D/4-D variables: " + listedNames(names) + ")");
   const std::string what = f.path + ": variable '" + f.variable + "'";
   int rank = 0, dimIds[NC_MAX_VAR_DIMS] = {};
   nc_type type;
@@ -153,7 +154,7 @@ Volume loadNetCdfBox(const VolumeSource& source, const VoxelBox& box) {
   const NcFile file(f.path);
   int var = -1, rank = 0;
   if (nc_inq_varid(file.id(), f.variable.c_str(), &var) != NC_NOERR)
-    throw Error(f.path + ": no variable '" + f.variable + "'");
+    throw base::Error(f.path + ": no variable '" + f.variable + "'");
   file.check(nc_inq_varndims(file.id(), var, &rank), "variable '" + f.variable + "'");
   const int t = rank - 3;
   const Index3 s = box.size();

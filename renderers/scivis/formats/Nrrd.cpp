@@ -5,7 +5,7 @@
 #include <cmath>
 #include <string>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/formats/ArrayHeader.h"
 #include "renderers/scivis/formats/HeaderText.h"
 
@@ -50,9 +50,9 @@ FileType nrrdType(const std::string& t, const std::string& where) {
   };
   for (const auto& n : kNames)
     if (t == n.name) return n.type;
-  throw Error(where + ": type '" + t +
-              "' is not one dfbwall reads (int8, uint8, int16, uint16, int32, uint32, float, "
-              "double)");
+  throw base::Error(where + ": type '" + t +
+                    "' is not one dfbwall reads (int8, uint8, int16, uint16, int32, uint32, float, "
+                    "double)");
 }
 
 // "(x,y,z)" vectors, or "none".
@@ -62,9 +62,9 @@ std::vector<Vec3> vectors(std::string_view value, const std::string& where) {
   while (true) {
     value = trim(value.substr(i));
     if (value.empty()) break;
-    if (value.front() != '(') throw Error(where + ": '(x,y,z)' vectors expected");
+    if (value.front() != '(') throw base::Error(where + ": '(x,y,z)' vectors expected");
     const std::size_t close = value.find(')');
-    if (close == std::string_view::npos) throw Error(where + ": a vector misses its ')'");
+    if (close == std::string_view::npos) throw base::Error(where + ": a vector misses its ')'");
     std::string inner(value.substr(1, close - 1));
     for (char& c : inner)
       if (c == ',') c = ' ';
@@ -79,7 +79,7 @@ std::vector<Vec3> vectors(std::string_view value, const std::string& where) {
 
 ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
   if (bytes.substr(0, 4) != "NRRD")
-    throw Error(path + ": not an NRRD file (it does not start with \"NRRD\")");
+    throw base::Error(path + ": not an NRRD file (it does not start with \"NRRD\")");
   ArrayHeader h;
   bool haveType = false, haveSizes = false, haveDimension = false, haveEndian = false,
        ended = false;
@@ -91,8 +91,8 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
     std::size_t end = bytes.find('\n', at);
     if (end == std::string_view::npos) {
       if (bytes.size() >= kMaxTextHeader)
-        throw Error(path + ": the NRRD header does not end within " +
-                    std::to_string(kMaxTextHeader) + " bytes");
+        throw base::Error(path + ": the NRRD header does not end within " +
+                          std::to_string(kMaxTextHeader) + " bytes");
       end = bytes.size();
     }
     std::string_view line = bytes.substr(at, end - at);
@@ -110,8 +110,8 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
     const std::size_t colon = line.find(": ");
     const std::string where = path + ":" + std::to_string(lineNumber);
     if (colon == std::string_view::npos)
-      throw Error(where + ": '" + std::string(line.substr(0, 80)) +
-                  "' is not a 'field: value' line");
+      throw base::Error(where + ": '" + std::string(line.substr(0, 80)) +
+                        "' is not a 'field: value' line");
     const std::string field = lower(trim(line.substr(0, colon)));
     const std::string_view value = trim(line.substr(colon + 2));
     const std::string fw = where + ": field '" + field + "'";
@@ -120,7 +120,8 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
       haveType = true;
     } else if (field == "dimension") {
       if (integers(value, 1, 0, 1 << 20, fw)[0] != 3)
-        throw Error(fw + ": dfbwall reads 3-D scalar volumes, not dimension " + std::string(value));
+        throw base::Error(fw + ": dfbwall reads 3-D scalar volumes, not dimension " +
+                          std::string(value));
       haveDimension = true;
     } else if (field == "sizes") {
       h.dims = fileDims(value, fw);
@@ -128,43 +129,44 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
     } else if (field == "spacings") {
       const auto s = numbers(value, 3, fw);
       for (double v : s)
-        if (!(v != 0)) throw Error(fw + ": spacings must not be 0");
+        if (!(v != 0)) throw base::Error(fw + ": spacings must not be 0");
       h.spacing = {std::fabs(static_cast<float>(s[0])), std::fabs(static_cast<float>(s[1])),
                    std::fabs(static_cast<float>(s[2]))};
     } else if (field == "space directions") {
       const auto d = vectors(value, fw);
-      if (d.size() != 3) throw Error(fw + ": 3 vectors expected");
+      if (d.size() != 3) throw base::Error(fw + ": 3 vectors expected");
       float s[3];
       for (int a = 0; a < 3; ++a) {
         s[a] = std::sqrt(d[a].x * d[a].x + d[a].y * d[a].y + d[a].z * d[a].z);
-        if (!(s[a] > 0) || !std::isfinite(s[a])) throw Error(fw + ": a direction of length 0");
+        if (!(s[a] > 0) || !std::isfinite(s[a]))
+          throw base::Error(fw + ": a direction of length 0");
       }
       h.spacing = {s[0], s[1], s[2]};
     } else if (field == "space origin") {
       const auto o = vectors(value, fw);
-      if (o.size() != 1) throw Error(fw + ": one '(x,y,z)' vector expected");
+      if (o.size() != 1) throw base::Error(fw + ": one '(x,y,z)' vector expected");
       h.origin = o[0];
     } else if (field == "encoding") {
       encoding = lower(value);
       if (encoding == "gz") encoding = "gzip";
       if (encoding != "raw" && encoding != "gzip")
-        throw Error(fw + ": encoding '" + std::string(value) +
-                    "' is not one dfbwall reads (raw, gzip)");
+        throw base::Error(fw + ": encoding '" + std::string(value) +
+                          "' is not one dfbwall reads (raw, gzip)");
     } else if (field == "endian") {
       const std::string e = lower(value);
-      if (e != "little" && e != "big") throw Error(fw + ": must be 'little' or 'big'");
+      if (e != "little" && e != "big") throw base::Error(fw + ": must be 'little' or 'big'");
       h.data.bigEndian = e == "big";
       haveEndian = true;
     } else if (field == "data file" || field == "datafile") {
       if (value.empty() || value.find('%') != std::string_view::npos ||
           lower(value).rfind("list", 0) == 0)
-        throw Error(fw + ": only one detached data file is read");
+        throw base::Error(fw + ": only one detached data file is read");
       dataFile = besideFile(path, value);
     } else if (field == "byte skip" || field == "byteskip") {
       byteSkip = integers(value, 1, 0, 1LL << 50, fw)[0];
     } else if (field == "line skip" || field == "lineskip") {
       if (integers(value, 1, 0, 1LL << 30, fw)[0] != 0)
-        throw Error(fw + ": line skip is not read; use byte skip");
+        throw base::Error(fw + ": line skip is not read; use byte skip");
     } else if (field == "kinds" || field == "centers" || field == "centerings" ||
                field == "space" || field == "space dimension" || field == "space units" ||
                field == "units" || field == "labels" || field == "content" || field == "min" ||
@@ -174,18 +176,19 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
                field == "thicknesses" || field == "block size") {
       // Not needed to place a scalar grid.
     } else {
-      throw Error(fw + ": unknown NRRD field");
+      throw base::Error(fw + ": unknown NRRD field");
     }
   }
   const std::string what = path + ": NRRD header";
-  if (!haveDimension) throw Error(what + " misses field 'dimension'");
-  if (!haveType) throw Error(what + " misses field 'type'");
-  if (!haveSizes) throw Error(what + " misses field 'sizes'");
+  if (!haveDimension) throw base::Error(what + " misses field 'dimension'");
+  if (!haveType) throw base::Error(what + " misses field 'type'");
+  if (!haveSizes) throw base::Error(what + " misses field 'sizes'");
   if (fileTypeBytes(h.data.type) > 1 && !haveEndian)
-    throw Error(what + " misses field 'endian' (needed for " + fileTypeName(h.data.type) + ")");
+    throw base::Error(what + " misses field 'endian' (needed for " + fileTypeName(h.data.type) +
+                      ")");
   h.data.compressed = encoding == "gzip";
   if (dataFile.empty()) {
-    if (!ended) throw Error(what + " has no blank line before the data and no 'data file'");
+    if (!ended) throw base::Error(what + " has no blank line before the data and no 'data file'");
     h.data.path = path;
     h.data.fileOffset = dataStart;
   } else {

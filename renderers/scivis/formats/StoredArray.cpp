@@ -15,7 +15,7 @@
 #include <memory>
 #include <vector>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 
 namespace renderers {
 namespace {
@@ -26,7 +26,7 @@ class File {
  public:
   explicit File(const std::string& path) : path_(path), fd_(::open(path.c_str(), O_RDONLY)) {
     if (fd_ < 0)
-      throw Error(path + ": cannot open the volume data file (" + std::strerror(errno) + ")");
+      throw base::Error(path + ": cannot open the volume data file (" + std::strerror(errno) + ")");
   }
   ~File() { ::close(fd_); }
   File(const File&) = delete;
@@ -46,8 +46,8 @@ class File {
       const ssize_t n = ::pread(fd_, to + done, bytes - done, static_cast<off_t>(offset + done));
       if (n < 0 && errno == EINTR) continue;
       if (n < 0)
-        throw Error(path_ + ": read failed at byte " + std::to_string(offset + done) + ": " +
-                    std::strerror(errno));
+        throw base::Error(path_ + ": read failed at byte " + std::to_string(offset + done) + ": " +
+                          std::strerror(errno));
       if (n == 0) break;
       done += static_cast<std::size_t>(n);
     }
@@ -56,14 +56,14 @@ class File {
   }
   void read(std::uint64_t offset, std::byte* to, std::size_t bytes) const {
     if (readSome(offset, to, bytes) != bytes)
-      throw Error(path_ + ": the file ends before byte " + std::to_string(offset + bytes) +
-                  " of the volume data");
+      throw base::Error(path_ + ": the file ends before byte " + std::to_string(offset + bytes) +
+                        " of the volume data");
   }
 
  private:
   struct stat status() const {
     struct stat st {};
-    if (::fstat(fd_, &st) != 0) throw Error(path_ + ": cannot stat: " + std::strerror(errno));
+    if (::fstat(fd_, &st) != 0) throw base::Error(path_ + ": cannot stat: " + std::strerror(errno));
     return st;
   }
 
@@ -77,7 +77,7 @@ class InflateStream {
  public:
   InflateStream(const File& file, const std::string& path, std::uint64_t offset)
       : file_(file), path_(path), offset_(offset), in_(kChunk) {
-    if (inflateInit2(&z_, 15 + 32) != Z_OK) throw Error(path + ": cannot start zlib");
+    if (inflateInit2(&z_, 15 + 32) != Z_OK) throw base::Error(path + ": cannot start zlib");
   }
   ~InflateStream() { inflateEnd(&z_); }
   InflateStream(const InflateStream&) = delete;
@@ -88,7 +88,7 @@ class InflateStream {
     auto copy = std::make_unique<InflateStream>(file_, path_, offset_);
     inflateEnd(&copy->z_);
     if (inflateCopy(&copy->z_, const_cast<z_stream*>(&z_)) != Z_OK)
-      throw Error(path_ + ": cannot copy the zlib stream");
+      throw base::Error(path_ + ": cannot copy the zlib stream");
     copy->in_ = in_;
     if (z_.next_in)
       copy->z_.next_in = reinterpret_cast<Bytef*>(copy->in_.data()) +
@@ -134,16 +134,16 @@ class InflateStream {
         continue;
       }
       if (rc != Z_OK && rc != Z_BUF_ERROR)
-        throw Error(path_ + ": compressed volume data is corrupt after " +
-                    std::to_string(produced_) + " inflated bytes (" +
-                    (z_.msg ? z_.msg : "zlib error " + std::to_string(rc)) + ")");
+        throw base::Error(path_ + ": compressed volume data is corrupt after " +
+                          std::to_string(produced_) + " inflated bytes (" +
+                          (z_.msg ? z_.msg : "zlib error " + std::to_string(rc)) + ")");
     }
     return bytes - z_.avail_out;
   }
 
   [[noreturn]] void ended() const {
-    throw Error(path_ + ": the compressed stream ends after " + std::to_string(produced_) +
-                " bytes, before the voxels the header calls for");
+    throw base::Error(path_ + ": the compressed stream ends after " + std::to_string(produced_) +
+                      " bytes, before the voxels the header calls for");
   }
 
   const File& file_;
@@ -285,11 +285,11 @@ void checkStoredArray(const StoredArray& array, Index3 dims) {
                              static_cast<std::uint64_t>(dims.z) * fileTypeBytes(array.type);
   const std::uint64_t found = file.size();
   if (found < need)
-    throw Error(array.path + ": the volume data file is " + std::to_string(found) +
-                " bytes, shorter than the " + std::to_string(need) + " the header calls for (" +
-                std::to_string(dims.x) + "x" + std::to_string(dims.y) + "x" +
-                std::to_string(dims.z) + " " + fileTypeName(array.type) + " voxels from byte " +
-                std::to_string(array.fileOffset) + ")");
+    throw base::Error(
+        array.path + ": the volume data file is " + std::to_string(found) +
+        " bytes, shorter than the " + std::to_string(need) + " the header calls for (" +
+        std::to_string(dims.x) + "x" + std::to_string(dims.y) + "x" + std::to_string(dims.z) + " " +
+        fileTypeName(array.type) + " voxels from byte " + std::to_string(array.fileOffset) + ")");
 }
 
 Volume readStoredBox(const StoredArray& array, const GridGeometry& grid, const VoxelBox& box) {

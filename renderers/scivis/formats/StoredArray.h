@@ -33,12 +33,12 @@ struct StoredArray {
 // What a stored array becomes in memory (see above).
 VoxelType heldVoxelType(const StoredArray& array);
 
-// Raw arrays: throws renderers::Error naming the file when it is missing or shorter than the
+// Raw arrays: throws base::Error naming the file when it is missing or shorter than the
 // `dims` voxels need. Compressed arrays: only that the file opens (its length shows on reading).
 void checkStoredArray(const StoredArray& array, Index3 dims);
 
 // The voxels of `box` of the array whose whole grid is `grid`, converted to heldVoxelType.
-// Throws renderers::Error naming the file on a short file, a stream that ends early or corrupt
+// Throws base::Error naming the file on a short file, a stream that ends early or corrupt
 // compressed data.
 Volume readStoredBox(const StoredArray& array, const GridGeometry& grid, const VoxelBox& box);
 

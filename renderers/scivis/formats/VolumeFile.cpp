@@ -10,7 +10,7 @@
 #include <limits>
 #include <vector>
 
-#include "renderers/Error.h"
+#include "base/Error.h"
 #include "renderers/scivis/formats/ArrayHeader.h"
 #include "renderers/scivis/formats/LibraryFormats.h"
 
@@ -31,17 +31,17 @@ std::string headBytes(const std::string& path, std::size_t bytes, bool gzip) {
   std::string out(bytes, '\0');
   if (gzip) {
     gzFile f = gzopen(path.c_str(), "rb");
-    if (!f) throw Error(path + ": cannot open (" + std::strerror(errno) + ")");
+    if (!f) throw base::Error(path + ": cannot open (" + std::strerror(errno) + ")");
     const int n = gzread(f, out.data(), static_cast<unsigned>(bytes));
     int code = 0;
     const std::string message = n < 0 ? gzerror(f, &code) : "";
     gzclose(f);
-    if (n < 0) throw Error(path + ": not a readable gzip file (" + message + ")");
+    if (n < 0) throw base::Error(path + ": not a readable gzip file (" + message + ")");
     out.resize(static_cast<std::size_t>(n));
     return out;
   }
   const int fd = ::open(path.c_str(), O_RDONLY);
-  if (fd < 0) throw Error(path + ": cannot open (" + std::strerror(errno) + ")");
+  if (fd < 0) throw base::Error(path + ": cannot open (" + std::strerror(errno) + ")");
   std::size_t done = 0;
   while (done < bytes) {
     const ssize_t n = ::read(fd, out.data() + done, bytes - done);
@@ -116,13 +116,13 @@ void resolveVolumeFile(VolumeSource& source) {
       break;
   }
   if (f.time != 0 && f.format != VolumeFormat::Nifti)
-    throw Error(f.path + ": 'time' is for 4-D NIfTI, HDF5 and NetCDF data; this " +
-                volumeFormatName(f.format) + " file is 3-D");
+    throw base::Error(f.path + ": 'time' is for 4-D NIfTI, HDF5 and NetCDF data; this " +
+                      volumeFormatName(f.format) + " file is 3-D");
   try {
     checkStoredArray(h.data, h.dims);
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     if (h.data.path == f.path) throw;
-    throw Error(f.path + ": its data file " + e.what());
+    throw base::Error(f.path + ": its data file " + e.what());
   }
   f.stored = h.data;
   f.hasGeometry = true;
@@ -170,20 +170,22 @@ std::string listedNames(const std::vector<std::string>& names) {
 
 void checkArrayRank(int rank, const std::string& what) {
   if (rank != 3 && rank != 4)
-    throw Error(what + " has " + std::to_string(rank) +
-                " dimensions; 3 (z, y, x) or 4 (t, z, y, x) are read");
+    throw base::Error(what + " has " + std::to_string(rank) +
+                      " dimensions; 3 (z, y, x) or 4 (t, z, y, x) are read");
 }
 
 Index3 arrayGridDims(const std::uint64_t* len, int rank, int time, const std::string& what) {
   const int t = rank - 3;
   if (rank == 4 && (time < 0 || static_cast<std::uint64_t>(time) >= len[0]))
-    throw Error(what + ": time " + std::to_string(time) + " is past its " + std::to_string(len[0]) +
-                " time steps");
-  if (rank == 3 && time != 0) throw Error(what + " is 3-D: it has no time " + std::to_string(time));
+    throw base::Error(what + ": time " + std::to_string(time) + " is past its " +
+                      std::to_string(len[0]) + " time steps");
+  if (rank == 3 && time != 0)
+    throw base::Error(what + " is 3-D: it has no time " + std::to_string(time));
   for (int a = 0; a < 3; ++a)
     if (len[t + a] > static_cast<std::uint64_t>(kMaxFileDims))
-      throw Error(what + ": " + std::to_string(len[t + a]) +
-                  " voxels along an axis, more than the cap of " + std::to_string(kMaxFileDims));
+      throw base::Error(what + ": " + std::to_string(len[t + a]) +
+                        " voxels along an axis, more than the cap of " +
+                        std::to_string(kMaxFileDims));
   const Index3 dims{static_cast<int>(len[t + 2]), static_cast<int>(len[t + 1]),
                     static_cast<int>(len[t])};
   checkFileDims(dims, what);

@@ -18,7 +18,7 @@ const char* volumeFormatName(VolumeFormat format);
 // Reads the header of source.file (path and format set) and fills in source.grid (dims; spacing
 // and origin from the file where it places its grid, see VolumeFileParams::hasGeometry),
 // source.type (what the voxels are held as) and source.file's resolved fields. Reads no voxels.
-// Throws renderers::Error naming the file (and the header's line and field) on any problem.
+// Throws base::Error naming the file (and the header's line and field) on any problem.
 void resolveVolumeFile(VolumeSource& source);
 
 // The voxels of `box` of a resolved file source. Missing values (NetCDF/HDF5 _FillValue and

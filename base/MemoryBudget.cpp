@@ -1,4 +1,4 @@
-#include "dfb/MemoryBudget.h"
+#include "base/MemoryBudget.h"
 
 #include <sys/resource.h>
 #include <unistd.h>
@@ -11,7 +11,7 @@
 #include <fstream>
 #include <limits>
 
-namespace dfb {
+namespace base {
 namespace {
 
 constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();
@@ -125,4 +125,4 @@ std::optional<std::uint64_t> parseByteSize(std::string_view text) {
   return static_cast<std::uint64_t>(value);
 }
 
-}  // namespace dfb
+}  // namespace base

@@ -9,7 +9,7 @@
 #include <chrono>
 #include <cstdint>
 
-namespace dfb {
+namespace base {
 
 using Clock = std::chrono::steady_clock;
 
@@ -35,4 +35,4 @@ inline std::int64_t processCpuNs() {
   return std::int64_t{t.tv_sec} * 1000000000 + t.tv_nsec;
 }
 
-}  // namespace dfb
+}  // namespace base

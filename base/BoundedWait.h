@@ -1,13 +1,13 @@
 #pragma once
 // Every wait has a bound (docs/design.md, invariant 6): completes a non-blocking MPI request,
-// polling gently, or throws messaging::DeadlineError with `timeoutMessage` once `deadline` has
+// polling gently, or throws base::DeadlineError with `timeoutMessage` once `deadline` has
 // passed. A rank that never joins a collective then turns into an error here instead of a hang.
 #include <mpi.h>
 
 #include <chrono>
 #include <string>
 
-namespace messaging {
+namespace base {
 
 void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_point deadline,
                       const std::string& timeoutMessage);
@@ -16,4 +16,4 @@ void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_poin
 void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_point deadline,
                       const std::string& timeoutMessage, std::chrono::microseconds maxSleep);
 
-}  // namespace messaging
+}  // namespace base

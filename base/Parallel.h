@@ -7,7 +7,7 @@
 #include <memory>
 #include <vector>
 
-namespace renderers {
+namespace base {
 
 // Caps the worker threads of the whole process while it lives (tbb::global_control);
 // threads <= 0 leaves TBB's default. Nest or overlap them only with care: the smallest wins.
@@ -70,4 +70,4 @@ void parallelFor(std::size_t count, const std::function<void(std::size_t)>& body
 // may come out in any order, which for integers changes nothing.
 void parallelSort(std::vector<std::uint64_t>& values);
 
-}  // namespace renderers
+}  // namespace base

@@ -6,19 +6,19 @@
 #include <cstdio>
 #include <string>
 
-namespace dfb {
+namespace base {
 
 class AtomicFile {
  public:
   // Creates the temporary, hidden (".NAME.XXXXXX") so globs for outputs never match it, with
-  // mode 0644. Throws dfb::Error naming the path.
+  // mode 0644. Throws base::Error naming the path.
   explicit AtomicFile(const std::string& path);
   ~AtomicFile();  // removes the temporary unless commit() succeeded
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
 
   FILE* stream() { return file_; }
-  // Flushes, fsyncs, closes and renames; throws dfb::Error naming the path (and removes the
+  // Flushes, fsyncs, closes and renames; throws base::Error naming the path (and removes the
   // temporary) when any step fails, e.g. ENOSPC.
   void commit();
 
@@ -32,4 +32,4 @@ class AtomicFile {
 // file can be created in it. Returns the problem, or an empty string.
 std::string checkWritableFolder(const std::string& folder);
 
-}  // namespace dfb
+}  // namespace base

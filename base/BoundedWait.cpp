@@ -1,11 +1,11 @@
-#include "messaging/BoundedWait.h"
+#include "base/BoundedWait.h"
 
 #include <algorithm>
 #include <thread>
 
-#include "messaging/Error.h"
+#include "base/Error.h"
 
-namespace messaging {
+namespace base {
 
 void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_point deadline,
                       const std::string& timeoutMessage) {
@@ -25,4 +25,4 @@ void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_poin
   }
 }
 
-}  // namespace messaging
+}  // namespace base

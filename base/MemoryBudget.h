@@ -17,7 +17,7 @@
 #include <string>
 #include <string_view>
 
-namespace dfb {
+namespace base {
 
 // The bytes this process may hold.
 std::uint64_t memoryLimit();
@@ -43,4 +43,4 @@ std::string byteText(std::uint64_t bytes);
 // case), e.g. "64M", "2G", "1.5G": the bytes, or nullopt for anything else, zero or over 2^63.
 std::optional<std::uint64_t> parseByteSize(std::string_view text);
 
-}  // namespace dfb
+}  // namespace base

@@ -1,4 +1,4 @@
-#include "renderers/Parallel.h"
+#include "base/Parallel.h"
 
 #include <pmmintrin.h>
 #include <tbb/global_control.h>
@@ -9,7 +9,7 @@
 
 #include <optional>
 
-namespace renderers {
+namespace base {
 
 struct ThreadLimit::Impl {
   std::optional<tbb::global_control> control;
@@ -60,4 +60,4 @@ void parallelSort(std::vector<std::uint64_t>& values) {
   tbb::parallel_sort(values.begin(), values.end());
 }
 
-}  // namespace renderers
+}  // namespace base

@@ -1,7 +1,7 @@
 // Output files never seen half-written (dfb/AtomicFile.h), on real files in a scratch folder:
 // the target holds its old bytes (or is absent) until commit, then all the new ones; nothing is
 // left behind either way; failures name the path and the reason.
-#include "dfb/AtomicFile.h"
+#include "base/AtomicFile.h"
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 
 namespace dfb {
 namespace {
@@ -43,7 +43,7 @@ class AtomicFileTest : public ::testing::Test {
         .read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     return bytes;
   }
-  static void write(AtomicFile& file, const std::string& bytes) {
+  static void write(base::AtomicFile& file, const std::string& bytes) {
     ASSERT_EQ(std::fwrite(bytes.data(), 1, bytes.size(), file.stream()), bytes.size());
   }
 
@@ -55,7 +55,7 @@ TEST_F(AtomicFileTest, TheTargetAppearsWholeOnlyAtCommit) {
   std::string bytes(100000, 'x');
   bytes += "end";
   {
-    AtomicFile file(target);
+    base::AtomicFile file(target);
     write(file, bytes);
     // Before commit: no target, one hidden temporary next to where it will be.
     EXPECT_FALSE(fs::exists(target));
@@ -75,7 +75,7 @@ TEST_F(AtomicFileTest, TheTargetAppearsWholeOnlyAtCommit) {
 TEST_F(AtomicFileTest, AnExistingFileKeepsItsBytesUntilCommitThenHasOnlyTheNewOnes) {
   const std::string target = path("frame.png");
   { std::ofstream(target) << "the old file, longer than the new one"; }
-  AtomicFile file(target);
+  base::AtomicFile file(target);
   write(file, "new");
   EXPECT_EQ(read(target), "the old file, longer than the new one");
   file.commit();
@@ -86,11 +86,11 @@ TEST_F(AtomicFileTest, WithoutCommitNothingChangesAndTheTemporaryGoes) {
   const std::string kept = path("kept.txt");
   { std::ofstream(kept) << "old"; }
   {
-    AtomicFile file(kept);
+    base::AtomicFile file(kept);
     write(file, "half of somethi");
   }  // e.g. an exception while writing
   {
-    AtomicFile file(path("never.txt"));
+    base::AtomicFile file(path("never.txt"));
     write(file, "never committed");
   }
   EXPECT_EQ(read(kept), "old");
@@ -99,7 +99,7 @@ TEST_F(AtomicFileTest, WithoutCommitNothingChangesAndTheTemporaryGoes) {
 
 TEST_F(AtomicFileTest, TwoWritersOfOneTargetDoNotShareATemporary) {
   const std::string target = path("same.txt");
-  AtomicFile first(target), second(target);
+  base::AtomicFile first(target), second(target);
   write(first, "first");
   write(second, "second");
   EXPECT_EQ(entries().size(), 2u);
@@ -112,21 +112,21 @@ TEST_F(AtomicFileTest, TwoWritersOfOneTargetDoNotShareATemporary) {
 TEST_F(AtomicFileTest, FailuresNameThePathAndTheReason) {
   const std::string missing = path("no-such-folder/out.png");
   try {
-    AtomicFile file(missing);
+    base::AtomicFile file(missing);
     ADD_FAILURE() << "created a file in a missing folder";
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_EQ(std::string(e.what()),
               missing + ": cannot create a temporary file: No such file or directory");
   }
   // The rename fails (a folder is in the way): commit throws and removes the temporary.
   const std::string folder = path("a-folder");
   fs::create_directories(fs::path(folder) / "inside");
-  AtomicFile file(folder);
+  base::AtomicFile file(folder);
   write(file, "bytes");
   try {
     file.commit();
     ADD_FAILURE() << "committed over a folder";
-  } catch (const Error& e) {
+  } catch (const base::Error& e) {
     EXPECT_EQ(std::string(e.what()), folder + ": cannot write: Is a directory");
   }
   EXPECT_EQ(entries(), std::vector<std::string>{"a-folder"});
@@ -134,17 +134,17 @@ TEST_F(AtomicFileTest, FailuresNameThePathAndTheReason) {
 
 TEST_F(AtomicFileTest, CheckWritableFolderMakesTheFolderOrSaysWhy) {
   const std::string nested = path("a/b/c");
-  EXPECT_EQ(checkWritableFolder(nested), "");
+  EXPECT_EQ(base::checkWritableFolder(nested), "");
   EXPECT_TRUE(fs::is_directory(nested));
   EXPECT_TRUE(fs::is_empty(nested)) << "the probe file is removed";
-  EXPECT_EQ(checkWritableFolder(nested), "") << "an existing folder is fine";
+  EXPECT_EQ(base::checkWritableFolder(nested), "") << "an existing folder is fine";
   { std::ofstream(path("a-file")) << "x"; }
   const std::string underFile = path("a-file/sub");
-  EXPECT_EQ(checkWritableFolder(underFile),
+  EXPECT_EQ(base::checkWritableFolder(underFile),
             underFile + ": cannot create the folder: Not a directory");
   // /proc refuses new files even to root.
   const std::string proc = "/proc/self/dfbwall-probe-folder";
-  const std::string problem = checkWritableFolder(proc);
+  const std::string problem = base::checkWritableFolder(proc);
   EXPECT_EQ(problem.rfind(proc + ": cannot create the folder: ", 0), 0u) << problem;
 }
 

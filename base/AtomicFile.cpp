@@ -1,4 +1,4 @@
-#include "dfb/AtomicFile.h"
+#include "base/AtomicFile.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -9,9 +9,9 @@
 #include <filesystem>
 #include <system_error>
 
-#include "dfb/Error.h"
+#include "base/Error.h"
 
-namespace dfb {
+namespace base {
 namespace {
 
 std::string temporaryPattern(const std::string& path) {
@@ -77,4 +77,4 @@ std::string checkWritableFolder(const std::string& folder) {
   return {};
 }
 
-}  // namespace dfb
+}  // namespace base

@@ -1,8 +1,8 @@
 // Every wait has a bound (messaging/BoundedWait.h), on real MPI requests of this rank alone
 // (MPI_COMM_SELF, so the test runs the same at any rank count): a request that completes is
-// waited for, one that never does ends in DeadlineError with its message at its deadline, and
+// waited for, one that never does ends in base::DeadlineError with its message at its deadline, and
 // the long wait's polling costs (nearly) no CPU.
-#include "messaging/BoundedWait.h"
+#include "base/BoundedWait.h"
 
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -11,7 +11,7 @@
 #include <chrono>
 #include <thread>
 
-#include "messaging/Error.h"
+#include "base/Error.h"
 #include "tests/Stopwatch.h"
 
 namespace messaging {
@@ -62,7 +62,7 @@ class Receive {
 TEST(BoundedWait, ARequestThatCompletesIsWaitedFor) {
   Receive receive(200ms);
   const auto start = Clock::now();
-  waitWithDeadline(receive.request, start + 20s, "never said");
+  base::waitWithDeadline(receive.request, start + 20s, "never said");
   EXPECT_EQ(receive.value(), 42);
   EXPECT_EQ(receive.request, MPI_REQUEST_NULL);  // completed and freed by MPI_Test
   EXPECT_GE(secondsSince(start), 0.19);
@@ -72,7 +72,7 @@ TEST(BoundedWait, ARequestThatCompletesIsWaitedFor) {
 TEST(BoundedWait, ACompletedRequestReturnsEvenPastItsDeadline) {
   Receive receive(0ms);
   std::this_thread::sleep_for(100ms);  // matched by now
-  waitWithDeadline(receive.request, Clock::now() - 1s, "never said");
+  base::waitWithDeadline(receive.request, Clock::now() - 1s, "never said");
   EXPECT_EQ(receive.value(), 42);
 }
 
@@ -82,11 +82,12 @@ TEST(BoundedWait, ARequestThatNeverCompletesEndsAtItsDeadlineWithItsMessage) {
     const auto start = Clock::now();
     try {
       if (maxSleep == 20us)
-        waitWithDeadline(receive.request, start + 300ms, "swap barrier of frame 7: late");
+        base::waitWithDeadline(receive.request, start + 300ms, "swap barrier of frame 7: late");
       else
-        waitWithDeadline(receive.request, start + 300ms, "swap barrier of frame 7: late", maxSleep);
+        base::waitWithDeadline(receive.request, start + 300ms, "swap barrier of frame 7: late",
+                               maxSleep);
       ADD_FAILURE() << "returned without the request completing";
-    } catch (const DeadlineError& e) {
+    } catch (const base::DeadlineError& e) {
       EXPECT_STREQ(e.what(), "swap barrier of frame 7: late");
     }
     const double waited = secondsSince(start);
@@ -103,7 +104,7 @@ TEST(BoundedWait, TheLongWaitCostsNearlyNoCpuAndStillNoticesCompletion) {
   Receive receive(1000ms);
   const auto start = Clock::now();
   const double cpu = threadCpuSeconds();
-  waitWithDeadline(receive.request, start + 20s, "never said", 50ms);
+  base::waitWithDeadline(receive.request, start + 20s, "never said", 50ms);
   const double used = threadCpuSeconds() - cpu, waited = secondsSince(start);
   EXPECT_EQ(receive.value(), 42);
   EXPECT_GE(waited, 0.99);
