@@ -15,7 +15,6 @@
 
 #include "api/SceneStyle.h"
 #include "api/SessionTesting.h"
-#include "api/WallStop.h"
 #include "base/AtomicFile.h"
 #include "base/BoundedWait.h"
 #include "base/Error.h"
@@ -24,15 +23,14 @@
 #include "messaging/Messenger.h"
 #include "renderers/FrameDriver.h"
 #include "renderers/scivis/BrickFrameDriver.h"
-#include "wall/DisplayPresenters.h"
-#include "wall/DisplayRoutingOp.h"
-#include "wall/FrameCredits.h"
+#include "runtime/MpiWallProcess.h"
+#include "runtime/RenderWall.h"
+#include "runtime/SetupAgreement.h"
+#include "runtime/WallControl.h"
+#include "wall/Capture.h"
 #include "wall/Layout.h"
-#include "wall/PieceMessage.h"
 #include "wall/Png.h"
 #include "wall/Ranks.h"
-#include "wall/Routing.h"
-#include "wall/WallNode.h"
 #include "wall/service/ServiceClient.h"
 
 namespace dfbwall {
@@ -109,7 +107,7 @@ struct Session::Impl {
   wall::RankRoles roles;
   int width = 0, height = 0;
   std::unique_ptr<messaging::Messenger> messenger;
-  std::unique_ptr<WallStop> wallStop;
+  std::unique_ptr<runtime::MpiWallControl> wallControl;
   // Shared with the messenger's error callback: the messenger, declared before it, is destroyed
   // after it and may still report an error while it stops.
   std::shared_ptr<FirstError> error = std::make_shared<FirstError>();
@@ -119,14 +117,11 @@ struct Session::Impl {
   std::vector<bool> activeTiles;
   dfb::DfbOptions dfbOptions;
   std::unique_ptr<dfb::DistributedFrameBuffer> fb;
-  std::shared_ptr<wall::DisplayRoutingOp> routing;
-  std::unique_ptr<wall::FrameCredits> credits;
-  // With SessionOptions::connect: the wall's directory, the link to it (render rank 0) and the
-  // pieces' way there (every rank).
+  // With SessionOptions::connect: the wall's directory and the link to it (render rank 0, until
+  // the wall side takes it).
   std::optional<wall::service::Directory> directory;
   std::shared_ptr<wall::service::ServiceClient> service;
-  std::shared_ptr<wall::service::ServicePieceSink> serviceSink;
-  std::uint32_t rosterVersion = 0;  // of the roster serviceSink routes with (0: the directory's)
+  std::unique_ptr<runtime::RenderWall> wallSide;  // with a layout or a connected wall
   std::unique_ptr<renderers::BrickFrameDriver> driver;
   // Where all of this rank's rendering runs: at most options.threads threads of its own, no cap
   // on the program's TBB parallelism (renderers/Parallel.h).
@@ -158,23 +153,17 @@ Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make
   base::checkMpi(MPI_Comm_dup(comm, &m.own), "MPI_Comm_dup");
   MPI_Comm_rank(m.own, &m.rank);
   MPI_Comm_size(m.own, &m.size);
-  // Setup problems (a bad layout, a rank count it does not fit, a capture folder a wall rank
-  // cannot write) may show on some ranks only: the ranks agree before anything else, so every
-  // rank throws (the one that found it with its message) instead of some waiting forever.
+  // Every rank throws a setup problem (the one that found it with its message).
   std::string problem;
   try {
     m.setUp();
   } catch (const std::exception& e) {
     problem = e.what();
   }
-  int failing = problem.empty() ? m.size : m.rank, first = 0;
-  MPI_Request request;
-  base::checkMpi(MPI_Iallreduce(&failing, &first, 1, MPI_INT, MPI_MIN, m.own, &request),
-                 "MPI_Iallreduce");
-  bounded(request, m.timeout, "dfbwall session setup");
-  if (first < m.size) {
+  if (const std::optional<int> first =
+          runtime::firstRankWithProblem(problem, m.own, m.timeout, "dfbwall session setup")) {
     MPI_Comm_free(&m.own);
-    throw std::runtime_error(problem.empty() ? "dfbwall: rank " + std::to_string(first) +
+    throw std::runtime_error(problem.empty() ? "dfbwall: rank " + std::to_string(*first) +
                                                    " could not set up the session (it says why)"
                                              : problem);
   }
@@ -199,7 +188,8 @@ Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make
                                 m.messenger->hostOf(m.rank) + "): "](const std::string& message) {
         error->record(where + message);
       });
-  m.wallStop = std::make_unique<WallStop>(*m.messenger);
+  m.wallControl = std::make_unique<runtime::MpiWallControl>(*m.messenger, m.roles.renderRanks,
+                                                            m.roles.worldSize());
   if (!m.isWall()) m.startRendering();
 }
 
@@ -212,10 +202,7 @@ void Session::Impl::startRendering() {
   dfbOptions.compressGather = !messenger->sameHost(0);
   dfbOptions.toneMap.exposure = options.exposure;
   if (route) {
-    // Tiles no display shows are never rendered; the rest are owned where they are rendered.
-    activeTiles = wall::tilesShownByAnyDisplay(*layout, options.tileSize);
-    dfbOptions.ownership = renderers::activeTileOwnership(activeTiles);
-    dfbOptions.format = dfb::DisplayFormat::NONE;
+    activeTiles = runtime::routeToDisplays(dfbOptions, *layout, options.tileSize);
   } else {
     dfbOptions.format = dfb::DisplayFormat::RGBA8;
   }
@@ -223,23 +210,22 @@ void Session::Impl::startRendering() {
   renderers::configureBrickDfb(dfbOptions, activeTiles);
   fb = std::make_unique<dfb::DistributedFrameBuffer>(*messenger, role, dfbOptions);
   arena = std::make_unique<base::TaskArena>(options.threads);
-  if (route && directory) {
-    serviceSink = std::make_shared<wall::service::ServicePieceSink>(
-        *directory, rank, wall::service::parseCodec(options.codec),
-        static_cast<int>(timeout.count()));
-    routing = std::make_shared<wall::DisplayRoutingOp>(serviceSink, *layout, options.tileSize);
-    fb->addPixelOp(routing);
-    if (rank == 0) {
-      credits = std::make_unique<wall::FrameCredits>();
-      // The wall ending the job, or going silent, is this rank's next call's error.
-      service->start(*credits,
-                     [error = error](const std::string& why) { error->record("dfbwall: " + why); });
-    }
-  } else if (route) {
-    routing =
-        std::make_shared<wall::DisplayRoutingOp>(*messenger, *layout, roles, options.tileSize);
-    fb->addPixelOp(routing);
-    if (rank == 0) credits = std::make_unique<wall::FrameCredits>(*messenger);
+  if (route) {
+    runtime::RenderWallSettings w;
+    w.layout = &*layout;
+    w.roles = roles;
+    w.tileSize = options.tileSize;
+    w.framesInFlight = options.framesInFlight;
+    w.timeout = timeout;
+    if (directory) w.directory = &*directory;
+    w.service = std::move(service);
+    w.codec = wall::service::parseCodec(options.codec);
+    w.mpiControl = wallControl.get();
+    // The wall ending the job, or going silent, is this rank's next call's error.
+    wallSide = std::make_unique<runtime::RenderWall>(
+        *messenger, rank, w,
+        [error = error](const std::string& why) { error->record("dfbwall: " + why); });
+    wallSide->attach(*fb);
   }
   // Pairs with runWall's: every object of every rank is registered before anyone sends.
   MPI_Request request;
@@ -275,13 +261,10 @@ void Session::Impl::setUp() {
     height = options.height;
   }
   if (isWall() && !options.captureDir.empty())
-    for (int d : layout->displaysOfProcess(roles.processOfRank(rank)))
-      if (std::string problem =
-              base::checkWritableFolder((std::filesystem::path(options.captureDir) /
-                                         layout->displays[static_cast<std::size_t>(d)].name)
-                                            .string());
-          !problem.empty())
-        throw std::runtime_error("dfbwall: capture folder " + problem);
+    if (std::string problem =
+            wall::checkCaptureFolders(options.captureDir, *layout, roles.processOfRank(rank));
+        !problem.empty())
+      throw std::runtime_error("dfbwall: capture folder " + problem);
 }
 
 Session::~Session() {
@@ -303,34 +286,24 @@ int Session::canvasHeight() const { return impl_->height; }
 void Session::runWall() try {
   Impl& m = *impl_;
   if (!m.isWall()) throw std::logic_error("dfbwall: runWall() on a render rank");
-  const int process = m.roles.processOfRank(m.rank);
   base::FloatModeGuard callersMode;  // a GL implementation may change it (llvmpipe)
-  const auto presenters = wall::makeDisplayPresenters(*m.layout, process, m.options.offscreen);
-  wall::WallNodeOptions options;
-  options.tileSize = m.options.tileSize;
-  options.captureDir = m.options.captureDir;
-  options.captureEvery = m.options.captureEvery;
-  options.lastFrame = 0;  // unknown: the render ranks announce it when they close
-  options.timeout = m.timeout;
-  options.framesAhead = static_cast<std::uint32_t>(m.options.framesInFlight) + 2;
+  runtime::WallProcessSettings settings;
+  settings.tileSize = m.options.tileSize;
+  settings.captureDir = m.options.captureDir;
+  settings.captureEvery = m.options.captureEvery;
+  settings.lastFrame = 0;  // unknown: the render ranks announce it when they close
+  settings.timeout = m.timeout;
+  settings.framesInFlight = m.options.framesInFlight;
+  settings.offscreen = m.options.offscreen;
   {
-    wall::MpiWallPeers peers(*m.messenger, m.role, options.timeout);
-    wall::WallNode node(*m.layout, peers, presenters->list(), options);
-    const messaging::Registration pieces(*m.messenger, wall::kWallNodeObject, &node);
-    m.wallStop->onLastFrame([&node](std::uint32_t last) { node.stopAfter(last); });
-    // However the block is left (a throw too), the stop no longer reaches the node it leaves.
-    const std::unique_ptr<WallStop, void (*)(WallStop*)> forget(
-        m.wallStop.get(), [](WallStop* stop) { stop->onLastFrame({}); });
-    MPI_Request request;
-    base::checkMpi(MPI_Ibarrier(m.own, &request), "MPI_Ibarrier");
-    bounded(request, m.timeout, "dfbwall session start-up");
-    for (std::uint32_t frameId = 1;; ++frameId) {
-      if (node.presentFrame(frameId).stopped) break;
+    runtime::MpiWallProcess process(*m.layout, m.roles.processOfRank(m.rank), settings);
+    runtime::WallProcessHooks hooks;
+    hooks.after = [&m](const wall::PresentReport&) {
       if (m.error->failed()) m.error->raise();  // the render ranks fail at their deadline
-    }
-    node.finish();  // captures the last frame
+    };
+    process.run(*m.messenger, m.role, m.own, *m.wallControl, hooks);
   }
-  m.wallStop.reset();
+  m.wallControl.reset();
   m.messenger->stop();
   MPI_Comm_free(&m.role);
   MPI_Comm_free(&m.own);
@@ -408,23 +381,19 @@ void Session::renderFrame() {
 void Session::Impl::renderFrame() {
   const std::uint32_t next = frameId + 1;
   // Frames in flight: rank 0 starts frame F once the wall presented F - K.
-  if (credits)
-    credits->waitForPresented(static_cast<std::int64_t>(next) - options.framesInFlight, timeout);
+  if (wallSide) wallSide->waitForCredit(next);
   FrameOrder order{};
   const Camera& c = camera;
   const float floats[10] = {c.position[0], c.position[1], c.position[2], c.lookAt[0], c.lookAt[1],
                             c.lookAt[2],   c.up[0],       c.up[1],       c.up[2],     c.fovY};
   std::memcpy(order.camera, floats, sizeof floats);
   order.styleHash = hashOfStyle;
-  if (service) order.rosterVersion = service->rosterVersion();
+  if (wallSide) order.rosterVersion = wallSide->rosterVersion();
   MPI_Request request;
   base::checkMpi(MPI_Ibcast(&order, sizeof order, MPI_BYTE, 0, role, &request), "MPI_Ibcast");
   bounded(request, 2 * timeout, "frame " + std::to_string(next));  // rank 0 may wait for the wall
-  if (serviceSink && order.rosterVersion != rosterVersion) {
-    // The wall lost a process or got one back: its pieces stop, or go to its new endpoint.
-    serviceSink->setRoster(wall::service::shareRoster(role, service.get(), timeout));
-    rosterVersion = order.rosterVersion;
-  }
+  // The wall lost a process or got one back: its pieces stop, or go to its new endpoint.
+  if (wallSide) wallSide->followRoster(order.rosterVersion, role);
   // What the ranks must agree on, each the lowest rank it concerns as renderRanks - rank (MPI_MAX;
   // 0: none): whether any rank changed its bricks or style (a new scene version), a rank without
   // a style, a rank whose style is not render rank 0's, a rank that failed (its messenger
@@ -469,7 +438,7 @@ void Session::Impl::renderFrame() {
   cd.up = {used.up[0], used.up[1], used.up[2]};
   cd.fovY = used.fovY;
   driver->renderFrame(*fb, {next, epoch}, cd);
-  if (routing) routing->endFrame(next);
+  if (wallSide) wallSide->endFrame(next);
   frameId = next;
   if (error->failed()) error->raise();  // during this frame: the others learn at the next one
 }
@@ -497,20 +466,12 @@ void Session::close() try {
   Impl& m = *impl_;
   if (m.closed) return;
   if (m.isWall()) throw std::logic_error("dfbwall: close() on a wall rank (runWall() returns)");
-  if (m.rank == 0 && m.layout) {
-    if (m.service)
-      m.service->bye(m.frameId);
-    else
-      m.wallStop->announceLastFrame(m.frameId, m.roles.renderRanks, m.roles.worldSize());
-    if (m.credits) m.credits->waitForPresented(m.frameId, m.timeout);
-  }
+  // The wall's processes run until told: a program does not know its frame count in advance.
+  if (m.wallSide) m.wallSide->finish(m.frameId, 0, false);
   m.driver.reset();
-  m.service.reset();  // after the goodbye and the last credit: its thread holds the credits
-  m.credits.reset();
-  m.serviceSink.reset();
+  m.wallSide.reset();  // after the goodbye and the last credit
   m.fb.reset();
-  m.routing.reset();
-  m.wallStop.reset();
+  m.wallControl.reset();
   m.messenger->stop();
   MPI_Comm_free(&m.role);
   MPI_Comm_free(&m.own);

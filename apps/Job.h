@@ -21,6 +21,10 @@ namespace wall::service {
 class ServiceClient;
 }
 
+namespace runtime {
+class MpiWallControl;
+}
+
 namespace app {
 
 class Preview;
@@ -133,12 +137,13 @@ class Steering;
 // streams the statistics there. Returns the exit code agreed with rank 0 (0, or a stop's).
 // `status`: rank 0 with a control server, what it reports (else null).
 int runRenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm renderComm,
-                  RunControl& control, Steering& steering, StatusBoard* status, StatsStream* stats,
-                  RankTotals& totals);
+                  RunControl& control, runtime::MpiWallControl& wallControl, Steering& steering,
+                  StatusBoard* status, StatsStream* stats, RankTotals& totals);
 // Wall ranks: assembles, swaps and presents the frames of this process's displays until the
 // last frame (or the one rank 0 announces when the run stops early). Returns the exit code.
 int runWallRank(const Job& job, messaging::Messenger& messenger, MPI_Comm wallComm,
-                RunControl& control, Steering& steering, RankTotals& totals);
+                RunControl& control, runtime::MpiWallControl& wallControl, Steering& steering,
+                RankTotals& totals);
 
 // The peak resident set of this process (VmHWM), in KiB; 0 where /proc is missing.
 double peakRssKiB();

@@ -27,6 +27,9 @@
 #include "messaging/MpiSession.h"
 #include "renderers/BuiltinScenes.h"
 #include "renderers/scivis/Bricks.h"
+#include "runtime/SetupAgreement.h"
+#include "runtime/WallControl.h"
+#include "wall/Capture.h"
 #include "wall/service/ServiceClient.h"
 
 namespace app {
@@ -35,10 +38,10 @@ namespace {
 // Every rank calls this with its own verdict; the lowest failing rank prints its message, so a
 // problem every rank finds (a bad layout) is printed once. True when every rank is fine.
 bool agree(const std::string& problem, int rank, std::chrono::milliseconds timeout) {
-  int failing = problem.empty() ? 1 << 30 : rank, first = 0;
-  base::boundedAllreduce(&failing, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD, timeout, "setup");
+  const std::optional<int> first =
+      runtime::firstRankWithProblem(problem, MPI_COMM_WORLD, timeout, "setup");
   if (first == rank) std::fprintf(stderr, "dfbwall: error: %s\n", problem.c_str());
-  return first == 1 << 30;
+  return !first;
 }
 
 // FNV-1a of a file's bytes, continuing from `hash` (unchanged when the file cannot be read: the
@@ -82,15 +85,11 @@ struct InputHashes {
 // the rank that will write there, not after the last frame.
 std::string checkOutputs(const Job& job) {
   const Options& o = job.options;
-  if (job.isWallRank() && !o.captureDir.empty()) {
-    for (int d : job.layout->displaysOfProcess(job.roles.processOfRank(job.worldRank))) {
-      const std::string folder =
-          (std::filesystem::path(o.captureDir) / job.layout->displays[static_cast<size_t>(d)].name)
-              .string();
-      if (std::string problem = base::checkWritableFolder(folder); !problem.empty())
-        return "--capture " + problem;
-    }
-  }
+  if (job.isWallRank() && !o.captureDir.empty())
+    if (std::string problem = wall::checkCaptureFolders(o.captureDir, *job.layout,
+                                                        job.roles.processOfRank(job.worldRank));
+        !problem.empty())
+      return "--capture " + problem;
   if (job.worldRank == 0 && !o.image.empty()) {
     const std::string folder = std::filesystem::path(o.image).parent_path().string();
     if (std::string problem = base::checkWritableFolder(folder.empty() ? "." : folder);
@@ -294,6 +293,7 @@ int run(int argc, char** argv) {
       ~Forget() { failure.setWhoIsSilent({}); }
     } forget{failure};
     RunControl control(messenger, signals);
+    runtime::MpiWallControl wallControl(messenger, job.roles.renderRanks, job.roles.worldSize());
     std::unique_ptr<Preview> preview;
     if (!job.isWallRank() && job.previewWanted()) {
       preview = std::make_unique<Preview>(job, messenger);
@@ -312,10 +312,11 @@ int run(int argc, char** argv) {
       std::fflush(stdout);
     }
     RankTotals totals;
-    const int exitCode = job.isWallRank()
-                             ? runWallRank(job, messenger, roleComm, control, steering, totals)
-                             : runRenderRank(job, messenger, roleComm, control, steering,
-                                             status.get(), stats.get(), totals);
+    const int exitCode =
+        job.isWallRank()
+            ? runWallRank(job, messenger, roleComm, control, wallControl, steering, totals)
+            : runRenderRank(job, messenger, roleComm, control, wallControl, steering, status.get(),
+                            stats.get(), totals);
     if (!job.options.statsFile.empty()) {
       const std::vector<RankTotals> ranks = collectTotals(job, totals, timeout);
       const bool stoppedEarly = control.stopRequested().has_value() || exitCode != 0;

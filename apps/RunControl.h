@@ -2,8 +2,8 @@
 // How the ranks of a job agree to stop early (docs/design.md, "Stopping"). Render rank 0
 // decides: it stops when it took a stop signal itself or when another rank that took one asked
 // it to. The other render ranks learn the decision from the per-frame broadcast, the wall ranks
-// from a message naming the last frame. Frames after it are never begun, so no piece is in
-// flight for a frame nobody will present.
+// from the last frame rank 0 names (runtime/WallControl.h). Frames after it are never begun, so no
+// piece is in flight for a frame nobody will present.
 //
 // One object per rank, registered under kRunControlObject on the job's messenger before the
 // start-up barrier. incoming() runs on the messenger's inbox thread; the rest on the main one.
@@ -35,14 +35,6 @@ class RunControl : public messaging::MessageHandler {
   void askToStop(int exitCode);
   // Rank 0: the exit code of the stop asked for, if any.
   std::optional<int> stopRequested() const;
-  // Rank 0: tells every wall rank (world ranks in [firstWallRank, worldSize)) the last frame.
-  void announceLastFrame(std::uint32_t lastFrame, int exitCode, int firstWallRank, int worldSize);
-  // Wall ranks: `stop(lastFrame)` runs once the last frame is known (on the inbox thread, or at
-  // once when it is known already).
-  void onLastFrame(std::function<void(std::uint32_t lastFrame)> stop);
-  // The exit code of an agreed stop (0 when the run ended normally).
-  int exitCode() const { return exitCode_; }
-  void setExitCode(int code) { exitCode_ = code; }
 
   void incoming(int fromRank, messaging::Bytes&& payload) override;
 
@@ -50,11 +42,8 @@ class RunControl : public messaging::MessageHandler {
   messaging::Messenger& messenger_;
   StopSignals& signals_;
   bool asked_ = false;
-  std::atomic<int> exitCode_{0};
   mutable std::mutex mutex_;
-  std::optional<int> requested_;                 // rank 0
-  std::optional<std::uint32_t> lastFrame_;       // wall ranks
-  std::function<void(std::uint32_t)> stopWall_;  // wall ranks
+  std::optional<int> requested_;  // rank 0
 };
 
 }  // namespace app

@@ -13,13 +13,9 @@ namespace {
 
 static_assert(std::is_trivially_copyable_v<SteeringRequest>);
 
-// What travels between ranks: a kind, then the request (kRequest), or a frame and a sequence.
-enum MessageKind : std::uint32_t { kRequest = 1, kKeepWaiting = 2, kCapture = 3 };
-struct WallMessage {
-  std::uint32_t frameId;
-  std::uint32_t unused;
-  std::uint64_t sequence;
-};
+// What travels to rank 0: a kind, then the request. (What rank 0 tells the wall ranks goes
+// through runtime/WallControl.h.)
+enum MessageKind : std::uint32_t { kRequest = 1 };
 
 template <typename T>
 messaging::Bytes pack(std::uint32_t kind, const T& body) {
@@ -142,27 +138,6 @@ void Steering::setPresentedProbe(std::function<std::int64_t()> probe) {
   presentedProbe_ = std::move(probe);
 }
 
-void Steering::tellWallsKeepWaiting(int firstWallRank, int worldSize) {
-  for (int rank = firstWallRank; rank < worldSize; ++rank)
-    messenger_.send(rank, kSteeringObject, pack(kKeepWaiting, WallMessage{0, 0, 0}));
-}
-
-void Steering::tellWallsCapture(std::uint32_t frameId, std::uint64_t sequence, int firstWallRank,
-                                int worldSize) {
-  for (int rank = firstWallRank; rank < worldSize; ++rank)
-    messenger_.send(rank, kSteeringObject, pack(kCapture, WallMessage{frameId, 0, sequence}));
-}
-
-void Steering::onKeepWaiting(std::function<void()> callback) {
-  std::lock_guard lock(mutex_);
-  keepWaiting_ = std::move(callback);
-}
-
-void Steering::onCapture(std::function<void(std::uint32_t, std::uint64_t)> callback) {
-  std::lock_guard lock(mutex_);
-  capture_ = std::move(callback);
-}
-
 void Steering::incoming(int fromRank, messaging::Bytes&& payload) {
   std::uint32_t kind = 0;
   if (payload.size() >= sizeof kind) std::memcpy(&kind, payload.data(), sizeof kind);
@@ -170,7 +145,8 @@ void Steering::incoming(int fromRank, messaging::Bytes&& payload) {
     return std::runtime_error("malformed steering message of " + std::to_string(payload.size()) +
                               " bytes from rank " + std::to_string(fromRank));
   };
-  if (kind == kRequest && messenger_.rank() == 0) {
+  if (kind != kRequest || messenger_.rank() != 0) throw malformed();
+  {
     SteeringRequest request;
     if (payload.size() != sizeof kind + sizeof request) throw malformed();
     std::memcpy(&request, payload.data() + sizeof kind, sizeof request);
@@ -182,21 +158,7 @@ void Steering::incoming(int fromRank, messaging::Bytes&& payload) {
       return;
     }
     enqueue(request);
-    return;
   }
-  WallMessage m;
-  if ((kind != kKeepWaiting && kind != kCapture) || payload.size() != sizeof kind + sizeof m)
-    throw malformed();
-  std::memcpy(&m, payload.data() + sizeof kind, sizeof m);
-  std::function<void()> keepWaiting;
-  std::function<void(std::uint32_t, std::uint64_t)> capture;
-  {
-    std::lock_guard lock(mutex_);
-    keepWaiting = keepWaiting_;
-    capture = capture_;
-  }
-  if (kind == kKeepWaiting && keepWaiting) keepWaiting();
-  if (kind == kCapture && capture) capture(m.frameId, m.sequence);
 }
 
 }  // namespace app

@@ -91,16 +91,6 @@ class Steering : public messaging::MessageHandler {
   // Rank 0: how to read the last frame every display presented (stamped on arriving requests).
   void setPresentedProbe(std::function<std::int64_t()> probe);
 
-  // Rank 0 -> wall ranks. keepWaiting: the renderers are idle (converged); wall ranks extend
-  // their wait for the next frame. capture: capture frame `frameId` or the first after it,
-  // `sequence` numbers captures (1, 2, ...).
-  void tellWallsKeepWaiting(int firstWallRank, int worldSize);
-  void tellWallsCapture(std::uint32_t frameId, std::uint64_t sequence, int firstWallRank,
-                        int worldSize);
-  // Wall ranks: what to do on those messages (run on the messenger's inbox thread).
-  void onKeepWaiting(std::function<void()> callback);
-  void onCapture(std::function<void(std::uint32_t frameId, std::uint64_t sequence)> callback);
-
   void incoming(int fromRank, messaging::Bytes&& payload) override;
 
  private:
@@ -114,8 +104,6 @@ class Steering : public messaging::MessageHandler {
   bool woken_ = false;
   std::mutex probeMutex_;  // guards presentedProbe_ (also while it runs)
   std::function<std::int64_t()> presentedProbe_;
-  std::function<void()> keepWaiting_;
-  std::function<void(std::uint32_t, std::uint64_t)> capture_;
 };
 
 }  // namespace app

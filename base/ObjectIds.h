@@ -11,7 +11,7 @@ enum class MessageObject : ObjectId {
   kFrameBuffer = 0xDFB0,  // the DFB's default id (DistributedFrameBuffer::Options::objectId)
   kRunControl,
   kSteering,
-  kWallStop,
+  kWallControl,
   kWallNode,
   kFrameCredits,
   kPreview,

@@ -6,7 +6,7 @@ include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 set(DFBWALL_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/dfbwall)
-install(TARGETS dfbwall_api base messaging dfb renderers wall wall_glfw dfbwall_warnings
+install(TARGETS dfbwall_api base messaging dfb renderers wall runtime wall_glfw dfbwall_warnings
   EXPORT dfbwallTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}

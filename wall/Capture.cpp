@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <system_error>
 
+#include "base/AtomicFile.h"
 #include "base/Error.h"
 #include "wall/Png.h"
 
@@ -36,6 +37,15 @@ std::string writeDisplayCapture(const std::string& dir, const Layout& layout, in
   if (ec) throw base::Error(path + ": cannot create the capture folder: " + ec.message());
   writePng(path, rgba8, d.rect.width(), d.rect.height());
   return path;
+}
+
+std::string checkCaptureFolders(const std::string& dir, const Layout& layout, int process) {
+  for (int d : layout.displaysOfProcess(process)) {
+    const std::string folder =
+        (std::filesystem::path(dir) / layout.displays[static_cast<size_t>(d)].name).string();
+    if (std::string problem = base::checkWritableFolder(folder); !problem.empty()) return problem;
+  }
+  return {};
 }
 
 Image composeWallPreview(const Layout& layout,

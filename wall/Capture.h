@@ -24,6 +24,10 @@ std::string wallPreviewPath(const std::string& dir, std::uint32_t frameId);
 std::string writeDisplayCapture(const std::string& dir, const Layout& layout, int display,
                                 std::uint32_t frameId, const std::uint32_t* rgba8);
 
+// For setup, before any frame: the folder of each display of wall process `process` under `dir`
+// made and writable. Returns the first problem, or an empty string.
+std::string checkCaptureFolders(const std::string& dir, const Layout& layout, int process);
+
 // The canvas with each display's pixels at its place and kBezelColor elsewhere.
 // `displayPixels[i]` holds display i's pixels, or is null to leave that display dark too.
 Image composeWallPreview(const Layout& layout,

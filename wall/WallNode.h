@@ -72,6 +72,14 @@ struct WallNodeOptions {
   std::chrono::milliseconds aliveEvery{250};
 };
 
+// The one rule for WallNodeOptions::framesAhead: render rank 0 starts frame F once frame
+// F - framesInFlight is presented, so pieces can be framesInFlight + 1 frames ahead of this
+// process's last presented frame, one more while it is between the swap barrier and noting the
+// frame presented.
+constexpr std::uint32_t framesAheadFor(int framesInFlight) {
+  return static_cast<std::uint32_t>(framesInFlight) + 2;
+}
+
 struct PresentReport {
   double waitMs = 0;     // until every piece of this process's displays had arrived (and was
                          // uploaded: uploads happen while waiting)

@@ -35,7 +35,7 @@ TEST(ObjectIds, FollowOneAnother) {
   using base::MessageObject;
   EXPECT_EQ(base::objectId(MessageObject::kRunControl),
             base::objectId(MessageObject::kFrameBuffer) + 1);
-  EXPECT_NE(base::objectId(MessageObject::kSteering), base::objectId(MessageObject::kWallStop));
+  EXPECT_NE(base::objectId(MessageObject::kSteering), base::objectId(MessageObject::kWallControl));
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 
 #include "base/AtomicFile.h"
 #include "base/Error.h"
+#include "wall/Capture.h"
 #include "wall/IdleScreen.h"
 #include "wall/WallNode.h"
 #include "wall/service/Desk.h"
@@ -210,15 +211,9 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   // Anything a job asks for that this process cannot do refuses the job, never ends the wall.
   std::string problem;
   if (!captureDir.empty()) {
-    for (int d : layout.displaysOfProcess(process)) {
-      problem = base::checkWritableFolder(
-          (std::filesystem::path(captureDir) / layout.displays[static_cast<size_t>(d)].name)
-              .string());
-      if (!problem.empty()) {
-        problem = "capture folder on wall process " + std::to_string(process) + ": " + problem;
-        break;
-      }
-    }
+    problem = checkCaptureFolders(captureDir, layout, process);
+    if (!problem.empty())
+      problem = "capture folder on wall process " + std::to_string(process) + ": " + problem;
   }
   if (!problem.empty()) {
     answer.header.kind = Command::Ready;
@@ -236,7 +231,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   o.lastFrame = 0;  // the job says when it ends
   o.firstFrame = firstFrame;
   o.timeout = options.timeout;
-  o.framesAhead = start.header.framesInFlight + 2;
+  o.framesAhead = framesAheadFor(static_cast<int>(start.header.framesInFlight));
   o.abandonOnFailure = true;
   if (link) o.alive = [this] { link->mainAlive(); };
   const std::uint64_t session = start.header.session;
