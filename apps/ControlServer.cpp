@@ -161,6 +161,11 @@ SteeringRequest settingsRequest(const Json& j, const std::string& renderer) {
   return r;
 }
 
+void reply(httplib::Response& res, const HttpReply& r) {
+  res.status = r.status;
+  res.set_content(r.body, r.contentType.c_str());
+}
+
 }  // namespace
 
 struct ControlServer::Impl {
@@ -177,6 +182,27 @@ struct ControlServer::Impl {
     if (auth.rfind("Bearer ", 0) == 0 && sameSecret(auth.substr(7), token)) return true;
     return req.has_param("token") && sameSecret(req.get_param_value("token"), token);
   }
+
+  // Every route: the token first, then the handler; a BadRequest is a 400, anything else a 500.
+  httplib::Server::Handler guarded(std::function<HttpReply(const httplib::Request&)> handler) {
+    return [this, handler](const httplib::Request& req, httplib::Response& res) {
+      if (!authorized(req)) {
+        res.set_header("WWW-Authenticate", "Bearer");
+        return reply(res, error(401, "a valid token is required (Authorization: Bearer TOKEN)"));
+      }
+      try {
+        reply(res, handler(req));
+      } catch (const BadRequest& e) {
+        reply(res, error(400, e.what()));
+      } catch (const std::invalid_argument& e) {  // Steering::submit's range checks
+        reply(res, error(400, e.what()));
+      } catch (const std::exception& e) {
+        reply(res, error(500, e.what()));
+      }
+    };
+  }
+  void addSteeringRoutes(const Job& job, Steering& steering, StatusBoard& status);
+  void answerWhatHttplibWouldNot();
 };
 
 ControlServer::ControlServer(const std::string& address, std::string token)
@@ -212,6 +238,52 @@ ControlServer::ControlServer(const std::string& address, std::string token)
 
 ControlServer::~ControlServer() { stop(); }
 
+namespace {
+
+// GET /api/status: what rank 0 published last, and the job's fixed facts.
+Json statusJson(const StatusBoard& status, const Job& job,
+                const std::vector<std::string>& displays) {
+  const RunStatus s = status.snapshot();
+  Json j{{"frame", s.frame},
+         {"fps", s.fps},
+         {"spp", s.spp},
+         {"epoch", s.epoch},
+         {"idle", s.idle},
+         {"presented", s.presented},
+         {"camera",
+          {{"position", vec3(s.view.camera.position)},
+           {"look_at", vec3(s.view.camera.lookAt)},
+           {"up", vec3(s.view.camera.up)},
+           {"fov", s.view.camera.fovY}}},
+         {"settings",
+          {{"exposure", s.view.exposure},
+           {"spp", s.view.spp},
+           {"max_depth", s.view.maxDepth},
+           {"transfer_function", s.view.transferFunction < 0
+                                     ? Json("scene")
+                                     : Json(renderers::transferFunctionPresetNames().at(
+                                           static_cast<size_t>(s.view.transferFunction)))},
+           {"opacity_scale", s.view.opacityScale}}},
+         {"max_spp", job.options.maxSpp},
+         {"renderer", job.options.renderer},
+         {"last_request", {{"id", s.lastRequest}, {"frame", s.lastRequestFrame}}}};
+  Json list = Json::array();
+  // The swap barrier presents a frame on every display at once: one number each. A
+  // display of a wall process the wall lost (--connect) shows nothing of this job.
+  for (const std::string& name : displays) {
+    const bool lost =
+        std::find(s.lostDisplays.begin(), s.lostDisplays.end(), name) != s.lostDisplays.end();
+    list.push_back(
+        {{"name", name}, {"presented", s.presented}, {"state", lost ? "lost" : "presenting"}});
+  }
+  j["displays"] = list;
+  j["lost_displays"] = s.lostDisplays;
+  j["errors"] = s.errors;
+  return j;
+}
+
+}  // namespace
+
 const std::string& ControlServer::host() const { return impl_->host; }
 int ControlServer::port() const { return impl_->port; }
 const std::string& ControlServer::token() const { return impl_->token; }
@@ -222,132 +294,81 @@ void ControlServer::addGet(const std::string& path, std::function<HttpReply()> h
 
 void ControlServer::start(const Job& job, Steering& steering, StatusBoard& status) {
   Impl& m = *impl_;
-  auto reply = [](httplib::Response& res, const HttpReply& r) {
-    res.status = r.status;
-    res.set_content(r.body, r.contentType.c_str());
-  };
-  // Every route: the token first, then the handler; a BadRequest is a 400, anything else a 500.
-  auto guarded = [&m, reply](std::function<HttpReply(const httplib::Request&)> handler) {
-    return [&m, reply, handler](const httplib::Request& req, httplib::Response& res) {
-      if (!m.authorized(req)) {
-        res.set_header("WWW-Authenticate", "Bearer");
-        return reply(res, error(401, "a valid token is required (Authorization: Bearer TOKEN)"));
-      }
-      try {
-        reply(res, handler(req));
-      } catch (const BadRequest& e) {
-        reply(res, error(400, e.what()));
-      } catch (const std::invalid_argument& e) {  // Steering::submit's range checks
-        reply(res, error(400, e.what()));
-      } catch (const std::exception& e) {
-        reply(res, error(500, e.what()));
-      }
-    };
-  };
-  const std::string renderer = job.options.renderer;
   std::vector<std::string> displays;
   if (job.layout)
     for (const auto& d : job.layout->displays) displays.push_back(d.name);
+  m.server.Get("/api/status", m.guarded([&status, displays, &job](const auto&) {
+    return json(200, statusJson(status, job, displays));
+  }));
+  m.addSteeringRoutes(job, steering, status);
+  for (const auto& [path, handler] : m.extraGets)
+    m.server.Get(path, m.guarded([handler](const auto&) { return handler(); }));
+  m.answerWhatHttplibWouldNot();
+  m.thread = std::thread([&m] { m.server.listen_after_bind(); });
+}
 
-  m.server.Get(
-      "/api/status", guarded([&status, renderer, displays, &job](const auto&) {
-        const RunStatus s = status.snapshot();
-        Json j{{"frame", s.frame},
-               {"fps", s.fps},
-               {"spp", s.spp},
-               {"epoch", s.epoch},
-               {"idle", s.idle},
-               {"presented", s.presented},
-               {"camera",
-                {{"position", vec3(s.view.camera.position)},
-                 {"look_at", vec3(s.view.camera.lookAt)},
-                 {"up", vec3(s.view.camera.up)},
-                 {"fov", s.view.camera.fovY}}},
-               {"settings",
-                {{"exposure", s.view.exposure},
-                 {"spp", s.view.spp},
-                 {"max_depth", s.view.maxDepth},
-                 {"transfer_function", s.view.transferFunction < 0
-                                           ? Json("scene")
-                                           : Json(renderers::transferFunctionPresetNames().at(
-                                                 static_cast<size_t>(s.view.transferFunction)))},
-                 {"opacity_scale", s.view.opacityScale}}},
-               {"max_spp", job.options.maxSpp},
-               {"renderer", renderer},
-               {"last_request", {{"id", s.lastRequest}, {"frame", s.lastRequestFrame}}}};
-        Json list = Json::array();
-        // The swap barrier presents a frame on every display at once: one number each. A
-        // display of a wall process the wall lost (--connect) shows nothing of this job.
-        for (const std::string& name : displays) {
-          const bool lost =
-              std::find(s.lostDisplays.begin(), s.lostDisplays.end(), name) != s.lostDisplays.end();
-          list.push_back({{"name", name},
-                          {"presented", s.presented},
-                          {"state", lost ? "lost" : "presenting"}});
-        }
-        j["displays"] = list;
-        j["lost_displays"] = s.lostDisplays;
-        j["errors"] = s.errors;
-        return json(200, j);
-      }));
+void ControlServer::Impl::addSteeringRoutes(const Job& job, Steering& steering,
+                                            StatusBoard& status) {
+  Impl& m = *this;
   // Every POST route is kept by path too: the pre-routing handler below serves a POST without a
   // body itself.
   const auto post = [&m](const std::string& path, httplib::Server::Handler handler) {
     m.posts[path] = handler;
     m.server.Post(path, std::move(handler));
   };
-  post("/api/camera", guarded([&steering, &status](const httplib::Request& req) {
-         SteeringRequest r = cameraRequest(parseObject(req.body));
-         if (const std::string problem = checkRequest(r); !problem.empty())
-           throw BadRequest(problem);
-         // Checked against the camera shown now (rank 0 checks again when applying).
-         if (!status.waitForFirstPublish(std::chrono::seconds(30)))
-           return json(503, Json{{"error", "the wall is still starting; try again"}});
-         FrameView view = status.snapshot().view;
-         if (!steerView(view, view.camera, r))
-           throw BadRequest("the camera would be unusable: look_at equal to position, or along up");
-         return json(200, Json{{"request", steering.submit(r)}});
-       }));
-  post("/api/settings", guarded([&steering, renderer](const httplib::Request& req) {
+  post("/api/camera", m.guarded([&steering, &status](const httplib::Request& req) {
+    SteeringRequest r = cameraRequest(parseObject(req.body));
+    if (const std::string problem = checkRequest(r); !problem.empty()) throw BadRequest(problem);
+    // Checked against the camera shown now (rank 0 checks again when applying).
+    if (!status.waitForFirstPublish(std::chrono::seconds(30)))
+      return json(503, Json{{"error", "the wall is still starting; try again"}});
+    FrameView view = status.snapshot().view;
+    if (!steerView(view, view.camera, r))
+      throw BadRequest("the camera would be unusable: look_at equal to position, or along up");
+    return json(200, Json{{"request", steering.submit(r)}});
+  }));
+  post("/api/settings",
+       m.guarded([&steering, renderer = job.options.renderer](const httplib::Request& req) {
          const SteeringRequest r = settingsRequest(parseObject(req.body), renderer);
          return json(200, Json{{"request", steering.submit(r)}});
        }));
   const bool canCapture = job.layout && !job.options.captureDir.empty();
-  post("/api/capture", guarded([&steering, canCapture](const httplib::Request& req) {
-         if (!parseObject(req.body).empty()) throw BadRequest("capture takes no fields");
-         if (!canCapture) throw BadRequest("captures need a wall started with --capture DIR");
-         SteeringRequest r;
-         r.kind = SteeringRequest::kCapture;
-         return json(200, Json{{"request", steering.submit(r)}});
-       }));
-  post("/api/stop", guarded([&steering](const httplib::Request& req) {
-         if (!parseObject(req.body).empty()) throw BadRequest("stop takes no fields");
-         SteeringRequest r;
-         r.kind = SteeringRequest::kStop;
-         return json(200, Json{{"request", steering.submit(r)}, {"stopping", true}});
-       }));
-  for (const auto& [path, handler] : m.extraGets)
-    m.server.Get(path, guarded([handler](const auto&) { return handler(); }));
+  post("/api/capture", m.guarded([&steering, canCapture](const httplib::Request& req) {
+    if (!parseObject(req.body).empty()) throw BadRequest("capture takes no fields");
+    if (!canCapture) throw BadRequest("captures need a wall started with --capture DIR");
+    SteeringRequest r;
+    r.kind = SteeringRequest::kCapture;
+    return json(200, Json{{"request", steering.submit(r)}});
+  }));
+  post("/api/stop", m.guarded([&steering](const httplib::Request& req) {
+    if (!parseObject(req.body).empty()) throw BadRequest("stop takes no fields");
+    SteeringRequest r;
+    r.kind = SteeringRequest::kStop;
+    return json(200, Json{{"request", steering.submit(r)}, {"stopping", true}});
+  }));
+}
+
+void ControlServer::Impl::answerWhatHttplibWouldNot() {
+  Impl& m = *this;
   // A POST with neither Content-Length nor Transfer-Encoding has an empty body (RFC 9112, 6.3),
   // and `curl -X POST URL` sends just that. httplib 0.11 instead reads such a body until the
   // connection closes (Server::routing -> read_content -> detail::read_content_without_length),
   // which a client waiting for its answer never does: 400 after the 5 s read timeout. The
   // pre-routing handler runs before that read, so it serves these requests itself, with the
   // empty body (the handlers take it as {}); the connection stays usable for the next request.
-  m.server.set_pre_routing_handler(
-      [&m, reply](const httplib::Request& req, httplib::Response& res) {
-        if (req.method != "POST" || req.has_header("Content-Length") ||
-            req.has_header("Transfer-Encoding"))
-          return httplib::Server::HandlerResponse::Unhandled;
-        const auto found = m.posts.find(req.path);
-        if (found == m.posts.end())
-          reply(res, error(404, "no such endpoint (see README, \"Steering the wall\")"));
-        else
-          found->second(req, res);
-        return httplib::Server::HandlerResponse::Handled;
-      });
+  m.server.set_pre_routing_handler([&m](const httplib::Request& req, httplib::Response& res) {
+    if (req.method != "POST" || req.has_header("Content-Length") ||
+        req.has_header("Transfer-Encoding"))
+      return httplib::Server::HandlerResponse::Unhandled;
+    const auto found = m.posts.find(req.path);
+    if (found == m.posts.end())
+      reply(res, error(404, "no such endpoint (see README, \"Steering the wall\")"));
+    else
+      found->second(req, res);
+    return httplib::Server::HandlerResponse::Handled;
+  });
   // httplib's own refusals come with no body: say what went wrong.
-  m.server.set_error_handler([reply](const httplib::Request& req, httplib::Response& res) {
+  m.server.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
     if (!res.body.empty()) return;
     if (res.status == 404)
       reply(res, error(404, "no such endpoint (see README, \"Steering the wall\")"));
@@ -358,7 +379,6 @@ void ControlServer::start(const Job& job, Steering& steering, StatusBoard& statu
     else
       reply(res, error(res.status, "request refused"));
   });
-  m.thread = std::thread([&m] { m.server.listen_after_bind(); });
 }
 
 void ControlServer::stop() {
