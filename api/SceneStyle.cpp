@@ -6,8 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "base/BoundedWait.h"
-#include "base/Error.h"
+#include "base/Collectives.h"
 #include "renderers/scivis/TransferFunction.h"
 
 namespace dfbwall {
@@ -241,15 +240,12 @@ renderers::SceneDesc sceneDesc(const Style& style, const std::vector<renderers::
     }
   const bool anyAuto = std::any_of(style.volumes.begin(), style.volumes.end(),
                                    [](const VolumeStyle& v) { return v.autoRange; });
-  if (anyAuto && n > 0) {
-    MPI_Request request;
-    base::checkMpi(MPI_Iallreduce(local.data(), global.data(), static_cast<int>(2 * n), MPI_FLOAT,
-                                  MPI_MAX, renderComm, &request),
-                   "MPI_Iallreduce");
-    base::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
-                           "value ranges of a new scene version: another render rank did not "
-                           "join in time");
-  }
+  if (anyAuto && n > 0)
+    base::allreduce(local.data(), global.data(), static_cast<int>(2 * n), MPI_FLOAT, MPI_MAX,
+                    renderComm,
+                    {.until = timeout,
+                     .late = "value ranges of a new scene version: another render rank did not "
+                             "join in time"});
   for (std::size_t v = 0; v < n; ++v) {
     const VolumeStyle& s = style.volumes[v];
     float lo = s.valueMin, hi = s.valueMax;

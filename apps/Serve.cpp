@@ -17,9 +17,7 @@
 #include "apps/Options.h"
 #include "apps/Run.h"
 #include "apps/StopSignals.h"
-#include "base/BoundedWait.h"
 #include "base/Collectives.h"
-#include "base/Error.h"
 #include "wall/DisplayPresenters.h"
 #include "wall/Ranks.h"
 #include "wall/service/WallService.h"
@@ -46,11 +44,8 @@ std::pair<std::string, std::string> shareHead(const std::string& address, const 
   char buffer[1024] = {};
   if (!address.empty())
     std::snprintf(buffer, sizeof buffer, "%s\n%s", address.c_str(), token.c_str());
-  MPI_Request request;
-  base::checkMpi(MPI_Ibcast(buffer, sizeof buffer, MPI_CHAR, 0, MPI_COMM_WORLD, &request),
-                 "MPI_Ibcast");
-  base::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
-                         "starting the wall service: the head did not answer");
+  base::bcast(buffer, sizeof buffer, 0, MPI_COMM_WORLD,
+              {.until = timeout, .late = "starting the wall service: the head did not answer"});
   buffer[sizeof buffer - 1] = 0;
   const char* newline = std::strchr(buffer, '\n');
   if (!newline) return {};
@@ -98,7 +93,8 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
     }
   } else {
     int failing = problem.empty() ? 1 << 30 : worldRank, first = 0;
-    base::boundedAllreduce(&failing, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD, timeout, "setup");
+    base::allreduce(&failing, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD,
+                    base::Bound::joinWithin(timeout, "setup"));
     if (first == worldRank) std::fprintf(stderr, "dfbwall: error: %s\n", problem.c_str());
     if (first != 1 << 30) return 1;
   }

@@ -10,7 +10,7 @@
 #include <mutex>
 #include <string>
 
-#include "base/BoundedWait.h"
+#include "base/Collectives.h"
 #include "base/Error.h"
 #include "base/Timing.h"
 #include "dfb/ImageGather.h"
@@ -104,16 +104,11 @@ DistributedFrameBuffer::DistributedFrameBuffer(messaging::Messenger& messenger, 
   base::checkMpi(MPI_Comm_dup(comm, &d.comm), "MPI_Comm_dup");
   MPI_Comm_rank(d.comm, &d.rank);
   MPI_Comm_size(d.comm, &d.size);
-  d.messengerRank.resize(static_cast<size_t>(d.size));
-  int mine = messenger.rank();
-  const auto deadline = base::Clock::now() + d.options.frameTimeout;
-  const std::string late = "creating the frame buffer: another rank did not join within " +
-                           std::to_string(d.options.frameTimeout.count()) + " ms";
-  MPI_Request request;
-  base::checkMpi(
-      MPI_Iallgather(&mine, 1, MPI_INT, d.messengerRank.data(), 1, MPI_INT, d.comm, &request),
-      "MPI_Iallgather");
-  base::waitWithDeadline(request, deadline, late);
+  const int mine = messenger.rank();
+  const base::Bound joined{.until = base::Clock::now() + d.options.frameTimeout,
+                           .late = "creating the frame buffer: another rank did not join within " +
+                                   std::to_string(d.options.frameTimeout.count()) + " ms"};
+  d.messengerRank = base::allgather(mine, d.comm, joined);
 
   const int count = d.grid.tileCount();
   d.owner.resize(static_cast<size_t>(count));
@@ -133,8 +128,7 @@ DistributedFrameBuffer::DistributedFrameBuffer(messaging::Messenger& messenger, 
   d.pixelOps.push_back(std::make_shared<ToneMapOp>(d.options.toneMap));
   messenger.registerObject(d.options.objectId, this);
   // Nobody may send to this object before every rank has registered it.
-  base::checkMpi(MPI_Ibarrier(d.comm, &request), "MPI_Ibarrier");
-  base::waitWithDeadline(request, deadline, late);
+  base::barrier(d.comm, joined);
 }
 
 DistributedFrameBuffer::~DistributedFrameBuffer() {
@@ -449,16 +443,15 @@ void DistributedFrameBuffer::end() {
   for (int t : d.ownedTiles)
     d.errorsLocal[static_cast<size_t>(t)] = d.tileErrors[static_cast<size_t>(t)];
   const auto collectiveDeadline = deadline + d.options.frameTimeout;
-  MPI_Request request;
-  base::checkMpi(MPI_Iallreduce(d.errorsLocal.data(), d.errorsGlobal.data(),
-                                static_cast<int>(count), MPI_FLOAT, MPI_MAX, d.comm, &request),
-                 "MPI_Iallreduce");
+  base::Pending agreement =
+      base::startAllreduce(d.errorsLocal.data(), d.errorsGlobal.data(), static_cast<int>(count),
+                           MPI_FLOAT, MPI_MAX, d.comm);
   const GatherCounts counts =
       d.options.gatherEveryFrame ? d.gather(collectiveDeadline) : GatherCounts{};
-  base::waitWithDeadline(request, collectiveDeadline,
-                         "frame " + std::to_string(d.frame.frameId) +
-                             ": another rank did not finish the frame within " +
-                             std::to_string(2 * d.options.frameTimeout.count()) + " ms");
+  agreement.finish({.until = collectiveDeadline,
+                    .late = "frame " + std::to_string(d.frame.frameId) +
+                            ": another rank did not finish the frame within " +
+                            std::to_string(2 * d.options.frameTimeout.count()) + " ms"});
   const auto complete = base::Clock::now();
   {
     std::lock_guard lock(d.frameMutex);

@@ -4,7 +4,7 @@
 #include <limits>
 #include <string>
 
-#include "base/BoundedWait.h"
+#include "base/Collectives.h"
 #include "base/Error.h"
 
 namespace dfb {
@@ -94,42 +94,28 @@ GatherCounts gatherImage(MPI_Comm comm, const TileGrid& grid, int bytesPerPixel,
     throw base::Error("gather: rank " + std::to_string(rank) + " holds " +
                       std::to_string(b.block.size()) +
                       " bytes of the image, more than one MPI message carries (2^31-1)");
-  const std::string late = "gather of the image: another rank did not join in time";
-  int blockSize = static_cast<int>(b.block.size());
-  b.sizes.resize(rank == 0 ? static_cast<size_t>(size) : 0);
-  MPI_Request request;
-  base::checkMpi(MPI_Igather(&blockSize, 1, MPI_INT, b.sizes.data(), 1, MPI_INT, 0, comm, &request),
-                 "MPI_Igather");
-  base::waitWithDeadline(request, deadline, late);
-  b.offsets.resize(b.sizes.size());
-  if (rank == 0) {
-    std::uint64_t total = 0;
-    for (size_t r = 0; r < b.sizes.size(); ++r) {
-      if (total > kMaxCount)
-        throw base::Error(
-            "gather: the image's blocks add up to more than 2^31-1 bytes; use fewer, "
-            "smaller images (or --image .png instead of .pfm)");
-      b.offsets[r] = static_cast<int>(total);
-      total += static_cast<std::uint64_t>(b.sizes[r]);
-    }
-    b.all.resize(total);
-  }
-  base::checkMpi(MPI_Igatherv(b.block.data(), blockSize, MPI_BYTE, b.all.data(), b.sizes.data(),
-                              b.offsets.data(), MPI_BYTE, 0, comm, &request),
-                 "MPI_Igatherv");
+  const base::Bound bound{
+      .until = deadline,
+      .late = "gather of the image: another rank did not join in time",
+      .tooLarge =
+          "gather: the image's blocks add up to more than 2^31-1 bytes; use fewer, "
+          "smaller images (or --image .png instead of .pfm)"};
+  base::Pending blocks =
+      base::startGatherv(std::span<const std::byte>(b.block), 0, comm, bound, b.gathered);
   if (rank == 0) {
     for (int tile : ownedTiles) {
       placeTile(grid, tile, bytesPerPixel, pixelsOf(tile), image);
       counts.pixelBytesReceived += tileBytes(grid, tile, bytesPerPixel);
     }
   }
-  base::waitWithDeadline(request, deadline, late);
+  blocks.finish(bound);
   if (rank != 0) return counts;
 
   for (int r = 1; r < size; ++r) {
-    const size_t blockBytes = static_cast<size_t>(b.sizes[static_cast<size_t>(r)]);
+    const std::span<const std::byte> block = b.gathered.of(r);
+    const size_t blockBytes = block.size();
     counts.bytesReceived += blockBytes;
-    const std::byte* at = b.all.data() + b.offsets[static_cast<size_t>(r)];
+    const std::byte* at = block.data();
     if (blockBytes < sizeof(BlockHeader))
       throw base::Error("gather: rank " + std::to_string(r) +
                         " sent a block shorter than its header");

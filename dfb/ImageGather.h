@@ -10,6 +10,7 @@
 #include <functional>
 #include <vector>
 
+#include "base/Collectives.h"
 #include "dfb/Tile.h"
 #include "messaging/Compression.h"
 
@@ -25,8 +26,8 @@ struct GatherCounts {
 // every frame touch every page anew, and first-touch page faults (~20 us per 4 KiB page on
 // this kind of VM) made a 512x512 RGBAF32 gather take 50 ms instead of 2-3.
 struct GatherBuffers {
-  messaging::Bytes raw, block, filtered, body, all, unpacked, unfiltered;
-  std::vector<int> sizes, offsets;
+  messaging::Bytes raw, block, filtered, body, unpacked, unfiltered;
+  base::Gathered<std::byte> gathered;
 };
 
 // `bytesPerPixel` 4 (RGBA8) or 16 (RGBAF32). `ownedTiles` in ascending order on each rank;

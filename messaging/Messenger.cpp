@@ -1,6 +1,7 @@
 #include "messaging/Messenger.h"
 
 #include <algorithm>
+#include <array>
 #include <condition_variable>
 #include <cstdio>
 #include <cstring>
@@ -16,7 +17,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "base/BoundedWait.h"
+#include "base/Collectives.h"
 #include "base/Error.h"
 #include "base/ObjectIds.h"
 #include "messaging/Envelope.h"
@@ -400,19 +401,16 @@ Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_
   impl_->options = options;
   impl_->owner = this;
   impl_->uncaughtAtConstruction = std::uncaught_exceptions();
-  const std::string notJoined = "starting the messenger: another rank did not join within " +
-                                std::to_string(options.quiesceTimeout.count()) + " ms";
+  const base::Bound joined{.until = options.quiesceTimeout,
+                           .late = "starting the messenger: another rank did not join within " +
+                                   std::to_string(options.quiesceTimeout.count()) + " ms"};
   base::checkMpi(MPI_Comm_dup(comm, &impl_->p2p), "MPI_Comm_dup");
   base::checkMpi(MPI_Comm_dup(comm, &impl_->control), "MPI_Comm_dup");
-  {
-    // No traffic on the new communicators until every rank has made them: OpenMPI 4.1 can take
-    // a fragment for a communicator that a rank is still making (it is in the lookup table, its
-    // matching state not yet) on another thread's progress, such as a live messenger's, and
-    // crashes there (a SEGV in mca_pml_ob1_recv_frag_callback_match, seen under ASan).
-    MPI_Request made;
-    base::checkMpi(MPI_Ibarrier(comm, &made), "MPI_Ibarrier");
-    base::waitWithDeadline(made, Clock::now() + options.quiesceTimeout, notJoined);
-  }
+  // No traffic on the new communicators until every rank has made them: OpenMPI 4.1 can take
+  // a fragment for a communicator that a rank is still making (it is in the lookup table, its
+  // matching state not yet) on another thread's progress, such as a live messenger's, and
+  // crashes there (a SEGV in mca_pml_ob1_recv_frag_callback_match, seen under ASan).
+  base::barrier(comm, joined);
   MPI_Comm_rank(impl_->p2p, &impl_->rank);
   MPI_Comm_size(impl_->p2p, &impl_->size);
   MPI_Comm host;
@@ -432,19 +430,11 @@ Messenger::Messenger(MPI_Comm comm, MessengerOptions options) : impl_(std::make_
   MPI_Group_free(&hostGroup);
   MPI_Group_free(&allGroup);
   MPI_Comm_free(&host);
-  char name[MPI_MAX_PROCESSOR_NAME] = {};
+  std::array<char, MPI_MAX_PROCESSOR_NAME> name = {};
   int length = 0;
-  MPI_Get_processor_name(name, &length);
-  std::vector<char> names(static_cast<size_t>(impl_->size) * MPI_MAX_PROCESSOR_NAME);
-  MPI_Request request;
-  base::checkMpi(MPI_Iallgather(name, MPI_MAX_PROCESSOR_NAME, MPI_CHAR, names.data(),
-                                MPI_MAX_PROCESSOR_NAME, MPI_CHAR, impl_->control, &request),
-                 "MPI_Iallgather");
-  base::waitWithDeadline(request, Clock::now() + options.quiesceTimeout, notJoined);
-  for (int r = 0; r < impl_->size; ++r) {
-    const char* n = names.data() + static_cast<size_t>(r) * MPI_MAX_PROCESSOR_NAME;
-    impl_->hosts.emplace_back(n, strnlen(n, MPI_MAX_PROCESSOR_NAME));
-  }
+  MPI_Get_processor_name(name.data(), &length);
+  for (const auto& n : base::allgather(name, impl_->control, joined))
+    impl_->hosts.emplace_back(n.data(), strnlen(n.data(), n.size()));
   const int handlerThreads =
       options.handlerThreads > 0 ? options.handlerThreads : tbb::info::default_concurrency();
   // One slot for the inbox thread, which joins the arena for every run of messages.
@@ -594,14 +584,11 @@ void Messenger::quiesce() {
     // (a few bytes, once, on a path that ends in an error) rather than on this stack.
     auto* counts =
         new std::uint64_t[4]{impl_->messagesSent.load(), impl_->messagesHandled.load(), 0, 0};
-    MPI_Request request;
-    base::checkMpi(
-        MPI_Iallreduce(counts, counts + 2, 2, MPI_UINT64_T, MPI_SUM, impl_->control, &request),
-        "MPI_Iallreduce");
-    base::waitWithDeadline(request, deadline,
-                           "messaging did not quiesce within " +
-                               std::to_string(impl_->options.quiesceTimeout.count()) +
-                               " ms: another rank is not answering");
+    base::allreduce(counts, counts + 2, 2, MPI_UINT64_T, MPI_SUM, impl_->control,
+                    {.until = deadline,
+                     .late = "messaging did not quiesce within " +
+                             std::to_string(impl_->options.quiesceTimeout.count()) +
+                             " ms: another rank is not answering"});
     const std::uint64_t global[2] = {counts[2], counts[3]};
     delete[] counts;
     if (global[0] == global[1] && global[0] == previous[0] && global[1] == previous[1]) return;

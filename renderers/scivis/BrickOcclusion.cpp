@@ -6,7 +6,7 @@
 #include <cstring>
 #include <string>
 
-#include "base/BoundedWait.h"
+#include "base/Collectives.h"
 #include "base/Error.h"
 
 namespace renderers {
@@ -207,31 +207,12 @@ BrickOcclusion BrickOcclusion::exchange(
   }
   if (local.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()))
     throw base::Error("brick occlusion summaries of one rank exceed 2 GB");
-  int ranks = 1;
-  MPI_Comm_size(comm, &ranks);
-  const int bytes = static_cast<int>(local.size());
-  std::vector<int> counts(static_cast<std::size_t>(ranks)), offsets(counts.size());
-  const auto wait = [&](MPI_Request& r) {
-    base::waitWithDeadline(r, std::chrono::steady_clock::now() + timeout,
-                           "exchanging brick occlusion summaries: another render rank did "
-                           "not join within " +
-                               std::to_string(timeout.count()) + " ms");
-  };
-  MPI_Request request;
-  base::checkMpi(MPI_Iallgather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, comm, &request),
-                 "MPI_Iallgather");
-  wait(request);
-  long long total = 0;
-  for (std::size_t r = 0; r < counts.size(); ++r) {
-    offsets[r] = static_cast<int>(total), total += counts[r];
-    if (total > std::numeric_limits<int>::max())
-      throw base::Error("brick occlusion summaries of the job exceed 2 GB");
-  }
-  std::vector<std::uint8_t> all(static_cast<std::size_t>(total));
-  base::checkMpi(MPI_Iallgatherv(local.data(), bytes, MPI_BYTE, all.data(), counts.data(),
-                                 offsets.data(), MPI_BYTE, comm, &request),
-                 "MPI_Iallgatherv");
-  wait(request);
+  const std::vector<std::uint8_t> all = base::allgatherv(
+      local, comm,
+      {.until = timeout,
+       .late = "exchanging brick occlusion summaries: another render rank did not join within " +
+               std::to_string(timeout.count()) + " ms",
+       .tooLarge = "brick occlusion summaries of the job exceed 2 GB"});
 
   BrickOcclusion out;
   Impl& m = *out.impl_;

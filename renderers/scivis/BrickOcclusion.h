@@ -43,8 +43,8 @@ class BrickOcclusion {
 
   // Collective over `comm`: every rank summarises the bricks it holds (`held`: id and content;
   // a brick held twice is summarised by each holder alike) and gets every brick's summary, in
-  // the order of `bricks` (the directory's, ascending ids). One MPI_Iallgatherv, bounded by
-  // `timeout`.
+  // the order of `bricks` (the directory's, ascending ids). One base::allgatherv, each of its
+  // waits bounded by `timeout`.
   static BrickOcclusion exchange(const SceneDesc& desc, const std::vector<BrickPlan>& bricks,
                                  const std::vector<std::pair<int, const BrickContent*>>& held,
                                  MPI_Comm comm, std::chrono::milliseconds timeout);

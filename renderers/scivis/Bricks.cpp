@@ -7,7 +7,7 @@
 #include <new>
 #include <string>
 
-#include "base/BoundedWait.h"
+#include "base/Collectives.h"
 #include "base/Error.h"
 #include "base/MemoryBudget.h"
 
@@ -547,12 +547,6 @@ struct WireBrick {
   float lo[3], hi[3];
 };
 
-void finish(MPI_Request& request, std::chrono::milliseconds timeout) {
-  base::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
-                         "exchanging brick bounds: another render rank did not join within " +
-                             std::to_string(timeout.count()) + " ms");
-}
-
 }  // namespace
 
 BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
@@ -566,26 +560,18 @@ BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
                      {b.bounds.lo.x, b.bounds.lo.y, b.bounds.lo.z},
                      {b.bounds.hi.x, b.bounds.hi.y, b.bounds.hi.z}});
   }
-  const int bytes = static_cast<int>(local.size() * sizeof(WireBrick));
-  std::vector<int> counts(static_cast<std::size_t>(ranks)), offsets(counts.size());
-  MPI_Request request;
-  base::checkMpi(MPI_Iallgather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, comm, &request),
-                 "MPI_Iallgather");
-  finish(request, timeout);
-  int total = 0;
-  for (std::size_t r = 0; r < counts.size(); ++r) offsets[r] = total, total += counts[r];
-  std::vector<WireBrick> all(static_cast<std::size_t>(total) / sizeof(WireBrick));
-  base::checkMpi(MPI_Iallgatherv(local.data(), bytes, MPI_BYTE, all.data(), counts.data(),
-                                 offsets.data(), MPI_BYTE, comm, &request),
-                 "MPI_Iallgatherv");
-  finish(request, timeout);
+  std::vector<int> counts;
+  const std::vector<WireBrick> all = base::allgatherv(
+      local, comm,
+      {.until = timeout,
+       .late = "exchanging brick bounds: another render rank did not join within " +
+               std::to_string(timeout.count()) + " ms"},
+      &counts);
 
   std::map<int, std::pair<Box3, std::vector<int>>> byId;
+  std::size_t first = 0;
   for (int r = 0; r < ranks; ++r) {
-    const std::size_t first =
-        static_cast<std::size_t>(offsets[static_cast<std::size_t>(r)]) / sizeof(WireBrick);
-    const std::size_t n =
-        static_cast<std::size_t>(counts[static_cast<std::size_t>(r)]) / sizeof(WireBrick);
+    const std::size_t n = static_cast<std::size_t>(counts[static_cast<std::size_t>(r)]);
     for (std::size_t i = first; i < first + n; ++i) {
       const WireBrick& w = all[i];
       const Box3 bounds{{w.lo[0], w.lo[1], w.lo[2]}, {w.hi[0], w.hi[1], w.hi[2]}};
@@ -598,6 +584,7 @@ BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
       if (it->second.second.empty() || it->second.second.back() != r)
         it->second.second.push_back(r);
     }
+    first += n;
   }
   if (byId.empty()) throw base::Error("no render rank holds any brick: nothing to render");
   BrickDirectory out;

@@ -114,7 +114,7 @@ struct BrickDirectory {
 };
 
 // Collective over `comm`: every rank gives the bricks it holds (id and clip bounds), every rank
-// gets the whole directory (one MPI_Iallgatherv, bounded by `timeout`). Throws base::Error
+// gets the whole directory (one base::allgatherv, bounded by `timeout`). Throws base::Error
 // when ranks disagree about a brick's bounds, an id is negative, or no rank holds any brick.
 BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
                               std::chrono::milliseconds timeout);

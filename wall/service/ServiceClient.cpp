@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "base/BoundedWait.h"
+#include "base/Collectives.h"
 #include "base/Error.h"
 #include "base/Timing.h"
 
@@ -195,33 +195,25 @@ Directory shareDirectory(MPI_Comm comm, const ServiceClient* client,
                          std::chrono::milliseconds timeout) {
   messaging::Bytes bytes = client ? client->directoryBytes() : messaging::Bytes{};
   std::uint64_t size = bytes.size();
-  const auto bounded = [&](void* data, int count) {
-    MPI_Request request;
-    base::checkMpi(MPI_Ibcast(data, count, MPI_BYTE, 0, comm, &request), "MPI_Ibcast");
-    base::waitWithDeadline(request, Clock::now() + timeout,
-                           "sharing the wall's directory: a rank did not join in time");
-  };
-  bounded(&size, sizeof size);
+  const base::Bound bound{.until = timeout,
+                          .late = "sharing the wall's directory: a rank did not join in time"};
+  base::bcast(&size, sizeof size, 0, comm, bound);
   if (size > kMaxMessageBytes)
     throw base::Error("a directory of " + std::to_string(size) + " bytes");
   bytes.resize(size);
-  bounded(bytes.data(), static_cast<int>(size));
+  base::bcast(bytes.data(), static_cast<int>(size), 0, comm, bound);
   return parseDirectory(bytes.data(), bytes.size());
 }
 
 Roster shareRoster(MPI_Comm comm, const ServiceClient* client, std::chrono::milliseconds timeout) {
   messaging::Bytes bytes = client ? client->rosterBytes() : messaging::Bytes{};
   std::uint64_t size = bytes.size();
-  const auto bounded = [&](void* data, int count) {
-    MPI_Request request;
-    base::checkMpi(MPI_Ibcast(data, count, MPI_BYTE, 0, comm, &request), "MPI_Ibcast");
-    base::waitWithDeadline(request, Clock::now() + timeout,
-                           "sharing the wall's roster: a rank did not join in time");
-  };
-  bounded(&size, sizeof size);
+  const base::Bound bound{.until = timeout,
+                          .late = "sharing the wall's roster: a rank did not join in time"};
+  base::bcast(&size, sizeof size, 0, comm, bound);
   if (size > kMaxMessageBytes) throw base::Error("a roster of " + std::to_string(size) + " bytes");
   bytes.resize(size);
-  bounded(bytes.data(), static_cast<int>(size));
+  base::bcast(bytes.data(), static_cast<int>(size), 0, comm, bound);
   return parseRoster(bytes.data(), bytes.size());
 }
 
