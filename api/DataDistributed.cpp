@@ -16,7 +16,7 @@
 #include "api/SceneStyle.h"
 #include "api/SessionTesting.h"
 #include "base/AtomicFile.h"
-#include "base/BoundedWait.h"
+#include "base/Collectives.h"
 #include "base/Error.h"
 #include "base/Parallel.h"
 #include "dfb/DistributedFrameBuffer.h"
@@ -37,12 +37,6 @@ namespace dfbwall {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-void bounded(MPI_Request& request, std::chrono::milliseconds timeout, const std::string& what) {
-  base::waitWithDeadline(
-      request, Clock::now() + timeout,
-      what + ": another rank did not join within " + std::to_string(timeout.count()) + " ms");
-}
 
 // What render rank 0 sends for every frame: the camera (so every rank renders the same) and the
 // hash of its style, which every rank compares its own with.
@@ -228,9 +222,7 @@ void Session::Impl::startRendering() {
     wallSide->attach(*fb);
   }
   // Pairs with runWall's: every object of every rank is registered before anyone sends.
-  MPI_Request request;
-  base::checkMpi(MPI_Ibarrier(own, &request), "MPI_Ibarrier");
-  bounded(request, timeout, "dfbwall session start-up");
+  base::barrier(own, base::Bound::joinWithin(timeout, "dfbwall session start-up"));
 }
 
 void Session::Impl::setUp() {
@@ -389,9 +381,9 @@ void Session::Impl::renderFrame() {
   std::memcpy(order.camera, floats, sizeof floats);
   order.styleHash = hashOfStyle;
   if (wallSide) order.rosterVersion = wallSide->rosterVersion();
-  MPI_Request request;
-  base::checkMpi(MPI_Ibcast(&order, sizeof order, MPI_BYTE, 0, role, &request), "MPI_Ibcast");
-  bounded(request, 2 * timeout, "frame " + std::to_string(next));  // rank 0 may wait for the wall
+  // Rank 0 may first wait for the wall's credit: twice the timeout is the bound.
+  base::bcast(&order, sizeof order, 0, role,
+              base::Bound::joinWithin(2 * timeout, "frame " + std::to_string(next)));
   // The wall lost a process or got one back: its pieces stop, or go to its new endpoint.
   if (wallSide) wallSide->followRoster(order.rosterVersion, role);
   // What the ranks must agree on, each the lowest rank it concerns as renderRanks - rank (MPI_MAX;
@@ -404,9 +396,8 @@ void Session::Impl::renderFrame() {
   int mine[4] = {dirty || !driver ? 1 : 0, styleSet ? 0 : mark,
                  styleSet && hashOfStyle != order.styleHash ? mark : 0, failed ? mark : 0};
   int agreed[4] = {0, 0, 0, 0};
-  base::checkMpi(MPI_Iallreduce(mine, agreed, 4, MPI_INT, MPI_MAX, role, &request),
-                 "MPI_Iallreduce");
-  bounded(request, timeout, "frame " + std::to_string(next));
+  base::allreduce(mine, agreed, 4, MPI_INT, MPI_MAX, role,
+                  base::Bound::joinWithin(timeout, "frame " + std::to_string(next)));
   if (failed) error->raise();
   if (agreed[3])
     throw std::runtime_error("dfbwall: render rank " + std::to_string(renderRanks - agreed[3]) +

@@ -2,24 +2,15 @@
 
 #include <algorithm>
 
-#include "base/BoundedWait.h"
-#include "base/Error.h"
+#include "base/Collectives.h"
 
 namespace app {
 
 std::vector<RankFrame> gatherRankFrames(const RankFrame& mine, MPI_Comm comm,
                                         std::chrono::milliseconds timeout) {
-  int rank = 0, size = 0;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
-  std::vector<RankFrame> all(rank == 0 ? static_cast<size_t>(size) : 0);
-  MPI_Request request;
-  base::checkMpi(MPI_Igather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, 0,
-                             comm, &request),
-                 "MPI_Igather");
-  base::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
-                         "frame statistics: another render rank did not send them in time");
-  return all;
+  return base::gather(mine, 0, comm,
+                      {.until = timeout,
+                       .late = "frame statistics: another render rank did not send them in time"});
 }
 
 FrameRecord combine(const std::vector<RankFrame>& all) {

@@ -15,9 +15,7 @@
 #include "apps/Stats.h"
 #include "apps/StatusBoard.h"
 #include "apps/Steering.h"
-#include "base/BoundedWait.h"
 #include "base/Collectives.h"
-#include "base/Error.h"
 #include "base/Timing.h"
 #include "dfb/DistributedFrameBuffer.h"
 #include "renderers/FrameDriver.h"
@@ -267,7 +265,7 @@ int RenderRank::run() {
   publish(0, false);  // the control server may answer before the first frame
   try {
     // Every object of every rank is registered before anyone sends.
-    base::boundedBarrier(MPI_COMM_WORLD, timeout_, "start-up");
+    base::barrier(MPI_COMM_WORLD, base::Bound::joinWithin(timeout_, "start-up"));
     cpuAtStart_ = base::processCpuNs();
     runStart_ = lastProgress_ = Clock::now();
     // What the pieces take on the wire: the messenger counts it per object, after compression.
@@ -317,9 +315,9 @@ FrameOrder RenderRank::orderFrame(std::uint32_t frameId) {
   }
   // Rank 0 may first wait for the wall's credit (up to the timeout) or idle: twice that is
   // the bound. After an idle order the wait is long, so it backs off to (nearly) no CPU.
-  base::boundedBcast(&order, sizeof order, renderComm_, 2 * timeout_,
-                     "frame " + std::to_string(frameId),
-                     idling_ ? kIdlePoll : std::chrono::microseconds(20));
+  base::Bound bound = base::Bound::joinWithin(2 * timeout_, "frame " + std::to_string(frameId));
+  if (idling_) bound.maxSleep = kIdlePoll;
+  base::bcast(&order, sizeof order, 0, renderComm_, bound);
   return order;
 }
 

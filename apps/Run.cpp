@@ -20,7 +20,6 @@
 #include "apps/StopSignals.h"
 #include "apps/control/PageRoutes.h"
 #include "base/AtomicFile.h"
-#include "base/BoundedWait.h"
 #include "base/Collectives.h"
 #include "base/Error.h"
 #include "base/MemoryBudget.h"
@@ -189,8 +188,8 @@ std::string compareInputs(const Job& job, const InputHashes& mine,
                           std::chrono::milliseconds timeout) {
   std::uint64_t local[4] = {mine.layout, ~mine.layout, mine.scene, mine.scene ? ~mine.scene : 0};
   std::uint64_t high[4] = {0, 0, 0, 0};
-  base::boundedAllreduce(local, high, 4, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD, timeout,
-                         "comparing inputs");
+  base::allreduce(local, high, 4, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD,
+                  base::Bound::joinWithin(timeout, "comparing inputs"));
   // max(h) == min(h) exactly when every rank's hash is the same; min(h) = ~max(~h).
   if (high[0] != ~high[1])
     return job.options.wall +
@@ -199,25 +198,17 @@ std::string compareInputs(const Job& job, const InputHashes& mine,
   if (high[2] != (high[3] ? ~high[3] : 0))
     return job.options.scene +
            ": the render ranks read different bytes from this file or the files it refers to; "
-           "every "
-           "host must see the same scene";
+           "every host must see the same scene";
   return {};
 }
 
 // Every rank's totals to rank 0. Collective over MPI_COMM_WORLD; only with --stats.
-std::vector<RankTotals> collectTotals(const Job& job, RankTotals mine,
-                                      std::chrono::milliseconds timeout) {
-  int size = 0;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
+std::vector<RankTotals> collectTotals(RankTotals mine, std::chrono::milliseconds timeout) {
   mine.peakRssKiB = peakRssKiB();
-  std::vector<RankTotals> all(job.worldRank == 0 ? static_cast<size_t>(size) : 0);
-  MPI_Request request;
-  base::checkMpi(MPI_Igather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, 0,
-                             MPI_COMM_WORLD, &request),
-                 "MPI_Igather");
-  base::waitWithDeadline(request, std::chrono::steady_clock::now() + timeout,
-                         "collecting statistics: another rank did not send its totals in time");
-  return all;
+  return base::gather(mine, 0, MPI_COMM_WORLD,
+                      {.until = timeout,
+                       .late = "collecting statistics: another rank did not send its totals in "
+                               "time"});
 }
 
 // --connect: render rank 0 read the wall's directory; every rank routes with it.
@@ -318,7 +309,7 @@ int run(int argc, char** argv) {
             : runRenderRank(job, messenger, roleComm, control, wallControl, steering, status.get(),
                             stats.get(), totals);
     if (!job.options.statsFile.empty()) {
-      const std::vector<RankTotals> ranks = collectTotals(job, totals, timeout);
+      const std::vector<RankTotals> ranks = collectTotals(totals, timeout);
       const bool stoppedEarly = control.stopRequested().has_value() || exitCode != 0;
       if (stats) stats->writeEnd(ranks, stoppedEarly, exitCode);
     }

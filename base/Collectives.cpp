@@ -75,22 +75,6 @@ Pending startAllreduce(const void* in, void* out, int count, MPI_Datatype type, 
   return Pending(request);
 }
 
-void boundedBarrier(MPI_Comm comm, std::chrono::milliseconds timeout, const std::string& what) {
-  barrier(comm, Bound::joinWithin(timeout, what));
-}
-
-void boundedBcast(void* buffer, int bytes, MPI_Comm comm, std::chrono::milliseconds timeout,
-                  const std::string& what, std::chrono::microseconds maxSleep) {
-  Bound bound = Bound::joinWithin(timeout, what);
-  bound.maxSleep = maxSleep;
-  bcast(buffer, bytes, 0, comm, bound);
-}
-
-void boundedAllreduce(const void* in, void* out, int count, MPI_Datatype type, MPI_Op op,
-                      MPI_Comm comm, std::chrono::milliseconds timeout, const std::string& what) {
-  allreduce(in, out, count, type, op, comm, Bound::joinWithin(timeout, what));
-}
-
 namespace collectives {
 
 void gatherBytes(const void* mine, void* all, int bytes, int root, MPI_Comm comm,

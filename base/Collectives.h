@@ -101,14 +101,6 @@ template <class T>
 Pending startGatherv(std::span<const T> mine, int root, MPI_Comm comm, const Bound& bound,
                      Gathered<T>& into);
 
-// Shorthands with the text of Bound::joinWithin, for setup steps; bcast from rank 0.
-void boundedBarrier(MPI_Comm comm, std::chrono::milliseconds timeout, const std::string& what);
-void boundedBcast(void* buffer, int bytes, MPI_Comm comm, std::chrono::milliseconds timeout,
-                  const std::string& what,
-                  std::chrono::microseconds maxSleep = std::chrono::microseconds(20));
-void boundedAllreduce(const void* in, void* out, int count, MPI_Datatype type, MPI_Op op,
-                      MPI_Comm comm, std::chrono::milliseconds timeout, const std::string& what);
-
 // The untyped core of the templates above.
 namespace collectives {
 

@@ -44,7 +44,7 @@ void MpiWallProcess::run(messaging::Messenger& messenger, MPI_Comm wallComm, MPI
   } forget{control};
   try {
     // Pairs with the render ranks' barrier: every object of every rank is registered.
-    base::boundedBarrier(startComm, options_.timeout, "start-up");
+    base::barrier(startComm, base::Bound::joinWithin(options_.timeout, "start-up"));
     if (hooks.started) hooks.started();
     for (std::uint32_t frameId = 1; options_.lastFrame == 0 || frameId <= options_.lastFrame;
          ++frameId) {

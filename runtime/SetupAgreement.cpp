@@ -11,7 +11,8 @@ std::optional<int> firstRankWithProblem(const std::string& problem, MPI_Comm com
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
   int failing = problem.empty() ? size : rank, first = size;
-  base::boundedAllreduce(&failing, &first, 1, MPI_INT, MPI_MIN, comm, timeout, what);
+  base::allreduce(&failing, &first, 1, MPI_INT, MPI_MIN, comm,
+                  base::Bound::joinWithin(timeout, what));
   if (first == size) return std::nullopt;
   return first;
 }

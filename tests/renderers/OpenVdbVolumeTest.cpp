@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
+#include <unistd.h>
 
 #include <filesystem>
 
@@ -20,7 +21,9 @@ float valueOf(int i, int j, int k) { return static_cast<float>(i * 10000 + j * 1
 // at (5, 5, 5); voxel size 0.5, translated by (1, 2, 3). An int grid shares the file.
 std::string writeVdb() {
   openvdb::initialize();
-  const fs::path dir = fs::path(::testing::TempDir()) / "dfbwall-vdb-tests";
+  // One folder a process: two test processes never write one file.
+  const fs::path dir =
+      fs::path(::testing::TempDir()) / ("dfbwall-vdb-tests-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const std::string path = (dir / "field.vdb").string();
   auto labels = openvdb::Int32Grid::create(0);
