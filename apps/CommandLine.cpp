@@ -280,10 +280,13 @@ void addServe(CLI::App& serve, Options& o) {
 }
 
 void addRelay(CLI::App& relay, RelayCommand& c) {
-  addListen(relay, c.listen, kNetwork,
-            "[ADDR:]PORT for jobs (default address 127.0.0.1); jobs are told ADDR, so on a "
-            "gateway give the address the render hosts reach");
-  relay.add_option("--wall", c.wall, "HOST:PORT of the wall (what `dfbwall serve` printed)")
+  addListen(
+      relay, c.listen, kNetwork,
+      "required: [ADDR:]PORT for jobs (default address 127.0.0.1); jobs are told ADDR, so on a "
+      "gateway give the address the render hosts reach");
+  relay
+      .add_option("--wall", c.wall,
+                  "required: HOST:PORT of the wall (what `dfbwall serve` printed)")
       ->group(kNetwork);
   addTimeout(relay, c.timeoutSeconds, "seconds after which a silent job is forgotten");
   addStats(relay, c.statsFile, "append one JSON line per job to FILE");
