@@ -12,9 +12,30 @@
 
 #include "wall/Layout.h"
 
+namespace {
+
+// The whole command line: one layout, no options.
+const char* const kUsage =
+    "usage: dfbwall-layout LAYOUT.toml\n"
+    "prints the layout's canvas, its wall processes and the host and displays of each:\n"
+    "  canvas WIDTHxHEIGHT\n"
+    "  processes W\n"
+    "  process P host HOST displays NAME[,NAME...]\n"
+    "options: -h, --help (this text)\n";
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  if (argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::fputs(kUsage, stdout);
+    return 0;
+  }
   if (argc != 2 || argv[1][0] == '-') {
-    std::fprintf(stderr, "usage: %s LAYOUT.toml\n", argv[0]);
+    for (int i = 1; i < argc; ++i)
+      if (argv[i][0] == '-')
+        std::fprintf(stderr, "dfbwall-layout: error: %s is not an option of dfbwall-layout\n",
+                     argv[i]);
+    std::fputs(kUsage, stderr);
     return 2;
   }
   try {

@@ -1,13 +1,16 @@
 #pragma once
-// The dfbwall command line, parsed into plain values. Every rank parses the same arguments and
-// gets the same answer, so a bad option is caught everywhere at once.
+// The dfbwall command line, parsed into plain values: the render job (dfbwall itself) and the
+// `serve` and `relay` subcommands, each with only the options it reads (apps/CommandLine.h).
+// Every rank parses the same arguments and gets the same answer, so a bad option is caught
+// everywhere at once.
 #include <cstdint>
 #include <string>
 
 namespace app {
 
+// The render job's options, and serve's (marked below): serve reads only those marked.
 struct Options {
-  // Scene and rendering (the renderer issue).
+  // Scene and rendering.
   std::string scene = "builtin:cornell";
   int width = 512, height = 512;
   bool sizeGiven = false;
@@ -32,26 +35,26 @@ struct Options {
   std::string ghost = "reach";
 
   // The wall.
-  std::string wall;  // layout file; empty: no wall
-  bool offscreen = false;
+  std::string wall;        // layout file; empty: no wall (serve: the wall it runs)
+  bool offscreen = false;  // serve too
   std::string captureDir;
   int captureEvery = 0;
-  std::string statsFile;
+  std::string statsFile;       // serve too: one JSON line per job
   std::string previewFile;     // .png: the last whole-wall preview, assembled on rank 0
   std::string mode = "route";  // route | gather
   bool dryRun = false;
-  int framesInFlight = 2;
+  int framesInFlight = 2;  // serve too: the most it grants a job
   bool compress = true;
   bool compressWithinHost = false;
-  int handlerThreads = 0;  // threads handling received tiles and pieces at once; 0: the cores
-  int timeoutSeconds = 60;
-  // Bytes each rank may hold of data sized by its input (dfb/MemoryBudget.h); 0: the host's
+  int handlerThreads = 0;   // serve too: threads handling received pieces at once; 0: the cores
+  int timeoutSeconds = 60;  // serve too
+  // Bytes each rank may hold of data sized by its input (base/MemoryBudget.h); 0: the host's
   // memory shared by the job's ranks on it.
   std::uint64_t memoryLimit = 0;
   bool quiet = false;
 
-  // The wall as a service (issue 20). `dfbwall serve`: these processes are the wall of `wall`,
-  // listening for render jobs on `listen`. `--connect`: this job renders for such a wall.
+  // The wall as a service. `dfbwall serve`: these processes are the wall of `wall`, listening
+  // for render jobs on `listen`. `--connect`: this job renders for such a wall.
   bool serve = false;
   std::string listen;            // serve, the head: [ADDR:]PORT
   int process = -1;              // serve --process N: this is the layout's process N, alone
@@ -61,15 +64,15 @@ struct Options {
   std::string codec = "snappy";  // connect: raw | snappy | jpeg[:QUALITY[:SUBSAMPLING]]
   bool wait = false;             // connect: queue behind a connected job instead of failing
 
-  // Steering (issue 12).
+  // Steering.
   std::string control;         // [ADDR:]PORT of the control server on render rank 0; empty: none
   std::string controlToken;    // required from clients; generated when binding beyond loopback
   std::int64_t maxSpp = 1024;  // with --frames 0: idle once an epoch has this many samples
   std::string cameraPath;      // FILE.toml: keyframes (apps/CameraPath.h)
 };
 
-// Parses argv. Returns an exit code to stop with (0 after --help) or -1 to go on; messages go to
-// stdout/stderr only when `print` (rank 0).
+// Parses argv (the render job, or `serve ...`). Returns an exit code to stop with (0 after --help)
+// or -1 to go on; messages go to stdout/stderr only when `print` (rank 0).
 int parseOptions(int argc, char** argv, Options& options, bool print);
 // True when the hub or the wall is on the other end: a wall of this job (--wall) or a serving
 // wall (--connect).

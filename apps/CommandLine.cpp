@@ -1,0 +1,381 @@
+#include "apps/CommandLine.h"
+
+#include <string>
+#include <vector>
+
+#include "wall/Layout.h"
+
+namespace app {
+namespace {
+
+// Help groups; a command lists them in the order its options are added.
+const std::string kScene = "Scene", kRendering = "Rendering",
+                  kBricks = "Data-parallel scivis (bricks)", kWall = "Wall",
+                  kConnect = "Connect to a wall service", kControl = "Control",
+                  kNetwork = "Network", kNetworkSecurity = "Network and security",
+                  kThroughput = "Throughput", kFailures = "Failure handling", kOutput = "Output",
+                  kHelp = "Help";
+
+// ---- Options of more than one command -------------------------------------------------------
+
+// The render job and serve: the layout whose displays are driven, and how they present.
+void addWallGroup(CLI::App& app, std::string& layout, bool& offscreen) {
+  app.add_option("--wall", layout, "wall layout FILE.toml (configs/walls/*.toml)")->group(kWall);
+  app.add_flag("--offscreen", offscreen, "present through OSMesa instead of windows")->group(kWall);
+}
+
+// The render job and serve: frames between rendering and presenting, and the threads that
+// handle what arrives. The help says what each means for the command.
+void addThroughputGroup(CLI::App& app, int& framesInFlight, const std::string& framesInFlightHelp,
+                        int& handlerThreads, const std::string& handlerThreadsHelp) {
+  app.add_option("--frames-in-flight", framesInFlight, framesInFlightHelp)
+      ->check(CLI::Range(1, 8))
+      ->capture_default_str()
+      ->group(kThroughput);
+  app.add_option("--handler-threads", handlerThreads, handlerThreadsHelp)
+      ->check(CLI::Range(0, 256))
+      ->capture_default_str()
+      ->group(kThroughput);
+}
+
+// Every command: how long a silent peer may stay silent.
+void addTimeout(CLI::App& app, int& seconds, const std::string& help) {
+  app.add_option("--timeout", seconds, help)
+      ->check(CLI::Range(1, 86400))
+      ->capture_default_str()
+      ->group(kFailures);
+}
+
+// Every command: JSON statistics to a file.
+void addStats(CLI::App& app, std::string& file, const std::string& help) {
+  app.add_option("--stats", file, help)->group(kOutput);
+}
+
+// serve and relay: where render jobs connect.
+void addListen(CLI::App& app, std::string& address, const std::string& group,
+               const std::string& help) {
+  app.add_option("--listen", address, help)->group(group);
+}
+
+// The render job (with --connect) and serve: the token a serving wall asks of its jobs.
+void addToken(CLI::App& app, std::string& token, const std::string& group,
+              const std::string& help) {
+  app.add_option("--token", token, help)->group(group);
+}
+
+// Last, so that every command lists it after its own groups.
+void addHelp(CLI::App& app) {
+  app.set_help_flag("-h,--help", "print this help and exit")->group(kHelp);
+}
+
+// ---- The render job -------------------------------------------------------------------------
+
+void addSceneGroup(CLI::App& app, Options& o) {
+  app.add_option(
+         "--scene", o.scene,
+         "FILE.toml or builtin:NAME (cornell, spheres; for --renderer scivis: wavelet, particles)")
+      ->capture_default_str()
+      ->group(kScene);
+  app.add_option("--camera-path", o.cameraPath,
+                 "FILE.toml: camera keyframes (time -> camera) for a reproducible fly-through")
+      ->group(kScene);
+  app.add_option("--orbit", o.orbit,
+                 "camera orbit, DEGREES per frame about the look-at point around the up axis "
+                 "(each frame restarts accumulation)")
+      ->check(CLI::Range(-360.0f, 360.0f))
+      ->capture_default_str()
+      ->group(kScene);
+}
+
+void addRenderingGroup(CLI::App& app, Options& o, RawOptions& raw) {
+  app.add_option("--renderer", o.renderer, "renderer")
+      ->check(CLI::IsMember({"pathtracer", "primary", "pattern", "scivis"}))
+      ->capture_default_str()
+      ->group(kRendering);
+  app.add_option("--size", raw.size, "image size WxH (not with --wall: the layout sets the canvas)")
+      ->group(kRendering);
+  app.add_option("--spp", o.spp, "samples per pixel per frame")
+      ->check(CLI::Range(1, 1 << 16))
+      ->capture_default_str()
+      ->group(kRendering);
+  app.add_option("--frames", o.frames, "frames to render, accumulated (0: until stopped)")
+      ->check(CLI::Range(0, 1 << 30))
+      ->capture_default_str()
+      ->group(kRendering);
+  app.add_option("--seed", o.seed, "random seed")->capture_default_str()->group(kRendering);
+  app.add_option("--max-depth", o.maxDepth, "maximum path length")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str()
+      ->group(kRendering);
+  app.add_option("--exposure", o.exposure, "exposure before tone mapping")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str()
+      ->group(kRendering);
+  app.add_flag("--filmic", o.filmic, "filmic tone curve instead of a clamp")->group(kRendering);
+  app.add_option("--tile-size", o.tileSize, "tile size in pixels")
+      ->check(CLI::Range(4, 1024))
+      ->capture_default_str()
+      ->group(kRendering);
+  app.add_option("--threads", o.threads, "threads per rank (0: all cores)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str()
+      ->group(kRendering);
+  app.add_option("--distribution", o.distribution, "work distribution")
+      ->check(CLI::IsMember({"static", "roundrobin", "dynamic"}))
+      ->capture_default_str()
+      ->group(kRendering);
+}
+
+void addBricksGroup(CLI::App& app, Options& o) {
+  app.add_option("--bricks", o.bricks,
+                 "scivis: cut the scene into N bricks, each rank loads only its own "
+                 "(data-parallel; 0: every rank holds the whole scene)")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str()
+      ->group(kBricks);
+  app.add_option("--replication", o.replication,
+                 "with --bricks: ranks holding each brick (1: data-parallel, all: image-parallel)")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str()
+      ->group(kBricks);
+  app.add_option("--ghost", o.ghost,
+                 "with --bricks: ghost data around each brick. reach: all that shading rays "
+                 "(AO) reach, images equal the unbricked render; layer: one voxel layer for "
+                 "interpolation, less memory, AO differs near brick faces")
+      ->check(CLI::IsMember({"reach", "layer"}))
+      ->capture_default_str()
+      ->group(kBricks);
+}
+
+// The wall of this job: its last W ranks drive the layout's displays.
+void addJobWallOptions(CLI::App& app, Options& o) {
+  app.add_option("--mode", o.mode,
+                 "route: tiles go straight to the displays; gather: through rank 0")
+      ->check(CLI::IsMember({"route", "gather"}))
+      ->capture_default_str()
+      ->group(kWall);
+  app.add_flag("--dry-run", o.dryRun,
+               "validate, print the plan (which tiles go where), render nothing")
+      ->group(kWall);
+}
+
+void addConnectGroup(CLI::App& app, Options& o) {
+  app.add_option("--connect", o.connect,
+                 "HOST:PORT of a wall that `dfbwall serve` runs (or a relay): every rank renders "
+                 "for it")
+      ->group(kConnect);
+  addToken(app, o.token, kConnect, "with --connect: the wall's token (what serve printed)");
+  app.add_option("--codec", o.codec,
+                 "with --connect: how pieces travel: raw, snappy (lossless, plane-delta "
+                 "filtered) or jpeg[:QUALITY[:444|422|420]] (lossy, for thin links)")
+      ->capture_default_str()
+      ->group(kConnect);
+  app.add_flag("--wait", o.wait, "with --connect: wait for a busy wall instead of failing")
+      ->group(kConnect);
+}
+
+void addControlGroup(CLI::App& app, Options& o) {
+  app.add_option("--control", o.control,
+                 "[ADDR:]PORT: serve the JSON control API and the controller page on render rank "
+                 "0 (default address 127.0.0.1; any other needs a token)")
+      ->group(kControl);
+  app.add_option("--control-token", o.controlToken,
+                 "token clients must send (Authorization: Bearer TOKEN); generated and printed "
+                 "when --control binds beyond loopback without one")
+      ->group(kControl);
+  app.add_option("--max-spp", o.maxSpp,
+                 "with --frames 0: samples per pixel after which a still wall stops rendering "
+                 "until something changes (0: never)")
+      ->check(CLI::Range(0, 1 << 30))
+      ->capture_default_str()
+      ->group(kControl);
+}
+
+// How tiles and pieces travel between the job's ranks.
+void addJobMessagingOptions(CLI::App& app, Options& o) {
+  app.add_flag("!--no-compress", o.compress, "send tiles and pieces uncompressed")
+      ->group(kThroughput);
+  app.add_flag("--compress-within-host", o.compressWithinHost,
+               "compress messages between ranks of one host too (default: only across hosts)")
+      ->group(kThroughput);
+}
+
+void addJobFailureOptions(CLI::App& app, RawOptions& raw) {
+  app.add_option("--memory-limit", raw.memoryLimit,
+                 "BYTES, or with a suffix K, M, G, T (e.g. 512M, 4G): what each rank may hold of "
+                 "scenes, images and captures; more is refused when read (default: the host's "
+                 "memory shared by the job's ranks on it)")
+      ->group(kFailures);
+}
+
+void addJobOutputGroup(CLI::App& app, Options& o) {
+  app.add_option("--image", o.image,
+                 "without a wall: write the last frame on rank 0: .png (tone-mapped) or .pfm "
+                 "(linear)")
+      ->group(kOutput);
+  app.add_option("--capture", o.captureDir,
+                 "with a wall: write each display's last frame (and a wall preview) under DIR")
+      ->group(kOutput);
+  app.add_option("--capture-every", o.captureEvery, "with --capture: every K-th frame too")
+      ->check(CLI::Range(0, 1 << 30))
+      ->group(kOutput);
+  app.add_option("--preview", o.previewFile,
+                 "assemble the whole-wall preview (at most 1024 cells a side) on rank 0 from "
+                 "tiles shrunk on their owners (as the control server does) and write the last "
+                 "one to FILE.png")
+      ->group(kOutput);
+  addStats(app, o.statsFile, "write per-frame statistics as JSON Lines to FILE");
+  app.add_flag("--quiet", o.quiet, "no progress line")->group(kOutput);
+}
+
+void addRenderJob(CLI::App& app, Options& o, RawOptions& raw) {
+  addSceneGroup(app, o);
+  addRenderingGroup(app, o, raw);
+  addBricksGroup(app, o);
+  addWallGroup(app, o.wall, o.offscreen);
+  addJobWallOptions(app, o);
+  addConnectGroup(app, o);
+  addControlGroup(app, o);
+  addThroughputGroup(app, o.framesInFlight, "frames rendered ahead of the wall", o.handlerThreads,
+                     "threads that decompress and handle received tiles and pieces at once, the "
+                     "messenger's inbox thread included (0: the cores; 1: the inbox thread alone)");
+  addJobMessagingOptions(app, o);
+  addTimeout(app, o.timeoutSeconds, "seconds any wait may take before it is an error");
+  addJobFailureOptions(app, raw);
+  addJobOutputGroup(app, o);
+  addHelp(app);
+}
+
+// ---- serve and relay ------------------------------------------------------------------------
+
+void addServe(CLI::App& serve, Options& o) {
+  addWallGroup(serve, o.wall, o.offscreen);
+  addListen(serve, o.listen, kNetworkSecurity,
+            "[ADDR:]PORT of wall process 0's directory, where jobs connect and the other "
+            "processes join (default address 127.0.0.1; any other needs a token, generated and "
+            "printed when not given)");
+  serve
+      .add_option("--process", o.process,
+                  "start (or restart) only the layout's wall process N, on its own (not under "
+                  "mpirun): 0 is the head (needs --listen), the others need --join")
+      ->check(CLI::Range(0, wall::kMaxDisplays - 1))
+      ->group(kNetworkSecurity);
+  serve
+      .add_option("--join", o.join,
+                  "with --process N > 0: HOST:PORT of the running wall's head (what it prints "
+                  "as 'wall service on')")
+      ->group(kNetworkSecurity);
+  addToken(serve, o.token, kNetworkSecurity,
+           "required from jobs and joining processes; generated and printed when --listen is "
+           "beyond loopback and none is given (with --process N > 0: the head's)");
+  addThroughputGroup(serve, o.framesInFlight, "the most frames a job may render ahead of the wall",
+                     o.handlerThreads,
+                     "threads of each wall process that decode received pieces at once (0: the "
+                     "cores)");
+  addTimeout(serve, o.timeoutSeconds,
+             "seconds after which a silent job or wall process is dropped");
+  addStats(serve, o.statsFile,
+           "wall process 0: append one JSON line per job and per process lost or back to FILE");
+  addHelp(serve);
+}
+
+void addRelay(CLI::App& relay, RelayCommand& c) {
+  addListen(
+      relay, c.listen, kNetwork,
+      "required: [ADDR:]PORT for jobs (default address 127.0.0.1); jobs are told ADDR, so on a "
+      "gateway give the address the render hosts reach");
+  relay
+      .add_option("--wall", c.wall,
+                  "required: HOST:PORT of the wall (what `dfbwall serve` printed)")
+      ->group(kNetwork);
+  addTimeout(relay, c.timeoutSeconds, "seconds after which a silent job is forgotten");
+  addStats(relay, c.statsFile, "append one JSON line per job to FILE");
+  addHelp(relay);
+}
+
+// The commands that take `option` ("--scene"), as a message names them.
+std::vector<std::string> commandsTaking(const CommandLine& cli, const std::string& option) {
+  std::vector<std::string> names;
+  if (cli.root.get_option_no_throw(option)) names.push_back("the render job (dfbwall)");
+  for (const CLI::App* sub : {cli.serve, cli.relay})
+    if (sub->get_option_no_throw(option)) names.push_back("dfbwall " + sub->get_name());
+  return names;
+}
+
+// "--scene" of "--scene=x"; empty when `argument` is no option.
+std::string optionName(const std::string& argument) {
+  const std::string name = argument.substr(0, argument.find('='));
+  return name.size() > 1 && name[0] == '-' && name != "--" ? name : std::string();
+}
+
+}  // namespace
+
+CommandLine::CommandLine(Options& options, RelayCommand& relayCommand, RawOptions& raw)
+    : root(
+          "dfbwall: path-traces a scene on MPI ranks and shows it on a display wall through "
+          "the Distributed FrameBuffer.\n"
+          "  image: mpirun -np N dfbwall --scene S --size WxH --image out.png\n"
+          "  wall:  mpirun -np R+W dfbwall --wall configs/walls/2x2.toml --offscreen --capture "
+          "DIR\n"
+          "These options are the render job's; serve and relay take their own "
+          "(dfbwall serve --help, dfbwall relay --help).",
+          "dfbwall") {
+  addRenderJob(root, options, raw);
+  serve = root.add_subcommand(
+      "serve",
+      "run the wall of --wall as a persistent service that render jobs connect to "
+      "(mpirun -np W dfbwall serve --wall L --listen [ADDR:]PORT; jobs: dfbwall --connect)");
+  addServe(*serve, options);
+  relay = root.add_subcommand(
+      "relay",
+      "forward render jobs to a serving wall from hosts that cannot reach it, without decoding "
+      "their pieces (dfbwall relay --listen [ADDR:]PORT --wall HOST:PORT; jobs: dfbwall "
+      "--connect RELAY:PORT)");
+  addRelay(*relay, relayCommand);
+  root.require_subcommand(0, 1);
+  // Arguments a command does not take are kept, not thrown at: misplacedArgument names them
+  // with the command and where they belong.
+  for (CLI::App* app : {&root, serve, relay}) app->allow_extras();
+}
+
+const CLI::App& CommandLine::command() const {
+  if (serve->parsed()) return *serve;
+  if (relay->parsed()) return *relay;
+  return root;
+}
+
+std::string CommandLine::commandName() const {
+  const CLI::App& given = command();
+  return &given == &root ? "dfbwall" : "dfbwall " + given.get_name();
+}
+
+std::string CommandLine::misplacedArgument() const {
+  const CLI::App& given = command();
+  const std::string name = &given == &root ? "the render job" : given.get_name();
+  const std::string seeHelp = " (see " + commandName() + " --help)";
+  std::vector<std::string> stray;
+  if (&given != &root) {
+    // What came before the subcommand's name went to the render job.
+    stray = root.remaining();
+    for (const CLI::Option* option : root.get_options())
+      if (option->count() > 0) stray.push_back(option->get_name());
+    for (const std::string& argument : stray)
+      if (const std::string option = optionName(argument);
+          !option.empty() && given.get_option_no_throw(option))
+        return option + " was given before " + name + "; its options go after it (" +
+               commandName() + " " + option + " ...)";
+  }
+  for (const std::string& argument : given.remaining()) stray.push_back(argument);
+  if (stray.empty()) return {};
+  const std::string option = optionName(stray.front());
+  if (option.empty()) return "unexpected argument '" + stray.front() + "'" + seeHelp;
+  const std::vector<std::string> others = commandsTaking(*this, option);
+  std::string list;
+  for (size_t i = 0; i < others.size(); ++i)
+    list += (i == 0 ? "" : i + 1 == others.size() ? " and " : ", ") + others[i];
+  return option + " is not an option of " + name +
+         (others.empty() ? "" : "; " + list + (others.size() > 1 ? " take it" : " takes it")) +
+         seeHelp;
+}
+
+}  // namespace app
