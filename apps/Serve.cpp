@@ -18,6 +18,7 @@
 #include "apps/Run.h"
 #include "apps/StopSignals.h"
 #include "base/Collectives.h"
+#include "runtime/SetupAgreement.h"
 #include "wall/DisplayPresenters.h"
 #include "wall/Ranks.h"
 #include "wall/service/WallService.h"
@@ -52,6 +53,76 @@ std::pair<std::string, std::string> shareHead(const std::string& address, const 
   return {std::string(buffer, static_cast<size_t>(newline - buffer)), std::string(newline + 1)};
 }
 
+// The layout and whether this start fits it; the problem, or an empty string.
+std::string checkStart(const Options& o, int worldSize, int process, bool alone,
+                       std::optional<wall::Layout>& layout) {
+  try {
+    layout = wall::loadLayout(o.wall);
+    if (alone && worldSize != 1)
+      return "serve --process starts one wall process on its own; under mpirun -np " +
+             std::to_string(worldSize) + " every rank is a process already (leave it out)";
+    if (alone && process >= layout->processCount)
+      return o.wall + ": the layout has wall processes 0.." +
+             std::to_string(layout->processCount - 1) + "; there is no process " +
+             std::to_string(process);
+    if (!alone && worldSize != layout->processCount)
+      return o.wall + ": the layout has " + std::to_string(layout->processCount) +
+             " wall processes; start serve with mpirun -np " +
+             std::to_string(layout->processCount) + " (got " + std::to_string(worldSize) +
+             "), or each process on its own with --process N";
+    return {};
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+}
+
+wall::service::ServiceOptions serviceOptions(const Options& o, int process, bool alone,
+                                             StopSignals& signals, int& stopSignal, FILE* stats) {
+  wall::service::ServiceOptions service;
+  service.process = process;
+  service.listen = o.listen;
+  service.join = o.join;
+  service.token = o.token;
+  service.timeout = std::chrono::seconds(o.timeoutSeconds);
+  service.handlerThreads = o.handlerThreads;
+  service.framesInFlight = o.framesInFlight;
+  service.leaveAlone = alone;
+  service.stopRequested = [&signals, &stopSignal] {
+    if (const int s = signals.poll()) stopSignal = s;
+    return stopSignal != 0;
+  };
+  service.log = [process](const std::string& line) {
+    std::fprintf(stderr, "dfbwall serve: wall process %d: %s\n", process, line.c_str());
+  };
+  service.jobRecord = [stats](const std::string& line) {
+    if (!stats) return;
+    std::fprintf(stats, "%s\n", line.c_str());
+    std::fflush(stats);
+  };
+  return service;
+}
+
+// Says which processes have not joined yet (the head), and where jobs connect.
+void reportStart(const wall::service::WallService& wall, const wall::service::ServiceOptions& s,
+                 const std::vector<int>& absent, int timeoutSeconds) {
+  if (s.process != 0) {
+    if (!absent.empty())
+      s.log("no answer from the head at " + wall.address() + " yet; still trying");
+    return;
+  }
+  if (!absent.empty()) {
+    std::string list;
+    for (int p : absent) list += (list.empty() ? "" : ", ") + std::to_string(p);
+    s.log("wall process" + std::string(absent.size() > 1 ? "es " : " ") + list +
+          " did not join within " + std::to_string(timeoutSeconds) +
+          " s; the wall starts without them (they join when they come)");
+  }
+  // One line a script can read: where jobs connect, and the token when one is needed.
+  std::printf("dfbwall: wall service on %s%s%s\n", wall.address().c_str(),
+              wall.token().empty() ? "" : "  token: ", wall.token().c_str());
+  std::fflush(stdout);
+}
+
 }  // namespace
 
 int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath& /*failure*/) {
@@ -63,65 +134,27 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
   // Setup problems (a bad layout, a rank count that does not fit, a port in use) are bad input:
   // one message, every process exits 1.
   std::optional<wall::Layout> layout;
-  std::string problem;
-  try {
-    layout = wall::loadLayout(o.wall);
-    if (alone && worldSize != 1)
-      problem = "serve --process starts one wall process on its own; under mpirun -np " +
-                std::to_string(worldSize) + " every rank is a process already (leave it out)";
-    else if (alone && process >= layout->processCount)
-      problem = o.wall + ": the layout has wall processes 0.." +
-                std::to_string(layout->processCount - 1) + "; there is no process " +
-                std::to_string(process);
-    else if (!alone && worldSize != layout->processCount)
-      problem = o.wall + ": the layout has " + std::to_string(layout->processCount) +
-                " wall processes; start serve with mpirun -np " +
-                std::to_string(layout->processCount) + " (got " + std::to_string(worldSize) +
-                "), or each process on its own with --process N";
-  } catch (const std::exception& e) {
-    problem = e.what();
-  }
+  std::string problem = checkStart(o, worldSize, process, alone, layout);
   FILE* stats = nullptr;
   if (problem.empty() && process == 0 && !o.statsFile.empty()) {
     stats = std::fopen(o.statsFile.c_str(), "a");
     if (!stats) problem = "--stats " + o.statsFile + ": cannot open it for writing";
   }
-  if (alone) {
-    if (!problem.empty()) {
-      std::fprintf(stderr, "dfbwall: error: %s\n", problem.c_str());
-      return 1;
-    }
-  } else {
-    int failing = problem.empty() ? 1 << 30 : worldRank, first = 0;
-    base::allreduce(&failing, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD,
-                    base::Bound::joinWithin(timeout, "setup"));
+  if (alone && !problem.empty()) {
+    std::fprintf(stderr, "dfbwall: error: %s\n", problem.c_str());
+    return 1;
+  }
+  if (!alone) {
+    const std::optional<int> first =
+        runtime::firstRankWithProblem(problem, MPI_COMM_WORLD, timeout, "setup");
     if (first == worldRank) std::fprintf(stderr, "dfbwall: error: %s\n", problem.c_str());
-    if (first != 1 << 30) return 1;
+    if (first) return 1;
   }
   int stopSignal = 0;
   try {
     const auto presenters = wall::makeDisplayPresenters(*layout, process, o.offscreen);
-    wall::service::ServiceOptions service;
-    service.process = process;
-    service.listen = o.listen;
-    service.join = o.join;
-    service.token = o.token;
-    service.timeout = timeout;
-    service.handlerThreads = o.handlerThreads;
-    service.framesInFlight = o.framesInFlight;
-    service.leaveAlone = alone;
-    service.stopRequested = [&signals, &stopSignal] {
-      if (const int s = signals.poll()) stopSignal = s;
-      return stopSignal != 0;
-    };
-    service.log = [process](const std::string& line) {
-      std::fprintf(stderr, "dfbwall serve: wall process %d: %s\n", process, line.c_str());
-    };
-    service.jobRecord = [stats](const std::string& line) {
-      if (!stats) return;
-      std::fprintf(stats, "%s\n", line.c_str());
-      std::fflush(stats);
-    };
+    wall::service::ServiceOptions service =
+        serviceOptions(o, process, alone, signals, stopSignal, stats);
     std::optional<wall::service::WallService> wallService;
     if (process == 0) {
       try {
@@ -141,23 +174,9 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
       }
       wallService.emplace(*layout, presenters->list(), service);
     }
-    const std::vector<int> absent =
-        wallService->waitForProcesses(std::chrono::steady_clock::now() + timeout);
-    if (process == 0) {
-      if (!absent.empty()) {
-        std::string list;
-        for (int p : absent) list += (list.empty() ? "" : ", ") + std::to_string(p);
-        service.log("wall process" + std::string(absent.size() > 1 ? "es " : " ") + list +
-                    " did not join within " + std::to_string(o.timeoutSeconds) +
-                    " s; the wall starts without them (they join when they come)");
-      }
-      // One line a script can read: where jobs connect, and the token when one is needed.
-      std::printf("dfbwall: wall service on %s%s%s\n", wallService->address().c_str(),
-                  wallService->token().empty() ? "" : "  token: ", wallService->token().c_str());
-      std::fflush(stdout);
-    } else if (!absent.empty()) {
-      service.log("no answer from the head at " + wallService->address() + " yet; still trying");
-    }
+    reportStart(*wallService, service,
+                wallService->waitForProcesses(std::chrono::steady_clock::now() + timeout),
+                o.timeoutSeconds);
     wallService->run();
     wallService.reset();
     if (stats) std::fclose(stats);
