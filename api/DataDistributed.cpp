@@ -22,16 +22,16 @@
 #include "dfb/DistributedFrameBuffer.h"
 #include "messaging/Messenger.h"
 #include "renderers/FrameDriver.h"
-#include "renderers/scivis/BrickFrameDriver.h"
+#include "renderers/scivis/bricks/BrickFrameDriver.h"
 #include "runtime/MpiWallProcess.h"
 #include "runtime/RenderWall.h"
 #include "runtime/SetupAgreement.h"
 #include "runtime/WallControl.h"
-#include "wall/Capture.h"
-#include "wall/Layout.h"
-#include "wall/Png.h"
-#include "wall/Ranks.h"
-#include "wall/service/ServiceClient.h"
+#include "wall/display/Capture.h"
+#include "wall/image/Png.h"
+#include "wall/layout/Layout.h"
+#include "wall/layout/Ranks.h"
+#include "wall/service/client/ServiceClient.h"
 
 namespace dfbwall {
 namespace {

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "base/Collectives.h"
-#include "renderers/scivis/TransferFunction.h"
+#include "renderers/TransferFunction.h"
 
 namespace dfbwall {
 namespace {

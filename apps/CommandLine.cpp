@@ -3,7 +3,7 @@
 #include <string>
 #include <vector>
 
-#include "wall/Layout.h"
+#include "wall/layout/Layout.h"
 
 namespace app {
 namespace {

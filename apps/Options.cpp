@@ -4,7 +4,7 @@
 
 #include "apps/CommandLine.h"
 #include "base/MemoryBudget.h"
-#include "wall/service/Codec.h"
+#include "wall/service/protocol/Codec.h"
 
 #include <algorithm>
 #include <charconv>

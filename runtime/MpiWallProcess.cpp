@@ -1,8 +1,8 @@
 #include "runtime/MpiWallProcess.h"
 
 #include "base/Collectives.h"
-#include "wall/PieceMessage.h"
-#include "wall/WallPeers.h"
+#include "wall/display/WallPeers.h"
+#include "wall/route/PieceMessage.h"
 
 namespace runtime {
 

@@ -11,9 +11,9 @@
 
 #include "messaging/Messenger.h"
 #include "runtime/WallControl.h"
-#include "wall/DisplayPresenters.h"
-#include "wall/Layout.h"
-#include "wall/WallNode.h"
+#include "wall/display/DisplayPresenters.h"
+#include "wall/display/WallNode.h"
+#include "wall/layout/Layout.h"
 
 namespace runtime {
 

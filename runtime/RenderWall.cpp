@@ -1,8 +1,8 @@
 #include "runtime/RenderWall.h"
 
 #include "renderers/FrameDriver.h"
-#include "wall/PieceMessage.h"
-#include "wall/Routing.h"
+#include "wall/route/PieceMessage.h"
+#include "wall/route/Routing.h"
 
 namespace runtime {
 

@@ -16,13 +16,13 @@
 #include "dfb/DistributedFrameBuffer.h"
 #include "messaging/Messenger.h"
 #include "runtime/WallControl.h"
-#include "wall/DisplayRoutingOp.h"
-#include "wall/FrameCredits.h"
-#include "wall/Layout.h"
-#include "wall/Ranks.h"
-#include "wall/service/Codec.h"
-#include "wall/service/Protocol.h"
-#include "wall/service/ServiceClient.h"
+#include "wall/layout/Layout.h"
+#include "wall/layout/Ranks.h"
+#include "wall/route/DisplayRoutingOp.h"
+#include "wall/route/FrameCredits.h"
+#include "wall/service/client/ServiceClient.h"
+#include "wall/service/protocol/Codec.h"
+#include "wall/service/protocol/Protocol.h"
 
 namespace runtime {
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <utility>
 
-#include "wall/service/ServiceClient.h"
+#include "wall/service/client/ServiceClient.h"
 
 namespace runtime {
 namespace {
