@@ -56,8 +56,6 @@ CameraPath CameraPath::load(const std::string& path, const renderers::CameraDesc
       r.problem(*root->get("fps"), "fps", "must be in (0, 1000]");
     out.loop_ = r.boolean(*root, "loop", "", false);
     const std::vector<const toml::table*> keys = r.arrayOfTables(*root, "keyframe");
-    if (keys.empty() && !root->get("keyframe"))
-      r.problem(*root, "keyframe", "missing; a camera path needs at least one [[keyframe]]");
     renderers::CameraDesc previous = sceneCamera;
     for (std::size_t i = 0; i < keys.size(); ++i)
       r.entry([&] {
@@ -68,6 +66,10 @@ CameraPath CameraPath::load(const std::string& path, const renderers::CameraDesc
         previous = k.camera;
         out.keys_.push_back(k);
       });
+    // (at() needs one; a file with problems is refused below anyway.)
+    if (out.keys_.empty() && diagnostics.ok())
+      r.problem(root->get("keyframe") ? *root->get("keyframe") : *root, "keyframe",
+                "a camera path needs at least one [[keyframe]]");
   }
   diagnostics.throwIfAny();
   return out;

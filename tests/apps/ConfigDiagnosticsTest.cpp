@@ -163,6 +163,16 @@ TEST(ConfigDiagnostics, ACameraPathReportsItsTypoAndWrongTypeWithPlaceAndEcho) {
   EXPECT_EQ(p[2].rest, "keyframe #1.look_at: missing");
 }
 
+TEST(ConfigDiagnostics, ACameraPathWithoutKeyframesIsRefused) {
+  for (const std::string text : {"fps = 10\n", "fps = 10\nkeyframe = []\n"}) {
+    const std::string path = writeFile("no-keys.toml", text);
+    const std::string e = errorOf([&] { app::CameraPath::load(path, {}); });
+    const std::vector<Printed> p = expectWellFormed(e, path, text);
+    ASSERT_EQ(p.size(), 1u) << e;
+    EXPECT_EQ(p[0].rest, "keyframe: a camera path needs at least one [[keyframe]]");
+  }
+}
+
 TEST(ConfigDiagnostics, SyntaxErrorsHaveLineAndColumnAndEchoInEveryKindOfFile) {
   struct Case {
     std::string name, text;
