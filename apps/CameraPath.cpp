@@ -2,55 +2,76 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
+#include "base/TomlDiagnostics.h"
 #include "renderers/TomlReader.h"
 
 namespace app {
 
+namespace {
+
+// One [[keyframe]]: up and fov carry over from `previous` (the scene's camera for the first).
+void readKeyframe(renderers::TomlReader& r, const toml::table& t, int number,
+                  const renderers::CameraDesc& previous, double earlier, bool first,
+                  renderers::CameraDesc& camera, double& time) {
+  const std::string what = "keyframe #" + std::to_string(number);
+  r.onlyKeys(t, what, {"time", "position", "look_at", "up", "fov"});
+  const std::size_t before = r.problems();
+  const toml::node* timeNode = r.need(t, "time", what);
+  time = r.number(timeNode, what + ".time");
+  if (r.problems() == before && time < 0)
+    r.problem(*timeNode, what + ".time", "must not be negative");
+  else if (r.problems() == before && !first && time <= earlier)
+    r.problem(
+        *timeNode, what + ".time",
+        "must be later than the keyframe before (" + renderers::TomlReader::text(earlier) + ")");
+  camera = previous;
+  camera.position = r.vec3(r.need(t, "position", what), what + ".position");
+  camera.lookAt = r.vec3(r.need(t, "look_at", what), what + ".look_at");
+  camera.up = r.vec3(t, "up", what, previous.up);
+  camera.fovY = r.number(t, "fov", what, previous.fovY);
+  // (A fov carried over from the scene's camera may be out of range too: reported here.)
+  if (!(camera.fovY >= 1 && camera.fovY <= 170))
+    r.problem(t.get("fov") ? *t.get("fov") : t, what + ".fov",
+              "must be in [1, 170] degrees, not " + renderers::TomlReader::text(camera.fovY));
+  r.settle();
+  const renderers::Vec3 view = camera.lookAt - camera.position;
+  if (renderers::length(view) <= 0 || renderers::length(renderers::cross(view, camera.up)) <= 0)
+    r.fail(t, what, "look_at must differ from position and not lie along up");
+}
+
+}  // namespace
+
 CameraPath CameraPath::load(const std::string& path, const renderers::CameraDesc& sceneCamera) {
-  renderers::TomlReader r(path);
-  toml::table root;
-  try {
-    root = toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    // Line 0: the file could not be read at all.
-    if (e.source().begin.line == 0)
-      throw base::Error(path + ": cannot read the camera path (" + std::string(e.description()) +
-                        ")");
-    throw base::Error(path + ":" + std::to_string(e.source().begin.line) + ": " +
-                      std::string(e.description()));
-  }
-  r.onlyKeys(root, "the camera path", {"fps", "loop", "keyframe"});
+  base::TomlDiagnostics diagnostics(path);
+  std::optional<toml::table> root;
+  if (diagnostics.readFile("camera path")) root = diagnostics.parse();
+  renderers::TomlReader r(diagnostics);
   CameraPath out;
-  out.fps_ = r.number(root, "fps", "the camera path", 30.0f);
-  if (!(out.fps_ > 0 && out.fps_ <= 1000)) r.fail(*root.get("fps"), "fps must be in (0, 1000]");
-  out.loop_ = r.boolean(root, "loop", "the camera path", false);
-  const std::vector<const toml::table*> keys = r.arrayOfTables(root, "keyframe");
-  if (keys.empty()) throw base::Error(path + ":1: the camera path needs at least one [[keyframe]]");
-  renderers::CameraDesc previous = sceneCamera;
-  for (const toml::table* t : keys) {
-    const std::string what = "keyframe";
-    r.onlyKeys(*t, what, {"time", "position", "look_at", "up", "fov"});
-    Key k;
-    const toml::node& time = r.require(*t, "time", what);
-    k.time = r.number(time, what + ".time");
-    if (k.time < 0) r.fail(time, "keyframe.time must not be negative");
-    if (!out.keys_.empty() && k.time <= out.keys_.back().time)
-      r.fail(time, "keyframe.time must be later than the keyframe before");
-    k.camera = sceneCamera;
-    k.camera.position = r.vec3(r.require(*t, "position", what), what + ".position");
-    k.camera.lookAt = r.vec3(r.require(*t, "look_at", what), what + ".look_at");
-    // Up and fov carry over from the keyframe before (the scene's for the first).
-    k.camera.up = r.vec3(*t, "up", what, previous.up);
-    k.camera.fovY = r.number(*t, "fov", what, previous.fovY);
-    if (!(k.camera.fovY >= 1 && k.camera.fovY <= 170))
-      r.fail(*t->get("fov"), "keyframe.fov must be in [1, 170] degrees");
-    const renderers::Vec3 view = k.camera.lookAt - k.camera.position;
-    if (renderers::length(view) <= 0 || renderers::length(renderers::cross(view, k.camera.up)) <= 0)
-      r.fail(*t, "keyframe: look_at must differ from position and not lie along up");
-    previous = k.camera;
-    out.keys_.push_back(k);
+  if (root) {
+    r.onlyKeys(*root, "", {"fps", "loop", "keyframe"});
+    out.fps_ = r.number(*root, "fps", "", 30.0f);
+    if (!(out.fps_ > 0 && out.fps_ <= 1000))
+      r.problem(*root->get("fps"), "fps", "must be in (0, 1000]");
+    out.loop_ = r.boolean(*root, "loop", "", false);
+    const std::vector<const toml::table*> keys = r.arrayOfTables(*root, "keyframe");
+    renderers::CameraDesc previous = sceneCamera;
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      r.entry([&] {
+        Key k;
+        readKeyframe(r, *keys[i], static_cast<int>(i + 1), previous,
+                     out.keys_.empty() ? 0.0 : out.keys_.back().time, out.keys_.empty(), k.camera,
+                     k.time);
+        previous = k.camera;
+        out.keys_.push_back(k);
+      });
+    // (at() needs one; a file with problems is refused below anyway.)
+    if (out.keys_.empty() && diagnostics.ok())
+      r.problem(root->get("keyframe") ? *root->get("keyframe") : *root, "keyframe",
+                "a camera path needs at least one [[keyframe]]");
   }
+  diagnostics.throwIfAny();
   return out;
 }
 

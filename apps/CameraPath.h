@@ -15,7 +15,7 @@ namespace app {
 class CameraPath {
  public:
   // Reads `path`; keyframes may leave out up and fov (then `sceneCamera`'s). Throws
-  // base::Error naming the file, line and field.
+  // base::Error listing every problem, each naming the file, line, column and field.
   static CameraPath load(const std::string& path, const renderers::CameraDesc& sceneCamera);
 
   renderers::CameraDesc at(std::uint32_t frameId) const;

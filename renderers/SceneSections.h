@@ -17,9 +17,9 @@ namespace renderers {
 struct SceneSections {
   std::vector<std::string> keys;  // the top-level keys `read` takes
   // Appends what it reads of `root` to `d` (names in other files are relative to `folder`).
-  // Throws base::Error "FILE:LINE: ...".
-  std::function<void(const TomlReader& r, const toml::table& root,
-                     const std::filesystem::path& folder, SceneDesc& d)>
+  // Problems go to `r` (TomlReader.h), which the caller throws at the end.
+  std::function<void(TomlReader& r, const toml::table& root, const std::filesystem::path& folder,
+                     SceneDesc& d)>
       read;
 };
 

@@ -19,7 +19,7 @@ struct VolumeDesc {
   TransferFunction transfer;
   bool visible = true;  // false: only for isosurfaces (no volume rendering of it)
   // Where its size was given, for errors found after reading (the memory budget of a brick):
-  // "scene.toml:7: volume 'ct'.dims"; empty when not read from a file.
+  // "scene.toml:7:8: volume 'ct'.dims"; empty when not read from a file.
   std::string where;
 };
 

@@ -14,52 +14,61 @@ namespace renderers {
 namespace {
 
 // Reads `key` as one number or an array of numbers.
-std::vector<float> numbers(const TomlReader& r, const toml::node& n, const std::string& what) {
+std::vector<float> numbers(TomlReader& r, const toml::node& n, const std::string& field) {
   std::vector<float> out;
   if (const toml::array* a = n.as_array()) {
-    for (const toml::node& e : *a) out.push_back(r.number(e, what));
+    for (const toml::node& e : *a) out.push_back(r.number(e, field));
   } else {
-    out.push_back(r.number(n, what));
+    out.push_back(r.number(n, field));
   }
   return out;
 }
 
-void readIsosurfaces(const TomlReader& r, const toml::table& t, SceneDesc& d) {
+void readIsosurface(TomlReader& r, const toml::table& t, SceneDesc& d) {
   const std::string what = "isosurface";
   r.onlyKeys(t, what, {"volume", "value", "values", "material", "materials"});
-  const toml::node& vn = r.require(t, "volume", what);
+  const toml::node* vn = r.need(t, "volume", what);
   const std::string volume = r.string(vn, what + ".volume");
   std::uint32_t v = 0;
   while (v < d.volumes.size() && d.volumes[v].name != volume) ++v;
-  if (v == d.volumes.size()) r.fail(vn, "volume '" + volume + "' of an isosurface is not defined");
+  if (vn && vn->is_string() && v == d.volumes.size()) {
+    std::vector<std::string> names;
+    for (const VolumeDesc& other : d.volumes) names.push_back(other.name);
+    r.notDefined(*vn, what + ".volume", "volume", volume, names);
+  }
 
-  if (t.get("value") && t.get("values")) r.fail(t, what + ": give value or values, not both");
+  if (t.get("value") && t.get("values"))
+    r.fail(*t.get("values"), what, "give value or values, not both");
   const toml::node* valuesNode = t.get("values") ? t.get("values") : t.get("value");
-  if (!valuesNode) r.fail(t, what + ": missing field 'values'");
-  const std::vector<float> values = numbers(r, *valuesNode, what + ".values");
-  if (values.empty()) r.fail(*valuesNode, what + ".values must not be empty");
+  if (!valuesNode) r.problem(t, what + ".values", "missing");
+  const std::vector<float> values =
+      valuesNode ? numbers(r, *valuesNode, what + ".values") : std::vector<float>{};
+  if (valuesNode && values.empty()) r.problem(*valuesNode, what + ".values", "must not be empty");
 
   std::vector<std::uint32_t> materials;
   if (const toml::node* ms = t.get("materials")) {
     const toml::array* a = ms->as_array();
     if (!a || a->size() != values.size())
-      r.fail(*ms, what + ".materials must be an array with one material per value");
+      r.fail(*ms, what + ".materials", "must be an array with one material per value");
+    std::vector<std::string> defined;
+    for (const Material& m : d.materials) defined.push_back(m.name);
     for (const toml::node& m : *a) {
       const std::string name = r.string(m, what + ".materials");
       const int i = d.findMaterial(name);
-      if (i < 0) r.fail(m, "material '" + name + "' of an isosurface is not defined");
+      if (m.is_string() && i < 0) r.notDefined(m, what + ".materials", "material", name, defined);
       materials.push_back(static_cast<std::uint32_t>(i));
     }
   } else {
     materials.assign(values.size(), r.material(d, t, what));
   }
+  r.settle();
   for (std::size_t i = 0; i < values.size(); ++i)
     d.isosurfaces.push_back({v, values[i], materials[i]});
 }
 
-void readParticles(const TomlReader& r, const toml::table& t, const std::filesystem::path& folder,
+void readParticles(TomlReader& r, const toml::table& t, const std::filesystem::path& folder,
                    SceneDesc& d) {
-  const std::string name = t.get("name") ? r.string(*t.get("name"), "particles.name") : "particles";
+  const std::string name = t.get("name") ? r.string(t.get("name"), "particles.name") : "particles";
   const std::string what = "particles '" + name + "'";
   r.onlyKeys(t, what,
              {"name", "material", "radius", "radii", "centers", "file", "layout", "generator",
@@ -69,47 +78,55 @@ void readParticles(const TomlReader& r, const toml::table& t, const std::filesys
   p.material = r.material(d, t, what);
   const int sources =
       (t.get("centers") ? 1 : 0) + (t.get("file") ? 1 : 0) + (t.get("generator") ? 1 : 0);
-  if (sources != 1) r.fail(t, what + ": give exactly one of centers, file or generator");
+  if (sources != 1) r.fail(t, what, "give exactly one of centers, file or generator");
   const float radius = r.number(t, "radius", what, 0.0f);
-  if (t.get("radius") && !(radius > 0)) r.fail(*t.get("radius"), what + ".radius must be positive");
+  if (t.get("radius") && !(radius > 0))
+    r.problem(*t.get("radius"), what + ".radius", "must be positive");
 
   if (const toml::node* c = t.get("centers")) {
     const toml::array* a = c->as_array();
-    if (!a) r.fail(*c, what + ".centers must be an array of [x, y, z]");
+    if (!a)
+      r.fail(*c, what + ".centers",
+             "expected an array of [x, y, z], got " + base::tomlTypeName(*c));
     for (const toml::node& e : *a) p.centers.push_back(r.vec3(e, what + ".centers"));
   } else if (const toml::node* f = t.get("file")) {
     const std::string layout =
-        t.get("layout") ? r.string(*t.get("layout"), what + ".layout") : std::string("xyz");
-    p.file = (folder / r.string(*f, what + ".file")).string();
+        t.get("layout") ? r.string(t.get("layout"), what + ".layout") : std::string("xyz");
+    const std::string fileName = r.string(*f, what + ".file");
+    r.settle();  // the file is read only as the fields above say
+    p.file = (folder / fileName).string();
     // Reading holds the file's records and the particles made of them (no more than as many
     // bytes again).
     std::error_code ec;
     const std::uint64_t fileBytes = std::filesystem::file_size(p.file, ec);
     if (!ec)
-      r.budget(*f, what + ".file (" + std::to_string(fileBytes) + " bytes)",
+      r.budget(*f, what + ".file", std::to_string(fileBytes) + " bytes",
                d.bytes() + base::bytesTimes(fileBytes, 2));
     r.loading(*f, what + ".file", [&] {
       try {
         readParticleFile(p.file, layout, p);
       } catch (const base::Error& e) {
-        r.fail(*f, what + ": " + e.what());
+        r.fail(*f, what + ".file", e.what());
       }
     });
   } else {
     const toml::node& g = *t.get("generator");
-    if (r.string(g, what + ".generator") != "clusters")
-      r.fail(g, what + ".generator must be \"clusters\"");
-    const toml::node& countNode = r.require(t, "count", what);
+    const std::string generator = r.string(g, what + ".generator");
+    if (g.is_string() && generator != "clusters")
+      r.problem(g, what + ".generator", "must be \"clusters\", not \"" + generator + "\"");
+    const std::size_t before = r.problems();
+    const toml::node* countNode = r.need(t, "count", what);
     const std::uint32_t count = r.index(countNode, what + ".count");
-    if (count == 0 || count > 100'000'000)
-      r.fail(countNode, what + ".count must be between 1 and 100000000");
-    const std::uint64_t seed = t.get("seed") ? r.index(*t.get("seed"), what + ".seed") : 1;
+    if (r.problems() == before && (count == 0 || count > 100'000'000))
+      r.problem(*countNode, what + ".count", "must be between 1 and 100000000");
+    const std::uint64_t seed = t.get("seed") ? r.index(t.get("seed"), what + ".seed") : 1;
     const float size = r.number(t, "size", what, 2.0f);
-    if (!(size > 0)) r.fail(*t.get("size"), what + ".size must be positive");
-    r.budget(countNode, what + ".count (" + std::to_string(count) + " particles)",
-             d.bytes() + std::uint64_t{count} * (sizeof(Vec3) + sizeof(float)));
+    if (!(size > 0)) r.problem(*t.get("size"), what + ".size", "must be positive");
     const Vec3 center = r.vec3(t, "center", what, {});
-    p = r.loading(countNode, what + ".count", [&] {
+    r.settle();
+    r.budget(*countNode, what + ".count", std::to_string(count) + " particles",
+             d.bytes() + std::uint64_t{count} * (sizeof(Vec3) + sizeof(float)));
+    p = r.loading(*countNode, what + ".count", [&] {
       return clusteredParticles(count, seed, center, size, radius > 0 ? radius : 0.002f * size);
     });
     p.name = name;
@@ -117,15 +134,15 @@ void readParticles(const TomlReader& r, const toml::table& t, const std::filesys
   }
 
   if (const toml::node* rs = t.get("radii")) {
-    if (t.get("radius")) r.fail(*rs, what + ": give radius or radii, not both");
+    if (t.get("radius")) r.fail(*rs, what, "give radius or radii, not both");
     p.radii = numbers(r, *rs, what + ".radii");
   } else if (radius > 0) {
     p.radii = {radius};
   }
-  if (p.radii.empty())
-    r.fail(t, what + ": missing field 'radius' (or 'radii', or 'r' in the layout)");
+  r.settle();
+  if (p.radii.empty()) r.fail(t, what + ".radius", "missing (or 'radii', or 'r' in the layout)");
   if (p.radii.size() != 1 && p.radii.size() != p.centers.size())
-    r.fail(*t.get("radii"), what + ".radii must have one radius per particle");
+    r.fail(*t.get("radii"), what + ".radii", "must have one radius per particle");
   // Radii and attributes from a file may be anything; a sphere must stay within the float range
   // and be wider than a float step where it is.
   const toml::node& radiiAt = t.get("radii")    ? *t.get("radii")
@@ -134,95 +151,104 @@ void readParticles(const TomlReader& r, const toml::table& t, const std::filesys
                                                 : t;
   for (float x : p.radii)
     if (!(x > 0 && std::isfinite(x)))
-      r.fail(radiiAt,
-             what + ": every radius must be positive and finite, not " + TomlReader::text(x));
+      r.fail(radiiAt, what, "every radius must be positive and finite, not " + TomlReader::text(x));
   for (std::size_t i = 0; i < p.centers.size(); ++i) {
     const Vec3 c = p.centers[i];
     const float ri = p.radius(i);
     if (!isFinite(c) || !isFinite(c + Vec3{ri}) || !isFinite(c - Vec3{ri}))
-      r.fail(radiiAt, what + ": particle " + std::to_string(i) +
-                          " reaches beyond the float range (center ± radius)");
+      r.fail(radiiAt, what,
+             "particle " + std::to_string(i) + " reaches beyond the float range (center ± radius)");
     if (ri < floatStep(maxAbs(c)))
-      r.fail(radiiAt, what + ": the radius of particle " + std::to_string(i) + ", " +
-                          TomlReader::text(ri) + ", is below float precision at its center (" +
-                          "steps of " + TomlReader::text(floatStep(maxAbs(c))) + " there)");
+      r.fail(radiiAt, what,
+             "the radius of particle " + std::to_string(i) + ", " + TomlReader::text(ri) +
+                 ", is below float precision at its center (steps of " +
+                 TomlReader::text(floatStep(maxAbs(c))) + " there)");
   }
   if (const toml::node* a = t.get("attribute")) {
     p.attribute = numbers(r, *a, what + ".attribute");
+    r.settle();
     if (p.attribute.size() != p.centers.size())
-      r.fail(*a, what + ".attribute must have one value per particle");
+      r.fail(*a, what + ".attribute", "must have one value per particle");
   }
   for (std::size_t i = 0; i < p.attribute.size(); ++i)
     if (!std::isfinite(p.attribute[i]))
-      r.fail(t.get("attribute") ? *t.get("attribute") : radiiAt,
-             what + ": the attribute of particle " + std::to_string(i) + " is not finite");
+      r.fail(t.get("attribute") ? *t.get("attribute") : radiiAt, what,
+             "the attribute of particle " + std::to_string(i) + " is not finite");
   if (const toml::node* cm = t.get("color_map")) {
     p.colorMap = readTransferFunction(r, *cm, what + ".color_map");
-    if (p.attribute.empty()) r.fail(*cm, what + ".color_map needs an attribute per particle");
+    if (p.attribute.empty()) r.fail(*cm, what + ".color_map", "needs an attribute per particle");
   } else if (!p.attribute.empty()) {
     float lo = p.attribute[0], hi = p.attribute[0];
     for (float x : p.attribute) lo = std::min(lo, x), hi = std::max(hi, x);
     p.colorMap = transferFunctionPreset("viridis", lo, hi > lo ? hi : lo + 1);
   }
-  if (p.centers.empty()) r.fail(t, what + ": no particles");
+  if (p.centers.empty()) r.fail(t, what, "no particles");
+  r.settle();
   d.particles.push_back(std::move(p));
 }
 
-LightDesc readLight(const TomlReader& r, const toml::table& t) {
+LightDesc readLight(TomlReader& r, const toml::table& t) {
   const std::string what = "light";
   r.onlyKeys(t, what, {"type", "direction", "position", "color", "intensity"});
   LightDesc l;
-  const toml::node& typeNode = r.require(t, "type", what);
+  const toml::node* typeNode = r.need(t, "type", what);
   const std::string type = r.string(typeNode, what + ".type");
   if (type == "directional") {
     l.kind = LightDesc::Kind::Directional;
-    const toml::node& dn = r.require(t, "direction", what);
+    const std::size_t before = r.problems();
+    const toml::node* dn = r.need(t, "direction", what);
     l.direction = r.vec3(dn, what + ".direction");
-    if (!(length(l.direction) > 0)) r.fail(dn, what + ".direction must not be zero");
+    if (r.problems() == before && !(length(l.direction) > 0))
+      r.problem(*dn, what + ".direction", "must not be zero");
     l.direction = normalize(l.direction);
   } else if (type == "point") {
     l.kind = LightDesc::Kind::Point;
-    l.position = r.vec3(r.require(t, "position", what), what + ".position");
+    l.position = r.vec3(r.need(t, "position", what), what + ".position");
   } else if (type == "ambient") {
     l.kind = LightDesc::Kind::Ambient;
-  } else {
-    r.fail(typeNode, what + ".type must be directional, point or ambient");
+  } else if (typeNode && typeNode->is_string()) {
+    r.problem(*typeNode, what + ".type",
+              "must be directional, point or ambient, not \"" + type + "\"");
   }
   l.color = r.vec3(t, "color", what, Vec3{1.0f});
   l.intensity = r.number(t, "intensity", what, 1.0f);
-  if (!(l.intensity >= 0)) r.fail(*t.get("intensity"), what + ".intensity must not be negative");
+  if (!(l.intensity >= 0))
+    r.problem(*t.get("intensity"), what + ".intensity", "must not be negative");
+  r.settle();
   if (!isFinite(l.color * l.intensity))
-    r.fail(t.get("intensity") ? *t.get("intensity") : *t.get("color"),
-           what + ": color x intensity is beyond the float range");
+    r.fail(t.get("intensity") ? *t.get("intensity") : *t.get("color"), what,
+           "color x intensity is beyond the float range");
   return l;
 }
 
-void readSettings(const TomlReader& r, const toml::table& t, SciVisSettings& s) {
+void readSettings(TomlReader& r, const toml::table& t, SciVisSettings& s) {
   const std::string what = "scivis";
   r.onlyKeys(t, what,
              {"ao_samples", "ao_distance", "sampling_rate", "shadows", "min_transmittance"});
   if (const toml::node* n = t.get("ao_samples")) {
     const std::uint32_t v = r.index(*n, what + ".ao_samples");
-    if (v > 256) r.fail(*n, what + ".ao_samples must be at most 256");
-    s.aoSamples = static_cast<int>(v);
+    if (v > 256)
+      r.problem(*n, what + ".ao_samples", "must be at most 256");
+    else
+      s.aoSamples = static_cast<int>(v);
   }
   s.aoDistance = r.number(t, "ao_distance", what, s.aoDistance);
   if (!(s.aoDistance >= 0))
-    r.fail(*t.get("ao_distance"), what + ".ao_distance must not be negative");
+    r.problem(*t.get("ao_distance"), what + ".ao_distance", "must not be negative");
   s.samplingRate = r.number(t, "sampling_rate", what, s.samplingRate);
   if (!(s.samplingRate >= 0.01f && s.samplingRate <= 64))
-    r.fail(*t.get("sampling_rate"), what + ".sampling_rate must be in [0.01, 64]");
+    r.problem(*t.get("sampling_rate"), what + ".sampling_rate", "must be in [0.01, 64]");
   s.shadows = r.boolean(t, "shadows", what, s.shadows);
   s.minTransmittance = r.number(t, "min_transmittance", what, s.minTransmittance);
   if (!(s.minTransmittance >= 0 && s.minTransmittance < 1))
-    r.fail(*t.get("min_transmittance"), what + ".min_transmittance must be in [0, 1)");
+    r.problem(*t.get("min_transmittance"), what + ".min_transmittance", "must be in [0, 1)");
 }
 
 // The renderer marches rays in steps of the finest spacing over the sampling rate, counting
 // the steps from the camera in float: beyond 2^22 steps a float no longer counts them exactly
 // (a ray would stand still), so a scene whose volumes lie that many steps from its camera is
 // refused, naming the volume with the finest spacing.
-void checkSampling(const TomlReader& r, const std::vector<const toml::table*>& tables,
+void checkSampling(TomlReader& r, const std::vector<const toml::table*>& tables,
                    const SceneDesc& d) {
   constexpr double kMaxSteps = 1 << 22;
   std::size_t finest = 0;
@@ -248,36 +274,50 @@ void checkSampling(const TomlReader& r, const std::vector<const toml::table*>& t
   }
   if (reach / step > kMaxSteps) {
     const toml::table& t = *tables[finest];
-    r.fail(t.get("spacing") ? *t.get("spacing") : t,
-           "volume '" + d.volumes[finest].name + "'.spacing: the volumes are sampled every " +
-               TomlReader::text(step) +
-               " world units (the finest spacing / scivis.sampling_rate) " + "and reach " +
-               TomlReader::text(reach) + " from the camera: " + TomlReader::text(reach / step) +
-               " samples along a ray, more than a float counts " +
-               "exactly (2^22); use a coarser spacing or put the camera nearer");
+    r.problem(t.get("spacing") ? *t.get("spacing") : t,
+              "volume '" + d.volumes[finest].name + "'.spacing",
+              "the volumes are sampled every " + TomlReader::text(step) +
+                  " world units (the finest spacing / scivis.sampling_rate) and reach " +
+                  TomlReader::text(reach) + " from the camera: " + TomlReader::text(reach / step) +
+                  " samples along a ray, more than a float counts exactly (2^22); use a coarser "
+                  "spacing or put the camera nearer");
   }
 }
 
 }  // namespace
 
-void readSciVis(const TomlReader& r, const toml::table& root, const std::filesystem::path& folder,
+void readSciVis(TomlReader& r, const toml::table& root, const std::filesystem::path& folder,
                 SceneDesc& d) {
   const std::vector<const toml::table*> volumes = r.arrayOfTables(root, "volumes");
-  for (const toml::table* t : volumes) {
-    if (d.volumes.size() == SciVisScene::kMaxVolumes)
-      r.fail(*t, "volumes: the scivis renderer draws at most " +
-                     std::to_string(SciVisScene::kMaxVolumes) + " volumes, and this is volume " +
-                     std::to_string(d.volumes.size() + 1));
-    VolumeDesc v = r.loading(*t, "volume", [&] { return readVolume(r, *t, folder); });
-    for (const VolumeDesc& other : d.volumes)
-      if (other.name == v.name) r.fail(*t, "volume '" + v.name + "' is defined twice");
-    d.volumes.push_back(std::move(v));
+  for (std::size_t i = 0; i < volumes.size(); ++i) {
+    const toml::table& t = *volumes[i];
+    if (i == SciVisScene::kMaxVolumes)
+      r.problem(t, "volumes",
+                "the scivis renderer draws at most " + std::to_string(SciVisScene::kMaxVolumes) +
+                    " volumes, and this is volume " + std::to_string(i + 1));
+    if (i >= SciVisScene::kMaxVolumes) continue;
+    const std::string name = t.get("name") ? t.get("name")->value_or(std::string()) : "";
+    const bool ok = r.entry([&] {
+      VolumeDesc v = r.loading(t, "volume", [&] { return readVolume(r, t, folder); });
+      r.settle();
+      for (const VolumeDesc& other : d.volumes)
+        if (other.name == v.name) r.fail(t, "volume '" + v.name + "'", "is defined twice");
+      d.volumes.push_back(std::move(v));
+    });
+    if (!ok && !name.empty()) r.markFailed("volume", name);
   }
-  for (const toml::table* t : r.arrayOfTables(root, "isosurfaces")) readIsosurfaces(r, *t, d);
-  for (const toml::table* t : r.arrayOfTables(root, "particles")) readParticles(r, *t, folder, d);
-  for (const toml::table* t : r.arrayOfTables(root, "lights")) d.lights.push_back(readLight(r, *t));
-  if (const toml::node* s = root.get("scivis")) readSettings(r, r.table(*s, "scivis"), d.scivis);
-  checkSampling(r, volumes, d);
+  for (const toml::table* t : r.arrayOfTables(root, "isosurfaces"))
+    r.entry([&] { readIsosurface(r, *t, d); });
+  for (const toml::table* t : r.arrayOfTables(root, "particles"))
+    r.entry([&] { readParticles(r, *t, folder, d); });
+  for (const toml::table* t : r.arrayOfTables(root, "lights"))
+    r.entry([&] { d.lights.push_back(readLight(r, *t)); });
+  if (const toml::node* s = root.get("scivis"))
+    r.entry([&] {
+      if (const toml::table* t = r.table(*s, "scivis")) readSettings(r, *t, d.scivis);
+    });
+  // Judged on a file read cleanly: a volume that failed is not in d.volumes.
+  if (r.diagnostics().ok()) checkSampling(r, volumes, d);
 }
 
 }  // namespace renderers

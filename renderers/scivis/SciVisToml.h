@@ -25,8 +25,9 @@
 namespace renderers {
 
 // Appends the volumes, isosurfaces, particles and lights of `root` to `d` and reads its
-// [scivis] settings; `d.materials` must already be read. Throws base::Error "FILE:LINE: ...".
-void readSciVis(const TomlReader& r, const toml::table& root, const std::filesystem::path& folder,
+// [scivis] settings; `d.materials` must already be read. Problems go to `r`, each entry read on
+// its own.
+void readSciVis(TomlReader& r, const toml::table& root, const std::filesystem::path& folder,
                 SceneDesc& d);
 
 }  // namespace renderers

@@ -11,11 +11,13 @@
 
 #include "base/Error.h"
 #include "base/MemoryBudget.h"
+#include "base/TomlDiagnostics.h"
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
 #include "renderers/TomlReader.h"
 #include "renderers/scivis/bricks/Bricks.h"
 #include "renderers/scivis/scene/SciVisScene.h"
+#include "tests/DiagnosticsTestUtil.h"
 
 namespace renderers {
 namespace {
@@ -42,14 +44,15 @@ std::string sparseFile(const std::string& name, std::uint64_t bytes) {
   return p.string();
 }
 
-// The base::Error `step` throws for the scene at `path`, with the path replaced by "FILE",
-// or "(no error)". A bare std::bad_alloc (or any other exception) fails the test.
+// The base::Error `step` throws for the scene at `path`, one headline a problem
+// (DiagnosticsTestUtil.h), with the path replaced by "FILE", or "(no error)". A bare
+// std::bad_alloc (or any other exception) fails the test.
 template <class Step>
 std::string errorOf(const std::string& path, Step step) {
   try {
     step();
   } catch (const base::Error& e) {
-    std::string m = e.what();
+    std::string m = testutil::headlines(e.what());
     if (m.rfind(path, 0) == 0) m = "FILE" + m.substr(path.size());
     return m;
   }
@@ -102,7 +105,7 @@ TEST(SceneTomlBudget, AVolumeBeyondTheRankIsRefusedBeforeItsVoxelsNamingDimsAndB
   const std::string e = loadErrorOf(path);
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
   // 512³ float voxels and their macrocells: 536870912 + 2097152 bytes.
-  EXPECT_EQ(e.rfind("FILE:9: volume 'w'.dims: this rank holds 538968064 bytes of this "
+  EXPECT_EQ(e.rfind("FILE:9:8: volume 'w'.dims: this rank holds 538968064 bytes of this "
                     "512x512x512 float32 volume (the whole scene",
                     0),
             0u)
@@ -131,7 +134,7 @@ TEST(SceneTomlBudget, VolumesCountTogether) {
       writeScene("two-volumes.toml", kCamera + waveletVolume("a", "256, 256, 128") +
                                          waveletVolume("b", "256, 256, 129"));
   const std::string e = loadErrorOf(path);
-  EXPECT_EQ(e.rfind("FILE:13: volume 'b'.dims: this rank holds", 0), 0u) << e;
+  EXPECT_EQ(e.rfind("FILE:13:8: volume 'b'.dims: this rank holds", 0), 0u) << e;
   EXPECT_TRUE(contains(e, "more than this rank may hold: 64 MiB")) << e;
 }
 
@@ -144,8 +147,9 @@ generator = "clusters"
 count = 100000000
 )");
   EXPECT_EQ(errorOf(generated),
-            "FILE:10: particles 'p'.count (100000000 particles) needs 1.49 GiB (1600000000 bytes), "
-            "more than this rank may hold: 64 MiB (67108864 bytes: --memory-limit)");
+            "FILE:10:9: particles 'p'.count: loading it (100000000 particles) needs 1.49 GiB "
+            "(1600000000 bytes), more than this rank may hold: 64 MiB (67108864 bytes: "
+            "--memory-limit)");
   sparseFile("huge.xyz", 1ull << 30);
   const std::string file = writeScene("file-particles.toml", kCamera + R"([[particles]]
 name = "f"
@@ -153,9 +157,10 @@ material = "white"
 radius = 0.1
 file = "huge.xyz"
 )");
-  EXPECT_EQ(errorOf(file).rfind("FILE:10: particles 'f'.file (1073741824 bytes) needs 2 GiB "
-                                "(2147483648 bytes)",
-                                0),
+  EXPECT_EQ(errorOf(file).rfind(
+                "FILE:10:8: particles 'f'.file: loading it (1073741824 bytes) needs 2 GiB "
+                "(2147483648 bytes)",
+                0),
             0u)
       << errorOf(file);
 }
@@ -168,12 +173,15 @@ name = "m"
 material = "white"
 file = "huge.obj"
 )");
-  EXPECT_EQ(errorOf(mesh).rfind("FILE:9: mesh 'm'.file (1073741824 bytes) needs 1 GiB", 0), 0u)
+  EXPECT_EQ(
+      errorOf(mesh).rfind("FILE:9:8: mesh 'm'.file: loading it (1073741824 bytes) needs 1 GiB", 0),
+      0u)
       << errorOf(mesh);
   // 4 MiB of TOML: TOML++ may need 40 times that.
   const std::string big =
       writeScene("big-scene.toml", kCamera + "# " + std::string(4 * kMiB, 'x') + "\n[[spheres]]\n");
-  EXPECT_EQ(errorOf(big).rfind("FILE:1: the scene file (", 0), 0u) << errorOf(big);
+  // (The file as a whole: no line.)
+  EXPECT_EQ(errorOf(big).rfind("FILE: the scene file (4194405 bytes; ", 0), 0u) << errorOf(big);
   EXPECT_TRUE(contains(errorOf(big), "more than this rank may hold: 64 MiB")) << errorOf(big);
 }
 
@@ -213,15 +221,20 @@ file = "strip.obj"
 
 TEST(SceneTomlBudget, AFailedAllocationWhileLoadingNamesWhatWasLoading) {
   const std::string path = writeScene("alloc.toml", "[thing]\nsize = 1\n");
-  const toml::table root = toml::parse_file(path);
-  const TomlReader r(path);
-  try {
+  base::TomlDiagnostics diagnostics(path);
+  ASSERT_TRUE(diagnostics.readFile("scene file"));
+  const toml::table root = *diagnostics.parse();
+  TomlReader r(diagnostics);
+  EXPECT_FALSE(r.entry([&] {
     r.loading(*root["thing"]["size"].node(), "thing.size", []() -> int { throw std::bad_alloc(); });
+  }));
+  try {
+    diagnostics.throwIfAny();
     ADD_FAILURE() << "no error";
   } catch (const base::Error& e) {
     const std::string m = e.what();
     EXPECT_EQ(
-        m.rfind(path + ":2: thing.size: out of memory while loading it; this rank may hold ", 0),
+        m.rfind(path + ":2:8: thing.size: out of memory while loading it; this rank may hold ", 0),
         0u)
         << m;
     EXPECT_FALSE(contains(m, "bad_alloc")) << m;
@@ -237,9 +250,8 @@ struct Case {
 void expectRefusals(const std::vector<Case>& cases) {
   for (const Case& c : cases) {
     const std::string e = errorOf(writeScene(c.name + ".toml", c.text));
-    EXPECT_EQ(e.rfind("FILE:", 0), 0u) << c.name << ": " << e;
-    EXPECT_TRUE(contains(e, c.expected))
-        << c.name << "\n got: " << e << "\n expected: " << c.expected;
+    EXPECT_EQ(e.rfind("FILE" + c.expected, 0), 0u)
+        << c.name << "\n got: " << e << "\n expected: FILE" << c.expected;
   }
 }
 
@@ -255,20 +267,20 @@ TEST(SceneTomlGeometry, CamerasThatSeeNothing) {
   const std::string materials = "[materials.white]\ntype = \"diffuse\"\n" + kTriangle;
   expectRefusals({
       {"camera-same", "[camera]\nposition = [1, 2, 3]\nlook_at = [1, 2, 3]\n" + materials,
-       ":3: camera.look_at must differ from camera.position"},
+       ":3:11: camera.look_at: must differ from camera.position"},
       {"camera-up",
        "[camera]\nposition = [0, 0, -5]\nlook_at = [0, 0, 0]\nup = [0, 0, 2]\n" + materials,
-       ":4: camera.up must not be parallel to the view direction"},
+       ":4:6: camera.up: must not be parallel to the view direction"},
       {"camera-up-zero",
        "[camera]\nposition = [0, 0, -5]\nlook_at = [0, 0, 0]\nup = [0, 0, 0]\n" + materials,
-       ":4: camera.up must be a non-zero direction"},
+       ":4:6: camera.up: must be a non-zero direction"},
       {"camera-far", "[camera]\nposition = [1e30, 0, 0]\nlook_at = [-1e30, 0, 0]\n" + materials,
-       ":3: camera.look_at is too far from camera.position for float arithmetic"},
+       ":3:11: camera.look_at: is too far from camera.position for float arithmetic"},
       {"camera-lens",
        "[camera]\nposition = [0, 0, -5]\nlook_at = [0, 0, 0]\nlens_radius = -1\n" + materials,
-       ":4: camera.lens_radius must not be negative"},
+       ":4:15: camera.lens_radius: must not be negative"},
       {"camera-nan", "[camera]\nposition = [0, nan, -5]\nlook_at = [0, 0, 0]\n" + materials,
-       ":2: camera.position must be a finite number"},
+       ":2:16: camera.position: expected a finite number, got nan"},
   });
 }
 
@@ -286,15 +298,15 @@ material = "white"
 vertices = [[0, 0, 0], [1, 1, 1], [2, 2, 2]]
 faces = [[0, 1, 2]]
 )",
-       ":9: mesh 'line': no triangle has a non-zero area"},
+       ":9:12: mesh 'line': no triangle has a non-zero area"},
       {"mesh-file-flat",
        kCamera + "[[meshes]]\nname = \"f\"\nmaterial = \"white\"\nfile = \"flat.obj\"\n",
-       ":9: mesh 'f': no triangle has a non-zero area"},
+       ":9:8: mesh 'f': no triangle has a non-zero area"},
       {"mesh-file-inf",
        kCamera + "[[meshes]]\nname = \"i\"\nmaterial = \"white\"\nfile = \"inf.obj\"\n",
-       ":9: mesh 'i': vertex 1 has a non-finite position"},
+       ":9:8: mesh 'i': vertex 1 has a non-finite position"},
       {"mesh-scale-zero", kCamera + kTriangle + "scale = [1, 0, 1]\n",
-       ":12: mesh 't'.scale makes a degenerate transform"},
+       ":12:9: mesh 't'.scale: makes a degenerate transform"},
       {"mesh-translate-inf", kCamera + R"([[meshes]]
 name = "far"
 material = "white"
@@ -302,13 +314,13 @@ vertices = [[3e38, 0, 0], [3e38, 1, 0], [3e38, 0, 1]]
 faces = [[0, 1, 2]]
 translate = [3e38, 0, 0]
 )",
-       ":11: mesh 'far': the transform moves its vertices beyond the float range"},
+       ":11:13: mesh 'far': the transform moves its vertices beyond the float range"},
       {"instance-scale", kCamera + kTriangle + "[[instances]]\nmesh = \"t\"\nscale = 1e20\n",
-       ":14: instance of 't'.scale makes a degenerate transform"},
+       ":14:9: instance of 't'.scale: makes a degenerate transform"},
       {"sphere-tiny", sphere("[1e30, 0, 0]", "1"),
-       ":8: sphere 'sphere'.radius 1 is below float precision at its center"},
+       ":8:10: sphere 'sphere'.radius: 1 is below float precision at its center"},
       {"sphere-huge", sphere("[3e38, 0, 0]", "1e38"),
-       ":8: sphere 'sphere': center ± radius leaves the float range"},
+       ":8:10: sphere 'sphere': center ± radius leaves the float range"},
   });
 }
 
@@ -329,13 +341,13 @@ TEST(SceneTomlGeometry, ParticlesFromFiles) {
   };
   expectRefusals({
       {"particles-zero", scene("zero-radius.xyzr", "xyzr", ""),
-       ":9: particles 'p': every radius must be positive and finite, not 0"},
+       ":9:8: particles 'p': every radius must be positive and finite, not 0"},
       {"particles-inf", scene("inf-radius.xyzr", "xyzr", ""),
-       ":9: particles 'p': every radius must be positive and finite, not inf"},
+       ":9:8: particles 'p': every radius must be positive and finite, not inf"},
       {"particles-nan", scene("nan-attribute.xyza", "xyza", "radius = 0.1\n"),
-       ":11: particles 'p': the attribute of particle 1 is not finite"},
+       ":11:10: particles 'p': the attribute of particle 1 is not finite"},
       {"particles-tiny", scene("far.xyz", "xyz", "radius = 0.5\n"),
-       ":11: particles 'p': the radius of particle 0, 0.5, is below float precision"},
+       ":11:10: particles 'p': the radius of particle 0, 0.5, is below float precision"},
       {"particles-size", kCamera + R"([[particles]]
 name = "g"
 material = "white"
@@ -344,7 +356,7 @@ count = 1000
 center = [3e38, 0, 0]
 size = 3e38
 )",
-       "particles 'g': particle "},
+       ":6:1: particles 'g': particle "},
   });
 }
 
@@ -352,16 +364,17 @@ TEST(SceneTomlGeometry, VolumesFloatCannotPlace) {
   const std::string w = kCamera + "[[volumes]]\nname = \"w\"\nsource = \"wavelet\"\n";  // to 8
   expectRefusals({
       {"volume-precision", w + "origin = [1e30, 0, 0]\nspacing = 1e-30\n",
-       ":10: volume 'w'.spacing along x, 1e-30, is below float precision at the grid's "
+       ":10:11: volume 'w'.spacing: along x, 1e-30, is below float precision at the grid's "
        "coordinates"},
       {"volume-origin", w + "origin = [1e30, 0, 0]\n",
-       ":9: volume 'w'.spacing along x, 0.1, is below float precision"},
+       ":9:10: volume 'w'.spacing: along x, 0.1, is below float precision"},
       {"volume-overflow", w + "dims = [4096, 2, 2]\nspacing = 1e35\n",
-       ":10: volume 'w'.spacing along x: the grid's far corner, origin + spacing (dims - 1) = "},
+       ":10:11: volume 'w'.spacing: along x: the grid's far corner, origin + spacing (dims - 1) "
+       "= "},
       {"volume-denormal", w + "spacing = 1e-40\n",
-       ":9: volume 'w'.spacing along x, 9.99995e-41, must be a positive normal float"},
+       ":9:11: volume 'w'.spacing: along x, 9.99995e-41, must be a positive normal float"},
       {"volume-steps", w + "dims = [64, 64, 64]\nspacing = 1e-5\n[scivis]\nsampling_rate = 64\n",
-       ":10: volume 'w'.spacing: the volumes are sampled every 1.5625e-07 world units"},
+       ":10:11: volume 'w'.spacing: the volumes are sampled every 1.5625e-07 world units"},
   });
   // Every volume reader calls the same check (GridGeometry::problem).
   GridGeometry g;
@@ -377,7 +390,7 @@ type = "ambient"
 color = [3e38, 1, 1]
 intensity = 10
 )",
-       ":15: light: color x intensity is beyond the float range"},
+       ":15:13: light: color x intensity is beyond the float range"},
   });
 }
 
@@ -388,8 +401,9 @@ TEST(SceneTomlSciVisLimits, ANinthVolumeIsRefusedWhereItIsDeclared) {
   for (int i = 0; i < 9; ++i)
     text += "[[volumes]]\nname = \"v" + std::to_string(i) + "\"\nsource = \"marschner-lobb\"\n";
   // Volume 9 starts on line 6 + 8 * 3.
-  EXPECT_EQ(errorOf(writeScene("nine.toml", text)),
-            "FILE:30: volumes: the scivis renderer draws at most 8 volumes, and this is volume 9");
+  EXPECT_EQ(
+      errorOf(writeScene("nine.toml", text)),
+      "FILE:30:1: volumes: the scivis renderer draws at most 8 volumes, and this is volume 9");
   // Eight are fine; a description with nine made elsewhere is refused when the scene is built.
   SceneDesc d = loadSceneDesc(writeScene("eight.toml", text.substr(0, text.rfind("[[volumes]]"))));
   ASSERT_EQ(d.volumes.size(), SciVisScene::kMaxVolumes);

@@ -8,6 +8,7 @@
 #include "renderers/MeshImport.h"
 #include "renderers/Scene.h"
 #include "renderers/SceneToml.h"
+#include "tests/DiagnosticsTestUtil.h"
 #include "tests/renderers/RenderTestUtil.h"
 
 namespace renderers {
@@ -23,11 +24,12 @@ std::string writeFile(const std::string& name, const std::string& text) {
   return p.string();
 }
 
+// The problems loading `spec` gives, one headline each (DiagnosticsTestUtil.h).
 std::string errorOf(const std::string& spec) {
   try {
     loadSceneDesc(spec);
   } catch (const base::Error& e) {
-    return e.what();
+    return testutil::headlines(e.what());
   }
   return "(no error)";
 }
@@ -55,7 +57,7 @@ faces = [[0, 1, 2]]
 material = "foo"
 )");
   // kHeader is 8 lines with its leading newline, the [[meshes]] block starts on line 10.
-  EXPECT_EQ(errorOf(path), path + ":14: material 'foo' of mesh 'bunny' is not defined");
+  EXPECT_EQ(errorOf(path), path + ":14:12: mesh 'bunny'.material: material 'foo' is not defined");
 }
 
 TEST(SceneToml, BadFieldTypeGivesFileLineAndField) {
@@ -64,22 +66,26 @@ position = [0, 0, -5]
 look_at = [0, 0, 0]
 fov = "wide"
 )");
-  EXPECT_EQ(errorOf(path), path + ":4: camera.fov must be a number");
+  EXPECT_EQ(errorOf(path), path + ":4:7: camera.fov: expected a number, got a string");
   const std::string vec = writeFile("bad-vector.toml", R"([camera]
 position = [0, 0]
 look_at = [0, 0, 0]
 )");
-  EXPECT_EQ(errorOf(vec), vec + ":2: camera.position must be an array of 3 numbers");
+  EXPECT_EQ(errorOf(vec),
+            vec + ":2:12: camera.position: expected [x, y, z] (3 numbers), got 2 elements");
 }
 
 TEST(SceneToml, SyntaxErrorsMissingAndUnknownFields) {
   const std::string syntax = writeFile("syntax.toml", "[camera]\nposition = [0, 0, -5\n");
   EXPECT_EQ(errorOf(syntax).rfind(syntax + ":", 0), 0u) << errorOf(syntax);
   const std::string missing = writeFile("missing.toml", "[camera]\nposition = [0, 0, -5]\n");
-  EXPECT_EQ(errorOf(missing), missing + ":1: camera: missing field 'look_at'");
+  EXPECT_EQ(errorOf(missing), missing + ":1:1: camera.look_at: missing");
   const std::string unknown =
       writeFile("unknown-field.toml", std::string(kHeader) + "colour = 1\n");
-  EXPECT_EQ(errorOf(unknown), unknown + ":9: unknown field 'colour' in material 'white'");
+  EXPECT_EQ(errorOf(unknown), unknown +
+                                  ":9:1: material 'white': unknown field 'colour' (did you mean "
+                                  "'color'?); known fields: type, color, emission, roughness, ior, "
+                                  "opacity, specular, shininess");
   const std::string index = writeFile("bad-index.toml", std::string(kHeader) + R"(
 [[meshes]]
 name = "tri"
@@ -87,7 +93,7 @@ material = "white"
 vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
 faces = [[0, 1, 3]]
 )");
-  EXPECT_EQ(errorOf(index), index + ":14: mesh 'tri'.faces: vertex 3 does not exist");
+  EXPECT_EQ(errorOf(index), index + ":14:17: mesh 'tri'.faces: vertex 3 does not exist");
 }
 
 TEST(SceneToml, UnknownBuiltinListsTheChoices) {
@@ -174,7 +180,7 @@ file = "does-not-exist.obj"
 material = "white"
 )");
   const std::string e = errorOf(broken);
-  EXPECT_EQ(e.rfind(broken + ":12: mesh 'nothing': ", 0), 0u) << e;
+  EXPECT_EQ(e.rfind(broken + ":12:8: mesh 'nothing'.file: ", 0), 0u) << e;
 }
 
 TEST(SceneToml, StanfordBunnyFromCgal) {

@@ -56,11 +56,16 @@ TEST(VolumeFile, HostileFilesGiveOneErrorNamingTheFile) {
   expectError("huge.nrrd", nrrd + "type: uchar\nsizes: 13 9 70000\n\n" + u8, "more than the cap");
   expectError("total.nrrd", nrrd + "type: uchar\nsizes: 16000 16000 16000\n\n",
               "voxels, more than");
-  expectError("type.nrrd", nrrd + "type: block\nsizes: 13 9 7\n\n", "type 'block'");
-  expectError("enc.nrrd", nrrd + "type: uchar\nencoding: bzip2\nsizes: 13 9 7\n\n", "bzip2");
+  // Header problems are located at the value: file, line and column.
+  expectError("type.nrrd", nrrd + "type: block\nsizes: 13 9 7\n\n",
+              "type.nrrd:3:7: field 'type': 'block' is not one dfbwall reads");
+  expectError("enc.nrrd", nrrd + "type: uchar\nencoding: bzip2\nsizes: 13 9 7\n\n",
+              "enc.nrrd:4:11: field 'encoding': 'bzip2' is not one dfbwall reads (raw, gzip)");
   expectError("dim.nrrd", "NRRD0004\ndimension: 4\n", "dimension 4");
-  expectError("junk.nrrd", nrrd + "sizes: 13 9 x7\n", "'x7' is not a number");
-  expectError("line.nrrd", nrrd + "type: uchar\nsizes 13 9 7\n", "line.nrrd:4");
+  expectError("junk.nrrd", nrrd + "sizes: 13 9 x7\n",
+              "junk.nrrd:3:13: field 'sizes': 'x7' is not a number");
+  expectError("line.nrrd", nrrd + "type: uchar\nsizes 13 9 7\n",
+              "line.nrrd:4:1: 'sizes 13 9 7' is not a 'field: value' line");
   expectError("endian.nrrd", nrrd + "type: short\nsizes: 13 9 7\n\n", "misses field 'endian'");
   expectError("nomagic.nrrd", "PK\3\4", "not an NRRD file");
   expectError("endsearly.nrrd",
@@ -95,7 +100,7 @@ TEST(VolumeFile, HostileFilesGiveOneErrorNamingTheFile) {
   expectError("nometa.mha", "ObjectType = Image\nNDims = 3\nDimSize = 13 9 7\n", "ElementDataFile");
   expectError("metatype.mha",
               "NDims = 3\nDimSize = 13 9 7\nElementType = MET_STRING\nElementDataFile = LOCAL\n",
-              "MET_STRING");
+              "metatype.mha:3:15: field 'ElementType': 'MET_STRING' is not one dfbwall reads");
   expectError("nofile.mhd",
               "NDims = 3\nDimSize = 13 9 7\nElementType = MET_UCHAR\nElementDataFile = gone.raw\n",
               "nofile.mhd: its data file");

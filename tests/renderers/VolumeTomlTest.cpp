@@ -1,12 +1,15 @@
 // [[volumes]] entries and transfer functions from TOML: what a valid entry gives, and errors that
-// name file:line and the field.
+// name file:line:column and the field.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "base/Error.h"
+#include "base/TomlDiagnostics.h"
 #include "renderers/scivis/io/VolumeToml.h"
+#include "tests/DiagnosticsTestUtil.h"
 
 namespace renderers {
 namespace {
@@ -25,21 +28,28 @@ std::string writeFile(const std::string& name, const std::string& text) {
   return p.string();
 }
 
-// The first [[volumes]] entry of the file.
+// The first [[volumes]] entry of the file; its problems thrown as one base::Error.
 VolumeDesc readFirst(const std::string& path) {
-  const toml::table root = toml::parse_file(path);
-  const TomlReader r(path);
-  return readVolume(r, *root["volumes"][0].as_table(), fs::path(path).parent_path());
+  base::TomlDiagnostics diagnostics(path);
+  diagnostics.readFile("scene file");
+  const std::optional<toml::table> root = diagnostics.parse();
+  diagnostics.throwIfAny();
+  TomlReader r(diagnostics);
+  VolumeDesc d;
+  r.entry(
+      [&] { d = readVolume(r, *(*root)["volumes"][0].as_table(), fs::path(path).parent_path()); });
+  diagnostics.throwIfAny();
+  return d;
 }
 
-// "(no error)" or the message of the base::Error reading `text` (saved as `name`) throws; every
-// message is expected to start with "<path>:".
+// "(no error)" or the problems reading `text` (saved as `name`) gives, one headline each
+// (DiagnosticsTestUtil.h); every message is expected to start with "<path>:".
 std::string errorOf(const std::string& name, const std::string& text) {
   const std::string path = writeFile(name, text);
   try {
     readFirst(path);
   } catch (const base::Error& e) {
-    const std::string m = e.what();
+    const std::string m = testutil::headlines(e.what());
     return m.rfind(path + ":", 0) == 0 ? m.substr(path.size()) : "(no file name) " + m;
   }
   return "(no error)";
@@ -130,7 +140,7 @@ type = "uint16"
 header_bytes = 6
 transfer_function = { preset = "grayscale", range = [0, 4096] }
 )"),
-            ":4: volume 'ct'.file: " + ct +
+            ":4:8: volume 'ct'.file: " + ct +
                 ": raw volume file is 54 bytes, expected 78 bytes (4x3x3 uint16 voxels of 2 bytes "
                 "+ 6 header bytes)");
   EXPECT_EQ(errorOf("raw-missing.toml", R"([[volumes]]
@@ -141,29 +151,29 @@ dims = [4, 3, 3]
 type = "float32"
 transfer_function = { preset = "grayscale", range = [0, 1] }
 )"),
-            ":4: volume 'ct'.file: " + (testDir() / "nothing.raw").string() +
+            ":4:8: volume 'ct'.file: " + (testDir() / "nothing.raw").string() +
                 ": cannot open the raw volume file (No such file or directory); expected 144 bytes "
                 "(4x3x3 float32 voxels of 4 bytes + 0 header bytes)");
   const std::string head = "[[volumes]]\nname = \"ct\"\nsource = \"raw\"\nfile = \"ct.raw\"\n";
   EXPECT_EQ(errorOf("raw-nodims.toml", head + "type = \"uint8\"\n"),
-            ":1: volume 'ct': missing field 'dims'");
+            ":1:1: volume 'ct'.dims: missing");
   EXPECT_EQ(errorOf("raw-type.toml", head + "dims = [2, 2, 2]\ntype = \"int8\"\n"),
-            ":6: volume 'ct'.type must be \"float32\", \"uint8\" or \"uint16\"");
+            ":6:8: volume 'ct'.type: must be \"float32\", \"uint8\" or \"uint16\", not \"int8\"");
   EXPECT_EQ(errorOf("raw-order.toml",
                     head + "dims = [2, 2, 2]\ntype = \"uint8\"\nbyte_order = \"middle\"\n"),
-            ":7: volume 'ct'.byte_order must be \"little\" or \"big\"");
+            ":7:14: volume 'ct'.byte_order: must be \"little\" or \"big\", not \"middle\"");
   EXPECT_EQ(
       errorOf("raw-header.toml", head + "dims = [2, 2, 2]\ntype = \"uint8\"\nheader_bytes = -1\n"),
-      ":7: volume 'ct'.header_bytes must be a non-negative integer");
+      ":7:16: volume 'ct'.header_bytes: must not be negative, got -1");
   // A file's values are unknown until it is read: a preset needs its range.
   EXPECT_EQ(
       errorOf("raw-norange.toml", head + "dims = [4, 3, 2]\ntype = \"uint16\"\nheader_bytes = 6\n"
                                          "transfer_function = { preset = \"viridis\" }\n"),
-      ":8: volume 'ct'.transfer_function: missing field 'range' (the volume's values are not "
+      ":8:21: volume 'ct'.transfer_function: missing field 'range' (the volume's values are not "
       "known before reading it)");
   EXPECT_EQ(
       errorOf("raw-notf.toml", head + "dims = [4, 3, 2]\ntype = \"uint16\"\nheader_bytes = 6\n"),
-      ":1: volume 'ct': missing field 'transfer_function'");
+      ":1:1: volume 'ct'.transfer_function: missing");
 }
 
 // source = "file": the format from the name (or `format`), the grid from the header, errors
@@ -191,19 +201,21 @@ TEST(VolumeToml, FilesTakeTheirGridFromTheHeaderAndErrorsNameLineFieldAndFile) {
       writeFile("raw.toml", head + "file = \"v.raw\"\ndims = [2, 3, 4]\ntype = \"uint16\"\n" + tf));
   EXPECT_EQ(raw.source.kind, VolumeSource::Kind::RawFile);
   EXPECT_EQ(raw.source.grid.dims, (Index3{2, 3, 4}));
-  EXPECT_EQ(errorOf("ext.toml", head + "file = \"v.dat\"\n" + tf),
-            ":4: volume 'v'.file: the format is not known from the name (.nrrd .nhdr .nii .nii.gz "
-            ".mhd .mha .h5 .hdf5 .nc .cdf); give 'format'");
+  EXPECT_EQ(
+      errorOf("ext.toml", head + "file = \"v.dat\"\n" + tf),
+      ":4:8: volume 'v'.file: the format is not known from the name (.nrrd .nhdr .nii .nii.gz "
+      ".mhd .mha .h5 .hdf5 .nc .cdf); give 'format'");
   EXPECT_EQ(errorOf("fmt.toml", head + "file = \"v.nrrd\"\nformat = \"tiff\"\n" + tf),
-            ":5: volume 'v'.format must be \"nrrd\", \"nifti\", \"metaimage\", \"hdf5\" or "
-            "\"netcdf\"");
+            ":5:10: volume 'v'.format: must be \"nrrd\", \"nifti\", \"metaimage\", \"hdf5\" or "
+            "\"netcdf\", not \"tiff\"");
   EXPECT_EQ(errorOf("var.toml", head + "file = \"v.nrrd\"\nvariable = \"T\"\n" + tf),
-            ":5: volume 'v'.variable is for NetCDF files");
+            ":5:12: volume 'v'.variable: is for NetCDF files");
   EXPECT_EQ(errorOf("dims.toml", head + "file = \"v.nrrd\"\ndims = [3, 4, 5]\n" + tf),
-            ":5: unknown field 'dims' in volume 'v'");
+            ":5:1: volume 'v': unknown field 'dims'; known fields: name, source, origin, spacing, "
+            "visible, transfer_function, file, format, dataset, variable, time");
   const std::string nifti =
       errorOf("nifti.toml", head + "file = \"v.nrrd\"\nformat = \"nifti\"\n" + tf);
-  EXPECT_EQ(nifti.rfind(":4: volume 'v'.file: " + nrrd + ": 146 bytes, too short for a NIfTI", 0),
+  EXPECT_EQ(nifti.rfind(":4:8: volume 'v'.file: " + nrrd + ": 146 bytes, too short for a NIfTI", 0),
             0u)
       << nifti;
 }
@@ -211,30 +223,34 @@ TEST(VolumeToml, FilesTakeTheirGridFromTheHeaderAndErrorsNameLineFieldAndFile) {
 TEST(VolumeToml, FieldErrorsNameFileLineAndField) {
   const std::string w = "[[volumes]]\nname = \"w\"\nsource = \"wavelet\"\n";  // lines 1-3
   EXPECT_EQ(errorOf("unknown.toml", w + "colour = 1\n"),
-            ":4: unknown field 'colour' in volume 'w'");
-  EXPECT_EQ(errorOf("other-source.toml", w + "f_m = 6\n"), ":4: unknown field 'f_m' in volume 'w'");
+            ":4:1: volume 'w': unknown field 'colour'; known fields: name, source, dims, origin, "
+            "spacing, visible, transfer_function, maximum, sigma, x_freq, x_mag, y_freq, y_mag, "
+            "z_freq, z_mag");
+  EXPECT_EQ(errorOf("other-source.toml", w + "f_m = 6\n")
+                .rfind(":4:1: volume 'w': unknown field 'f_m'", 0),
+            0u);
   EXPECT_EQ(
       errorOf("source.toml", "[[volumes]]\nname = \"w\"\nsource = \"noise\"\n"),
-      ":3: volume 'w'.source must be \"wavelet\", \"marschner-lobb\", \"raw\", \"openvdb\" or "
+      ":3:10: volume 'w'.source: must be \"wavelet\", \"marschner-lobb\", \"raw\", \"openvdb\" or "
       "\"file\", not \"noise\"");
   EXPECT_EQ(errorOf("dims-small.toml", w + "dims = [64, 1, 64]\n"),
-            ":4: volume 'w'.dims must be between 2 and 16384 per axis, not 1");
+            ":4:13: volume 'w'.dims: must be between 2 and 16384 per axis, not 1");
   EXPECT_EQ(errorOf("dims-big.toml", w + "dims = [25600, 256, 256]\n"),
-            ":4: volume 'w'.dims must be between 2 and 16384 per axis, not 25600");
+            ":4:9: volume 'w'.dims: must be between 2 and 16384 per axis, not 25600");
   EXPECT_EQ(errorOf("dims-float.toml", w + "dims = [64, 64.5, 64]\n"),
-            ":4: volume 'w'.dims must be an array of 3 integers");
+            ":4:13: volume 'w'.dims: expected an integer, got a floating-point number");
   EXPECT_EQ(errorOf("spacing.toml", w + "spacing = [1, 0, 1]\n"),
-            ":4: volume 'w'.spacing must be positive");
+            ":4:11: volume 'w'.spacing: must be positive");
   EXPECT_EQ(errorOf("spacing-neg.toml", w + "spacing = -2\n"),
-            ":4: volume 'w'.spacing must be positive");
-  EXPECT_EQ(errorOf("sigma.toml", w + "sigma = 0\n"), ":4: volume 'w'.sigma must be positive");
+            ":4:11: volume 'w'.spacing: must be positive");
+  EXPECT_EQ(errorOf("sigma.toml", w + "sigma = 0\n"), ":4:9: volume 'w'.sigma: must be positive");
   EXPECT_EQ(
       errorOf("alpha.toml", "[[volumes]]\nname = \"m\"\nsource = \"marschner-lobb\"\nalpha = -1\n"),
-      ":4: volume 'm'.alpha must not be negative");
+      ":4:9: volume 'm'.alpha: must not be negative");
   EXPECT_EQ(errorOf("visible.toml", w + "visible = 1\n"),
-            ":4: volume 'w'.visible must be true or false");
+            ":4:11: volume 'w'.visible: expected true or false, got an integer");
   EXPECT_EQ(errorOf("name.toml", "[[volumes]]\nsource = \"wavelet\"\n"),
-            ":1: volume: missing field 'name'");
+            ":1:1: volume.name: missing");
 }
 
 TEST(VolumeToml, TransferFunctionErrorsNameFileLineAndField) {
@@ -244,40 +260,42 @@ TEST(VolumeToml, TransferFunctionErrorsNameFileLineAndField) {
     return errorOf(name, w + "[volumes.transfer_function]\n" + table);  // the table: line 4
   };
   EXPECT_EQ(error("tf-range.toml", "preset = \"viridis\"\nrange = [10, 10]\n"),
-            ":6: " + tf + ".range must have low < high");
+            ":6:9: " + tf + ".range: must have low < high");
   EXPECT_EQ(error("tf-range-shape.toml", "preset = \"viridis\"\nrange = [10]\n"),
-            ":6: " + tf + ".range must be [low, high]");
+            ":6:9: " + tf + ".range: expected [low, high] (2 numbers), got 1 element");
   EXPECT_EQ(error("tf-opacity.toml", "preset = \"viridis\"\nopacity = [[0, 0],\n  [10, 1.5]]\n"),
-            ":7: " + tf + ".opacity: [value, opacity] needs numbers in [0, 1] after the value");
+            ":7:3: " + tf + ".opacity: [value, opacity] needs numbers in [0, 1] after the value");
   EXPECT_EQ(error("tf-order.toml", "colors = [[0, 0, 0, 0],\n  [10, 1, 1, 1],\n  [5, 1, 0, 0]]\n"),
-            ":7: " + tf + ".colors: control point values must be ascending (5 after 10)");
+            ":7:3: " + tf + ".colors: control point values must be ascending (5 after 10)");
   EXPECT_EQ(error("tf-color-shape.toml", "colors = [[0, 0, 0]]\n"),
-            ":5: " + tf + ".colors: each point must be [value, r, g, b]");
+            ":5:11: " + tf + ".colors: each point must be [value, r, g, b]");
   EXPECT_EQ(error("tf-color-range.toml", "colors = [[0, 0, 2, 0]]\n"),
-            ":5: " + tf + ".colors: [value, r, g, b] needs numbers in [0, 1] after the value");
+            ":5:11: " + tf + ".colors: [value, r, g, b] needs numbers in [0, 1] after the value");
   EXPECT_EQ(error("tf-empty.toml", "opacity = []\npreset = \"viridis\"\n"),
-            ":5: " + tf + ".opacity must be a non-empty array of [value, opacity]");
+            ":5:11: " + tf + ".opacity: must be a non-empty array of [value, opacity]");
   EXPECT_EQ(error("tf-both.toml", "preset = \"viridis\"\ncolors = [[0, 0, 0, 0]]\n"),
-            ":6: " + tf + ": give either 'preset' or 'colors', not both");
+            ":6:10: " + tf + ": give either 'preset' or 'colors', not both");
   EXPECT_EQ(error("tf-none.toml", "opacity = [[0, 0], [1, 1]]\n"),
-            ":4: " + tf + ": missing field 'preset' or 'colors'");
+            ":4:1: " + tf + ": missing field 'preset' or 'colors'");
   EXPECT_EQ(error("tf-preset.toml", "preset = \"jet\"\n"),
-            ":5: " + tf +
+            ":5:10: " + tf +
                 ".preset: unknown transfer function preset 'jet' (presets: cool-warm, "
                 "viridis, inferno, grayscale, rainbow)");
   EXPECT_EQ(error("tf-unknown.toml", "preset = \"viridis\"\ngamma = 2\n"),
-            ":6: unknown field 'gamma' in " + tf);
+            ":6:1: " + tf +
+                ": unknown field 'gamma'; known fields: preset, colors, opacity, range, "
+                "opacity_unit, max_opacity");
   EXPECT_EQ(error("tf-unit.toml", "preset = \"viridis\"\nopacity_unit = 0\n"),
-            ":6: " + tf + ".opacity_unit must be positive");
+            ":6:16: " + tf + ".opacity_unit: must be positive");
   EXPECT_EQ(error("tf-max.toml", "preset = \"viridis\"\nmax_opacity = 1.2\n"),
-            ":6: " + tf + ".max_opacity must be in [0, 1]");
+            ":6:15: " + tf + ".max_opacity: must be in [0, 1]");
   EXPECT_EQ(error("tf-max-and-points.toml",
                   "preset = \"viridis\"\nopacity = [[0, 0], [1, 1]]\nmax_opacity = 0.5\n"),
-            ":7: " + tf +
-                ".max_opacity shapes the default opacity ramp; with 'opacity' given, put "
+            ":7:15: " + tf +
+                ".max_opacity: shapes the default opacity ramp; with 'opacity' given, put "
                 "the peak there");
   EXPECT_EQ(errorOf("tf-type.toml", w + "transfer_function = \"viridis\"\n"),
-            ":4: " + tf + " must be a table");
+            ":4:21: " + tf + ": expected a table, got a string");
 }
 
 }  // namespace

@@ -87,7 +87,9 @@ TEST(Layout, GridProcessPerRowAndDisplay) {
   EXPECT_EQ(byDisplay.layout.processCount, 6);
   const auto bad = wall::readLayoutText(std::string(grid) + "process_per = \"host\"\n", "bad.toml");
   ASSERT_EQ(bad.problems.size(), 1u);
-  EXPECT_NE(bad.problems[0].find("bad.toml:6: grid: field 'process_per'"), std::string::npos)
+  EXPECT_NE(bad.problems[0].find("bad.toml:6:15: grid.process_per: must be \"display\", \"column\" "
+                                 "or \"row\", got \"host\""),
+            std::string::npos)
       << bad.problems[0];
 }
 
@@ -136,6 +138,8 @@ size = [70, 20]
   EXPECT_EQ(r.layout.processCount, 2);
   EXPECT_EQ(r.layout.displays[1].lines.table, 6);
   EXPECT_EQ(r.layout.displays[1].lines.size, 9);
+  EXPECT_EQ(r.layout.displays[1].columns.table, 1);
+  EXPECT_EQ(r.layout.displays[1].columns.size, 8);
 }
 
 TEST(Layout, LoadLayoutThrowsWithEveryProblem) {

@@ -21,11 +21,12 @@ struct Display {
   std::string host;  // expected MPI processor name; empty = any (mismatch is a warning)
   int monitor = 0;   // GLFW monitor index for window mode (0 = primary)
   bool fullscreen = false;
-  // Where each field was written, for messages; 0 when the field was not written (defaults,
-  // grid-expanded displays use the [grid] lines).
-  struct Lines {
+  // Where each field was written (line and column, from 1), for messages; 0 when the field was
+  // not written (defaults; grid-expanded displays use the [grid]'s places).
+  struct Places {
     int table = 0, name = 0, origin = 0, size = 0, process = 0;
-  } lines;
+  };
+  Places lines, columns;
 };
 
 // Caps that keep every size computation small and exact (64-bit where it adds up): a layout past
@@ -47,8 +48,9 @@ struct Layout {
   int findDisplay(std::string_view name) const;
 };
 
-// Every problem with a layout file, one line each: "FILE:LINE: display 'NAME': field 'F': what".
-// Parse errors carry a column too ("FILE:LINE:COL: ..."). Empty when the layout is usable.
+// Every problem with a layout file, one each: "FILE:LINE:COLUMN: display 'NAME'.FIELD: what",
+// then the line echoed with a caret under the column (base/TomlDiagnostics.h). Empty when the
+// layout is usable.
 using Problems = std::vector<std::string>;
 
 struct LayoutResult {

@@ -3,11 +3,13 @@
 // could trust (a display with a type error is skipped instead of producing follow-on noise).
 #include <vector>
 
+#include "base/TomlDiagnostics.h"
 #include "wall/layout/Layout.h"
 
 namespace wall::detail {
 
-// `trusted` has one entry per display, or is empty for "all".
-Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted);
+// `trusted` has one entry per display, or is empty for "all". Problems go to `report`.
+void validateDisplays(const Layout& layout, const std::vector<bool>& trusted,
+                      base::TomlDiagnostics& report);
 
 }  // namespace wall::detail

@@ -12,14 +12,14 @@
 #include <string_view>
 
 #include "base/Error.h"
+#include "base/TomlDiagnostics.h"
 #include "wall/layout/Layout.h"
 #include "wall/layout/LayoutChecks.h"
 
 namespace wall {
 namespace {
 
-constexpr std::array<std::string_view, 2> kTopKeys = {"display", "grid"};
-constexpr std::array<std::string_view, 1> kTopScalarKeys = {"description"};
+constexpr std::array<std::string_view, 3> kTopKeys = {"display", "grid", "description"};
 constexpr std::array<std::string_view, 7> kDisplayKeys = {"name", "origin",  "size",      "process",
                                                           "host", "monitor", "fullscreen"};
 constexpr std::array<std::string_view, 9> kGridKeys = {"columns",    "rows",     "display_size",
@@ -27,195 +27,103 @@ constexpr std::array<std::string_view, 9> kGridKeys = {"columns",    "rows",    
                                                        "fullscreen", "monitor",  "process_per"};
 
 int lineOf(const toml::node& n) { return static_cast<int>(n.source().begin.line); }
+int columnOf(const toml::node& n) { return static_cast<int>(n.source().begin.column); }
 
-std::string typeName(const toml::node& n) {
-  switch (n.type()) {
-    case toml::node_type::table:
-      return "a table";
-    case toml::node_type::array:
-      return "an array";
-    case toml::node_type::string:
-      return "a string";
-    case toml::node_type::integer:
-      return "an integer";
-    case toml::node_type::floating_point:
-      return "a floating-point number";
-    case toml::node_type::boolean:
-      return "a boolean";
-    case toml::node_type::date:
-      return "a date";
-    case toml::node_type::time:
-      return "a time";
-    case toml::node_type::date_time:
-      return "a date-time";
-    default:
-      return "nothing";
-  }
+// Records where `n` was written as the place of one field of `d`.
+void mark(Display& d, int Display::Places::*field, const toml::node& n) {
+  d.lines.*field = lineOf(n);
+  d.columns.*field = columnOf(n);
 }
 
-// Levenshtein distance, to turn "orign" into "did you mean 'origin'?".
-size_t editDistance(std::string_view a, std::string_view b) {
-  std::vector<size_t> row(b.size() + 1);
-  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (size_t i = 1; i <= a.size(); ++i) {
-    size_t diag = row[0];
-    row[0] = i;
-    for (size_t j = 1; j <= b.size(); ++j) {
-      const size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diag = up;
-    }
-  }
-  return row[b.size()];
+// "display 'a'.size", or the field alone at the top of the file.
+std::string fieldOf(const std::string& subject, std::string_view field) {
+  return subject.empty() ? std::string(field) : subject + "." + std::string(field);
 }
 
-// Collects problems with the file name and a subject ("display 'a'", "grid") in front.
-class Reporter {
- public:
-  Reporter(const std::string& file, Problems& out) : file_(file), out_(out) {}
-
-  void add(int line, const std::string& subject, std::string_view field, const std::string& what) {
-    std::string m = file_ + ":" + std::to_string(line) + ": ";
-    if (!subject.empty()) m += subject + ": ";
-    if (!field.empty()) m += "field '" + std::string(field) + "': ";
-    out_.push_back(m + what);
-  }
-  size_t count() const { return out_.size(); }
-
-  template <size_t N>
-  void unknownKeys(const toml::table& t, const std::string& subject,
-                   const std::array<std::string_view, N>& known) {
-    for (auto&& [k, v] : t) {
-      if (std::find(known.begin(), known.end(), k.str()) != known.end()) continue;
-      std::string what = "unknown field '" + std::string(k.str()) + "'";
-      std::string_view best;
-      size_t bestDistance = 3;  // suggest only close matches
-      for (std::string_view candidate : known) {
-        const size_t d = editDistance(k.str(), candidate);
-        if (d < bestDistance) bestDistance = d, best = candidate;
-      }
-      what += best.empty() ? "" : " (did you mean '" + std::string(best) + "'?)";
-      what += "; known fields: ";
-      for (size_t i = 0; i < N; ++i) what += (i ? ", " : "") + std::string(known[i]);
-      add(static_cast<int>(k.source().begin.line), subject, "", what);
-    }
-  }
-
- private:
-  const std::string& file_;
-  Problems& out_;
-};
-
-std::optional<int> readInt(const toml::node& n, Reporter& r, const std::string& subject,
-                           std::string_view field) {
-  if (!n.is_integer()) {
-    r.add(lineOf(n), subject, field, "expected an integer, got " + typeName(n));
+std::optional<int> readInt(const toml::node& n, base::TomlDiagnostics& r,
+                           const std::string& subject, std::string_view field) {
+  const std::optional<std::int64_t> v = r.integer(n, fieldOf(subject, field));
+  if (!v) return std::nullopt;
+  if (*v < std::numeric_limits<int>::min() || *v > std::numeric_limits<int>::max()) {
+    r.add(n, fieldOf(subject, field), std::to_string(*v) + " is out of range");
     return std::nullopt;
   }
-  const int64_t v = n.as_integer()->get();
-  if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max()) {
-    r.add(lineOf(n), subject, field, std::to_string(v) + " is out of range");
-    return std::nullopt;
-  }
-  return static_cast<int>(v);
+  return static_cast<int>(*v);
 }
 
-std::optional<double> readNumber(const toml::node& n, Reporter& r, const std::string& subject,
-                                 std::string_view field) {
-  if (n.is_integer()) return static_cast<double>(n.as_integer()->get());
-  if (n.is_floating_point()) {
-    const double v = n.as_floating_point()->get();
-    if (std::isfinite(v)) return v;
-    r.add(lineOf(n), subject, field, "expected a finite number, got " + std::to_string(v));
-    return std::nullopt;
-  }
-  r.add(lineOf(n), subject, field, "expected a number, got " + typeName(n));
-  return std::nullopt;
+std::optional<double> readNumber(const toml::node& n, base::TomlDiagnostics& r,
+                                 const std::string& subject, std::string_view field) {
+  return r.number(n, fieldOf(subject, field));
 }
 
-// An array of exactly N integers (N = names.size()), e.g. origin = [x, y].
+// An array of exactly N integers or numbers, e.g. origin = [x, y].
 template <typename T, size_t N>
-std::optional<std::array<T, N>> readTuple(const toml::node& n, Reporter& r,
+std::optional<std::array<T, N>> readTuple(const toml::node& n, base::TomlDiagnostics& r,
                                           const std::string& subject, std::string_view field,
                                           const char* shape) {
-  const toml::array* a = n.as_array();
-  const char* kind = std::is_same_v<T, int> ? "integers" : "numbers";
-  if (!a) {
-    r.add(lineOf(n), subject, field,
-          std::string("expected ") + shape + " (" + std::to_string(N) + " " + kind + "), got " +
-              typeName(n));
-    return std::nullopt;
-  }
-  if (a->size() != N) {
-    r.add(lineOf(n), subject, field,
-          std::string("expected ") + shape + " (" + std::to_string(N) + " " + kind + "), got " +
-              std::to_string(a->size()) + " element" + (a->size() == 1 ? "" : "s"));
-    return std::nullopt;
-  }
   std::array<T, N> out{};
-  bool ok = true;
-  for (size_t i = 0; i < N; ++i) {
-    std::optional<T> v;
-    if constexpr (std::is_same_v<T, int>)
-      v = readInt((*a)[i], r, subject, field);
-    else
-      v = readNumber((*a)[i], r, subject, field);
-    if (v)
-      out[i] = *v;
-    else
-      ok = false;
+  if constexpr (std::is_same_v<T, int>) {
+    if (!r.integers(n, fieldOf(subject, field), N, shape)) return std::nullopt;
+    const toml::array& a = *n.as_array();
+    bool ok = true;
+    for (size_t i = 0; i < N; ++i) {
+      const std::optional<int> e = readInt(a[i], r, subject, field);
+      ok = ok && e.has_value();
+      out[i] = e.value_or(0);
+    }
+    if (!ok) return std::nullopt;
+  } else {
+    const auto v = r.numbers(n, fieldOf(subject, field), N, shape);
+    if (!v) return std::nullopt;
+    std::copy(v->begin(), v->end(), out.begin());
   }
-  if (!ok) return std::nullopt;
   return out;
 }
 
-std::optional<std::string> readString(const toml::node& n, Reporter& r, const std::string& subject,
-                                      std::string_view field) {
-  if (const auto* s = n.as_string()) return s->get();
-  r.add(lineOf(n), subject, field, "expected a string, got " + typeName(n));
-  return std::nullopt;
+std::optional<std::string> readString(const toml::node& n, base::TomlDiagnostics& r,
+                                      const std::string& subject, std::string_view field) {
+  return r.string(n, fieldOf(subject, field));
 }
 
-std::optional<bool> readBool(const toml::node& n, Reporter& r, const std::string& subject,
-                             std::string_view field) {
-  if (const auto* b = n.as_boolean()) return b->get();
-  r.add(lineOf(n), subject, field, "expected true or false, got " + typeName(n));
-  return std::nullopt;
+std::optional<bool> readBool(const toml::node& n, base::TomlDiagnostics& r,
+                             const std::string& subject, std::string_view field) {
+  return r.boolean(n, fieldOf(subject, field));
 }
 
 // One [[display]] table. Returns whether it set `process`.
-bool readDisplay(const toml::table& t, int index, Display& d, Reporter& r) {
-  d.lines.table = lineOf(t);
+bool readDisplay(const toml::table& t, int index, Display& d, base::TomlDiagnostics& r) {
+  mark(d, &Display::Places::table, t);
   std::string subject = "display #" + std::to_string(index + 1);
   if (const toml::node* n = t.get("name")) {
-    d.lines.name = lineOf(*n);
+    mark(d, &Display::Places::name, *n);
     if (auto s = readString(*n, r, subject, "name")) {
       d.name = *s;
       subject = "display '" + d.name + "'";
     }
   } else {
-    r.add(d.lines.table, subject, "name", "missing; every [[display]] needs a name");
+    r.add(t, fieldOf(subject, "name"), "missing; every [[display]] needs a name");
   }
   r.unknownKeys(t, subject, kDisplayKeys);
 
   if (const toml::node* n = t.get("origin")) {
-    d.lines.origin = lineOf(*n);
+    mark(d, &Display::Places::origin, *n);
     if (auto v = readTuple<int, 2>(*n, r, subject, "origin", "[x, y]"))
       d.rect.x0 = (*v)[0], d.rect.y0 = (*v)[1];
   } else {
-    r.add(d.lines.table, subject, "origin", "missing; give the top-left corner as [x, y]");
+    r.add(t, fieldOf(subject, "origin"), "missing; give the top-left corner as [x, y]");
   }
   int w = 0, h = 0;
-  if (const toml::node* n = t.get("size")) {
-    d.lines.size = lineOf(*n);
-    if (auto v = readTuple<int, 2>(*n, r, subject, "size", "[w, h]")) w = (*v)[0], h = (*v)[1];
+  const toml::node* size = t.get("size");
+  if (size) {
+    mark(d, &Display::Places::size, *size);
+    if (auto v = readTuple<int, 2>(*size, r, subject, "size", "[w, h]")) w = (*v)[0], h = (*v)[1];
   } else {
-    r.add(d.lines.table, subject, "size", "missing; give the size in pixels as [w, h]");
+    r.add(t, fieldOf(subject, "size"), "missing; give the size in pixels as [w, h]");
   }
   // Computed in 64 bits: a huge origin plus size must not wrap into a plausible rectangle.
   const int64_t x1 = int64_t{d.rect.x0} + w, y1 = int64_t{d.rect.y0} + h;
   if (x1 > std::numeric_limits<int>::max() || y1 > std::numeric_limits<int>::max()) {
-    r.add(d.lines.size, subject, "size", "origin + size is out of range");
+    r.add(*size, fieldOf(subject, "size"), "origin + size is out of range");
     w = h = 0;
   }
   d.rect.x1 = d.rect.x0 + w;
@@ -223,14 +131,14 @@ bool readDisplay(const toml::table& t, int index, Display& d, Reporter& r) {
 
   bool setProcess = false;
   if (const toml::node* n = t.get("process")) {
-    d.lines.process = lineOf(*n);
+    mark(d, &Display::Places::process, *n);
     setProcess = true;
     if (auto v = readInt(*n, r, subject, "process")) d.process = *v;
   }
   if (const toml::node* n = t.get("host")) d.host = readString(*n, r, subject, "host").value_or("");
   if (const toml::node* n = t.get("monitor")) {
     d.monitor = readInt(*n, r, subject, "monitor").value_or(0);
-    if (d.monitor < 0) r.add(lineOf(*n), subject, "monitor", "must be 0 or more");
+    if (d.monitor < 0) r.add(*n, fieldOf(subject, "monitor"), "must be 0 or more");
   }
   if (const toml::node* n = t.get("fullscreen"))
     d.fullscreen = readBool(*n, r, subject, "fullscreen").value_or(false);
@@ -238,15 +146,16 @@ bool readDisplay(const toml::table& t, int index, Display& d, Reporter& r) {
 }
 
 // `trusted[i]`: display i was read without a problem, so semantic checks may look at it.
-void readDisplays(const toml::node& node, Layout& layout, std::vector<bool>& trusted, Reporter& r) {
+void readDisplays(const toml::node& node, Layout& layout, std::vector<bool>& trusted,
+                  base::TomlDiagnostics& r) {
   const toml::array* a = node.as_array();
   if (!a || !a->is_array_of_tables()) {
-    r.add(lineOf(node), "", "display",
-          "expected [[display]] tables (an array of tables), got " + typeName(node));
+    r.add(node, "display",
+          "expected [[display]] tables (an array of tables), got " + base::tomlTypeName(node));
     return;
   }
   if (a->size() > static_cast<size_t>(kMaxDisplays)) {
-    r.add(lineOf(node), "", "display",
+    r.add(node, "display",
           std::to_string(a->size()) + " [[display]] tables: at most " +
               std::to_string(kMaxDisplays) + " displays in a layout");
     return;
@@ -269,7 +178,7 @@ void readDisplays(const toml::node& node, Layout& layout, std::vector<bool>& tru
     } else if (!setsProcess[i]) {
       const Display& other = layout.displays[static_cast<size_t>(firstSet - setsProcess.begin())];
       trusted[i] = false;
-      r.add(d.lines.table, "display '" + d.name + "'", "process",
+      r.add(d.lines.table, d.columns.table, "display '" + d.name + "'.process",
             "missing; display '" + other.name + "' (line " + std::to_string(other.lines.process) +
                 ") sets 'process', so every display must");
     }
@@ -280,44 +189,42 @@ void readDisplays(const toml::node& node, Layout& layout, std::vector<bool>& tru
 // column, or the row, with process_per). A panel's
 // left edge is its column times (width + left bezel + right bezel): the pixels that would sit
 // behind the bezels belong to the canvas but to no display, so the picture continues.
-void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
+void readGrid(const toml::table& t, Layout& layout, base::TomlDiagnostics& r) {
   const std::string subject = "grid";
-  const int line = lineOf(t);
   r.unknownKeys(t, subject, kGridKeys);
   bool ok = true;
   auto positive = [&](const char* field) -> int {
     const toml::node* n = t.get(field);
     if (!n) {
-      r.add(line, subject, field, "missing");
+      r.add(t, fieldOf(subject, field), "missing");
       ok = false;
       return 0;
     }
     auto v = readInt(*n, r, subject, field);
     if (v && *v <= 0)
-      r.add(lineOf(*n), subject, field, "must be positive, got " + std::to_string(*v));
+      r.add(*n, fieldOf(subject, field), "must be positive, got " + std::to_string(*v));
     if (!v || *v <= 0) ok = false;
     return v.value_or(0);
   };
   const int columns = positive("columns");
   const int rows = positive("rows");
 
-  int w = 0, h = 0, sizeLine = line;
-  if (const toml::node* n = t.get("display_size")) {
-    sizeLine = lineOf(*n);
-    if (auto v = readTuple<int, 2>(*n, r, subject, "display_size", "[w, h]")) {
+  int w = 0, h = 0;
+  const toml::node* size = t.get("display_size");
+  const toml::node& sizeAt = size ? *size : t;  // where the panels' size is given
+  if (size) {
+    if (auto v = readTuple<int, 2>(*size, r, subject, "display_size", "[w, h]")) {
       w = (*v)[0], h = (*v)[1];
       if (w <= 0)
-        r.add(sizeLine, subject, "display_size",
-              "width must be positive, got " + std::to_string(w));
+        r.add(*size, "grid.display_size", "width must be positive, got " + std::to_string(w));
       if (h <= 0)
-        r.add(sizeLine, subject, "display_size",
-              "height must be positive, got " + std::to_string(h));
+        r.add(*size, "grid.display_size", "height must be positive, got " + std::to_string(h));
       ok = ok && w > 0 && h > 0;
     } else {
       ok = false;
     }
   } else {
-    r.add(line, subject, "display_size", "missing; give each panel's size in pixels as [w, h]");
+    r.add(t, "grid.display_size", "missing; give each panel's size in pixels as [w, h]");
     ok = false;
   }
 
@@ -326,7 +233,7 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
   const toml::node* mm = t.get("bezel_mm");
   const toml::node* pitch = t.get("pixel_pitch_mm");
   if (px && mm) {
-    r.add(lineOf(*mm), subject, "bezel_mm", "give either bezel_px or bezel_mm, not both");
+    r.add(*mm, "grid.bezel_mm", "give either bezel_px or bezel_mm, not both");
     ok = false;
   } else if (px) {
     if (auto v = readTuple<int, 4>(*px, r, subject, "bezel_px", "[left, right, top, bottom]")) {
@@ -338,10 +245,10 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
     auto v = readTuple<double, 4>(*mm, r, subject, "bezel_mm", "[left, right, top, bottom]");
     std::optional<double> p;
     if (!pitch) {
-      r.add(lineOf(*mm), subject, "pixel_pitch_mm",
+      r.add(*mm, "grid.pixel_pitch_mm",
             "missing; bezel_mm needs the pixel pitch to turn millimetres into pixels");
     } else if ((p = readNumber(*pitch, r, subject, "pixel_pitch_mm")) && !(*p > 0.0)) {
-      r.add(lineOf(*pitch), subject, "pixel_pitch_mm", "must be positive");
+      r.add(*pitch, "grid.pixel_pitch_mm", "must be positive");
       p.reset();
     }
     if (v && p) {
@@ -350,7 +257,7 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
         if ((*v)[i] < 0) {
           bezel[i] = -1;               // reported below, with the bezel_px case
         } else if (!(pixels < 1e6)) {  // also NaN
-          r.add(lineOf(*mm), subject, "bezel_mm",
+          r.add(*mm, "grid.bezel_mm",
                 "a bezel of " + std::to_string((*v)[i]) + " mm is out of range");
           ok = false;
         } else {
@@ -362,14 +269,13 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
     }
   }
   if (pitch && !mm) {
-    r.add(lineOf(*pitch), subject, "pixel_pitch_mm",
-          "only used with bezel_mm; remove it or add bezel_mm");
+    r.add(*pitch, "grid.pixel_pitch_mm", "only used with bezel_mm; remove it or add bezel_mm");
     ok = false;
   }
   const char* sides[] = {"left", "right", "top", "bottom"};
   for (size_t i = 0; i < 4; ++i) {
     if (bezel[i] < 0) {
-      r.add(lineOf(px ? *px : *mm), subject, px ? "bezel_px" : "bezel_mm",
+      r.add(px ? *px : *mm, px ? "grid.bezel_px" : "grid.bezel_mm",
             std::string(sides[i]) + " bezel must be 0 or more");
       ok = false;
     }
@@ -380,7 +286,7 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
     fullscreen = readBool(*n, r, subject, "fullscreen").value_or(false);
   if (const toml::node* n = t.get("monitor")) {
     monitor = readInt(*n, r, subject, "monitor").value_or(0);
-    if (monitor < 0) r.add(lineOf(*n), subject, "monitor", "must be 0 or more");
+    if (monitor < 0) r.add(*n, "grid.monitor", "must be 0 or more");
   }
   // Which panels one wall process drives: one each, or a whole column or row (one host with
   // several monitors per column of a wall is a common way to cable one).
@@ -388,7 +294,7 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
   if (const toml::node* n = t.get("process_per")) {
     processPer = readString(*n, r, subject, "process_per").value_or("display");
     if (processPer != "display" && processPer != "column" && processPer != "row") {
-      r.add(lineOf(*n), subject, "process_per",
+      r.add(*n, "grid.process_per",
             "must be \"display\", \"column\" or \"row\", got \"" + processPer + "\"");
       ok = false;
     }
@@ -396,7 +302,7 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
   if (!ok) return;
 
   if (int64_t{columns} * rows > kMaxDisplays) {
-    r.add(line, subject, "columns",
+    r.add(*t.get("columns"), "grid.columns",
           std::to_string(columns) + " x " + std::to_string(rows) + " panels: at most " +
               std::to_string(kMaxDisplays) + " displays in a layout");
     return;
@@ -405,7 +311,7 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
                 pitchY = int64_t{h} + bezel[2] + bezel[3];
   if (pitchX * columns > std::numeric_limits<int>::max() ||
       pitchY * rows > std::numeric_limits<int>::max()) {
-    r.add(sizeLine, subject, "display_size", "the grid is too large");
+    r.add(sizeAt, "grid.display_size", "the grid is too large");
     return;
   }
   for (int row = 0; row < rows; ++row) {
@@ -431,41 +337,35 @@ void readGrid(const toml::table& t, Layout& layout, Reporter& r) {
         d.process = row * columns + col;
         d.monitor = monitor;
       }
-      d.lines = {line, line, line, sizeLine, line};
+      for (int Display::Places::*field : {&Display::Places::table, &Display::Places::name,
+                                          &Display::Places::origin, &Display::Places::process})
+        mark(d, field, t);
+      mark(d, &Display::Places::size, sizeAt);
       layout.displays.push_back(std::move(d));
     }
   }
 }
 
-void readRoot(const toml::table& root, Layout& layout, std::vector<bool>& trusted, Reporter& r) {
-  for (auto&& [k, v] : root) {
-    const bool known =
-        std::find(kTopKeys.begin(), kTopKeys.end(), k.str()) != kTopKeys.end() ||
-        std::find(kTopScalarKeys.begin(), kTopScalarKeys.end(), k.str()) != kTopScalarKeys.end();
-    if (known) continue;
-    std::string what = "unknown table or key '" + std::string(k.str()) + "'";
-    for (std::string_view c : {"display", "grid", "description"})
-      if (editDistance(k.str(), c) <= 2) what += " (did you mean '" + std::string(c) + "'?)";
-    r.add(static_cast<int>(k.source().begin.line), "", "",
-          what + "; a layout has [[display]] tables or one [grid], and an optional description");
-  }
+void readRoot(const toml::table& root, Layout& layout, std::vector<bool>& trusted,
+              base::TomlDiagnostics& r) {
+  r.unknownKeys(root, "", kTopKeys);
   if (const toml::node* n = root.get("description")) readString(*n, r, "", "description");
   const toml::node* displays = root.get("display");
   const toml::node* grid = root.get("grid");
   if (displays && grid) {
-    r.add(lineOf(*grid), "", "grid", "use either [grid] or [[display]] tables, not both");
+    r.add(*grid, "grid", "use either [grid] or [[display]] tables, not both");
     return;
   }
   if (grid) {
     if (const toml::table* t = grid->as_table())
       readGrid(*t, layout, r);  // expands only when the grid itself is sound
     else
-      r.add(lineOf(*grid), "", "grid", "expected a [grid] table, got " + typeName(*grid));
+      r.add(*grid, "grid", "expected a [grid] table, got " + base::tomlTypeName(*grid));
     trusted.assign(layout.displays.size(), true);
   } else if (displays) {
     readDisplays(*displays, layout, trusted, r);
   } else {
-    r.add(1, "", "", "no displays: describe them with [[display]] tables or a [grid] table");
+    r.add(1, 1, "", "no displays: describe them with [[display]] tables or a [grid] table");
   }
 }
 
@@ -474,23 +374,15 @@ void readRoot(const toml::table& root, Layout& layout, std::vector<bool>& truste
 LayoutResult readLayoutText(std::string_view text, const std::string& fileName) {
   LayoutResult result;
   result.layout.file = fileName;
-  Reporter reporter(fileName, result.problems);
-  toml::table root;
-  try {
-    root = toml::parse(text, fileName);
-  } catch (const toml::parse_error& e) {
-    const toml::source_position& p = e.source().begin;
-    result.problems.push_back(fileName + ":" + std::to_string(p.line) + ":" +
-                              std::to_string(p.column) +
-                              ": TOML syntax error: " + std::string(e.description()));
-    return result;
+  base::TomlDiagnostics diagnostics(fileName, std::string(text));
+  if (const std::optional<toml::table> root = diagnostics.parse()) {
+    std::vector<bool> trusted;
+    readRoot(*root, result.layout, trusted, diagnostics);
+    // Semantic checks look only at displays read cleanly, so a typo in one display does not
+    // hide an overlap elsewhere, nor does it produce follow-on noise about itself.
+    detail::validateDisplays(result.layout, trusted, diagnostics);
   }
-  std::vector<bool> trusted;
-  readRoot(root, result.layout, trusted, reporter);
-  // Semantic checks look only at displays read cleanly, so a typo in one display does not hide
-  // an overlap elsewhere, nor does it produce follow-on noise about itself.
-  Problems semantic = detail::validateDisplays(result.layout, trusted);
-  result.problems.insert(result.problems.end(), semantic.begin(), semantic.end());
+  result.problems = diagnostics.texts();
   if (result.problems.empty()) computeCanvas(result.layout);
   return result;
 }

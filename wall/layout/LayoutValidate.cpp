@@ -1,15 +1,13 @@
 // Semantic checks on a layout, the canvas, and the small Layout helpers.
 #include <algorithm>
-#include <cerrno>
 #include <cstdint>
-#include <cstring>
-#include <fstream>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <set>
-#include <sstream>
 
 #include "base/Error.h"
+#include "base/TomlDiagnostics.h"
 #include "wall/layout/Layout.h"
 #include "wall/layout/LayoutChecks.h"
 
@@ -19,8 +17,6 @@ namespace {
 std::string subjectOf(const Display& d, size_t index) {
   return d.name.empty() ? "display #" + std::to_string(index + 1) : "display '" + d.name + "'";
 }
-
-int lineOr(int field, const Display& d) { return field > 0 ? field : d.lines.table; }
 
 bool validName(const std::string& name) {
   return std::all_of(name.begin(), name.end(), [](char c) {
@@ -41,11 +37,16 @@ std::string rectText(const dfb::Region& r) {
 
 namespace detail {
 
-Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted) {
-  Problems out;
-  auto add = [&](int line, const Display& d, size_t i, const char* field, const std::string& what) {
-    out.push_back(layout.file + ":" + std::to_string(line) + ": " + subjectOf(d, i) + ": field '" +
-                  field + "': " + what);
+void validateDisplays(const Layout& layout, const std::vector<bool>& trusted,
+                      base::TomlDiagnostics& report) {
+  const size_t before = report.count();
+  // At the field's place, or the display's when the field was not written.
+  auto add = [&](int Display::Places::*place, const Display& d, size_t i, const char* field,
+                 const std::string& what) {
+    const bool written = d.lines.*place > 0;
+    report.add(written ? d.lines.*place : d.lines.table,
+               written ? d.columns.*place : d.columns.table,
+               subjectOf(d, i) + "." + std::string(field), what);
   };
   const size_t n = layout.displays.size();
   auto isTrusted = [&](size_t i) { return trusted.empty() || trusted[i]; };
@@ -55,28 +56,27 @@ Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted
   for (size_t i = 0; i < n; ++i) {
     if (!isTrusted(i)) continue;
     const Display& d = layout.displays[i];
-    const int sizeLine = lineOr(d.lines.size, d);
     if (d.rect.width() <= 0)
-      add(sizeLine, d, i, "size", "width must be positive, got " + std::to_string(d.rect.width()));
+      add(&Display::Places::size, d, i, "size",
+          "width must be positive, got " + std::to_string(d.rect.width()));
     if (d.rect.height() <= 0)
-      add(sizeLine, d, i, "size",
+      add(&Display::Places::size, d, i, "size",
           "height must be positive, got " + std::to_string(d.rect.height()));
-    const int nameLine = lineOr(d.lines.name, d);
     if (d.name.empty()) {
-      add(nameLine, d, i, "name", "must not be empty");
+      add(&Display::Places::name, d, i, "name", "must not be empty");
     } else if (!validName(d.name)) {
-      add(nameLine, d, i, "name",
+      add(&Display::Places::name, d, i, "name",
           "'" + d.name +
               "' may contain only letters, digits, '-' and '_' (it names a capture "
               "folder and a window)");
     } else if (auto [it, fresh] = firstWithName.emplace(d.name, i); !fresh) {
       const Display& first = layout.displays[it->second];
-      add(nameLine, d, i, "name",
+      add(&Display::Places::name, d, i, "name",
           "duplicate name '" + d.name + "'; the display at line " +
               std::to_string(first.lines.table) + " has it already");
     }
     if (d.process < 0 || d.process >= kMaxDisplays)
-      add(lineOr(d.lines.process, d), d, i, "process",
+      add(&Display::Places::process, d, i, "process",
           "must be from 0 to " + std::to_string(kMaxDisplays - 1) +
               " (one wall process drives "
               "at least one display), got " +
@@ -92,7 +92,7 @@ Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted
       if (!isTrusted(i) || a.rect.empty()) continue;
       const dfb::Region o = dfb::intersect(a.rect, b.rect);
       if (o.empty()) continue;
-      add(lineOr(b.lines.origin, b), b, j, "origin",
+      add(&Display::Places::origin, b, j, "origin",
           "overlaps " + subjectOf(a, i) + " (line " + std::to_string(a.lines.table) + ") in the " +
               std::to_string(o.width()) + "x" + std::to_string(o.height()) + " pixels " +
               rectText(o));
@@ -115,7 +115,7 @@ Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted
         const std::string missing = p - expected == 1
                                         ? std::to_string(expected)
                                         : std::to_string(expected) + " to " + std::to_string(p - 1);
-        add(lineOr(d.lines.process, d), d, at, "process",
+        add(&Display::Places::process, d, at, "process",
             "process indices must run from 0 without gaps, but no display has process " + missing +
                 " (the highest is " + std::to_string(*used.rbegin()) + ")");
       }
@@ -123,30 +123,40 @@ Problems validateDisplays(const Layout& layout, const std::vector<bool>& trusted
     }
   }
 
-  if (out.empty() && n > 0 && allTrusted) {
+  if (report.count() == before && n > 0 && allTrusted) {
     int64_t x0 = std::numeric_limits<int>::max(), y0 = x0, x1 = std::numeric_limits<int>::min(),
             y1 = x1;
-    for (const Display& d : layout.displays) {
+    size_t farthest = 0;  // the display reaching farthest from (0, 0): named in the message
+    int64_t reach = -1;
+    for (size_t i = 0; i < n; ++i) {
+      const Display& d = layout.displays[i];
       x0 = std::min<int64_t>(x0, d.rect.x0), y0 = std::min<int64_t>(y0, d.rect.y0);
       x1 = std::max<int64_t>(x1, d.rect.x1), y1 = std::max<int64_t>(y1, d.rect.y1);
+      for (int64_t v :
+           {int64_t{d.rect.x0}, int64_t{d.rect.y0}, int64_t{d.rect.x1}, int64_t{d.rect.y1}})
+        if (std::abs(v) > reach) reach = std::abs(v), farthest = i;
     }
     // Region::pixelCount is an int: the whole canvas must fit one. Each side is checked first,
     // so the product cannot overflow even 64 bits (origins near -2^31 and +2^31).
     if (x1 - x0 > kMaxCanvasSide || y1 - y0 > kMaxCanvasSide ||
         (x1 - x0) * (y1 - y0) > kMaxCanvasPixels)
-      out.push_back(layout.file + ":1: the canvas, " + std::to_string(x1 - x0) + "x" +
-                    std::to_string(y1 - y0) + " pixels, is too large (at most " +
-                    std::to_string(kMaxCanvasSide) + " pixels a side and 2^31-1 in all)");
+      add(&Display::Places::origin, layout.displays[farthest], farthest, "origin",
+          "the canvas, " + std::to_string(x1 - x0) + "x" + std::to_string(y1 - y0) +
+              " pixels, is too large (at most " + std::to_string(kMaxCanvasSide) +
+              " pixels a side and 2^31-1 in all); this display lies farthest out");
   }
-  return out;
 }
 
 }  // namespace detail
 
 Problems validateLayout(const Layout& layout) {
+  base::TomlDiagnostics report(layout.file);
   // (The TOML reader reports a file without displays itself, with its own wording.)
-  if (layout.displays.empty()) return {layout.file + ":1: the layout has no displays"};
-  return detail::validateDisplays(layout, {});
+  if (layout.displays.empty())
+    report.add(0, 0, "", "the layout has no displays");
+  else
+    detail::validateDisplays(layout, {}, report);
+  return report.texts();
 }
 
 void computeCanvas(Layout& layout) {
@@ -171,16 +181,12 @@ void computeCanvas(Layout& layout) {
 }
 
 LayoutResult readLayoutFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    LayoutResult result;
-    result.layout.file = path;
-    result.problems.push_back(path + ": cannot read the layout file: " + std::strerror(errno));
-    return result;
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return readLayoutText(text.str(), path);
+  base::TomlDiagnostics file(path);
+  if (file.readFile("layout file")) return readLayoutText(file.text(), path);
+  LayoutResult result;
+  result.layout.file = path;
+  result.problems = file.texts();
+  return result;
 }
 
 Layout loadLayout(const std::string& path) {

@@ -85,7 +85,7 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const Ghost
 // counted both sparse and dense, the particles and triangles they reach — with the scene
 // description itself. Throws base::Error before anything is loaded when that is more than
 // this rank may hold, naming the volume that asks most (its file, line and field, e.g.
-// "scene.toml:7: volume 'ct'.dims: ...") or the particles and triangles, and the bytes.
+// "scene.toml:7:8: volume 'ct'.dims: ...") or the particles and triangles, and the bytes.
 // loadOwnBricks and wholeScene check this themselves.
 void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans,
                       const GhostReach& reach);

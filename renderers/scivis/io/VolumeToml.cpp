@@ -21,66 +21,76 @@ std::string str(float v) {
   return s;
 }
 
-Index3 readDims(const TomlReader& r, const toml::node& n, const std::string& what) {
-  const toml::array* a = n.as_array();
-  if (!a || a->size() != 3) r.fail(n, what + " must be an array of 3 integers");
-  int d[3];
-  for (int i = 0; i < 3; ++i) {
-    const toml::node& e = (*a)[static_cast<std::size_t>(i)];
-    const auto v = e.value<std::int64_t>();
-    if (!e.is_integer() || !v) r.fail(e, what + " must be an array of 3 integers");
-    if (*v < 2 || *v > kMaxDims)
-      r.fail(e, what + " must be between 2 and " + std::to_string(kMaxDims) + " per axis, not " +
-                    std::to_string(*v));
-    d[i] = static_cast<int>(*v);
+Index3 readDims(TomlReader& r, const toml::node& n, const std::string& field) {
+  const auto v = r.diagnostics().integers(n, field, 3, "[x, y, z]");
+  if (!v) return {};
+  const toml::array& a = *n.as_array();
+  int d[3] = {};
+  for (std::size_t i = 0; i < 3; ++i) {
+    if ((*v)[i] < 2 || (*v)[i] > kMaxDims)
+      r.problem(a[i], field,
+                "must be between 2 and " + std::to_string(kMaxDims) + " per axis, not " +
+                    std::to_string((*v)[i]));
+    else
+      d[i] = static_cast<int>((*v)[i]);
   }
   return {d[0], d[1], d[2]};
 }
 
-Vec3 readSpacing(const TomlReader& r, const toml::node& n, const std::string& what) {
-  const Vec3 s = n.is_array() ? r.vec3(n, what) : Vec3{r.number(n, what)};
-  if (!(s.x > 0 && s.y > 0 && s.z > 0)) r.fail(n, what + " must be positive");
+Vec3 readSpacing(TomlReader& r, const toml::node& n, const std::string& field) {
+  const std::size_t before = r.problems();
+  const Vec3 s = n.is_array() ? r.vec3(n, field) : Vec3{r.number(n, field)};
+  if (r.problems() == before && !(s.x > 0 && s.y > 0 && s.z > 0))
+    r.problem(n, field, "must be positive");
   return s;
 }
 
-float readInRange(const TomlReader& r, const toml::table& t, std::string_view key,
+float readInRange(TomlReader& r, const toml::table& t, std::string_view key,
                   const std::string& what, float fallback, float lo, float hi) {
-  const float v = r.number(t, key, what, fallback);
+  const float v = r.number(t, key, what, fallback);  // the fallback is in range
   if (v < lo || v > hi)
-    r.fail(*t.get(key),
-           what + "." + std::string(key) + " must be in [" + str(lo) + ", " + str(hi) + "]");
+    r.problem(*t.get(key), what + "." + std::string(key),
+              "must be in [" + str(lo) + ", " + str(hi) + "]");
   return v;
 }
 
 // [[value, a, b, ...], ...] with `width` numbers per point, values ascending (equal values make a
 // step), the other numbers in [0, 1].
 template <class Point, class Make>
-std::vector<Point> readPoints(const TomlReader& r, const toml::node& n, const std::string& what,
+std::vector<Point> readPoints(TomlReader& r, const toml::node& n, const std::string& field,
                               std::size_t width, const char* shape, Make make) {
   const toml::array* a = n.as_array();
-  if (!a || a->empty()) r.fail(n, what + " must be a non-empty array of " + shape);
+  if (!a || a->empty()) r.fail(n, field, std::string("must be a non-empty array of ") + shape);
   std::vector<Point> points;
   float previous = 0;
   for (const toml::node& p : *a) {
     const toml::array* q = p.as_array();
-    if (!q || q->size() != width) r.fail(p, what + ": each point must be " + shape);
+    if (!q || q->size() != width) {
+      r.problem(p, field, std::string("each point must be ") + shape);
+      continue;
+    }
+    const std::size_t before = r.problems();
     float v[4];
-    for (std::size_t i = 0; i < width; ++i) v[i] = r.number((*q)[i], what);
-    for (std::size_t i = 1; i < width; ++i)
-      if (v[i] < 0 || v[i] > 1)
-        r.fail(p, what + ": " + shape + " needs numbers in [0, 1] after the value");
+    for (std::size_t i = 0; i < width; ++i) v[i] = r.number((*q)[i], field);
+    if (r.problems() != before) continue;
+    bool inUnit = true;
+    for (std::size_t i = 1; i < width; ++i) inUnit = inUnit && v[i] >= 0 && v[i] <= 1;
+    if (!inUnit)
+      r.problem(p, field, std::string(shape) + " needs numbers in [0, 1] after the value");
     if (!points.empty() && v[0] < previous)
-      r.fail(p, what + ": control point values must be ascending (" + str(v[0]) + " after " +
-                    str(previous) + ")");
+      r.problem(
+          p, field,
+          "control point values must be ascending (" + str(v[0]) + " after " + str(previous) + ")");
     previous = v[0];
     points.push_back(make(v));
   }
   return points;
 }
 
-VolumeSource::Kind readKind(const TomlReader& r, const toml::table& t, const std::string& what) {
-  const toml::node& n = r.require(t, "source", what);
+VolumeSource::Kind readKind(TomlReader& r, const toml::table& t, const std::string& what) {
+  const toml::node* n = r.need(t, "source", what);
   const std::string s = r.string(n, what + ".source");
+  r.settle();  // without a source, which fields belong to it is unknown
   if (s == "wavelet") return VolumeSource::Kind::Wavelet;
   if (s == "marschner-lobb") return VolumeSource::Kind::MarschnerLobb;
   if (s == "raw") return VolumeSource::Kind::RawFile;
@@ -94,17 +104,16 @@ VolumeSource::Kind readKind(const TomlReader& r, const toml::table& t, const std
     if (ext == ".vdb" && !t.get("format")) return VolumeSource::Kind::OpenVdb;
     return VolumeSource::Kind::File;
   }
-  r.fail(n, what +
-                ".source must be \"wavelet\", \"marschner-lobb\", \"raw\", \"openvdb\" or "
-                "\"file\", not \"" +
-                s + "\"");
+  r.fail(*n, what + ".source",
+         "must be \"wavelet\", \"marschner-lobb\", \"raw\", \"openvdb\" or \"file\", not \"" + s +
+             "\"");
 }
 
-void readRaw(const TomlReader& r, const toml::table& t, const std::string& what,
+void readRaw(TomlReader& r, const toml::table& t, const std::string& what,
              const std::filesystem::path& folder, VolumeSource& s) {
-  const toml::node& file = r.require(t, "file", what);
+  const toml::node* file = r.need(t, "file", what);
   s.raw.path = (folder / r.string(file, what + ".file")).string();
-  const toml::node& type = r.require(t, "type", what);
+  const toml::node* type = r.need(t, "type", what);
   const std::string typeName = r.string(type, what + ".type");
   if (typeName == "float32")
     s.type = VoxelType::Float32;
@@ -112,76 +121,88 @@ void readRaw(const TomlReader& r, const toml::table& t, const std::string& what,
     s.type = VoxelType::UInt8;
   else if (typeName == "uint16")
     s.type = VoxelType::UInt16;
-  else
-    r.fail(type, what + ".type must be \"float32\", \"uint8\" or \"uint16\"");
+  else if (type && type->is_string())
+    r.problem(*type, what + ".type",
+              "must be \"float32\", \"uint8\" or \"uint16\", not \"" + typeName + "\"");
   if (const toml::node* order = t.get("byte_order")) {
-    const std::string o = r.string(*order, what + ".byte_order");
-    if (o != "little" && o != "big")
-      r.fail(*order, what + ".byte_order must be \"little\" or \"big\"");
+    const std::string o = r.string(order, what + ".byte_order");
+    if (order->is_string() && o != "little" && o != "big")
+      r.problem(*order, what + ".byte_order", "must be \"little\" or \"big\", not \"" + o + "\"");
     s.raw.bigEndian = o == "big";
   }
   if (const toml::node* header = t.get("header_bytes")) {
-    const auto v = header->value<std::int64_t>();
-    if (!header->is_integer() || !v || *v < 0)
-      r.fail(*header, what + ".header_bytes must be a non-negative integer");
-    s.raw.headerBytes = static_cast<std::uint64_t>(*v);
+    const auto v = r.diagnostics().integer(*header, what + ".header_bytes");
+    if (v && *v < 0)
+      r.problem(*header, what + ".header_bytes", "must not be negative, got " + std::to_string(*v));
+    if (v && *v >= 0) s.raw.headerBytes = static_cast<std::uint64_t>(*v);
   }
+  r.settle();  // the file is checked against the fields above
   try {
     checkRawFile(s);
   } catch (const base::Error& e) {
-    r.fail(file, what + ".file: " + e.what());
+    r.fail(*file, what + ".file", e.what());
   }
 }
 
-void readOpenVdb(const TomlReader& r, const toml::table& t, const std::string& what,
+void readOpenVdb(TomlReader& r, const toml::table& t, const std::string& what,
                  const std::filesystem::path& folder, VolumeSource& s) {
-  const toml::node& file = r.require(t, "file", what);
+  const toml::node* file = r.need(t, "file", what);
   s.vdb.path = (folder / r.string(file, what + ".file")).string();
-  if (const toml::node* grid = t.get("grid")) s.vdb.gridName = r.string(*grid, what + ".grid");
+  if (const toml::node* grid = t.get("grid")) s.vdb.gridName = r.string(grid, what + ".grid");
+  r.settle();
   try {
     resolveOpenVdbGrid(s);
   } catch (const base::Error& e) {
-    r.fail(file, what + ".file: " + e.what());
+    r.fail(*file, what + ".file", e.what());
   }
   for (int a = 0; a < 3; ++a)
     if (s.grid.dims[a] > kMaxDims)
-      r.fail(file, what + ".file: the grid's active voxels span " + std::to_string(s.grid.dims[a]) +
-                       " voxels along an axis, more than " + std::to_string(kMaxDims));
+      r.fail(*file, what + ".file",
+             "the grid's active voxels span " + std::to_string(s.grid.dims[a]) +
+                 " voxels along an axis, more than " + std::to_string(kMaxDims));
 }
 
-void readFile(const TomlReader& r, const toml::table& t, const std::string& what,
+void readFile(TomlReader& r, const toml::table& t, const std::string& what,
               const std::filesystem::path& folder, VolumeSource& s) {
-  const toml::node& file = r.require(t, "file", what);
+  const toml::node* file = r.need(t, "file", what);
   VolumeFileParams& f = s.file;
   f.path = (folder / r.string(file, what + ".file")).string();
+  bool formatKnown = false;
   if (const toml::node* format = t.get("format")) {
-    const auto named = volumeFormatNamed(r.string(*format, what + ".format"));
-    if (!named)
-      r.fail(*format, what +
-                          ".format must be \"nrrd\", \"nifti\", \"metaimage\", \"hdf5\" or "
-                          "\"netcdf\"");
-    f.format = *named;
+    const std::string name = r.string(format, what + ".format");
+    const auto named = volumeFormatNamed(name);
+    if (named)
+      f.format = *named, formatKnown = true;
+    else if (format->is_string())
+      r.problem(*format, what + ".format",
+                "must be \"nrrd\", \"nifti\", \"metaimage\", \"hdf5\" or \"netcdf\", not \"" +
+                    name + "\"");
   } else if (const auto byName = volumeFormatOfPath(f.path)) {
-    f.format = *byName;
-  } else {
-    r.fail(file, what +
-                     ".file: the format is not known from the name (.nrrd .nhdr .nii .nii.gz .mhd "
-                     ".mha .h5 .hdf5 .nc .cdf); give 'format'");
+    f.format = *byName, formatKnown = true;
+  } else if (file && file->is_string()) {
+    r.problem(*file, what + ".file",
+              "the format is not known from the name (.nrrd .nhdr .nii .nii.gz .mhd .mha .h5 "
+              ".hdf5 .nc .cdf); give 'format'");
   }
   if (const toml::node* d = t.get("dataset")) {
-    if (f.format != VolumeFormat::Hdf5) r.fail(*d, what + ".dataset is for HDF5 files");
-    f.dataset = r.string(*d, what + ".dataset");
+    if (formatKnown && f.format != VolumeFormat::Hdf5)
+      r.problem(*d, what + ".dataset", "is for HDF5 files");
+    f.dataset = r.string(d, what + ".dataset");
   }
   if (const toml::node* v = t.get("variable")) {
-    if (f.format != VolumeFormat::NetCdf) r.fail(*v, what + ".variable is for NetCDF files");
-    f.variable = r.string(*v, what + ".variable");
+    if (formatKnown && f.format != VolumeFormat::NetCdf)
+      r.problem(*v, what + ".variable", "is for NetCDF files");
+    f.variable = r.string(v, what + ".variable");
   }
   if (const toml::node* time = t.get("time")) {
-    const auto v = time->value<std::int64_t>();
-    if (!time->is_integer() || !v || *v < 0 || *v > (1 << 30))
-      r.fail(*time, what + ".time must be a non-negative integer");
-    f.time = static_cast<int>(*v);
+    const auto v = r.diagnostics().integer(*time, what + ".time");
+    if (v && (*v < 0 || *v > (1 << 30)))
+      r.problem(*time, what + ".time",
+                "must be from 0 to " + std::to_string(1 << 30) + ", got " + std::to_string(*v));
+    else if (v)
+      f.time = static_cast<int>(*v);
   }
+  r.settle();  // the file is read as the fields above say
   try {
     resolveVolumeFile(s);
   } catch (const base::Error& e) {
@@ -189,28 +210,28 @@ void readFile(const TomlReader& r, const toml::table& t, const std::string& what
     const std::string m = e.what();
     for (const std::string field : {"dataset", "variable", "time"})
       if (const toml::node* n = t.get(field); n && m.find(" " + field + " ") != std::string::npos)
-        r.fail(*n, what + "." + field + ": " + m);
-    r.fail(file, what + ".file: " + m);
+        r.fail(*n, what + "." + field, m);
+    r.fail(*file, what + ".file", m);
   }
 }
 
 }  // namespace
 
-TransferFunction readTransferFunction(const TomlReader& r, const toml::node& n,
-                                      const std::string& what) {
+TransferFunction readTransferFunction(TomlReader& r, const toml::node& n, const std::string& what) {
   return readTransferFunction(r, n, what, std::nullopt);
 }
 
-TransferFunction readTransferFunction(const TomlReader& r, const toml::node& n,
-                                      const std::string& what,
+TransferFunction readTransferFunction(TomlReader& r, const toml::node& n, const std::string& what,
                                       std::optional<std::pair<float, float>> defaultRange) {
-  const toml::table& t = r.table(n, what);
+  const toml::table* table = r.table(n, what);
+  if (!table) r.skip();
+  const toml::table& t = *table;
   r.onlyKeys(t, what, {"preset", "colors", "opacity", "range", "opacity_unit", "max_opacity"});
   const toml::node* preset = t.get("preset");
   const toml::node* colors = t.get("colors");
   const toml::node* opacity = t.get("opacity");
-  if (preset && colors) r.fail(*colors, what + ": give either 'preset' or 'colors', not both");
-  if (!preset && !colors) r.fail(t, what + ": missing field 'preset' or 'colors'");
+  if (preset && colors) r.problem(*colors, what, "give either 'preset' or 'colors', not both");
+  if (!preset && !colors) r.problem(t, what, "missing field 'preset' or 'colors'");
 
   TransferFunction tf;
   if (colors) {
@@ -227,14 +248,15 @@ TransferFunction readTransferFunction(const TomlReader& r, const toml::node& n,
   }
 
   if (const toml::node* range = t.get("range")) {
-    const toml::array* a = range->as_array();
-    if (!a || a->size() != 2) r.fail(*range, what + ".range must be [low, high]");
-    tf.valueMin = r.number((*a)[0], what + ".range");
-    tf.valueMax = r.number((*a)[1], what + ".range");
-    if (!(tf.valueMin < tf.valueMax)) r.fail(*range, what + ".range must have low < high");
+    float lohi[2];
+    if (r.floats(*range, what + ".range", 2, "[low, high]", lohi)) {
+      tf.valueMin = lohi[0];
+      tf.valueMax = lohi[1];
+      if (!(tf.valueMin < tf.valueMax)) r.problem(*range, what + ".range", "must have low < high");
+    }
   } else if (defaultRange) {
     std::tie(tf.valueMin, tf.valueMax) = *defaultRange;
-  } else if (colors) {
+  } else if (colors && !tf.colors.empty()) {
     // The control points span the values they colour.
     tf.valueMin =
         std::min(tf.colors.front().first,
@@ -243,45 +265,46 @@ TransferFunction readTransferFunction(const TomlReader& r, const toml::node& n,
         std::max(tf.colors.back().first,
                  tf.opacities.empty() ? tf.colors.back().first : tf.opacities.back().first);
     if (!(tf.valueMin < tf.valueMax))
-      r.fail(*colors, what + ": the control points span no values; give 'range' = [low, high]");
-  } else {
-    r.fail(t, what +
-                  ": missing field 'range' (the volume's values are not known before reading "
-                  "it)");
+      r.problem(*colors, what, "the control points span no values; give 'range' = [low, high]");
+  } else if (!colors) {
+    r.problem(t, what,
+              "missing field 'range' (the volume's values are not known before reading it)");
   }
 
   const toml::node* maxOpacity = t.get("max_opacity");
   if (maxOpacity && opacity)
-    r.fail(*maxOpacity, what +
-                            ".max_opacity shapes the default opacity ramp; with 'opacity' given, "
-                            "put the peak there");
+    r.problem(*maxOpacity, what + ".max_opacity",
+              "shapes the default opacity ramp; with 'opacity' given, put the peak there");
   const float peak = readInRange(r, t, "max_opacity", what, 1.0f, 0.0f, 1.0f);
+  if (const toml::node* unit = t.get("opacity_unit")) {
+    const std::size_t before = r.problems();
+    tf.unitDistance = r.number(*unit, what + ".opacity_unit");
+    if (r.problems() == before && !(tf.unitDistance > 0))
+      r.problem(*unit, what + ".opacity_unit", "must be positive");
+  }
+  r.settle();  // a preset spans the range read above
   if (preset) {
     const std::string name = r.string(*preset, what + ".preset");
+    r.settle();
     TransferFunction p;
     try {
       p = transferFunctionPreset(name, tf.valueMin, tf.valueMax, peak);
     } catch (const base::Error& e) {
-      r.fail(*preset, what + ".preset: " + e.what());
+      r.fail(*preset, what + ".preset", e.what());
     }
     tf.colors = std::move(p.colors);
     if (!opacity) tf.opacities = std::move(p.opacities);
   } else if (!opacity) {
     tf.opacities = {{tf.valueMin, 0.0f}, {tf.valueMax, peak}};
   }
-
-  if (const toml::node* unit = t.get("opacity_unit")) {
-    tf.unitDistance = r.number(*unit, what + ".opacity_unit");
-    if (!(tf.unitDistance > 0)) r.fail(*unit, what + ".opacity_unit must be positive");
-  }
   return tf;
 }
 
-VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
-                      const std::filesystem::path& folder) {
+VolumeDesc readVolume(TomlReader& r, const toml::table& t, const std::filesystem::path& folder) {
   VolumeDesc d;
-  d.name = r.string(r.require(t, "name", "volume"), "volume.name");
-  const std::string what = "volume '" + d.name + "'";
+  const toml::node* nameNode = r.need(t, "name", "volume");
+  d.name = r.string(nameNode, "volume.name");
+  const std::string what = nameNode && nameNode->is_string() ? "volume '" + d.name + "'" : "volume";
   VolumeSource& s = d.source;
   s.kind = readKind(r, t, what);
   switch (s.kind) {
@@ -311,10 +334,7 @@ VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
                   "format", "dataset", "variable", "time"});
       break;
   }
-  if (const toml::node* v = t.get("visible")) {
-    if (!v->is_boolean()) r.fail(*v, what + ".visible must be true or false");
-    d.visible = *v->value<bool>();
-  }
+  d.visible = r.boolean(t, "visible", what, d.visible);
 
   // Resolution: VTK's 21³ for the wavelet, Marschner and Lobb's 40³; raw files must say.
   if (const toml::node* dims = t.get("dims"))
@@ -324,14 +344,14 @@ VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
   else if (s.kind == VolumeSource::Kind::MarschnerLobb)
     s.grid.dims = {40, 40, 40};
   else if (s.kind == VolumeSource::Kind::RawFile)
-    r.require(t, "dims", what);
+    r.need(t, "dims", what);
 
   switch (s.kind) {
     case VolumeSource::Kind::Wavelet: {
       WaveletParams& p = s.wavelet;
       p.maximum = r.number(t, "maximum", what, p.maximum);
       p.sigma = r.number(t, "sigma", what, p.sigma);
-      if (!(p.sigma > 0)) r.fail(*t.get("sigma"), what + ".sigma must be positive");
+      if (!(p.sigma > 0)) r.problem(*t.get("sigma"), what + ".sigma", "must be positive");
       p.xFreq = r.number(t, "x_freq", what, p.xFreq);
       p.xMag = r.number(t, "x_mag", what, p.xMag);
       p.yFreq = r.number(t, "y_freq", what, p.yFreq);
@@ -344,7 +364,7 @@ VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
       s.marschnerLobb.fM = r.number(t, "f_m", what, s.marschnerLobb.fM);
       s.marschnerLobb.alpha = r.number(t, "alpha", what, s.marschnerLobb.alpha);
       if (!(s.marschnerLobb.alpha >= 0))
-        r.fail(*t.get("alpha"), what + ".alpha must not be negative");
+        r.problem(*t.get("alpha"), what + ".alpha", "must not be negative");
       break;
     case VolumeSource::Kind::RawFile:
       readRaw(r, t, what, folder, s);
@@ -362,28 +382,29 @@ VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
   const Index3 n = s.grid.dims;
   const bool fileGeometry = s.kind == VolumeSource::Kind::OpenVdb ||
                             (s.kind == VolumeSource::Kind::File && s.file.hasGeometry);
-  if (const toml::node* spacing = t.get("spacing")) {
-    s.grid.spacing = readSpacing(r, *spacing, what + ".spacing");
-  } else if (!fileGeometry) {
+  const toml::node* spacing = t.get("spacing");
+  const toml::node* origin = t.get("origin");
+  if (spacing) s.grid.spacing = readSpacing(r, *spacing, what + ".spacing");
+  if (origin) s.grid.origin = r.vec3(*origin, what + ".origin");
+  r.settle();  // the defaults below and the checks after them judge the fields above
+  if (!spacing && !fileGeometry)
     s.grid.spacing = Vec3{2.0f / static_cast<float>(std::max({n.x, n.y, n.z}) - 1)};
-  }
-  if (const toml::node* origin = t.get("origin")) {
-    s.grid.origin = r.vec3(*origin, what + ".origin");
-  } else if (!fileGeometry) {
+  if (!origin && !fileGeometry)
     s.grid.origin = {-0.5f * s.grid.spacing.x * static_cast<float>(n.x - 1),
                      -0.5f * s.grid.spacing.y * static_cast<float>(n.y - 1),
                      -0.5f * s.grid.spacing.z * static_cast<float>(n.z - 1)};
-  }
 
   // Where its size was given (a brick's memory budget names it), and whether float can place
   // its voxels.
   const toml::node* sized = t.get("dims") ? t.get("dims") : t.get("file");
   d.where = r.where(sized ? *sized : t, what + (sized ? (t.get("dims") ? ".dims" : ".file") : ""));
-  if (const std::string problem = s.grid.problem(); !problem.empty())
-    r.fail(t.get("spacing")  ? *t.get("spacing")
-           : t.get("origin") ? *t.get("origin")
-                             : t,
-           what + "." + problem);
+  if (const std::string problem = s.grid.problem(); !problem.empty()) {
+    const std::size_t space = problem.find(' ');  // "spacing along x, ...": the field first
+    r.fail(spacing  ? *spacing
+           : origin ? *origin
+                    : t,
+           what + "." + problem.substr(0, space), problem.substr(space + 1));
+  }
 
   // Procedural fields know their range, so a preset needs none; files do not (unless invisible,
   // when the transfer function is never used). The wavelet's range costs evaluations: only
@@ -397,7 +418,7 @@ VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
   } else if (range) {
     d.transfer = transferFunctionPreset("cool-warm", range->first, range->second);
   } else if (d.visible) {
-    r.require(t, "transfer_function", what);
+    r.need(t, "transfer_function", what);
   }
   return d;
 }

@@ -1,6 +1,6 @@
 #pragma once
 // Reading a [[volumes]] entry and a transfer function from a scene file (SceneToml.cpp calls
-// these). Every error names the file, line and field.
+// these). Problems go to the reader, each naming the file, line, column and field.
 //
 //   [[volumes]]
 //   name = "wave"
@@ -48,13 +48,10 @@ namespace renderers {
 
 // `folder` resolves relative file names. The transfer function's range defaults to the source's
 // value range where that is known without reading voxels (procedural fields), else it is required.
-VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
-                      const std::filesystem::path& folder);
-TransferFunction readTransferFunction(const TomlReader& r, const toml::node& n,
-                                      const std::string& what);
+VolumeDesc readVolume(TomlReader& r, const toml::table& t, const std::filesystem::path& folder);
+TransferFunction readTransferFunction(TomlReader& r, const toml::node& n, const std::string& what);
 // The same, with the range used when the table gives none (a volume's known value range).
-TransferFunction readTransferFunction(const TomlReader& r, const toml::node& n,
-                                      const std::string& what,
+TransferFunction readTransferFunction(TomlReader& r, const toml::node& n, const std::string& what,
                                       std::optional<std::pair<float, float>> defaultRange);
 
 }  // namespace renderers

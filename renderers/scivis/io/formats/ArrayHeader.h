@@ -1,7 +1,8 @@
 #pragma once
 // What the header of an NRRD, NIfTI-1 or MetaImage file says: the grid and where its voxels are
 // stored. The parsers take the first bytes of the file (for .nii.gz: of the inflated stream) and
-// throw base::Error naming the file, the line (text headers) and the field on anything they
+// throw base::Error located in the file (line and column for text headers) and naming the field
+// on anything they
 // do not understand or do not believe (dims past the caps, sizes that overflow, unknown types or
 // encodings). They never read files themselves, so the fuzzer runs them on any bytes.
 #include <string>
@@ -37,7 +38,8 @@ constexpr std::size_t kNiftiHeaderBytes = 348;
 ArrayHeader parseNiftiHeader(std::string_view bytes, const std::string& path, bool compressed,
                              int time = 0);
 
-// Checks dims against the caps; `where` starts the message ("file:line: field 'sizes'").
-void checkFileDims(Index3 dims, const std::string& where);
+// What is wrong with dims against the caps ("1 voxels along axis 1, must be ..."); empty when
+// nothing is.
+std::string fileDimsProblem(Index3 dims);
 
 }  // namespace renderers

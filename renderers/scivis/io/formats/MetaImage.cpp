@@ -15,7 +15,7 @@ namespace {
 
 using namespace headertext;
 
-FileType metaType(const std::string& t, const std::string& where) {
+FileType metaType(const std::string& t, const HeaderField& f) {
   static const struct {
     const char* name;
     FileType type;
@@ -26,21 +26,20 @@ FileType metaType(const std::string& t, const std::string& where) {
                 {"MET_FLOAT", FileType::Float32}, {"MET_DOUBLE", FileType::Float64}};
   for (const auto& n : kNames)
     if (t == n.name) return n.type;
-  throw base::Error(
-      where + ": ElementType '" + t +
-      "' is not one dfbwall reads (MET_CHAR, MET_UCHAR, MET_SHORT, MET_USHORT, MET_INT, "
-      "MET_UINT, MET_FLOAT, MET_DOUBLE)");
+  f.fail("'" + t.substr(0, 80) +
+         "' is not one dfbwall reads (MET_CHAR, MET_UCHAR, MET_SHORT, MET_USHORT, MET_INT, "
+         "MET_UINT, MET_FLOAT, MET_DOUBLE)");
 }
 
-bool boolean(std::string_view v, const std::string& where) {
+bool boolean(std::string_view v, const HeaderField& f) {
   const std::string b = lower(v);
   if (b == "true" || b == "1") return true;
   if (b == "false" || b == "0") return false;
-  throw base::Error(where + ": must be True or False, not '" + std::string(v) + "'");
+  f.fail("must be True or False, not '" + std::string(v.substr(0, 80)) + "'");
 }
 
-Vec3 vec3(std::string_view value, const std::string& where) {
-  const std::vector<double> v = numbers(value, 3, where);
+Vec3 vec3(std::string_view value, const HeaderField& f) {
+  const std::vector<double> v = numbers(value, 3, f);
   return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
 }
 
@@ -56,31 +55,30 @@ ArrayHeader parseMetaImageHeader(std::string_view bytes, const std::string& path
   while (at < bytes.size() && !ended) {
     std::size_t end = bytes.find('\n', at);
     if (end == std::string_view::npos) end = bytes.size();
-    std::string_view line = bytes.substr(at, end - at);
+    const std::string_view raw = bytes.substr(at, end - at);  // columns count from its start
     at = std::min(end + 1, bytes.size());
     ++lineNumber;
-    line = trim(line);
+    const std::string_view line = trim(raw);
     if (line.empty()) continue;
-    const std::string where = path + ":" + std::to_string(lineNumber);
     const std::size_t eq = line.find('=');
     if (eq == std::string_view::npos)
-      throw base::Error(where + ": '" + std::string(line.substr(0, 80)) +
-                        "' is not a 'Key = Value' line");
+      throw base::Error(fieldAt(path, lineNumber, raw, line, "").where,
+                        "'" + std::string(line.substr(0, 80)) + "' is not a 'Key = Value' line");
     const std::string key(trim(line.substr(0, eq)));
     const std::string_view value = trim(line.substr(eq + 1));
-    const std::string fw = where + ": field '" + key + "'";
+    const HeaderField fw = fieldAt(path, lineNumber, raw, value, key);
     if (key == "ObjectType") {
-      if (lower(value) != "image") throw base::Error(fw + ": only Image objects are read");
+      if (lower(value) != "image") fw.fail("only Image objects are read");
     } else if (key == "NDims") {
       if (integers(value, 1, 0, 1 << 20, fw)[0] != 3)
-        throw base::Error(fw + ": dfbwall reads 3-D images, not " + std::string(value) + "-D");
+        fw.fail("dfbwall reads 3-D images, not " + std::string(value) + "-D");
       haveNDims = true;
     } else if (key == "DimSize") {
       h.dims = fileDims(value, fw);
       haveDims = true;
     } else if (key == "ElementSpacing" || key == "ElementSize") {
       const Vec3 s = vec3(value, fw);
-      if (!(s.x != 0 && s.y != 0 && s.z != 0)) throw base::Error(fw + ": must not be 0");
+      if (!(s.x != 0 && s.y != 0 && s.z != 0)) fw.fail("must not be 0");
       if (key == "ElementSpacing" || h.spacing == Vec3{1.0f})
         h.spacing = {std::fabs(s.x), std::fabs(s.y), std::fabs(s.z)};
     } else if (key == "Offset" || key == "Origin" || key == "Position") {
@@ -94,14 +92,14 @@ ArrayHeader parseMetaImageHeader(std::string_view bytes, const std::string& path
       h.data.compressed = boolean(value, fw);
     } else if (key == "ElementNumberOfChannels") {
       if (integers(value, 1, 0, 1 << 20, fw)[0] != 1)
-        throw base::Error(fw + ": only single-channel (scalar) images are read");
+        fw.fail("only single-channel (scalar) images are read");
     } else if (key == "HeaderSize") {
       headerSize = integers(value, 1, 0, 1LL << 50, fw)[0];
     } else if (key == "ElementDataFile") {
-      if (value.empty()) throw base::Error(fw + ": empty");
+      if (value.empty()) fw.fail("empty");
       if (value != "LOCAL") {
         if (value.find('%') != std::string_view::npos || lower(value).rfind("list", 0) == 0)
-          throw base::Error(fw + ": only one data file is read");
+          fw.fail("only one data file is read");
         dataFile = besideFile(path, value);
       }
       ended = true;
@@ -114,17 +112,20 @@ ArrayHeader parseMetaImageHeader(std::string_view bytes, const std::string& path
                key == "ElementToIntensityFunctionOffset" || key == "AcquisitionDate") {
       // Not needed to place a scalar grid.
     } else {
-      throw base::Error(fw + ": unknown MetaImage field");
+      fw.fail("unknown MetaImage field");
     }
     if (!ended && at >= kMaxTextHeader)
-      throw base::Error(path + ": the MetaImage header does not end (ElementDataFile) within " +
-                        std::to_string(kMaxTextHeader) + " bytes");
+      throw base::Error(base::SourceLocation{path},
+                        "the MetaImage header does not end (ElementDataFile) within " +
+                            std::to_string(kMaxTextHeader) + " bytes");
   }
-  const std::string what = path + ": MetaImage header";
-  if (!ended) throw base::Error(what + " misses field 'ElementDataFile' (its last line)");
-  if (!haveNDims) throw base::Error(what + " misses field 'NDims'");
-  if (!haveDims) throw base::Error(what + " misses field 'DimSize'");
-  if (!haveType) throw base::Error(what + " misses field 'ElementType'");
+  // Missing fields belong to the header as a whole: no line.
+  const base::SourceLocation file{path};
+  if (!ended)
+    throw base::Error(file, "MetaImage header misses field 'ElementDataFile' (its last line)");
+  if (!haveNDims) throw base::Error(file, "MetaImage header misses field 'NDims'");
+  if (!haveDims) throw base::Error(file, "MetaImage header misses field 'DimSize'");
+  if (!haveType) throw base::Error(file, "MetaImage header misses field 'ElementType'");
   h.data.path = dataFile.empty() ? path : dataFile;
   h.data.fileOffset = dataFile.empty() ? at : static_cast<std::uint64_t>(headerSize);
   return h;

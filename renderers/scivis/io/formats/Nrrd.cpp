@@ -2,6 +2,7 @@
 // "field: value" lines (and "key:=value" pairs, ignored) up to a blank line; the data follows
 // (attached) or lies in `data file`. Read here: 3-D scalar arrays, raw or gzip encoding, spacing
 // from `spacings` or the lengths of `space directions` (axis-aligned), `space origin`.
+#include <cctype>
 #include <cmath>
 #include <string>
 
@@ -14,7 +15,7 @@ namespace {
 
 using namespace headertext;
 
-FileType nrrdType(const std::string& t, const std::string& where) {
+FileType nrrdType(const std::string& t, const HeaderField& f) {
   static const struct {
     const char* name;
     FileType type;
@@ -50,25 +51,24 @@ FileType nrrdType(const std::string& t, const std::string& where) {
   };
   for (const auto& n : kNames)
     if (t == n.name) return n.type;
-  throw base::Error(where + ": type '" + t +
-                    "' is not one dfbwall reads (int8, uint8, int16, uint16, int32, uint32, float, "
-                    "double)");
+  f.fail("'" + t.substr(0, 80) +
+         "' is not one dfbwall reads (int8, uint8, int16, uint16, int32, uint32, float, double)");
 }
 
-// "(x,y,z)" vectors, or "none".
-std::vector<Vec3> vectors(std::string_view value, const std::string& where) {
+// "(x,y,z)" vectors.
+std::vector<Vec3> vectors(std::string_view value, const HeaderField& f) {
   std::vector<Vec3> out;
   std::size_t i = 0;
   while (true) {
-    value = trim(value.substr(i));
-    if (value.empty()) break;
-    if (value.front() != '(') throw base::Error(where + ": '(x,y,z)' vectors expected");
-    const std::size_t close = value.find(')');
-    if (close == std::string_view::npos) throw base::Error(where + ": a vector misses its ')'");
-    std::string inner(value.substr(1, close - 1));
+    while (i < value.size() && std::isspace(static_cast<unsigned char>(value[i]))) ++i;
+    if (i >= value.size()) break;
+    if (value[i] != '(') f.fail("'(x,y,z)' vectors expected", i);
+    const std::size_t close = value.find(')', i);
+    if (close == std::string_view::npos) f.fail("a vector misses its ')'", i);
+    std::string inner(value.substr(i + 1, close - i - 1));
     for (char& c : inner)
       if (c == ',') c = ' ';
-    const std::vector<double> v = numbers(inner, 3, where);
+    const std::vector<double> v = numbers(inner, 3, f.at(i + 1));
     out.push_back({static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])});
     i = close + 1;
   }
@@ -79,7 +79,8 @@ std::vector<Vec3> vectors(std::string_view value, const std::string& where) {
 
 ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
   if (bytes.substr(0, 4) != "NRRD")
-    throw base::Error(path + ": not an NRRD file (it does not start with \"NRRD\")");
+    throw base::Error(base::SourceLocation{path, 1, 1},
+                      "not an NRRD file (it does not start with \"NRRD\")");
   ArrayHeader h;
   bool haveType = false, haveSizes = false, haveDimension = false, haveEndian = false,
        ended = false;
@@ -91,8 +92,9 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
     std::size_t end = bytes.find('\n', at);
     if (end == std::string_view::npos) {
       if (bytes.size() >= kMaxTextHeader)
-        throw base::Error(path + ": the NRRD header does not end within " +
-                          std::to_string(kMaxTextHeader) + " bytes");
+        throw base::Error(
+            base::SourceLocation{path},
+            "the NRRD header does not end within " + std::to_string(kMaxTextHeader) + " bytes");
       end = bytes.size();
     }
     std::string_view line = bytes.substr(at, end - at);
@@ -108,20 +110,18 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
     if (line.front() == '#') continue;
     if (line.find(":=") != std::string_view::npos) continue;  // key/value pairs
     const std::size_t colon = line.find(": ");
-    const std::string where = path + ":" + std::to_string(lineNumber);
     if (colon == std::string_view::npos)
-      throw base::Error(where + ": '" + std::string(line.substr(0, 80)) +
-                        "' is not a 'field: value' line");
+      throw base::Error(base::SourceLocation{path, lineNumber, 1},
+                        "'" + std::string(line.substr(0, 80)) + "' is not a 'field: value' line");
     const std::string field = lower(trim(line.substr(0, colon)));
     const std::string_view value = trim(line.substr(colon + 2));
-    const std::string fw = where + ": field '" + field + "'";
+    const HeaderField fw = fieldAt(path, lineNumber, line, value, field);
     if (field == "type") {
       h.data.type = nrrdType(lower(value), fw);
       haveType = true;
     } else if (field == "dimension") {
       if (integers(value, 1, 0, 1 << 20, fw)[0] != 3)
-        throw base::Error(fw + ": dfbwall reads 3-D scalar volumes, not dimension " +
-                          std::string(value));
+        fw.fail("dfbwall reads 3-D scalar volumes, not dimension " + std::string(value));
       haveDimension = true;
     } else if (field == "sizes") {
       h.dims = fileDims(value, fw);
@@ -129,44 +129,42 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
     } else if (field == "spacings") {
       const auto s = numbers(value, 3, fw);
       for (double v : s)
-        if (!(v != 0)) throw base::Error(fw + ": spacings must not be 0");
+        if (!(v != 0)) fw.fail("spacings must not be 0");
       h.spacing = {std::fabs(static_cast<float>(s[0])), std::fabs(static_cast<float>(s[1])),
                    std::fabs(static_cast<float>(s[2]))};
     } else if (field == "space directions") {
       const auto d = vectors(value, fw);
-      if (d.size() != 3) throw base::Error(fw + ": 3 vectors expected");
+      if (d.size() != 3) fw.fail("3 vectors expected");
       float s[3];
       for (int a = 0; a < 3; ++a) {
         s[a] = std::sqrt(d[a].x * d[a].x + d[a].y * d[a].y + d[a].z * d[a].z);
-        if (!(s[a] > 0) || !std::isfinite(s[a]))
-          throw base::Error(fw + ": a direction of length 0");
+        if (!(s[a] > 0) || !std::isfinite(s[a])) fw.fail("a direction of length 0");
       }
       h.spacing = {s[0], s[1], s[2]};
     } else if (field == "space origin") {
       const auto o = vectors(value, fw);
-      if (o.size() != 1) throw base::Error(fw + ": one '(x,y,z)' vector expected");
+      if (o.size() != 1) fw.fail("one '(x,y,z)' vector expected");
       h.origin = o[0];
     } else if (field == "encoding") {
       encoding = lower(value);
       if (encoding == "gz") encoding = "gzip";
       if (encoding != "raw" && encoding != "gzip")
-        throw base::Error(fw + ": encoding '" + std::string(value) +
-                          "' is not one dfbwall reads (raw, gzip)");
+        fw.fail("'" + std::string(value.substr(0, 80)) + "' is not one dfbwall reads (raw, gzip)");
     } else if (field == "endian") {
       const std::string e = lower(value);
-      if (e != "little" && e != "big") throw base::Error(fw + ": must be 'little' or 'big'");
+      if (e != "little" && e != "big") fw.fail("must be 'little' or 'big'");
       h.data.bigEndian = e == "big";
       haveEndian = true;
     } else if (field == "data file" || field == "datafile") {
       if (value.empty() || value.find('%') != std::string_view::npos ||
           lower(value).rfind("list", 0) == 0)
-        throw base::Error(fw + ": only one detached data file is read");
+        fw.fail("only one detached data file is read");
       dataFile = besideFile(path, value);
     } else if (field == "byte skip" || field == "byteskip") {
       byteSkip = integers(value, 1, 0, 1LL << 50, fw)[0];
     } else if (field == "line skip" || field == "lineskip") {
       if (integers(value, 1, 0, 1LL << 30, fw)[0] != 0)
-        throw base::Error(fw + ": line skip is not read; use byte skip");
+        fw.fail("line skip is not read; use byte skip");
     } else if (field == "kinds" || field == "centers" || field == "centerings" ||
                field == "space" || field == "space dimension" || field == "space units" ||
                field == "units" || field == "labels" || field == "content" || field == "min" ||
@@ -176,19 +174,21 @@ ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
                field == "thicknesses" || field == "block size") {
       // Not needed to place a scalar grid.
     } else {
-      throw base::Error(fw + ": unknown NRRD field");
+      fw.fail("unknown NRRD field");
     }
   }
-  const std::string what = path + ": NRRD header";
-  if (!haveDimension) throw base::Error(what + " misses field 'dimension'");
-  if (!haveType) throw base::Error(what + " misses field 'type'");
-  if (!haveSizes) throw base::Error(what + " misses field 'sizes'");
+  // Missing fields belong to the header as a whole: no line.
+  const base::SourceLocation file{path};
+  if (!haveDimension) throw base::Error(file, "NRRD header misses field 'dimension'");
+  if (!haveType) throw base::Error(file, "NRRD header misses field 'type'");
+  if (!haveSizes) throw base::Error(file, "NRRD header misses field 'sizes'");
   if (fileTypeBytes(h.data.type) > 1 && !haveEndian)
-    throw base::Error(what + " misses field 'endian' (needed for " + fileTypeName(h.data.type) +
-                      ")");
+    throw base::Error(file, std::string("NRRD header misses field 'endian' (needed for ") +
+                                fileTypeName(h.data.type) + ")");
   h.data.compressed = encoding == "gzip";
   if (dataFile.empty()) {
-    if (!ended) throw base::Error(what + " has no blank line before the data and no 'data file'");
+    if (!ended)
+      throw base::Error(file, "NRRD header has no blank line before the data and no 'data file'");
     h.data.path = path;
     h.data.fileOffset = dataStart;
   } else {

@@ -188,7 +188,8 @@ Index3 arrayGridDims(const std::uint64_t* len, int rank, int time, const std::st
                         std::to_string(kMaxFileDims));
   const Index3 dims{static_cast<int>(len[t + 2]), static_cast<int>(len[t + 1]),
                     static_cast<int>(len[t])};
-  checkFileDims(dims, what);
+  if (const std::string problem = fileDimsProblem(dims); !problem.empty())
+    throw base::Error(what + ": " + problem);
   return dims;
 }
 
