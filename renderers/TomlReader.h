@@ -55,7 +55,7 @@ class TomlReader {
     return path_ + ":" + std::to_string(at.source().begin.line) + ": " + what;
   }
 
-  // The memory budget (dfb/MemoryBudget.h): fails naming `at` when `bytes` (all this rank will
+  // The memory budget (base/MemoryBudget.h): fails naming `at` when `bytes` (all this rank will
   // hold once `what` is loaded: what it holds already included) exceed what it may hold.
   void budget(const toml::node& at, const std::string& what, std::uint64_t bytes) const {
     if (std::string problem = base::memoryProblem(bytes); !problem.empty())
