@@ -118,7 +118,7 @@ struct Session::Impl {
   std::unique_ptr<runtime::RenderWall> wallSide;  // with a layout or a connected wall
   std::unique_ptr<renderers::BrickFrameDriver> driver;
   // Where all of this rank's rendering runs: at most options.threads threads of its own, no cap
-  // on the program's TBB parallelism (renderers/Parallel.h).
+  // on the program's TBB parallelism (base/Parallel.h).
   std::unique_ptr<base::TaskArena> arena;
   Style style;
   std::uint64_t hashOfStyle = 0;  // styleHash(style)

@@ -1,7 +1,8 @@
 #pragma once
-// --control [ADDR:]PORT: the JSON-over-HTTP control API on render rank 0 (README, "Steering the
-// wall"). Debian's cpp-httplib serves it on two threads of its own; handlers only read the
-// status board and queue steering requests, so a slow or hostile client never stalls a frame.
+// --control [ADDR:]PORT: the JSON-over-HTTP control API on render rank 0 (docs/service.md,
+// "Steering the wall"). Debian's cpp-httplib serves it on two threads of its own; handlers only
+// read the status board and queue steering requests, so a slow or hostile client never stalls a
+// frame.
 //
 //   GET  /api/status    frame, fps, spp, camera, displays, renderer, errors
 //   POST /api/camera    {"position", "look_at", "up", "fov"} (any subset), "orbit", "pan", "dolly"

@@ -25,7 +25,7 @@ void FailurePath::setWhoIsSilent(std::function<std::string()> whoIsSilent) {
 
 void FailurePath::fail(const std::exception& e) {
   std::string what = e.what();
-  // Loaders name what they load (dfb/MemoryBudget.h); this is the net for the rest.
+  // Loaders name what they load (base/MemoryBudget.h); this is the net for the rest.
   if (dynamic_cast<const std::bad_alloc*>(&e))
     what = "out of memory (an allocation failed); this rank may hold " + base::memoryLimitText();
   if (dynamic_cast<const base::DeadlineError*>(&e)) {

@@ -84,7 +84,7 @@ struct FrameRecord {
   // lastSetTileNs it is the compositing time. One host's clock: on a cluster the difference
   // also holds the hosts' clock offset. 0: no wall.
   std::int64_t displaysCompleteNs = 0;
-  // Steering (issue 12): the frame's accumulation epoch; the last request it applies (0: none),
+  // Steering: the frame's accumulation epoch; the last request it applies (0: none),
   // when the first of them reached rank 0 and the last frame every display had presented then;
   // when rank 0 learnt every display presented this frame. All on rank 0's steady_clock.
   std::uint32_t epoch = 0;
@@ -95,7 +95,7 @@ struct FrameRecord {
 // Where one rank's time went over the whole run, in milliseconds summed over tiles or frames.
 // Render ranks fill the first seven stages, wall ranks the next five. render, wallWait, barrier,
 // present and gatherRelay are elapsed time; the per-pixel stages (tileUnpack .. send,
-// pieceUnpack, assemble) are CPU time of the threads doing them (dfb/Timing.h). The CPU totals
+// pieceUnpack, assemble) are CPU time of the threads doing them (base/Timing.h). The CPU totals
 // over the frames (start-up barrier .. last frame) let the bench tell the rest apart: render
 // ranks: the renderer's render() calls, the whole process; wall ranks: the whole process, its
 // main thread (waits, swap barrier, GL calls), the GL driver's own threads (apps/ThreadCpu.h).

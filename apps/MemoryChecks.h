@@ -1,5 +1,5 @@
 #pragma once
-// The memory budget (dfb/MemoryBudget.h) of what a job allocates for its canvas, checked at
+// The memory budget (base/MemoryBudget.h) of what a job allocates for its canvas, checked at
 // setup on the rank that will hold it, before any frame: the frame buffer's tiles a render rank
 // owns, the image render rank 0 gathers (--image), the display frames a wall process holds and,
 // with --capture, the whole-wall preview wall process 0 composes. Estimates of the real

@@ -1,4 +1,4 @@
-// The --image PFM (written atomically, see dfb/AtomicFile.h) and the peak-memory probe.
+// The --image PFM (written atomically, see base/AtomicFile.h) and the peak-memory probe.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

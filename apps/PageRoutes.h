@@ -1,5 +1,5 @@
 #pragma once
-// The controller page's routes on the control server (issue 12): the page itself ("/" and its
+// The controller page's routes on the control server: the page itself ("/" and its
 // files, embedded by cmake/EmbedFiles.cmake), the latest whole-wall preview as PNG, and the
 // layout the page draws the display outlines and names from.
 //

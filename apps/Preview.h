@@ -1,5 +1,5 @@
 #pragma once
-// The whole-wall preview in the app (issue 12): every render rank runs the preview's pixel op,
+// The whole-wall preview in the app: every render rank runs the preview's pixel op,
 // render rank 0 assembles the shrunk tiles (wall/route/PreviewAssembler.h). Wanted when the control
 // server runs (it serves /api/preview.png) or with --preview FILE.png (written at the end).
 #include <chrono>

@@ -294,7 +294,7 @@ int run(int argc, char** argv) {
     std::unique_ptr<StatusBoard> status;
     if (server) {
       status = std::make_unique<StatusBoard>();
-      addPageRoutes(*server, job, *preview);  // the controller page and the preview (issue 12)
+      addPageRoutes(*server, job, *preview);  // the controller page and the preview
       server->start(job, steering, *status);
       // One line a script can read: where the API is, and the token when one is needed.
       std::printf("dfbwall: control API on http://%s:%d/%s%s\n", server->host().c_str(),

@@ -1,5 +1,5 @@
-// `dfbwall serve`: the wall processes of a layout as a persistent service (README, "A wall that
-// stays up"; wall/service/server/WallService.h). Either every process at once under one mpirun
+// `dfbwall serve`: the wall processes of a layout as a persistent service (docs/service.md, "A wall
+// that stays up"; wall/service/server/WallService.h). Either every process at once under one mpirun
 // (rank p is process p; MPI only tells the others where the head listens), or one process on its
 // own, started or restarted by hand or by a service manager (`--process N`, `--join HOST:PORT`).
 // The processes share no MPI communication after start-up, so under

@@ -1,5 +1,5 @@
 #pragma once
-// Steering a running wall (issue 12): requests to move the camera, change settings, capture or
+// Steering a running wall: requests to move the camera, change settings, capture or
 // stop, from any source — the control server's HTTP handlers on render rank 0, a keyboard on a
 // wall rank's window — queued on render rank 0 and applied there at the next frame boundary.
 // Rank 0 then broadcasts the frame's camera and settings with the frame order

@@ -1,5 +1,5 @@
 # Figure "control" of scripts/bench (sourced by it; uses its helpers and variables): steering a
-# running wall (issue 12). bench/control_bench.py drives a 2x2 wall (configs/walls/2x2.toml,
+# running wall. bench/control_bench.py drives a 2x2 wall (configs/walls/2x2.toml,
 # 2 render + 4 wall ranks, OSMesa) through the control API: camera requests at random moments
 # for frames in flight K = 1, 2, 3 with the pattern (delivery-bound) and the path tracer
 # (render-bound), interleaved; the statistics give, per request, the frames the displays

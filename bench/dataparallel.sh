@@ -1,5 +1,5 @@
 # Figure "dataparallel" of scripts/bench (sourced by it; uses its helpers and variables): the
-# scivis renderer data-parallel through the DFB (--bricks N --replication K, issue 10).
+# scivis renderer data-parallel through the DFB (--bricks N --replication K).
 #  1. Strong scaling 1 -> 2 -> 4 ranks of a 256^3 wavelet (faint volume + two isosurfaces, AO)
 #     cut into 4 bricks, with image-parallel (--bricks 0, whole scene on every rank) beside it.
 #  2. Compositing overhead per frame on 2 and 4 ranks: composite_ms / frame_ms as the statistics

@@ -2,7 +2,7 @@
 # nanoseconds per delivered pixel on one host, after rendering on the render side and after the
 # wire (GL excluded) on the wall side, per stage, three ways:
 #  1. the app: the 2x2 1080p wall, 2 render + 4 wall ranks over shared memory; the per-pixel
-#     stages are thread-CPU timers (dfb/Timing.h), and the rest of each process's CPU over the
+#     stages are thread-CPU timers (base/Timing.h), and the rest of each process's CPU over the
 #     frames is reported beside them. Each figure is a difference between a long and a short run
 #     (steady state: the first frames' page faults on fresh display images and buffers, tens of
 #     ms here, cancel out) ("other": the messenger's MPI and inbox threads, MPI's
@@ -120,7 +120,7 @@ fig_pixelcost() {
            "frames_short_and_long_run": {"pattern": [$short, $long], "pathtracer": [$ptshort, $ptlong]}, "runs": $reps,
            "steady_state": "every app figure is (long runs - short runs) / (frames difference x 3840 x 2160): start-up costs cancel",
            "unit": "CPU ns per delivered pixel (3840 x 2160 per frame), summed over the side's ranks and threads",
-           "stages": "thread CPU clock per stage (dfb/Timing.h); render side after render(), wall side after the wire",
+           "stages": "thread CPU clock per stage (base/Timing.h); render side after render(), wall side after the wire",
            "other": "render: process CPU over the frames - render() CPU - stages; wall: process CPU - main thread (waits, swap barrier, GL calls) - GL driver threads (llvmpipe) - stages. Mostly the messenger's MPI and inbox threads (MPI copies, polling, decompression, dispatch)"},
  "goals": [$goals_json],
  "app": [$appRows

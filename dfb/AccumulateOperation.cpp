@@ -12,7 +12,7 @@
 // cleared double sum does), and the sums it would have written are exactly derivable from it,
 // so they are materialized only if a second frame of the epoch comes. Writing 48 bytes of sums
 // per pixel that the next frame's new epoch overwrites unread was most of a float tile's cost
-// on its owner (11 ns per pixel, memory-bound).
+// on its owner (memory-bound).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -33,7 +33,7 @@ class AccumulateOperation final : public TileOperation {
  public:
   // The sums are allocated when first written (holdSums): a moving camera at 1 spp never writes
   // them, and allocating them for every owned tile (192 KB a 64² tile, page-faulted and zeroed)
-  // was most of a first frame's set-up (2048²: 94 of 96 ms in begin()).
+  // was most of a first frame's set-up.
   explicit AccumulateOperation(const Region& region) : region_(region) { finished_.reset(region); }
 
   void newFrame(const FrameInfo&, std::uint32_t accumulationId, int expectedInputs) override {

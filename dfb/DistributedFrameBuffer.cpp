@@ -72,7 +72,7 @@ struct DistributedFrameBuffer::Impl {
 
   std::atomic<std::uint64_t> tilesSet{0}, tilesCompleted{0}, staleInputs{0}, earlyInputs{0};
   std::atomic<std::int64_t> lastSetTileNs{0};
-  // Stage timers in nanoseconds of the working thread's CPU time (dfb/Timing.h), read once or
+  // Stage timers in nanoseconds of the working thread's CPU time (base/Timing.h), read once or
   // twice per stage per tile.
   std::atomic<std::int64_t> unpackNs{0}, operationNs{0}, toneMapNs{0}, pixelOpsNs{0};
   base::Clock::time_point frameStart;

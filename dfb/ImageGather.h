@@ -23,8 +23,7 @@ struct GatherCounts {
 };
 
 // The gather's working memory, kept by the caller from one frame to the next: fresh buffers
-// every frame touch every page anew, and first-touch page faults (~20 us per 4 KiB page on
-// this kind of VM) made a 512x512 RGBAF32 gather take 50 ms instead of 2-3.
+// every frame touch every page anew, and first-touch page faults cost more than the gather.
 struct GatherBuffers {
   messaging::Bytes raw, block, filtered, body, unpacked, unfiltered;
   base::Gathered<std::byte> gathered;

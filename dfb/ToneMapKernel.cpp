@@ -17,8 +17,8 @@ namespace {
 // [0, 1] by the encoder: it gives 0 for anything not above 0, NaN included, and clips at 1.)
 float filmicCurve(float x) { return (x * (2.51f * x + 0.03f)) / (x * (2.43f * x + 0.59f) + 0.14f); }
 
-// Exactly encodeSrgb8Reference() without a pow per channel (which cost 45 ns, more than all
-// the rest of a wall frame's pixel work). The 8-bit result is a non-decreasing step function of
+// Exactly encodeSrgb8Reference() without a pow per channel (which cost more than all the rest
+// of a wall frame's pixel work). The 8-bit result is a non-decreasing step function of
 // the linear value with 255 steps, so it is defined by the smallest float reaching each step;
 // those are found once by bisection over the float bit patterns, using the reference itself.
 // A table on the top 16 bits of the float gives the step at the start of each bucket, and at

@@ -1,8 +1,9 @@
 // The plane-delta pre-filter (messaging/Compression.h). For RGBA8 (4 channels) an SSSE3 kernel
 // takes 16 pixels at a time: a byte shuffle and a 4x4 transpose split them into four 16-byte
 // planes, and the delta is one subtract against the plane shifted by a byte (decode: a prefix sum
-// in four shifted adds); it measured ~6x faster than the byte loop, which cost more than Snappy on
-// a piece. tests/messaging/CompressionTest.cpp checks both against the definition on random sizes.
+// in four shifted adds): the byte loop cost more than Snappy on a piece (docs/benchmarks.md,
+// "Measurements behind the code"). tests/messaging/CompressionTest.cpp checks both against the
+// definition on random sizes.
 #include <cstdint>
 
 #include "messaging/Compression.h"

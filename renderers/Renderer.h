@@ -34,7 +34,7 @@ struct RenderSettings {
   std::optional<dfb::ToneMapSettings> displayPixels = std::nullopt;
 };
 
-// Settings an operator may change while the wall runs (steering, issue 12). Set between frames,
+// Settings an operator may change while the wall runs (steering). Set between frames,
 // the same on every rank (they come with the frame order); a renderer ignores what it lacks.
 struct LiveSettings {
   int maxDepth = 8;           // the path tracer's path length

@@ -77,8 +77,8 @@ struct Volume {
   // same values at the same indices). Where a slice is a multiple of 1 KiB (256², 512², any
   // power-of-two slice), the same rows of neighbouring slices map onto the same few sets of the
   // L1 cache (one way spans 4 KiB), and the march's 16 rays, crossing slices, evict each
-  // other's voxels: 512³ float at 512² took 7.4 ns a sample, 5.9 with the slices spread. In
-  // place when the buffer came from allocateVoxelBytes (its capacity holds the padding).
+  // other's voxels. In place when the buffer came from allocateVoxelBytes (its capacity holds
+  // the padding).
   void spreadSlices();
 };
 

@@ -1,4 +1,4 @@
-// The data-distributed API embedded in a program (issue 20): the calling thread gets its own
+// The data-distributed API embedded in a program: the calling thread gets its own
 // floating-point mode back after rendering, the program's own TBB parallelism is not capped by a
 // session, render ranks that pass different styles fail together, and errors are thrown, never
 // turned into MPI_Abort.

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""A real browser on a real wall (issue 12): headless Chromium (Debian's chromium +
+"""A real browser on a real wall: headless Chromium (Debian's chromium +
 chromium-driver, driven through python3-selenium) opens the controller page of a running dfbwall
 job (mpirun, OSMesa wall, --frames 0 --control), sees the preview image load, drags on it, and
 the job's camera changes: /api/status reports another camera, and a capture after the drag

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""End-to-end tests of the control API (issue 12) against a real running job: mpirun, render
+"""End-to-end tests of the control API against a real running job: mpirun, render
 ranks, an OSMesa wall with captures, HTTP through the standard library's urllib.
 
   control_test.py camera      a camera request changes what every display shows; the captures

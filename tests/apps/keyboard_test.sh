@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# A keyboard on the wall (issue 12): under Xvfb, real X key events (xdotool, through XTEST, into
+# A keyboard on the wall: under Xvfb, real X key events (xdotool, through XTEST, into
 # the focused window of a display) steer a running job: the right arrow orbits the camera
 # (/api/status reports another camera) even while the converged wall idles, '+' dollies, Esc
 # stops the job gracefully (exit 0, the statistics end with their summary).

@@ -1,4 +1,4 @@
-// Output files never seen half-written (dfb/AtomicFile.h), on real files in a scratch folder:
+// Output files never seen half-written (base/AtomicFile.h), on real files in a scratch folder:
 // the target holds its old bytes (or is absent) until commit, then all the new ones; nothing is
 // left behind either way; failures name the path and the reason.
 #include "base/AtomicFile.h"

@@ -1,4 +1,4 @@
-// Every wait has a bound (messaging/BoundedWait.h), on real MPI requests of this rank alone
+// Every wait has a bound (base/BoundedWait.h), on real MPI requests of this rank alone
 // (MPI_COMM_SELF, so the test runs the same at any rank count): a request that completes is
 // waited for, one that never does ends in base::DeadlineError with its message at its deadline, and
 // the long wait's polling costs (nearly) no CPU.

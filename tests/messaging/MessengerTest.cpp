@@ -391,7 +391,7 @@ TEST(Messenger, ConcurrentHandlersRunTogetherAndNeverCrossSerialOnes) {
 }
 
 // A message is one MPI message however large: a wall piece or a gathered display is never cut
-// into many small sends (issue 13), on the sender's side nor the receiver's.
+// into many small sends, on the sender's side nor the receiver's.
 TEST(Messenger, ALargeMessageIsOneMpiMessage) {
   if (worldSize() < 2) GTEST_SKIP() << "needs two ranks";
   Messenger messenger(MPI_COMM_WORLD);

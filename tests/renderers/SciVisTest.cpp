@@ -415,7 +415,7 @@ TEST(SciVis, SurfacePacketsHitAsSingleRays) {
   }
 }
 
-// Steering (issue 12): another transfer-function preset or opacity scale changes the picture
+// Steering: another transfer-function preset or opacity scale changes the picture
 // without rebuilding the scene, and going back to the scene's own gives it back bit for bit.
 TEST(SciVis, LiveTransferFunctionChangesAndRestores) {
   const RenderScene scene = buildRenderScene("scivis", *mixedScene(1));

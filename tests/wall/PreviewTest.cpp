@@ -42,7 +42,7 @@ TEST(Preview, GridSizesRoundUpAndCellsClipToTheCanvas) {
 }
 
 // The shrink factor follows the canvas: the page shows 513-1024 cells across the longest side
-// whatever the wall's size, or the whole canvas when it is smaller (issue 23: the 2x2 demo wall
+// whatever the wall's size, or the whole canvas when it is smaller (the 2x2 demo wall
 // was a mosaic of 51x38 cells at the old fixed factor of 8).
 TEST(Preview, FactorKeepsFiveHundredToAThousandCellsAcross) {
   const Layout demo = loadLayout(std::string(DFBWALL_SOURCE_DIR) + "/configs/walls/2x2.toml");

@@ -106,7 +106,7 @@ int WallNode::expectedPieceIndex(size_t position, const dfb::Region& local) cons
 }
 
 void WallNode::incoming(int fromRank, messaging::Bytes&& payload) {
-  const std::int64_t start = base::threadCpuNs();  // stage CPU time (dfb/Timing.h)
+  const std::int64_t start = base::threadCpuNs();  // stage CPU time (base/Timing.h)
   PieceHeader h{};
   try {
     h = readPieceHeader(payload);

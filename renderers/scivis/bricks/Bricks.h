@@ -80,7 +80,7 @@ GhostReach ghostReach(const SceneDesc& desc, GhostMode mode = GhostMode::Reach);
 // and triangles) it was loading.
 BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const GhostReach& reach);
 
-// The memory budget of loading `plans` with `reach` (dfb/MemoryBudget.h): what loadBrick holds
+// The memory budget of loading `plans` with `reach` (base/MemoryBudget.h): what loadBrick holds
 // for them at most — dense voxel boxes with their ghost layers and macrocells, ghost shells
 // counted both sparse and dense, the particles and triangles they reach — with the scene
 // description itself. Throws base::Error before anything is loaded when that is more than

@@ -26,7 +26,7 @@ constexpr std::size_t kClusterChunk = 4096;  // clusters per binning task
 // The per-chunk rows of counts (depth buckets, screen cells) are this many entries longer than
 // they hold: the offsets pass walks one entry of every row in turn, and rows a power of two of
 // bytes apart (16 KiB of buckets, 64 KiB of cells at 2048²) all fell into the same cache sets,
-// so each of those reads missed (5 of the 11.5 ms a 1.6 M-triangle frame spent binning at 2048²).
+// so each of those reads missed.
 constexpr std::size_t kCountRowPad = 64 / sizeof(std::uint32_t);
 // A triangle's least depth is its vertices' least less this share of it (so every hit the ray
 // test finds on it lies deeper); a cluster's, its points' less twice that, so it lies below
@@ -432,8 +432,7 @@ void FirstHitRaster::makeClusters(const std::vector<Mesh>& meshes, std::size_t t
   // to each: a query then reads one cluster's points together), in the order its triangles
   // first name them, and its triangles' corners as indices into them. Clusters are independent,
   // so in parallel: their distinct vertices found (and corners set) first, then, placed by the
-  // counts' running sum, copied. (Serially, with a search that stopped at its match, this took
-  // 60 of the 117 ms of clustering the wavelet's 1.6 M contour triangles.)
+  // counts' running sum, copied.
   const auto eachCluster = [&](const auto& body) {
     base::parallelFor(
         (clusters_.size() + kClusterChunk - 1) / kClusterChunk, [&](std::size_t chunk) {

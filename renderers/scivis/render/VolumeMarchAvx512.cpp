@@ -282,9 +282,8 @@ AVX512_INLINE void prefetchCells(const Field16& f, __m512 fx, __m512 fy, __m512 
 // Asks for the voxels of the first kPrefetchAhead samples of rays 0 .. count - 1 (the packet
 // that marches next), from about where each ray's march starts (its first sample lies within a
 // step of it): no step asks for them, and in a dense volume a ray takes only about 16 samples.
-// Asked while the packet before marches, they are in the cache when it starts (scivis bench,
-// 512^3 at 512^2: 5.40 -> 4.97 ns a sample; asked when their own packet starts: 5.12; both: no
-// better than this alone).
+// Asked while the packet before marches, they are in the cache when it starts (asking when their
+// own packet starts gains half as much: docs/benchmarks.md, "Measurements behind the code").
 template <class T>
 AVX512_INLINE void prefetchStarts(const Field16& f, const MarchRay* rays, int count) {
   __m512 ray[16];

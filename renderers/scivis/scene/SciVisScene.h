@@ -149,7 +149,7 @@ class SciVisScene {
   const std::vector<VolumeLayer>& volumes() const { return volumes_; }
   // The volume layers with another transfer function: preset `preset` (an index in
   // transferFunctionPresetNames(); -1: each volume's own) over each volume's value range and
-  // with its peak opacity, every opacity times `opacityScale` (steering, issue 12).
+  // with its peak opacity, every opacity times `opacityScale` (steering).
   std::vector<VolumeLayer> retunedVolumes(int preset, float opacityScale) const;
   float volumeStep() const { return step_; }  // world distance between volume samples
   // Whether the volume's transfer function shows anything (opacity) in [lo, hi].

@@ -1,7 +1,7 @@
 #pragma once
-// `dfbwall relay`: one process that render jobs connect to instead of the wall (README, "A wall
-// that stays up"), for compute nodes that cannot reach the wall's network; several may run, one
-// per gateway. It forwards without decoding pieces:
+// `dfbwall relay`: one process that render jobs connect to instead of the wall (docs/service.md, "A
+// wall that stays up"), for compute nodes that cannot reach the wall's network; several may run,
+// one per gateway. It forwards without decoding pieces:
 //
 //  - the directory link: every job connection on the relay's --listen socket gets a connection
 //    of its own to the wall's directory socket, so the wall sees each job as it would directly

@@ -1,7 +1,7 @@
 #pragma once
 // The head of a service wall: wall process 0's desk thread, which owns the directory socket
-// (`--listen`) that render jobs say hello to and the other wall processes join (README, "A wall
-// that stays up"; wall/service/protocol/Protocol.h, wall/service/protocol/LinkMessages.h).
+// (`--listen`) that render jobs say hello to and the other wall processes join (docs/service.md, "A
+// wall that stays up"; wall/service/protocol/Protocol.h, wall/service/protocol/LinkMessages.h).
 //
 // For jobs: one at a time (a second is refused as busy, or queued with `wait`), their keepalives,
 // captures and goodbye, their credits, and the end of a job that goes silent.

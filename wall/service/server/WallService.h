@@ -1,7 +1,7 @@
 #pragma once
 // `dfbwall serve`: the wall processes of a layout as a persistent service that render jobs
-// connect to (README, "A wall that stays up"). Every process keeps its displays (idle screens
-// before the first job, the last complete frame after each), receives the pieces of the
+// connect to (docs/service.md, "A wall that stays up"). Every process keeps its displays (idle
+// screens before the first job, the last complete frame after each), receives the pieces of the
 // connected job on its own piece socket (wall/service/server/PieceReceiver.h) and presents them
 // with the same wall node as a single-job wall.
 //
