@@ -81,18 +81,9 @@ class TomlReader {
   float number(const toml::node& n, const std::string& field, float fallback = 0) {
     return number(&n, field, fallback);
   }
-<<<<<<< HEAD
   float number(const toml::table& t, std::string_view key, const std::string& what,
                float fallback) {
     return number(t.get(key), field(what, key), fallback);
-=======
-
-  // The memory budget (base/MemoryBudget.h): fails naming `at` when `bytes` (all this rank will
-  // hold once `what` is loaded: what it holds already included) exceed what it may hold.
-  void budget(const toml::node& at, const std::string& what, std::uint64_t bytes) const {
-    if (std::string problem = base::memoryProblem(bytes); !problem.empty())
-      fail(at, what + " " + problem);
->>>>>>> comments
   }
   bool boolean(const toml::table& t, std::string_view key, const std::string& what, bool fallback);
   std::string string(const toml::node* n, const std::string& field);
