@@ -5,7 +5,7 @@
 #include "apps/Job.h"
 #include "renderers/BuiltinScenes.h"
 #include "renderers/FrameDriver.h"
-#include "renderers/scivis/bricks/Bricks.h"
+#include "renderers/scivis/bricks/BrickPlan.h"
 #include "wall/route/Routing.h"
 
 namespace app {

@@ -1,9 +1,9 @@
 #pragma once
 // One rank's brick rendered over the whole canvas, as IceT's icetCompositeImage wants its input:
-// full-frame buffers of which only `viewport` is valid. The brick is loaded and cut exactly as
-// the DFB's data-parallel driver does it (renderers/scivis/bricks/Bricks.h), and only the tiles the
-// brick projects to are rendered (BrickFrameDriver::bricksOfTile decides, as for the DFB), so
-// both compositors receive the same fragments from the same rendering work.
+// full-frame buffers of which only `viewport` is valid. The brick is cut and loaded exactly as
+// the DFB's data-parallel driver does it (renderers/scivis/bricks/BrickPlan.h, BrickLoad.h), and
+// only the tiles the brick projects to are rendered (BrickFrameDriver::bricksOfTile decides, as
+// for the DFB), so both compositors receive the same fragments from the same rendering work.
 //
 // Buffers are in canvas rows (row 0 = the top row). IceT calls its row 0 the bottom one; since
 // no projection matrix is handed to IceT, it never looks at where rows are, and tiles and

@@ -8,7 +8,7 @@
 #include "renderers/RendererRegistry.h"
 #include "renderers/SceneSections.h"
 #include "renderers/scivis/SciVisToml.h"
-#include "renderers/scivis/bricks/Bricks.h"
+#include "renderers/scivis/bricks/BrickLoad.h"
 #include "renderers/scivis/render/SciVisRenderer.h"
 #include "renderers/scivis/scene/SciVisScene.h"
 

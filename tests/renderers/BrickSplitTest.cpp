@@ -5,7 +5,7 @@
 #include <memory>
 
 #include "renderers/SciVisDesc.h"
-#include "renderers/scivis/bricks/Bricks.h"
+#include "renderers/scivis/bricks/BrickPlan.h"
 
 namespace renderers {
 namespace {

@@ -12,7 +12,8 @@
 
 #include "renderers/BuiltinScenes.h"
 #include "renderers/Rng.h"
-#include "renderers/scivis/bricks/Bricks.h"
+#include "renderers/scivis/bricks/BrickLoad.h"
+#include "renderers/scivis/bricks/BrickPlan.h"
 #include "renderers/scivis/kernels/FirstHitRaster.h"
 #include "renderers/scivis/render/SciVisRenderer.h"
 #include "renderers/scivis/scene/SciVisScene.h"

@@ -15,7 +15,7 @@
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
 #include "renderers/TomlReader.h"
-#include "renderers/scivis/bricks/Bricks.h"
+#include "renderers/scivis/bricks/BrickLoad.h"
 #include "renderers/scivis/scene/SciVisScene.h"
 #include "tests/DiagnosticsTestUtil.h"
 

@@ -10,7 +10,9 @@
 #include "base/Parallel.h"
 #include "base/Timing.h"
 #include "dfb/TileOperation.h"
+#include "renderers/scivis/bricks/BrickExchange.h"
 #include "renderers/scivis/bricks/BrickOcclusion.h"
+#include "renderers/scivis/bricks/BrickPlan.h"
 #include "renderers/scivis/render/CameraRays.h"
 #include "renderers/scivis/render/RayBlocks.h"
 

@@ -1,6 +1,6 @@
 #pragma once
 // Data- and mixed-parallel rendering through the DFB (paper 4.2-4.3, listings 3-4): the scene is
-// cut into bricks (Bricks.h), each rank loads only the bricks it holds, and per frame every tile
+// cut into bricks (BrickPlan.h), each rank loads only the bricks it holds, and per frame every tile
 // becomes a dependency tree: its owner sends the generation-0 background tile announcing one
 // child per brick the tile needs, and for each of those bricks one of its holders (the
 // tile-brick owner) renders the brick clipped to its bounds as a generation-1 tile. The DFB's
@@ -27,6 +27,7 @@
 #include "dfb/DistributedFrameBuffer.h"
 #include "renderers/FrameDriver.h"
 #include "renderers/Renderer.h"
+#include "renderers/scivis/bricks/BrickLoad.h"
 #include "renderers/scivis/bricks/Bricks.h"
 #include "renderers/scivis/render/SciVisRenderer.h"
 

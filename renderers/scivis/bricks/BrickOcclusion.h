@@ -27,6 +27,7 @@
 
 #include "renderers/SceneDesc.h"
 #include "renderers/scivis/bricks/Bricks.h"
+#include "renderers/scivis/scene/SciVisScene.h"
 
 namespace renderers {
 

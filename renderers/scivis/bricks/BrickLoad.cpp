@@ -1,99 +1,16 @@
-#include "renderers/scivis/bricks/Bricks.h"
+#include "renderers/scivis/bricks/BrickLoad.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <map>
 #include <new>
 #include <string>
 
-#include "base/Collectives.h"
 #include "base/Error.h"
 #include "base/MemoryBudget.h"
 
 namespace renderers {
 namespace {
-
-Box3 expanded(const Box3& b, float margin) { return {b.lo - Vec3{margin}, b.hi + Vec3{margin}}; }
-
-bool overlaps(const Box3& a, Vec3 lo, Vec3 hi) {
-  return lo.x <= a.hi.x && hi.x >= a.lo.x && lo.y <= a.hi.y && hi.y >= a.lo.y && lo.z <= a.hi.z &&
-         hi.z >= a.lo.z;
-}
-
-// The boxes [from.lo + s dLo, from.hi + s dHi] for s in [0, sMax], together: every point a
-// shadow ray from `from` passes on its way to a light. Towards a directional light d: dLo = dHi
-// = d (the box swept along it); towards a point light in box L: dLo = L.lo - from.lo, dHi =
-// L.hi - from.hi, sMax = 1 (each point of `from` joined to each of L: the convex hull).
-struct SweptBox {
-  Box3 from;
-  Vec3 dLo, dHi;
-  float sMax = 0;
-
-  Box3 bounds() const {
-    Box3 b = from;
-    grow(b, from.lo + dLo * sMax, from.hi + dHi * sMax);
-    return b;
-  }
-  // Whether [lo, hi] meets one of the boxes: per axis, two linear conditions on s.
-  bool overlaps(Vec3 lo, Vec3 hi) const {
-    float s0 = 0, s1 = sMax;
-    // a + s b <= 0 for some s in [s0, s1].
-    auto keep = [&](float a, float b) {
-      if (b > 0)
-        s1 = std::min(s1, -a / b);
-      else if (b < 0)
-        s0 = std::max(s0, -a / b);
-      else if (a > 0)
-        s1 = -1;
-    };
-    for (int a = 0; a < 3; ++a) {
-      keep(from.lo[a] - hi[a], dLo[a]);   // the moving box's low face below hi
-      keep(lo[a] - from.hi[a], -dHi[a]);  // its high face above lo
-    }
-    return s0 <= s1;
-  }
-};
-
-// How far off a brick's bounds its shading rays may start: SciVisRenderer leaves a surface by
-// 1e-4 of the scene's extent and 0.05 of a volume step (both as SciVisScene computes them);
-// four times that.
-float startPad(const SceneDesc& desc, const Box3& domain) {
-  float finest = 0;
-  for (const VolumeDesc& v : desc.volumes) {
-    const Vec3 h = v.source.grid.spacing;
-    const float m = std::min(h.x, std::min(h.y, h.z));
-    finest = finest > 0 ? std::min(finest, m) : m;
-  }
-  const float step = finest > 0 ? finest / desc.scivis.samplingRate : 1.0f;
-  const float extent = domain.empty() ? 0.0f : std::max(1e-3f, maxComponent(domain.hi - domain.lo));
-  return 4.0f * (1e-4f * extent + 0.05f * step);
-}
-
-// Where the shadow rays of points in `bounds` go (one SweptBox per light of `reach`): from
-// within `pad` of the bounds to a point light or out of the domain. None when the bounds hold
-// the domain.
-std::vector<SweptBox> shadowSweeps(const Box3& bounds, const GhostReach& reach, float pad) {
-  std::vector<SweptBox> out;
-  if (reach.lights.empty() || reach.domain.empty() ||
-      (bounds.contains(reach.domain.lo) && bounds.contains(reach.domain.hi)))
-    return out;
-  const Box3 from = expanded(bounds, pad);
-  Box3 all = reach.domain;
-  grow(all, from.lo, from.hi);
-  // A box moved this far along a unit direction has left every box holding it and the domain.
-  const float across = length(all.hi - all.lo) * 1.001f + pad;
-  for (const ResolvedLight& light : reach.lights) {
-    if (light.kind == LightDesc::Kind::Directional) {
-      const Vec3 d = length(light.direction) > 0 ? normalize(light.direction) : Vec3{};
-      out.push_back({from, d, d, across});
-    } else if (light.kind == LightDesc::Kind::Point) {
-      const Box3 at = expanded({light.position, light.position}, pad);
-      out.push_back({from, at.lo - from.lo, at.hi - from.hi, 1.0f});
-    }
-  }
-  return out;
-}
 
 // The particles of `p` for which `keep(centre, radius)` holds, with their radii and attributes.
 template <class Keep>
@@ -162,34 +79,6 @@ bool voxelsAround(const GridGeometry& g, const Box3& region, VoxelBox& box, bool
   return !empty;
 }
 
-// Where one brick's shading rays go beyond its bounds (from its GhostReach): ambient-occlusion
-// rays within `around`, shadow rays along `sweeps`; `region` bounds both.
-struct BrickReach {
-  Box3 around, region;
-  std::vector<SweptBox> sweeps;
-  bool beyond = false;  // whether they leave the bounds at all
-  bool reached(Vec3 lo, Vec3 hi) const {
-    if (overlaps(around, lo, hi)) return true;
-    for (const SweptBox& s : sweeps)
-      if (s.overlaps(lo, hi)) return true;
-    return false;
-  }
-};
-
-BrickReach brickReach(const SceneDesc& desc, const Box3& bounds, const GhostReach& reach) {
-  BrickReach r;
-  const float pad = startPad(desc, reach.domain);
-  r.sweeps = shadowSweeps(bounds, reach, pad);
-  r.beyond = reach.margin > 0 || !r.sweeps.empty();
-  r.around = r.beyond ? expanded(bounds, reach.margin + pad) : bounds;
-  r.region = r.around;
-  for (const SweptBox& s : r.sweeps) {
-    const Box3 b = s.bounds();
-    grow(r.region, b.lo, b.hi);
-  }
-  return r;
-}
-
 std::string volumeName(const VolumeDesc& v) {
   return v.where.empty() ? "volume '" + v.name + "'" : v.where;
 }
@@ -223,102 +112,6 @@ std::uint64_t brickVolumeBytes(const SceneDesc& desc, std::size_t i, const Brick
                             base::bytesPlus(dense(shell), base::bytesTimes(shell.voxelCount(), 4)));
   return bytes;
 }
-
-// The axis to halve `size` along: the longest, and among axes within kNearlyLongest of it the
-// one nearest the camera's up direction, then the one most across its view. Bricks stacked
-// along up lie apart on screen for every camera that orbits about up (the usual way to turn a
-// data set), so each rank rasterises and shades its own part of the image; bricks stacked along
-// the view overlap there, and the farther one's rays are traced, or tested, behind the nearer
-// one. (2 bricks of the 256^3 wavelet on 2 ranks at 2048^2 over a 135-degree orbit: contours'
-// frames 0.57-0.69x of the x-split's, the volume's 0.67x.)
-int splitAxis(Vec3 size, const CameraDesc& camera) {
-  constexpr float kNearlyLongest = 0.9f;
-  const float longest = std::max({size.x, size.y, size.z});
-  const Vec3 up = normalize(camera.up), forward = normalize(camera.lookAt - camera.position);
-  // Lower ranks better: nearer up, then more across the view.
-  const auto rank = [&](int axis) {
-    return std::pair{-std::abs(up[axis]), std::abs(forward[axis])};
-  };
-  int best = -1;
-  for (int a = 0; a < 3; ++a)
-    if (size[a] >= kNearlyLongest * longest && (best < 0 || rank(a) < rank(best))) best = a;
-  return best < 0 ? 0 : best;
-}
-
-void split(const Box3& box, int count, const CameraDesc& camera, int& nextId,
-           std::vector<BrickPlan>& out) {
-  if (count == 1) {
-    out.push_back({nextId++, box});
-    return;
-  }
-  const int axis = splitAxis(box.hi - box.lo, camera);
-  const int left = count / 2;
-  const float lo = box.lo[axis], hi = box.hi[axis];
-  const float plane = lo + (hi - lo) * static_cast<float>(left) / static_cast<float>(count);
-  Box3 a = box, b = box;
-  (axis == 0 ? a.hi.x : axis == 1 ? a.hi.y : a.hi.z) = plane;
-  (axis == 0 ? b.lo.x : axis == 1 ? b.lo.y : b.lo.z) = plane;
-  split(a, left, camera, nextId, out);
-  split(b, count - left, camera, nextId, out);
-}
-
-}  // namespace
-
-Box3 openAtDomainBoundary(const Box3& bounds, const Box3& domain) {
-  constexpr float kInf = Box3::kInf;
-  Box3 out = bounds;
-  if (out.lo.x <= domain.lo.x) out.lo.x = -kInf;
-  if (out.lo.y <= domain.lo.y) out.lo.y = -kInf;
-  if (out.lo.z <= domain.lo.z) out.lo.z = -kInf;
-  if (out.hi.x >= domain.hi.x) out.hi.x = kInf;
-  if (out.hi.y >= domain.hi.y) out.hi.y = kInf;
-  if (out.hi.z >= domain.hi.z) out.hi.z = kInf;
-  return out;
-}
-
-std::vector<BrickPlan> splitScene(const SceneDesc& desc, int count) {
-  if (count < 1) throw base::Error("--bricks must be at least 1");
-  std::vector<BrickPlan> out;
-  int nextId = 0;
-  split(sceneDomain(desc), count, desc.camera, nextId, out);
-  return out;
-}
-
-std::vector<int> brickHolders(int brick, int ranks, int replication) {
-  const int k = std::clamp(replication, 1, ranks);
-  std::vector<int> holders;
-  for (int j = 0; j < k; ++j) holders.push_back((brick * k + j) % ranks);
-  std::sort(holders.begin(), holders.end());
-  return holders;
-}
-
-const char* ghostModeName(GhostMode mode) { return mode == GhostMode::Layer ? "layer" : "reach"; }
-
-GhostMode ghostModeFromName(const std::string& name) {
-  if (name == "reach") return GhostMode::Reach;
-  if (name == "layer") return GhostMode::Layer;
-  throw base::Error("ghost mode '" + name +
-                    "': choose reach (shading rays see what they reach) or " +
-                    "layer (one ghost layer of voxels)");
-}
-
-float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode) {
-  if (mode == GhostMode::Layer || desc.scivis.aoSamples <= 0) return 0.0f;
-  return desc.scivis.aoDistance > 0 ? desc.scivis.aoDistance : 0.25f * sceneExtent;
-}
-
-GhostReach ghostReach(const SceneDesc& desc, GhostMode mode) {
-  GhostReach reach;
-  if (mode == GhostMode::Layer) return reach;
-  reach.domain = sceneDomain(desc);
-  reach.margin = ghostMargin(desc, maxComponent(reach.domain.hi - reach.domain.lo), mode);
-  if (desc.scivis.shadows)
-    for (const ResolvedLight& light : resolveLights(desc))
-      if (light.kind != LightDesc::Kind::Ambient) reach.lights.push_back(light);
-  return reach;
-}
-
-namespace {
 
 // loadBrick's work; `part` says what it is loading, for an allocation that fails on the way.
 BrickContent loadBrickData(const SceneDesc& desc, const BrickPlan& plan, const GhostReach& ghosts,
@@ -472,23 +265,6 @@ BrickContent wholeScene(const SceneDesc& desc) {
   return loadBrick(desc, whole, GhostReach{});
 }
 
-namespace {
-
-// The plans rank `rank` holds.
-std::vector<BrickPlan> ownPlans(const SceneDesc& desc, int bricks, int replication, int rank,
-                                int ranks) {
-  const std::vector<BrickPlan> plans = splitScene(desc, bricks);
-  if (replication < 1) throw base::Error("--replication must be at least 1");
-  std::vector<BrickPlan> mine;
-  for (const BrickPlan& plan : plans) {
-    const std::vector<int> h = brickHolders(plan.id, ranks, replication);
-    if (std::find(h.begin(), h.end(), rank) != h.end()) mine.push_back(plan);
-  }
-  return mine;
-}
-
-}  // namespace
-
 void checkOwnBricksMemory(const SceneDesc& desc, int bricks, int replication, int rank, int ranks,
                           GhostMode ghosts) {
   checkBrickMemory(desc, ownPlans(desc, bricks, replication, rank, ranks),
@@ -502,62 +278,6 @@ std::vector<HeldBrick> loadOwnBricks(const SceneDesc& desc, int bricks, int repl
   checkBrickMemory(desc, mine, reach);
   std::vector<HeldBrick> out;
   for (const BrickPlan& plan : mine) out.push_back({plan.id, loadBrick(desc, plan, reach)});
-  return out;
-}
-
-namespace {
-
-// One brick on the wire: plain numbers, the same layout on every rank of a job.
-struct WireBrick {
-  std::int32_t id;
-  float lo[3], hi[3];
-};
-
-}  // namespace
-
-BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
-                              std::chrono::milliseconds timeout) {
-  int ranks = 1;
-  MPI_Comm_size(comm, &ranks);
-  std::vector<WireBrick> local;
-  for (const BrickPlan& b : mine) {
-    if (b.id < 0) throw base::Error("brick id " + std::to_string(b.id) + " is negative");
-    local.push_back({b.id,
-                     {b.bounds.lo.x, b.bounds.lo.y, b.bounds.lo.z},
-                     {b.bounds.hi.x, b.bounds.hi.y, b.bounds.hi.z}});
-  }
-  std::vector<int> counts;
-  const std::vector<WireBrick> all = base::allgatherv(
-      local, comm,
-      {.until = timeout,
-       .late = "exchanging brick bounds: another render rank did not join within " +
-               std::to_string(timeout.count()) + " ms"},
-      &counts);
-
-  std::map<int, std::pair<Box3, std::vector<int>>> byId;
-  std::size_t first = 0;
-  for (int r = 0; r < ranks; ++r) {
-    const std::size_t n = static_cast<std::size_t>(counts[static_cast<std::size_t>(r)]);
-    for (std::size_t i = first; i < first + n; ++i) {
-      const WireBrick& w = all[i];
-      const Box3 bounds{{w.lo[0], w.lo[1], w.lo[2]}, {w.hi[0], w.hi[1], w.hi[2]}};
-      auto [it, fresh] = byId.try_emplace(w.id, bounds, std::vector<int>{});
-      if (!fresh && !(it->second.first == bounds))
-        throw base::Error("brick " + std::to_string(w.id) + ": render rank " + std::to_string(r) +
-                          " gives it other bounds than render rank " +
-                          std::to_string(it->second.second.front()) +
-                          " (ranks holding one brick id must hold the same brick)");
-      if (it->second.second.empty() || it->second.second.back() != r)
-        it->second.second.push_back(r);
-    }
-    first += n;
-  }
-  if (byId.empty()) throw base::Error("no render rank holds any brick: nothing to render");
-  BrickDirectory out;
-  for (auto& [id, entry] : byId) {
-    out.bricks.push_back({id, entry.first});
-    out.holders.push_back(std::move(entry.second));
-  }
   return out;
 }
 
