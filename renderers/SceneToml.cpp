@@ -281,8 +281,9 @@ void readScene(TomlReader& r, const toml::table& root, const std::filesystem::pa
     });
   if (const toml::node* ms = root.get("materials"))
     if (const toml::table* materials = r.table(*ms, "materials"))
-      for (const auto& [key, node] : *materials) {
+      for (const auto& [key, value] : *materials) {
         const std::string name(key.str());
+        const toml::node& node = value;  // a lambda may not capture a structured binding (clang 14)
         const bool ok = r.entry([&] {
           const toml::table* t = r.table(node, "material '" + name + "'");
           if (!t) r.skip();
