@@ -1,14 +1,15 @@
 #include "wall/service/relay/Relay.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <vector>
 
 #include "base/Error.h"
-#include "wall/service/protocol/JsonText.h"
 #include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/Zmq.h"
 #include "wall/service/relay/RelayRoutes.h"
@@ -305,6 +306,20 @@ struct Relay::Impl {
     }
   }
 
+  // The job's --stats line; `job` is the number serve's --stats gives the same job.
+  std::string record(const Job& job, double seconds, const std::string& why) const {
+    const nlohmann::ordered_json line{{"job", job.session % 1000000007},
+                                      {"host", job.host},
+                                      {"session", hex(&job.session, sizeof job.session)},
+                                      {"batches_forwarded", job.batches},
+                                      {"bytes_forwarded", job.bytes},
+                                      {"dropped", job.dropped},
+                                      {"strangers_dropped", strangers},
+                                      {"seconds", std::round(seconds * 1e6) / 1e6},
+                                      {"ended", why}};
+    // The host comes from the wire: bytes that are not UTF-8 are replaced, not thrown.
+    return line.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+  }
   void forget(Job& job, const std::string& why) {
     const double seconds =
         std::chrono::duration<double>(job.over.value_or(Clock::now()) - job.started).count();
@@ -314,15 +329,7 @@ struct Relay::Impl {
           std::to_string(job.bytes) + " bytes forwarded, " + std::to_string(job.dropped) +
           " dropped, " + std::to_string(strangers) + " strangers' messages dropped, " +
           std::to_string(static_cast<long long>(seconds)) + " s (" + why + ")");
-      if (options.jobRecord)
-        options.jobRecord("{\"job\":" + std::to_string(job.session % 1000000007) +
-                          ",\"host\":" + jsonText(job.host) +
-                          ",\"session\":" + jsonText(hex(&job.session, sizeof job.session)) +
-                          ",\"batches_forwarded\":" + std::to_string(job.batches) +
-                          ",\"bytes_forwarded\":" + std::to_string(job.bytes) +
-                          ",\"dropped\":" + std::to_string(job.dropped) +
-                          ",\"strangers_dropped\":" + std::to_string(strangers) + ",\"seconds\":" +
-                          std::to_string(seconds) + ",\"ended\":" + jsonText(why) + "}");
+      if (options.jobRecord) options.jobRecord(record(job, seconds, why));
       strangers = 0;
       sessions.remove(job.session);
       bySession.erase(job.session);

@@ -1,7 +1,8 @@
 #pragma once
 // The head of a service wall: wall process 0's desk thread, which owns the directory socket
-// (`--listen`) that render jobs say hello to and the other wall processes join (docs/service.md, "A
-// wall that stays up"; wall/service/protocol/Protocol.h, wall/service/protocol/LinkMessages.h).
+// (`--listen`) that render jobs say hello to and the other wall processes join
+// (docs/service.md, "A wall that stays up"; wall/service/protocol/Protocol.h and
+// LinkMessages.h).
 //
 // For jobs: one at a time (a second is refused as busy, or queued with `wait`), their keepalives,
 // captures and goodbye, their credits, and the end of a job that goes silent.
@@ -13,6 +14,10 @@
 // is back (the credit rule: frame F starts once F - K is presented), and the job a new roster.
 //
 // The head's own process reaches the desk in process, through ProcessLink.
+//
+// Three parts: Membership (who is in the wall) and JobDesk (the jobs and each process's seat in
+// them) decide, with no socket and no clock of their own; the desk is the loop around them: the
+// socket, the thread, decoding messages and carrying out what the two decide.
 #include <functional>
 #include <memory>
 #include <string>

@@ -1,0 +1,428 @@
+// The jobs of a service wall's desk (wall/service/server/JobDesk.h) in process: decoded events
+// in, actions out, the time the test's. The messages the actions carry are the real wire
+// messages, read back with the protocol's parsers; the processes are a real Membership.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "wall/service/protocol/LinkMessages.h"
+#include "wall/service/server/JobDesk.h"
+
+namespace wall::service {
+namespace {
+
+using Clock = JobDesk::Clock;
+using Actions = JobDesk::Actions;
+using State = JobDesk::State;
+using namespace std::chrono_literals;
+constexpr auto kTimeout = 600ms;
+const Clock::time_point t0{std::chrono::hours(1)};
+
+Layout threeProcessLayout() {
+  const auto path = std::filesystem::temp_directory_path() / "dfbwall-jobdesk-layout.toml";
+  std::ofstream(path) << "[grid]\ncolumns = 3\nrows = 1\ndisplay_size = [64, 64]\n";
+  Layout layout = loadLayout(path.string());
+  std::filesystem::remove(path);
+  return layout;
+}
+
+template <class T>
+std::vector<T> only(const Actions& actions) {
+  std::vector<T> out;
+  for (const JobDesk::Action& a : actions)
+    if (const T* t = std::get_if<T>(&a)) out.push_back(*t);
+  return out;
+}
+
+std::vector<JobDesk::Reply> replies(const Actions& actions, Kind kind) {
+  std::vector<JobDesk::Reply> out;
+  for (const JobDesk::Reply& r : only<JobDesk::Reply>(actions))
+    if (r.kind == kind) out.push_back(r);
+  return out;
+}
+
+std::string textOf(const JobDesk::Reply& r) {
+  return parseText(r.message.data(), r.message.size());
+}
+
+// The processes given command `kind`, in order.
+std::vector<int> given(const Actions& actions, Command kind) {
+  std::vector<int> out;
+  for (const JobDesk::ToProcess& c : only<JobDesk::ToProcess>(actions))
+    if (c.command.header.kind == kind) out.push_back(c.process);
+  return out;
+}
+
+ServiceCommand commandTo(const Actions& actions, int process, Command kind) {
+  for (const JobDesk::ToProcess& c : only<JobDesk::ToProcess>(actions))
+    if (c.process == process && c.command.header.kind == kind) return c.command;
+  ADD_FAILURE() << "no such command to process " << process;
+  return {};
+}
+
+std::vector<nlohmann::json> records(const Actions& actions) {
+  std::vector<nlohmann::json> out;
+  for (const JobDesk::Record& r : only<JobDesk::Record>(actions))
+    out.push_back(nlohmann::json::parse(r.json));
+  return out;
+}
+
+class JobDeskTest : public ::testing::Test {
+ protected:
+  JobDeskTest()
+      : layout(threeProcessLayout()),
+        members({3, "t", layoutHash(layout), layout.file, "tcp://head:1", kTimeout}, t0),
+        jobs({&layout, "t", kTimeout, 2, [this] { return ++lastSession; }}, members) {
+    for (int p = 1; p < 3; ++p) members.admit("link" + std::to_string(p), joinOf(p, 1), t0);
+  }
+
+  Join joinOf(int p, std::uint64_t incarnation) const {
+    Join j;
+    j.token = "t";
+    j.process = static_cast<std::uint32_t>(p);
+    j.host = "host" + std::to_string(p);
+    j.pieceEndpoint = "tcp://host" + std::to_string(p) + ":" + std::to_string(incarnation);
+    j.layoutHash = layoutHash(layout);
+    j.incarnation = incarnation;
+    return j;
+  }
+  static Hello helloFrom(const std::string& host, bool wait = false) {
+    Hello h;
+    h.token = "t";
+    h.host = host;
+    h.renderRanks = 4;
+    h.framesInFlight = 3;  // the wall grants 2
+    h.wait = wait;
+    return h;
+  }
+  ServiceCommand answer(Command kind, std::int64_t a = 0, std::int64_t b = 0,
+                        std::string text = {}) const {
+    ServiceCommand c;
+    c.header.kind = kind;
+    c.header.session = jobs.session();
+    c.header.a = a;
+    c.header.b = b;
+    c.text = std::move(text);
+    return c;
+  }
+  // Every process in the wall answers Start; the actions of the last answer.
+  Actions allReady(Clock::time_point now) {
+    Actions last;
+    for (int p = 0; p < 3; ++p)
+      if (members.live(p)) last = jobs.answer(p, answer(Command::Ready, 1), now);
+    return last;
+  }
+  // A job from `host` on connection `peer`, running: its directory.
+  Directory run(const std::string& peer, const std::string& host, Clock::time_point now) {
+    const Actions started = jobs.hello(peer, helloFrom(host), now);
+    EXPECT_EQ(given(started, Command::Start), (std::vector<int>{0, 1, 2}));
+    const auto directories = replies(allReady(now), Kind::Directory);
+    EXPECT_EQ(directories.size(), 1u);
+    EXPECT_EQ(jobs.state(), State::Running);
+    if (directories.empty()) return {};
+    EXPECT_EQ(directories[0].peer, peer);
+    return parseDirectory(directories[0].message.data(), directories[0].message.size());
+  }
+  // Every process in the job says Done after `frames`; the actions of the last.
+  Actions allDone(std::int64_t frames, Clock::time_point now) {
+    Actions last;
+    for (int p = 0; p < 3; ++p) last = jobs.answer(p, answer(Command::Done, frames, 100), now);
+    return last;
+  }
+  // The loop's part of a loss: Membership drops, JobDesk is told.
+  Actions lose(int p, const std::string& why, Clock::time_point now) {
+    EXPECT_TRUE(members.drop(p));
+    return jobs.lost(p, why, now);
+  }
+
+  Layout layout;
+  Membership members;
+  std::uint64_t lastSession = 100;
+  JobDesk jobs;
+};
+
+TEST_F(JobDeskTest, AJobStartsOnceEveryProcessIsReadyAndGetsTheDirectory) {
+  const Actions started = jobs.hello("job-a", helloFrom("render1"), t0);
+  EXPECT_EQ(jobs.state(), State::Starting);
+  const ServiceCommand start = commandTo(started, 1, Command::Start);
+  EXPECT_EQ(start.header.session, 101u);
+  EXPECT_EQ(start.header.a, 1);                // from frame 1
+  EXPECT_EQ(start.header.framesInFlight, 2u);  // the job asked for 3
+  EXPECT_EQ(start.header.renderRanks, 4u);
+  EXPECT_TRUE(replies(jobs.answer(0, answer(Command::Ready, 1), t0), Kind::Directory).empty());
+  EXPECT_TRUE(replies(jobs.answer(1, answer(Command::Ready, 1), t0), Kind::Directory).empty());
+  const auto directory = replies(jobs.answer(2, answer(Command::Ready, 1), t0), Kind::Directory);
+  ASSERT_EQ(directory.size(), 1u);
+  const Directory d = parseDirectory(directory[0].message.data(), directory[0].message.size());
+  EXPECT_EQ(d.session, 101u);
+  EXPECT_EQ(d.framesInFlight, 2u);
+  EXPECT_EQ(d.timeoutMs, 600u);
+  ASSERT_EQ(d.processes.size(), 3u);
+  EXPECT_EQ(d.processes[0].endpoint, "tcp://head:1");
+  EXPECT_EQ(d.processes[2].endpoint, "tcp://host2:1");
+  for (const DirectoryProcess& p : d.processes) EXPECT_TRUE(p.live);
+}
+
+TEST_F(JobDeskTest, AWrongTokenIsRefused) {
+  Hello wrong = helloFrom("stranger");
+  wrong.token = "guess";
+  Actions a = jobs.hello("s1", wrong, t0);
+  ASSERT_EQ(replies(a, Kind::Refused).size(), 1u);
+  EXPECT_EQ(textOf(replies(a, Kind::Refused)[0]), "wrong token");
+  const auto logged = only<JobDesk::Log>(a);
+  ASSERT_EQ(logged.size(), 1u);
+  EXPECT_EQ(logged[0].line, "refused a job from stranger: wrong token");
+  EXPECT_EQ(logged[0].oncePer, "s1");  // a stranger's retries do not flood the log
+  wrong.token.clear();
+  a = jobs.hello("s2", wrong, t0);
+  EXPECT_EQ(textOf(replies(a, Kind::Refused)[0]), "this wall needs a token (--token)");
+  EXPECT_TRUE(given(a, Command::Start).empty());
+  EXPECT_EQ(jobs.state(), State::Idle);
+}
+
+TEST_F(JobDeskTest, ASecondJobIsRefusedBusyOrQueuedWithWait) {
+  run("job-a", "render1", t0);
+  const Actions busy = jobs.hello("job-b", helloFrom("render2"), t0);
+  ASSERT_EQ(replies(busy, Kind::Refused).size(), 1u);
+  EXPECT_EQ(textOf(replies(busy, Kind::Refused)[0]), "busy: a job from render1 is connected");
+  EXPECT_TRUE(only<JobDesk::ToProcess>(busy).empty());
+
+  const Actions queued = jobs.hello("job-c", helloFrom("render3", true), t0);
+  ASSERT_EQ(replies(queued, Kind::Queued).size(), 1u);
+  EXPECT_EQ(textOf(replies(queued, Kind::Queued)[0]),
+            "busy: a job from render1 is connected; waiting (place 1)");
+  EXPECT_EQ(jobs.queued(), 1u);
+  // Its keepalive is answered with its place.
+  JobDesk::JobMessage keepalive{"job-c", Kind::Keepalive, 0, {}, {}};
+  const auto place = replies(jobs.message(keepalive, t0 + 100ms), Kind::Queued);
+  ASSERT_EQ(place.size(), 1u);
+  EXPECT_EQ(place[0].peer, "job-c");
+}
+
+TEST_F(JobDeskTest, QueuedJobsStartInOrderAndTheQueueIsBounded) {
+  run("job-0", "render0", t0);
+  for (std::size_t i = 1; i <= JobDesk::kMaxQueued; ++i)
+    EXPECT_EQ(
+        replies(jobs.hello("job-" + std::to_string(i), helloFrom("r"), t0), Kind::Refused).size(),
+        1u);  // without wait: busy
+  for (std::size_t i = 1; i <= JobDesk::kMaxQueued; ++i)
+    jobs.hello("job-" + std::to_string(i), helloFrom("render" + std::to_string(i), true), t0);
+  EXPECT_EQ(jobs.queued(), JobDesk::kMaxQueued);
+  const auto full = replies(jobs.hello("job-x", helloFrom("rx", true), t0), Kind::Refused);
+  ASSERT_EQ(full.size(), 1u);
+  EXPECT_EQ(textOf(full[0]), "busy: a job from render0 is connected, and 16 jobs wait already");
+
+  // Each job ends with its goodbye: the next in the queue starts, in order.
+  for (int i = 1; i <= 3; ++i) {
+    JobDesk::JobMessage bye{"job-" + std::to_string(i - 1), Kind::Bye, jobs.session(), {5, 0}, {}};
+    EXPECT_EQ(commandTo(jobs.message(bye, t0 + 10ms), 2, Command::LastFrame).header.a, 5);
+    const Actions over = allDone(5, t0 + 20ms);
+    const auto job = records(over);
+    ASSERT_EQ(job.size(), 1u);
+    EXPECT_EQ(job[0]["host"], "render" + std::to_string(i - 1));
+    EXPECT_EQ(job[0]["frames_presented"], 5);
+    EXPECT_EQ(job[0]["ended"], "last frame");
+    EXPECT_EQ(given(over, Command::Start), (std::vector<int>{0, 1, 2}));
+    EXPECT_EQ(jobs.state(), State::Starting);
+    const auto directory = replies(allReady(t0 + 30ms), Kind::Directory);
+    ASSERT_EQ(directory.size(), 1u);
+    EXPECT_EQ(directory[0].peer, "job-" + std::to_string(i));
+  }
+  EXPECT_EQ(jobs.queued(), JobDesk::kMaxQueued - 3);
+}
+
+TEST_F(JobDeskTest, AJobThatGoesSilentEndsAndTheNextStarts) {
+  run("job-a", "render1", t0);
+  jobs.hello("job-c", helloFrom("render3", true), t0);
+  jobs.hello("job-b", helloFrom("render2", true), t0);
+  // job-b keeps waiting; job-c, first in the queue, goes silent there.
+  jobs.message({"job-b", Kind::Keepalive, 0, {}, {}}, t0 + 500ms);
+  EXPECT_TRUE(only<JobDesk::ToProcess>(jobs.tick(t0 + kTimeout)).empty());  // not yet
+  const Actions silent = jobs.tick(t0 + kTimeout + 1ms);
+  EXPECT_EQ(given(silent, Command::Abort), (std::vector<int>{0, 1, 2}));
+  const auto ended = replies(silent, Kind::Ended);
+  ASSERT_EQ(ended.size(), 1u);
+  EXPECT_EQ(ended[0].peer, "job-a");
+  EXPECT_EQ(textOf(ended[0]), "no word from the job for 600 ms");
+  EXPECT_EQ(jobs.state(), State::Ending);
+
+  // The processes give the frame up and say Done: the job's record, then job-b (job-c left the
+  // queue: silent for longer than the timeout).
+  const Actions next = allDone(3, t0 + 700ms);
+  const auto job = records(next);
+  ASSERT_EQ(job.size(), 1u);
+  EXPECT_EQ(job[0]["ended"], "no word from the job for 600 ms");
+  EXPECT_DOUBLE_EQ(job[0]["seconds"].get<double>(), 0.7);
+  EXPECT_EQ(given(next, Command::Start), (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(replies(allReady(t0 + 710ms), Kind::Directory).at(0).peer, "job-b");
+  EXPECT_EQ(jobs.queued(), 0u);
+}
+
+TEST_F(JobDeskTest, AProcessThatMissesBeatsIsDroppedAndTheJobGetsANewRoster) {
+  run("job-a", "render1", t0);
+  jobs.presented(jobs.session(), 1, 0);
+  // Frame 2's barrier: the head and process 1 arrive, process 2 never does.
+  EXPECT_TRUE(only<JobDesk::Release>(jobs.arrive(0, jobs.session(), 2, {1, 0}, t0)).empty());
+  EXPECT_TRUE(only<JobDesk::Release>(jobs.arrive(1, jobs.session(), 2, {7, 0}, t0)).empty());
+  members.heard(1, t0 + 500ms);
+  const auto silent = members.silent(t0 + kTimeout + 1ms);
+  ASSERT_EQ(silent.size(), 1u);
+  ASSERT_EQ(silent[0].process, 2);
+  const Actions lost = lose(2, silent[0].why, t0 + kTimeout + 1ms);
+
+  const auto roster = replies(lost, Kind::Roster);
+  ASSERT_EQ(roster.size(), 1u);
+  EXPECT_EQ(roster[0].peer, "job-a");
+  const Roster r = parseRoster(roster[0].message.data(), roster[0].message.size());
+  EXPECT_EQ(r.version, 1u);
+  EXPECT_EQ(r.fromFrame, 0u);  // at once
+  EXPECT_TRUE(r.processes[0].live);
+  EXPECT_TRUE(r.processes[1].live);
+  EXPECT_FALSE(r.processes[2].live);
+  EXPECT_EQ(r.why, "lost wall process 2 on host2 after frame 1: no word from it for 600 ms");
+  // The barrier it held up goes on without it.
+  const auto released = only<JobDesk::Release>(lost);
+  ASSERT_EQ(released.size(), 2u);
+  EXPECT_EQ(released[0].process, 0);
+  EXPECT_EQ(released[1].process, 1);
+  EXPECT_EQ(released[0].values, (std::vector<std::int64_t>{7, 0}));
+  // --stats, as the end-to-end tests grep it.
+  const auto record = only<JobDesk::Record>(lost);
+  ASSERT_EQ(record.size(), 1u);
+  EXPECT_EQ(record[0].json, R"({"event":"lost","process":2,"host":"host2","frame":1,)"
+                            R"("why":"no word from it for 600 ms"})");
+  // The job ends with the processes left, and counts the loss.
+  jobs.message({"job-a", Kind::Bye, jobs.session(), {2, 0}, {}}, t0 + 700ms);
+  jobs.answer(0, answer(Command::Done, 2), t0 + 700ms);
+  const auto job = records(jobs.answer(1, answer(Command::Done, 2), t0 + 700ms));
+  ASSERT_EQ(job.size(), 1u);
+  EXPECT_EQ(job[0]["processes_lost"], 1);
+  EXPECT_EQ(jobs.state(), State::Idle);
+}
+
+TEST_F(JobDeskTest, AProcessThatRejoinsDuringAJobIsAdmittedFromTheRightFirstFrame) {
+  run("job-a", "render1", t0);
+  jobs.presented(jobs.session(), 1, 0);
+  const auto credit = replies(jobs.presented(jobs.session(), 2, 0), Kind::Presented);
+  ASSERT_EQ(credit.size(), 1u);
+  EXPECT_EQ(parseControl(credit[0].message.data(), credit[0].message.size()).value, 2u);
+  lose(2, "killed", t0 + 1s);
+
+  // It starts again: a new incarnation on a new piece socket. Start with no first frame, and
+  // nothing for the job until it is Ready (its node takes pieces).
+  members.admit("link2-again", joinOf(2, 2), t0 + 2s);
+  const Actions admitted = jobs.joined(2, t0 + 2s);
+  EXPECT_EQ(given(admitted, Command::Start), std::vector<int>{2});
+  EXPECT_EQ(commandTo(admitted, 2, Command::Start).header.a, 0);
+  EXPECT_TRUE(replies(admitted, Kind::Roster).empty());
+
+  // Ready: its first frame is the last credited (2) + frames in flight (2) + 1.
+  const Actions ready = jobs.answer(2, answer(Command::Ready, 1), t0 + 2s);
+  EXPECT_EQ(commandTo(ready, 2, Command::FirstFrame).header.a, 5);
+  const auto roster = replies(ready, Kind::Roster);
+  ASSERT_EQ(roster.size(), 1u);
+  const Roster r = parseRoster(roster[0].message.data(), roster[0].message.size());
+  EXPECT_EQ(r.version, 2u);
+  EXPECT_EQ(r.fromFrame, 5u);
+  EXPECT_TRUE(r.processes[2].live);
+  EXPECT_EQ(r.processes[2].endpoint, "tcp://host2:2");
+  EXPECT_EQ(only<JobDesk::Record>(ready).at(0).json,
+            R"({"event":"rejoined","process":2,"host":"host2","frame":5})");
+
+  // Frame 4 is not its: the head and process 1 agree alone. Frame 5 waits for it.
+  const std::uint64_t session = jobs.session();
+  jobs.arrive(0, session, 4, {1}, t0 + 2s);
+  EXPECT_EQ(only<JobDesk::Release>(jobs.arrive(1, session, 4, {1}, t0 + 2s)).size(), 2u);
+  jobs.arrive(0, session, 5, {1}, t0 + 2s);
+  EXPECT_TRUE(only<JobDesk::Release>(jobs.arrive(1, session, 5, {1}, t0 + 2s)).empty());
+  EXPECT_EQ(only<JobDesk::Release>(jobs.arrive(2, session, 5, {9}, t0 + 2s)).size(), 3u);
+  EXPECT_EQ(records(allDone(5, t0 + 3s)).at(0)["processes_rejoined"], 1);
+}
+
+TEST_F(JobDeskTest, AProcessThatJoinsWhileAJobStartsIsAdmittedOnceItRuns) {
+  lose(2, "killed", t0);
+  EXPECT_EQ(given(jobs.hello("job-a", helloFrom("render1"), t0), Command::Start),
+            (std::vector<int>{0, 1}));
+  members.admit("link2-again", joinOf(2, 2), t0);
+  EXPECT_TRUE(only<JobDesk::ToProcess>(jobs.joined(2, t0)).empty());
+  jobs.answer(0, answer(Command::Ready, 1), t0);
+  const Actions running = jobs.answer(1, answer(Command::Ready, 1), t0);
+  const auto directory = replies(running, Kind::Directory).at(0);
+  EXPECT_FALSE(
+      parseDirectory(directory.message.data(), directory.message.size()).processes[2].live);
+  EXPECT_EQ(given(running, Command::Start), std::vector<int>{2});
+  EXPECT_EQ(
+      commandTo(jobs.answer(2, answer(Command::Ready, 1), t0), 2, Command::FirstFrame).header.a,
+      3);  // nothing credited yet: 0 + 2 + 1
+}
+
+TEST_F(JobDeskTest, AProcessThatCannotStartAJobRefusesIt) {
+  jobs.hello("job-a", helloFrom("render1"), t0);
+  jobs.answer(0, answer(Command::Ready, 1), t0);
+  jobs.answer(1, answer(Command::Ready, 0, 0, "no such capture folder"), t0);
+  const Actions refused = jobs.answer(2, answer(Command::Ready, 1), t0);
+  EXPECT_EQ(given(refused, Command::Cancel), (std::vector<int>{0, 2}));
+  EXPECT_EQ(textOf(replies(refused, Kind::Refused).at(0)), "no such capture folder");
+  EXPECT_EQ(jobs.state(), State::Ending);
+  jobs.answer(0, answer(Command::Done), t0);
+  const auto job = records(jobs.answer(2, answer(Command::Done), t0));
+  EXPECT_EQ(job.at(0)["ended"], "no such capture folder");
+  EXPECT_EQ(jobs.state(), State::Idle);
+}
+
+TEST_F(JobDeskTest, ABarrierWithAnotherValueCountDropsTheProcess) {
+  run("job-a", "render1", t0);
+  jobs.arrive(0, jobs.session(), 1, {1, 2}, t0);
+  const auto drop = only<JobDesk::Drop>(jobs.arrive(1, jobs.session(), 1, {1}, t0));
+  ASSERT_EQ(drop.size(), 1u);
+  EXPECT_EQ(drop[0].process, 1);
+  EXPECT_EQ(drop[0].why, "its swap barrier of frame 1 has 1 values, not the others' count");
+  // A barrier of another session (an earlier job's node) is not counted.
+  EXPECT_TRUE(jobs.arrive(2, 999, 1, {1, 2}, t0).empty());
+}
+
+TEST_F(JobDeskTest, AStopRefusesTheQueueEndsTheJobAndClosesOnceEveryProcessConfirms) {
+  run("job-a", "render1", t0);
+  jobs.hello("job-b", helloFrom("render2", true), t0);
+  const Actions stop = jobs.answer(1, answer(Command::StopAsked), t0);
+  EXPECT_EQ(textOf(replies(stop, Kind::Refused).at(0)), "the wall is shutting down");
+  EXPECT_EQ(replies(stop, Kind::Refused).at(0).peer, "job-b");
+  EXPECT_EQ(textOf(replies(stop, Kind::Ended).at(0)), "the wall is shutting down");
+  EXPECT_EQ(textOf(replies(jobs.hello("job-c", helloFrom("r"), t0), Kind::Refused).at(0)),
+            "the wall is shutting down");
+  allDone(4, t0);
+  const Actions closing = jobs.tick(t0 + 100ms);
+  EXPECT_EQ(given(closing, Command::Shutdown), (std::vector<int>{1, 2}));
+  EXPECT_EQ(only<JobDesk::Closing>(closing).size(), 1u);
+  EXPECT_EQ(jobs.state(), State::Closed);
+  jobs.answer(1, answer(Command::Shutdown), t0 + 150ms);
+  EXPECT_TRUE(jobs.tick(t0 + 200ms).empty());  // process 2 has not confirmed
+  jobs.answer(2, answer(Command::Shutdown), t0 + 250ms);
+  const Actions closed = jobs.tick(t0 + 300ms);
+  EXPECT_EQ(given(closed, Command::Shutdown), std::vector<int>{0});  // the head's own last
+  EXPECT_EQ(only<JobDesk::Closed>(closed).size(), 1u);
+}
+
+TEST_F(JobDeskTest, JobRecordsAreJsonWhateverTheHostSends) {
+  Hello h = helloFrom("bad\xff\"host\n");
+  run("job-a", "", t0);
+  jobs.message({"job-a", Kind::Bye, jobs.session(), {0, 0}, {}}, t0);
+  const auto line = only<JobDesk::Record>(allDone(0, t0 + 1500ms)).at(0).json;
+  EXPECT_EQ(line.rfind(R"({"job":)", 0), 0u) << line;  // keys in the documented order
+  const auto job = nlohmann::json::parse(line);
+  EXPECT_EQ(job["seconds"], 1.5);
+  EXPECT_EQ(job["render_ranks"], 4);
+
+  jobs.hello("job-b", h, t0);
+  allReady(t0);
+  const Actions ended = jobs.failed("job-b", "a bad \xfe batch", t0);
+  EXPECT_EQ(given(ended, Command::Abort), (std::vector<int>{0, 1, 2}));
+  const auto bad = records(allDone(0, t0));  // parses: the bytes that are not UTF-8 replaced
+  ASSERT_EQ(bad.size(), 1u);
+  EXPECT_EQ(bad[0]["host"], "bad\xEF\xBF\xBD\"host\n");
+}
+
+}  // namespace
+}  // namespace wall::service

@@ -1,0 +1,206 @@
+#pragma once
+// The jobs of a service wall's desk (wall/service/server/Desk.h) as a state machine with no
+// socket, thread or clock of its own: the desk decodes each message and hands it in with the
+// time, and carries out the actions it gets back, in order. Testable in process.
+//
+// One job at a time: a hello with the wrong token is refused, a second job is refused as busy or
+// queued (`wait`, at most kMaxQueued), and queued jobs start in order. A job starts when every
+// process in the wall answered Start (its node attached), gets its directory, sends keepalives,
+// captures and goodbye (turned into commands to the processes), is credited each presented frame
+// and ends with every process's Done, a failure, or the timeout of its silence; then the next.
+// Each process has a seat in the job (in it, ready, done, first frame): a process lost is done
+// and the job gets a roster without it; one that joins during the job is admitted from the first
+// frame the job cannot have started without it (the last credited frame + frames in flight + 1).
+// The job's swap barriers and capture gathers wait for the processes taking part in each frame
+// (FrameAgreements).
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <set>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "wall/layout/Layout.h"
+#include "wall/service/protocol/Protocol.h"
+#include "wall/service/protocol/ServiceCommands.h"
+#include "wall/service/server/FrameAgreements.h"
+#include "wall/service/server/Membership.h"
+
+namespace wall::service {
+
+class JobDesk {
+ public:
+  using Clock = std::chrono::steady_clock;
+  static constexpr std::size_t kMaxQueued = 16;  // jobs waiting behind the connected one
+
+  struct Setup {
+    const Layout* layout = nullptr;  // what the directory tells a job
+    std::string token;               // what a job must present (empty: none)
+    std::chrono::milliseconds timeout{60000};
+    int framesInFlight = 2;  // the most a job is granted
+    // A fresh, non-zero session id for each job.
+    std::function<std::uint64_t()> newSession;
+  };
+
+  // A message to a connection on the directory socket (a job, or a refused stranger).
+  struct Reply {
+    std::string peer;
+    Kind kind = Kind::Refused;
+    messaging::Bytes message;  // the packed wire message
+  };
+  // A command to wall process `process` (0: the head's own, in process).
+  struct ToProcess {
+    int process = 0;
+    ServiceCommand command;
+  };
+  // Frame `frameId`'s swap barrier is released for `process` with the agreed values.
+  struct Release {
+    int process = 0;
+    std::uint64_t session = 0;
+    std::uint32_t frameId = 0;
+    std::vector<std::int64_t> values;
+  };
+  // The pixels of a captured frame, for the head's process (empty: a process that sent none).
+  struct Gathered {
+    std::uint64_t session = 0;
+    std::uint32_t frameId = 0;
+    std::vector<std::vector<std::uint32_t>> pixels;
+  };
+  // A process broke the job's rules (a barrier with a value count that differs): drop it.
+  struct Drop {
+    int process = 0;
+    std::string why;
+  };
+  // A line for the wall's log; with `oncePer` (a connection), said once per connection and line
+  // until the job ends, so a stranger's retries do not flood the log.
+  struct Log {
+    std::string line;
+    std::string oncePer;
+  };
+  // A JSON line for `--stats`: a job that ended, a process lost or back.
+  struct Record {
+    std::string json;
+  };
+  // The job the head's process waits for is now `session` (0: none); `ended`: a job ended.
+  struct Session {
+    std::uint64_t session = 0;
+    bool ended = false;
+  };
+  // The wall stops: the shutdown went out to every process (Closing), and every process
+  // confirmed it or a second passed (Closed: the desk stops).
+  struct Closing {};
+  struct Closed {};
+  using Action = std::variant<Reply, ToProcess, Release, Gathered, Drop, Log, Record, Session,
+                              Closing, Closed>;
+  using Actions = std::vector<Action>;
+
+  // A message from a job's connection other than a hello: Keepalive, Capture, Bye, or a kind a
+  // job must not send. `malformed`: why its body did not decode as a Control.
+  struct JobMessage {
+    std::string peer;
+    Kind kind = Kind::Keepalive;
+    std::uint64_t session = 0;
+    Control control;
+    std::string malformed;
+  };
+
+  enum class State { Idle, Starting, Running, Ending, Closed };
+
+  // `members` is read for who is live and where their pieces go; it outlives this.
+  JobDesk(Setup setup, const Membership& members);
+
+  Actions hello(const std::string& peer, const Hello& hello, Clock::time_point now);
+  Actions message(const JobMessage& message, Clock::time_point now);
+  // An answer of process `process` (Ready, Done, Failed, StopAsked, Shutdown's confirmation).
+  Actions answer(int process, const ServiceCommand& command, Clock::time_point now);
+  // After Membership admitted it / after Membership dropped it.
+  Actions joined(int process, Clock::time_point now);
+  Actions lost(int process, const std::string& why, Clock::time_point now);
+  Actions arrive(int process, std::uint64_t session, std::uint32_t frameId,
+                 const std::vector<std::int64_t>& values, Clock::time_point now);
+  Actions pixels(int process, std::uint64_t session, std::uint32_t frameId,
+                 std::vector<std::uint32_t> pixels, Clock::time_point now);
+  Actions headPixels(std::uint64_t session, std::uint32_t frameId,
+                     std::vector<std::uint32_t> pixels, Clock::time_point deadline,
+                     Clock::time_point now);
+  // The head's process presented `frameId` on every display in the job: the job's credit.
+  Actions presented(std::uint64_t session, std::uint32_t frameId, std::int64_t completeNs);
+  // Time passing: gathers past their deadline, a job silent for the timeout, the shutdown.
+  Actions tick(Clock::time_point now);
+  // Handling a message from `peer` failed: if it is the job's connection, the job ends.
+  Actions failed(const std::string& peer, const std::string& why, Clock::time_point now);
+
+  State state() const { return state_; }
+  std::uint64_t session() const { return job_.session; }
+  std::size_t queued() const { return queue_.size(); }
+  std::uint32_t lastCredited() const { return lastCredited_; }
+
+ private:
+  struct Job {
+    std::string peer;
+    Hello hello;
+    Clock::time_point lastHeard;
+    std::uint64_t session = 0;
+    Clock::time_point started;
+  };
+  // Each process's part in the job: in it (given Start), answered Start, done with it (Done, a
+  // refusal, or lost), and the first frame it shows (later than 1 when it joined mid-job).
+  struct Seat {
+    bool in = false, ready = false, done = false;
+    std::uint32_t fromFrame = 1;
+  };
+
+  void queueOrRefuse(const std::string& peer, const Hello& hello, const std::string& from);
+  bool queuedMessage(const JobMessage& m);
+  void onControl(const JobMessage& m);
+  void onReady(int p, const ServiceCommand& c);
+  void onDone(int p, const ServiceCommand& c);
+  void stopAsked(int p);
+
+  void emit(Action action) { out_.push_back(std::move(action)); }
+  Actions take();
+  void log(std::string line, std::string oncePer = {});
+  void reply(const std::string& peer, Kind kind, messaging::Bytes message);
+  ServiceCommand command(Command kind, std::int64_t a = 0, std::int64_t b = 0,
+                         std::string text = {}) const;
+  ServiceCommand startCommand(std::uint32_t firstFrame) const;
+  void toJob(const ServiceCommand& c);
+  std::vector<DirectoryProcess> roster() const;
+  void sendRoster(std::uint32_t fromFrame, const std::string& why);
+  std::string busy() const;
+
+  void startJob();
+  bool allDone() const;
+  void endJob(const std::string& why);
+  void nextJob();
+  void jobOver();
+  void overIfAllDone();
+  void maybeRun();
+  void admitToJob(int p);
+  void joinedJob(int p);
+  bool participates(int p, std::uint32_t frameId) const;
+  void releaseWhatCan();
+  void closeIfIdle();
+
+  Setup s_;
+  const Membership& members_;
+  Clock::time_point now_;
+  Actions out_;
+  State state_ = State::Idle;
+  Job job_;
+  std::deque<Job> queue_;
+  std::vector<Seat> seats_;
+  std::set<int> waitingToJoinJob_;  // joined while the job was starting
+  std::string failure_;
+  std::int64_t lastPresented_ = 0, bytes_ = 0;
+  std::uint32_t lastCredited_ = 0, granted_ = 2, rosterVersion_ = 0;
+  int processesLost_ = 0, processesRejoined_ = 0;
+  bool shuttingDown_ = false;
+  int shutdownAcks_ = 0;  // members that confirmed the shutdown (State::Closed)
+  Clock::time_point closedAt_;
+  FrameAgreements agreements_;
+};
+
+}  // namespace wall::service
