@@ -7,7 +7,8 @@
 // values of any size.
 //
 // A collective cannot be cancelled: after a DeadlineError it stays posted and MPI may still write
-// the buffers it was given, so the job is expected to end.
+// the buffers it was given, so the job is expected to end; the buffers the helpers own are kept
+// for the rest of the process (the caller's own, as for Pending, are the caller's to keep).
 #include <mpi.h>
 
 #include <chrono>
@@ -15,8 +16,11 @@
 #include <span>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <variant>
 #include <vector>
+
+#include "base/Error.h"
 
 namespace base {
 
@@ -119,6 +123,13 @@ Pending startGatherv(const void* mine, int count, void* all, const std::vector<i
 Pending startAllgatherv(const void* mine, int count, void* all, const std::vector<int>& counts,
                         const std::vector<int>& offsets, std::size_t valueBytes, MPI_Comm comm);
 
+// After a DeadlineError the collective stays posted and MPI may still write the buffers it was
+// given: those a helper owns are kept for the rest of the process instead of freed under it.
+template <class... Buffers>
+void keepWhilePosted(Buffers&&... buffers) {
+  (static_cast<void>(new std::decay_t<Buffers>(std::move(buffers))), ...);
+}
+
 }  // namespace collectives
 
 template <class T>
@@ -128,7 +139,12 @@ std::vector<T> gather(const T& mine, int root, MPI_Comm comm, const Bound& bound
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
   std::vector<T> all(rank == root ? static_cast<std::size_t>(size) : 0);
-  collectives::gatherBytes(&mine, all.data(), static_cast<int>(sizeof(T)), root, comm, bound);
+  try {
+    collectives::gatherBytes(&mine, all.data(), static_cast<int>(sizeof(T)), root, comm, bound);
+  } catch (const DeadlineError&) {
+    collectives::keepWhilePosted(std::move(all));
+    throw;
+  }
   return all;
 }
 
@@ -138,7 +154,12 @@ std::vector<T> allgather(const T& mine, MPI_Comm comm, const Bound& bound) {
   int size = 1;
   MPI_Comm_size(comm, &size);
   std::vector<T> all(static_cast<std::size_t>(size));
-  collectives::allgatherBytes(&mine, all.data(), static_cast<int>(sizeof(T)), comm, bound);
+  try {
+    collectives::allgatherBytes(&mine, all.data(), static_cast<int>(sizeof(T)), comm, bound);
+  } catch (const DeadlineError&) {
+    collectives::keepWhilePosted(std::move(all));
+    throw;
+  }
   return all;
 }
 
@@ -149,8 +170,13 @@ std::vector<T> allgatherv(const std::vector<T>& mine, MPI_Comm comm, const Bound
   const int count = collectives::countOf(mine.size(), bound);
   std::vector<int> counts = allgather(count, comm, bound), offsets;
   std::vector<T> all(collectives::layOut(counts, offsets, bound));
-  collectives::startAllgatherv(mine.data(), count, all.data(), counts, offsets, sizeof(T), comm)
-      .finish(bound);
+  try {
+    collectives::startAllgatherv(mine.data(), count, all.data(), counts, offsets, sizeof(T), comm)
+        .finish(bound);
+  } catch (const DeadlineError&) {
+    collectives::keepWhilePosted(std::move(all), std::move(counts), std::move(offsets));
+    throw;
+  }
   if (countsPerRank) *countsPerRank = std::move(counts);
   return all;
 }
@@ -175,7 +201,12 @@ template <class T>
 std::vector<std::vector<T>> gatherv(const std::vector<T>& mine, int root, MPI_Comm comm,
                                     const Bound& bound) {
   Gathered<T> gathered;
-  startGatherv(std::span<const T>(mine), root, comm, bound, gathered).finish(bound);
+  try {
+    startGatherv(std::span<const T>(mine), root, comm, bound, gathered).finish(bound);
+  } catch (const DeadlineError&) {
+    collectives::keepWhilePosted(std::move(gathered));
+    throw;
+  }
   std::vector<std::vector<T>> out;
   for (std::size_t r = 0; r < gathered.counts.size(); ++r) {
     const std::span<const T> part = gathered.of(static_cast<int>(r));
