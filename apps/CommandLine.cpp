@@ -229,6 +229,9 @@ void addJobOutputGroup(CLI::App& app, Options& o) {
 }
 
 void addRenderJob(CLI::App& app, Options& o, RawOptions& raw) {
+  // An option given again takes its last value: scripts/demo adds the caller's options after
+  // its own (`scripts/demo --frames 64`).
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   addSceneGroup(app, o);
   addRenderingGroup(app, o, raw);
   addBricksGroup(app, o);
