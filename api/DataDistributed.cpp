@@ -36,8 +36,6 @@
 namespace dfbwall {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 // What render rank 0 sends for every frame: the camera (so every rank renders the same) and the
 // hash of its style, which every rank compares its own with.
 struct FrameOrder {

@@ -7,9 +7,7 @@
 //
 // One object per rank, registered under kRunControlObject on the job's messenger before the
 // start-up barrier. incoming() runs on the messenger's inbox thread; the rest on the main one.
-#include <atomic>
 #include <cstdint>
-#include <functional>
 #include <mutex>
 #include <optional>
 
