@@ -8,7 +8,7 @@
 
 #include "base/BoundedWait.h"
 #include "base/Error.h"
-#include "renderers/scivis/TransferFunction.h"
+#include "renderers/TransferFunction.h"
 
 namespace dfbwall {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "api/DataDistributed.h"
 #include "renderers/SceneDesc.h"
-#include "renderers/scivis/Bricks.h"
+#include "renderers/scivis/bricks/Bricks.h"
 
 namespace dfbwall {
 

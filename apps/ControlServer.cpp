@@ -17,7 +17,7 @@
 #include "apps/Job.h"
 #include "apps/StatusBoard.h"
 #include "apps/Steering.h"
-#include "renderers/scivis/TransferFunction.h"
+#include "renderers/TransferFunction.h"
 
 namespace app {
 namespace {

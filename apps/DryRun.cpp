@@ -5,8 +5,8 @@
 #include "apps/Job.h"
 #include "renderers/BuiltinScenes.h"
 #include "renderers/FrameDriver.h"
-#include "renderers/scivis/Bricks.h"
-#include "wall/Routing.h"
+#include "renderers/scivis/bricks/Bricks.h"
+#include "wall/route/Routing.h"
 
 namespace app {
 

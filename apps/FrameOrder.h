@@ -31,8 +31,9 @@ struct FrameOrder {
   // 1: no frame now; the camera is still and the sample budget reached (--max-spp). The ranks
   // wait for the next order without rendering (rank 0 sends one at least every heartbeat).
   std::int32_t idle = 0;
-  // --connect: the version of the wall's roster this frame routes with (wall/service/Protocol.h,
-  // Roster); a rank whose version differs takes the roster from rank 0 before the frame.
+  // --connect: the version of the wall's roster this frame routes with
+  // (wall/service/protocol/Protocol.h, Roster); a rank whose version differs takes the roster from
+  // rank 0 before the frame.
   std::uint32_t rosterVersion = 0;
   std::uint64_t captureSequence = 0;  // > 0: the walls capture this frame
   // The last steering request this frame applies (0: none), when the first of them arrived

@@ -12,10 +12,10 @@
 #include "apps/Options.h"
 #include "messaging/Messenger.h"
 #include "renderers/RenderScene.h"
-#include "wall/Layout.h"
-#include "wall/Ranks.h"
-#include "wall/service/Codec.h"
-#include "wall/service/Protocol.h"
+#include "wall/layout/Layout.h"
+#include "wall/layout/Ranks.h"
+#include "wall/service/protocol/Codec.h"
+#include "wall/service/protocol/Protocol.h"
 
 namespace wall::service {
 class ServiceClient;
@@ -113,7 +113,7 @@ struct RankTotals {
   double sceneBytes = 0;  // render ranks: the scene data this rank holds (its bricks, or all)
   double brickTiles = 0;  // render ranks with --bricks: brick tiles rendered over the run
   // Render ranks with --bricks: camera rays not traced, hidden behind a nearer brick's opaque
-  // isosurface (renderers/scivis/BrickOcclusion.h), over the run.
+  // isosurface (renderers/scivis/bricks/BrickOcclusion.h), over the run.
   double brickRaysSkipped = 0;
   // Render ranks: isosurface triangles held (camera-visible and shading-only) and the seconds
   // making them and their BVHs at scene load.

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "wall/Layout.h"
+#include "wall/layout/Layout.h"
 
 int main(int argc, char** argv) {
   if (argc != 2 || argv[1][0] == '-') {

@@ -3,8 +3,8 @@
 #include <CLI/CLI.hpp>
 
 #include "base/MemoryBudget.h"
-#include "wall/Layout.h"
-#include "wall/service/Codec.h"
+#include "wall/layout/Layout.h"
+#include "wall/service/protocol/Codec.h"
 
 #include <charconv>
 #include <cmath>

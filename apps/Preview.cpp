@@ -1,8 +1,8 @@
 #include "apps/Preview.h"
 
 #include "base/Error.h"
-#include "wall/Png.h"
-#include "wall/Routing.h"
+#include "wall/image/Png.h"
+#include "wall/route/Routing.h"
 
 namespace app {
 

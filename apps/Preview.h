@@ -1,6 +1,6 @@
 #pragma once
 // The whole-wall preview in the app (issue 12): every render rank runs the preview's pixel op,
-// render rank 0 assembles the shrunk tiles (wall/PreviewAssembler.h). Wanted when the control
+// render rank 0 assembles the shrunk tiles (wall/route/PreviewAssembler.h). Wanted when the control
 // server runs (it serves /api/preview.png) or with --preview FILE.png (written at the end).
 #include <chrono>
 #include <memory>
@@ -10,8 +10,8 @@
 
 #include "apps/Job.h"
 #include "messaging/Messenger.h"
-#include "wall/PreviewAssembler.h"
-#include "wall/PreviewOp.h"
+#include "wall/route/PreviewAssembler.h"
+#include "wall/route/PreviewOp.h"
 
 namespace app {
 

@@ -1,12 +1,12 @@
 // `dfbwall relay`: forwards render jobs to a serving wall for hosts that cannot reach it (README,
-// "A wall that stays up"; wall/service/Relay.h). One process, no MPI: it runs on a gateway.
+// "A wall that stays up"; wall/service/relay/Relay.h). One process, no MPI: it runs on a gateway.
 #include <cstdio>
 #include <string>
 
 #include "apps/Options.h"
 #include "apps/Run.h"
 #include "apps/StopSignals.h"
-#include "wall/service/Relay.h"
+#include "wall/service/relay/Relay.h"
 
 namespace app {
 

@@ -22,13 +22,13 @@
 #include "renderers/FrameDriver.h"
 #include "renderers/Renderer.h"
 #include "renderers/WorkDistribution.h"
-#include "renderers/scivis/BrickFrameDriver.h"
-#include "wall/DisplayRoutingOp.h"
-#include "wall/FrameCredits.h"
-#include "wall/PieceMessage.h"
-#include "wall/Png.h"
-#include "wall/Routing.h"
-#include "wall/service/ServiceClient.h"
+#include "renderers/scivis/bricks/BrickFrameDriver.h"
+#include "wall/image/Png.h"
+#include "wall/route/DisplayRoutingOp.h"
+#include "wall/route/FrameCredits.h"
+#include "wall/route/PieceMessage.h"
+#include "wall/route/Routing.h"
+#include "wall/service/client/ServiceClient.h"
 
 namespace app {
 namespace {

@@ -12,13 +12,13 @@
 #include "apps/Failure.h"
 #include "apps/Job.h"
 #include "apps/MemoryChecks.h"
+#include "apps/PageRoutes.h"
 #include "apps/Preview.h"
 #include "apps/RunControl.h"
 #include "apps/Stats.h"
 #include "apps/StatusBoard.h"
 #include "apps/Steering.h"
 #include "apps/StopSignals.h"
-#include "apps/control/PageRoutes.h"
 #include "base/AtomicFile.h"
 #include "base/BoundedWait.h"
 #include "base/Collectives.h"
@@ -26,8 +26,8 @@
 #include "base/MemoryBudget.h"
 #include "messaging/MpiSession.h"
 #include "renderers/BuiltinScenes.h"
-#include "renderers/scivis/Bricks.h"
-#include "wall/service/ServiceClient.h"
+#include "renderers/scivis/bricks/Bricks.h"
+#include "wall/service/client/ServiceClient.h"
 
 namespace app {
 namespace {

@@ -13,11 +13,11 @@ struct Options;
 class StopSignals;
 class FailurePath;
 // `dfbwall serve`: every rank is a wall process of options.wall's layout, serving render jobs
-// until stopped (wall/service/WallService.h). Returns the exit code.
+// until stopped (wall/service/server/WallService.h). Returns the exit code.
 int runServe(const Options& options, int worldRank, StopSignals& signals, FailurePath& failure);
 
 // `dfbwall relay ...` (argv from "relay" on): forwards render jobs to a serving wall
-// (wall/service/Relay.h); no MPI. Returns the exit code.
+// (wall/service/relay/Relay.h); no MPI. Returns the exit code.
 int runRelay(int argc, char** argv, StopSignals& signals);
 
 }  // namespace app

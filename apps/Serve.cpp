@@ -1,7 +1,7 @@
 // `dfbwall serve`: the wall processes of a layout as a persistent service (README, "A wall that
-// stays up"; wall/service/WallService.h). Either every process at once under one mpirun (rank p
-// is process p; MPI only tells the others where the head listens), or one process on its own,
-// started or restarted by hand or by a service manager (`--process N`, `--join HOST:PORT`).
+// stays up"; wall/service/server/WallService.h). Either every process at once under one mpirun
+// (rank p is process p; MPI only tells the others where the head listens), or one process on its
+// own, started or restarted by hand or by a service manager (`--process N`, `--join HOST:PORT`).
 // The processes share no MPI communication after start-up, so under
 // `mpirun --enable-recovery` one that dies leaves the others running.
 #include <unistd.h>
@@ -20,9 +20,9 @@
 #include "base/BoundedWait.h"
 #include "base/Collectives.h"
 #include "base/Error.h"
-#include "wall/DisplayPresenters.h"
-#include "wall/Ranks.h"
-#include "wall/service/WallService.h"
+#include "wall/display/DisplayPresenters.h"
+#include "wall/layout/Ranks.h"
+#include "wall/service/server/WallService.h"
 
 namespace app {
 namespace {

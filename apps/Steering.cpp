@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "renderers/scivis/TransferFunction.h"
+#include "renderers/TransferFunction.h"
 
 namespace app {
 namespace {

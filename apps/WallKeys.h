@@ -5,7 +5,7 @@
 #include <optional>
 
 #include "apps/Steering.h"
-#include "wall/Presenter.h"
+#include "wall/display/Presenter.h"
 
 namespace app {
 

@@ -11,9 +11,9 @@
 #include "apps/WallKeys.h"
 #include "base/Collectives.h"
 #include "base/Timing.h"
-#include "wall/DisplayPresenters.h"
-#include "wall/PieceMessage.h"
-#include "wall/WallNode.h"
+#include "wall/display/DisplayPresenters.h"
+#include "wall/display/WallNode.h"
+#include "wall/route/PieceMessage.h"
 
 namespace app {
 namespace {

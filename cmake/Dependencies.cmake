@@ -57,7 +57,7 @@ dfbwall_pkg_module(OSMESA osmesa "OSMesa" libosmesa6-dev)
 # The control server (apps/ControlServer.cpp): Debian's compiled cpp-httplib. Its pkg-config
 # flags carry the library's build options (OpenSSL, zlib, Brotli), which the header must match.
 dfbwall_pkg_module(HTTPLIB cpp-httplib "cpp-httplib" libcpp-httplib-dev)
-# Volume files (renderers/scivis/formats/): serial HDF5 (what Debian's NetCDF links; each rank
+# Volume files (renderers/scivis/io/formats/): serial HDF5 (what Debian's NetCDF links; each rank
 # opens the file itself and reads its hyperslab), NetCDF, zlib for gzip-compressed NRRD/NIfTI.
 dfbwall_pkg_module(HDF5 hdf5-serial "HDF5" libhdf5-dev)
 dfbwall_pkg_module(NETCDF netcdf "NetCDF" libnetcdf-dev)

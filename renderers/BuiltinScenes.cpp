@@ -1,9 +1,9 @@
 #include "renderers/BuiltinScenes.h"
 
 #include "base/Error.h"
+#include "renderers/Particles.h"
 #include "renderers/Rng.h"
 #include "renderers/SceneToml.h"
-#include "renderers/scivis/Particles.h"
 
 namespace renderers {
 namespace {

@@ -1,5 +1,5 @@
 #pragma once
-// The few Embree 3 calls both scenes (Scene.cpp, scivis/SciVisScene.cpp) make the same way:
+// The few Embree 3 calls both scenes (Scene.cpp, scivis/scene/SciVisScene.cpp) make the same way:
 // collecting a device error, a single ray, a closest hit, a packet of 16 closest hits and an
 // occlusion test.
 #include <embree3/rtcore.h>

@@ -6,7 +6,7 @@
 
 #include "renderers/Renderer.h"
 #include "renderers/Scene.h"
-#include "renderers/scivis/SciVisScene.h"
+#include "renderers/scivis/scene/SciVisScene.h"
 
 namespace renderers {
 
@@ -17,7 +17,7 @@ struct RenderScene {
 };
 
 // Builds what `renderer` draws from `desc` (the whole scene); with `distributed` only the
-// description (the bricks load their own parts: scivis/BrickFrameDriver.h). Throws
+// description (the bricks load their own parts: scivis/bricks/BrickFrameDriver.h). Throws
 // base::Error.
 RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc, bool distributed = false);
 

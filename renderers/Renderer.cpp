@@ -12,7 +12,7 @@
 #include "renderers/PatternRenderer.h"
 #include "renderers/PrimaryRenderer.h"
 #include "renderers/RenderScene.h"
-#include "renderers/scivis/SciVisRenderer.h"
+#include "renderers/scivis/render/SciVisRenderer.h"
 
 namespace renderers {
 

@@ -9,7 +9,7 @@
 #include "renderers/Camera.h"
 #include "renderers/Material.h"
 #include "renderers/Math.h"
-#include "renderers/scivis/SciVisDesc.h"
+#include "renderers/SciVisDesc.h"
 
 namespace renderers {
 

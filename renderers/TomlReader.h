@@ -1,7 +1,7 @@
 #pragma once
 // Reading TOML++ tables with errors that name the file, the line and the field: every scene
-// reader (SceneToml.cpp, scivis/VolumeToml.cpp) goes through this one class, so a misspelt key or
-// a wrong type is reported the same way everywhere.
+// reader (SceneToml.cpp, scivis/io/VolumeToml.cpp) goes through this one class, so a misspelt key
+// or a wrong type is reported the same way everywhere.
 #include <toml++/toml.h>
 
 #include <cmath>

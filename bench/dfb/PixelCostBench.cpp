@@ -36,9 +36,9 @@
 #include "dfb/ToneMapKernel.h"
 #include "messaging/Envelope.h"
 #include "renderers/PatternRenderer.h"
-#include "wall/Layout.h"
-#include "wall/PieceMessage.h"
-#include "wall/Routing.h"
+#include "wall/layout/Layout.h"
+#include "wall/route/PieceMessage.h"
+#include "wall/route/Routing.h"
 
 namespace {
 

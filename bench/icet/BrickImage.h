@@ -1,7 +1,7 @@
 #pragma once
 // One rank's brick rendered over the whole canvas, as IceT's icetCompositeImage wants its input:
 // full-frame buffers of which only `viewport` is valid. The brick is loaded and cut exactly as
-// the DFB's data-parallel driver does it (renderers/scivis/Bricks.h), and only the tiles the
+// the DFB's data-parallel driver does it (renderers/scivis/bricks/Bricks.h), and only the tiles the
 // brick projects to are rendered (BrickFrameDriver::bricksOfTile decides, as for the DFB), so
 // both compositors receive the same fragments from the same rendering work.
 //
@@ -17,10 +17,10 @@
 #include "dfb/TileOperation.h"
 #include "renderers/Renderer.h"
 #include "renderers/SceneDesc.h"
-#include "renderers/scivis/BrickFrameDriver.h"
-#include "renderers/scivis/Bricks.h"
-#include "renderers/scivis/SciVisRenderer.h"
-#include "renderers/scivis/SciVisScene.h"
+#include "renderers/scivis/bricks/BrickFrameDriver.h"
+#include "renderers/scivis/bricks/Bricks.h"
+#include "renderers/scivis/render/SciVisRenderer.h"
+#include "renderers/scivis/scene/SciVisScene.h"
 
 namespace icetbench {
 

@@ -47,11 +47,11 @@
 #include "messaging/Messenger.h"
 #include "messaging/MpiSession.h"
 #include "renderers/BuiltinScenes.h"
-#include "renderers/scivis/BrickFrameDriver.h"
-#include "wall/DisplayRoutingOp.h"
-#include "wall/PieceMessage.h"
-#include "wall/Png.h"
-#include "wall/Ranks.h"
+#include "renderers/scivis/bricks/BrickFrameDriver.h"
+#include "wall/image/Png.h"
+#include "wall/layout/Ranks.h"
+#include "wall/route/DisplayRoutingOp.h"
+#include "wall/route/PieceMessage.h"
 
 namespace {
 

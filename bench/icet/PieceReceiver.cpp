@@ -3,8 +3,8 @@
 #include <stdexcept>
 
 #include "base/Timing.h"
-#include "wall/PieceMessage.h"
-#include "wall/Routing.h"
+#include "wall/route/PieceMessage.h"
+#include "wall/route/Routing.h"
 
 namespace icetbench {
 

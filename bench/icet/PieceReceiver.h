@@ -10,8 +10,8 @@
 #include <string>
 
 #include "messaging/Messenger.h"
-#include "wall/Image.h"
-#include "wall/Layout.h"
+#include "wall/image/Image.h"
+#include "wall/layout/Layout.h"
 
 namespace icetbench {
 

@@ -36,9 +36,9 @@
 #include "renderers/BuiltinScenes.h"
 #include "renderers/CanvasImage.h"
 #include "renderers/RenderScene.h"
-#include "renderers/scivis/SciVisRenderer.h"
-#include "renderers/scivis/VolumeSource.h"
-#include "wall/Png.h"
+#include "renderers/scivis/io/VolumeLoad.h"
+#include "renderers/scivis/render/SciVisRenderer.h"
+#include "wall/image/Png.h"
 
 namespace {
 

@@ -9,8 +9,8 @@
 #include <cstdlib>
 #include <exception>
 
-#include "wall/Image.h"
-#include "wall/Png.h"
+#include "wall/image/Image.h"
+#include "wall/image/Png.h"
 
 int main(int argc, char** argv) {
   if (argc < 3 || (argc - 1) % 2 != 0) {
@@ -24,8 +24,8 @@ int main(int argc, char** argv) {
     for (int i = 1; i + 1 < argc; i += 2) {
       const wall::Image a = wall::readPng(argv[i]), b = wall::readPng(argv[i + 1]);
       if (a.width != b.width || a.height != b.height) {
-        std::fprintf(stderr, "%s is %dx%d, %s is %dx%d\n", argv[i], a.width, a.height,
-                     argv[i + 1], b.width, b.height);
+        std::fprintf(stderr, "%s is %dx%d, %s is %dx%d\n", argv[i], a.width, a.height, argv[i + 1],
+                     b.width, b.height);
         return 1;
       }
       for (std::size_t p = 0; p < a.pixels.size(); ++p)
@@ -38,8 +38,10 @@ int main(int argc, char** argv) {
       samples += 3 * a.pixels.size();
     }
     const double mse = samples > 0 ? squared / static_cast<double>(samples) : 0;
-    if (mse == 0) std::printf("inf %d\n", worst);
-    else std::printf("%.3f %d\n", 10 * std::log10(255.0 * 255.0 / mse), worst);
+    if (mse == 0)
+      std::printf("inf %d\n", worst);
+    else
+      std::printf("%.3f %d\n", 10 * std::log10(255.0 * 255.0 / mse), worst);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "capture_psnr: %s\n", e.what());
     return 1;

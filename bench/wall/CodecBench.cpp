@@ -1,6 +1,6 @@
-// The wall service's pixel codecs (wall/service/Codec.h) on the pieces a render job sends: 64x64
-// RGBA8 tiles of a 512x512 image that is smooth (a rendered-looking scene) or noisy (the same at
-// low sample counts: every channel off by a normal factor, sigma 0.35). Per codec: the ratio
+// The wall service's pixel codecs (wall/service/protocol/Codec.h) on the pieces a render job sends:
+// 64x64 RGBA8 tiles of a 512x512 image that is smooth (a rendered-looking scene) or noisy (the same
+// at low sample counts: every channel off by a normal factor, sigma 0.35). Per codec: the ratio
 // (raw bytes / encoded bytes), encode and decode speed in MB/s of raw pixels on one thread, and
 // the PSNR of what decodes. Prints a table and writes JSON (argv[1], default
 // bench/results/codec.json).
@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "wall/Image.h"
-#include "wall/service/Codec.h"
+#include "wall/image/Image.h"
+#include "wall/service/protocol/Codec.h"
 
 namespace {
 

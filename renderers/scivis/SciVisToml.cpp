@@ -6,9 +6,9 @@
 #include <vector>
 
 #include "base/MemoryBudget.h"
-#include "renderers/scivis/Particles.h"
-#include "renderers/scivis/SciVisScene.h"
-#include "renderers/scivis/VolumeToml.h"
+#include "renderers/Particles.h"
+#include "renderers/scivis/io/VolumeToml.h"
+#include "renderers/scivis/scene/SciVisScene.h"
 
 namespace renderers {
 namespace {

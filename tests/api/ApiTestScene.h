@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "api/DataDistributed.h"
-#include "renderers/scivis/VolumeSource.h"
+#include "renderers/scivis/io/VolumeLoad.h"
 
 namespace apitest {
 

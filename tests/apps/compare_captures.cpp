@@ -16,11 +16,11 @@
 #include <set>
 #include <string>
 
-#include "wall/Capture.h"
-#include "wall/Image.h"
-#include "wall/Layout.h"
-#include "wall/Png.h"
-#include "wall/Preview.h"
+#include "wall/display/Capture.h"
+#include "wall/image/Image.h"
+#include "wall/image/Png.h"
+#include "wall/layout/Layout.h"
+#include "wall/route/Preview.h"
 
 namespace {
 

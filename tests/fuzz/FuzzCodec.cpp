@@ -1,18 +1,18 @@
 // libFuzzer target: a piece's pixel bytes as they arrive at a remote wall process, decoded with
-// each codec of wall/service/Codec.h as a 64x64 rectangle into a buffer of exactly that size.
-// Anything but a clean decode or a base::Error (a crash, a sanitizer report, another exception)
-// is a finding. What decodes is decoded again into rows 72 pixels apart, the strided path. After
-// each input a valid piece of each codec must still decode: one hostile piece must not break the
-// thread's decoders (libjpeg-turbo 2.1's tjDecompressHeader3 did, see Codec.cpp).
-// Seeds (tests/fuzz/corpus/codec/): encodePixels output for 64x64 pieces, one file per codec
-// (raw, Snappy compressed and stored, JPEG at 4:2:0, 4:2:2 and 4:4:4).
+// each codec of wall/service/protocol/Codec.h as a 64x64 rectangle into a buffer of exactly that
+// size. Anything but a clean decode or a base::Error (a crash, a sanitizer report, another
+// exception) is a finding. What decodes is decoded again into rows 72 pixels apart, the strided
+// path. After each input a valid piece of each codec must still decode: one hostile piece must not
+// break the thread's decoders (libjpeg-turbo 2.1's tjDecompressHeader3 did, see Codec.cpp). Seeds
+// (tests/fuzz/corpus/codec/): encodePixels output for 64x64 pieces, one file per codec (raw, Snappy
+// compressed and stored, JPEG at 4:2:0, 4:2:2 and 4:4:4).
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <vector>
 
 #include "base/Error.h"
-#include "wall/service/Codec.h"
+#include "wall/service/protocol/Codec.h"
 
 namespace {
 

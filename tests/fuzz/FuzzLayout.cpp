@@ -5,8 +5,8 @@
 #include <cstdlib>
 #include <string_view>
 
-#include "wall/Layout.h"
-#include "wall/Routing.h"
+#include "wall/layout/Layout.h"
+#include "wall/route/Routing.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const wall::LayoutResult r = wall::readLayoutText(

@@ -3,8 +3,8 @@
 #include <cstdint>
 
 #include "base/Error.h"
-#include "wall/Image.h"
-#include "wall/PieceMessage.h"
+#include "wall/image/Image.h"
+#include "wall/route/PieceMessage.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto* bytes = reinterpret_cast<const std::byte*>(data);

@@ -1,9 +1,9 @@
 // libFuzzer target: a piece batch as it arrives on a wall process's piece socket
-// (wall/service/Protocol.h, wall/service/Codec.h). The batch is parsed, then every piece of at
-// most 256x256 pixels is decoded into a buffer of exactly its size, as the piece receiver does
-// into a display image. Any bytes are accepted or refused with a base::Error (anything else
-// escapes and is a crash); nothing is read or written out of bounds; a lossless piece that
-// decoded encodes and decodes back to the same pixels.
+// (wall/service/protocol/Protocol.h, wall/service/protocol/Codec.h). The batch is parsed, then
+// every piece of at most 256x256 pixels is decoded into a buffer of exactly its size, as the piece
+// receiver does into a display image. Any bytes are accepted or refused with a base::Error
+// (anything else escapes and is a crash); nothing is read or written out of bounds; a lossless
+// piece that decoded encodes and decodes back to the same pixels.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "base/Error.h"
-#include "wall/service/Codec.h"
-#include "wall/service/Protocol.h"
+#include "wall/service/protocol/Codec.h"
+#include "wall/service/protocol/Protocol.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size) {
   using namespace wall::service;

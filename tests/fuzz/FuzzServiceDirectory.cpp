@@ -1,14 +1,15 @@
-// libFuzzer target: the directory a wall sends a job it accepted (wall/service/Protocol.h),
-// as a render job's rank 0 reads it. Any bytes are refused with a base::Error (anything else
-// escapes and is a crash) or give a directory whose layout passes the layout checks: displays
-// inside the canvas, processes 0..W-1 with an endpoint each; it packs and parses back the same.
+// libFuzzer target: the directory a wall sends a job it accepted
+// (wall/service/protocol/Protocol.h), as a render job's rank 0 reads it. Any bytes are refused with
+// a base::Error (anything else escapes and is a crash) or give a directory whose layout passes the
+// layout checks: displays inside the canvas, processes 0..W-1 with an endpoint each; it packs and
+// parses back the same.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 
 #include "base/Error.h"
-#include "wall/Layout.h"
-#include "wall/service/Protocol.h"
+#include "wall/layout/Layout.h"
+#include "wall/service/protocol/Protocol.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size) {
   using namespace wall::service;

@@ -1,7 +1,7 @@
 // libFuzzer target: what a job's rank 0 or the wall's process 0 reads first on the wall
-// service's directory socket (wall/service/Protocol.h): the header, a hello, a control message,
-// a text message. Any bytes are accepted or refused with a base::Error (anything else escapes and
-// is a crash); whatever is accepted honours the caps and packs back to the same body.
+// service's directory socket (wall/service/protocol/Protocol.h): the header, a hello, a control
+// message, a text message. Any bytes are accepted or refused with a base::Error (anything else
+// escapes and is a crash); whatever is accepted honours the caps and packs back to the same body.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -9,7 +9,7 @@
 #include <string>
 
 #include "base/Error.h"
-#include "wall/service/Protocol.h"
+#include "wall/service/protocol/Protocol.h"
 
 namespace {
 

@@ -1,16 +1,16 @@
 // libFuzzer target: what a wall's head reads from its processes' links and a job reads from the
-// wall when processes come and go (wall/service/LinkMessages.h; Roster in Protocol.h). The first
-// byte picks the parser. Any bytes are refused with a base::Error (anything else escapes and is
-// a crash) or give a message within its caps that packs and parses back the same.
+// wall when processes come and go (wall/service/protocol/LinkMessages.h; Roster in Protocol.h). The
+// first byte picks the parser. Any bytes are refused with a base::Error (anything else escapes and
+// is a crash) or give a message within its caps that packs and parses back the same.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 
 #include "base/Error.h"
-#include "wall/Layout.h"
-#include "wall/service/LinkMessages.h"
-#include "wall/service/Protocol.h"
-#include "wall/service/ServiceCommands.h"
+#include "wall/layout/Layout.h"
+#include "wall/service/protocol/LinkMessages.h"
+#include "wall/service/protocol/Protocol.h"
+#include "wall/service/protocol/ServiceCommands.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size) {
   using namespace wall::service;

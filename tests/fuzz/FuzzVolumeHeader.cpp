@@ -10,8 +10,8 @@
 #include <exception>
 #include <string>
 
-#include "renderers/scivis/VolumeSource.h"
-#include "renderers/scivis/formats/VolumeFile.h"
+#include "renderers/scivis/io/VolumeLoad.h"
+#include "renderers/scivis/io/formats/VolumeFile.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;

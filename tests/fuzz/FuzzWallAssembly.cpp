@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "base/Error.h"
-#include "wall/Layout.h"
-#include "wall/WallNode.h"
-#include "wall/WallPeers.h"
+#include "wall/display/WallNode.h"
+#include "wall/display/WallPeers.h"
+#include "wall/layout/Layout.h"
 
 namespace {
 

@@ -10,7 +10,7 @@
 #include "dfb/DistributedFrameBuffer.h"
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
-#include "renderers/scivis/BrickFrameDriver.h"
+#include "renderers/scivis/bricks/BrickFrameDriver.h"
 #include "tests/MpiTestUtil.h"
 #include "tests/renderers/BrickTestUtil.h"
 #include "tests/renderers/RenderTestUtil.h"

@@ -1,6 +1,6 @@
-// No work behind a nearer brick's opaque surface (renderers/scivis/BrickOcclusion.h): the rays it
-// skips change no byte of the image, on any rank count and replication, it does skip some, and
-// it never applies where a fragment may be translucent.
+// No work behind a nearer brick's opaque surface (renderers/scivis/bricks/BrickOcclusion.h): the
+// rays it skips change no byte of the image, on any rank count and replication, it does skip some,
+// and it never applies where a fragment may be translucent.
 #include <gtest/gtest.h>
 #include <mpi.h>
 
@@ -9,9 +9,9 @@
 
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
-#include "renderers/scivis/BrickFrameDriver.h"
-#include "renderers/scivis/BrickOcclusion.h"
-#include "renderers/scivis/SciVisRenderer.h"
+#include "renderers/scivis/bricks/BrickFrameDriver.h"
+#include "renderers/scivis/bricks/BrickOcclusion.h"
+#include "renderers/scivis/render/SciVisRenderer.h"
 #include "tests/MpiTestUtil.h"
 #include "tests/renderers/BrickTestUtil.h"
 #include "tests/renderers/RenderTestUtil.h"

@@ -4,8 +4,8 @@
 
 #include <memory>
 
-#include "renderers/scivis/Bricks.h"
-#include "renderers/scivis/SciVisDesc.h"
+#include "renderers/SciVisDesc.h"
+#include "renderers/scivis/bricks/Bricks.h"
 
 namespace renderers {
 namespace {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "dfb/DistributedFrameBuffer.h"
-#include "renderers/scivis/BrickFrameDriver.h"
+#include "renderers/scivis/bricks/BrickFrameDriver.h"
 
 namespace renderers::test {
 

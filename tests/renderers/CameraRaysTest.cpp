@@ -5,7 +5,7 @@
 #include <cstring>
 #include <vector>
 
-#include "renderers/scivis/CameraRays.h"
+#include "renderers/scivis/render/CameraRays.h"
 
 namespace renderers {
 namespace {

@@ -9,7 +9,7 @@
 #include <cstring>
 
 #include "renderers/SceneToml.h"
-#include "renderers/scivis/BrickFrameDriver.h"
+#include "renderers/scivis/bricks/BrickFrameDriver.h"
 #include "tests/MpiTestUtil.h"
 #include "tests/renderers/BrickTestUtil.h"
 

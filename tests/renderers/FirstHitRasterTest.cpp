@@ -12,10 +12,10 @@
 
 #include "renderers/BuiltinScenes.h"
 #include "renderers/Rng.h"
-#include "renderers/scivis/Bricks.h"
-#include "renderers/scivis/FirstHitRaster.h"
-#include "renderers/scivis/SciVisRenderer.h"
-#include "renderers/scivis/SciVisScene.h"
+#include "renderers/scivis/bricks/Bricks.h"
+#include "renderers/scivis/kernels/FirstHitRaster.h"
+#include "renderers/scivis/render/SciVisRenderer.h"
+#include "renderers/scivis/scene/SciVisScene.h"
 #include "tests/renderers/RenderTestUtil.h"
 
 namespace renderers {

@@ -10,8 +10,8 @@
 #include <map>
 #include <vector>
 
-#include "renderers/scivis/Box.h"
-#include "renderers/scivis/Isosurfaces.h"
+#include "renderers/scivis/scene/Box.h"
+#include "renderers/scivis/scene/Isosurfaces.h"
 
 namespace renderers {
 namespace {

@@ -7,7 +7,7 @@
 #include <filesystem>
 
 #include "base/Error.h"
-#include "renderers/scivis/VolumeSource.h"
+#include "renderers/scivis/io/VolumeLoad.h"
 
 namespace renderers {
 namespace {

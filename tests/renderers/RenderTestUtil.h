@@ -11,7 +11,7 @@
 #include "renderers/Camera.h"
 #include "renderers/CanvasImage.h"
 #include "renderers/Renderer.h"
-#include "renderers/scivis/Box.h"
+#include "renderers/scivis/scene/Box.h"
 
 namespace renderers::test {
 

@@ -14,8 +14,8 @@
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
 #include "renderers/TomlReader.h"
-#include "renderers/scivis/Bricks.h"
-#include "renderers/scivis/SciVisScene.h"
+#include "renderers/scivis/bricks/Bricks.h"
+#include "renderers/scivis/scene/SciVisScene.h"
 
 namespace renderers {
 namespace {

@@ -11,8 +11,8 @@
 
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
-#include "renderers/scivis/SciVisRenderer.h"
-#include "renderers/scivis/ShadingShell.h"
+#include "renderers/scivis/render/SciVisRenderer.h"
+#include "renderers/scivis/scene/ShadingShell.h"
 #include "tests/renderers/RenderTestUtil.h"
 
 namespace renderers {

@@ -6,7 +6,7 @@
 #include <random>
 
 #include "base/Error.h"
-#include "renderers/scivis/TransferFunction.h"
+#include "renderers/TransferFunction.h"
 
 namespace renderers {
 namespace {

@@ -13,9 +13,9 @@
 #include "base/Error.h"
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
-#include "renderers/scivis/VolumeField.h"
-#include "renderers/scivis/VolumeSource.h"
-#include "renderers/scivis/formats/VolumeFile.h"
+#include "renderers/scivis/io/VolumeLoad.h"
+#include "renderers/scivis/io/formats/VolumeFile.h"
+#include "renderers/scivis/scene/VolumeField.h"
 #include "tests/renderers/RenderTestUtil.h"
 #include "tests/renderers/VolumeFileTestUtil.h"
 

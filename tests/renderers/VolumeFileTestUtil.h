@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "renderers/scivis/VolumeSource.h"
-#include "renderers/scivis/formats/VolumeFile.h"
+#include "renderers/scivis/io/VolumeLoad.h"
+#include "renderers/scivis/io/formats/VolumeFile.h"
 
 namespace renderers::volfiletest {
 

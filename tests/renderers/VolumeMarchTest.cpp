@@ -15,10 +15,10 @@
 
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
-#include "renderers/scivis/MarchOnly.h"
-#include "renderers/scivis/SciVisRenderer.h"
-#include "renderers/scivis/VolumeMarch.h"
-#include "renderers/scivis/VolumeSource.h"
+#include "renderers/scivis/io/VolumeLoad.h"
+#include "renderers/scivis/render/MarchOnly.h"
+#include "renderers/scivis/render/SciVisRenderer.h"
+#include "renderers/scivis/render/VolumeMarch.h"
 #include "tests/renderers/RenderTestUtil.h"
 
 namespace renderers {

@@ -11,8 +11,8 @@
 #include <fstream>
 
 #include "base/Error.h"
-#include "renderers/scivis/VolumeField.h"
-#include "renderers/scivis/VolumeSource.h"
+#include "renderers/scivis/io/VolumeLoad.h"
+#include "renderers/scivis/scene/VolumeField.h"
 
 namespace renderers {
 namespace {

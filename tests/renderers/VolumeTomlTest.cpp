@@ -6,7 +6,7 @@
 #include <fstream>
 
 #include "base/Error.h"
-#include "renderers/scivis/VolumeToml.h"
+#include "renderers/scivis/io/VolumeToml.h"
 
 namespace renderers {
 namespace {

@@ -10,8 +10,8 @@
 #include <string>
 
 #include "base/Error.h"
-#include "renderers/scivis/VolumeSource.h"
-#include "renderers/scivis/formats/VolumeFile.h"
+#include "renderers/scivis/io/VolumeLoad.h"
+#include "renderers/scivis/io/formats/VolumeFile.h"
 
 int main(int argc, char** argv) {
   using namespace renderers;

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "wall/Layout.h"
+#include "wall/layout/Layout.h"
 
 namespace {
 

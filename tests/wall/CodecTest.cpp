@@ -1,7 +1,7 @@
-// The wall service's pixel codecs (wall/service/Codec.h): --codec parsing, bit-exact raw and
-// Snappy round trips (strided rectangles, odd sizes), JPEG quality and size on a rendered-looking
-// image, and hostile input: every malformed piece is a base::Error, never a crash (this suite
-// also runs under ASan+UBSan).
+// The wall service's pixel codecs (wall/service/protocol/Codec.h): --codec parsing, bit-exact raw
+// and Snappy round trips (strided rectangles, odd sizes), JPEG quality and size on a
+// rendered-looking image, and hostile input: every malformed piece is a base::Error, never a crash
+// (this suite also runs under ASan+UBSan).
 #include <gtest/gtest.h>
 #include <turbojpeg.h>
 
@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "base/Error.h"
-#include "wall/Image.h"
-#include "wall/service/Codec.h"
+#include "wall/image/Image.h"
+#include "wall/service/protocol/Codec.h"
 
 namespace wall::service {
 namespace {

@@ -1,8 +1,8 @@
 // A service wall head's swap barriers and capture gathers among processes that come and go
-// (wall/service/FrameAgreements.h).
+// (wall/service/server/FrameAgreements.h).
 #include <gtest/gtest.h>
 
-#include "wall/service/FrameAgreements.h"
+#include "wall/service/server/FrameAgreements.h"
 
 namespace wall::service {
 namespace {

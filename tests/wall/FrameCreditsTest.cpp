@@ -1,7 +1,7 @@
-// Frame pacing (wall/FrameCredits.h) on render rank 0's side: acknowledgements in order, the
+// Frame pacing (wall/route/FrameCredits.h) on render rank 0's side: acknowledgements in order, the
 // bounded wait for one, the times a frame's statistics take, and the wire message through a real
 // messenger (run on 1 rank: wall process 0 and render rank 0 are the same rank here).
-#include "wall/FrameCredits.h"
+#include "wall/route/FrameCredits.h"
 
 #include <gtest/gtest.h>
 #include <mpi.h>

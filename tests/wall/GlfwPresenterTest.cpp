@@ -8,9 +8,9 @@
 #include <string>
 
 #include "base/Error.h"
-#include "wall/GlfwPresenter.h"
-#include "wall/Layout.h"
-#include "wall/OsmesaPresenter.h"
+#include "wall/display/GlfwPresenter.h"
+#include "wall/display/OsmesaPresenter.h"
+#include "wall/layout/Layout.h"
 
 namespace {
 

@@ -1,6 +1,6 @@
 // The wall service's idle screen: opaque, the asked size at any size, text where it belongs and
 // inside the image, deterministic, and an image without text when the font is missing.
-#include "wall/IdleScreen.h"
+#include "wall/display/IdleScreen.h"
 
 #include <gtest/gtest.h>
 
@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "base/Error.h"
-#include "wall/Image.h"
-#include "wall/Png.h"
+#include "wall/image/Image.h"
+#include "wall/image/Png.h"
 
 namespace {
 

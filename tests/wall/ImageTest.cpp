@@ -7,10 +7,10 @@
 #include <string>
 
 #include "base/Error.h"
-#include "wall/Capture.h"
-#include "wall/Image.h"
-#include "wall/Layout.h"
-#include "wall/Png.h"
+#include "wall/display/Capture.h"
+#include "wall/image/Image.h"
+#include "wall/image/Png.h"
+#include "wall/layout/Layout.h"
 
 namespace fs = std::filesystem;
 

@@ -5,8 +5,8 @@
 #include <string>
 
 #include "base/Error.h"
-#include "wall/Layout.h"
-#include "wall/Ranks.h"
+#include "wall/layout/Layout.h"
+#include "wall/layout/Ranks.h"
 
 namespace {
 

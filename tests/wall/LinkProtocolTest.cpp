@@ -1,6 +1,6 @@
-// The messages that let wall processes come and go (wall/service/Protocol.h: Roster and the live
-// flags of the directory; wall/service/LinkMessages.h: the wall's own link): round trips, and
-// every malformed variant refused with a base::Error that says what was wrong.
+// The messages that let wall processes come and go (wall/service/protocol/Protocol.h: Roster and
+// the live flags of the directory; wall/service/protocol/LinkMessages.h: the wall's own link):
+// round trips, and every malformed variant refused with a base::Error that says what was wrong.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -8,9 +8,9 @@
 #include <string>
 
 #include "base/Error.h"
-#include "wall/service/LinkMessages.h"
-#include "wall/service/Protocol.h"
-#include "wall/service/ServiceCommands.h"
+#include "wall/service/protocol/LinkMessages.h"
+#include "wall/service/protocol/Protocol.h"
+#include "wall/service/protocol/ServiceCommands.h"
 
 namespace wall::service {
 namespace {

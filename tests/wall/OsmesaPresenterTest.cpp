@@ -8,7 +8,7 @@
 #include <random>
 #include <vector>
 
-#include "wall/OsmesaPresenter.h"
+#include "wall/display/OsmesaPresenter.h"
 
 namespace {
 

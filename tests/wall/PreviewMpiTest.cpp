@@ -10,8 +10,8 @@
 
 #include "dfb/DistributedFrameBuffer.h"
 #include "tests/MpiTestUtil.h"
-#include "wall/PreviewAssembler.h"
-#include "wall/PreviewOp.h"
+#include "wall/route/PreviewAssembler.h"
+#include "wall/route/PreviewOp.h"
 
 namespace wall {
 namespace {

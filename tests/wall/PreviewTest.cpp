@@ -1,5 +1,5 @@
-// The preview's box filter and decoration (wall/Preview.h), without ranks.
-#include "wall/Preview.h"
+// The preview's box filter and decoration (wall/route/Preview.h), without ranks.
+#include "wall/route/Preview.h"
 
 #include <gtest/gtest.h>
 
@@ -7,8 +7,8 @@
 #include <fstream>
 #include <random>
 
-#include "wall/Layout.h"
-#include "wall/Png.h"
+#include "wall/image/Png.h"
+#include "wall/layout/Layout.h"
 
 namespace wall {
 namespace {

@@ -1,7 +1,7 @@
-// The wall service's wire protocol (wall/service/Protocol.h): round trips of every message kind
-// (hello, directory, text, control, piece batches in each codec, built with BatchWriter::add and
-// with encodePiece + append), and hostile input: every malformed message is a base::Error with a
-// message a log can print, never a crash (this suite also runs under ASan+UBSan, and every
+// The wall service's wire protocol (wall/service/protocol/Protocol.h): round trips of every message
+// kind (hello, directory, text, control, piece batches in each codec, built with BatchWriter::add
+// and with encodePiece + append), and hostile input: every malformed message is a base::Error with
+// a message a log can print, never a crash (this suite also runs under ASan+UBSan, and every
 // truncated message is copied into a buffer of exactly its size so an over-read is caught).
 //
 // With DFBWALL_WRITE_FUZZ_SEEDS=DIR, the test WritesFuzzSeeds writes real pack* output into
@@ -23,10 +23,10 @@
 #include <vector>
 
 #include "base/Error.h"
-#include "wall/Image.h"
-#include "wall/Layout.h"
-#include "wall/service/Codec.h"
-#include "wall/service/Protocol.h"
+#include "wall/image/Image.h"
+#include "wall/layout/Layout.h"
+#include "wall/service/protocol/Codec.h"
+#include "wall/service/protocol/Protocol.h"
 
 namespace wall::service {
 namespace {

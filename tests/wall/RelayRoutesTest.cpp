@@ -1,4 +1,4 @@
-// What a relay (wall/service/RelayRoutes.h) does to the messages it forwards: the wall's
+// What a relay (wall/service/relay/RelayRoutes.h) does to the messages it forwards: the wall's
 // Directory and Roster reach the job with the relay's endpoints (live flags, layout, session,
 // credits, roster version and reason as the wall said); piece messages pass only when they are
 // batches of a session the relay has seen in a Directory; the directory link carries the kinds of
@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "wall/Layout.h"
-#include "wall/service/Protocol.h"
-#include "wall/service/RelayRoutes.h"
+#include "wall/layout/Layout.h"
+#include "wall/service/protocol/Protocol.h"
+#include "wall/service/relay/RelayRoutes.h"
 
 namespace wall::service {
 namespace {

@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "base/Error.h"
-#include "wall/Layout.h"
-#include "wall/PieceMessage.h"
-#include "wall/Routing.h"
+#include "wall/layout/Layout.h"
+#include "wall/route/PieceMessage.h"
+#include "wall/route/Routing.h"
 
 namespace {
 

@@ -1,6 +1,6 @@
-// The wall's own coordination (wall/service/Desk.h, wall/service/MemberLink.h) in one process:
-// a real desk and real member links over ZeroMQ on loopback, and a real job link
-// (wall/service/ServiceClient.h), with the processes' answers given by the test. Checks what
+// The wall's own coordination (wall/service/server/Desk.h, wall/service/server/MemberLink.h) in one
+// process: a real desk and real member links over ZeroMQ on loopback, and a real job link
+// (wall/service/client/ServiceClient.h), with the processes' answers given by the test. Checks what
 // the end-to-end tests (tests/apps/wall_survives_test.sh, cluster_test.sh survive) cannot pin
 // down exactly: who takes part in which swap barrier, when a silent process is dropped, the
 // roster the job gets, the first frame a process that comes back is given, refusals.
@@ -18,11 +18,11 @@
 #include <vector>
 
 #include "base/Error.h"
-#include "wall/FrameCredits.h"
-#include "wall/service/Desk.h"
-#include "wall/service/LinkMessages.h"
-#include "wall/service/MemberLink.h"
-#include "wall/service/ServiceClient.h"
+#include "wall/route/FrameCredits.h"
+#include "wall/service/client/ServiceClient.h"
+#include "wall/service/protocol/LinkMessages.h"
+#include "wall/service/server/Desk.h"
+#include "wall/service/server/MemberLink.h"
 
 namespace wall::service {
 namespace {

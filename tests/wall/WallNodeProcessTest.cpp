@@ -15,12 +15,12 @@
 
 #include "base/Error.h"
 #include "tests/Stopwatch.h"
-#include "wall/Capture.h"
-#include "wall/OsmesaPresenter.h"
-#include "wall/PieceMessage.h"
-#include "wall/Png.h"
-#include "wall/Routing.h"
-#include "wall/WallNode.h"
+#include "wall/display/Capture.h"
+#include "wall/display/OsmesaPresenter.h"
+#include "wall/display/WallNode.h"
+#include "wall/image/Png.h"
+#include "wall/route/PieceMessage.h"
+#include "wall/route/Routing.h"
 
 namespace wall {
 namespace {

@@ -1,7 +1,7 @@
 // The wall node on real ranks (run with 3: rank 0 sends pieces, ranks 1 and 2 are wall
 // processes 0 and 1, each driving one offscreen display), fed by hand or by the display-routing
 // op through the job's messenger.
-#include "wall/WallNode.h"
+#include "wall/display/WallNode.h"
 
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -15,14 +15,14 @@
 
 #include "base/Error.h"
 #include "dfb/PixelOp.h"
-#include "wall/Capture.h"
-#include "wall/DisplayRoutingOp.h"
-#include "wall/FrameCredits.h"
-#include "wall/OsmesaPresenter.h"
-#include "wall/PieceMessage.h"
-#include "wall/Png.h"
-#include "wall/Ranks.h"
-#include "wall/Routing.h"
+#include "wall/display/Capture.h"
+#include "wall/display/OsmesaPresenter.h"
+#include "wall/image/Png.h"
+#include "wall/layout/Ranks.h"
+#include "wall/route/DisplayRoutingOp.h"
+#include "wall/route/FrameCredits.h"
+#include "wall/route/PieceMessage.h"
+#include "wall/route/Routing.h"
 
 namespace wall {
 namespace {

@@ -1,0 +1,39 @@
+#include "apps/PageRoutes.h"
+
+#include <nlohmann/json.hpp>
+
+#include "apps/ControlServer.h"
+#include "apps/Job.h"
+#include "apps/Preview.h"
+#include "apps/control/PageAssets.h"
+
+namespace app {
+
+void addPageRoutes(ControlServer& server, const Job& job, const Preview& preview) {
+  for (const PageAsset& asset : pageAssets()) {
+    auto serve = [&asset] {
+      return HttpReply{200, std::string(asset.contentType), std::string(asset.body)};
+    };
+    server.addGet(std::string(asset.path), serve);
+    if (asset.path == "/index.html") server.addGet("/", serve);
+  }
+  server.addGet("/api/preview.png", [&preview] {
+    return HttpReply{200, "image/png", *preview.png().bytes};
+  });
+
+  nlohmann::json layout;
+  layout["canvas"] = {job.canvasWidth, job.canvasHeight};
+  const wall::PreviewGrid& grid = preview.assembler()->grid();
+  layout["preview"] = {{"size", {grid.width(), grid.height()}}, {"factor", grid.factor}};
+  layout["displays"] = nlohmann::json::array();
+  if (job.layout)
+    for (const wall::Display& d : job.layout->displays)
+      layout["displays"].push_back({{"name", d.name},
+                                    {"rect", {d.rect.x0, d.rect.y0, d.rect.x1, d.rect.y1}},
+                                    {"process", d.process}});
+  server.addGet("/api/layout", [body = layout.dump()] {
+    return HttpReply{200, "application/json", body};
+  });
+}
+
+}  // namespace app

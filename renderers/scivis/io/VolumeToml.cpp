@@ -1,0 +1,405 @@
+#include "renderers/scivis/io/VolumeToml.h"
+
+#include <algorithm>
+
+#include "base/Error.h"
+#include "renderers/scivis/io/formats/VolumeFile.h"
+
+namespace renderers {
+namespace {
+
+// Voxels per axis at most. Indices and world positions are floats in the renderer: below 2^14
+// voxels a position inside the grid keeps 1/1024 of a voxel of precision (24-bit mantissa), and
+// a typo such as 25600 for 256 fails here, naming the line, instead of as an allocation failure
+// on every rank.
+constexpr int kMaxDims = 16384;
+
+std::string str(float v) {
+  std::string s = std::to_string(v);
+  s.erase(s.find_last_not_of('0') + 1);
+  if (s.back() == '.') s.pop_back();
+  return s;
+}
+
+Index3 readDims(const TomlReader& r, const toml::node& n, const std::string& what) {
+  const toml::array* a = n.as_array();
+  if (!a || a->size() != 3) r.fail(n, what + " must be an array of 3 integers");
+  int d[3];
+  for (int i = 0; i < 3; ++i) {
+    const toml::node& e = (*a)[static_cast<std::size_t>(i)];
+    const auto v = e.value<std::int64_t>();
+    if (!e.is_integer() || !v) r.fail(e, what + " must be an array of 3 integers");
+    if (*v < 2 || *v > kMaxDims)
+      r.fail(e, what + " must be between 2 and " + std::to_string(kMaxDims) + " per axis, not " +
+                    std::to_string(*v));
+    d[i] = static_cast<int>(*v);
+  }
+  return {d[0], d[1], d[2]};
+}
+
+Vec3 readSpacing(const TomlReader& r, const toml::node& n, const std::string& what) {
+  const Vec3 s = n.is_array() ? r.vec3(n, what) : Vec3{r.number(n, what)};
+  if (!(s.x > 0 && s.y > 0 && s.z > 0)) r.fail(n, what + " must be positive");
+  return s;
+}
+
+float readInRange(const TomlReader& r, const toml::table& t, std::string_view key,
+                  const std::string& what, float fallback, float lo, float hi) {
+  const float v = r.number(t, key, what, fallback);
+  if (v < lo || v > hi)
+    r.fail(*t.get(key),
+           what + "." + std::string(key) + " must be in [" + str(lo) + ", " + str(hi) + "]");
+  return v;
+}
+
+// [[value, a, b, ...], ...] with `width` numbers per point, values ascending (equal values make a
+// step), the other numbers in [0, 1].
+template <class Point, class Make>
+std::vector<Point> readPoints(const TomlReader& r, const toml::node& n, const std::string& what,
+                              std::size_t width, const char* shape, Make make) {
+  const toml::array* a = n.as_array();
+  if (!a || a->empty()) r.fail(n, what + " must be a non-empty array of " + shape);
+  std::vector<Point> points;
+  float previous = 0;
+  for (const toml::node& p : *a) {
+    const toml::array* q = p.as_array();
+    if (!q || q->size() != width) r.fail(p, what + ": each point must be " + shape);
+    float v[4];
+    for (std::size_t i = 0; i < width; ++i) v[i] = r.number((*q)[i], what);
+    for (std::size_t i = 1; i < width; ++i)
+      if (v[i] < 0 || v[i] > 1)
+        r.fail(p, what + ": " + shape + " needs numbers in [0, 1] after the value");
+    if (!points.empty() && v[0] < previous)
+      r.fail(p, what + ": control point values must be ascending (" + str(v[0]) + " after " +
+                    str(previous) + ")");
+    previous = v[0];
+    points.push_back(make(v));
+  }
+  return points;
+}
+
+VolumeSource::Kind readKind(const TomlReader& r, const toml::table& t, const std::string& what) {
+  const toml::node& n = r.require(t, "source", what);
+  const std::string s = r.string(n, what + ".source");
+  if (s == "wavelet") return VolumeSource::Kind::Wavelet;
+  if (s == "marschner-lobb") return VolumeSource::Kind::MarschnerLobb;
+  if (s == "raw") return VolumeSource::Kind::RawFile;
+  if (s == "openvdb") return VolumeSource::Kind::OpenVdb;
+  if (s == "file") {
+    // The existing readers by the file's extension: .raw (with dims and type), .vdb.
+    const toml::node* file = t.get("file");
+    const std::string name = file && file->is_string() ? *file->value<std::string>() : "";
+    const std::string ext = std::filesystem::path(name).extension().string();
+    if (ext == ".raw" && !t.get("format")) return VolumeSource::Kind::RawFile;
+    if (ext == ".vdb" && !t.get("format")) return VolumeSource::Kind::OpenVdb;
+    return VolumeSource::Kind::File;
+  }
+  r.fail(n, what +
+                ".source must be \"wavelet\", \"marschner-lobb\", \"raw\", \"openvdb\" or "
+                "\"file\", not \"" +
+                s + "\"");
+}
+
+void readRaw(const TomlReader& r, const toml::table& t, const std::string& what,
+             const std::filesystem::path& folder, VolumeSource& s) {
+  const toml::node& file = r.require(t, "file", what);
+  s.raw.path = (folder / r.string(file, what + ".file")).string();
+  const toml::node& type = r.require(t, "type", what);
+  const std::string typeName = r.string(type, what + ".type");
+  if (typeName == "float32")
+    s.type = VoxelType::Float32;
+  else if (typeName == "uint8")
+    s.type = VoxelType::UInt8;
+  else if (typeName == "uint16")
+    s.type = VoxelType::UInt16;
+  else
+    r.fail(type, what + ".type must be \"float32\", \"uint8\" or \"uint16\"");
+  if (const toml::node* order = t.get("byte_order")) {
+    const std::string o = r.string(*order, what + ".byte_order");
+    if (o != "little" && o != "big")
+      r.fail(*order, what + ".byte_order must be \"little\" or \"big\"");
+    s.raw.bigEndian = o == "big";
+  }
+  if (const toml::node* header = t.get("header_bytes")) {
+    const auto v = header->value<std::int64_t>();
+    if (!header->is_integer() || !v || *v < 0)
+      r.fail(*header, what + ".header_bytes must be a non-negative integer");
+    s.raw.headerBytes = static_cast<std::uint64_t>(*v);
+  }
+  try {
+    checkRawFile(s);
+  } catch (const base::Error& e) {
+    r.fail(file, what + ".file: " + e.what());
+  }
+}
+
+void readOpenVdb(const TomlReader& r, const toml::table& t, const std::string& what,
+                 const std::filesystem::path& folder, VolumeSource& s) {
+  const toml::node& file = r.require(t, "file", what);
+  s.vdb.path = (folder / r.string(file, what + ".file")).string();
+  if (const toml::node* grid = t.get("grid")) s.vdb.gridName = r.string(*grid, what + ".grid");
+  try {
+    resolveOpenVdbGrid(s);
+  } catch (const base::Error& e) {
+    r.fail(file, what + ".file: " + e.what());
+  }
+  for (int a = 0; a < 3; ++a)
+    if (s.grid.dims[a] > kMaxDims)
+      r.fail(file, what + ".file: the grid's active voxels span " + std::to_string(s.grid.dims[a]) +
+                       " voxels along an axis, more than " + std::to_string(kMaxDims));
+}
+
+void readFile(const TomlReader& r, const toml::table& t, const std::string& what,
+              const std::filesystem::path& folder, VolumeSource& s) {
+  const toml::node& file = r.require(t, "file", what);
+  VolumeFileParams& f = s.file;
+  f.path = (folder / r.string(file, what + ".file")).string();
+  if (const toml::node* format = t.get("format")) {
+    const auto named = volumeFormatNamed(r.string(*format, what + ".format"));
+    if (!named)
+      r.fail(*format, what +
+                          ".format must be \"nrrd\", \"nifti\", \"metaimage\", \"hdf5\" or "
+                          "\"netcdf\"");
+    f.format = *named;
+  } else if (const auto byName = volumeFormatOfPath(f.path)) {
+    f.format = *byName;
+  } else {
+    r.fail(file, what +
+                     ".file: the format is not known from the name (.nrrd .nhdr .nii .nii.gz .mhd "
+                     ".mha .h5 .hdf5 .nc .cdf); give 'format'");
+  }
+  if (const toml::node* d = t.get("dataset")) {
+    if (f.format != VolumeFormat::Hdf5) r.fail(*d, what + ".dataset is for HDF5 files");
+    f.dataset = r.string(*d, what + ".dataset");
+  }
+  if (const toml::node* v = t.get("variable")) {
+    if (f.format != VolumeFormat::NetCdf) r.fail(*v, what + ".variable is for NetCDF files");
+    f.variable = r.string(*v, what + ".variable");
+  }
+  if (const toml::node* time = t.get("time")) {
+    const auto v = time->value<std::int64_t>();
+    if (!time->is_integer() || !v || *v < 0 || *v > (1 << 30))
+      r.fail(*time, what + ".time must be a non-negative integer");
+    f.time = static_cast<int>(*v);
+  }
+  try {
+    resolveVolumeFile(s);
+  } catch (const base::Error& e) {
+    // Point at the field the problem is about: a dataset, variable or time step the file lacks.
+    const std::string m = e.what();
+    for (const std::string field : {"dataset", "variable", "time"})
+      if (const toml::node* n = t.get(field); n && m.find(" " + field + " ") != std::string::npos)
+        r.fail(*n, what + "." + field + ": " + m);
+    r.fail(file, what + ".file: " + m);
+  }
+}
+
+}  // namespace
+
+TransferFunction readTransferFunction(const TomlReader& r, const toml::node& n,
+                                      const std::string& what) {
+  return readTransferFunction(r, n, what, std::nullopt);
+}
+
+TransferFunction readTransferFunction(const TomlReader& r, const toml::node& n,
+                                      const std::string& what,
+                                      std::optional<std::pair<float, float>> defaultRange) {
+  const toml::table& t = r.table(n, what);
+  r.onlyKeys(t, what, {"preset", "colors", "opacity", "range", "opacity_unit", "max_opacity"});
+  const toml::node* preset = t.get("preset");
+  const toml::node* colors = t.get("colors");
+  const toml::node* opacity = t.get("opacity");
+  if (preset && colors) r.fail(*colors, what + ": give either 'preset' or 'colors', not both");
+  if (!preset && !colors) r.fail(t, what + ": missing field 'preset' or 'colors'");
+
+  TransferFunction tf;
+  if (colors) {
+    tf.colors = readPoints<std::pair<float, Vec3>>(r, *colors, what + ".colors", 4,
+                                                   "[value, r, g, b]", [](const float* v) {
+                                                     return std::pair{v[0], Vec3{v[1], v[2], v[3]}};
+                                                   });
+  }
+  if (opacity) {
+    tf.opacities = readPoints<std::pair<float, float>>(r, *opacity, what + ".opacity", 2,
+                                                       "[value, opacity]", [](const float* v) {
+                                                         return std::pair{v[0], v[1]};
+                                                       });
+  }
+
+  if (const toml::node* range = t.get("range")) {
+    const toml::array* a = range->as_array();
+    if (!a || a->size() != 2) r.fail(*range, what + ".range must be [low, high]");
+    tf.valueMin = r.number((*a)[0], what + ".range");
+    tf.valueMax = r.number((*a)[1], what + ".range");
+    if (!(tf.valueMin < tf.valueMax)) r.fail(*range, what + ".range must have low < high");
+  } else if (defaultRange) {
+    std::tie(tf.valueMin, tf.valueMax) = *defaultRange;
+  } else if (colors) {
+    // The control points span the values they colour.
+    tf.valueMin =
+        std::min(tf.colors.front().first,
+                 tf.opacities.empty() ? tf.colors.front().first : tf.opacities.front().first);
+    tf.valueMax =
+        std::max(tf.colors.back().first,
+                 tf.opacities.empty() ? tf.colors.back().first : tf.opacities.back().first);
+    if (!(tf.valueMin < tf.valueMax))
+      r.fail(*colors, what + ": the control points span no values; give 'range' = [low, high]");
+  } else {
+    r.fail(t, what +
+                  ": missing field 'range' (the volume's values are not known before reading "
+                  "it)");
+  }
+
+  const toml::node* maxOpacity = t.get("max_opacity");
+  if (maxOpacity && opacity)
+    r.fail(*maxOpacity, what +
+                            ".max_opacity shapes the default opacity ramp; with 'opacity' given, "
+                            "put the peak there");
+  const float peak = readInRange(r, t, "max_opacity", what, 1.0f, 0.0f, 1.0f);
+  if (preset) {
+    const std::string name = r.string(*preset, what + ".preset");
+    TransferFunction p;
+    try {
+      p = transferFunctionPreset(name, tf.valueMin, tf.valueMax, peak);
+    } catch (const base::Error& e) {
+      r.fail(*preset, what + ".preset: " + e.what());
+    }
+    tf.colors = std::move(p.colors);
+    if (!opacity) tf.opacities = std::move(p.opacities);
+  } else if (!opacity) {
+    tf.opacities = {{tf.valueMin, 0.0f}, {tf.valueMax, peak}};
+  }
+
+  if (const toml::node* unit = t.get("opacity_unit")) {
+    tf.unitDistance = r.number(*unit, what + ".opacity_unit");
+    if (!(tf.unitDistance > 0)) r.fail(*unit, what + ".opacity_unit must be positive");
+  }
+  return tf;
+}
+
+VolumeDesc readVolume(const TomlReader& r, const toml::table& t,
+                      const std::filesystem::path& folder) {
+  VolumeDesc d;
+  d.name = r.string(r.require(t, "name", "volume"), "volume.name");
+  const std::string what = "volume '" + d.name + "'";
+  VolumeSource& s = d.source;
+  s.kind = readKind(r, t, what);
+  switch (s.kind) {
+    case VolumeSource::Kind::Wavelet:
+      r.onlyKeys(t, what,
+                 {"name", "source", "dims", "origin", "spacing", "visible", "transfer_function",
+                  "maximum", "sigma", "x_freq", "x_mag", "y_freq", "y_mag", "z_freq", "z_mag"});
+      break;
+    case VolumeSource::Kind::MarschnerLobb:
+      r.onlyKeys(t, what,
+                 {"name", "source", "dims", "origin", "spacing", "visible", "transfer_function",
+                  "f_m", "alpha"});
+      break;
+    case VolumeSource::Kind::RawFile:
+      r.onlyKeys(t, what,
+                 {"name", "source", "dims", "origin", "spacing", "visible", "transfer_function",
+                  "file", "type", "byte_order", "header_bytes"});
+      break;
+    case VolumeSource::Kind::OpenVdb:
+      r.onlyKeys(
+          t, what,
+          {"name", "source", "origin", "spacing", "visible", "transfer_function", "file", "grid"});
+      break;
+    case VolumeSource::Kind::File:
+      r.onlyKeys(t, what,
+                 {"name", "source", "origin", "spacing", "visible", "transfer_function", "file",
+                  "format", "dataset", "variable", "time"});
+      break;
+  }
+  if (const toml::node* v = t.get("visible")) {
+    if (!v->is_boolean()) r.fail(*v, what + ".visible must be true or false");
+    d.visible = *v->value<bool>();
+  }
+
+  // Resolution: VTK's 21³ for the wavelet, Marschner and Lobb's 40³; raw files must say.
+  if (const toml::node* dims = t.get("dims"))
+    s.grid.dims = readDims(r, *dims, what + ".dims");
+  else if (s.kind == VolumeSource::Kind::Wavelet)
+    s.grid.dims = {21, 21, 21};
+  else if (s.kind == VolumeSource::Kind::MarschnerLobb)
+    s.grid.dims = {40, 40, 40};
+  else if (s.kind == VolumeSource::Kind::RawFile)
+    r.require(t, "dims", what);
+
+  switch (s.kind) {
+    case VolumeSource::Kind::Wavelet: {
+      WaveletParams& p = s.wavelet;
+      p.maximum = r.number(t, "maximum", what, p.maximum);
+      p.sigma = r.number(t, "sigma", what, p.sigma);
+      if (!(p.sigma > 0)) r.fail(*t.get("sigma"), what + ".sigma must be positive");
+      p.xFreq = r.number(t, "x_freq", what, p.xFreq);
+      p.xMag = r.number(t, "x_mag", what, p.xMag);
+      p.yFreq = r.number(t, "y_freq", what, p.yFreq);
+      p.yMag = r.number(t, "y_mag", what, p.yMag);
+      p.zFreq = r.number(t, "z_freq", what, p.zFreq);
+      p.zMag = r.number(t, "z_mag", what, p.zMag);
+      break;
+    }
+    case VolumeSource::Kind::MarschnerLobb:
+      s.marschnerLobb.fM = r.number(t, "f_m", what, s.marschnerLobb.fM);
+      s.marschnerLobb.alpha = r.number(t, "alpha", what, s.marschnerLobb.alpha);
+      if (!(s.marschnerLobb.alpha >= 0))
+        r.fail(*t.get("alpha"), what + ".alpha must not be negative");
+      break;
+    case VolumeSource::Kind::RawFile:
+      readRaw(r, t, what, folder, s);
+      break;
+    case VolumeSource::Kind::OpenVdb:
+      readOpenVdb(r, t, what, folder, s);
+      break;
+    case VolumeSource::Kind::File:
+      readFile(r, t, what, folder, s);
+      break;
+  }
+
+  // Geometry: the file's own for OpenVDB and files that place their grid, else the longest side
+  // 2 world units centred on 0; either can be overridden.
+  const Index3 n = s.grid.dims;
+  const bool fileGeometry = s.kind == VolumeSource::Kind::OpenVdb ||
+                            (s.kind == VolumeSource::Kind::File && s.file.hasGeometry);
+  if (const toml::node* spacing = t.get("spacing")) {
+    s.grid.spacing = readSpacing(r, *spacing, what + ".spacing");
+  } else if (!fileGeometry) {
+    s.grid.spacing = Vec3{2.0f / static_cast<float>(std::max({n.x, n.y, n.z}) - 1)};
+  }
+  if (const toml::node* origin = t.get("origin")) {
+    s.grid.origin = r.vec3(*origin, what + ".origin");
+  } else if (!fileGeometry) {
+    s.grid.origin = {-0.5f * s.grid.spacing.x * static_cast<float>(n.x - 1),
+                     -0.5f * s.grid.spacing.y * static_cast<float>(n.y - 1),
+                     -0.5f * s.grid.spacing.z * static_cast<float>(n.z - 1)};
+  }
+
+  // Where its size was given (a brick's memory budget names it), and whether float can place
+  // its voxels.
+  const toml::node* sized = t.get("dims") ? t.get("dims") : t.get("file");
+  d.where = r.where(sized ? *sized : t, what + (sized ? (t.get("dims") ? ".dims" : ".file") : ""));
+  if (const std::string problem = s.grid.problem(); !problem.empty())
+    r.fail(t.get("spacing")  ? *t.get("spacing")
+           : t.get("origin") ? *t.get("origin")
+                             : t,
+           what + "." + problem);
+
+  // Procedural fields know their range, so a preset needs none; files do not (unless invisible,
+  // when the transfer function is never used). The wavelet's range costs evaluations: only
+  // when the transfer function does not give one.
+  const toml::node* tf = t.get("transfer_function");
+  const bool rangeGiven = tf && tf->is_table() && tf->as_table()->get("range");
+  const std::optional<std::pair<float, float>> range =
+      rangeGiven ? std::nullopt : knownValueRange(s);
+  if (tf) {
+    d.transfer = readTransferFunction(r, *tf, what + ".transfer_function", range);
+  } else if (range) {
+    d.transfer = transferFunctionPreset("cool-warm", range->first, range->second);
+  } else if (d.visible) {
+    r.require(t, "transfer_function", what);
+  }
+  return d;
+}
+
+}  // namespace renderers

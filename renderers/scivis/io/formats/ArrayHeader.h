@@ -1,0 +1,43 @@
+#pragma once
+// What the header of an NRRD, NIfTI-1 or MetaImage file says: the grid and where its voxels are
+// stored. The parsers take the first bytes of the file (for .nii.gz: of the inflated stream) and
+// throw base::Error naming the file, the line (text headers) and the field on anything they
+// do not understand or do not believe (dims past the caps, sizes that overflow, unknown types or
+// encodings). They never read files themselves, so the fuzzer runs them on any bytes.
+#include <string>
+#include <string_view>
+
+#include "renderers/scivis/io/formats/StoredArray.h"
+
+namespace renderers {
+
+// Voxels per axis at most (as the scene file allows) and in all (2^34: 16 GiB of uint8).
+constexpr int kMaxFileDims = 16384;
+constexpr std::uint64_t kMaxFileVoxels = std::uint64_t{1} << 34;
+
+struct ArrayHeader {
+  Index3 dims;
+  Vec3 spacing{1.0f};
+  Vec3 origin{0.0f};
+  StoredArray data;  // data.path: the data file (the header's own or a detached one)
+};
+
+// Text headers end at a blank line (NRRD) or the ElementDataFile line (MetaImage); a header not
+// ended within this many bytes is refused.
+constexpr std::size_t kMaxTextHeader = 1 << 20;
+
+// `bytes`: the file's first bytes (up to kMaxTextHeader); `path`: the file, for messages and to
+// resolve detached data files against its folder.
+ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path);
+ArrayHeader parseMetaImageHeader(std::string_view bytes, const std::string& path);
+// NIfTI-1 single file (.nii, magic "n+1"): `bytes` at least the 348-byte header; `compressed`:
+// the file is gzipped (.nii.gz; bytes are then the inflated stream's first bytes). `time`
+// selects the volume of a 4-D file.
+constexpr std::size_t kNiftiHeaderBytes = 348;
+ArrayHeader parseNiftiHeader(std::string_view bytes, const std::string& path, bool compressed,
+                             int time = 0);
+
+// Checks dims against the caps; `where` starts the message ("file:line: field 'sizes'").
+void checkFileDims(Index3 dims, const std::string& where);
+
+}  // namespace renderers

@@ -1,0 +1,205 @@
+// NRRD headers (teem's format, https://teem.sourceforge.net/nrrd/format.html): "NRRD000X", then
+// "field: value" lines (and "key:=value" pairs, ignored) up to a blank line; the data follows
+// (attached) or lies in `data file`. Read here: 3-D scalar arrays, raw or gzip encoding, spacing
+// from `spacings` or the lengths of `space directions` (axis-aligned), `space origin`.
+#include <cmath>
+#include <string>
+
+#include "base/Error.h"
+#include "renderers/scivis/io/formats/ArrayHeader.h"
+#include "renderers/scivis/io/formats/HeaderText.h"
+
+namespace renderers {
+namespace {
+
+using namespace headertext;
+
+FileType nrrdType(const std::string& t, const std::string& where) {
+  static const struct {
+    const char* name;
+    FileType type;
+  } kNames[] = {
+      {"signed char", FileType::Int8},
+      {"int8", FileType::Int8},
+      {"int8_t", FileType::Int8},
+      {"uchar", FileType::UInt8},
+      {"unsigned char", FileType::UInt8},
+      {"uint8", FileType::UInt8},
+      {"uint8_t", FileType::UInt8},
+      {"short", FileType::Int16},
+      {"short int", FileType::Int16},
+      {"signed short", FileType::Int16},
+      {"signed short int", FileType::Int16},
+      {"int16", FileType::Int16},
+      {"int16_t", FileType::Int16},
+      {"ushort", FileType::UInt16},
+      {"unsigned short", FileType::UInt16},
+      {"unsigned short int", FileType::UInt16},
+      {"uint16", FileType::UInt16},
+      {"uint16_t", FileType::UInt16},
+      {"int", FileType::Int32},
+      {"signed int", FileType::Int32},
+      {"int32", FileType::Int32},
+      {"int32_t", FileType::Int32},
+      {"uint", FileType::UInt32},
+      {"unsigned int", FileType::UInt32},
+      {"uint32", FileType::UInt32},
+      {"uint32_t", FileType::UInt32},
+      {"float", FileType::Float32},
+      {"double", FileType::Float64},
+  };
+  for (const auto& n : kNames)
+    if (t == n.name) return n.type;
+  throw base::Error(where + ": type '" + t +
+                    "' is not one dfbwall reads (int8, uint8, int16, uint16, int32, uint32, float, "
+                    "double)");
+}
+
+// "(x,y,z)" vectors, or "none".
+std::vector<Vec3> vectors(std::string_view value, const std::string& where) {
+  std::vector<Vec3> out;
+  std::size_t i = 0;
+  while (true) {
+    value = trim(value.substr(i));
+    if (value.empty()) break;
+    if (value.front() != '(') throw base::Error(where + ": '(x,y,z)' vectors expected");
+    const std::size_t close = value.find(')');
+    if (close == std::string_view::npos) throw base::Error(where + ": a vector misses its ')'");
+    std::string inner(value.substr(1, close - 1));
+    for (char& c : inner)
+      if (c == ',') c = ' ';
+    const std::vector<double> v = numbers(inner, 3, where);
+    out.push_back({static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])});
+    i = close + 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path) {
+  if (bytes.substr(0, 4) != "NRRD")
+    throw base::Error(path + ": not an NRRD file (it does not start with \"NRRD\")");
+  ArrayHeader h;
+  bool haveType = false, haveSizes = false, haveDimension = false, haveEndian = false,
+       ended = false;
+  std::string encoding = "raw", dataFile;
+  long long byteSkip = 0;
+  std::size_t at = 0, dataStart = bytes.size();
+  int lineNumber = 0;
+  while (at < bytes.size()) {
+    std::size_t end = bytes.find('\n', at);
+    if (end == std::string_view::npos) {
+      if (bytes.size() >= kMaxTextHeader)
+        throw base::Error(path + ": the NRRD header does not end within " +
+                          std::to_string(kMaxTextHeader) + " bytes");
+      end = bytes.size();
+    }
+    std::string_view line = bytes.substr(at, end - at);
+    at = end + 1;
+    ++lineNumber;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (lineNumber == 1) continue;  // the magic
+    if (line.empty()) {
+      ended = true;
+      dataStart = std::min(at, bytes.size());
+      break;
+    }
+    if (line.front() == '#') continue;
+    if (line.find(":=") != std::string_view::npos) continue;  // key/value pairs
+    const std::size_t colon = line.find(": ");
+    const std::string where = path + ":" + std::to_string(lineNumber);
+    if (colon == std::string_view::npos)
+      throw base::Error(where + ": '" + std::string(line.substr(0, 80)) +
+                        "' is not a 'field: value' line");
+    const std::string field = lower(trim(line.substr(0, colon)));
+    const std::string_view value = trim(line.substr(colon + 2));
+    const std::string fw = where + ": field '" + field + "'";
+    if (field == "type") {
+      h.data.type = nrrdType(lower(value), fw);
+      haveType = true;
+    } else if (field == "dimension") {
+      if (integers(value, 1, 0, 1 << 20, fw)[0] != 3)
+        throw base::Error(fw + ": dfbwall reads 3-D scalar volumes, not dimension " +
+                          std::string(value));
+      haveDimension = true;
+    } else if (field == "sizes") {
+      h.dims = fileDims(value, fw);
+      haveSizes = true;
+    } else if (field == "spacings") {
+      const auto s = numbers(value, 3, fw);
+      for (double v : s)
+        if (!(v != 0)) throw base::Error(fw + ": spacings must not be 0");
+      h.spacing = {std::fabs(static_cast<float>(s[0])), std::fabs(static_cast<float>(s[1])),
+                   std::fabs(static_cast<float>(s[2]))};
+    } else if (field == "space directions") {
+      const auto d = vectors(value, fw);
+      if (d.size() != 3) throw base::Error(fw + ": 3 vectors expected");
+      float s[3];
+      for (int a = 0; a < 3; ++a) {
+        s[a] = std::sqrt(d[a].x * d[a].x + d[a].y * d[a].y + d[a].z * d[a].z);
+        if (!(s[a] > 0) || !std::isfinite(s[a]))
+          throw base::Error(fw + ": a direction of length 0");
+      }
+      h.spacing = {s[0], s[1], s[2]};
+    } else if (field == "space origin") {
+      const auto o = vectors(value, fw);
+      if (o.size() != 1) throw base::Error(fw + ": one '(x,y,z)' vector expected");
+      h.origin = o[0];
+    } else if (field == "encoding") {
+      encoding = lower(value);
+      if (encoding == "gz") encoding = "gzip";
+      if (encoding != "raw" && encoding != "gzip")
+        throw base::Error(fw + ": encoding '" + std::string(value) +
+                          "' is not one dfbwall reads (raw, gzip)");
+    } else if (field == "endian") {
+      const std::string e = lower(value);
+      if (e != "little" && e != "big") throw base::Error(fw + ": must be 'little' or 'big'");
+      h.data.bigEndian = e == "big";
+      haveEndian = true;
+    } else if (field == "data file" || field == "datafile") {
+      if (value.empty() || value.find('%') != std::string_view::npos ||
+          lower(value).rfind("list", 0) == 0)
+        throw base::Error(fw + ": only one detached data file is read");
+      dataFile = besideFile(path, value);
+    } else if (field == "byte skip" || field == "byteskip") {
+      byteSkip = integers(value, 1, 0, 1LL << 50, fw)[0];
+    } else if (field == "line skip" || field == "lineskip") {
+      if (integers(value, 1, 0, 1LL << 30, fw)[0] != 0)
+        throw base::Error(fw + ": line skip is not read; use byte skip");
+    } else if (field == "kinds" || field == "centers" || field == "centerings" ||
+               field == "space" || field == "space dimension" || field == "space units" ||
+               field == "units" || field == "labels" || field == "content" || field == "min" ||
+               field == "max" || field == "old min" || field == "old max" ||
+               field == "measurement frame" || field == "sample units" || field == "axis mins" ||
+               field == "axismins" || field == "axis maxs" || field == "axismaxs" ||
+               field == "thicknesses" || field == "block size") {
+      // Not needed to place a scalar grid.
+    } else {
+      throw base::Error(fw + ": unknown NRRD field");
+    }
+  }
+  const std::string what = path + ": NRRD header";
+  if (!haveDimension) throw base::Error(what + " misses field 'dimension'");
+  if (!haveType) throw base::Error(what + " misses field 'type'");
+  if (!haveSizes) throw base::Error(what + " misses field 'sizes'");
+  if (fileTypeBytes(h.data.type) > 1 && !haveEndian)
+    throw base::Error(what + " misses field 'endian' (needed for " + fileTypeName(h.data.type) +
+                      ")");
+  h.data.compressed = encoding == "gzip";
+  if (dataFile.empty()) {
+    if (!ended) throw base::Error(what + " has no blank line before the data and no 'data file'");
+    h.data.path = path;
+    h.data.fileOffset = dataStart;
+  } else {
+    h.data.path = dataFile;
+  }
+  const auto skip = static_cast<std::uint64_t>(byteSkip);
+  if (h.data.compressed)
+    h.data.streamSkip = skip;
+  else
+    h.data.fileOffset += skip;
+  return h;
+}
+
+}  // namespace renderers

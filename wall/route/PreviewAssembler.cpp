@@ -1,0 +1,120 @@
+#include "wall/route/PreviewAssembler.h"
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+
+#include "base/Error.h"
+#include "wall/route/PreviewOp.h"
+
+namespace wall {
+namespace {
+// Frames being assembled at once. Render ranks finish frames one after another, so two are in
+// progress at most (a fast rank's next frame while a slow rank's last tile travels); a message
+// further ahead than this is corrupt, not early.
+constexpr std::uint32_t kFramesAhead = 16;
+}  // namespace
+
+PreviewAssembler::PreviewAssembler(messaging::Messenger& messenger, PreviewGrid grid, int tileSize,
+                                   std::vector<bool> tilesOfFrame)
+    : messenger_(messenger),
+      grid_(grid),
+      tiles_(grid.canvasWidth, grid.canvasHeight, tileSize),
+      tilesOfFrame_(std::move(tilesOfFrame)),
+      tilesPerFrame_(
+          static_cast<int>(std::count(tilesOfFrame_.begin(), tilesOfFrame_.end(), true))),
+      latest_(std::make_shared<Snapshot>(Snapshot{0, Image(grid.width(), grid.height())})) {
+  if (static_cast<int>(tilesOfFrame_.size()) != tiles_.tileCount())
+    throw base::Error("preview: the tile mask does not match the canvas's tiles");
+  messenger_.registerObject(kPreviewObject, this);
+}
+
+PreviewAssembler::~PreviewAssembler() { messenger_.unregisterObject(kPreviewObject); }
+
+std::shared_ptr<const PreviewAssembler::Snapshot> PreviewAssembler::latest() const {
+  std::lock_guard lock(mutex_);
+  return latest_;
+}
+
+bool PreviewAssembler::waitFor(std::uint32_t frame,
+                               std::chrono::steady_clock::time_point deadline) const {
+  std::unique_lock lock(mutex_);
+  return published_.wait_until(lock, deadline, [&] { return latest_->frame >= frame; });
+}
+
+PreviewAssembler::Assembly& PreviewAssembler::assemblyOf(std::uint32_t frame) {
+  auto it = pending_.find(frame);
+  if (it != pending_.end()) return it->second;
+  Assembly& a = pending_[frame];
+  const size_t cells = static_cast<size_t>(grid_.width()) * static_cast<size_t>(grid_.height());
+  a.sums.assign(4 * cells, 0);
+  a.weights.assign(cells, 0);
+  a.seen.assign(tilesOfFrame_.size(), false);
+  a.missing = tilesPerFrame_;
+  return a;
+}
+
+void PreviewAssembler::incoming(int fromRank, messaging::Bytes&& payload) {
+  PreviewHeader h;
+  if (payload.size() < sizeof h)
+    throw base::Error("preview message from rank " + std::to_string(fromRank) + " is too short");
+  std::memcpy(&h, payload.data(), sizeof h);
+  const dfb::Region region{h.x0, h.y0, h.x1, h.y1};
+  const int tile = h.magic == kPreviewMagic && dfb::isSaneRegion(region, kMaxCanvasSide)
+                       ? tiles_.indexOfOrigin(h.x0, h.y0)
+                       : -1;
+  if (tile < 0 || tiles_.region(tile) != region || !tilesOfFrame_[static_cast<size_t>(tile)])
+    throw base::Error("malformed preview message from rank " + std::to_string(fromRank) +
+                      " (bad magic, or a rectangle that is no tile of the frame)");
+  const dfb::Region cells = grid_.cellsOf(region);
+  if (payload.size() != sizeof h + 4 * static_cast<size_t>(cells.pixelCount()))
+    throw base::Error("preview message from rank " + std::to_string(fromRank) + " has " +
+                      std::to_string(payload.size() - sizeof h) + " cell bytes, its tile needs " +
+                      std::to_string(4 * cells.pixelCount()));
+  std::vector<std::uint32_t> values(static_cast<size_t>(cells.pixelCount()));
+  std::memcpy(values.data(), payload.data() + sizeof h, 4 * values.size());
+
+  std::lock_guard lock(mutex_);
+  const std::uint32_t published = latest_->frame;
+  if (h.frameId <= published) return;  // a newer frame is out already: nobody wants this one
+  if (h.frameId - published > kFramesAhead)
+    throw base::Error("preview message from rank " + std::to_string(fromRank) + " for frame " +
+                      std::to_string(h.frameId) + ", far ahead of frame " +
+                      std::to_string(published));
+  Assembly& a = assemblyOf(h.frameId);
+  if (a.seen[static_cast<size_t>(tile)])
+    throw base::Error("preview of tile " + std::to_string(tile) + " of frame " +
+                      std::to_string(h.frameId) + " arrived twice");
+  a.seen[static_cast<size_t>(tile)] = true;
+  for (int cy = cells.y0; cy < cells.y1; ++cy)
+    for (int cx = cells.x0; cx < cells.x1; ++cx) {
+      const dfb::Region part = dfb::intersect(grid_.cellPixels(cx, cy), region);
+      const auto w = static_cast<std::uint32_t>(part.pixelCount());
+      const std::uint32_t v =
+          values[static_cast<size_t>((cy - cells.y0) * cells.width() + (cx - cells.x0))];
+      const size_t cell =
+          static_cast<size_t>(cy) * static_cast<size_t>(grid_.width()) + static_cast<size_t>(cx);
+      for (size_t c = 0; c < 4; ++c) a.sums[4 * cell + c] += (v >> (8 * c) & 0xff) * w;
+      a.weights[cell] += w;
+    }
+  if (--a.missing == 0) publish(h.frameId, a);
+}
+
+void PreviewAssembler::publish(std::uint32_t frame, const Assembly& a) {
+  auto snapshot = std::make_shared<Snapshot>();
+  snapshot->frame = frame;
+  snapshot->image = Image(grid_.width(), grid_.height());
+  for (size_t cell = 0; cell < a.weights.size(); ++cell) {
+    const std::uint32_t w = a.weights[cell];
+    if (w == 0) continue;  // no tile covers it: no display shows it
+    std::uint32_t p = 0;
+    for (size_t c = 0; c < 4; ++c) p |= (a.sums[4 * cell + c] + w / 2) / w << (8 * c);
+    snapshot->image.pixels[cell] = p;
+  }
+  latest_ = std::move(snapshot);
+  // This frame and every older one are done with.
+  pending_.erase(pending_.begin(), pending_.upper_bound(frame));
+  published_.notify_all();
+}
+
+}  // namespace wall

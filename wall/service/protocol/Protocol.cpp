@@ -1,0 +1,303 @@
+#include "wall/service/protocol/Protocol.h"
+
+#include <cstring>
+#include <string_view>
+
+#include "base/Error.h"
+#include "wall/service/protocol/WireFormat.h"
+
+namespace wall::service {
+namespace {
+
+constexpr std::uint32_t kMaxRanks = 1 << 20;
+
+DirectoryProcess readProcess(Reader& r, std::uint32_t index) {
+  DirectoryProcess p;
+  p.endpoint = r.text();
+  const auto live = r.get<std::uint8_t>();
+  if (live > 1)
+    r.fail("process " + std::to_string(index) + " has the live flag " + std::to_string(live));
+  p.live = live == 1;
+  if (p.live && p.endpoint.empty())
+    r.fail("live process " + std::to_string(index) + " has no endpoint");
+  return p;
+}
+
+}  // namespace
+
+messaging::Bytes packHello(const Hello& h) {
+  Writer w(Kind::Hello, 0);
+  w.text(h.token);
+  w.text(h.host);
+  w.put<std::uint32_t>(h.renderRanks);
+  w.put<std::uint32_t>(h.tileSize);
+  w.put<std::uint8_t>(static_cast<std::uint8_t>(h.codec.codec));
+  w.put<std::uint8_t>(static_cast<std::uint8_t>(h.codec.jpegQuality));
+  w.put<std::uint8_t>(static_cast<std::uint8_t>(h.codec.subsampling));
+  w.put<std::uint8_t>(h.wait ? 1 : 0);
+  w.put<std::uint32_t>(h.framesInFlight);
+  w.text(h.captureDir);
+  w.put<std::uint32_t>(h.captureEvery);
+  return w.take();
+}
+
+Hello parseHello(const std::byte* data, std::size_t size) {
+  Reader r(data, size, "hello");
+  Hello h;
+  h.token = r.text();
+  h.host = r.text();
+  h.renderRanks = r.get<std::uint32_t>();
+  h.tileSize = r.get<std::uint32_t>();
+  const auto codec = r.get<std::uint8_t>();
+  const auto quality = r.get<std::uint8_t>();
+  const auto subsampling = r.get<std::uint8_t>();
+  const auto wait = r.get<std::uint8_t>();
+  h.framesInFlight = r.get<std::uint32_t>();
+  h.captureDir = r.text();
+  h.captureEvery = r.get<std::uint32_t>();
+  r.end();
+  if (h.renderRanks < 1 || h.renderRanks > kMaxRanks)
+    r.fail("render ranks " + std::to_string(h.renderRanks));
+  if (h.tileSize < 4 || h.tileSize > 1024) r.fail("tile size " + std::to_string(h.tileSize));
+  if (codec > static_cast<std::uint8_t>(Codec::Jpeg)) r.fail("codec " + std::to_string(codec));
+  if (quality < 1 || quality > 100) r.fail("JPEG quality " + std::to_string(quality));
+  if (subsampling > static_cast<std::uint8_t>(ChromaSubsampling::S420))
+    r.fail("chroma subsampling " + std::to_string(subsampling));
+  if (wait > 1) r.fail("wait flag " + std::to_string(wait));
+  if (h.framesInFlight < 1 || h.framesInFlight > 16)
+    r.fail("frames in flight " + std::to_string(h.framesInFlight));
+  if (h.captureEvery > (1u << 30)) r.fail("capture-every " + std::to_string(h.captureEvery));
+  h.codec.codec = static_cast<Codec>(codec);
+  h.codec.jpegQuality = quality;
+  h.codec.subsampling = static_cast<ChromaSubsampling>(subsampling);
+  h.wait = wait == 1;
+  return h;
+}
+
+messaging::Bytes packDirectory(const Directory& d) {
+  Writer w(Kind::Directory, d.session);
+  w.put<std::int32_t>(d.layout.canvasWidth);
+  w.put<std::int32_t>(d.layout.canvasHeight);
+  w.put<std::uint32_t>(static_cast<std::uint32_t>(d.layout.displays.size()));
+  for (const Display& display : d.layout.displays) {
+    w.text(display.name);
+    w.put<std::int32_t>(display.rect.x0);
+    w.put<std::int32_t>(display.rect.y0);
+    w.put<std::int32_t>(display.rect.x1);
+    w.put<std::int32_t>(display.rect.y1);
+    w.put<std::int32_t>(display.process);
+  }
+  w.put<std::uint32_t>(static_cast<std::uint32_t>(d.processes.size()));
+  for (const DirectoryProcess& p : d.processes) {
+    w.text(p.endpoint);
+    w.put<std::uint8_t>(p.live ? 1 : 0);
+  }
+  w.put<std::uint32_t>(d.framesInFlight);
+  w.put<std::uint32_t>(d.timeoutMs);
+  w.put<std::uint32_t>(d.rosterVersion);
+  w.text(d.layout.file);
+  return w.take();
+}
+
+Directory parseDirectory(const std::byte* data, std::size_t size) {
+  Reader r(data, size, "directory");
+  Directory d;
+  d.session = parseHeader(data, size).session;
+  const auto width = r.get<std::int32_t>(), height = r.get<std::int32_t>();
+  const auto displays = r.get<std::uint32_t>();
+  if (displays < 1 || displays > static_cast<std::uint32_t>(kMaxDisplays))
+    r.fail(std::to_string(displays) + " displays");
+  for (std::uint32_t i = 0; i < displays; ++i) {
+    Display display;
+    display.name = r.text();
+    display.rect.x0 = r.get<std::int32_t>();
+    display.rect.y0 = r.get<std::int32_t>();
+    display.rect.x1 = r.get<std::int32_t>();
+    display.rect.y1 = r.get<std::int32_t>();
+    display.process = r.get<std::int32_t>();
+    // Checked in 64 bits before anything computes a width or moves the rectangle: a side
+    // of INT_MAX - INT_MIN would overflow an int in computeCanvas and validateLayout.
+    if (!dfb::isSaneRegion(display.rect, kMaxCanvasSide))
+      r.fail("display " + std::to_string(i) + " has the rectangle [" +
+             std::to_string(display.rect.x0) + ", " + std::to_string(display.rect.x1) + ") x [" +
+             std::to_string(display.rect.y0) + ", " + std::to_string(display.rect.y1) + ")");
+    d.layout.displays.push_back(std::move(display));
+  }
+  const auto processes = r.get<std::uint32_t>();
+  if (processes < 1 || processes > static_cast<std::uint32_t>(kMaxDisplays))
+    r.fail(std::to_string(processes) + " wall processes");
+  for (std::uint32_t i = 0; i < processes; ++i) d.processes.push_back(readProcess(r, i));
+  d.framesInFlight = r.get<std::uint32_t>();
+  d.timeoutMs = r.get<std::uint32_t>();
+  d.rosterVersion = r.get<std::uint32_t>();
+  d.layout.file = r.text();
+  r.end();
+  if (d.framesInFlight < 1 || d.framesInFlight > 16)
+    r.fail("frames in flight " + std::to_string(d.framesInFlight));
+  // The same checks as a layout file gets, before computeCanvas moves the displays (which
+  // overflows an int for displays 2^31 apart; validateLayout refuses such a canvas in 64 bits);
+  // the canvas must be what the displays make.
+  if (const Problems problems = validateLayout(d.layout); !problems.empty())
+    r.fail("its layout: " + joinProblems(problems));
+  computeCanvas(d.layout);
+  if (d.layout.canvasWidth != width || d.layout.canvasHeight != height ||
+      d.layout.processCount != static_cast<int>(processes))
+    r.fail("canvas or process count does not match its displays");
+  return d;
+}
+
+messaging::Bytes packRoster(const Roster& roster) {
+  Writer w(Kind::Roster, roster.session);
+  w.put<std::uint32_t>(roster.version);
+  w.put<std::uint32_t>(roster.fromFrame);
+  w.put<std::uint32_t>(static_cast<std::uint32_t>(roster.processes.size()));
+  for (const DirectoryProcess& p : roster.processes) {
+    w.text(p.endpoint);
+    w.put<std::uint8_t>(p.live ? 1 : 0);
+  }
+  w.text(roster.why.size() > kMaxStringBytes ? roster.why.substr(0, kMaxStringBytes) : roster.why);
+  return w.take();
+}
+
+Roster parseRoster(const std::byte* data, std::size_t size) {
+  Reader r(data, size, "roster");
+  Roster roster;
+  roster.session = parseHeader(data, size).session;
+  roster.version = r.get<std::uint32_t>();
+  roster.fromFrame = r.get<std::uint32_t>();
+  const auto processes = r.get<std::uint32_t>();
+  if (processes < 1 || processes > static_cast<std::uint32_t>(kMaxDisplays))
+    r.fail(std::to_string(processes) + " wall processes");
+  for (std::uint32_t i = 0; i < processes; ++i) roster.processes.push_back(readProcess(r, i));
+  roster.why = r.text();
+  r.end();
+  return roster;
+}
+
+messaging::Bytes packText(Kind kind, std::uint64_t session, const std::string& text) {
+  Writer w(kind, session);
+  w.text(text.size() > kMaxStringBytes ? text.substr(0, kMaxStringBytes) : text);
+  return w.take();
+}
+
+std::string parseText(const std::byte* data, std::size_t size) {
+  Reader r(data, size, "text message");
+  std::string s = r.text();
+  r.end();
+  return s;
+}
+
+messaging::Bytes packControl(Kind kind, std::uint64_t session, std::uint64_t value,
+                             std::int64_t second) {
+  Writer w(kind, session);
+  w.put(value);
+  w.put(second);
+  return w.take();
+}
+
+Control parseControl(const std::byte* data, std::size_t size) {
+  Reader r(data, size, "control message");
+  Control c;
+  c.value = r.get<std::uint64_t>();
+  c.second = r.get<std::int64_t>();
+  r.end();
+  return c;
+}
+
+MessageHeader parseHeader(const std::byte* data, std::size_t size) {
+  MessageHeader h;
+  if (size < sizeof h)
+    throw base::Error("not the dfbwall protocol: a message of " + std::to_string(size) + " bytes");
+  std::memcpy(&h, data, sizeof h);
+  if (h.magic != kMagic) throw base::Error("not the dfbwall protocol (wrong magic number)");
+  if (h.version != kProtocolVersion)
+    throw base::Error("protocol version " + std::to_string(h.version) + ", this side speaks " +
+                      std::to_string(kProtocolVersion) + ": use the same dfbwall on both sides");
+  if (h.kind < static_cast<std::uint16_t>(Kind::Hello) ||
+      h.kind > static_cast<std::uint16_t>(kLastKind))
+    throw base::Error("unknown message kind " + std::to_string(h.kind));
+  return h;
+}
+
+void BatchWriter::start(std::uint64_t session, const BatchHeader& header) {
+  Writer w(Kind::Batch, session);
+  w.put<std::uint32_t>(header.frameId);
+  w.put<std::int32_t>(header.display);
+  w.put<std::uint32_t>(header.renderRank);
+  w.put<std::uint32_t>(static_cast<std::uint32_t>(header.codec));
+  w.put<std::uint32_t>(0);  // piece count, set by take()
+  bytes_ = w.take();
+  pieces_ = 0;
+}
+
+namespace {
+constexpr std::size_t kBatchHeaderBytes = sizeof(MessageHeader) + 5 * sizeof(std::uint32_t);
+constexpr std::size_t kPieceCountAt = kBatchHeaderBytes - sizeof(std::uint32_t);
+struct PieceRecord {
+  std::int32_t x0, y0, x1, y1;
+  std::uint32_t size;
+};
+constexpr int kMaxPieceSide = 4096;
+static_assert(sizeof(PieceRecord) == kPieceRecordBytes, "the piece record is part of the protocol");
+}  // namespace
+
+void BatchWriter::add(const CodecSpec& codec, const dfb::Region& local, const std::uint32_t* pixels,
+                      int stride) {
+  // Encoded aside first: a piece the codec refuses never leaves half a record in the batch.
+  thread_local messaging::Bytes piece;
+  encodePiece(codec, local, pixels, stride, piece);
+  append(piece);
+}
+
+void BatchWriter::append(const messaging::Bytes& piece) {
+  bytes_.insert(bytes_.end(), piece.begin(), piece.end());
+  ++pieces_;
+}
+
+void encodePiece(const CodecSpec& codec, const dfb::Region& local, const std::uint32_t* pixels,
+                 int stride, messaging::Bytes& out) {
+  PieceRecord record{local.x0, local.y0, local.x1, local.y1, 0};
+  out.resize(sizeof record);
+  encodePixels(codec, pixels, local.width(), local.height(), stride, out);
+  record.size = static_cast<std::uint32_t>(out.size() - sizeof record);
+  std::memcpy(out.data(), &record, sizeof record);
+}
+
+messaging::Bytes BatchWriter::take() {
+  std::memcpy(bytes_.data() + kPieceCountAt, &pieces_, sizeof pieces_);
+  pieces_ = 0;
+  return std::move(bytes_);
+}
+
+BatchHeader parseBatch(const std::byte* data, std::size_t size, std::vector<BatchPiece>& pieces) {
+  Reader r(data, size, "piece batch");
+  BatchHeader h;
+  h.frameId = r.get<std::uint32_t>();
+  h.display = r.get<std::int32_t>();
+  h.renderRank = r.get<std::uint32_t>();
+  const auto codec = r.get<std::uint32_t>();
+  h.pieceCount = r.get<std::uint32_t>();
+  if (codec > static_cast<std::uint32_t>(Codec::Jpeg)) r.fail("codec " + std::to_string(codec));
+  h.codec = static_cast<Codec>(codec);
+  // Every piece takes at least its record: a count the message cannot hold is refused before
+  // anything is reserved for it.
+  if (h.pieceCount > r.left() / sizeof(PieceRecord))
+    r.fail(std::to_string(h.pieceCount) + " pieces in " + std::to_string(size) + " bytes");
+  pieces.clear();
+  pieces.reserve(h.pieceCount);
+  for (std::uint32_t i = 0; i < h.pieceCount; ++i) {
+    PieceRecord record;
+    r.raw(&record, sizeof record);
+    const dfb::Region local{record.x0, record.y0, record.x1, record.y1};
+    if (local.x0 < 0 || local.y0 < 0 || local.x1 <= local.x0 || local.y1 <= local.y0 ||
+        local.x1 - local.x0 > kMaxPieceSide || local.y1 - local.y0 > kMaxPieceSide)
+      r.fail("piece " + std::to_string(i) + " has the rectangle [" + std::to_string(local.x0) +
+             ", " + std::to_string(local.x1) + ") x [" + std::to_string(local.y0) + ", " +
+             std::to_string(local.y1) + ")");
+    pieces.push_back({local, r.span(record.size), record.size});
+  }
+  r.end();
+  return h;
+}
+
+}  // namespace wall::service

@@ -1,0 +1,180 @@
+#pragma once
+// The wall service's wire protocol (README, "A wall that stays up"). Render jobs reach a
+// persistent wall (`dfbwall serve`) over ZeroMQ (wall/service/protocol/Zmq.h):
+//
+//  - render rank 0 <-> wall process 0, the wall's directory socket (`--listen`): Hello, then
+//    Directory | Refused | Queued; during the job Keepalive, Capture, Bye from the job and
+//    Presented (the credit for frames in flight), Roster (a wall process was lost or came back)
+//    and Ended (the wall ended the job) back;
+//  - every render rank -> the wall processes its tiles touch, each process's piece socket (its
+//    endpoint is in the directory): one Batch per (render rank, display, frame) of pieces,
+//    encoded with the job's codec (wall/service/protocol/Codec.h).
+//
+//  - the wall's own processes among themselves (wall/service/WallLink.h): Join, Welcome, Beat,
+//    Command, Barrier, Pixels, Dropped, on the same directory socket of process 0 (the head).
+//
+// Every message starts with a MessageHeader (magic, protocol version, kind, session id). The
+// wall never trusts a length, count, rectangle, display index or frame number from the wire:
+// parse* functions check every field against the message's size and throw base::Error naming
+// what was wrong; callers check the rest against the session (wall/display/WallNode.h).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "dfb/Tile.h"
+#include "messaging/Compression.h"
+#include "wall/layout/Layout.h"
+#include "wall/service/protocol/Codec.h"
+
+namespace wall::service {
+
+constexpr std::uint32_t kMagic = 0x57424644;  // "DFBW"
+// 2: wall processes come and go (Roster, live flags in the directory, the wall link).
+constexpr std::uint16_t kProtocolVersion = 2;
+// Caps of what one message may say, checked before anything is allocated.
+constexpr std::size_t kMaxMessageBytes = std::size_t{1} << 30;
+constexpr std::size_t kMaxStringBytes = 4096;
+
+enum class Kind : std::uint16_t {
+  Hello = 1,
+  Directory = 2,
+  Refused = 3,
+  Queued = 4,
+  Keepalive = 5,
+  Capture = 6,
+  Bye = 7,
+  Presented = 8,
+  Ended = 9,
+  Batch = 10,
+  Roster = 11,
+  // The wall's own link (wall/service/WallLink.h); a job never sends or gets these.
+  Join = 12,
+  Welcome = 13,
+  Beat = 14,
+  Command = 15,
+  Barrier = 16,
+  Pixels = 17,
+  Dropped = 18,
+};
+constexpr Kind kLastKind = Kind::Dropped;
+
+struct MessageHeader {
+  std::uint32_t magic = kMagic;
+  std::uint16_t version = kProtocolVersion;
+  std::uint16_t kind = 0;
+  std::uint64_t session = 0;  // 0 before the directory gave one
+};
+static_assert(sizeof(MessageHeader) == 16, "the header is part of the protocol");
+
+// The first thing a job says.
+struct Hello {
+  std::string token;  // empty: none
+  std::string host;   // the job's rank-0 host, for the wall's log and the busy message
+  std::uint32_t renderRanks = 1;
+  std::uint32_t tileSize = 64;
+  CodecSpec codec;
+  std::uint32_t framesInFlight = 2;
+  bool wait = false;       // queue behind the connected job instead of being refused
+  std::string captureDir;  // on the wall hosts; empty: no captures
+  std::uint32_t captureEvery = 0;
+};
+
+struct DirectoryProcess {
+  std::string endpoint;  // "tcp://HOST:PORT" of the process's piece socket
+  bool live = true;      // false: the process is lost; pieces of its displays are not sent
+};
+
+// What the wall tells a job it accepted: everything needed to route pieces to the displays.
+struct Directory {
+  std::uint64_t session = 0;
+  Layout layout;  // displays (name, rect, process), canvas, process count; file = the wall's
+  std::vector<DirectoryProcess> processes;
+  std::uint32_t framesInFlight = 2;  // what the wall grants (at most what the job asked for)
+  std::uint32_t timeoutMs = 60000;   // the wall drops a job it has not heard from for this long
+  std::uint32_t rosterVersion = 0;   // of `processes`; a Roster with a higher one replaces them
+};
+
+// The wall's processes changed during a job: one was lost (dropped from the swap barrier; the
+// job stops sending its displays' pieces, counting them as dropped) or (re)joined (the job sends
+// its pieces again, at the latest from `fromFrame`, to the endpoint named here, which changes
+// when a process restarts). Sent before the credit that lets the job start `fromFrame`, so a job
+// that applies the newest roster it has at the start of each frame is never late.
+struct Roster {
+  std::uint64_t session = 0;
+  std::uint32_t version = 0;
+  std::uint32_t fromFrame = 0;  // 0: a loss (at once)
+  std::vector<DirectoryProcess> processes;
+  std::string why;  // one line for the job's log: which process, which host, why
+};
+
+messaging::Bytes packHello(const Hello& hello);
+messaging::Bytes packDirectory(const Directory& directory);
+messaging::Bytes packRoster(const Roster& roster);
+// Refused, Ended: a reason. Queued: the job's place in the queue as text.
+messaging::Bytes packText(Kind kind, std::uint64_t session, const std::string& text);
+// Keepalive (value unused), Bye (the last frame), Capture (frame, sequence in `second`),
+// Presented (frame, completeNs in `second`).
+messaging::Bytes packControl(Kind kind, std::uint64_t session, std::uint64_t value,
+                             std::int64_t second = 0);
+
+// The header of any message, checked (magic, version, a known kind); throws base::Error with a
+// message a log can print ("not the dfbwall protocol", "protocol version 7, this wall speaks 1").
+MessageHeader parseHeader(const std::byte* data, std::size_t size);
+Hello parseHello(const std::byte* data, std::size_t size);
+// Also validates the layout (a wall that sends nonsense is an error on the job's side too).
+Directory parseDirectory(const std::byte* data, std::size_t size);
+// Process count 1..kMaxDisplays, endpoints non-empty for live processes. The job checks the
+// count against its directory.
+Roster parseRoster(const std::byte* data, std::size_t size);
+std::string parseText(const std::byte* data, std::size_t size);
+struct Control {
+  std::uint64_t value = 0;
+  std::int64_t second = 0;
+};
+Control parseControl(const std::byte* data, std::size_t size);
+
+// A batch of pieces of one display and frame from one render rank.
+struct BatchHeader {
+  std::uint32_t frameId = 0;
+  std::int32_t display = -1;
+  std::uint32_t renderRank = 0;
+  Codec codec = Codec::Raw;
+  std::uint32_t pieceCount = 0;
+};
+struct BatchPiece {
+  dfb::Region local;  // in the display's coordinates
+  const std::byte* data = nullptr;
+  std::size_t size = 0;
+};
+
+// What each piece adds to a batch before its pixels: rectangle and encoded size.
+constexpr std::size_t kPieceRecordBytes = 20;
+
+// Builds a batch: start it, add pieces (each encoded right into the message), take it.
+class BatchWriter {
+ public:
+  void start(std::uint64_t session, const BatchHeader& header);
+  // `pixels`: the piece's top-left pixel in an image of rows `stride` pixels apart.
+  void add(const CodecSpec& codec, const dfb::Region& local, const std::uint32_t* pixels,
+           int stride);
+  // A piece encoded beforehand by encodePiece (so encoding needs no lock around the batch).
+  void append(const messaging::Bytes& piece);
+  std::uint32_t pieces() const { return pieces_; }
+  std::size_t bytes() const { return bytes_.size(); }
+  messaging::Bytes take();
+
+ private:
+  messaging::Bytes bytes_;
+  std::uint32_t pieces_ = 0;
+};
+
+// One piece's record and encoded pixels, as BatchWriter::add would write them, into `out`
+// (replacing what it held).
+void encodePiece(const CodecSpec& codec, const dfb::Region& local, const std::uint32_t* pixels,
+                 int stride, messaging::Bytes& out);
+
+// Parses a whole batch; every piece's rectangle is non-empty and at most 4096 pixels a side,
+// every data range inside the message. Throws base::Error.
+BatchHeader parseBatch(const std::byte* data, std::size_t size, std::vector<BatchPiece>& pieces);
+
+}  // namespace wall::service

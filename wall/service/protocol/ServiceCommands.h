@@ -1,0 +1,48 @@
+#pragma once
+// What the wall's processes tell each other about a render job (wall/service/server/WallService.h):
+// the head's orders to every process and each process's answers to the head. They travel over the
+// wall link (wall/service/protocol/LinkMessages.h, Kind::Command) or, for the head's own process,
+// inside the process.
+#include <cstdint>
+#include <string>
+
+#include "messaging/Compression.h"
+
+namespace wall::service {
+
+enum class Command : std::uint32_t {
+  Start = 1,      // a job: run a wall node for it (text: its capture folder; a: its first frame, or
+                  // 0 for a process joining a running job: FirstFrame follows its Ready)
+  Cancel = 2,     // the job never started (a process could not): stop before frame 1
+  LastFrame = 3,  // a: the job's last frame
+  Abort = 4,      // the job is gone (text: why): give the frame in progress up
+  KeepWaiting = 5,  // the job is alive but idle
+  Capture = 6,      // a: frame, b: sequence
+  Shutdown = 7,     // the wall stops
+  Ready = 8,        // a: 1 ready, 0 not (text: why)
+  Done = 9,         // a: last presented frame, b: bytes received (text: failure, if any)
+  Failed = 10,      // this process gave a frame up (text: why)
+  StopAsked = 11,   // this process was asked to stop the wall
+  FirstFrame = 12,  // a: the first frame of a process that joined a running job
+};
+
+struct CommandHeader {
+  Command kind;
+  std::int32_t process;
+  std::uint64_t session;
+  std::int64_t a, b;
+  std::uint32_t tileSize, renderRanks, framesInFlight, captureEvery;
+  std::uint32_t codec;
+  std::uint32_t textBytes;
+};
+
+struct ServiceCommand {
+  CommandHeader header{};
+  std::string text;
+};
+
+messaging::Bytes packCommand(const ServiceCommand& command);
+// Throws base::Error on a body that is not a command.
+ServiceCommand parseCommand(const messaging::Bytes& body);
+
+}  // namespace wall::service

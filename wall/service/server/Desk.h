@@ -1,0 +1,66 @@
+#pragma once
+// The head of a service wall: wall process 0's desk thread, which owns the directory socket
+// (`--listen`) that render jobs say hello to and the other wall processes join (README, "A wall
+// that stays up"; wall/service/protocol/Protocol.h, wall/service/protocol/LinkMessages.h).
+//
+// For jobs: one at a time (a second is refused as busy, or queued with `wait`), their keepalives,
+// captures and goodbye, their credits, and the end of a job that goes silent.
+// For the wall's processes: who is in the wall (Join, Beat), the commands of a job to every
+// process in it, its swap barriers and capture gathers. A process that stops answering (dies,
+// hangs, its link is cut) is dropped after the timeout: the barriers go on without it, the job
+// is told (Roster) and stops sending its displays' pieces. When it joins again during a job it
+// is given the job (Start) from the first frame the job cannot have started without knowing it
+// is back (the credit rule: frame F starts once F - K is presented), and the job a new roster.
+//
+// The head's own process reaches the desk in process, through ProcessLink.
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "wall/layout/Layout.h"
+#include "wall/service/server/ProcessLink.h"
+#include "wall/service/server/WallService.h"
+
+namespace wall::service {
+
+class Desk : public ProcessLink {
+ public:
+  struct Setup {
+    const Layout* layout = nullptr;
+    ServiceOptions options;
+    std::string token;        // what jobs and joining processes must present (empty: none)
+    std::string ownEndpoint;  // process 0's piece socket
+    // Commands for the head's own process, called on the desk thread.
+    std::function<void(const ServiceCommand&)> deliver;
+  };
+  explicit Desk(Setup setup);
+  ~Desk() override;  // ends the desk thread
+  Desk(const Desk&) = delete;
+  Desk& operator=(const Desk&) = delete;
+
+  // Binds the directory socket; throws base::Error naming --listen on a bad address or a port in
+  // use. Returns the endpoint bound (with the real port).
+  std::string bind(const std::string& endpoint);
+  void start();
+  // Thread-safe: the processes (1..W-1) not in the wall now.
+  std::vector<int> absentProcesses() const;
+  // The desk thread ended (after the wall's shutdown was sent to every process).
+  bool closed() const;
+
+  std::uint64_t epoch() const override { return 0; }
+  void toHead(const ServiceCommand& command, std::uint64_t epoch) override;
+  void agreeMax(std::uint64_t epoch, std::uint64_t session, std::uint32_t frameId,
+                std::int64_t* values, int count, Clock::time_point deadline) override;
+  std::vector<std::vector<std::uint32_t>> gatherToFirst(std::uint64_t epoch, std::uint64_t session,
+                                                        std::uint32_t frameId,
+                                                        std::vector<std::uint32_t> mine,
+                                                        Clock::time_point deadline) override;
+  void presented(std::uint64_t session, std::uint32_t frameId, std::int64_t completeNs) override;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace wall::service

@@ -1,0 +1,98 @@
+#include "wall/service/server/FrameAgreements.h"
+
+#include <algorithm>
+
+namespace wall::service {
+namespace {
+// Members' pixels of frames the head never asks for (it gave them up) do not pile up.
+constexpr std::size_t kMaxGathers = 8;
+}  // namespace
+
+void FrameAgreements::clear() {
+  barriers_.clear();
+  gathers_.clear();
+}
+
+bool FrameAgreements::arrive(int process, std::uint32_t frameId,
+                             const std::vector<std::int64_t>& values) {
+  auto [at, fresh] = barriers_.try_emplace(frameId);
+  Barrier& b = at->second;
+  if (fresh) {
+    b.values = values;
+    b.arrived.assign(static_cast<size_t>(processCount_), false);
+  } else {
+    if (values.size() != b.values.size()) return false;
+    for (size_t i = 0; i < values.size(); ++i) b.values[i] = std::max(b.values[i], values[i]);
+  }
+  b.arrived[static_cast<size_t>(process)] = true;
+  return true;
+}
+
+std::vector<FrameAgreements::Release> FrameAgreements::complete(const TakesPart& takesPart) {
+  std::vector<Release> out;
+  for (auto at = barriers_.begin(); at != barriers_.end();) {
+    const std::uint32_t frameId = at->first;
+    Barrier& b = at->second;
+    bool all = true;
+    for (int p = 0; p < processCount_ && all; ++p)
+      all = !takesPart(p, frameId) || b.arrived[static_cast<size_t>(p)];
+    if (!all) {
+      ++at;
+      continue;
+    }
+    Release r{frameId, std::move(b.values), {}};
+    for (int p = 0; p < processCount_; ++p)
+      if (b.arrived[static_cast<size_t>(p)]) r.processes.push_back(p);
+    out.push_back(std::move(r));
+    at = barriers_.erase(at);
+  }
+  return out;
+}
+
+FrameAgreements::Gather& FrameAgreements::gatherOf(std::uint32_t frameId) {
+  auto [at, fresh] = gathers_.try_emplace(frameId);
+  if (fresh) {
+    at->second.pixels.resize(static_cast<size_t>(processCount_));
+    at->second.got.assign(static_cast<size_t>(processCount_), false);
+  }
+  while (gathers_.size() > kMaxGathers && !gathers_.begin()->second.headAsked)
+    gathers_.erase(gathers_.begin());
+  return gathers_.at(frameId);
+}
+
+void FrameAgreements::pixels(int process, std::uint32_t frameId,
+                             std::vector<std::uint32_t> pixels) {
+  Gather& g = gatherOf(frameId);
+  g.pixels[static_cast<size_t>(process)] = std::move(pixels);
+  g.got[static_cast<size_t>(process)] = true;
+}
+
+void FrameAgreements::headPixels(std::uint32_t frameId, std::vector<std::uint32_t> pixels,
+                                 Clock::time_point deadline) {
+  Gather& g = gatherOf(frameId);
+  g.pixels[0] = std::move(pixels);
+  g.got[0] = true;
+  g.headAsked = true;
+  g.deadline = deadline;
+}
+
+std::vector<FrameAgreements::Gathered> FrameAgreements::gathered(const TakesPart& takesPart,
+                                                                 Clock::time_point now) {
+  std::vector<Gathered> out;
+  for (auto at = gathers_.begin(); at != gathers_.end();) {
+    Gather& g = at->second;
+    bool complete = g.headAsked;
+    if (complete && now < g.deadline)
+      for (int p = 0; p < processCount_ && complete; ++p)
+        complete = !takesPart(p, at->first) || g.got[static_cast<size_t>(p)];
+    if (!complete) {
+      ++at;
+      continue;
+    }
+    out.push_back({at->first, std::move(g.pixels)});
+    at = gathers_.erase(at);
+  }
+  return out;
+}
+
+}  // namespace wall::service

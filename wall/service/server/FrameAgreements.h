@@ -1,0 +1,67 @@
+#pragma once
+// The swap barriers and capture gathers of one job on a service wall's head
+// (wall/service/server/Desk.h), among processes that come and go: each frame's agreement waits for
+// exactly the processes that take part in it at the moment (the desk says which: in the job, live,
+// past their first frame), so dropping a process completes what it held up, and a process that
+// joins later is not waited for before its first frame. Bookkeeping only: no sockets, no threads
+// (the desk's thread).
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <utility>
+#include <vector>
+
+namespace wall::service {
+
+class FrameAgreements {
+ public:
+  using Clock = std::chrono::steady_clock;
+  // Whether process p takes part in frame F's agreements now.
+  using TakesPart = std::function<bool(int process, std::uint32_t frameId)>;
+
+  explicit FrameAgreements(int processCount) : processCount_(processCount) {}
+  void clear();
+
+  // Process p's values for frame F's barrier (the element-wise maximum is kept). False when
+  // their count differs from the first arrival's: the caller treats p as broken.
+  bool arrive(int process, std::uint32_t frameId, const std::vector<std::int64_t>& values);
+  struct Release {
+    std::uint32_t frameId = 0;
+    std::vector<std::int64_t> values;
+    std::vector<int> processes;  // those that arrived, to be released
+  };
+  // Every barrier whose taking-part processes have all arrived, removed from the board.
+  std::vector<Release> complete(const TakesPart& takesPart);
+
+  // A process's pixels of captured frame F; the head's own with its deadline.
+  void pixels(int process, std::uint32_t frameId, std::vector<std::uint32_t> pixels);
+  void headPixels(std::uint32_t frameId, std::vector<std::uint32_t> pixels,
+                  Clock::time_point deadline);
+  struct Gathered {
+    std::uint32_t frameId = 0;
+    std::vector<std::vector<std::uint32_t>> pixels;  // by process; empty: not sent in time
+  };
+  // Every gather the head asked for that has every taking-part process's pixels, or whose
+  // deadline passed, removed from the board.
+  std::vector<Gathered> gathered(const TakesPart& takesPart, Clock::time_point now);
+
+ private:
+  struct Barrier {
+    std::vector<std::int64_t> values;
+    std::vector<bool> arrived;
+  };
+  struct Gather {
+    std::vector<std::vector<std::uint32_t>> pixels;
+    std::vector<bool> got;
+    bool headAsked = false;
+    Clock::time_point deadline;
+  };
+  Gather& gatherOf(std::uint32_t frameId);
+
+  int processCount_;
+  std::map<std::uint32_t, Barrier> barriers_;
+  std::map<std::uint32_t, Gather> gathers_;
+};
+
+}  // namespace wall::service

@@ -1,0 +1,360 @@
+#include "wall/service/server/WallService.h"
+
+#include <unistd.h>
+#include <condition_variable>
+#include <deque>
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <random>
+#include <thread>
+
+#include "base/AtomicFile.h"
+#include "base/Error.h"
+#include "wall/display/IdleScreen.h"
+#include "wall/display/WallNode.h"
+#include "wall/service/protocol/LinkMessages.h"
+#include "wall/service/protocol/Zmq.h"
+#include "wall/service/server/Desk.h"
+#include "wall/service/server/MemberLink.h"
+#include "wall/service/server/PieceReceiver.h"
+
+namespace wall::service {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string randomToken() {
+  static const char* digits = "0123456789abcdef";
+  std::random_device device;
+  std::string token;
+  for (int i = 0; i < 24; ++i) token += digits[device() % 16];
+  return token;
+}
+
+std::string hostName() {
+  char name[256] = {};
+  if (gethostname(name, sizeof name - 1) != 0) return "an unnamed host";
+  return name;
+}
+
+}  // namespace
+
+struct WallService::Impl {
+  const Layout& layout;
+  std::vector<Presenter*> presenters;
+  ServiceOptions options;
+  int process = 0, processCount = 1;
+  std::string address, token;
+  std::unique_ptr<PieceReceiver> receiver;
+  std::unique_ptr<Desk> desk;        // the head
+  std::unique_ptr<MemberLink> link;  // every other process
+  ProcessLink* head = nullptr;       // one of the two
+
+  // Commands for the main thread; the node of the job in progress for the link's thread.
+  std::mutex mutex;
+  std::condition_variable commanded;
+  std::deque<ServiceCommand> commands;
+  WallNode* node = nullptr;
+  std::uint64_t nodeSession = 0;
+  bool linkLost = false;
+
+  Impl(const Layout& l, std::vector<Presenter*> p, ServiceOptions o)
+      : layout(l), presenters(std::move(p)), options(std::move(o)) {}
+
+  void log(const std::string& line) {
+    if (options.log) options.log(line);
+  }
+  void incoming(const ServiceCommand& c);
+  void lost(const std::string& why);
+  void showIdle(const std::string& status);
+  void runJob(const ServiceCommand& start);
+};
+
+void WallService::Impl::incoming(const ServiceCommand& c) {
+  const CommandHeader& h = c.header;
+  std::lock_guard lock(mutex);
+  if (node && h.session == nodeSession) {
+    switch (h.kind) {
+      case Command::Cancel:
+        node->stopAfter(0);
+        return;
+      case Command::LastFrame:
+        node->stopAfter(static_cast<std::uint32_t>(h.a));
+        return;
+      case Command::Abort:
+        node->abort(c.text);
+        return;
+      case Command::KeepWaiting:
+        node->keepWaiting();
+        return;
+      case Command::Capture:
+        node->requestCapture(static_cast<std::uint32_t>(h.a), static_cast<std::uint64_t>(h.b));
+        return;
+      case Command::FirstFrame:
+        node->startAt(static_cast<std::uint32_t>(h.a));
+        return;
+      default:
+        break;
+    }
+  }
+  if (h.kind == Command::Start || h.kind == Command::Shutdown) {
+    commands.push_back(c);
+    commanded.notify_all();
+  }
+}
+
+// The head is gone for this process: the job's frame in progress is given up here (the node's
+// barrier throws), and the process shows that it is out of the wall until it joined again.
+void WallService::Impl::lost(const std::string& why) {
+  std::lock_guard lock(mutex);
+  if (node) node->abort("lost the wall's head: " + why);
+  commands.clear();
+  linkLost = true;
+  commanded.notify_all();
+}
+
+WallService::WallService(const Layout& layout, std::vector<Presenter*> presenters,
+                         ServiceOptions options)
+    : impl_(std::make_unique<Impl>(layout, std::move(presenters), std::move(options))) {
+  Impl& m = *impl_;
+  m.process = m.options.process;
+  m.processCount = layout.processCount;
+  const bool isHead = m.process == 0;
+  const std::string headAddress = isHead ? m.options.listen : m.options.join;
+  const std::string endpoint = tcpEndpoint(headAddress, isHead ? "--listen" : "--join");
+  const std::string headHost = hostOf(headAddress);
+  const bool loopback = isLoopback(headHost);
+  m.token = m.options.token;
+  if (isHead && !loopback && m.token.empty()) m.token = randomToken();
+  // Pieces: any port, on the listen address where it is this host's (loopback, or the head's
+  // own), else on every interface.
+  const std::string pieceHost =
+      loopback ? headHost : (isHead && headHost != "0.0.0.0" ? headHost : "0.0.0.0");
+  const int deadPeerMs = static_cast<int>(m.options.timeout.count());
+  m.receiver = std::make_unique<PieceReceiver>("tcp://" + pieceHost + ":*",
+                                               m.options.handlerThreads, deadPeerMs, m.options.log);
+  const std::string mine = "tcp://" + (loopback ? headHost : advertisedHost(pieceHost)) + ":" +
+                           std::to_string(m.receiver->port());
+  if (isHead) {
+    Desk::Setup setup;
+    setup.layout = &layout;
+    setup.options = m.options;
+    setup.token = m.token;
+    setup.ownEndpoint = mine;
+    setup.deliver = [this](const ServiceCommand& c) { impl_->incoming(c); };
+    m.desk = std::make_unique<Desk>(std::move(setup));
+    const std::string bound = m.desk->bind(endpoint);
+    m.address = (loopback || headHost != "0.0.0.0" ? headHost : advertisedHost(headHost)) + ":" +
+                std::to_string(portOf(bound));
+    m.head = m.desk.get();
+    m.desk->start();
+  } else {
+    MemberLink::Setup setup;
+    setup.head = m.options.join;
+    setup.join.token = m.token;
+    setup.join.process = static_cast<std::uint32_t>(m.process);
+    setup.join.host = hostName();
+    setup.join.pieceEndpoint = mine;
+    setup.join.layoutHash = layoutHash(layout);
+    setup.timeout = m.options.timeout;
+    setup.deliver = [this](const ServiceCommand& c) { impl_->incoming(c); };
+    setup.onLost = [this](const std::string& why) { impl_->lost(why); };
+    setup.log = m.options.log;
+    m.link = std::make_unique<MemberLink>(std::move(setup));
+    m.address = m.options.join;
+    m.head = m.link.get();
+    m.link->start();
+  }
+}
+
+WallService::~WallService() {
+  // The links stop before what they deliver to goes.
+  impl_->desk.reset();
+  impl_->link.reset();
+}
+
+std::string WallService::address() const { return impl_->address; }
+std::string WallService::token() const { return impl_->token; }
+
+std::vector<int> WallService::waitForProcesses(Clock::time_point until) {
+  Impl& m = *impl_;
+  if (m.link)
+    return m.link->waitUntilJoined(until) ? std::vector<int>{} : std::vector<int>{m.process};
+  while (true) {
+    std::vector<int> absent = m.desk->absentProcesses();
+    if (absent.empty() || Clock::now() >= until) return absent;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+}
+
+void WallService::Impl::showIdle(const std::string& status) {
+  const std::vector<int> ours = layout.displaysOfProcess(process);
+  for (size_t i = 0; i < ours.size(); ++i) {
+    const Display& d = layout.displays[static_cast<size_t>(ours[i])];
+    IdleText text;
+    text.title = d.name;
+    text.lines = {"dfbwall serve \u2014 connect with: dfbwall --connect " + address, status};
+    const Image image = renderIdleScreen(d.rect.width(), d.rect.height(), text);
+    presenters[i]->present(image.pixels.data(), image.width, image.height);
+  }
+}
+
+void WallService::Impl::runJob(const ServiceCommand& start) {
+  // Everything this job's node says to the head is of the epoch the job started in.
+  const std::uint64_t epoch = head->epoch();
+  ServiceCommand answer;
+  answer.header.session = start.header.session;
+  answer.header.process = process;
+  const std::string& captureDir = start.text;
+  // Anything a job asks for that this process cannot do refuses the job, never ends the wall.
+  std::string problem;
+  if (!captureDir.empty()) {
+    for (int d : layout.displaysOfProcess(process)) {
+      problem = base::checkWritableFolder(
+          (std::filesystem::path(captureDir) / layout.displays[static_cast<size_t>(d)].name)
+              .string());
+      if (!problem.empty()) {
+        problem = "capture folder on wall process " + std::to_string(process) + ": " + problem;
+        break;
+      }
+    }
+  }
+  if (!problem.empty()) {
+    answer.header.kind = Command::Ready;
+    answer.header.a = 0;  // counts as this process's Done too: it runs no node for the job
+    answer.text = problem;
+    head->toHead(answer, epoch);
+    return;
+  }
+  // 0: this process joins a running job; the head names its first frame once it is Ready.
+  std::uint32_t firstFrame = static_cast<std::uint32_t>(std::max<std::int64_t>(0, start.header.a));
+  WallNodeOptions o;
+  o.tileSize = static_cast<int>(start.header.tileSize);
+  o.captureDir = captureDir;
+  o.captureEvery = static_cast<int>(start.header.captureEvery);
+  o.lastFrame = 0;  // the job says when it ends
+  o.firstFrame = firstFrame;
+  o.timeout = options.timeout;
+  o.framesAhead = start.header.framesInFlight + 2;
+  o.abandonOnFailure = true;
+  if (link) o.alive = [this] { link->mainAlive(); };
+  const std::uint64_t session = start.header.session;
+  o.onAbandon = [this, session, epoch](const std::string& why) {
+    ServiceCommand failed;
+    failed.header.kind = Command::Failed;
+    failed.header.session = session;
+    failed.header.process = process;
+    failed.text = why;
+    head->toHead(failed, epoch);
+  };
+  std::string failure;
+  std::int64_t lastPresented = 0, bytes = 0;
+  {
+    LinkPeers peers(*head, epoch, session, process, processCount);
+    WallNode job(layout, peers, presenters, o);
+    {
+      std::lock_guard lock(mutex);
+      node = &job;
+      nodeSession = session;
+    }
+    receiver->attach(session, static_cast<Codec>(start.header.codec),
+                     static_cast<int>(start.header.renderRanks), &job);
+    answer.header.kind = Command::Ready;
+    answer.header.a = 1;
+    head->toHead(answer, epoch);
+    bool asked = false;
+    try {
+      if (firstFrame == 0) firstFrame = job.waitForStart(Clock::now() + options.timeout);
+      for (std::uint32_t frameId = firstFrame; frameId > 0; ++frameId) {
+        const PresentReport r = job.presentFrame(frameId);
+        if (r.stopped) {
+          if (!r.failure.empty()) failure = r.failure;
+          break;
+        }
+        lastPresented = frameId;
+        bytes += static_cast<std::int64_t>(r.bytesReceived);
+        if (!asked && options.stopRequested && options.stopRequested()) {
+          asked = true;
+          if (process != 0 && options.leaveAlone) {
+            failure = "wall process " + std::to_string(process) + " was asked to stop";
+            break;
+          }
+          ServiceCommand stop;
+          stop.header.kind = Command::StopAsked;
+          stop.header.process = process;
+          head->toHead(stop, epoch);
+        }
+      }
+      job.finish();
+    } catch (const std::exception& e) {
+      // A lost head (the barrier throws) or a broken display ends this process's part in the
+      // job; the head drops it, the others go on.
+      if (failure.empty()) failure = e.what();
+      log("gave the job up: " + failure);
+    }
+    receiver->detach();
+    std::lock_guard lock(mutex);
+    node = nullptr;
+    nodeSession = 0;
+  }
+  answer.header.kind = Command::Done;
+  answer.header.a = lastPresented;
+  answer.header.b = bytes;
+  answer.text = failure;
+  head->toHead(answer, epoch);
+}
+
+void WallService::run() {
+  Impl& m = *impl_;
+  bool idleShown = false, wasJoined = true, asked = false;
+  while (true) {
+    std::optional<ServiceCommand> command;
+    bool lostNow = false;
+    {
+      std::unique_lock lock(m.mutex);
+      m.commanded.wait_for(lock, std::chrono::milliseconds(50),
+                           [&] { return !m.commands.empty() || m.linkLost; });
+      if (!m.commands.empty()) {
+        command = std::move(m.commands.front());
+        m.commands.pop_front();
+      }
+      lostNow = m.linkLost;
+      m.linkLost = false;
+    }
+    if (m.link && !m.link->refusal().empty())
+      throw base::Error("the wall's head at " + m.address +
+                        " refused this process: " + m.link->refusal());
+    const bool joined = !m.link || m.link->joined();
+    // Asked to stop, this process waits for the head's shutdown; without a head there is none.
+    if (asked && !joined) return;
+    if (!idleShown || lostNow || joined != wasJoined) {
+      m.showIdle(joined ? "waiting for a render job"
+                        : "not in the wall: joining the head at " + m.address + " again");
+      idleShown = true;
+      wasJoined = joined;
+    }
+    if (m.link) m.link->mainAlive();
+    for (Presenter* p : m.presenters) p->pollEvents();
+    bool closed = false;
+    for (Presenter* p : m.presenters) closed = closed || p->closeRequested();
+    if (!asked && (closed || (m.options.stopRequested && m.options.stopRequested()))) {
+      asked = true;
+      // Out of the wall (or told to leave it alone), a process simply stops; otherwise the
+      // head stops the wall.
+      if (m.link && (m.options.leaveAlone || !joined)) return;
+      ServiceCommand stop;
+      stop.header.kind = Command::StopAsked;
+      stop.header.process = m.process;
+      m.head->toHead(stop, m.head->epoch());
+    }
+    if (!command) continue;
+    if (command->header.kind == Command::Shutdown) break;
+    if (command->header.kind == Command::Start) {
+      m.runJob(*command);
+      if (m.link && !m.link->joined()) idleShown = false;  // it left the job by losing the head
+    }
+  }
+}
+
+}  // namespace wall::service

@@ -1,0 +1,73 @@
+#pragma once
+// `dfbwall serve`: the wall processes of a layout as a persistent service that render jobs
+// connect to (README, "A wall that stays up"). Every process keeps its displays (idle screens
+// before the first job, the last complete frame after each), receives the pieces of the
+// connected job on its own piece socket (wall/service/server/PieceReceiver.h) and presents them
+// with the same wall node as a single-job wall.
+//
+// Process 0 is the head: its desk (wall/service/server/Desk.h) takes the jobs and coordinates the
+// processes. Every other process joins the head over its own link
+// (wall/service/server/MemberLink.h): the processes share no MPI job, so one that dies, hangs or
+// loses its network is dropped after the timeout and the others go on; started again (or back on
+// the network) it joins again and shows the running job's frames. Nothing a job does ends the wall:
+// a job that dies or sends garbage is dropped within the timeout, its partial frame given up on
+// every display, and the next job taken at once.
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "wall/display/Presenter.h"
+#include "wall/layout/Layout.h"
+
+namespace wall::service {
+
+struct ServiceOptions {
+  int process = 0;     // which of the layout's processes this is (0: the head)
+  std::string listen;  // the head: [ADDR:]PORT of the directory socket
+  std::string join;    // the others: the head's HOST:PORT
+  std::string token;   // required from jobs and joining processes when not empty
+  std::chrono::milliseconds timeout{60000};  // a silent job or process is dropped after this long
+  int handlerThreads = 0;                    // piece decoding threads per process (0: cores)
+  int framesInFlight = 2;                    // the most a job is granted
+  // A stop asked of a process other than the head (a signal, a closed window) makes it leave
+  // the wall alone (true: a process started on its own) or stop the whole wall (false).
+  bool leaveAlone = false;
+  // Polled between frames and while idle (stop signals); true asks for a stop.
+  std::function<bool()> stopRequested;
+  // One line to the process's log (stderr), prefixed by the caller.
+  std::function<void(const std::string&)> log;
+  // The head: one JSON line per job that ended and per process lost or back (--stats).
+  std::function<void(const std::string&)> jobRecord;
+};
+
+class WallService {
+ public:
+  // Binds this process's sockets (the head: its directory socket too) and starts its link; a
+  // member joins in the background. Throws base::Error on a bad --listen / --join or a port in
+  // use.
+  WallService(const Layout& layout, std::vector<Presenter*> presenters, ServiceOptions options);
+  ~WallService();
+  WallService(const WallService&) = delete;
+  WallService& operator=(const WallService&) = delete;
+
+  // The head: "HOST:PORT" that jobs pass to --connect and processes to --join, and the token they
+  // need (generated when the listen address is not loopback and none was given; empty: none).
+  // The others: the head's address they joined.
+  std::string address() const;
+  std::string token() const;
+  // The head: waits until every process joined, or `until`; returns those that did not.
+  // Another process: waits until it joined (returns nothing) or `until` (returns itself); throws
+  // base::Error when the head refused it (wrong token, another layout).
+  std::vector<int> waitForProcesses(std::chrono::steady_clock::time_point until);
+  // Presents jobs until the wall is asked to stop (or this process leaves it); returns then.
+  // Throws base::Error when the head refuses this process.
+  void run();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace wall::service
