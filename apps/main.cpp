@@ -1,4 +1,8 @@
 // dfbwall: a thin main; everything happens in app::run.
 #include "apps/Run.h"
+#include "renderers/scivis/Registration.h"
 
-int main(int argc, char** argv) { return app::run(argc, argv); }
+int main(int argc, char** argv) {
+  renderers::registerSciVis();  // the scivis renderer and the scivis parts of scene files
+  return app::run(argc, argv);
+}

@@ -6,9 +6,12 @@
 
 #include "renderers/Renderer.h"
 #include "renderers/Scene.h"
-#include "renderers/scivis/scene/SciVisScene.h"
 
 namespace renderers {
+
+// renderers/scivis/scene/SciVisScene.h: made by the scivis renderer's registration
+// (renderers/scivis/Registration.h), which the core does not include.
+class SciVisScene;
 
 struct RenderScene {
   std::shared_ptr<const SceneDesc> desc;
@@ -21,7 +24,8 @@ struct RenderScene {
 // base::Error.
 RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc, bool distributed = false);
 
-// Any renderer by name: "pathtracer", "primary", "pattern" or "scivis". `scene` must outlive it.
+// Any renderer by name: "pathtracer", "primary", "pattern" or a registered one
+// (RendererRegistry.h: "scivis"). `scene` must outlive it.
 std::unique_ptr<Renderer> makeRenderer(const std::string& name, const RenderScene& scene,
                                        const RenderSettings& settings);
 

@@ -5,6 +5,9 @@
 
 #include <cmath>
 #include <new>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "base/Error.h"
 #include "base/MemoryBudget.h"
@@ -12,9 +15,22 @@
 #include "renderers/PatternRenderer.h"
 #include "renderers/PrimaryRenderer.h"
 #include "renderers/RenderScene.h"
-#include "renderers/scivis/render/SciVisRenderer.h"
+#include "renderers/RendererRegistry.h"
 
 namespace renderers {
+namespace {
+
+// "pathtracer, primary, pattern or scivis": the core's renderers and the registered ones.
+std::string rendererChoices() {
+  std::vector<std::string> names{"pathtracer", "primary", "pattern"};
+  for (std::string& name : registeredRenderers()) names.push_back(std::move(name));
+  std::string text;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    text += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+  return text;
+}
+
+}  // namespace
 
 std::unique_ptr<Renderer> makeRenderer(const std::string& name, const Scene& scene,
                                        const RenderSettings& settings) {
@@ -23,10 +39,10 @@ std::unique_ptr<Renderer> makeRenderer(const std::string& name, const Scene& sce
   if (name == "pathtracer") return std::make_unique<PathTracer>(scene, settings);
   if (name == "primary") return std::make_unique<PrimaryRenderer>(scene, settings);
   if (name == "pattern") return std::make_unique<PatternRenderer>(settings);
-  if (name == "scivis")
-    throw base::Error("the scivis renderer draws a scivis scene: build it with buildRenderScene");
-  throw base::Error("unknown renderer '" + name +
-                    "' (choose pathtracer, primary, pattern or scivis)");
+  if (findRenderer(name))
+    throw base::Error("the " + name + " renderer draws a " + name +
+                      " scene: build it with buildRenderScene");
+  throw base::Error("unknown renderer '" + name + "' (choose " + rendererChoices() + ")");
 }
 
 namespace {
@@ -35,8 +51,8 @@ RenderScene buildScene(const std::string& renderer, SceneDesc desc, bool distrib
   RenderScene out;
   out.desc = std::make_shared<const SceneDesc>(std::move(desc));
   if (distributed) return out;
-  if (renderer == "scivis") {
-    out.scivis = std::make_shared<const SciVisScene>(out.desc, wholeScene(*out.desc));
+  if (const RendererFactory* registered = findRenderer(renderer)) {
+    registered->build(out);
   } else if (renderer != "pattern") {
     if (out.desc->instances.empty())
       throw base::Error(
@@ -64,11 +80,10 @@ RenderScene buildRenderScene(const std::string& renderer, SceneDesc desc, bool d
 
 std::unique_ptr<Renderer> makeRenderer(const std::string& name, const RenderScene& scene,
                                        const RenderSettings& settings) {
-  if (name == "scivis") {
+  if (const RendererFactory* registered = findRenderer(name)) {
     if (settings.width <= 0 || settings.height <= 0)
       throw base::Error("renderer: canvas size must be positive");
-    if (!scene.scivis) throw base::Error("renderer scivis: the scene was not built for it");
-    return std::make_unique<SciVisRenderer>(*scene.scivis, settings);
+    return registered->make(scene, settings);
   }
   if (name == "pattern") return std::make_unique<PatternRenderer>(settings);
   if (!scene.surfaces) throw base::Error("renderer " + name + ": the scene was built for scivis");

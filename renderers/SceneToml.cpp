@@ -6,13 +6,15 @@
 #include <filesystem>
 #include <initializer_list>
 #include <new>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "base/Error.h"
 #include "base/MemoryBudget.h"
 #include "renderers/MeshImport.h"
+#include "renderers/SceneSections.h"
 #include "renderers/TomlReader.h"
-#include "renderers/scivis/SciVisToml.h"
 
 namespace renderers {
 namespace {
@@ -180,9 +182,12 @@ SceneDesc readSceneToml(const std::string& path) {
   }
   const TomlReader r(path);
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
-  r.onlyKeys(root, "the scene",
-             {"camera", "environment", "materials", "meshes", "spheres", "instances", "volumes",
-              "isosurfaces", "particles", "lights", "scivis"});
+  // The core's keys, then those of the registered sections (SceneSections.h).
+  const std::vector<SceneSections> sections = registeredSceneSections();
+  std::vector<std::string_view> keys{"camera", "environment", "materials",
+                                     "meshes", "spheres",     "instances"};
+  for (const SceneSections& s : sections) keys.insert(keys.end(), s.keys.begin(), s.keys.end());
+  r.onlyKeys(root, "the scene", keys);
   SceneDesc d;
   readCamera(r, r.table(r.require(root, "camera", "the scene"), "camera"), d.camera);
   if (const toml::node* e = root.get("environment"))
@@ -268,7 +273,7 @@ SceneDesc readSceneToml(const std::string& path) {
     checkPlacement(r, *t, what, d.shapes[shape].mesh, transform);
     d.instances.push_back({shape, transform, material});
   }
-  readSciVis(r, root, folder, d);
+  for (const SceneSections& s : sections) s.read(r, root, folder, d);
   if (d.instances.empty() && d.volumes.empty() && d.particles.empty())
     r.fail(root, "the scene has no meshes, spheres, volumes or particles");
   return d;

@@ -37,6 +37,10 @@ class TomlReader {
   // Rejects keys outside `known`: a misspelt field would otherwise be silently ignored.
   void onlyKeys(const toml::table& t, const std::string& what,
                 std::initializer_list<std::string_view> known) const {
+    onlyKeys(t, what, std::vector<std::string_view>(known));
+  }
+  void onlyKeys(const toml::table& t, const std::string& what,
+                const std::vector<std::string_view>& known) const {
     for (const auto& [key, value] : t) {
       bool ok = false;
       for (auto k : known) ok = ok || key.str() == k;

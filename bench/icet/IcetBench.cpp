@@ -47,6 +47,7 @@
 #include "messaging/Messenger.h"
 #include "messaging/MpiSession.h"
 #include "renderers/BuiltinScenes.h"
+#include "renderers/scivis/Registration.h"
 #include "renderers/scivis/bricks/BrickFrameDriver.h"
 #include "wall/image/Png.h"
 #include "wall/layout/Ranks.h"
@@ -436,6 +437,7 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  renderers::registerSciVis();  // scenes may have volumes, isosurfaces and particles
   try {
     return run(argc, argv);
   } catch (const std::exception& e) {

@@ -13,6 +13,7 @@
 #include "renderers/BuiltinScenes.h"
 #include "renderers/Camera.h"
 #include "renderers/Scene.h"
+#include "renderers/scivis/Registration.h"
 
 using namespace renderers;
 
@@ -48,6 +49,7 @@ double run(const Scene& scene, const Camera& cam, int size, int pw, Fn intersect
 }
 
 int main(int argc, char** argv) {
+  renderers::registerSciVis();  // scenes may have volumes, isosurfaces and particles
   if (argc < 4) return std::fprintf(stderr, "usage: %s SCENE SIZE THREADS\n", argv[0]), 2;
   const Scene scene(loadSceneDesc(argv[1]));
   const int size = std::atoi(argv[2]);

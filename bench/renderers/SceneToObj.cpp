@@ -8,8 +8,10 @@
 #include <string>
 
 #include "renderers/BuiltinScenes.h"
+#include "renderers/scivis/Registration.h"
 
 int main(int argc, char** argv) {
+  renderers::registerSciVis();  // scenes may have volumes, isosurfaces and particles
   if (argc != 3) {
     std::fprintf(stderr, "usage: %s SCENE OUT.obj\n", argv[0]);
     return 2;

@@ -36,6 +36,7 @@
 #include "renderers/BuiltinScenes.h"
 #include "renderers/CanvasImage.h"
 #include "renderers/RenderScene.h"
+#include "renderers/scivis/Registration.h"
 #include "renderers/scivis/io/VolumeLoad.h"
 #include "renderers/scivis/render/SciVisRenderer.h"
 #include "wall/image/Png.h"
@@ -145,6 +146,7 @@ MarchKernel marchFromEnvironment() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  renderers::registerSciVis();  // scenes may have volumes, isosurfaces and particles
   if (argc < 6) {
     std::fprintf(stderr,
                  "usage: %s volume|volume-uint8|volume-uint16|iso|iso-ao RESOLUTION SIZE THREADS "

@@ -11,6 +11,7 @@
 
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
+#include "renderers/scivis/bricks/Bricks.h"
 #include "renderers/scivis/render/SciVisRenderer.h"
 #include "renderers/scivis/scene/ShadingShell.h"
 #include "tests/renderers/RenderTestUtil.h"

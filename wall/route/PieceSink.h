@@ -1,7 +1,7 @@
 #pragma once
 // Where the display-routing pixel op (wall/route/DisplayRoutingOp.h) hands each piece: the job's
 // messenger to a wall rank of the same MPI job (MessengerPieceSink), or a service link to a
-// persistent wall (wall/service/ServicePieceSink.h). One op, two transports.
+// persistent wall (ServiceClient, wall/service/client/ServiceClient.h). One op, two transports.
 #include <atomic>
 #include <cstdint>
 #include <vector>

@@ -14,11 +14,6 @@
 namespace renderers {
 namespace {
 
-void grow(Box3& b, Vec3 lo, Vec3 hi) {
-  b.lo = {std::min(b.lo.x, lo.x), std::min(b.lo.y, lo.y), std::min(b.lo.z, lo.z)};
-  b.hi = {std::max(b.hi.x, hi.x), std::max(b.hi.y, hi.y), std::max(b.hi.z, hi.z)};
-}
-
 Box3 expanded(const Box3& b, float margin) { return {b.lo - Vec3{margin}, b.hi + Vec3{margin}}; }
 
 bool overlaps(const Box3& a, Vec3 lo, Vec3 hi) {
@@ -97,25 +92,6 @@ std::vector<SweptBox> shadowSweeps(const Box3& bounds, const GhostReach& reach, 
       out.push_back({from, at.lo - from.lo, at.hi - from.hi, 1.0f});
     }
   }
-  return out;
-}
-
-// Every particle set of the scene: its [[particles]] and the path tracer's sphere shapes.
-std::vector<const ParticlesDesc*> particleSets(const SceneDesc& desc,
-                                               std::vector<ParticlesDesc>& converted) {
-  for (const Instance& inst : desc.instances) {
-    const Shape& s = desc.shapes.at(inst.shape);
-    if (!s.isSpheres()) continue;
-    ParticlesDesc p;
-    p.name = s.name;
-    for (const Vec3& c : s.spheres.centers) p.centers.push_back(inst.transform.point(c));
-    p.radii = s.spheres.radii;
-    p.material = inst.material;
-    converted.push_back(std::move(p));
-  }
-  std::vector<const ParticlesDesc*> out;
-  for (const ParticlesDesc& p : desc.particles) out.push_back(&p);
-  for (const ParticlesDesc& p : converted) out.push_back(&p);
   return out;
 }
 
@@ -298,23 +274,6 @@ Box3 openAtDomainBoundary(const Box3& bounds, const Box3& domain) {
   if (out.hi.y >= domain.hi.y) out.hi.y = kInf;
   if (out.hi.z >= domain.hi.z) out.hi.z = kInf;
   return out;
-}
-
-Box3 sceneDomain(const SceneDesc& desc) {
-  Box3 domain{Vec3{Box3::kInf}, Vec3{-Box3::kInf}};
-  for (const VolumeDesc& v : desc.volumes) {
-    Vec3 lo, hi;
-    v.source.grid.bounds(v.source.grid.wholeBox(), lo, hi);
-    grow(domain, lo, hi);
-  }
-  std::vector<ParticlesDesc> converted;
-  for (const ParticlesDesc* p : particleSets(desc, converted))
-    for (std::size_t i = 0; i < p->centers.size(); ++i)
-      grow(domain, p->centers[i] - Vec3{p->radius(i)}, p->centers[i] + Vec3{p->radius(i)});
-  for (const WorldMesh& m : worldMeshes(desc))
-    for (const Vec3& v : m.mesh.positions) grow(domain, v, v);
-  if (domain.empty()) throw base::Error("the scene is empty: nothing to cut into bricks");
-  return domain;
 }
 
 std::vector<BrickPlan> splitScene(const SceneDesc& desc, int count) {
@@ -504,6 +463,13 @@ void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans
   throw base::Error("the scene's particles and triangles: this rank holds " +
                     std::to_string(others) + " bytes of them (" + bricks + "); its data in all " +
                     problem);
+}
+
+BrickContent wholeScene(const SceneDesc& desc) {
+  // One brick without bounds: every voxel, particle and triangle, nothing as ghost.
+  const BrickPlan whole{0, Box3{}};
+  checkBrickMemory(desc, {whole}, GhostReach{});
+  return loadBrick(desc, whole, GhostReach{});
 }
 
 namespace {

@@ -23,8 +23,7 @@ struct BrickPlan {
   Box3 bounds;  // bricks tile the domain; camera rays are clipped to them
 };
 
-// The bounds of everything in the scene (volumes' voxel centres, particles, meshes).
-Box3 sceneDomain(const SceneDesc& desc);
+// sceneDomain (the bounds of everything in the scene): SciVisScene.h.
 // `bounds` with the faces it shares with `domain`'s boundary pushed to infinity: where a brick's
 // camera rays take first hits from the raster (FirstHitRaster.h) as the unbricked scene, which
 // clips no ray at the domain's boundary, does; between bricks the split stays `bounds`'.
@@ -94,6 +93,10 @@ void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans
 // for a program that wants to know at setup, before the frames start.
 void checkOwnBricksMemory(const SceneDesc& desc, int bricks, int replication, int rank, int ranks,
                           GhostMode ghosts = GhostMode::Reach);
+
+// The whole scene as one brick: every volume loaded whole, every particle and mesh (its memory
+// checked first).
+BrickContent wholeScene(const SceneDesc& desc);
 
 // One brick a rank holds: its id (every rank holding an id holds the same data) and its data;
 // content.bounds are the brick's clip bounds.

@@ -18,6 +18,12 @@ struct Box3 {
   bool operator==(const Box3&) const = default;
 };
 
+// `b` widened to hold [lo, hi].
+inline void grow(Box3& b, Vec3 lo, Vec3 hi) {
+  b.lo = {std::min(b.lo.x, lo.x), std::min(b.lo.y, lo.y), std::min(b.lo.z, lo.z)};
+  b.hi = {std::max(b.hi.x, hi.x), std::max(b.hi.y, hi.y), std::max(b.hi.z, hi.z)};
+}
+
 inline Vec3 reciprocal(Vec3 d) { return {1.0f / d.x, 1.0f / d.y, 1.0f / d.z}; }
 
 // One axis of clipToBox(): [t0, t1] narrowed to the slab lo <= origin + t dir <= hi along it

@@ -12,7 +12,6 @@
 #include "base/Parallel.h"
 #include "renderers/EmbreeRays.h"
 #include "renderers/TransferFunction.h"
-#include "renderers/scivis/bricks/Bricks.h"
 #include "renderers/scivis/scene/Isosurfaces.h"
 
 namespace renderers {
@@ -44,11 +43,40 @@ std::vector<WorldMesh> worldMeshes(const SceneDesc& desc) {
   return out;
 }
 
-BrickContent wholeScene(const SceneDesc& desc) {
-  // One brick without bounds: every voxel, particle and triangle, nothing as ghost.
-  const BrickPlan whole{0, Box3{}};
-  checkBrickMemory(desc, {whole}, GhostReach{});
-  return loadBrick(desc, whole, GhostReach{});
+// Every particle set of the scene: its [[particles]] and the path tracer's sphere shapes.
+std::vector<const ParticlesDesc*> particleSets(const SceneDesc& desc,
+                                               std::vector<ParticlesDesc>& converted) {
+  for (const Instance& inst : desc.instances) {
+    const Shape& s = desc.shapes.at(inst.shape);
+    if (!s.isSpheres()) continue;
+    ParticlesDesc p;
+    p.name = s.name;
+    for (const Vec3& c : s.spheres.centers) p.centers.push_back(inst.transform.point(c));
+    p.radii = s.spheres.radii;
+    p.material = inst.material;
+    converted.push_back(std::move(p));
+  }
+  std::vector<const ParticlesDesc*> out;
+  for (const ParticlesDesc& p : desc.particles) out.push_back(&p);
+  for (const ParticlesDesc& p : converted) out.push_back(&p);
+  return out;
+}
+
+Box3 sceneDomain(const SceneDesc& desc) {
+  Box3 domain{Vec3{Box3::kInf}, Vec3{-Box3::kInf}};
+  for (const VolumeDesc& v : desc.volumes) {
+    Vec3 lo, hi;
+    v.source.grid.bounds(v.source.grid.wholeBox(), lo, hi);
+    grow(domain, lo, hi);
+  }
+  std::vector<ParticlesDesc> converted;
+  for (const ParticlesDesc* p : particleSets(desc, converted))
+    for (std::size_t i = 0; i < p->centers.size(); ++i)
+      grow(domain, p->centers[i] - Vec3{p->radius(i)}, p->centers[i] + Vec3{p->radius(i)});
+  for (const WorldMesh& m : worldMeshes(desc))
+    for (const Vec3& v : m.mesh.positions) grow(domain, v, v);
+  if (domain.empty()) throw base::Error("the scene is empty: nothing to cut into bricks");
+  return domain;
 }
 
 struct SciVisScene::Embree {

@@ -41,10 +41,14 @@ struct BrickContent {
   std::size_t bytes() const;  // the data held: voxels, particles, triangles
 };
 
-// The whole scene as one brick: every volume loaded whole, every particle and mesh.
-BrickContent wholeScene(const SceneDesc& desc);
 // The scene's mesh instances (and sphere shapes, as particles) moved to world space.
 std::vector<WorldMesh> worldMeshes(const SceneDesc& desc);
+// Every particle set of the scene: its [[particles]] and the path tracer's sphere shapes (made
+// into particle sets in `converted`, which must outlive the pointers).
+std::vector<const ParticlesDesc*> particleSets(const SceneDesc& desc,
+                                               std::vector<ParticlesDesc>& converted);
+// The bounds of everything in the scene (volumes' voxel centres, particles, meshes).
+Box3 sceneDomain(const SceneDesc& desc);
 
 // A surface found by a ray: where, its shading normal (unit, any side) and what it looks like.
 struct SurfaceHit {

@@ -1,5 +1,5 @@
 #pragma once
-// The wall service's wire protocol (README, "A wall that stays up"). Render jobs reach a
+// The wall service's wire protocol (docs/service.md, "A wall that stays up"). Render jobs reach a
 // persistent wall (`dfbwall serve`) over ZeroMQ (wall/service/protocol/Zmq.h):
 //
 //  - render rank 0 <-> wall process 0, the wall's directory socket (`--listen`): Hello, then
@@ -10,8 +10,9 @@
 //    endpoint is in the directory): one Batch per (render rank, display, frame) of pieces,
 //    encoded with the job's codec (wall/service/protocol/Codec.h).
 //
-//  - the wall's own processes among themselves (wall/service/WallLink.h): Join, Welcome, Beat,
-//    Command, Barrier, Pixels, Dropped, on the same directory socket of process 0 (the head).
+//  - the wall's own processes among themselves (wall/service/protocol/LinkMessages.h): Join,
+//    Welcome, Beat, Command, Barrier, Pixels, Dropped, on the same directory socket of process 0
+//    (the head).
 //
 // Every message starts with a MessageHeader (magic, protocol version, kind, session id). The
 // wall never trusts a length, count, rectangle, display index or frame number from the wire:
@@ -47,7 +48,7 @@ enum class Kind : std::uint16_t {
   Ended = 9,
   Batch = 10,
   Roster = 11,
-  // The wall's own link (wall/service/WallLink.h); a job never sends or gets these.
+  // The wall's own link (wall/service/protocol/LinkMessages.h); a job never sends or gets these.
   Join = 12,
   Welcome = 13,
   Beat = 14,
