@@ -1,6 +1,6 @@
-// The data-distributed API: a program's bricks rendered by renderers::BrickFrameDriver through
-// the DFB, onto a wall (route mode, wall ranks at the end of the program's communicator) or into
-// an image on render rank 0. The same path as `dfbwall --bricks` (apps/RenderRank.cpp), which
+// The data-distributed API: a program's bricks rendered by renderers::scivis::BrickFrameDriver
+// through the DFB, onto a wall (route mode, wall ranks at the end of the program's communicator) or
+// into an image on render rank 0. The same path as `dfbwall --bricks` (apps/RenderRank.cpp), which
 // loads its bricks from a scene file instead.
 #include "api/DataDistributed.h"
 
@@ -114,14 +114,14 @@ struct Session::Impl {
   std::optional<wall::service::Directory> directory;
   std::shared_ptr<wall::service::ServiceClient> service;
   std::unique_ptr<runtime::RenderWall> wallSide;  // with a layout or a connected wall
-  std::unique_ptr<renderers::BrickFrameDriver> driver;
+  std::unique_ptr<renderers::scivis::BrickFrameDriver> driver;
   // Where all of this rank's rendering runs: at most options.threads threads of its own, no cap
   // on the program's TBB parallelism (base/Parallel.h).
   std::unique_ptr<base::TaskArena> arena;
   Style style;
   std::uint64_t hashOfStyle = 0;  // styleHash(style)
   bool styleSet = false, dirty = false, replacing = false;
-  std::vector<renderers::HeldBrick> pending;  // bricks added since the last frame
+  std::vector<renderers::scivis::HeldBrick> pending;  // bricks added since the last frame
   Camera camera, lastCamera;
   bool haveCamera = false;
   std::uint32_t frameId = 0, epoch = 0;
@@ -199,7 +199,7 @@ void Session::Impl::startRendering() {
     dfbOptions.format = dfb::DisplayFormat::RGBA8;
   }
   // The driver's operation (composite, then accumulate): the same for every scene version.
-  renderers::configureBrickDfb(dfbOptions, activeTiles);
+  renderers::scivis::configureBrickDfb(dfbOptions, activeTiles);
   fb = std::make_unique<dfb::DistributedFrameBuffer>(*messenger, role, dfbOptions);
   arena = std::make_unique<base::TaskArena>(options.threads);
   if (route) {
@@ -333,9 +333,9 @@ void Session::setCamera(const Camera& camera) {
 
 void Session::Impl::commit() {
   // This rank's bricks: the ones added since the last frame, or the ones it had.
-  std::vector<renderers::HeldBrick> bricks =
+  std::vector<renderers::scivis::HeldBrick> bricks =
       replacing ? std::move(pending)
-                : (driver ? driver->releaseBricks() : std::vector<renderers::HeldBrick>{});
+                : (driver ? driver->releaseBricks() : std::vector<renderers::scivis::HeldBrick>{});
   pending.clear();
   replacing = false;
   driver.reset();
@@ -344,13 +344,13 @@ void Session::Impl::commit() {
   settings.height = height;
   settings.seed = style.seed;
   auto desc = std::make_shared<renderers::SceneDesc>(sceneDesc(style, bricks, role, timeout));
-  renderers::BrickDriverOptions driving;
+  renderers::scivis::BrickDriverOptions driving;
   driving.samplesPerPixel = static_cast<std::uint32_t>(std::max(1, style.samplesPerPixel));
   driving.threads = 0;  // no process-wide cap: the arena renderFrame runs in has the threads
   driving.activeTiles = activeTiles;
   driving.timeout = timeout;
-  driver = std::make_unique<renderers::BrickFrameDriver>(std::move(desc), settings, driving,
-                                                         std::move(bricks), role);
+  driver = std::make_unique<renderers::scivis::BrickFrameDriver>(std::move(desc), settings, driving,
+                                                                 std::move(bricks), role);
 }
 
 void Session::renderFrame() {

@@ -8,6 +8,7 @@
 
 #include "base/Collectives.h"
 #include "renderers/TransferFunction.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 
 namespace dfbwall {
 namespace {
@@ -64,12 +65,13 @@ void convertVoxels(VoxelType t, const void* from, std::byte* to, std::size_t cou
   throw std::runtime_error("dfbwall: brick " + std::to_string(brick.id) + ": " + what);
 }
 
-renderers::ParticlesDesc particles(const Brick& brick, const Particles& p, const char* field) {
+renderers::scivis::ParticlesDesc particles(const Brick& brick, const Particles& p,
+                                           const char* field) {
   if (!(p.radii.size() == 1 || p.radii.size() == p.centers.size()) && !p.centers.empty())
     fail(brick, std::string(field) + ".radii has " + std::to_string(p.radii.size()) +
                     " entries: give 1 or one per centre (" + std::to_string(p.centers.size()) +
                     ")");
-  renderers::ParticlesDesc out;
+  renderers::scivis::ParticlesDesc out;
   out.name = field;
   out.material = 0;
   for (const Vec3f& c : p.centers) out.centers.push_back(vec(c));
@@ -77,8 +79,8 @@ renderers::ParticlesDesc particles(const Brick& brick, const Particles& p, const
   return out;
 }
 
-renderers::WorldMesh mesh(const Brick& brick, const Mesh& m, const char* field) {
-  renderers::WorldMesh out;
+renderers::scivis::WorldMesh mesh(const Brick& brick, const Mesh& m, const char* field) {
+  renderers::scivis::WorldMesh out;
   out.material = 1;
   for (const Vec3f& v : m.positions) out.mesh.positions.push_back(vec(v));
   for (const auto& t : m.triangles) {
@@ -176,9 +178,9 @@ std::uint64_t styleHash(const Style& style) {
   return h.value();
 }
 
-renderers::BrickContent brickContent(const Style& style, const Brick& brick) {
+renderers::scivis::BrickContent brickContent(const Style& style, const Brick& brick) {
   if (brick.id < 0) fail(brick, "the id must not be negative");
-  renderers::BrickContent c;
+  renderers::scivis::BrickContent c;
   c.bounds = {vec(brick.boundsLo), vec(brick.boundsHi)};
   if (!brick.volumes.empty() && brick.volumes.size() != style.volumes.size())
     fail(brick, "volumes has " + std::to_string(brick.volumes.size()) + " entries; the style has " +
@@ -215,9 +217,11 @@ renderers::BrickContent brickContent(const Style& style, const Brick& brick) {
   return c;
 }
 
-renderers::SceneDesc sceneDesc(const Style& style, const std::vector<renderers::HeldBrick>& mine,
+renderers::SceneDesc sceneDesc(const Style& style,
+                               const std::vector<renderers::scivis::HeldBrick>& mine,
                                MPI_Comm renderComm, std::chrono::milliseconds timeout) {
   renderers::SceneDesc d;
+  renderers::scivis::SciVisDesc& scivis = renderers::scivis::sciVisDesc(d);
   renderers::Material particle, surface;
   particle.name = "particles";
   particle.color = vec(style.particleColor);
@@ -231,7 +235,7 @@ renderers::SceneDesc sceneDesc(const Style& style, const std::vector<renderers::
   // The value ranges every rank colours by: min of -max and of min in one reduction.
   const std::size_t n = style.volumes.size();
   std::vector<float> local(2 * n, -std::numeric_limits<float>::max()), global(2 * n);
-  for (const renderers::HeldBrick& b : mine)
+  for (const renderers::scivis::HeldBrick& b : mine)
     for (std::size_t v = 0; v < n && v < b.content.volumes.size(); ++v) {
       const renderers::Volume& vol = b.content.volumes[v];
       if (vol.voxels.empty()) continue;
@@ -253,46 +257,46 @@ renderers::SceneDesc sceneDesc(const Style& style, const std::vector<renderers::
       lo = -global[2 * v], hi = global[2 * v + 1];
       if (!(hi > lo)) hi = lo + 1;  // a constant field (or none anywhere): any non-empty range
     }
-    renderers::VolumeDesc vd;
+    renderers::scivis::VolumeDesc vd;
     vd.name = s.name;
     vd.source.grid = geometry(s.grid);
     vd.transfer = renderers::transferFunctionPreset(s.transferFunction, lo, hi, s.maxOpacity);
     vd.visible = s.visible;
-    d.volumes.push_back(std::move(vd));
+    scivis.volumes.push_back(std::move(vd));
   }
   for (const Isosurface& iso : style.isosurfaces) {
     if (iso.volume < 0 || static_cast<std::size_t>(iso.volume) >= n)
       throw std::runtime_error("dfbwall: an isosurface refers to volume " +
                                std::to_string(iso.volume) + " of " + std::to_string(n));
     renderers::Material m;
-    m.name = "isosurface" + std::to_string(d.isosurfaces.size());
+    m.name = "isosurface" + std::to_string(scivis.isosurfaces.size());
     m.color = vec(iso.color);
     m.opacity = iso.opacity;
     m.specular = 0.3f;
-    d.isosurfaces.push_back({static_cast<std::uint32_t>(iso.volume), iso.value,
-                             static_cast<std::uint32_t>(d.materials.size())});
+    scivis.isosurfaces.push_back({static_cast<std::uint32_t>(iso.volume), iso.value,
+                                  static_cast<std::uint32_t>(d.materials.size())});
     d.materials.push_back(m);
   }
   for (const Light& l : style.lights) {
-    renderers::LightDesc ld;
-    ld.kind = l.kind == Light::Kind::Point     ? renderers::LightDesc::Kind::Point
-              : l.kind == Light::Kind::Ambient ? renderers::LightDesc::Kind::Ambient
-                                               : renderers::LightDesc::Kind::Directional;
+    renderers::scivis::LightDesc ld;
+    ld.kind = l.kind == Light::Kind::Point     ? renderers::scivis::LightDesc::Kind::Point
+              : l.kind == Light::Kind::Ambient ? renderers::scivis::LightDesc::Kind::Ambient
+                                               : renderers::scivis::LightDesc::Kind::Directional;
     ld.direction = vec(l.direction);
     ld.position = vec(l.position);
     ld.color = vec(l.color);
     ld.intensity = l.intensity;
-    d.lights.push_back(ld);
+    scivis.lights.push_back(ld);
   }
   d.environment.color = vec(style.background);
   if (style.aoSamples > 0 && !(style.aoDistance > 0))
     throw std::runtime_error(
         "dfbwall: Style.aoDistance must be positive with aoSamples (a brick cannot know the "
         "whole scene's extent)");
-  d.scivis.aoSamples = style.aoSamples;
-  d.scivis.aoDistance = style.aoDistance;
-  d.scivis.shadows = style.shadows;
-  d.scivis.samplingRate = style.samplingRate;
+  scivis.settings.aoSamples = style.aoSamples;
+  scivis.settings.aoDistance = style.aoDistance;
+  scivis.settings.shadows = style.shadows;
+  scivis.settings.samplingRate = style.samplingRate;
   return d;
 }
 

@@ -15,11 +15,12 @@ namespace dfbwall {
 
 // Copies the brick's data. Throws std::runtime_error naming the brick and the field for data
 // that does not fit the style (a voxel box outside its field, radii that do not match, ...).
-renderers::BrickContent brickContent(const Style& style, const Brick& brick);
+renderers::scivis::BrickContent brickContent(const Style& style, const Brick& brick);
 
 // Materials: 0 the particles, 1 the meshes, 2 + i isosurface i. Collective over `renderComm`
 // when a volume asks for autoRange (the value range over every rank's voxels, one allreduce).
-renderers::SceneDesc sceneDesc(const Style& style, const std::vector<renderers::HeldBrick>& mine,
+renderers::SceneDesc sceneDesc(const Style& style,
+                               const std::vector<renderers::scivis::HeldBrick>& mine,
                                MPI_Comm renderComm, std::chrono::milliseconds timeout);
 
 // FNV-1a over a canonical serialisation of every field of the style (sizes and string lengths

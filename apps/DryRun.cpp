@@ -55,20 +55,20 @@ void printDryRun(const Job& job) {
     // The data-parallel plan: every brick, its bounds and the render ranks that load it. A
     // tile's brick is rendered by holder (tile + brick) mod K of the K holders.
     const renderers::SceneDesc desc = renderers::loadSceneDesc(o.scene);
-    const auto bricks = renderers::splitScene(desc, o.bricks);
+    const auto bricks = renderers::scivis::splitScene(desc, o.bricks);
     std::printf(
         "bricks: %zu, each on %d render rank(s); tile-brick owner = holders[(tile + brick) %% K]\n",
         bricks.size(), std::min(o.replication, job.roles.renderRanks));
-    const renderers::GhostMode ghost = renderers::ghostModeFromName(o.ghost);
-    const renderers::GhostReach reach = renderers::ghostReach(desc, ghost);
+    const renderers::scivis::GhostMode ghost = renderers::scivis::ghostModeFromName(o.ghost);
+    const renderers::scivis::GhostReach reach = renderers::scivis::ghostReach(desc, ghost);
     std::printf(
         "ghost: %s, %g world units beyond each brick plus a layer of 2 voxels, and for shadows "
         "the brick swept towards %zu light(s) to the domain's boundary\n",
-        renderers::ghostModeName(ghost), reach.margin, reach.lights.size());
-    for (const renderers::BrickPlan& b : bricks) {
+        renderers::scivis::ghostModeName(ghost), reach.margin, reach.lights.size());
+    for (const renderers::scivis::BrickPlan& b : bricks) {
       std::printf("brick %d [%g %g %g]..[%g %g %g] on ranks", b.id, b.bounds.lo.x, b.bounds.lo.y,
                   b.bounds.lo.z, b.bounds.hi.x, b.bounds.hi.y, b.bounds.hi.z);
-      for (int r : renderers::brickHolders(b.id, job.roles.renderRanks, o.replication))
+      for (int r : renderers::scivis::brickHolders(b.id, job.roles.renderRanks, o.replication))
         std::printf(" %d", r);
       std::printf("\n");
     }

@@ -21,7 +21,9 @@
 #include "renderers/FrameDriver.h"
 #include "renderers/Renderer.h"
 #include "renderers/WorkDistribution.h"
+#include "renderers/scivis/Registration.h"
 #include "renderers/scivis/bricks/BrickFrameDriver.h"
+#include "renderers/scivis/scene/SciVisScene.h"
 #include "runtime/FrameBuffer.h"
 #include "runtime/RenderWall.h"
 #include "wall/image/Png.h"
@@ -118,7 +120,7 @@ class RenderRank {
   dfb::DfbOptions dfbOptions_;
   std::unique_ptr<renderers::Renderer> renderer_;
   std::unique_ptr<renderers::FrameDriver> imageDriver_;
-  std::unique_ptr<renderers::BrickFrameDriver> brickDriver_;
+  std::unique_ptr<renderers::scivis::BrickFrameDriver> brickDriver_;
   std::unique_ptr<dfb::DistributedFrameBuffer> dfb_;
   std::optional<runtime::RenderWall> wall_;
   Preview* preview_ = nullptr;
@@ -210,21 +212,22 @@ void RenderRank::makeDrivers() {
   driving_.distribution = renderers::distributionFromName(o_.distribution);
   driving_.samplesPerPixel = static_cast<std::uint32_t>(o_.spp);
   driving_.threads = o_.threads;
-  renderers::SciVisScene::IsosurfaceStats iso;
+  renderers::scivis::SciVisScene::IsosurfaceStats iso;
   if (o_.bricks > 0) {
     int renderRanks = 1;
     MPI_Comm_size(renderComm_, &renderRanks);
-    renderers::BrickDriverOptions bricks;
+    renderers::scivis::BrickDriverOptions bricks;
     bricks.samplesPerPixel = static_cast<std::uint32_t>(o_.spp);
     bricks.threads = o_.threads;
     bricks.activeTiles = driving_.activeTiles;
     bricks.timeout = timeout_;
     // Each rank loads only its own bricks; the ranks then exchange their bounds, as programs
     // that bring their own data do (api/DataDistributed.h).
-    brickDriver_ = std::make_unique<renderers::BrickFrameDriver>(
+    brickDriver_ = std::make_unique<renderers::scivis::BrickFrameDriver>(
         job_.scene.desc, settings_, bricks,
-        renderers::loadOwnBricks(*job_.scene.desc, o_.bricks, o_.replication, renderRank_,
-                                 renderRanks, renderers::ghostModeFromName(o_.ghost)),
+        renderers::scivis::loadOwnBricks(*job_.scene.desc, o_.bricks, o_.replication, renderRank_,
+                                         renderRanks,
+                                         renderers::scivis::ghostModeFromName(o_.ghost)),
         renderComm_);
     brickDriver_->configure(dfbOptions_);
     totals_.sceneBytes = static_cast<double>(brickDriver_->sceneBytes());
@@ -233,9 +236,10 @@ void RenderRank::makeDrivers() {
     renderer_ = renderers::makeRenderer(o_.renderer, job_.scene, settings_);
     imageDriver_ = std::make_unique<renderers::FrameDriver>(*renderer_, driving_);
     imageDriver_->configure(dfbOptions_);
-    if (!job_.scene.scivis) return;
-    totals_.sceneBytes = static_cast<double>(job_.scene.scivis->bytes());
-    iso = job_.scene.scivis->isosurfaceStats();
+    const renderers::scivis::SciVisScene* scivis = renderers::scivis::findSciVisScene(job_.scene);
+    if (!scivis) return;
+    totals_.sceneBytes = static_cast<double>(scivis->bytes());
+    iso = scivis->isosurfaceStats();
   }
   totals_.isosurfaceTriangles = static_cast<double>(iso.cameraTriangles);
   totals_.shadingOnlyTriangles = static_cast<double>(iso.shadingTriangles);

@@ -142,9 +142,9 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
       // Bricks load once the frames are set up; their memory is known now (render ranks are
       // world ranks 0 .. R-1, in order).
       if (o.bricks > 0)
-        renderers::checkOwnBricksMemory(*job.scene.desc, o.bricks, o.replication, job.worldRank,
-                                        job.roles.renderRanks,
-                                        renderers::ghostModeFromName(o.ghost));
+        renderers::scivis::checkOwnBricksMemory(*job.scene.desc, o.bricks, o.replication,
+                                                job.worldRank, job.roles.renderRanks,
+                                                renderers::scivis::ghostModeFromName(o.ghost));
       if (job.worldRank == 0 && !o.cameraPath.empty())
         job.cameraPath = CameraPath::load(o.cameraPath, job.scene.desc->camera);
     }

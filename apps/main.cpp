@@ -3,6 +3,6 @@
 #include "renderers/scivis/Registration.h"
 
 int main(int argc, char** argv) {
-  renderers::registerSciVis();  // the scivis renderer and the scivis parts of scene files
+  renderers::scivis::registerSciVis();  // the scivis renderer and the scivis parts of scene files
   return app::run(argc, argv);
 }

@@ -1,7 +1,9 @@
 #include "renderers/BuiltinScenes.h"
 
+#include <mutex>
+#include <utility>
+
 #include "base/Error.h"
-#include "renderers/Particles.h"
 #include "renderers/Rng.h"
 #include "renderers/SceneToml.h"
 
@@ -115,54 +117,51 @@ SceneDesc manySpheres(int countX, int countZ) {
   return d;
 }
 
-SceneDesc waveletScene(int resolution) {
-  SceneDesc d;
-  VolumeDesc v;
-  v.name = "wavelet";
-  v.source.kind = VolumeSource::Kind::Wavelet;
-  v.source.grid.dims = {resolution, resolution, resolution};
-  const float spacing = 2.0f / static_cast<float>(resolution - 1);
-  v.source.grid.spacing = Vec3{spacing};
-  v.source.grid.origin = Vec3{-1.0f};
-  // The field spans about 37..277; a faint cool-warm haze shows its lobes, and two isosurfaces
-  // show its shape: a glassy outer one and an opaque core.
-  v.transfer = transferFunctionPreset("cool-warm", 37.0f, 277.0f, 0.0f);
-  v.transfer.opacities = {{37.0f, 0.0f}, {190.0f, 0.0f}, {277.0f, 0.04f}};
-  d.volumes.push_back(std::move(v));
-  Material glass = {"outer", MaterialType::Diffuse, {0.55f, 0.7f, 1.0f}, {}, 0, 1.5f};
-  glass.opacity = 0.18f;
-  glass.specular = 0.4f;
-  Material core = {"core", MaterialType::Diffuse, {1.0f, 0.55f, 0.2f}, {}, 0, 1.5f};
-  core.specular = 0.3f;
-  d.materials = {glass, core};
-  d.isosurfaces = {{0, 160.0f, 0}, {0, 215.0f, 1}};
-  d.camera = {{2.3f, 1.5f, 2.9f}, {0, -0.05f, 0}, {0, 1, 0}, 38.0f, 0, 0};
-  d.environment.kind = Environment::Kind::Gradient;
-  d.environment.bottom = {0.02f, 0.02f, 0.03f};
-  d.environment.top = {0.12f, 0.14f, 0.22f};
-  d.scivis.aoSamples = 1;
-  d.scivis.aoDistance = 0.3f;
-  return d;
+namespace {
+
+struct Registered {
+  std::string name;
+  std::function<SceneDesc()> make;
+};
+
+struct Registry {
+  std::mutex mutex;
+  std::vector<Registered> scenes;
+};
+
+Registry& registry() {
+  static Registry r;
+  return r;
 }
 
-SceneDesc particleScene(std::size_t count) {
-  SceneDesc d;
-  d.materials = {diffuse("particle", {0.8f, 0.8f, 0.8f})};
-  d.materials[0].specular = 0.25f;
-  ParticlesDesc p = clusteredParticles(count, 7, Vec3{}, 2.0f, 0.0045f);
-  p.name = "halos";
-  p.colorMap = transferFunctionPreset("viridis", 0.0f, 1.0f);
-  d.particles.push_back(std::move(p));
-  d.camera = {{0.4f, 0.9f, 3.0f}, {0, 0, 0}, {0, 1, 0}, 45.0f, 0, 0};
-  d.environment.kind = Environment::Kind::Constant;
-  d.environment.color = {0.01f, 0.01f, 0.015f};
-  d.scivis.aoSamples = 1;
-  d.scivis.aoDistance = 0.08f;
-  return d;
+// The registered scene `name`'s maker, or an empty function.
+std::function<SceneDesc()> findBuiltinScene(const std::string& name) {
+  Registry& r = registry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  for (const Registered& e : r.scenes)
+    if (e.name == name) return e.make;
+  return {};
+}
+
+}  // namespace
+
+void registerBuiltinScene(const std::string& name, std::function<SceneDesc()> make) {
+  Registry& r = registry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  for (Registered& e : r.scenes)
+    if (e.name == name) {
+      e.make = std::move(make);
+      return;
+    }
+  r.scenes.push_back({name, std::move(make)});
 }
 
 std::vector<std::string> builtinSceneNames() {
-  return {"cornell", "spheres", "wavelet", "particles"};
+  std::vector<std::string> names{"cornell", "spheres"};
+  Registry& r = registry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  for (const Registered& e : r.scenes) names.push_back(e.name);
+  return names;
 }
 
 SceneDesc loadSceneDesc(const std::string& spec) {
@@ -171,8 +170,7 @@ SceneDesc loadSceneDesc(const std::string& spec) {
   const std::string name = spec.substr(prefix.size());
   if (name == "cornell") return cornellBox();
   if (name == "spheres") return manySpheres();
-  if (name == "wavelet") return waveletScene();
-  if (name == "particles") return particleScene();
+  if (const std::function<SceneDesc()> make = findBuiltinScene(name)) return make();
   std::string names;
   for (const auto& n : builtinSceneNames()) names += (names.empty() ? "" : ", ") + n;
   throw base::Error("unknown built-in scene '" + name + "' (choose " + names + ")");

@@ -20,14 +20,19 @@
 namespace renderers {
 namespace {
 
-// "pathtracer, primary, pattern or scivis": the core's renderers and the registered ones.
-std::string rendererChoices() {
-  std::vector<std::string> names{"pathtracer", "primary", "pattern"};
-  for (std::string& name : registeredRenderers()) names.push_back(std::move(name));
+// "a, b or c".
+std::string listed(const std::vector<std::string>& names) {
   std::string text;
   for (std::size_t i = 0; i < names.size(); ++i)
     text += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
   return text;
+}
+
+// "pathtracer, primary, pattern or ...": the core's renderers and the registered ones.
+std::string rendererChoices() {
+  std::vector<std::string> names{"pathtracer", "primary", "pattern"};
+  for (std::string& name : registeredRenderers()) names.push_back(std::move(name));
+  return listed(names);
 }
 
 }  // namespace
@@ -50,15 +55,18 @@ namespace {
 RenderScene buildScene(const std::string& renderer, SceneDesc desc, bool distributed) {
   RenderScene out;
   out.desc = std::make_shared<const SceneDesc>(std::move(desc));
+  out.renderer = renderer;
   if (distributed) return out;
   if (const RendererFactory* registered = findRenderer(renderer)) {
     registered->build(out);
   } else if (renderer != "pattern") {
-    if (out.desc->instances.empty())
+    if (out.desc->instances.empty()) {
+      const std::vector<std::string> others = out.desc->extensions.drawnBy();
       throw base::Error(
-          "renderer " + renderer +
-          " draws meshes and spheres, and the scene has none (its volumes and particles "
-          "are drawn by --renderer scivis)");
+          "renderer " + renderer + " draws meshes and spheres, and the scene has none" +
+          (others.empty() ? std::string()
+                          : " (what it has is drawn by --renderer " + listed(others) + ")"));
+    }
     out.surfaces = std::make_shared<const Scene>(*out.desc);
   }
   return out;
@@ -86,7 +94,8 @@ std::unique_ptr<Renderer> makeRenderer(const std::string& name, const RenderScen
     return registered->make(scene, settings);
   }
   if (name == "pattern") return std::make_unique<PatternRenderer>(settings);
-  if (!scene.surfaces) throw base::Error("renderer " + name + ": the scene was built for scivis");
+  if (!scene.surfaces)
+    throw base::Error("renderer " + name + ": the scene was built for " + scene.renderer);
   return makeRenderer(name, *scene.surfaces, settings);
 }
 

@@ -22,25 +22,14 @@ std::vector<std::string> SceneDesc::inputFiles() const {
   std::vector<std::string> files;
   for (const Shape& s : shapes)
     if (!s.file.empty()) files.push_back(s.file);
-  for (const ParticlesDesc& p : particles)
-    if (!p.file.empty()) files.push_back(p.file);
-  for (const VolumeDesc& v : volumes) {
-    if (v.source.kind == VolumeSource::Kind::RawFile) files.push_back(v.source.raw.path);
-    if (v.source.kind == VolumeSource::Kind::OpenVdb) files.push_back(v.source.vdb.path);
-    if (v.source.kind == VolumeSource::Kind::File) {
-      files.push_back(v.source.file.path);
-      const std::string& data = v.source.file.stored.path;  // a detached data file
-      if (!data.empty() && data != v.source.file.path) files.push_back(data);
-    }
-  }
+  for (std::string& file : extensions.inputFiles()) files.push_back(std::move(file));
   return files;
 }
 
 std::uint64_t SceneDesc::bytes() const {
   std::uint64_t total = 0;
   for (const Shape& s : shapes) total += s.bytes();
-  for (const ParticlesDesc& p : particles) total += p.bytes();
-  return total;
+  return total + extensions.bytes();
 }
 
 namespace {

@@ -1,6 +1,6 @@
 #pragma once
-// A scene as plain data: what SceneToml reads, BuiltinScenes make, Scene builds a BVH from and
-// SciVisScene turns into volumes, isosurfaces and particles.
+// A scene as plain data: what SceneToml reads, BuiltinScenes make and Scene builds a BVH from;
+// a registered renderer's parts of it (SceneExtension.h) ride along under the renderer's name.
 #include <array>
 #include <cstdint>
 #include <string>
@@ -9,7 +9,7 @@
 #include "renderers/Camera.h"
 #include "renderers/Material.h"
 #include "renderers/Math.h"
-#include "renderers/SciVisDesc.h"
+#include "renderers/SceneExtension.h"
 
 namespace renderers {
 
@@ -73,19 +73,15 @@ struct SceneDesc {
   CameraDesc camera;
   Environment environment;
 
-  // Drawn by the scivis renderer only (the path tracer draws the meshes and spheres above).
-  std::vector<VolumeDesc> volumes;
-  std::vector<IsosurfaceDesc> isosurfaces;
-  std::vector<ParticlesDesc> particles;
-  std::vector<LightDesc> lights;  // empty: an ambient light and a headlight (SciVisScene.h)
-  SciVisSettings scivis;
+  // What registered renderers draw beyond the meshes and spheres above, by renderer name.
+  SceneExtensions extensions;
 
   // Index of the material called `name`, or -1.
   int findMaterial(const std::string& name) const;
-  // Every file the description refers to besides the scene file itself (meshes, particle and
-  // volume files): a cluster checks that every host reads the same bytes from them.
+  // Every file the description refers to besides the scene file itself (meshes, then the
+  // extensions' files): a cluster checks that every host reads the same bytes from them.
   std::vector<std::string> inputFiles() const;
-  // The bytes its shapes and particles hold (what the memory budget counts as read so far).
+  // The bytes its shapes and extensions hold (what the memory budget counts as read so far).
   std::uint64_t bytes() const;
 };
 

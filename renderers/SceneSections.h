@@ -16,6 +16,9 @@ namespace renderers {
 
 struct SceneSections {
   std::vector<std::string> keys;  // the top-level keys `read` takes
+  // What they describe to draw, for the error of a scene without anything to draw: "volumes or
+  // particles" (read into SceneDesc::extensions, whose emptiness decides).
+  std::string draws;
   // Appends what it reads of `root` to `d` (names in other files are relative to `folder`).
   // Problems go to `r` (TomlReader.h), which the caller throws at the end.
   std::function<void(TomlReader& r, const toml::table& root, const std::filesystem::path& folder,

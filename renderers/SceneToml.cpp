@@ -312,8 +312,13 @@ void readScene(TomlReader& r, const toml::table& root, const std::filesystem::pa
     r.entry([&] { readInstance(r, *t, d); });
   for (const SceneSections& s : sections) s.read(r, root, folder, d);
   // Only for a file read cleanly: entries that failed would otherwise count as missing.
-  if (r.diagnostics().ok() && d.instances.empty() && d.volumes.empty() && d.particles.empty())
-    r.problem(root, "", "the scene has no meshes, spheres, volumes or particles");
+  if (r.diagnostics().ok() && d.instances.empty() && d.extensions.drawnBy().empty()) {
+    std::string more;  // ", volumes or particles"
+    for (const SceneSections& s : sections)
+      if (!s.draws.empty()) more += ", " + s.draws;
+    r.problem(root, "",
+              "the scene has no meshes" + (more.empty() ? " or spheres" : ", spheres" + more));
+  }
 }
 
 }  // namespace

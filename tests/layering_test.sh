@@ -35,6 +35,23 @@ forbid apps api
 # Benchmarks and examples use what a user could: never the tests' helpers.
 forbid bench tests
 forbid examples tests
+# Namespaces follow folders: a sub-library's files open its namespace (or one beneath it), never
+# their parent library's.
+sublibrary() {  # sublibrary FOLDER NAMESPACE PARENT_NAMESPACE
+  local folder=$1 ns=$2 parent=$3
+  if hits=$(grep -rnE "^namespace ${parent}( |::)" "$root/$folder" --include='*.h' --include='*.cpp' |
+            grep -vE ":namespace ${ns}( |::)"); then
+    echo "FAIL: $folder/ must open namespace $ns (or one beneath it), not:"; echo "$hits"; status=1
+  fi
+}
+sublibrary renderers/scivis renderers::scivis renderers
+sublibrary wall/service wall::service wall
+# The renderers core reaches the scivis renderer through its registries only: its code (comments
+# aside) never names it.
+if hits=$(grep -niE 'scivis' "$root"/renderers/*.h "$root"/renderers/*.cpp |
+          grep -vE '^[^:]+:[0-9]+:[[:space:]]*//' | grep -iE '^[^:]+:[0-9]+:([^/]|/[^/])*scivis'); then
+  echo "FAIL: the renderers core names the scivis renderer:"; echo "$hits"; status=1
+fi
 # The API's public header is all an installed program sees: MPI and the standard library only.
 if hits=$(grep -nE '#include +"' "$root/api/DataDistributed.h"); then
   echo "FAIL: api/DataDistributed.h must include only <mpi.h> and standard headers:"; echo "$hits"
@@ -109,6 +126,7 @@ done
 
 if [[ $status -eq 0 ]]; then
   echo "base/ -> nothing; messaging/ -> base/ only; dfb/ -> messaging/ only; renderers/, wall/ -> dfb/, messaging/ only; runtime/ -> no apps/, api/; api/ self-contained; bench/, examples/ -> no tests/: holds"
+  echo "renderers/scivis/ in renderers::scivis, wall/service/ in wall::service; the renderers core names no scivis: holds"
   echo "no folder includes another in a cycle; the arrows between sub-folders:"
   printf '%s' "$arrows"
 fi

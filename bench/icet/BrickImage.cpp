@@ -12,6 +12,7 @@
 namespace icetbench {
 
 using namespace renderers;
+using namespace renderers::scivis;
 
 namespace {
 constexpr int kTileSize = 64;  // the DFB's default tile: the same plan on both sides

@@ -35,7 +35,7 @@ class BrickImage {
   // makes it). `planner` is this rank's DFB driver of the same scene and bricks; only its plan
   // (which tiles need which brick) is used.
   void render(const dfb::FrameInfo& frame, const renderers::CameraDesc& camera,
-              const renderers::BrickFrameDriver& planner);
+              const renderers::scivis::BrickFrameDriver& planner);
 
   const std::vector<float>& color() const { return color_; }  // premultiplied linear RGBA
   const std::vector<std::uint32_t>& rgba8() const { return rgba8_; }
@@ -46,12 +46,12 @@ class BrickImage {
  private:
   std::shared_ptr<const renderers::SceneDesc> desc_;
   renderers::RenderSettings settings_;
-  renderers::BrickPlan plan_;
+  renderers::scivis::BrickPlan plan_;
   bool opaque_;
   dfb::ToneMapSettings toneMap_;
   float depthScale_;  // depth = t / (t + depthScale_): monotonic, in [0, 1)
-  std::unique_ptr<renderers::SciVisScene> scene_;
-  std::unique_ptr<renderers::SciVisRenderer> renderer_;
+  std::unique_ptr<renderers::scivis::SciVisScene> scene_;
+  std::unique_ptr<renderers::scivis::SciVisRenderer> renderer_;
   std::vector<float> color_, depth_;
   std::vector<std::uint32_t> rgba8_;
   std::array<int, 4> viewport_{0, 0, 0, 0};
@@ -60,7 +60,7 @@ class BrickImage {
 // Brick ids front to back as seen from `eye`: the bricks come from a k-d split, so a plane
 // between two groups of them always exists, and the group on the eye's side goes first (the
 // order IceT's icetCompositeOrder needs; the DFB sorts fragments per pixel instead).
-std::vector<int> visibilityOrder(const std::vector<renderers::BrickPlan>& bricks,
+std::vector<int> visibilityOrder(const std::vector<renderers::scivis::BrickPlan>& bricks,
                                  renderers::Vec3 eye);
 
 }  // namespace icetbench

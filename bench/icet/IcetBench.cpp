@@ -49,6 +49,7 @@
 #include "renderers/BuiltinScenes.h"
 #include "renderers/scivis/Registration.h"
 #include "renderers/scivis/bricks/BrickFrameDriver.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 #include "wall/image/Png.h"
 #include "wall/layout/Ranks.h"
 #include "wall/route/DisplayRoutingOp.h"
@@ -236,7 +237,8 @@ int run(int argc, char** argv) {
     // z-compositing keeps the nearest fragment and drops what lies behind it, so it is right only
     // for opaque surfaces: the opaque mode renders the scene's surfaces opaque and its volumes
     // not at all (the wavelet: both isosurfaces opaque, no haze).
-    for (renderers::VolumeDesc& v : loaded.volumes) v.visible = false;
+    for (renderers::scivis::VolumeDesc& v : renderers::scivis::sciVisDesc(loaded).volumes)
+      v.visible = false;
     for (renderers::Material& m : loaded.materials) m.opacity = 1.0f;
   }
   renderers::Environment& environment = loaded.environment;
@@ -256,10 +258,10 @@ int run(int argc, char** argv) {
   MPI_Comm dfbComm, icetComm;
   MPI_Comm_dup(MPI_COMM_WORLD, &dfbComm);
   MPI_Comm_dup(MPI_COMM_WORLD, &icetComm);
-  renderers::BrickDriverOptions bo;
+  renderers::scivis::BrickDriverOptions bo;
   bo.threads = o.threads;
-  renderers::BrickFrameDriver driver(
-      desc, settings, bo, renderers::loadOwnBricks(*desc, ranks, 1, rank, ranks), dfbComm);
+  renderers::scivis::BrickFrameDriver driver(
+      desc, settings, bo, renderers::scivis::loadOwnBricks(*desc, ranks, 1, rank, ranks), dfbComm);
   messaging::Messenger messenger(dfbComm);
   dfb::DfbOptions options;
   options.width = width, options.height = height;
@@ -437,7 +439,7 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  renderers::registerSciVis();  // scenes may have volumes, isosurfaces and particles
+  renderers::scivis::registerSciVis();  // scenes may have volumes, isosurfaces and particles
   try {
     return run(argc, argv);
   } catch (const std::exception& e) {

@@ -16,6 +16,7 @@
 #include "renderers/scivis/Registration.h"
 
 using namespace renderers;
+using namespace renderers::scivis;
 
 template <int N, typename RayHitN, typename Fn>
 double run(const Scene& scene, const Camera& cam, int size, int pw, Fn intersect) {
@@ -49,7 +50,7 @@ double run(const Scene& scene, const Camera& cam, int size, int pw, Fn intersect
 }
 
 int main(int argc, char** argv) {
-  renderers::registerSciVis();  // scenes may have volumes, isosurfaces and particles
+  renderers::scivis::registerSciVis();  // scenes may have volumes, isosurfaces and particles
   if (argc < 4) return std::fprintf(stderr, "usage: %s SCENE SIZE THREADS\n", argv[0]), 2;
   const Scene scene(loadSceneDesc(argv[1]));
   const int size = std::atoi(argv[2]);

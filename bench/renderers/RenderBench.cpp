@@ -14,7 +14,7 @@
 #include "renderers/scivis/Registration.h"
 
 int main(int argc, char** argv) {
-  renderers::registerSciVis();  // scenes may have volumes, isosurfaces and particles
+  renderers::scivis::registerSciVis();  // scenes may have volumes, isosurfaces and particles
   if (argc < 7) {
     std::fprintf(stderr, "usage: %s SCENE W H SPP MAX_PATH_LENGTH THREADS [RENDERER] [OUT.ppm]\n",
                  argv[0]);

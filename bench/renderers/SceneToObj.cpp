@@ -11,7 +11,7 @@
 #include "renderers/scivis/Registration.h"
 
 int main(int argc, char** argv) {
-  renderers::registerSciVis();  // scenes may have volumes, isosurfaces and particles
+  renderers::scivis::registerSciVis();  // scenes may have volumes, isosurfaces and particles
   if (argc != 3) {
     std::fprintf(stderr, "usage: %s SCENE OUT.obj\n", argv[0]);
     return 2;

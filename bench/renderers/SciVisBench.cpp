@@ -33,9 +33,9 @@
 #include <unistd.h>
 
 #include "base/Error.h"
-#include "renderers/BuiltinScenes.h"
 #include "renderers/CanvasImage.h"
 #include "renderers/RenderScene.h"
+#include "renderers/scivis/BuiltinScenes.h"
 #include "renderers/scivis/Registration.h"
 #include "renderers/scivis/io/VolumeLoad.h"
 #include "renderers/scivis/render/SciVisRenderer.h"
@@ -44,6 +44,7 @@
 namespace {
 
 using namespace renderers;
+using namespace renderers::scivis;
 
 // The volume's voxels as integers in a raw file (see "volume-uint8" above), the transfer
 // function's values moved the same way.
@@ -85,14 +86,14 @@ void toIntegers(VolumeDesc& v, VoxelType type) {
 
 SceneDesc benchScene(const std::string& mode, int resolution) {
   SceneDesc d = waveletScene(resolution);
-  VolumeDesc& v = d.volumes[0];
+  VolumeDesc& v = sciVisDesc(d).volumes[0];
   v.transfer.colors = {{37.0f, {0.23f, 0.30f, 0.75f}},
                        {157.0f, {0.87f, 0.87f, 0.87f}},
                        {277.0f, {0.71f, 0.02f, 0.15f}}};
-  d.isosurfaces.clear();
-  d.scivis = {};
+  sciVisDesc(d).isosurfaces.clear();
+  sciVisDesc(d).settings = {};
   // VTK's fixed-point caster stops a ray when its remaining opacity drops below 0xff of 0x7fff.
-  d.scivis.minTransmittance = 1.0f / 128.0f;
+  sciVisDesc(d).settings.minTransmittance = 1.0f / 128.0f;
   d.environment = {};
   // VTK's ResetCamera: the bounding sphere fills a 30° view, looking down -z.
   const float radius = std::sqrt(3.0f), distance = radius / std::sin(15.0f * kPi / 180.0f);
@@ -106,16 +107,16 @@ SceneDesc benchScene(const std::string& mode, int resolution) {
     Material a{"a", MaterialType::Diffuse, {0.55f, 0.7f, 1.0f}, {}, 0, 1.5f};
     Material b{"b", MaterialType::Diffuse, {1.0f, 0.55f, 0.2f}, {}, 0, 1.5f};
     d.materials = {a, b};
-    d.isosurfaces = {{0, 160.0f, 0}, {0, 215.0f, 1}};
-    d.scivis.shadows = false;
+    sciVisDesc(d).isosurfaces = {{0, 160.0f, 0}, {0, 215.0f, 1}};
+    sciVisDesc(d).settings.shadows = false;
   } else {
     v.visible = false;
     Material a{"a", MaterialType::Diffuse, {0.9f, 0.9f, 0.95f}, {}, 0, 1.5f};
     Material b{"b", MaterialType::Diffuse, {1.0f, 0.55f, 0.2f}, {}, 0, 1.5f};
     d.materials = {a, b};
-    d.isosurfaces = {{0, 145.0f, 0}, {0, 215.0f, 1}};
-    d.scivis.aoSamples = 4;
-    d.scivis.aoDistance = 0.3f;
+    sciVisDesc(d).isosurfaces = {{0, 145.0f, 0}, {0, 215.0f, 1}};
+    sciVisDesc(d).settings.aoSamples = 4;
+    sciVisDesc(d).settings.aoDistance = 0.3f;
   }
   return d;
 }
@@ -146,7 +147,7 @@ MarchKernel marchFromEnvironment() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  renderers::registerSciVis();  // scenes may have volumes, isosurfaces and particles
+  renderers::scivis::registerSciVis();  // scenes may have volumes, isosurfaces and particles
   if (argc < 6) {
     std::fprintf(stderr,
                  "usage: %s volume|volume-uint8|volume-uint16|iso|iso-ao RESOLUTION SIZE THREADS "
@@ -162,8 +163,9 @@ int main(int argc, char** argv) {
     const auto t0 = Clock::now();
     const SceneDesc desc = benchScene(mode, resolution);
     const RenderScene scene = buildRenderScene("scivis", desc);
-    if (desc.volumes[0].source.kind == VolumeSource::Kind::RawFile)
-      std::remove(desc.volumes[0].source.raw.path.c_str());  // read: the voxels are in memory
+    if (sciVisDesc(desc).volumes[0].source.kind == VolumeSource::Kind::RawFile)
+      std::remove(
+          sciVisDesc(desc).volumes[0].source.raw.path.c_str());  // read: the voxels are in memory
     const double loadS = std::chrono::duration<double>(Clock::now() - t0).count();
     RenderSettings settings;
     settings.width = settings.height = size;
@@ -172,7 +174,7 @@ int main(int argc, char** argv) {
     const float orbitDegreesPerFrame = 360.0f / static_cast<float>(frames);
     const MarchKernel march = resolveMarchKernel(marchFromEnvironment());
     auto renderer =
-        std::make_unique<SciVisRenderer>(*scene.scivis, settings, SciVisOptions{true, march});
+        std::make_unique<SciVisRenderer>(sciVisScene(scene), settings, SciVisOptions{true, march});
     const SciVisRenderer* scivis = renderer.get();
     std::vector<double> seconds, cpuSeconds;
     std::vector<float> image;
@@ -222,7 +224,7 @@ int main(int argc, char** argv) {
       if (out.size() > 4 && out.compare(out.size() - 4, 4, ".png") == 0)
         wall::writePng(out, rgba8.data(), size, size);
     }
-    const SciVisScene::IsosurfaceStats& iso = scene.scivis->isosurfaceStats();
+    const SciVisScene::IsosurfaceStats& iso = sciVisScene(scene).isosurfaceStats();
     const double rays = double(size) * size * frames;
     std::printf(
         "{\"mode\": \"%s\", \"resolution\": %d, \"size\": %d, \"threads\": %d, \"frames\": %d, "

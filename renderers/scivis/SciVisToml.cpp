@@ -6,11 +6,11 @@
 #include <vector>
 
 #include "base/MemoryBudget.h"
-#include "renderers/Particles.h"
+#include "renderers/scivis/io/Particles.h"
 #include "renderers/scivis/io/VolumeToml.h"
 #include "renderers/scivis/scene/SciVisScene.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 // Reads `key` as one number or an array of numbers.
@@ -25,15 +25,16 @@ std::vector<float> numbers(TomlReader& r, const toml::node& n, const std::string
 }
 
 void readIsosurface(TomlReader& r, const toml::table& t, SceneDesc& d) {
+  SciVisDesc& parts = sciVisDesc(d);
   const std::string what = "isosurface";
   r.onlyKeys(t, what, {"volume", "value", "values", "material", "materials"});
   const toml::node* vn = r.need(t, "volume", what);
   const std::string volume = r.string(vn, what + ".volume");
   std::uint32_t v = 0;
-  while (v < d.volumes.size() && d.volumes[v].name != volume) ++v;
-  if (vn && vn->is_string() && v == d.volumes.size()) {
+  while (v < parts.volumes.size() && parts.volumes[v].name != volume) ++v;
+  if (vn && vn->is_string() && v == parts.volumes.size()) {
     std::vector<std::string> names;
-    for (const VolumeDesc& other : d.volumes) names.push_back(other.name);
+    for (const VolumeDesc& other : parts.volumes) names.push_back(other.name);
     r.notDefined(*vn, what + ".volume", "volume", volume, names);
   }
 
@@ -63,7 +64,7 @@ void readIsosurface(TomlReader& r, const toml::table& t, SceneDesc& d) {
   }
   r.settle();
   for (std::size_t i = 0; i < values.size(); ++i)
-    d.isosurfaces.push_back({v, values[i], materials[i]});
+    parts.isosurfaces.push_back({v, values[i], materials[i]});
 }
 
 void readParticles(TomlReader& r, const toml::table& t, const std::filesystem::path& folder,
@@ -184,7 +185,7 @@ void readParticles(TomlReader& r, const toml::table& t, const std::filesystem::p
   }
   if (p.centers.empty()) r.fail(t, what, "no particles");
   r.settle();
-  d.particles.push_back(std::move(p));
+  sciVisDesc(d).particles.push_back(std::move(p));
 }
 
 LightDesc readLight(TomlReader& r, const toml::table& t) {
@@ -251,19 +252,21 @@ void readSettings(TomlReader& r, const toml::table& t, SciVisSettings& s) {
 void checkSampling(TomlReader& r, const std::vector<const toml::table*>& tables,
                    const SceneDesc& d) {
   constexpr double kMaxSteps = 1 << 22;
+  const SciVisDesc& parts = sciVisDesc(d);
   std::size_t finest = 0;
   Vec3 lo{INFINITY}, hi{-INFINITY};
-  for (std::size_t i = 0; i < d.volumes.size(); ++i) {
-    const GridGeometry& g = d.volumes[i].source.grid;
-    if (minComponent(g.spacing) < minComponent(d.volumes[finest].source.grid.spacing)) finest = i;
+  for (std::size_t i = 0; i < parts.volumes.size(); ++i) {
+    const GridGeometry& g = parts.volumes[i].source.grid;
+    if (minComponent(g.spacing) < minComponent(parts.volumes[finest].source.grid.spacing))
+      finest = i;
     Vec3 a, b;
     g.bounds(g.wholeBox(), a, b);
     lo = {std::min(lo.x, a.x), std::min(lo.y, a.y), std::min(lo.z, a.z)};
     hi = {std::max(hi.x, b.x), std::max(hi.y, b.y), std::max(hi.z, b.z)};
   }
-  if (d.volumes.empty()) return;
-  const double step =
-      double(minComponent(d.volumes[finest].source.grid.spacing)) / double(d.scivis.samplingRate);
+  if (parts.volumes.empty()) return;
+  const double step = double(minComponent(parts.volumes[finest].source.grid.spacing)) /
+                      double(parts.settings.samplingRate);
   const Vec3 eye = d.camera.position;
   double reach = 0;
   for (int corner = 0; corner < 8; ++corner) {
@@ -275,7 +278,7 @@ void checkSampling(TomlReader& r, const std::vector<const toml::table*>& tables,
   if (reach / step > kMaxSteps) {
     const toml::table& t = *tables[finest];
     r.problem(t.get("spacing") ? *t.get("spacing") : t,
-              "volume '" + d.volumes[finest].name + "'.spacing",
+              "volume '" + parts.volumes[finest].name + "'.spacing",
               "the volumes are sampled every " + TomlReader::text(step) +
                   " world units (the finest spacing / scivis.sampling_rate) and reach " +
                   TomlReader::text(reach) + " from the camera: " + TomlReader::text(reach / step) +
@@ -288,6 +291,7 @@ void checkSampling(TomlReader& r, const std::vector<const toml::table*>& tables,
 
 void readSciVis(TomlReader& r, const toml::table& root, const std::filesystem::path& folder,
                 SceneDesc& d) {
+  SciVisDesc& parts = sciVisDesc(d);
   const std::vector<const toml::table*> volumes = r.arrayOfTables(root, "volumes");
   for (std::size_t i = 0; i < volumes.size(); ++i) {
     const toml::table& t = *volumes[i];
@@ -300,9 +304,9 @@ void readSciVis(TomlReader& r, const toml::table& root, const std::filesystem::p
     const bool ok = r.entry([&] {
       VolumeDesc v = r.loading(t, "volume", [&] { return readVolume(r, t, folder); });
       r.settle();
-      for (const VolumeDesc& other : d.volumes)
+      for (const VolumeDesc& other : parts.volumes)
         if (other.name == v.name) r.fail(t, "volume '" + v.name + "'", "is defined twice");
-      d.volumes.push_back(std::move(v));
+      parts.volumes.push_back(std::move(v));
     });
     if (!ok && !name.empty()) r.markFailed("volume", name);
   }
@@ -311,13 +315,13 @@ void readSciVis(TomlReader& r, const toml::table& root, const std::filesystem::p
   for (const toml::table* t : r.arrayOfTables(root, "particles"))
     r.entry([&] { readParticles(r, *t, folder, d); });
   for (const toml::table* t : r.arrayOfTables(root, "lights"))
-    r.entry([&] { d.lights.push_back(readLight(r, *t)); });
+    r.entry([&] { parts.lights.push_back(readLight(r, *t)); });
   if (const toml::node* s = root.get("scivis"))
     r.entry([&] {
-      if (const toml::table* t = r.table(*s, "scivis")) readSettings(r, *t, d.scivis);
+      if (const toml::table* t = r.table(*s, "scivis")) readSettings(r, *t, parts.settings);
     });
-  // Judged on a file read cleanly: a volume that failed is not in d.volumes.
+  // Judged on a file read cleanly: a volume that failed is not in parts.volumes.
   if (r.diagnostics().ok()) checkSampling(r, volumes, d);
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -22,7 +22,7 @@
 #include "renderers/SceneDesc.h"
 #include "renderers/TomlReader.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // Appends the volumes, isosurfaces, particles and lights of `root` to `d` and reads its
 // [scivis] settings; `d.materials` must already be read. Problems go to `r`, each entry read on
@@ -30,4 +30,4 @@ namespace renderers {
 void readSciVis(TomlReader& r, const toml::table& root, const std::filesystem::path& folder,
                 SceneDesc& d);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

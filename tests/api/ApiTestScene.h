@@ -19,7 +19,7 @@ inline const renderers::Volume& field() {
     s.grid.dims = {kN, kN, kN};
     s.grid.origin = {-1, -1, -1};
     s.grid.spacing = renderers::Vec3{2.0f / (kN - 1)};
-    return renderers::loadVolume(s, s.grid.wholeBox());
+    return renderers::scivis::loadVolume(s, s.grid.wholeBox());
   }();
   return v;
 }

@@ -202,7 +202,8 @@ TEST(ConfigDiagnostics, SyntaxErrorsHaveLineAndColumnAndEchoInEveryKindOfFile) {
 TEST(ConfigDiagnostics, VolumeHeadersNameTheirLineAndColumn) {
   // A header's own place, as base::SourceLocation...
   try {
-    renderers::parseNrrdHeader("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 x 4\n\n", "v.nhdr");
+    renderers::scivis::parseNrrdHeader("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 x 4\n\n",
+                                       "v.nhdr");
     FAIL() << "a bad size was accepted";
   } catch (const base::Error& e) {
     EXPECT_EQ(e.where().file, "v.nhdr");
@@ -211,8 +212,8 @@ TEST(ConfigDiagnostics, VolumeHeadersNameTheirLineAndColumn) {
     EXPECT_STREQ(e.what(), "v.nhdr:4:10: field 'sizes': 'x' is not a number");
   }
   try {
-    renderers::parseMetaImageHeader("NDims = 3\n  DimSize = 4 4\nElementDataFile = LOCAL\n",
-                                    "v.mhd");
+    renderers::scivis::parseMetaImageHeader("NDims = 3\n  DimSize = 4 4\nElementDataFile = LOCAL\n",
+                                            "v.mhd");
     FAIL() << "two sizes were accepted";
   } catch (const base::Error& e) {
     EXPECT_STREQ(e.what(), "v.mhd:2:13: field 'DimSize': 3 numbers expected, found 2");

@@ -12,7 +12,7 @@
 #include "renderers/scivis/Registration.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  renderers::registerSciVis();  // the scivis parts of scenes, as dfbwall reads them
+  renderers::scivis::registerSciVis();  // the scivis parts of scenes, as dfbwall reads them
   // Mesh paths in the text are read relative to the scene's folder: an empty private one.
   static const std::string folder = [] {
     char pattern[] = "/tmp/dfbwall-fuzz-scene.XXXXXX";

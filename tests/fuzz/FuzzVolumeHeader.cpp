@@ -31,10 +31,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     renderers::VolumeSource s;
     s.kind = renderers::VolumeSource::Kind::File;
     s.file.path = path;
-    s.file.format = *renderers::volumeFormatOfPath(path);
-    renderers::resolveVolumeFile(s);
+    s.file.format = *renderers::scivis::volumeFormatOfPath(path);
+    renderers::scivis::resolveVolumeFile(s);
     if (s.grid.wholeBox().voxelCount() <= (std::size_t{1} << 20))
-      (void)renderers::loadVolume(s, s.grid.wholeBox());
+      (void)renderers::scivis::loadVolume(s, s.grid.wholeBox());
   } catch (const std::exception&) {
   }
   std::remove(path.c_str());

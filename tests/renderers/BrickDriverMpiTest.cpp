@@ -8,14 +8,15 @@
 #include <cstring>
 
 #include "dfb/DistributedFrameBuffer.h"
-#include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
+#include "renderers/scivis/BuiltinScenes.h"
 #include "renderers/scivis/bricks/BrickFrameDriver.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 #include "tests/MpiTestUtil.h"
 #include "tests/renderers/BrickTestUtil.h"
 #include "tests/renderers/RenderTestUtil.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 constexpr int kWidth = 80, kHeight = 56, kTile = 16, kFrames = 2;
@@ -25,17 +26,17 @@ constexpr int kWidth = 80, kHeight = 56, kTile = 16, kFrames = 2;
 // (the default lights: a directional one from the camera) that fall from brick to brick.
 std::shared_ptr<SceneDesc> scene(int resolution = 36) {
   auto d = std::make_shared<SceneDesc>(waveletScene(resolution));
-  d->volumes[0].transfer.opacities = {{37.0f, 0.0f}, {120.0f, 0.03f}, {277.0f, 0.2f}};
-  d->scivis.aoSamples = 2;
-  d->scivis.aoDistance = 0.2f;
-  d->scivis.shadows = true;
-  d->scivis.minTransmittance = 0;
+  sciVisDesc(*d).volumes[0].transfer.opacities = {{37.0f, 0.0f}, {120.0f, 0.03f}, {277.0f, 0.2f}};
+  sciVisDesc(*d).settings.aoSamples = 2;
+  sciVisDesc(*d).settings.aoDistance = 0.2f;
+  sciVisDesc(*d).settings.shadows = true;
+  sciVisDesc(*d).settings.minTransmittance = 0;
   ParticlesDesc p;
   p.name = "dots";
   p.centers = {{0, 0, 0}, {0.5f, -0.02f, 0.3f}, {-0.7f, 0.4f, -0.01f}, {0.01f, 0.8f, 0.6f}};
   p.radii = {0.12f};
   p.material = 1;
-  d->particles.push_back(p);
+  sciVisDesc(*d).particles.push_back(p);
   Shape tri;
   tri.name = "tri";
   tri.mesh.positions = {{-1, -0.9f, -0.3f}, {1, -0.9f, 0.2f}, {0.1f, 0.9f, -0.1f}};
@@ -103,8 +104,8 @@ TEST(BrickDriverMpi, LayerGhostsGiveTheSameBytesOnEveryRankCountAndReplication) 
 // and render the same bytes.
 TEST(BrickDriverMpi, LayerGhostsEqualReachWithoutAoAndShadows) {
   const auto desc = scene();
-  desc->scivis.aoSamples = 0;
-  desc->scivis.shadows = false;
+  sciVisDesc(*desc).settings.aoSamples = 0;
+  sciVisDesc(*desc).settings.shadows = false;
   const int ranks = testutil::worldSize();
   const std::vector<float> reach = renderBricks(desc, ranks, 4, 1, GhostMode::Reach);
   const std::vector<float> layer = renderBricks(desc, ranks, 4, 1, GhostMode::Layer);
@@ -117,7 +118,7 @@ TEST(BrickDriverMpi, LayerGhostsEqualReachWithoutAoAndShadows) {
 // faces no longer sees the neighbour's data: the image differs from the unbricked one there.
 TEST(BrickDriverMpi, LayerGhostsHoldLessAndChangeAoNearBrickFaces) {
   const auto desc = scene();
-  ASSERT_GT(desc->scivis.aoSamples, 0);
+  ASSERT_GT(sciVisDesc(*desc).settings.aoSamples, 0);
   std::size_t reachBytes = 0, layerBytes = 0;
   for (const HeldBrick& b : loadOwnBricks(*desc, 4, 1, 0, 1, GhostMode::Reach))
     reachBytes += b.content.bytes();
@@ -151,7 +152,7 @@ TEST(BrickDriverMpi, FourBricksMatchTheUnbrickedRender) { checkAgainstUnbricked(
 // bricks swept towards them: the hull of brick and light, a column to the domain's face).
 TEST(BrickDriverMpi, FourBricksMatchTheUnbrickedRenderWithPointAndAxisLights) {
   const auto desc = scene();
-  desc->scivis.aoSamples = 0;
+  sciVisDesc(*desc).settings.aoSamples = 0;
   LightDesc point;
   point.kind = LightDesc::Kind::Point;
   point.position = {0.6f, 0.9f, -0.5f};
@@ -162,7 +163,7 @@ TEST(BrickDriverMpi, FourBricksMatchTheUnbrickedRenderWithPointAndAxisLights) {
   LightDesc ambient;
   ambient.kind = LightDesc::Kind::Ambient;
   ambient.intensity = 0.2f;
-  desc->lights = {point, axis, ambient};
+  sciVisDesc(*desc).lights = {point, axis, ambient};
   checkAgainstUnbricked(desc);
 }
 
@@ -237,7 +238,7 @@ void checkAgainstUnbricked(const std::shared_ptr<SceneDesc>& desc) {
 // tests above hold to the unbricked render), and the bricks hold less.
 TEST(BrickDriverMpi, SparseShellsShadeAsTheDenseReach) {
   const auto desc = scene(160);
-  desc->scivis.aoDistance = 0.4f;  // 32 voxels: a shell of several macrocells
+  sciVisDesc(*desc).settings.aoDistance = 0.4f;  // 32 voxels: a shell of several macrocells
   std::vector<HeldBrick> sparse = loadOwnBricks(*desc, 4, 1, 0, 1, GhostMode::Reach);
   std::vector<HeldBrick> dense = sparse, unshelled = sparse;
   for (HeldBrick& b : unshelled) b.content.shells.clear();
@@ -248,7 +249,7 @@ TEST(BrickDriverMpi, SparseShellsShadeAsTheDenseReach) {
       const ShadingShell& shell = b.content.shells[v];
       if (shell.empty()) continue;
       ++shells;
-      b.content.volumes[v] = loadVolume(desc->volumes[v].source, shell.box());
+      b.content.volumes[v] = loadVolume(sciVisDesc(*desc).volumes[v].source, shell.box());
       b.content.shells[v] = ShadingShell();
     }
     denseBytes += b.content.bytes();
@@ -278,10 +279,10 @@ TEST(BrickDriverMpi, SparseShellsShadeAsTheDenseReach) {
 // where the CPU runs them (VolumeMarch.h), with empty macrocells to jump.
 TEST(BrickDriverMpi, AVolumeAloneGivesTheSameBytesOnEveryRankCountAndMatchesTheUnbricked) {
   auto desc = scene();
-  desc->isosurfaces.clear(), desc->particles.clear(), desc->shapes.clear();
+  sciVisDesc(*desc).isosurfaces.clear(), sciVisDesc(*desc).particles.clear(), desc->shapes.clear();
   desc->instances.clear();
-  desc->volumes[0].transfer.opacities = {{37.0f, 0.0f}, {140.0f, 0.0f}, {277.0f, 0.5f}};
-  desc->scivis.aoSamples = 0;
+  sciVisDesc(*desc).volumes[0].transfer.opacities = {{37.0f, 0.0f}, {140.0f, 0.0f}, {277.0f, 0.5f}};
+  sciVisDesc(*desc).settings.aoSamples = 0;
   checkEveryRankCountAndReplication(desc, GhostMode::Reach);
   checkAgainstUnbricked(desc);
 }
@@ -290,8 +291,8 @@ TEST(BrickDriverMpi, EachRankHoldsOnlyItsBricks) {
   const auto desc = scene();
   // No shading ray leaves a brick: it holds its data and ghost layers only (what AO and shadow
   // rays reach costs whole macrocells, a large part of this small field).
-  desc->scivis.aoSamples = 0;
-  desc->scivis.shadows = false;
+  sciVisDesc(*desc).settings.aoSamples = 0;
+  sciVisDesc(*desc).settings.shadows = false;
   const int size = testutil::worldSize(), rank = testutil::worldRank();
   BrickFrameDriver split(desc, settings(), {}, loadOwnBricks(*desc, 4, 1, rank, size),
                          MPI_COMM_WORLD);
@@ -307,4 +308,4 @@ TEST(BrickDriverMpi, EachRankHoldsOnlyItsBricks) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

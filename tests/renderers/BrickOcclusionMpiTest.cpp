@@ -7,16 +7,17 @@
 #include <cmath>
 #include <cstring>
 
-#include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
+#include "renderers/scivis/BuiltinScenes.h"
 #include "renderers/scivis/bricks/BrickFrameDriver.h"
 #include "renderers/scivis/bricks/BrickOcclusion.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 #include "renderers/scivis/render/SciVisRenderer.h"
 #include "tests/MpiTestUtil.h"
 #include "tests/renderers/BrickTestUtil.h"
 #include "tests/renderers/RenderTestUtil.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 constexpr int kWidth = 96, kHeight = 72, kTile = 16, kFrames = 2;
@@ -26,11 +27,11 @@ constexpr int kWidth = 96, kHeight = 72, kTile = 16, kFrames = 2;
 // corner, so nearer bricks hide farther ones.
 std::shared_ptr<SceneDesc> opaqueScene() {
   auto d = std::make_shared<SceneDesc>(waveletScene(40));
-  d->volumes[0].visible = false;
+  sciVisDesc(*d).volumes[0].visible = false;
   for (Material& m : d->materials) m.opacity = 1.0f;
-  d->scivis.aoSamples = 2;
-  d->scivis.aoDistance = 0.2f;
-  d->scivis.shadows = true;
+  sciVisDesc(*d).settings.aoSamples = 2;
+  sciVisDesc(*d).settings.aoDistance = 0.2f;
+  sciVisDesc(*d).settings.shadows = true;
   return d;
 }
 
@@ -122,9 +123,9 @@ TEST(BrickOcclusionMpi, NothingIsSkippedWhereFragmentsMayBeTranslucent) {
   auto glassy = opaqueScene();
   glassy->materials[0].opacity = 0.5f;
   auto volume = opaqueScene();
-  volume->volumes[0].visible = true;
+  sciVisDesc(*volume).volumes[0].visible = true;
   auto bare = opaqueScene();
-  bare->isosurfaces.clear();
+  sciVisDesc(*bare).isosurfaces.clear();
   EXPECT_FALSE(BrickOcclusion::exactFor(*glassy));
   EXPECT_FALSE(BrickOcclusion::exactFor(*volume));
   EXPECT_FALSE(BrickOcclusion::exactFor(*bare));
@@ -187,4 +188,4 @@ TEST(BrickOcclusionMpi, ACrossingIsCertainOnlyBetweenCellsOnBothSides) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -4,10 +4,10 @@
 
 #include <memory>
 
-#include "renderers/SciVisDesc.h"
 #include "renderers/scivis/bricks/BrickPlan.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 // A scene of one volume of `dims` voxels at unit spacing, seen by a camera with `up` looking
@@ -19,7 +19,7 @@ SceneDesc sceneOf(Index3 dims, Vec3 up, Vec3 position) {
   v.source.grid.dims = dims;
   v.source.grid.origin = {0, 0, 0};
   v.source.grid.spacing = {1, 1, 1};
-  desc.volumes.push_back(v);
+  sciVisDesc(desc).volumes.push_back(v);
   desc.camera.position = position;
   desc.camera.lookAt = {0, 0, 0};
   desc.camera.up = up;
@@ -87,4 +87,4 @@ TEST(BrickSplit, BricksTileTheDomainWithEqualShares) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

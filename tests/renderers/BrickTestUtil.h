@@ -17,18 +17,16 @@ namespace renderers::test {
 // (rank 0's copy; empty elsewhere), rendered with 2 threads a rank in tiles of `tileSize`.
 // `occlusionCut`: BrickDriverOptions::occlusionCut; `raysSkipped` (if given): this rank's
 // BrickFrameDriver::raysSkipped() at the end.
-inline std::vector<float> renderHeldBricks(const std::shared_ptr<SceneDesc>& desc,
-                                           const RenderSettings& settings,
-                                           std::vector<HeldBrick> held, MPI_Comm comm, int tileSize,
-                                           int frames, std::chrono::milliseconds frameTimeout,
-                                           bool occlusionCut = true,
-                                           std::uint64_t* raysSkipped = nullptr,
-                                           FirstHits firstHits = FirstHits::Auto) {
-  BrickDriverOptions bo;
+inline std::vector<float> renderHeldBricks(
+    const std::shared_ptr<SceneDesc>& desc, const RenderSettings& settings,
+    std::vector<scivis::HeldBrick> held, MPI_Comm comm, int tileSize, int frames,
+    std::chrono::milliseconds frameTimeout, bool occlusionCut = true,
+    std::uint64_t* raysSkipped = nullptr, scivis::FirstHits firstHits = scivis::FirstHits::Auto) {
+  scivis::BrickDriverOptions bo;
   bo.threads = 2;
   bo.occlusionCut = occlusionCut;
   bo.firstHits = firstHits;
-  BrickFrameDriver driver(desc, settings, bo, std::move(held), comm);
+  scivis::BrickFrameDriver driver(desc, settings, bo, std::move(held), comm);
   messaging::Messenger messenger(comm);
   dfb::DfbOptions options;
   options.width = settings.width, options.height = settings.height, options.tileSize = tileSize;

@@ -7,7 +7,7 @@
 
 #include "renderers/scivis/render/CameraRays.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 bool sameBits(const SciVisRenderer::RayPiece& a, const SciVisRenderer::RayPiece& b) {
@@ -62,4 +62,4 @@ TEST(CameraRays, RowsGiveEachPixelItsOwnRayAndStream) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -13,7 +13,7 @@
 #include "tests/MpiTestUtil.h"
 #include "tests/renderers/BrickTestUtil.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 constexpr int kWidth = 64, kHeight = 48, kTile = 16;
@@ -68,4 +68,4 @@ TEST(FileBricksMpi, OceanRendersTheSameBytesOnEveryRankCountAndMatchesOneBrick) 
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

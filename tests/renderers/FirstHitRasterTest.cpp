@@ -10,8 +10,8 @@
 #include <memory>
 #include <vector>
 
-#include "renderers/BuiltinScenes.h"
 #include "renderers/Rng.h"
+#include "renderers/scivis/BuiltinScenes.h"
 #include "renderers/scivis/bricks/BrickLoad.h"
 #include "renderers/scivis/bricks/BrickPlan.h"
 #include "renderers/scivis/kernels/FirstHitRaster.h"
@@ -19,7 +19,7 @@
 #include "renderers/scivis/scene/SciVisScene.h"
 #include "tests/renderers/RenderTestUtil.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 constexpr float kInf = Box3::kInf;
@@ -59,13 +59,13 @@ std::shared_ptr<SceneDesc> isoScene(int n, std::vector<float> levels, CameraDesc
   v.transfer.colors = {{0.0f, Vec3{1}}};
   v.transfer.opacities = {{0.0f, 0.0f}};
   v.visible = false;
-  desc->volumes.push_back(v);
+  sciVisDesc(*desc).volumes.push_back(v);
   for (std::size_t i = 0; i < levels.size(); ++i) {
     Material m;
     m.name = "iso" + std::to_string(i);
     m.color = Vec3{0.3f + 0.3f * static_cast<float>(i), 0.6f, 0.9f};
     desc->materials.push_back(m);
-    desc->isosurfaces.push_back(
+    sciVisDesc(*desc).isosurfaces.push_back(
         {0, levels[i], static_cast<std::uint32_t>(desc->materials.size() - 1)});
   }
   desc->camera = camera;
@@ -408,9 +408,10 @@ TEST(FirstHitRaster, RenderedImagesMatchEmbreesFirstHits) {
 // raster found, as they do up to Embree's.
 TEST(FirstHitRaster, AVisibleVolumeMarchesUpToTheRastersSurface) {
   auto desc = isoScene(64, {0.55f, 0.85f}, kCamera);
-  desc->volumes[0].visible = true;
-  desc->volumes[0].transfer.colors = {{0.0f, Vec3{1, 0.5f, 0.2f}}, {2.0f, Vec3{0.2f, 0.5f, 1}}};
-  desc->volumes[0].transfer.opacities = {{0.0f, 0.02f}, {2.0f, 0.05f}};
+  sciVisDesc(*desc).volumes[0].visible = true;
+  sciVisDesc(*desc).volumes[0].transfer.colors = {{0.0f, Vec3{1, 0.5f, 0.2f}},
+                                                  {2.0f, Vec3{0.2f, 0.5f, 1}}};
+  sciVisDesc(*desc).volumes[0].transfer.opacities = {{0.0f, 0.02f}, {2.0f, 0.05f}};
   const SciVisScene scene(desc, fieldContent(64, ripple));
   RenderSettings settings;
   settings.width = 120, settings.height = 96, settings.seed = 9;
@@ -434,16 +435,16 @@ TEST(FirstHitRaster, AVisibleVolumeMarchesUpToTheRastersSurface) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 // Bricks find, ray for ray, what the whole scene finds: each brick rasterises its own triangles
 // for the rays clipped to its bounds, and the nearest of the bricks' hits is the whole scene's.
 TEST(FirstHitRaster, BricksFindWhatTheWholeSceneFinds) {
   auto desc = std::make_shared<SceneDesc>(waveletScene(96));
-  desc->volumes[0].visible = false;
+  sciVisDesc(*desc).volumes[0].visible = false;
   for (Material& m : desc->materials) m.opacity = 1.0f;
   desc->camera = orbitCamera(desc->camera, 30.0f);
   const int w = 384, h = 384;
@@ -495,4 +496,4 @@ TEST(FirstHitRaster, BricksFindWhatTheWholeSceneFinds) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

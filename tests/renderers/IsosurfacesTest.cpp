@@ -13,7 +13,7 @@
 #include "renderers/scivis/scene/Box.h"
 #include "renderers/scivis/scene/Isosurfaces.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 // A field of n³ voxels over [-1, 1]³ held as floats, x fastest.
@@ -172,4 +172,4 @@ TEST(Isosurfaces, SkippedCellsAreExactlyTheOtherMeshs) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -10,7 +10,7 @@
 #include "base/Error.h"
 #include "renderers/scivis/io/VolumeLoad.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 namespace fs = std::filesystem;
@@ -114,4 +114,4 @@ TEST(OpenVdbVolume, ErrorsNameTheFileAndTheGrid) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

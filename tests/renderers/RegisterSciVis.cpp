@@ -5,6 +5,6 @@
 
 namespace {
 
-[[maybe_unused]] const bool kSciVisRegistered = (renderers::registerSciVis(), true);
+[[maybe_unused]] const bool kSciVisRegistered = (renderers::scivis::registerSciVis(), true);
 
 }  // namespace

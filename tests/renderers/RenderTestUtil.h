@@ -48,14 +48,15 @@ struct PixelRay {
 // The rays through the pixels (x0 + i dx, y0 + j dy) of a width x height canvas that meet `box`,
 // row by row.
 inline std::vector<PixelRay> pixelRaysThrough(const Camera& camera, int width, int height, int x0,
-                                              int dx, int y0, int dy, const Box3& box) {
+                                              int dx, int y0, int dy, const scivis::Box3& box) {
   std::vector<PixelRay> rays;
   for (int y = y0; y < height; y += dy)
     for (int x = x0; x < width; x += dx) {
-      PixelRay r{x, y, {}, {}, 0, Box3::kInf};
+      PixelRay r{x, y, {}, {}, 0, scivis::Box3::kInf};
       camera.ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f, 0.5f, 0.5f, r.origin,
                  r.dir);
-      if (clipToBox(box, r.origin, reciprocal(r.dir), r.t0, r.t1)) rays.push_back(r);
+      if (scivis::clipToBox(box, r.origin, scivis::reciprocal(r.dir), r.t0, r.t1))
+        rays.push_back(r);
     }
   return rays;
 }

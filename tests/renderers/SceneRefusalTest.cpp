@@ -19,7 +19,7 @@
 #include "renderers/scivis/scene/SciVisScene.h"
 #include "tests/DiagnosticsTestUtil.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 namespace fs = std::filesystem;
@@ -406,8 +406,8 @@ TEST(SceneTomlSciVisLimits, ANinthVolumeIsRefusedWhereItIsDeclared) {
       "FILE:30:1: volumes: the scivis renderer draws at most 8 volumes, and this is volume 9");
   // Eight are fine; a description with nine made elsewhere is refused when the scene is built.
   SceneDesc d = loadSceneDesc(writeScene("eight.toml", text.substr(0, text.rfind("[[volumes]]"))));
-  ASSERT_EQ(d.volumes.size(), SciVisScene::kMaxVolumes);
-  d.volumes.push_back(d.volumes.back());
+  ASSERT_EQ(sciVisDesc(d).volumes.size(), SciVisScene::kMaxVolumes);
+  sciVisDesc(d).volumes.push_back(sciVisDesc(d).volumes.back());
   const auto desc = std::make_shared<const SceneDesc>(d);
   try {
     SciVisScene scene(desc, BrickContent{});
@@ -418,4 +418,4 @@ TEST(SceneTomlSciVisLimits, ANinthVolumeIsRefusedWhereItIsDeclared) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

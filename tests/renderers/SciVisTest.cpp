@@ -9,14 +9,15 @@
 #include <memory>
 #include <vector>
 
-#include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
+#include "renderers/scivis/BuiltinScenes.h"
 #include "renderers/scivis/bricks/BrickLoad.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 #include "renderers/scivis/render/SciVisRenderer.h"
 #include "renderers/scivis/scene/ShadingShell.h"
 #include "tests/renderers/RenderTestUtil.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 // A volume of `n`³ voxels over [-1, 1]³, every voxel `value`.
@@ -60,9 +61,9 @@ TEST(SciVis, HomogeneousCubeAbsorbsAsBeersLaw) {
   const float opacity = 1.0f - std::exp(-sigma * unit);
   v.transfer.opacities = {{0.0f, opacity}, {1.0f, opacity}};
   v.transfer.unitDistance = unit;
-  desc->volumes.push_back(v);
-  desc->scivis.samplingRate = 4;
-  desc->scivis.minTransmittance = 0;
+  sciVisDesc(*desc).volumes.push_back(v);
+  sciVisDesc(*desc).settings.samplingRate = 4;
+  sciVisDesc(*desc).settings.minTransmittance = 0;
   BrickContent content;
   content.volumes.push_back(constantVoxels(v, 0.5f));
   const SciVisScene scene(desc, std::move(content));
@@ -98,16 +99,16 @@ TEST(SciVis, HomogeneousCubeAbsorbsAsBeersLaw) {
 // a triangle: everything a ray can meet.
 std::shared_ptr<SceneDesc> mixedScene(int aoSamples) {
   auto d = std::make_shared<SceneDesc>(waveletScene(40));
-  d->volumes[0].transfer.opacities = {{37.0f, 0.0f}, {120.0f, 0.05f}, {277.0f, 0.3f}};
-  d->scivis.aoSamples = aoSamples;
-  d->scivis.aoDistance = 0.3f;
-  d->scivis.minTransmittance = 0;
+  sciVisDesc(*d).volumes[0].transfer.opacities = {{37.0f, 0.0f}, {120.0f, 0.05f}, {277.0f, 0.3f}};
+  sciVisDesc(*d).settings.aoSamples = aoSamples;
+  sciVisDesc(*d).settings.aoDistance = 0.3f;
+  sciVisDesc(*d).settings.minTransmittance = 0;
   ParticlesDesc p;
   p.name = "dots";
   p.centers = {{0.5f, 0.5f, 0.5f}, {-0.6f, 0.2f, 0.7f}, {0.1f, -0.7f, -0.4f}};
   p.radii = {0.15f};
   p.material = 0;
-  d->particles.push_back(p);
+  sciVisDesc(*d).particles.push_back(p);
   Shape tri;
   tri.name = "tri";
   tri.mesh.positions = {{-1, -1, -0.2f}, {1, -1, -0.2f}, {0, 1, -0.2f}};
@@ -182,7 +183,7 @@ TEST(SciVis, ABrickWithItsNeighbourAsGhostShadesLikeTheWholeScene) {
 // (from its blocks outside the core, from the core's field inside); it holds fewer voxels.
 TEST(SciVis, ShadingShellSamplesAsTheDenseBox) {
   const SceneDesc wavelet = waveletScene(97);
-  const VolumeSource& source = wavelet.volumes[0].source;
+  const VolumeSource& source = sciVisDesc(wavelet).volumes[0].source;
   const VoxelBox box{{5, 0, 11}, {70, 60, 97}}, coreBox{{5, 20, 30}, {50, 60, 80}};
   const std::vector<float> isovalues = {160.0f, 215.0f};
   const Volume denseVoxels = loadVolume(source, box), coreVoxels = loadVolume(source, coreBox);
@@ -271,12 +272,12 @@ TEST(SciVis, MarschnerLobbIsosurfaceHitsLieOnTheLevelSet) {
   v.transfer.colors = {{0.0f, Vec3{1}}};
   v.transfer.opacities = {{0.0f, 0.0f}};
   v.visible = false;
-  desc->volumes.push_back(v);
+  sciVisDesc(*desc).volumes.push_back(v);
   Material m;
   m.name = "iso";
   desc->materials = {m};
   const float level = 0.5f;
-  desc->isosurfaces = {{0, level, 0}};
+  sciVisDesc(*desc).isosurfaces = {{0, level, 0}};
   desc->camera = {{1.8f, 2.2f, 2.6f}, {0, 0, 0}, {0, 1, 0}, 40.0f, 0, 0};
   const SciVisScene scene(desc, wholeScene(*desc));
   const SciVisRenderer renderer(scene, settingsFor(64, 64), {false});
@@ -344,10 +345,10 @@ TEST(SciVis, TilesAndThreadsDoNotChangeAPixel) {
 TEST(SciVis, TheFastMarchBetweenSurfacesCompositesAsTheGenericLoop) {
   const auto one = mixedScene(1);
   auto two = std::make_shared<SceneDesc>(*one);
-  VolumeDesc hidden = two->volumes[0];
+  VolumeDesc hidden = sciVisDesc(*two).volumes[0];
   hidden.name = "hidden";
   hidden.visible = false;
-  two->volumes.push_back(hidden);
+  sciVisDesc(*two).volumes.push_back(hidden);
   const RenderScene a = buildRenderScene("scivis", *one), b = buildRenderScene("scivis", *two);
   const auto fast =
       test::renderImage(*makeRenderer("scivis", a, settingsFor(40, 32)), 40, 32, 16, 2, 1);
@@ -364,8 +365,8 @@ TEST(SciVis, TheFastMarchBetweenSurfacesCompositesAsTheGenericLoop) {
 TEST(SciVis, SurfacePacketsHitAsSingleRays) {
   for (bool spheres : {false, true}) {
     auto desc = mixedScene(0);
-    if (!spheres) desc->particles.clear();
-    desc->volumes[0].visible = spheres;  // also the one-volume march between surfaces
+    if (!spheres) sciVisDesc(*desc).particles.clear();
+    sciVisDesc(*desc).volumes[0].visible = spheres;  // also the one-volume march between surfaces
     const SciVisScene scene(desc, wholeScene(*desc));
     const SciVisRenderer renderer(scene, settingsFor(48, 48), {false});
     Camera camera(desc->camera, 48, 48);
@@ -434,4 +435,4 @@ TEST(SciVis, LiveTransferFunctionChangesAndRestores) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -7,9 +7,10 @@
 
 #include "base/Error.h"
 #include "renderers/BuiltinScenes.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 #include "tests/DiagnosticsTestUtil.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 namespace fs = std::filesystem;
@@ -47,18 +48,18 @@ transfer_function = { preset = "grayscale", range = [37.0, 277.0] }
 TEST(SciVisToml, TheShippedWaveletSceneReads) {
   const SceneDesc d =
       loadSceneDesc(std::string(DFBWALL_SOURCE_DIR) + "/configs/scenes/wavelet.toml");
-  ASSERT_EQ(d.volumes.size(), 1u);
-  EXPECT_EQ(d.volumes[0].source.grid.dims, (Index3{96, 96, 96}));
-  ASSERT_EQ(d.isosurfaces.size(), 2u);
-  EXPECT_EQ(d.isosurfaces[1].value, 215.0f);
-  EXPECT_EQ(d.materials[d.isosurfaces[1].material].name, "core");
-  EXPECT_FLOAT_EQ(d.materials[d.isosurfaces[0].material].opacity, 0.3f);
-  ASSERT_EQ(d.particles.size(), 1u);
-  EXPECT_EQ(d.particles[0].centers.size(), 4u);
-  EXPECT_EQ(d.particles[0].attribute.size(), 4u);
-  ASSERT_EQ(d.lights.size(), 2u);
-  EXPECT_EQ(d.lights[1].kind, LightDesc::Kind::Directional);
-  EXPECT_EQ(d.scivis.aoSamples, 1);
+  ASSERT_EQ(sciVisDesc(d).volumes.size(), 1u);
+  EXPECT_EQ(sciVisDesc(d).volumes[0].source.grid.dims, (Index3{96, 96, 96}));
+  ASSERT_EQ(sciVisDesc(d).isosurfaces.size(), 2u);
+  EXPECT_EQ(sciVisDesc(d).isosurfaces[1].value, 215.0f);
+  EXPECT_EQ(d.materials[sciVisDesc(d).isosurfaces[1].material].name, "core");
+  EXPECT_FLOAT_EQ(d.materials[sciVisDesc(d).isosurfaces[0].material].opacity, 0.3f);
+  ASSERT_EQ(sciVisDesc(d).particles.size(), 1u);
+  EXPECT_EQ(sciVisDesc(d).particles[0].centers.size(), 4u);
+  EXPECT_EQ(sciVisDesc(d).particles[0].attribute.size(), 4u);
+  ASSERT_EQ(sciVisDesc(d).lights.size(), 2u);
+  EXPECT_EQ(sciVisDesc(d).lights[1].kind, LightDesc::Kind::Directional);
+  EXPECT_EQ(sciVisDesc(d).settings.aoSamples, 1);
   EXPECT_EQ(d.instances.size(), 1u);
 }
 
@@ -69,25 +70,25 @@ TEST(SciVisToml, TheParaViewComparisonScenesRead) {
     SCOPED_TRACE(name);
     const SceneDesc d =
         loadSceneDesc(std::string(DFBWALL_SOURCE_DIR) + "/configs/scenes/" + name + ".toml");
-    ASSERT_EQ(d.volumes.size(), 1u);
-    const VolumeDesc& v = d.volumes[0];
+    ASSERT_EQ(sciVisDesc(d).volumes.size(), 1u);
+    const VolumeDesc& v = sciVisDesc(d).volumes[0];
     EXPECT_EQ(v.source.grid.dims, (Index3{256, 256, 256}));
     EXPECT_FLOAT_EQ(v.source.grid.origin.x, -1.0f);
     EXPECT_FLOAT_EQ(v.source.grid.spacing.x, 2.0f / 255.0f);
     ASSERT_EQ(v.transfer.colors.size(), 3u);
     EXPECT_EQ(v.transfer.colors[1].first, 157.0f);
-    EXPECT_EQ(d.scivis.samplingRate, 1.0f);
-    EXPECT_EQ(d.scivis.minTransmittance, 1.0f / 128.0f);
-    EXPECT_EQ(d.scivis.aoSamples, 0);
-    EXPECT_FALSE(d.scivis.shadows);
+    EXPECT_EQ(sciVisDesc(d).settings.samplingRate, 1.0f);
+    EXPECT_EQ(sciVisDesc(d).settings.minTransmittance, 1.0f / 128.0f);
+    EXPECT_EQ(sciVisDesc(d).settings.aoSamples, 0);
+    EXPECT_FALSE(sciVisDesc(d).settings.shadows);
     EXPECT_EQ(d.camera.fovY, 30.0f);
   }
   const SceneDesc c =
       loadSceneDesc(std::string(DFBWALL_SOURCE_DIR) + "/configs/scenes/wavelet256-contours.toml");
-  EXPECT_FALSE(c.volumes[0].visible);
-  ASSERT_EQ(c.isosurfaces.size(), 2u);
-  EXPECT_EQ(c.isosurfaces[0].value, 160.0f);
-  EXPECT_EQ(c.isosurfaces[1].value, 215.0f);
+  EXPECT_FALSE(sciVisDesc(c).volumes[0].visible);
+  ASSERT_EQ(sciVisDesc(c).isosurfaces.size(), 2u);
+  EXPECT_EQ(sciVisDesc(c).isosurfaces[0].value, 160.0f);
+  EXPECT_EQ(sciVisDesc(c).isosurfaces[1].value, 215.0f);
 }
 
 TEST(SciVisToml, MistakesNameFileLineAndField) {
@@ -121,4 +122,4 @@ TEST(SciVisToml, MistakesNameFileLineAndField) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

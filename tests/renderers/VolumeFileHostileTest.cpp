@@ -17,7 +17,7 @@
 #include "tests/renderers/RenderTestUtil.h"
 #include "tests/renderers/VolumeFileTestUtil.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 using namespace volfiletest;
@@ -133,4 +133,4 @@ TEST(VolumeFile, HostileFilesGiveOneErrorNamingTheFile) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

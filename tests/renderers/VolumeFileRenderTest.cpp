@@ -9,15 +9,16 @@
 #include <limits>
 
 #include "base/Error.h"
-#include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
+#include "renderers/scivis/BuiltinScenes.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 #include "renderers/scivis/io/VolumeLoad.h"
 #include "renderers/scivis/io/formats/VolumeFile.h"
 #include "renderers/scivis/scene/VolumeField.h"
 #include "tests/renderers/RenderTestUtil.h"
 #include "tests/renderers/VolumeFileTestUtil.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 using namespace volfiletest;
@@ -26,9 +27,9 @@ using namespace volfiletest;
 // with opacity `opacity[0]` at lo and `opacity[1]` at hi, every isosurface at `isoValue`.
 std::vector<float> renderField(SceneDesc d, float lo, float hi, const float (&opacity)[2],
                                float isoValue, std::uint64_t seed) {
-  d.volumes[0].transfer = transferFunctionPreset("viridis", lo, hi);
-  d.volumes[0].transfer.opacities = {{lo, opacity[0]}, {hi, opacity[1]}};
-  for (IsosurfaceDesc& iso : d.isosurfaces) iso.value = isoValue;
+  sciVisDesc(d).volumes[0].transfer = transferFunctionPreset("viridis", lo, hi);
+  sciVisDesc(d).volumes[0].transfer.opacities = {{lo, opacity[0]}, {hi, opacity[1]}};
+  for (IsosurfaceDesc& iso : sciVisDesc(d).isosurfaces) iso.value = isoValue;
   const RenderScene scene = buildRenderScene("scivis", d);
   RenderSettings settings;
   settings.width = 48, settings.height = 36, settings.seed = seed;
@@ -49,7 +50,7 @@ TEST(VolumeFile, Hdf5AndNetCdfRenderAsTheSameFieldFromARawFile) {
     SceneDesc d = waveletScene(21);
     source.grid.spacing = Vec3{0.15f};
     source.grid.origin = {-0.9f, -0.6f, -0.45f};
-    d.volumes[0].source = source;
+    sciVisDesc(d).volumes[0].source = source;
     return renderField(d, -20, 99, {0.1f, 0.8f}, 30, 3);
   };
   const std::vector<float> expected = render(raw);
@@ -85,9 +86,9 @@ TEST(VolumeFile, NanVoxelsRenderAsTheFieldWithoutThem) {
   writeFile(folder() / "cut.raw", cut);
   auto render = [&](const std::string& file, Index3 d, float x0) {
     SceneDesc scene = waveletScene(21);
-    scene.scivis.aoSamples = 0;
-    scene.scivis.shadows = false;
-    VolumeSource& s = scene.volumes[0].source;
+    sciVisDesc(scene).settings.aoSamples = 0;
+    sciVisDesc(scene).settings.shadows = false;
+    VolumeSource& s = sciVisDesc(scene).volumes[0].source;
     s = VolumeSource{};
     s.kind = VolumeSource::Kind::RawFile;
     s.raw.path = (folder() / file).string();
@@ -113,4 +114,4 @@ TEST(VolumeFile, NanVoxelsRenderAsTheFieldWithoutThem) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -19,7 +19,7 @@
 #include "tests/renderers/RenderTestUtil.h"
 #include "tests/renderers/VolumeFileTestUtil.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 using namespace volfiletest;
@@ -193,4 +193,4 @@ TEST(VolumeFile, NetCdfClassicAndNetCdf4MissingValuesAreNanAndOutOfTheRange) {
 // The same field from HDF5, NetCDF-3, NetCDF-4 and a raw file renders the same bytes (the
 // volume rendered with a transfer function and an isosurface, shaded).
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -18,7 +18,7 @@
 #include "renderers/scivis/io/VolumeLoad.h"
 #include "renderers/scivis/io/formats/VolumeFile.h"
 
-namespace renderers::volfiletest {
+namespace renderers::scivis::volfiletest {
 
 namespace fs = std::filesystem;
 
@@ -227,4 +227,4 @@ inline VolumeSource libSource(const fs::path& path, const std::string& name, int
   return s;
 }
 
-}  // namespace renderers::volfiletest
+}  // namespace renderers::scivis::volfiletest

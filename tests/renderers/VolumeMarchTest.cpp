@@ -13,24 +13,25 @@
 #include <string>
 #include <vector>
 
-#include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
+#include "renderers/scivis/BuiltinScenes.h"
+#include "renderers/scivis/Registration.h"
 #include "renderers/scivis/io/VolumeLoad.h"
 #include "renderers/scivis/render/MarchOnly.h"
 #include "renderers/scivis/render/SciVisRenderer.h"
 #include "renderers/scivis/render/VolumeMarch.h"
 #include "tests/renderers/RenderTestUtil.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 // The wavelet as a haze without isosurfaces: nothing below 150 (empty macrocells to jump), an
 // opacity ramp above, `peak` at the top (a high peak ends rays early).
 SceneDesc haze(float peak, int resolution = 40) {
   SceneDesc d = waveletScene(resolution);
-  d.isosurfaces.clear();
-  d.volumes[0].transfer.opacities = {{37.0f, 0.0f}, {150.0f, 0.0f}, {277.0f, peak}};
-  d.scivis.aoSamples = 0;
+  sciVisDesc(d).isosurfaces.clear();
+  sciVisDesc(d).volumes[0].transfer.opacities = {{37.0f, 0.0f}, {150.0f, 0.0f}, {277.0f, peak}};
+  sciVisDesc(d).settings.aoSamples = 0;
   return d;
 }
 
@@ -65,7 +66,7 @@ TEST(VolumeMarch, EveryKernelGivesTheSseImage) {
   for (float peak : {0.08f, 0.9f}) {
     const RenderScene scene = buildRenderScene("scivis", haze(peak));
     std::uint64_t samples = 0;
-    const auto sse = image(*scene.scivis, MarchKernel::Sse, &samples);
+    const auto sse = image(sciVisScene(scene), MarchKernel::Sse, &samples);
     EXPECT_GT(samples, 10000u);
     // The haze shows: pixels differ from one another (the background is a gradient, so compare
     // a pixel through the volume's centre with one beside it, off the volume).
@@ -73,7 +74,7 @@ TEST(VolumeMarch, EveryKernelGivesTheSseImage) {
     const std::size_t corner = 4 * (static_cast<std::size_t>(kH / 2) * kW + 0);
     EXPECT_NE(sse[centre], sse[corner]) << "peak " << peak;
     for (MarchKernel k : kernels()) {
-      const auto other = image(*scene.scivis, k, nullptr);
+      const auto other = image(sciVisScene(scene), k, nullptr);
       EXPECT_TRUE(sameBits(sse, other)) << marchKernelName(k) << ", peak " << peak;
     }
   }
@@ -83,13 +84,13 @@ TEST(VolumeMarch, EveryKernelGivesTheSseImage) {
 // exactly what that loop composites.
 TEST(VolumeMarch, MarchesAsTheGenericLoop) {
   SceneDesc one = haze(0.5f), two = haze(0.5f);
-  two.volumes.push_back(two.volumes[0]);
-  two.volumes[1].name = "twin";
-  two.volumes[1].visible = false;
+  sciVisDesc(two).volumes.push_back(sciVisDesc(two).volumes[0]);
+  sciVisDesc(two).volumes[1].name = "twin";
+  sciVisDesc(two).volumes[1].visible = false;
   const RenderScene a = buildRenderScene("scivis", one), b = buildRenderScene("scivis", two);
-  const auto generic = image(*b.scivis, MarchKernel::Sse, nullptr);
+  const auto generic = image(sciVisScene(b), MarchKernel::Sse, nullptr);
   for (MarchKernel k : kernels())
-    EXPECT_TRUE(sameBits(generic, image(*a.scivis, k, nullptr))) << marchKernelName(k);
+    EXPECT_TRUE(sameBits(generic, image(sciVisScene(a), k, nullptr))) << marchKernelName(k);
 }
 
 // Rays cut into pieces (as bricks cut them), integrated as a batch (packets where the kernel
@@ -98,7 +99,8 @@ TEST(VolumeMarch, CutRaysGiveTheSseFragments) {
   const RenderScene scene = buildRenderScene("scivis", haze(0.5f));
   const SceneDesc& desc = *scene.desc;
   Camera camera(desc.camera, 64, 64);
-  const SciVisRenderer sse(*scene.scivis, settings(64, 64), SciVisOptions{true, MarchKernel::Sse});
+  const SciVisRenderer sse(sciVisScene(scene), settings(64, 64),
+                           SciVisOptions{true, MarchKernel::Sse});
   std::vector<SciVisRenderer::RayPiece> pieces;
   for (const test::PixelRay& r :
        test::pixelRaysThrough(camera, 64, 64, 1, 3, 2, 5, Box3{Vec3{-1.0f}, Vec3{1.0f}})) {
@@ -111,7 +113,7 @@ TEST(VolumeMarch, CutRaysGiveTheSseFragments) {
   }
   ASSERT_GT(pieces.size(), 600u);
   for (MarchKernel k : kernels()) {
-    const SciVisRenderer other(*scene.scivis, settings(64, 64), SciVisOptions{true, k});
+    const SciVisRenderer other(sciVisScene(scene), settings(64, 64), SciVisOptions{true, k});
     std::vector<Fragment> got(pieces.size());
     other.integrate(pieces.data(), pieces.size(), got.data());
     int seen = 0;
@@ -132,8 +134,8 @@ TEST(VolumeMarch, CutRaysGiveTheSseFragments) {
 TEST(VolumeMarch, SixteenPiecesSetUpAsOneAtATime) {
   if (!marchKernelAvailable(MarchKernel::Avx512)) GTEST_SKIP() << "no AVX-512 here";
   const RenderScene scene = buildRenderScene("scivis", haze(0.5f));
-  const Box3& data = scene.scivis->volumes()[0].field->dataBounds();
-  const float step = scene.scivis->volumeStep(), minT = 1.0f / 128.0f;
+  const Box3& data = sciVisScene(scene).volumes()[0].field->dataBounds();
+  const float step = sciVisScene(scene).volumeStep(), minT = 1.0f / 128.0f;
   Camera camera(scene.desc->camera, 48, 48);
   std::vector<SciVisRenderer::RayPiece> pieces;
   for (const test::PixelRay& r :
@@ -176,7 +178,7 @@ TEST(VolumeMarch, SixteenPiecesSetUpAsOneAtATime) {
 // SSE march one ray at a time; both must give the same image.
 SceneDesc integerHaze(VoxelType type, float peak, int resolution = 40) {
   SceneDesc d = haze(peak, resolution);
-  VolumeSource& s = d.volumes[0].source;
+  VolumeSource& s = sciVisDesc(d).volumes[0].source;
   const VolumeSource wavelet = s;
   const Index3 n = wavelet.grid.dims;
   const float offset = type == VoxelType::UInt8 ? -30.0f : 0.0f;
@@ -202,7 +204,7 @@ SceneDesc integerHaze(VoxelType type, float peak, int resolution = 40) {
   s.kind = VolumeSource::Kind::RawFile;
   s.type = type;
   s.raw = {path.string(), false, 0};
-  TransferFunction& t = d.volumes[0].transfer;
+  TransferFunction& t = sciVisDesc(d).volumes[0].transfer;
   for (auto& c : t.colors) c.first = (c.first + offset) * scale;
   for (auto& o : t.opacities) o.first = (o.first + offset) * scale;
   t.valueMin = (t.valueMin + offset) * scale, t.valueMax = (t.valueMax + offset) * scale;
@@ -212,18 +214,18 @@ SceneDesc integerHaze(VoxelType type, float peak, int resolution = 40) {
 TEST(VolumeMarch, IntegerVoxelsGiveTheSseImageInEveryKernel) {
   for (VoxelType type : {VoxelType::UInt8, VoxelType::UInt16}) {
     const RenderScene scene = buildRenderScene("scivis", integerHaze(type, 0.5f));
-    ASSERT_EQ(scene.scivis->volumes()[0].field->volume().type, type);
+    ASSERT_EQ(sciVisScene(scene).volumes()[0].field->volume().type, type);
     std::uint64_t samples = 0;
-    const auto sse = image(*scene.scivis, MarchKernel::Sse, &samples);
+    const auto sse = image(sciVisScene(scene), MarchKernel::Sse, &samples);
     EXPECT_GT(samples, 10000u) << voxelTypeName(type);
     const std::size_t centre = 4 * (static_cast<std::size_t>(kH / 2) * kW + kW / 2);
     const std::size_t corner = 4 * (static_cast<std::size_t>(kH / 2) * kW + 0);
     EXPECT_NE(sse[centre], sse[corner]) << voxelTypeName(type);
     for (MarchKernel k : kernels()) {
-      EXPECT_TRUE(sameBits(sse, image(*scene.scivis, k, nullptr)))
+      EXPECT_TRUE(sameBits(sse, image(sciVisScene(scene), k, nullptr)))
           << marchKernelName(k) << ", " << voxelTypeName(type);
       if (k == MarchKernel::Avx512) {
-        EXPECT_TRUE(marchesPackets(scene.scivis->volumes()[0], k)) << voxelTypeName(type);
+        EXPECT_TRUE(marchesPackets(sciVisScene(scene).volumes()[0], k)) << voxelTypeName(type);
       }
     }
   }
@@ -235,18 +237,18 @@ TEST(VolumeMarch, SpreadSlicesGiveTheGenericLoopsImageInEveryKernel) {
   for (VoxelType type : {VoxelType::Float32, VoxelType::UInt16, VoxelType::UInt8}) {
     const SceneDesc one = type == VoxelType::Float32 ? haze(0.5f, 64) : integerHaze(type, 0.5f, 64);
     SceneDesc two = one;
-    two.volumes.push_back(two.volumes[0]);
-    two.volumes[1].name = "twin";
-    two.volumes[1].visible = false;
+    sciVisDesc(two).volumes.push_back(sciVisDesc(two).volumes[0]);
+    sciVisDesc(two).volumes[1].name = "twin";
+    sciVisDesc(two).volumes[1].visible = false;
     const RenderScene a = buildRenderScene("scivis", one), b = buildRenderScene("scivis", two);
-    const Volume& spread = a.scivis->content().volumes[0];
+    const Volume& spread = sciVisScene(a).content().volumes[0];
     ASSERT_EQ(spread.type, type);
     ASSERT_EQ(spread.slicePadding * voxelBytes(type), 64u) << voxelTypeName(type);
     std::uint64_t samples = 0;
-    const auto generic = image(*b.scivis, MarchKernel::Sse, &samples);
+    const auto generic = image(sciVisScene(b), MarchKernel::Sse, &samples);
     EXPECT_GT(samples, 10000u) << voxelTypeName(type);
     for (MarchKernel k : kernels())
-      EXPECT_TRUE(sameBits(generic, image(*a.scivis, k, nullptr)))
+      EXPECT_TRUE(sameBits(generic, image(sciVisScene(a), k, nullptr)))
           << marchKernelName(k) << ", " << voxelTypeName(type);
   }
 }
@@ -256,7 +258,7 @@ TEST(VolumeMarch, SpreadSlicesGiveTheGenericLoopsImageInEveryKernel) {
 // and the wavelet's top above it (range 0 .. 200, the wavelet reaches 277), every value seen.
 SceneDesc clampedHaze() {
   SceneDesc d = haze(0.5f);
-  VolumeSource& s = d.volumes[0].source;
+  VolumeSource& s = sciVisDesc(d).volumes[0].source;
   const VolumeSource wavelet = s;
   const Index3 n = wavelet.grid.dims;
   const std::filesystem::path path =
@@ -274,7 +276,7 @@ SceneDesc clampedHaze() {
   s.kind = VolumeSource::Kind::RawFile;
   s.type = VoxelType::Float32;
   s.raw = {path.string(), false, 0};
-  TransferFunction& t = d.volumes[0].transfer;
+  TransferFunction& t = sciVisDesc(d).volumes[0].transfer;
   t.valueMin = 0.0f, t.valueMax = 200.0f;
   t.opacities = {{0.0f, 0.3f}, {200.0f, 0.05f}};
   return d;
@@ -284,18 +286,18 @@ SceneDesc clampedHaze() {
 // the generic loop's, bit for bit, and no NaN in it.
 TEST(VolumeMarch, ClampsAndMissingValuesGiveTheSseImageInEveryKernel) {
   SceneDesc twin = clampedHaze();
-  twin.volumes.push_back(twin.volumes[0]);
-  twin.volumes[1].name = "twin";
-  twin.volumes[1].visible = false;
+  sciVisDesc(twin).volumes.push_back(sciVisDesc(twin).volumes[0]);
+  sciVisDesc(twin).volumes[1].name = "twin";
+  sciVisDesc(twin).volumes[1].visible = false;
   const RenderScene scene = buildRenderScene("scivis", clampedHaze());
   const RenderScene generic = buildRenderScene("scivis", twin);
   std::uint64_t samples = 0;
-  const auto sse = image(*scene.scivis, MarchKernel::Sse, &samples);
+  const auto sse = image(sciVisScene(scene), MarchKernel::Sse, &samples);
   EXPECT_GT(samples, 10000u);
   for (std::size_t i = 0; i < sse.size(); ++i) ASSERT_FALSE(std::isnan(sse[i])) << "value " << i;
-  EXPECT_TRUE(sameBits(sse, image(*generic.scivis, MarchKernel::Sse, nullptr)));
+  EXPECT_TRUE(sameBits(sse, image(sciVisScene(generic), MarchKernel::Sse, nullptr)));
   for (MarchKernel k : kernels())
-    EXPECT_TRUE(sameBits(sse, image(*scene.scivis, k, nullptr))) << marchKernelName(k);
+    EXPECT_TRUE(sameBits(sse, image(sciVisScene(scene), k, nullptr))) << marchKernelName(k);
 }
 
 TEST(VolumeMarch, KernelNames) {
@@ -306,4 +308,4 @@ TEST(VolumeMarch, KernelNames) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

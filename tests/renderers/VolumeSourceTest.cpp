@@ -14,7 +14,7 @@
 #include "renderers/scivis/io/VolumeLoad.h"
 #include "renderers/scivis/scene/VolumeField.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 namespace fs = std::filesystem;
@@ -403,4 +403,4 @@ TEST(RawVolume, MissingOrWrongSizedFilesNameTheFileAndTheExpectedSize) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -11,7 +11,7 @@
 #include "renderers/scivis/io/VolumeToml.h"
 #include "tests/DiagnosticsTestUtil.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 namespace fs = std::filesystem;
@@ -299,4 +299,4 @@ TEST(VolumeToml, TransferFunctionErrorsNameFileLineAndField) {
 }
 
 }  // namespace
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -15,6 +15,7 @@
 
 int main(int argc, char** argv) {
   using namespace renderers;
+  using namespace renderers::scivis;
   if (argc < 6 || (argc - 3) % 3 != 0) {
     std::fprintf(stderr, "usage: volume_probe FILE NAME i j k [i j k ...]\n");
     return 2;

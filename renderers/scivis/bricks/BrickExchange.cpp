@@ -7,7 +7,7 @@
 #include "base/Collectives.h"
 #include "base/Error.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 // One brick on the wire: plain numbers, the same layout on every rank of a job.
@@ -64,4 +64,4 @@ BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
   return out;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

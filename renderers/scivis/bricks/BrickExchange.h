@@ -11,7 +11,7 @@
 
 #include "renderers/scivis/bricks/Bricks.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // Every brick of the job, by ascending id, and the ranks of `comm` holding each (ascending).
 struct BrickDirectory {
@@ -25,4 +25,4 @@ struct BrickDirectory {
 BrickDirectory exchangeBricks(const std::vector<BrickPlan>& mine, MPI_Comm comm,
                               std::chrono::milliseconds timeout);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -16,7 +16,7 @@
 #include "renderers/scivis/render/CameraRays.h"
 #include "renderers/scivis/render/RayBlocks.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 constexpr float kInf = Box3::kInf;
@@ -143,10 +143,10 @@ BrickFrameDriver::BrickFrameDriver(std::shared_ptr<const SceneDesc> desc,
   MPI_Comm_size(comm, &m.ranks);
   std::vector<BrickPlan> held;
   for (const HeldBrick& b : mine) {
-    if (b.content.volumes.size() != m.desc->volumes.size())
+    if (b.content.volumes.size() != sciVisDesc(*m.desc).volumes.size())
       throw base::Error("brick " + std::to_string(b.id) + " has " +
                         std::to_string(b.content.volumes.size()) + " volumes, the scene " +
-                        std::to_string(m.desc->volumes.size()));
+                        std::to_string(sciVisDesc(*m.desc).volumes.size()));
     for (const BrickPlan& p : held)
       if (p.id == b.id)
         throw base::Error("brick " + std::to_string(b.id) + " is added twice on render rank " +
@@ -506,4 +506,4 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
   return report;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -31,7 +31,7 @@
 #include "renderers/scivis/bricks/Bricks.h"
 #include "renderers/scivis/render/SciVisRenderer.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 struct BrickDriverOptions {
   std::uint32_t samplesPerPixel = 1;
@@ -54,7 +54,7 @@ class BrickFrameDriver {
  public:
   // `desc` gives everything but the bricks' data: materials, transfer functions, isosurfaces,
   // lights, background, the camera and the renderer's settings; its volumes' grids place the
-  // bricks' voxels (BrickContent::volumes has one entry per desc->volumes).
+  // bricks' voxels (BrickContent::volumes has one entry per SciVisDesc::volumes).
   BrickFrameDriver(std::shared_ptr<const SceneDesc> desc, const RenderSettings& settings,
                    BrickDriverOptions options, std::vector<HeldBrick> mine, MPI_Comm comm);
   ~BrickFrameDriver();
@@ -97,4 +97,4 @@ class BrickFrameDriver {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace renderers
+}  // namespace renderers::scivis

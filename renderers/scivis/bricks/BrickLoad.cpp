@@ -9,7 +9,7 @@
 #include "base/Error.h"
 #include "base/MemoryBudget.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 // The particles of `p` for which `keep(centre, radius)` holds, with their radii and attributes.
@@ -84,7 +84,7 @@ std::string volumeName(const VolumeDesc& v) {
 }
 
 bool hasIsosurface(const SceneDesc& desc, std::size_t volume) {
-  for (const IsosurfaceDesc& iso : desc.isosurfaces)
+  for (const IsosurfaceDesc& iso : sciVisDesc(desc).isosurfaces)
     if (iso.volume == volume) return true;
   return false;
 }
@@ -94,7 +94,7 @@ bool hasIsosurface(const SceneDesc& desc, std::size_t volume) {
 // may hold both while it chooses.
 std::uint64_t brickVolumeBytes(const SceneDesc& desc, std::size_t i, const BrickPlan& plan,
                                const BrickReach& reach) {
-  const VolumeSource& source = desc.volumes[i].source;
+  const VolumeSource& source = sciVisDesc(desc).volumes[i].source;
   // OpenVDB: while a box is sampled, the leaves of the grid that touch it are held too (as many
   // float voxels again, at most).
   const std::uint64_t width =
@@ -116,11 +116,12 @@ std::uint64_t brickVolumeBytes(const SceneDesc& desc, std::size_t i, const Brick
 // loadBrick's work; `part` says what it is loading, for an allocation that fails on the way.
 BrickContent loadBrickData(const SceneDesc& desc, const BrickPlan& plan, const GhostReach& ghosts,
                            std::string& part) {
+  const SciVisDesc& parts = sciVisDesc(desc);
   BrickContent c;
   c.bounds = plan.bounds;
   const BrickReach reach = brickReach(desc, plan.bounds, ghosts);
-  for (std::size_t i = 0; i < desc.volumes.size(); ++i) {
-    const VolumeDesc& v = desc.volumes[i];
+  for (std::size_t i = 0; i < parts.volumes.size(); ++i) {
+    const VolumeDesc& v = parts.volumes[i];
     const GridGeometry& g = v.source.grid;
     part = volumeName(v) + ": its voxels";
     // Dense: the voxels camera rays and gradients use (the brick and one ghost layer).
@@ -137,7 +138,7 @@ BrickContent loadBrickData(const SceneDesc& desc, const BrickPlan& plan, const G
     // Beyond, what shading rays can reach (only isosurfaces stop them in a volume): sparse, or
     // dense when the sparse shell would not be smaller (small fields, isosurfaces everywhere).
     std::vector<float> isovalues;
-    for (const IsosurfaceDesc& iso : desc.isosurfaces)
+    for (const IsosurfaceDesc& iso : parts.isosurfaces)
       if (iso.volume == i) isovalues.push_back(iso.value);
     VoxelBox shell;
     c.shells.emplace_back();
@@ -195,16 +196,17 @@ BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const Ghost
 
 void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans,
                       const GhostReach& ghosts) {
+  const SciVisDesc& parts = sciVisDesc(desc);
   // Per volume, what the plans hold of it; particles and triangles: those the bricks reach
   // (plus, for triangles, the world-space copy of every mesh loadBrick makes on the way).
-  std::vector<std::uint64_t> volumes(desc.volumes.size(), 0);
+  std::vector<std::uint64_t> volumes(parts.volumes.size(), 0);
   std::uint64_t others = desc.bytes();
   std::vector<ParticlesDesc> converted;
   const std::vector<const ParticlesDesc*> sets = particleSets(desc, converted);
   const std::vector<WorldMesh> meshes = worldMeshes(desc);
   for (const BrickPlan& plan : plans) {
     const BrickReach reach = brickReach(desc, plan.bounds, ghosts);
-    for (std::size_t i = 0; i < desc.volumes.size(); ++i)
+    for (std::size_t i = 0; i < parts.volumes.size(); ++i)
       volumes[i] = base::bytesPlus(volumes[i], brickVolumeBytes(desc, i, plan, reach));
     for (const ParticlesDesc* p : sets) {
       const std::uint64_t each = sizeof(Vec3) + (p->radii.size() > 1 ? 4 : 0) +
@@ -245,7 +247,7 @@ void checkBrickMemory(const SceneDesc& desc, const std::vector<BrickPlan>& plans
           ? std::string("the whole scene")
           : std::to_string(plans.size()) + (plans.size() == 1 ? " brick" : " bricks");
   if (!volumes.empty() && volumes[largest] >= others) {
-    const VolumeDesc& v = desc.volumes[largest];
+    const VolumeDesc& v = parts.volumes[largest];
     const Index3 n = v.source.grid.dims;
     throw base::Error(volumeName(v) + ": this rank holds " + std::to_string(volumes[largest]) +
                       " bytes of this " + std::to_string(n.x) + "x" + std::to_string(n.y) + "x" +
@@ -281,4 +283,4 @@ std::vector<HeldBrick> loadOwnBricks(const SceneDesc& desc, int bricks, int repl
   return out;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

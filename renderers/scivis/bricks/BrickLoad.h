@@ -8,7 +8,7 @@
 #include "renderers/scivis/bricks/Bricks.h"
 #include "renderers/scivis/scene/SciVisScene.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // The data of `plan`: per volume the voxels around its bounds and two beyond them (dense), and
 // as far as `reach` goes, for shading rays, a ShadingShell (sparse: only macrocells holding an
@@ -49,4 +49,4 @@ struct HeldBrick {
 std::vector<HeldBrick> loadOwnBricks(const SceneDesc& desc, int bricks, int replication, int rank,
                                      int ranks, GhostMode ghosts = GhostMode::Reach);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -9,7 +9,7 @@
 #include "base/Collectives.h"
 #include "base/Error.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 // A cell's side of an isovalue: wholly below, wholly above (strictly, every voxel), or neither.
@@ -47,7 +47,7 @@ struct IsoFaces {
 };
 
 struct BrickSummary {
-  std::vector<IsoFaces> isos;  // per SceneDesc::isosurfaces entry
+  std::vector<IsoFaces> isos;  // per SciVisDesc::isosurfaces entry
 };
 
 // The side of `iso` that cell (i, j, k) lies on (all 8 voxels strictly below or above; a voxel
@@ -167,8 +167,8 @@ BrickOcclusion::BrickOcclusion(BrickOcclusion&&) noexcept = default;
 BrickOcclusion& BrickOcclusion::operator=(BrickOcclusion&&) noexcept = default;
 
 bool BrickOcclusion::exactFor(const SceneDesc& desc) {
-  if (desc.isosurfaces.empty()) return false;
-  for (const VolumeDesc& v : desc.volumes)
+  if (sciVisDesc(desc).isosurfaces.empty()) return false;
+  for (const VolumeDesc& v : sciVisDesc(desc).volumes)
     if (v.visible) return false;
   for (const Material& m : desc.materials)
     if (m.opacity != 1.0f) return false;
@@ -178,7 +178,7 @@ bool BrickOcclusion::exactFor(const SceneDesc& desc) {
 std::vector<std::uint8_t> BrickOcclusion::summarise(const SceneDesc& desc,
                                                     const BrickContent& content) {
   std::vector<std::uint8_t> out;
-  for (const IsosurfaceDesc& iso : desc.isosurfaces) {
+  for (const IsosurfaceDesc& iso : sciVisDesc(desc).isosurfaces) {
     const IsoFaces faces =
         iso.volume < content.volumes.size()
             ? summariseIso(content.volumes[iso.volume], content.bounds, iso.value)
@@ -230,7 +230,7 @@ BrickOcclusion BrickOcclusion::exchange(
     if (it != bricks.end() && !known[static_cast<std::size_t>(it - bricks.begin())]) {
       const std::size_t i = static_cast<std::size_t>(it - bricks.begin());
       std::size_t pos = at;
-      m.summaries[i] = parse(all, pos, desc.isosurfaces.size());
+      m.summaries[i] = parse(all, pos, sciVisDesc(desc).isosurfaces.size());
       known[i] = true;
       m.bytes += size;
     }
@@ -276,4 +276,4 @@ bool BrickOcclusion::hides(int brick, Vec3 origin, Vec3 dir, Vec3 invDir, float 
   return false;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -29,7 +29,7 @@
 #include "renderers/scivis/bricks/Bricks.h"
 #include "renderers/scivis/scene/SciVisScene.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 class BrickOcclusion {
  public:
@@ -65,4 +65,4 @@ class BrickOcclusion {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -6,7 +6,7 @@
 
 #include "base/Error.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 Box3 expanded(const Box3& b, float margin) { return {b.lo - Vec3{margin}, b.hi + Vec3{margin}}; }
@@ -16,12 +16,12 @@ Box3 expanded(const Box3& b, float margin) { return {b.lo - Vec3{margin}, b.hi +
 // four times that.
 float startPad(const SceneDesc& desc, const Box3& domain) {
   float finest = 0;
-  for (const VolumeDesc& v : desc.volumes) {
+  for (const VolumeDesc& v : sciVisDesc(desc).volumes) {
     const Vec3 h = v.source.grid.spacing;
     const float m = std::min(h.x, std::min(h.y, h.z));
     finest = finest > 0 ? std::min(finest, m) : m;
   }
-  const float step = finest > 0 ? finest / desc.scivis.samplingRate : 1.0f;
+  const float step = finest > 0 ? finest / sciVisDesc(desc).settings.samplingRate : 1.0f;
   const float extent = domain.empty() ? 0.0f : std::max(1e-3f, maxComponent(domain.hi - domain.lo));
   return 4.0f * (1e-4f * extent + 0.05f * step);
 }
@@ -148,8 +148,9 @@ GhostMode ghostModeFromName(const std::string& name) {
 }
 
 float ghostMargin(const SceneDesc& desc, float sceneExtent, GhostMode mode) {
-  if (mode == GhostMode::Layer || desc.scivis.aoSamples <= 0) return 0.0f;
-  return desc.scivis.aoDistance > 0 ? desc.scivis.aoDistance : 0.25f * sceneExtent;
+  const SciVisSettings& settings = sciVisDesc(desc).settings;
+  if (mode == GhostMode::Layer || settings.aoSamples <= 0) return 0.0f;
+  return settings.aoDistance > 0 ? settings.aoDistance : 0.25f * sceneExtent;
 }
 
 GhostReach ghostReach(const SceneDesc& desc, GhostMode mode) {
@@ -157,7 +158,7 @@ GhostReach ghostReach(const SceneDesc& desc, GhostMode mode) {
   if (mode == GhostMode::Layer) return reach;
   reach.domain = sceneDomain(desc);
   reach.margin = ghostMargin(desc, maxComponent(reach.domain.hi - reach.domain.lo), mode);
-  if (desc.scivis.shadows)
+  if (sciVisDesc(desc).settings.shadows)
     for (const ResolvedLight& light : resolveLights(desc))
       if (light.kind != LightDesc::Kind::Ambient) reach.lights.push_back(light);
   return reach;
@@ -176,4 +177,4 @@ std::vector<BrickPlan> ownPlans(const SceneDesc& desc, int bricks, int replicati
   return mine;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -9,7 +9,7 @@
 #include "renderers/scivis/bricks/Bricks.h"
 #include "renderers/scivis/scene/SciVisScene.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // sceneDomain (the bounds of everything in the scene): SciVisScene.h.
 // `bounds` with the faces it shares with `domain`'s boundary pushed to infinity: where a brick's
@@ -121,4 +121,4 @@ struct BrickReach {
 // The reach of the brick with `bounds`.
 BrickReach brickReach(const SceneDesc& desc, const Box3& bounds, const GhostReach& reach);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -3,11 +3,11 @@
 // its data (BrickLoad.h) and the directory every rank agrees on (BrickExchange.h).
 #include "renderers/scivis/scene/Box.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 struct BrickPlan {
   int id = 0;
   Box3 bounds;  // bricks tile the domain; camera rays are clipped to them
 };
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -11,7 +11,7 @@
 #include "base/Error.h"
 #include "base/Parallel.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 void initializeOpenVdb() {
@@ -153,4 +153,4 @@ Volume loadOpenVdbBox(const VolumeSource& source, const VoxelBox& box) {
   }
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -23,7 +23,7 @@
 // through the same rounding steps as VTK's vtkRTAnalyticSource and as proceduralValue, whichever
 // box it is made in, so bricks agree bit for bit with the whole field.
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 thread_local std::uint64_t bytesReadOnThisThread = 0;
@@ -318,4 +318,4 @@ Volume loadVolume(const VolumeSource& source, const VoxelBox& box) {
   throw base::Error("unknown volume source");
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

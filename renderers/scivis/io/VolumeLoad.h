@@ -12,7 +12,7 @@
 #include "renderers/Volume.h"
 #include "renderers/VolumeSource.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // The field's value at whole-field voxel (i, j, k) of a procedural source (Wavelet,
 // MarschnerLobb); for tests that compare against the formula.
@@ -45,4 +45,4 @@ std::uint64_t volumeFileBytesRead();
 // naming the file and what is wrong on any I/O problem (missing, too short, unreadable).
 Volume loadVolume(const VolumeSource& source, const VoxelBox& box);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

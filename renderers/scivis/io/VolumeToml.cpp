@@ -5,7 +5,7 @@
 #include "base/Error.h"
 #include "renderers/scivis/io/formats/VolumeFile.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 // Voxels per axis at most. Indices and world positions are floats in the renderer: below 2^14
@@ -423,4 +423,4 @@ VolumeDesc readVolume(TomlReader& r, const toml::table& t, const std::filesystem
   return d;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

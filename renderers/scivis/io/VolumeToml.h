@@ -39,12 +39,12 @@
 #include <string>
 #include <utility>
 
-#include "renderers/SciVisDesc.h"
 #include "renderers/TomlReader.h"
 #include "renderers/TransferFunction.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 #include "renderers/scivis/io/VolumeLoad.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // `folder` resolves relative file names. The transfer function's range defaults to the source's
 // value range where that is known without reading voxels (procedural fields), else it is required.
@@ -54,4 +54,4 @@ TransferFunction readTransferFunction(TomlReader& r, const toml::node& n, const 
 TransferFunction readTransferFunction(TomlReader& r, const toml::node& n, const std::string& what,
                                       std::optional<std::pair<float, float>> defaultRange);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -12,7 +12,7 @@
 
 #include "renderers/scivis/kernels/Avx512.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -601,4 +601,4 @@ void FirstHitRaster::firstHits(int x0, int x1, int y0, int y1, std::size_t strid
     }
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -35,7 +35,7 @@
 
 #include "renderers/Camera.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 class FirstHitRaster {
  public:
@@ -128,4 +128,4 @@ class FirstHitRaster {
   bool simd_ = false;
 };
 
-}  // namespace renderers
+}  // namespace renderers::scivis

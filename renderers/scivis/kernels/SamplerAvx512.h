@@ -8,7 +8,7 @@
 #include "renderers/Rng.h"
 #include "renderers/scivis/kernels/Avx512.h"
 
-namespace renderers::lanes {
+namespace renderers::scivis::lanes {
 
 // mix64 (Rng.h) in 8 lanes.
 AVX512_INLINE __m512i mix64x8(__m512i z) {
@@ -27,4 +27,4 @@ AVX512_INLINE __m256 get8(__m512i keys, std::uint32_t d) {
                        _mm256_set1_ps(1.0f / 16777216.0f));
 }
 
-}  // namespace renderers::lanes
+}  // namespace renderers::scivis::lanes

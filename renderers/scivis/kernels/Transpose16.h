@@ -6,7 +6,7 @@
 
 #include "renderers/scivis/kernels/Avx512.h"
 
-namespace renderers::lanes {
+namespace renderers::scivis::lanes {
 
 // Rows r[i] (16 values each) to columns: afterwards r[k] holds value k of rows 0 .. 15.
 AVX512_INLINE void transpose16(__m512 r[16]) {
@@ -34,4 +34,4 @@ AVX512_INLINE void transpose16(__m512 r[16]) {
   for (int i = 0; i < 16; ++i) r[i] = t[i];
 }
 
-}  // namespace renderers::lanes
+}  // namespace renderers::scivis::lanes

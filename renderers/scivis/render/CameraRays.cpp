@@ -6,7 +6,7 @@
 
 #include "renderers/scivis/kernels/Avx512.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 constexpr float kInf = Box3::kInf;
@@ -131,4 +131,4 @@ void cameraRowRays(const RowRays& row, int x0, int x1, int y, SciVisRenderer::Ra
     }
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

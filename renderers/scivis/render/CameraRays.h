@@ -9,7 +9,7 @@
 #include "renderers/Camera.h"
 #include "renderers/scivis/render/SciVisRenderer.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 struct RowRays {
   const Camera* camera;
@@ -28,4 +28,4 @@ bool cameraRowSimdAvailable();
 void cameraRowRays(const RowRays& row, int x0, int x1, int y, SciVisRenderer::RayPiece* out,
                    std::uint8_t* inside = nullptr);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -9,7 +9,7 @@
 #include "renderers/scivis/render/VolumeMarch.h"
 #include "renderers/scivis/scene/Box.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // The march takes a piece of t0 < t1 whose [t0 - step, t1 + step] meets `dataBounds` (the
 // field's); `step`: the scene's volume step. False: it takes none (`ray` unchanged).
@@ -33,4 +33,4 @@ inline bool marchRayOf(const SciVisRenderer::RayPiece& r, Vec3 invDir, const Box
 unsigned marchOnly16(const SciVisRenderer::RayPiece* rays, const Box3& dataBounds, float step,
                      float minTransmittance, MarchRay* out);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

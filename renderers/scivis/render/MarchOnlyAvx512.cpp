@@ -9,7 +9,7 @@
 
 #include "renderers/scivis/kernels/Avx512.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 using RayPiece = SciVisRenderer::RayPiece;
@@ -77,4 +77,4 @@ AVX512_TARGET unsigned marchOnly16(const RayPiece* rays, const Box3& dataBounds,
   return take;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace renderers {
+namespace renderers::scivis {
 
 constexpr int kRayBlockSide = 4;
 
@@ -52,4 +52,4 @@ class RayBlockOrderCache {
   std::vector<std::uint32_t> order_;
 };
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -11,7 +11,7 @@
 #include "renderers/scivis/render/RayBlocks.h"
 #include "renderers/scivis/render/VolumeMarch.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 constexpr float kInf = Box3::kInf;
@@ -53,8 +53,8 @@ std::uint64_t bitsOf(float t) { return std::bit_cast<std::uint32_t>(t); }
 // centre of `domain` (0: no isosurfaces).
 float cellPixels(const SceneDesc& desc, const Box3& domain, const CameraDesc& camera, int height) {
   float finest = kInf;
-  for (const IsosurfaceDesc& iso : desc.isosurfaces) {
-    const Vec3 s = desc.volumes.at(iso.volume).source.grid.spacing;
+  for (const IsosurfaceDesc& iso : sciVisDesc(desc).isosurfaces) {
+    const Vec3 s = sciVisDesc(desc).volumes.at(iso.volume).source.grid.spacing;
     finest = std::min(finest, std::min(s.x, std::min(s.y, s.z)));
   }
   if (!(finest < kInf)) return 0;
@@ -166,7 +166,7 @@ bool SciVisRenderer::occluded(Vec3 origin, Vec3 dir, float tFar) const {
 
 Vec3 SciVisRenderer::shade(Vec3 point, Vec3 normal, Vec3 dir, Vec3 baseColor, const Material& m,
                            const Sampler& hitSampler) const {
-  const SciVisSettings& settings = scene_.desc().scivis;
+  const SciVisSettings& settings = scene_.sciVis().settings;
   if (dot(normal, dir) > 0) normal = -normal;  // face the viewer
   const Vec3 from = point + normal * epsilon_;
   float ambientVisibility = 1.0f;
@@ -219,8 +219,8 @@ Fragment SciVisRenderer::integrate(Vec3 origin, Vec3 dir, Vec3 invDir, float t0,
   Accumulator acc;
   Fragment out;
   if (!(t0 < t1)) return out;
-  const float minTransmittance = scene_.desc().scivis.minTransmittance;
-  const int aoSamples = scene_.desc().scivis.aoSamples;
+  const float minTransmittance = scene_.sciVis().settings.minTransmittance;
+  const int aoSamples = scene_.sciVis().settings.aoSamples;
 
   // Surfaces come from Embree one at a time, in order; the next one waits in `surface`.
   SurfaceHit surface;
@@ -371,7 +371,7 @@ bool SciVisRenderer::marchOnly(Vec3 origin, Vec3 dir, Vec3 invDir, float t0, flo
   if (layers.size() != 1 || !layers[0].visible || !layers[0].field) return false;
   if (first.found && first.hit.t < t1) return false;
   return marchRayOf({origin, dir, t0, t1, sampler}, invDir, layers[0].field->dataBounds(),
-                    scene_.volumeStep(), scene_.desc().scivis.minTransmittance, ray);
+                    scene_.volumeStep(), scene_.sciVis().settings.minTransmittance, ray);
 }
 
 bool SciVisRenderer::marchesPacketsHere() const {
@@ -423,7 +423,7 @@ void SciVisRenderer::integrate(const RayPiece* rays, std::size_t count, Fragment
   std::size_t done = 0;
   if (packets && march_ == MarchKernel::Avx512 && !surfaces && !given && (*layers_)[0].visible) {
     const Box3& data = (*layers_)[0].field->dataBounds();
-    const float step = scene_.volumeStep(), minT = scene_.desc().scivis.minTransmittance;
+    const float step = scene_.volumeStep(), minT = scene_.sciVis().settings.minTransmittance;
     for (; done + 16 <= count; done += 16) {
       const unsigned take = marchOnly16(rays + done, data, step, minT, waiting + waitingCount);
       for (std::size_t i = done; i < done + 16; ++i) {
@@ -575,4 +575,4 @@ void SciVisRenderer::render(const dfb::Region& region, std::uint32_t accumulatio
   volumeSamples_.fetch_add(volumeSamples, std::memory_order_relaxed);
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -22,7 +22,7 @@
 #include "renderers/scivis/render/VolumeMarch.h"
 #include "renderers/scivis/scene/SciVisScene.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // Premultiplied RGBA of a piece of a ray and the distance where it became at least half opaque
 // (infinity if never).
@@ -138,4 +138,4 @@ class SciVisRenderer final : public Renderer {
   mutable std::atomic<std::uint64_t> volumeSamples_{0};  // added once per tile
 };
 
-}  // namespace renderers
+}  // namespace renderers::scivis

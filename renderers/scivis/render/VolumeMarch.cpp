@@ -11,7 +11,7 @@
 #include "base/Error.h"
 #include "renderers/scivis/render/VolumeMarchSteps.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 constexpr float kInf = Box3::kInf;
@@ -509,4 +509,4 @@ std::uint32_t marchOneVolume(const SciVisScene::VolumeLayer& v, const MarchRay& 
   }
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -21,7 +21,7 @@
 #include "renderers/Math.h"
 #include "renderers/scivis/scene/SciVisScene.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 enum class MarchKernel {
   Auto,  // the fastest the CPU runs
@@ -75,4 +75,4 @@ void marchPacket(const SciVisScene::VolumeLayer& v, MarchKernel kernel, const Ma
                  int count, MarchColor* colors, std::uint32_t* samples,
                  const MarchRay* next = nullptr, int nextCount = 0);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

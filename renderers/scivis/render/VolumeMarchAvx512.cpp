@@ -21,7 +21,7 @@
 
 #include "renderers/scivis/kernels/Avx512.h"
 
-namespace renderers::march {
+namespace renderers::scivis::march {
 namespace {
 
 constexpr float kInf = Box3::kInf;
@@ -478,4 +478,4 @@ void marchPacketAvx512(const SciVisScene::VolumeLayer& v, const MarchRay* rays, 
   }
 }
 
-}  // namespace renderers::march
+}  // namespace renderers::scivis::march

@@ -10,7 +10,7 @@
 
 #include "renderers/scivis/render/VolumeMarch.h"
 
-namespace renderers::march {
+namespace renderers::scivis::march {
 
 // The first sample index of the march: the first k >= kStart with (k + jitter) step >= t0, as
 // the generic loop reaches it by counting up from kStart (the two loops mend rounding).
@@ -104,4 +104,4 @@ void marchPacketAvx512(const SciVisScene::VolumeLayer& v, const MarchRay* rays, 
                        MarchColor* colors, std::uint32_t* samples, const MarchRay* next,
                        int nextCount);
 
-}  // namespace renderers::march
+}  // namespace renderers::scivis::march

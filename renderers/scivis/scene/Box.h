@@ -6,7 +6,7 @@
 
 #include "renderers/Math.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 struct Box3 {
   static constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -43,4 +43,4 @@ inline bool clipToBox(const Box3& box, Vec3 origin, Vec3 invDir, float& t0, floa
   return t0 <= t1;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

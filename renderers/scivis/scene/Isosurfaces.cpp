@@ -6,7 +6,7 @@
 
 #include "base/Parallel.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 // Cube corners c = x + 2 y + 4 z (the order trilinear() takes them in). Edge e runs along axis
@@ -246,4 +246,4 @@ std::vector<IsoMesh> polygonise(const GridGeometry& grid, const std::vector<Cell
   return out;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -21,7 +21,7 @@
 
 #include "renderers/Volume.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 struct IsoMesh {
   std::vector<Vec3> positions;
@@ -50,4 +50,4 @@ using BlockReader = std::function<void(const CellBlock& block, float* voxels)>;
 std::vector<IsoMesh> polygonise(const GridGeometry& grid, const std::vector<CellBlock>& blocks,
                                 const std::vector<float>& isovalues, const BlockReader& read);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

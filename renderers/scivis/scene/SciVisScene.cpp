@@ -14,7 +14,7 @@
 #include "renderers/TransferFunction.h"
 #include "renderers/scivis/scene/Isosurfaces.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 std::size_t BrickContent::bytes() const {
   std::size_t total = 0;
@@ -57,14 +57,14 @@ std::vector<const ParticlesDesc*> particleSets(const SceneDesc& desc,
     converted.push_back(std::move(p));
   }
   std::vector<const ParticlesDesc*> out;
-  for (const ParticlesDesc& p : desc.particles) out.push_back(&p);
+  for (const ParticlesDesc& p : sciVisDesc(desc).particles) out.push_back(&p);
   for (const ParticlesDesc& p : converted) out.push_back(&p);
   return out;
 }
 
 Box3 sceneDomain(const SceneDesc& desc) {
   Box3 domain{Vec3{Box3::kInf}, Vec3{-Box3::kInf}};
-  for (const VolumeDesc& v : desc.volumes) {
+  for (const VolumeDesc& v : sciVisDesc(desc).volumes) {
     Vec3 lo, hi;
     v.source.grid.bounds(v.source.grid.wholeBox(), lo, hi);
     grow(domain, lo, hi);
@@ -223,14 +223,15 @@ struct SciVisScene::Embree {
 
 SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickContent content)
     : desc_(std::move(sceneDesc)),
+      sciVis_(&sciVisDesc(*desc_)),
       content_(std::move(content)),
       embree_(std::make_unique<Embree>()) {
   const SceneDesc& desc = *desc_;
-  const SciVisSettings& settings = desc.scivis;
-  if (desc.volumes.size() > kMaxVolumes)
-    throw base::Error("the scene has " + std::to_string(desc.volumes.size()) +
+  const SciVisSettings& settings = sciVis_->settings;
+  if (sciVis_->volumes.size() > kMaxVolumes)
+    throw base::Error("the scene has " + std::to_string(sciVis_->volumes.size()) +
                       " volumes; the scivis renderer draws at most " + std::to_string(kMaxVolumes));
-  if (content_.volumes.size() != desc.volumes.size())
+  if (content_.volumes.size() != sciVis_->volumes.size())
     throw base::Error("a scivis brick needs one (possibly empty) volume per scene volume");
   for (const auto* set : {&content_.particles, &content_.ghostParticles})
     for (const ParticlesDesc& p : *set) {
@@ -244,8 +245,8 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   for (const auto* set : {&content_.meshes, &content_.ghostMeshes})
     for (const WorldMesh& m : *set)
       if (m.material >= desc.materials.size()) throw base::Error("a mesh has no such material");
-  for (const IsosurfaceDesc& iso : desc.isosurfaces)
-    if (iso.volume >= desc.volumes.size() || iso.material >= desc.materials.size())
+  for (const IsosurfaceDesc& iso : sciVis_->isosurfaces)
+    if (iso.volume >= sciVis_->volumes.size() || iso.material >= desc.materials.size())
       throw base::Error("an isosurface names a volume or material that does not exist");
 
   // Volumes: one sampling step for all (the finest spacing over the sampling rate), and each
@@ -260,7 +261,7 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   // Bricks must agree on the step with the whole scene: it comes from the scene's grids, not
   // from what this brick holds.
   finest = 0;
-  for (const VolumeDesc& v : desc.volumes) {
+  for (const VolumeDesc& v : sciVis_->volumes) {
     const Vec3 s = v.source.grid.spacing;
     const float m = std::min(s.x, std::min(s.y, s.z));
     finest = finest > 0 ? std::min(finest, m) : m;
@@ -269,7 +270,7 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
   for (std::size_t i = 0; i < content_.volumes.size(); ++i) {
     content_.volumes[i].spreadSlices();  // before any field or isosurface reads them
     const Volume& v = content_.volumes[i];
-    const VolumeDesc& vd = desc.volumes[i];
+    const VolumeDesc& vd = sciVis_->volumes[i];
     VolumeLayer layer;
     layer.visible = vd.visible;
     if (!v.box.empty()) {
@@ -278,7 +279,7 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
     }
     if (i < content_.shells.size() && !content_.shells[i].empty())
       layer.shell = &content_.shells[i];
-    for (const IsosurfaceDesc& iso : desc.isosurfaces)
+    for (const IsosurfaceDesc& iso : sciVis_->isosurfaces)
       if (iso.volume == i) layer.isosurfaces.push_back(&iso);
     bake(layer, vd, vd.transfer, 1.0f);
     volumes_.push_back(std::move(layer));
@@ -331,8 +332,9 @@ SciVisScene::SciVisScene(std::shared_ptr<const SceneDesc> sceneDesc, BrickConten
 }
 
 std::vector<ResolvedLight> resolveLights(const SceneDesc& desc) {
+  const SciVisDesc& parts = sciVisDesc(desc);
   std::vector<ResolvedLight> lights;
-  if (desc.lights.empty()) {
+  if (parts.lights.empty()) {
     lights.push_back({LightDesc::Kind::Ambient, {}, {}, Vec3{0.25f}});
     const Vec3 view = desc.camera.lookAt - desc.camera.position;
     lights.push_back({LightDesc::Kind::Directional,
@@ -340,7 +342,7 @@ std::vector<ResolvedLight> resolveLights(const SceneDesc& desc) {
                       {},
                       Vec3{0.85f}});
   } else {
-    for (const LightDesc& l : desc.lights)
+    for (const LightDesc& l : parts.lights)
       lights.push_back({l.kind, -l.direction, l.position, l.color * l.intensity});
   }
   return lights;
@@ -481,7 +483,7 @@ std::vector<SciVisScene::VolumeLayer> SciVisScene::retunedVolumes(int preset,
   std::vector<VolumeLayer> out = volumes_;
   const std::vector<std::string> names = transferFunctionPresetNames();
   for (std::size_t i = 0; i < out.size(); ++i) {
-    const VolumeDesc& vd = desc_->volumes[i];
+    const VolumeDesc& vd = sciVis_->volumes[i];
     TransferFunction tf = vd.transfer;
     if (preset >= 0 && preset < static_cast<int>(names.size())) {
       float peak = 0;
@@ -591,4 +593,4 @@ bool SciVisScene::surfaceOccluded(Vec3 origin, Vec3 dir, float tNear, float tFar
   return embree::occluded(embree_->occluders, origin, dir, tNear, tFar);
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -11,14 +11,16 @@
 #include <memory>
 #include <vector>
 
+#include "renderers/RendererScene.h"
 #include "renderers/SceneDesc.h"
 #include "renderers/Volume.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 #include "renderers/scivis/kernels/FirstHitRaster.h"
 #include "renderers/scivis/scene/Box.h"
 #include "renderers/scivis/scene/ShadingShell.h"
 #include "renderers/scivis/scene/VolumeField.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // Triangles in world space with one material: a scene's mesh instance, or the part of one a
 // brick holds.
@@ -29,7 +31,7 @@ struct WorldMesh {
 
 struct BrickContent {
   Box3 bounds;  // camera rays are clipped to it
-  // One entry per SceneDesc::volumes, holding the voxels this brick has of it (an empty box:
+  // One entry per SciVisDesc::volumes, holding the voxels this brick has of it (an empty box:
   // none). Voxels beyond `bounds` are ghost layers: shading rays and gradients see them.
   std::vector<Volume> volumes;
   // Per volume (or none at all): the sparse ghost shell shading rays test isosurfaces in, when
@@ -70,7 +72,7 @@ struct ResolvedLight {
 // not follow the camera of a frame).
 std::vector<ResolvedLight> resolveLights(const SceneDesc& desc);
 
-class SciVisScene {
+class SciVisScene final : public RendererScene {
  public:
   SciVisScene(std::shared_ptr<const SceneDesc> desc, BrickContent content);
   ~SciVisScene();
@@ -78,6 +80,7 @@ class SciVisScene {
   SciVisScene& operator=(const SciVisScene&) = delete;
 
   const SceneDesc& desc() const { return *desc_; }
+  const SciVisDesc& sciVis() const { return *sciVis_; }  // desc()'s scivis parts
   const Box3& bounds() const { return content_.bounds; }
   const BrickContent& content() const { return content_; }
   // Moves the data out, for a new scene version that keeps it; destroy the scene next.
@@ -171,6 +174,7 @@ class SciVisScene {
   void addIsosurfaces(std::size_t volume);
 
   std::shared_ptr<const SceneDesc> desc_;
+  const SciVisDesc* sciVis_;  // in *desc_
   BrickContent content_;
   std::vector<std::unique_ptr<VolumeField>> fields_;
   std::vector<VolumeLayer> volumes_;
@@ -182,4 +186,4 @@ class SciVisScene {
   std::unique_ptr<Embree> embree_;
 };
 
-}  // namespace renderers
+}  // namespace renderers::scivis

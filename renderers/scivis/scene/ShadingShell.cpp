@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <limits>
 
-namespace renderers {
+namespace renderers::scivis {
 
 ShadingShell ShadingShell::load(const VolumeSource& source, const VoxelBox& box,
                                 const VoxelBox& core, const std::vector<float>& isovalues,
@@ -104,4 +104,4 @@ std::size_t ShadingShell::bytes() const {
          blocks_.size() * sizeof(Block) + voxels_.size() * sizeof(float);
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -18,7 +18,7 @@
 #include "renderers/scivis/io/VolumeLoad.h"
 #include "renderers/scivis/scene/VolumeField.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 class ShadingShell : public FieldGeometry {
  public:
@@ -90,4 +90,4 @@ class ShadingShell : public FieldGeometry {
   std::vector<float> voxels_;
 };
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -8,7 +8,7 @@
 #include "base/Error.h"
 #include "base/Parallel.h"
 
-namespace renderers {
+namespace renderers::scivis {
 FieldGeometry::FieldGeometry(const GridGeometry& grid, const VoxelBox& box, std::size_t sliceStride)
     : grid_(grid), box_(box) {
   const Index3 n = box.size();
@@ -156,4 +156,4 @@ Box3 FieldGeometry::macroBounds(int m) const {
   return b;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -20,7 +20,7 @@
 #include "renderers/Volume.h"
 #include "renderers/scivis/scene/Box.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // Where a held box of a field lies and how world points map onto it: cells, macrocells on the
 // whole field's grid and their value ranges. The part of a field that does not depend on how
@@ -264,4 +264,4 @@ class VolumeField : public FieldGeometry {
   const Volume* volume_;
 };
 
-}  // namespace renderers
+}  // namespace renderers::scivis

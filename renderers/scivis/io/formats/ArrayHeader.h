@@ -10,7 +10,7 @@
 
 #include "renderers/scivis/io/formats/StoredArray.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // Voxels per axis at most (as the scene file allows) and in all (2^34: 16 GiB of uint8).
 constexpr int kMaxFileDims = 16384;
@@ -42,4 +42,4 @@ ArrayHeader parseNiftiHeader(std::string_view bytes, const std::string& path, bo
 // nothing is.
 std::string fileDimsProblem(Index3 dims);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

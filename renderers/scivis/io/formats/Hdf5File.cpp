@@ -7,7 +7,7 @@
 #include "base/Error.h"
 #include "renderers/scivis/io/formats/LibraryFormats.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 std::mutex& hdf5LibraryLock() {
   static std::mutex lock;
@@ -163,4 +163,4 @@ Volume loadHdf5Box(const VolumeSource& source, const VoxelBox& box) {
   return v;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -9,7 +9,7 @@
 #include "base/Error.h"
 #include "renderers/scivis/io/formats/ArrayHeader.h"
 
-namespace renderers::headertext {
+namespace renderers::scivis::headertext {
 
 void HeaderField::fail(const std::string& what, std::size_t offset) const {
   throw base::Error(at(offset).where, "field '" + name + "': " + what);
@@ -97,4 +97,4 @@ std::string besideFile(const std::string& path, std::string_view name) {
   return (std::filesystem::path(path).parent_path() / p).string();
 }
 
-}  // namespace renderers::headertext
+}  // namespace renderers::scivis::headertext

@@ -10,7 +10,7 @@
 #include "base/Error.h"
 #include "renderers/Volume.h"
 
-namespace renderers::headertext {
+namespace renderers::scivis::headertext {
 
 // A field's value in a header: the place of its first character (columns count bytes; headers
 // are ASCII) and the field's name.
@@ -42,4 +42,4 @@ Index3 fileDims(std::string_view value, const HeaderField& f);
 // The folder of `path` joined with `name` (unless absolute).
 std::string besideFile(const std::string& path, std::string_view name);
 
-}  // namespace renderers::headertext
+}  // namespace renderers::scivis::headertext

@@ -10,7 +10,7 @@
 
 #include "renderers/VolumeSource.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 void resolveHdf5(VolumeSource& source);
 Volume loadHdf5Box(const VolumeSource& source, const VoxelBox& box);
@@ -32,4 +32,4 @@ void markMissing(Volume& v, const std::vector<double>& missing, float slope, flo
 // any missing value makes float32).
 VoxelType heldTypeOf(FileType type, bool anyMissing, bool scaled);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

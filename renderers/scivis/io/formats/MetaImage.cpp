@@ -10,7 +10,7 @@
 #include "renderers/scivis/io/formats/ArrayHeader.h"
 #include "renderers/scivis/io/formats/HeaderText.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 using namespace headertext;
@@ -131,4 +131,4 @@ ArrayHeader parseMetaImageHeader(std::string_view bytes, const std::string& path
   return h;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -8,7 +8,7 @@
 #include "base/Error.h"
 #include "renderers/scivis/io/formats/LibraryFormats.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 std::mutex& hdf5LibraryLock();  // Hdf5File.cpp: NetCDF-4 files go through HDF5 too
 
@@ -182,4 +182,4 @@ Volume loadNetCdfBox(const VolumeSource& source, const VoxelBox& box) {
   return v;
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

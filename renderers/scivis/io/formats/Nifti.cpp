@@ -10,7 +10,7 @@
 #include "base/Error.h"
 #include "renderers/scivis/io/formats/ArrayHeader.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 class Reader {
@@ -150,4 +150,4 @@ std::string fileDimsProblem(Index3 dims) {
   return {};
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -17,7 +17,7 @@
 
 #include "base/Error.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 thread_local std::uint64_t bytesRead = 0;
@@ -355,4 +355,4 @@ Volume readStoredBox(const StoredArray& array, const GridGeometry& grid, const V
 
 std::uint64_t storedBytesRead() { return bytesRead; }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

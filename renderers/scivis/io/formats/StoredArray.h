@@ -14,7 +14,7 @@
 #include "renderers/Volume.h"
 #include "renderers/VolumeSource.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 std::size_t fileTypeBytes(FileType type);
 const char* fileTypeName(FileType type);  // "int8", "uint8", ..., "float64"
@@ -35,4 +35,4 @@ Volume readStoredBox(const StoredArray& array, const GridGeometry& grid, const V
 // these.
 std::uint64_t storedBytesRead();
 
-}  // namespace renderers
+}  // namespace renderers::scivis

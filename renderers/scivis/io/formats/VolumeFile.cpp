@@ -14,7 +14,7 @@
 #include "renderers/scivis/io/formats/ArrayHeader.h"
 #include "renderers/scivis/io/formats/LibraryFormats.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 bool endsWith(const std::string& s, const std::string& tail) {
@@ -200,4 +200,4 @@ VoxelType heldTypeOf(FileType type, bool anyMissing, bool scaled) {
   return heldVoxelType(a);
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -7,7 +7,7 @@
 
 #include "renderers/VolumeSource.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // From the file name: .nrrd/.nhdr, .nii/.nii.gz, .mhd/.mha, .h5/.hdf5/.he5, .nc/.cdf/.nc4.
 std::optional<VolumeFormat> volumeFormatOfPath(const std::string& path);
@@ -25,4 +25,4 @@ void resolveVolumeFile(VolumeSource& source);
 // missing_value) become NaN, which renders as empty space.
 Volume loadVolumeFile(const VolumeSource& source, const VoxelBox& box);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

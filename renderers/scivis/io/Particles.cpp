@@ -1,4 +1,4 @@
-#include "renderers/Particles.h"
+#include "renderers/scivis/io/Particles.h"
 
 #include <cmath>
 #include <cstdio>
@@ -9,7 +9,7 @@
 #include "base/Parallel.h"
 #include "renderers/Rng.h"
 
-namespace renderers {
+namespace renderers::scivis {
 namespace {
 
 float unitFloat(std::uint64_t key) {
@@ -114,4 +114,4 @@ void readParticleFile(const std::string& path, const std::string& layout, Partic
   }
 }
 
-}  // namespace renderers
+}  // namespace renderers::scivis

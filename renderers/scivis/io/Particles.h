@@ -4,9 +4,9 @@
 #include <cstdint>
 #include <string>
 
-#include "renderers/SciVisDesc.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 // `count` particles clustered the way matter is in a cosmology run: a hierarchy of clumps
 // (Soneira & Peebles 1978: each level places a few sub-clumps inside a sphere a fixed fraction of
@@ -21,4 +21,4 @@ ParticlesDesc clusteredParticles(std::size_t count, std::uint64_t seed, Vec3 cen
 // file when it cannot be read or its size is not a whole number of records.
 void readParticleFile(const std::string& path, const std::string& layout, ParticlesDesc& out);
 
-}  // namespace renderers
+}  // namespace renderers::scivis

@@ -1,17 +1,20 @@
 #pragma once
 // What the scivis renderer draws, as plain data next to the meshes of SceneDesc: volumes (where
 // their voxels come from, not the voxels), isosurfaces of them, particle sets, lights and the
-// renderer's settings. Read from TOML (SceneToml.cpp, scivis/SciVisToml.cpp) or made by
-// BuiltinScenes.
+// renderer's settings. Read from TOML (scivis/SciVisToml.cpp) or made by the built-in scenes
+// (scivis/BuiltinScenes.h); a SceneDesc holds them as its "scivis" extension (sciVisDesc()).
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "renderers/Math.h"
+#include "renderers/SceneDesc.h"
+#include "renderers/SceneExtension.h"
 #include "renderers/TransferFunction.h"
 #include "renderers/VolumeSource.h"
 
-namespace renderers {
+namespace renderers::scivis {
 
 struct VolumeDesc {
   std::string name;
@@ -25,7 +28,7 @@ struct VolumeDesc {
 
 // One level set of a volume: a surface at `value`, shaded with a material, possibly transparent.
 struct IsosurfaceDesc {
-  std::uint32_t volume = 0;  // index into SceneDesc::volumes
+  std::uint32_t volume = 0;  // index into SciVisDesc::volumes
   float value = 0;
   std::uint32_t material = 0;  // index into SceneDesc::materials (its color and opacity)
 };
@@ -66,4 +69,27 @@ struct SciVisSettings {
   float minTransmittance = 1e-3f;
 };
 
-}  // namespace renderers
+// The scivis parts of a scene (the path tracer draws its meshes and spheres; the scivis
+// renderer draws those too).
+struct SciVisDesc final : SceneExtension {
+  std::vector<VolumeDesc> volumes;
+  std::vector<IsosurfaceDesc> isosurfaces;
+  std::vector<ParticlesDesc> particles;
+  std::vector<LightDesc> lights;  // empty: an ambient light and a headlight (SciVisScene.h)
+  SciVisSettings settings;
+
+  std::unique_ptr<SceneExtension> clone() const override;
+  bool empty() const override;                           // no volumes and no particles
+  std::vector<std::string> inputFiles() const override;  // particle and volume files
+  std::uint64_t bytes() const override;                  // the particles' bytes
+};
+
+// The name SceneDesc::extensions holds SciVisDesc under: the renderer's.
+inline constexpr const char* kSciVisName = "scivis";
+
+// `desc`'s scivis parts, added (empty) when it has none.
+SciVisDesc& sciVisDesc(SceneDesc& desc);
+// `desc`'s scivis parts; empty ones when it has none.
+const SciVisDesc& sciVisDesc(const SceneDesc& desc);
+
+}  // namespace renderers::scivis
