@@ -38,13 +38,14 @@ std::string joined(const std::vector<std::string>& parts, std::size_t count) {
   return out;
 }
 
-// A request as messages show it: it may come from the network, so bytes that are not printable
-// become '?' and a long one is cut.
+bool isControl(char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; }
+
+// A request as messages show it: it may come from the network, so control characters become '?'
+// and a long one is cut.
 std::string shown(const std::string& request) {
   constexpr std::size_t kShown = 200;
   std::string out;
-  for (const char c : request.substr(0, kShown))
-    out += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? '?' : c;
+  for (const char c : request.substr(0, kShown)) out += isControl(c) ? '?' : c;
   return request.size() > kShown ? out + "..." : out;
 }
 
@@ -72,8 +73,9 @@ std::string ConfinedFolder::resolve(const std::string& request) const {
   auto refuse = [&](const std::string& problem) {
     return Error("'" + shown(request) + "': " + problem);
   };
-  if (request.find('\0') != std::string::npos)
-    throw refuse("a path with a NUL byte is not allowed" + beneath);
+  // Names with control characters would carry terminal escapes into logs and listings.
+  if (std::any_of(request.begin(), request.end(), isControl))
+    throw refuse("a control character is not allowed" + beneath);
   std::vector<std::string> parts = partsOf(request);
   for (const std::string& part : parts) {
     if (part == "..") throw refuse("'..' is not allowed" + beneath);

@@ -78,8 +78,10 @@ TEST_F(ConfinedFolderTest, DotDotIsRefusedEvenWhereItWouldStayInside) {
   EXPECT_EQ(refusal(folder, (root_ / ".." / "outside").string()),
             "'" + (root_ / ".." / "outside").string() + "': '..' is not allowed" + beneath);
   EXPECT_EQ(refusal(folder, std::string("a\0b", 3)),
-            "'a?b': a path with a NUL byte is not allowed" + beneath)
+            "'a?b': a control character is not allowed" + beneath)
       << "bytes from the wire are shown printable";
+  EXPECT_EQ(refusal(folder, "red\x1b[31m"),
+            "'red?[31m': a control character is not allowed" + beneath);
   std::string deep;
   for (int i = 0; i < 65; ++i) deep += "d/";
   EXPECT_EQ(refusal(folder, deep), "'" + deep + "': more than 64 folders deep" + beneath);
