@@ -214,7 +214,8 @@ void addJobOutputGroup(CLI::App& app, Options& o) {
                  "(linear)")
       ->group(kOutput);
   app.add_option("--capture", o.captureDir,
-                 "with a wall: write each display's last frame (and a wall preview) under DIR")
+                 "with a wall: write each display's last frame (and a wall preview) under DIR "
+                 "(with --connect: a folder inside the wall's serve --capture-root)")
       ->group(kOutput);
   app.add_option("--capture-every", o.captureEvery, "with --capture: every K-th frame too")
       ->check(CLI::Range(0, 1 << 30))
@@ -251,7 +252,7 @@ void addRenderJob(CLI::App& app, Options& o, RawOptions& raw) {
 
 // ---- serve and relay ------------------------------------------------------------------------
 
-void addServe(CLI::App& serve, Options& o) {
+void addServe(CLI::App& serve, Options& o, RawOptions& raw) {
   addWallGroup(serve, o.wall, o.offscreen);
   addListen(serve, o.listen, kNetworkSecurity,
             "[ADDR:]PORT of wall process 0's directory, where jobs connect and the other "
@@ -279,6 +280,16 @@ void addServe(CLI::App& serve, Options& o) {
              "seconds after which a silent job or wall process is dropped");
   addStats(serve, o.statsFile,
            "wall process 0: append one JSON line per job and per process lost or back to FILE");
+  serve
+      .add_option("--capture-root", o.captureRoot,
+                  "an existing folder: a job's --capture names a folder inside it (relative to "
+                  "it, or absolute within it); without it, jobs that ask for captures are refused")
+      ->group(kOutput);
+  serve
+      .add_option("--capture-quota", raw.captureQuota,
+                  "BYTES, or with a suffix K, M, G, T: the most one job's captures may take on "
+                  "each wall process; a capture past it ends the job (default: 1G)")
+      ->group(kOutput);
   addHelp(serve);
 }
 
@@ -328,7 +339,7 @@ CommandLine::CommandLine(Options& options, RelayCommand& relayCommand, RawOption
       "serve",
       "run the wall of --wall as a persistent service that render jobs connect to "
       "(mpirun -np W dfbwall serve --wall L --listen [ADDR:]PORT; jobs: dfbwall --connect)");
-  addServe(*serve, options);
+  addServe(*serve, options, raw);
   relay = root.add_subcommand(
       "relay",
       "forward render jobs to a serving wall from hosts that cannot reach it, without decoding "

@@ -92,8 +92,15 @@ int parseArguments(CommandLine& cli, std::vector<std::string> args, bool print) 
 }
 
 // serve: the processes of one wall, all under mpirun or one on its own. Empty when fine.
-std::string serveProblem(const Options& o) {
+std::string serveProblem(Options& o, const RawOptions& raw) {
   if (o.wall.empty()) return "serve needs --wall FILE.toml: the wall it runs";
+  if (!raw.captureQuota.empty()) {
+    const std::optional<std::uint64_t> bytes = base::parseByteSize(raw.captureQuota);
+    if (!bytes)
+      return "--capture-quota must be BYTES or a number with K, M, G or T (e.g. 512M), not '" +
+             raw.captureQuota + "'";
+    o.captureQuota = *bytes;
+  }
   if (o.process > 0 && o.join.empty())
     return "serve --process " + std::to_string(o.process) +
            " needs --join HOST:PORT: the head of the wall it joins";
@@ -167,7 +174,7 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
     return fail("relay comes first: dfbwall relay --listen [ADDR:]PORT --wall HOST:PORT");
   o.serve = cli.serve->parsed();
   const std::string problem =
-      o.serve ? serveProblem(o)
+      o.serve ? serveProblem(o, raw)
               : renderJobProblem(o, raw, cli.root.get_option("--ghost")->count() > 0);
   return problem.empty() ? -1 : fail(problem);
 }

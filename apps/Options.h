@@ -56,11 +56,13 @@ struct Options {
   // The wall as a service. `dfbwall serve`: these processes are the wall of `wall`, listening
   // for render jobs on `listen`. `--connect`: this job renders for such a wall.
   bool serve = false;
-  std::string listen;            // serve, the head: [ADDR:]PORT
-  int process = -1;              // serve --process N: this is the layout's process N, alone
-  std::string join;              // serve --join HOST:PORT: the head a process N > 0 joins
-  std::string connect;           // HOST:PORT of a serving wall; empty: none
-  std::string token;             // serve: required from jobs; connect: what to present
+  std::string listen;       // serve, the head: [ADDR:]PORT
+  int process = -1;         // serve --process N: this is the layout's process N, alone
+  std::string join;         // serve --join HOST:PORT: the head a process N > 0 joins
+  std::string connect;      // HOST:PORT of a serving wall; empty: none
+  std::string token;        // serve: required from jobs; connect: what to present
+  std::string captureRoot;  // serve: jobs' captures only beneath it; empty: none taken
+  std::uint64_t captureQuota = std::uint64_t(1) << 30;  // serve: bytes per job and process
   std::string codec = "snappy";  // connect: raw | snappy | jpeg[:QUALITY[:SUBSAMPLING]]
   bool wait = false;             // connect: queue behind a connected job instead of failing
 

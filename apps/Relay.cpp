@@ -6,6 +6,7 @@
 #include "apps/Options.h"
 #include "apps/Run.h"
 #include "apps/StopSignals.h"
+#include "base/OutputFile.h"
 #include "wall/service/relay/Relay.h"
 
 namespace app {
@@ -15,9 +16,10 @@ int runRelay(int argc, char** argv, StopSignals& signals) {
   if (const int code = parseRelayOptions(argc, argv, command); code >= 0) return code;
   const std::string &wall = command.wall, &statsFile = command.statsFile;
   FILE* stats = nullptr;
-  if (!statsFile.empty() && !(stats = std::fopen(statsFile.c_str(), "a"))) {
-    std::fprintf(stderr, "dfbwall relay: error: --stats %s: cannot open it for writing\n",
-                 statsFile.c_str());
+  try {
+    if (!statsFile.empty()) stats = base::openOutputStream(statsFile, true);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "dfbwall relay: error: --stats %s\n", e.what());
     return 1;
   }
   int stopSignal = 0;

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <thread>
 
@@ -18,6 +19,8 @@
 #include "apps/Run.h"
 #include "apps/StopSignals.h"
 #include "base/Collectives.h"
+#include "base/ConfinedFolder.h"
+#include "base/OutputFile.h"
 #include "runtime/SetupAgreement.h"
 #include "wall/display/DisplayPresenters.h"
 #include "wall/layout/Ranks.h"
@@ -137,8 +140,19 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
   std::string problem = checkStart(o, worldSize, process, alone, layout);
   FILE* stats = nullptr;
   if (problem.empty() && process == 0 && !o.statsFile.empty()) {
-    stats = std::fopen(o.statsFile.c_str(), "a");
-    if (!stats) problem = "--stats " + o.statsFile + ": cannot open it for writing";
+    try {
+      stats = base::openOutputStream(o.statsFile, true);
+    } catch (const std::exception& e) {
+      problem = std::string("--stats ") + e.what();
+    }
+  }
+  std::shared_ptr<const base::ConfinedFolder> captureRoot;
+  if (problem.empty() && !o.captureRoot.empty()) {
+    try {
+      captureRoot = std::make_shared<const base::ConfinedFolder>(o.captureRoot, "the capture root");
+    } catch (const std::exception& e) {
+      problem = std::string("--capture-root ") + e.what();
+    }
   }
   if (alone && !problem.empty()) {
     std::fprintf(stderr, "dfbwall: error: %s\n", problem.c_str());
@@ -155,6 +169,8 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
     const auto presenters = wall::makeDisplayPresenters(*layout, process, o.offscreen);
     wall::service::ServiceOptions service =
         serviceOptions(o, process, alone, signals, stopSignal, stats);
+    service.captureRoot = captureRoot;
+    service.captureQuota = o.captureQuota;
     std::optional<wall::service::WallService> wallService;
     if (process == 0) {
       try {

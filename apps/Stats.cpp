@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "base/Error.h"
+#include "base/OutputFile.h"
 
 namespace app {
 namespace {
@@ -90,9 +91,7 @@ double LogHistogram::mad() const {
 }
 
 StatsStream::StatsStream(const std::string& path) : path_(path) {
-  fd_ = open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
-  if (fd_ < 0)
-    throw base::Error(path + ": cannot create the statistics file: " + std::strerror(errno));
+  fd_ = base::openOutputFile(path, false).release();  // throws base::Error naming the path
 }
 
 StatsStream::~StatsStream() {

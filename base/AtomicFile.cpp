@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <random>
 #include <system_error>
 
 #include "base/Error.h"
@@ -14,34 +15,63 @@
 namespace base {
 namespace {
 
-std::string temporaryPattern(const std::string& path) {
-  const std::filesystem::path target(path);
+// ".NAME." and six random letters or digits, as mkstemp would (mkstemp cannot take a folder fd
+// nor a mode).
+std::string temporaryName(const std::string& name) {
+  static const char kLetters[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789";
+  thread_local std::mt19937_64 random{std::random_device{}()};
+  std::uniform_int_distribution<std::size_t> pick(0, sizeof kLetters - 2);
   // Appended, not "." + string: GCC 12 at -O3 warns falsely (-Wrestrict) about the latter.
-  std::string name = ".";
-  name += target.filename().string();
-  name += ".XXXXXX";
-  return (target.parent_path() / name).string();
+  std::string temporary = ".";
+  temporary += name;
+  temporary += '.';
+  for (int i = 0; i < 6; ++i) temporary += kLetters[pick(random)];
+  return temporary;
 }
 
 }  // namespace
 
-AtomicFile::AtomicFile(const std::string& path) : path_(path), temporary_(temporaryPattern(path)) {
-  const int fd = mkstemp(temporary_.data());
-  if (fd < 0) throw Error(path_ + ": cannot create a temporary file: " + std::strerror(errno));
-  fchmod(fd, 0644);  // mkstemp makes it 0600; outputs are for other users too
+AtomicFile::AtomicFile(const std::string& path) : shown_(path) {
+  const std::filesystem::path target(path);
+  name_ = target.filename().string();
+  const std::string folder = target.parent_path().string();
+  folder_ = FileDescriptor(
+      open(folder.empty() ? "." : folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+  if (!folder_.valid())
+    throw Error(shown_ + ": cannot create a temporary file: " + std::strerror(errno));
+  createTemporary();
+}
+
+AtomicFile::AtomicFile(int folder, const std::string& name, const std::string& shownPath)
+    : folder_(fcntl(folder, F_DUPFD_CLOEXEC, 0)), name_(name), shown_(shownPath) {
+  if (!folder_.valid())
+    throw Error(shown_ + ": cannot create a temporary file: " + std::strerror(errno));
+  createTemporary();
+}
+
+void AtomicFile::createTemporary() {
+  int fd = -1;
+  for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
+    temporary_ = temporaryName(name_);
+    // 0666: the umask decides who else may read the output. O_EXCL never follows a link.
+    fd = openat(folder_.get(), temporary_.c_str(),
+                O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    if (fd < 0 && errno != EEXIST) break;
+  }
+  if (fd < 0) throw Error(shown_ + ": cannot create a temporary file: " + std::strerror(errno));
   file_ = fdopen(fd, "wb");
   if (!file_) {
     const int error = errno;
     close(fd);
-    unlink(temporary_.c_str());
-    throw Error(path_ + ": cannot open a temporary file: " + std::strerror(error));
+    unlinkat(folder_.get(), temporary_.c_str(), 0);
+    throw Error(shown_ + ": cannot open a temporary file: " + std::strerror(error));
   }
 }
 
 AtomicFile::~AtomicFile() {
   if (committed_) return;
   if (file_) std::fclose(file_);
-  unlink(temporary_.c_str());
+  unlinkat(folder_.get(), temporary_.c_str(), 0);
 }
 
 void AtomicFile::commit() {
@@ -50,19 +80,22 @@ void AtomicFile::commit() {
   if (!error && fsync(fileno(file_)) != 0) error = errno;
   if (std::fclose(file_) != 0 && !error) error = errno;
   file_ = nullptr;
-  if (!error && std::rename(temporary_.c_str(), path_.c_str()) != 0) error = errno;
-  if (error) {
-    unlink(temporary_.c_str());
-    throw Error(path_ + ": cannot write: " + std::strerror(error));
+  // A link planted at the target's name is refused rather than replaced: someone put it there to
+  // send this output elsewhere, and the operator should hear of it.
+  struct stat existing {};
+  const bool link = !error &&
+                    fstatat(folder_.get(), name_.c_str(), &existing, AT_SYMLINK_NOFOLLOW) == 0 &&
+                    S_ISLNK(existing.st_mode);
+  if (!error && !link &&
+      renameat(folder_.get(), temporary_.c_str(), folder_.get(), name_.c_str()) != 0)
+    error = errno;
+  if (error || link) {
+    unlinkat(folder_.get(), temporary_.c_str(), 0);
+    throw Error(shown_ + (link ? ": is a symbolic link; outputs never follow or replace one"
+                               : std::string(": cannot write: ") + std::strerror(error)));
   }
   committed_ = true;
-  // The rename itself is durable once the folder is.
-  const std::string folder = std::filesystem::path(path_).parent_path().string();
-  const int dir = open(folder.empty() ? "." : folder.c_str(), O_RDONLY | O_DIRECTORY);
-  if (dir >= 0) {
-    fsync(dir);
-    close(dir);
-  }
+  fsync(folder_.get());  // the rename itself is durable once the folder is
 }
 
 std::string checkWritableFolder(const std::string& folder) {

@@ -39,7 +39,8 @@ service_pid=""
 service_start() {
   local state=$1 port=$2 out=$3
   "$state/wall-mpirun" "$dfbwall" serve --wall "$service_wall" --listen "0.0.0.0:$port" --offscreen \
-    --timeout 30 --token "$service_token" --stats "$out.jsonl" >"$out.out" 2>"$out.err" &
+    --timeout 30 --token "$service_token" --stats "$out.jsonl" --capture-root "$work" \
+    >"$out.out" 2>"$out.err" &
   service_pid=$!
   local i
   for i in $(seq 300); do

@@ -267,7 +267,7 @@ case "$scenario" in
     token=$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')
     "$CLUSTER" mpirun-hosts "${wallHosts[@]}" --id "$id" -- "$DFBWALL" serve --wall "$layout" \
       --listen "0.0.0.0:$port" --offscreen --timeout $((5 * ${DFBWALL_TIME_SCALE:-1})) --token "$token" --stats "$work/serve.jsonl" \
-      >"$work/serve.out" 2>"$work/serve.err" &
+      --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
     serve=$!
     for _ in $(seq 200); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
     grep -qx "dfbwall: wall service on $address:$port  token: $token" "$work/serve.out" \
@@ -384,7 +384,7 @@ case "$scenario" in
     port=7000
     token=$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')
     "$CLUSTER" mpirun-hosts "${wallHosts[@]}" --id "$id" -- "$DFBWALL" serve --wall "$layout" \
-      --listen "0.0.0.0:$port" --offscreen --timeout 5 --token "$token" \
+      --listen "0.0.0.0:$port" --offscreen --timeout 5 --token "$token" --capture-root "$work" \
       >"$work/serve.out" 2>"$work/serve.err" &
     serve=$!
     "$CLUSTER" exec gateway1 --id "$id" -- "$DFBWALL" relay --listen "$gatewayRender:$port" \
@@ -443,7 +443,7 @@ case "$scenario" in
     token=$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')
     OMPI_MCA_orte_enable_recovery=1 "$CLUSTER" mpirun-hosts wall1 wall2 --id "$id" -- "$DFBWALL" serve \
       --wall "$layout" --listen "0.0.0.0:$port" --offscreen --timeout $timeout --token "$token" \
-      --stats "$work/serve.jsonl" >"$work/serve.out" 2>"$work/serve.err" &
+      --stats "$work/serve.jsonl" --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
     serve=$!
     for _ in $(seq 200); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
     grep -q "wall service on $address:$port" "$work/serve.out" || fail "serve did not start on wall1"
@@ -480,7 +480,7 @@ case "$scenario" in
     lost 3 "$(now)" r0c0 r0c1 r1c0
     dead=$(latest r1c1)
     ip netns exec "dfbw$id-wall2" unshare --uts sh -c "hostname wall2; exec $DFBWALL serve \
-      --wall $layout --process 3 --join $address:$port --token $token --offscreen --timeout $timeout" \
+      --wall $layout --process 3 --join $address:$port --token $token --offscreen --timeout $timeout --capture-root $work" \
       >"$work/restarted.out" 2>"$work/restarted.err" &
     restarted=$!
     t0=$(now)

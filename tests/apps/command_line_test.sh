@@ -45,7 +45,7 @@ serve_command='Wall: --wall --offscreen
 Network and security: --listen --process --join --token
 Throughput: --frames-in-flight --handler-threads
 Failure handling: --timeout
-Output: --stats
+Output: --stats --capture-root --capture-quota
 Help: --help'
 relay_command='Network: --listen --wall
 Failure handling: --timeout
@@ -139,7 +139,8 @@ mpi -np 1 "$DFBWALL" --scene builtin:spheres --renderer primary --size 32x24 --s
 [ -s "$work/job.png" ] || fail "the image run wrote no image"
 
 "$DFBWALL" serve --wall "$layout" --process 0 --listen 127.0.0.1:0 --offscreen --timeout 10 \
-  --frames-in-flight 2 --handler-threads 1 --stats "$work/serve.jsonl" >"$work/serve.out" 2>"$work/serve.err" &
+  --frames-in-flight 2 --handler-threads 1 --stats "$work/serve.jsonl" --capture-root "$work" \
+  --capture-quota 64M >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
 waitFor 30 grep -q "wall service on" "$work/serve.out" || fail "serve did not start"
 wallAddress=$(sed -n 's/^dfbwall: wall service on \([^ ]*\).*/\1/p' "$work/serve.out")

@@ -35,7 +35,7 @@ timeout=3
 port=$(freePort) relayPort=$(freePort)
 "$MPIEXEC" --enable-recovery --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 -np 4 \
   "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" --offscreen --timeout $timeout \
-  >"$work/serve.out" 2>"$work/serve.err" &
+  --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
 "$DFBWALL" relay --listen "127.0.0.1:$relayPort" --wall "127.0.0.1:$port" --timeout $timeout \
   >"$work/relay.out" 2>"$work/relay.err" &
@@ -64,7 +64,7 @@ dead=$(latest r1c1)
 
 # 2. The documented restart of process 3: a new piece socket, which only the relay learns.
 "$DFBWALL" serve --wall "$layout" --process 3 --join "127.0.0.1:$port" --offscreen \
-  --timeout $timeout >"$work/restarted.out" 2>"$work/restarted.err" &
+  --timeout $timeout --capture-root "$work" >"$work/restarted.out" 2>"$work/restarted.err" &
 restarted=$!
 start=$(now)
 waitFor 10 advanced "$dead" r1c1 || fail "the restarted process 3 presents nothing through the relay"

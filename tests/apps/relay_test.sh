@@ -37,7 +37,7 @@ port=$((20000 + $$ % 20000)) relayPort=$((20000 + ($$ + 7) % 20000))
 token=relaytesttoken
 "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
   -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" \
-  --token "$token" --offscreen --timeout 5 >"$work/serve.out" 2>"$work/serve.err" &
+  --token "$token" --offscreen --timeout 5 --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
 "$DFBWALL" relay --listen "127.0.0.1:$relayPort" --wall "127.0.0.1:$port" --timeout 5 \
   --stats "$work/relay.jsonl" >"$work/relay.out" 2>"$work/relay.err" &

@@ -29,7 +29,8 @@ port=$((20000 + $$ % 20000))
 # Straight, not through mpi(): $! must be mpirun itself (it forwards SIGUSR1 to the wall).
 "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
   -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" \
-  --offscreen --timeout $((5 * ${DFBWALL_TIME_SCALE:-1})) --stats "$work/serve.jsonl" >"$work/serve.out" 2>"$work/serve.err" &
+  --offscreen --timeout $((5 * ${DFBWALL_TIME_SCALE:-1})) --stats "$work/serve.jsonl" --capture-root "$work" \
+  >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
 for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
 grep -q "wall service on 127.0.0.1:$port" "$work/serve.out" || fail "serve did not start"

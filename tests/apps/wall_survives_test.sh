@@ -37,7 +37,7 @@ timeout=3
 port=$(freePort) cport=$(freePort)
 "$MPIEXEC" --enable-recovery --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 -np 4 \
   "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" --offscreen --timeout $timeout \
-  --stats "$work/serve.jsonl" >"$work/serve.out" 2>"$work/serve.err" &
+  --stats "$work/serve.jsonl" --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
 waitFor 20 grep -q "wall service on" "$work/serve.out" || fail "serve did not start"
 "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 -np 2 "$DFBWALL" \
@@ -69,7 +69,7 @@ dead=$(latest r1c1)
 
 # 2. The documented restart of process 3.
 "$DFBWALL" serve --wall "$layout" --process 3 --join "127.0.0.1:$port" --offscreen \
-  --timeout $timeout >"$work/restarted.out" 2>"$work/restarted.err" &
+  --timeout $timeout --capture-root "$work" >"$work/restarted.out" 2>"$work/restarted.err" &
 restarted=$!
 start=$(now)
 waitFor 10 advanced "$dead" r1c1 || fail "the restarted process 3 presents nothing"

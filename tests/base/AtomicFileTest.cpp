@@ -3,8 +3,10 @@
 // left behind either way; failures name the path and the reason.
 #include "base/AtomicFile.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -67,9 +69,59 @@ TEST_F(AtomicFileTest, TheTargetAppearsWholeOnlyAtCommit) {
   }
   EXPECT_EQ(read(target), bytes);
   EXPECT_EQ(entries(), std::vector<std::string>{"stats.json"});
-  struct stat st {};
-  ASSERT_EQ(stat(target.c_str(), &st), 0);
-  EXPECT_EQ(st.st_mode & 0777, 0644u) << "outputs are for other users too";
+}
+
+// 0666 less the umask, as any file the user's programs create: the operator decides who reads.
+TEST_F(AtomicFileTest, TheModeIsWhatTheUmaskLeaves) {
+  for (const mode_t mask : {mode_t{022}, mode_t{027}, mode_t{077}}) {
+    const mode_t before = umask(mask);
+    const std::string target = path("out-" + std::to_string(mask) + ".png");
+    {
+      base::AtomicFile file(target);
+      write(file, "bytes");
+      file.commit();
+    }
+    umask(before);
+    struct stat st {};
+    ASSERT_EQ(stat(target.c_str(), &st), 0);
+    EXPECT_EQ(st.st_mode & 0777, 0666u & ~mask) << "umask " << std::oct << mask;
+  }
+}
+
+// A link planted at the target's name would send the output wherever it points: it is an error,
+// and neither the link nor what it points to changes.
+TEST_F(AtomicFileTest, ALinkAtTheTargetsNameIsRefusedNotFollowed) {
+  const std::string victim = path("victim.txt");
+  { std::ofstream(victim) << "precious"; }
+  const std::string target = path("frame.png");
+  fs::create_symlink(victim, target);
+  base::AtomicFile file(target);
+  write(file, "attacker's choice");
+  try {
+    file.commit();
+    ADD_FAILURE() << "committed through a symbolic link";
+  } catch (const base::Error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              target + ": is a symbolic link; outputs never follow or replace one");
+  }
+  EXPECT_EQ(read(victim), "precious");
+  EXPECT_TRUE(fs::is_symlink(target));
+  EXPECT_EQ(entries(), (std::vector<std::string>{"frame.png", "victim.txt"}));
+}
+
+// The folder-descriptor form writes into the folder it was given, whatever its path is later.
+TEST_F(AtomicFileTest, AFolderDescriptorAndANameWriteThere) {
+  fs::create_directories(folder_ / "sub");
+  const int at = open((folder_ / "sub").c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  ASSERT_GE(at, 0);
+  fs::rename(folder_ / "sub", folder_ / "moved");
+  {
+    base::AtomicFile file(at, "x.txt", "shown/x.txt");
+    write(file, "in the folder held open");
+    file.commit();
+  }
+  close(at);
+  EXPECT_EQ(read(path("moved/x.txt")), "in the folder held open");
 }
 
 TEST_F(AtomicFileTest, AnExistingFileKeepsItsBytesUntilCommitThenHasOnlyTheNewOnes) {

@@ -39,7 +39,7 @@ cmp "$work/one.png" "$work/three.png"
 # them simulating and rendering, the pieces straight to the wall's 4 processes.
 port=$((20000 + ($$ + 7) % 20000))
 "$MPIEXEC" -np 4 "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" --offscreen \
-  --timeout 20 >"$work/serve.out" 2>"$work/serve.err" &
+  --timeout 20 --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
 trap 'kill -9 $serve 2>/dev/null || true; rm -rf "$work"' EXIT
 for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done

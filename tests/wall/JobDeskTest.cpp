@@ -372,6 +372,23 @@ TEST_F(JobDeskTest, AProcessThatCannotStartAJobRefusesIt) {
   EXPECT_EQ(jobs.state(), State::Idle);
 }
 
+// The head cannot write the capture of the job's last frame (its quota spent) after a member was
+// done with that frame: the job, which waits for the frame's credit, is told why.
+TEST_F(JobDeskTest, AFailureAfterAnotherProcessWasDoneStillReachesTheJob) {
+  run("job-a", "render1", t0);
+  jobs.answer(1, answer(Command::Done, 2, 100), t0);
+  EXPECT_EQ(jobs.state(), State::Ending);
+  const Actions failed = jobs.answer(0, answer(Command::Failed, 0, 0, "capture quota"), t0);
+  const auto ended = replies(failed, Kind::Ended);
+  ASSERT_EQ(ended.size(), 1u);
+  EXPECT_EQ(ended[0].peer, "job-a");
+  EXPECT_EQ(textOf(ended[0]), "capture quota");
+  jobs.answer(0, answer(Command::Done, 1, 100, "capture quota"), t0);
+  const auto job = records(jobs.answer(2, answer(Command::Done, 2, 100), t0));
+  EXPECT_EQ(job.at(0)["ended"], "capture quota");
+  EXPECT_EQ(jobs.state(), State::Idle);
+}
+
 TEST_F(JobDeskTest, ABarrierWithAnotherValueCountDropsTheProcess) {
   run("job-a", "render1", t0);
   jobs.arrive(0, jobs.session(), 1, {1, 2}, t0);

@@ -1,11 +1,15 @@
 #include "wall/display/Capture.h"
 
+#include <fcntl.h>
+
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <system_error>
 
 #include "base/AtomicFile.h"
-#include "base/Error.h"
+#include "base/MemoryBudget.h"
 #include "wall/image/Png.h"
 
 namespace wall {
@@ -28,15 +32,59 @@ std::string wallPreviewPath(const std::string& dir, std::uint32_t frameId) {
   return (std::filesystem::path(dir) / frameName("wall", frameId)).string();
 }
 
+CaptureWriter::CaptureWriter(std::string dir) : dir_(std::move(dir)) {}
+
+CaptureWriter::CaptureWriter(std::shared_ptr<const base::ConfinedFolder> root, std::string relative,
+                             std::uint64_t quota)
+    : dir_(std::move(relative)), root_(std::move(root)), quota_(quota) {}
+
+std::string CaptureWriter::writeDisplay(const Layout& layout, int display, std::uint32_t frameId,
+                                        const std::uint32_t* rgba8) {
+  const Display& d = layout.displays.at(static_cast<size_t>(display));
+  return write(d.name, frameName("frame", frameId),
+               encodePng(rgba8, d.rect.width(), d.rect.height()));
+}
+
+std::string CaptureWriter::writeWallPreview(std::uint32_t frameId, const Image& canvas) {
+  return write({}, frameName("wall", frameId), encodePng(canvas));
+}
+
+std::string CaptureWriter::write(const std::string& sub, const std::string& name,
+                                 const std::string& bytes) {
+  const std::filesystem::path folder = std::filesystem::path(dir_) / sub;
+  const std::string path =
+      ((root_ ? std::filesystem::path(root_->path()) / folder : folder) / name).string();
+  if (quota_ > 0 && written_ + bytes.size() > quota_)
+    throw CaptureError(path + ": not written: the job's captures would pass the capture quota of " +
+                       base::byteText(quota_) + " on this wall process (serve --capture-quota)");
+  try {
+    base::FileDescriptor at;
+    if (root_) {
+      at = root_->openFolder(folder.string(), true);
+    } else {
+      std::error_code ec;
+      std::filesystem::create_directories(folder, ec);
+      if (ec) throw base::Error(path + ": cannot create the capture folder: " + ec.message());
+      at = base::FileDescriptor(open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+      if (!at.valid())
+        throw base::Error(path + ": cannot open the capture folder: " + std::strerror(errno));
+    }
+    base::AtomicFile file(at.get(), name, path);
+    if (std::fwrite(bytes.data(), 1, bytes.size(), file.stream()) != bytes.size())
+      throw base::Error(path + ": cannot write: " + std::strerror(errno));
+    file.commit();  // a full disk shows here
+  } catch (const CaptureError&) {
+    throw;
+  } catch (const base::Error& e) {
+    throw CaptureError(e.what());
+  }
+  written_ += bytes.size();
+  return path;
+}
+
 std::string writeDisplayCapture(const std::string& dir, const Layout& layout, int display,
                                 std::uint32_t frameId, const std::uint32_t* rgba8) {
-  const Display& d = layout.displays.at(static_cast<size_t>(display));
-  const std::string path = displayCapturePath(dir, d.name, frameId);
-  std::error_code ec;
-  std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
-  if (ec) throw base::Error(path + ": cannot create the capture folder: " + ec.message());
-  writePng(path, rgba8, d.rect.width(), d.rect.height());
-  return path;
+  return CaptureWriter(dir).writeDisplay(layout, display, frameId, rgba8);
 }
 
 std::string checkCaptureFolders(const std::string& dir, const Layout& layout, int process) {
@@ -46,6 +94,19 @@ std::string checkCaptureFolders(const std::string& dir, const Layout& layout, in
     if (std::string problem = base::checkWritableFolder(folder); !problem.empty()) return problem;
   }
   return {};
+}
+
+std::string resolveCaptureRequest(const base::ConfinedFolder* root, const std::string& request,
+                                  const Layout& layout, int process) {
+  if (!root)
+    throw base::Error(
+        "this wall writes no captures for jobs; its operator allows them beneath a "
+        "folder with serve --capture-root DIR");
+  std::string relative = root->resolve(request);
+  if (relative.empty()) relative = ".";
+  for (int d : layout.displaysOfProcess(process))
+    root->resolve(relative + "/" + layout.displays[static_cast<size_t>(d)].name);
+  return relative;
 }
 
 Image composeWallPreview(const Layout& layout,

@@ -7,8 +7,6 @@
 #include "base/BoundedWait.h"
 #include "base/Error.h"
 #include "base/Timing.h"
-#include "wall/display/Capture.h"
-#include "wall/image/Png.h"
 #include "wall/route/FrameCredits.h"
 #include "wall/route/PieceMessage.h"
 #include "wall/route/Routing.h"
@@ -35,6 +33,9 @@ WallNode::WallNode(const Layout& layout, WallPeers& peers, std::vector<Presenter
       process_(peers.process()),
       presenters_(std::move(presenters)),
       options_(std::move(options)),
+      captures_(options_.captureRoot ? CaptureWriter(options_.captureRoot, options_.captureDir,
+                                                     options_.captureQuota)
+                                     : CaptureWriter(options_.captureDir)),
       mine_(layout.displaysOfProcess(process_)) {
   const int process = process_;
   if (presenters_.size() != mine_.size())
@@ -485,17 +486,25 @@ void WallNode::finish() {
 }
 
 // Each process writes its displays' captures; wall process 0 also gathers every display's pixels
-// for the whole-wall preview. What is captured is what the presenter shows, read back.
+// for the whole-wall preview. What is captured is what the presenter shows, read back. A capture
+// this process cannot write still takes part in the gather (so the head does not wait for it in
+// vain), then throws CaptureError.
 void WallNode::capture(std::uint32_t frameId) {
   lastCaptured_ = frameId;
   std::vector<std::uint32_t> mine;
+  std::string failure;
   for (size_t i = 0; i < mine_.size(); ++i) {
     const Image shown = presenters_[i]->readBack();
-    writeDisplayCapture(options_.captureDir, layout_, mine_[i], frameId, shown.pixels.data());
+    try {
+      if (failure.empty()) captures_.writeDisplay(layout_, mine_[i], frameId, shown.pixels.data());
+    } catch (const CaptureError& e) {
+      failure = e.what();
+    }
     mine.insert(mine.end(), shown.pixels.begin(), shown.pixels.end());
   }
   const std::vector<std::vector<std::uint32_t>> all =
       peers_.gatherToFirst(frameId, std::move(mine), Clock::now() + options_.timeout);
+  if (!failure.empty()) throw CaptureError(failure);
   if (process_ != 0) return;
   std::vector<const std::uint32_t*> pixels(layout_.displays.size(), nullptr);
   for (int p = 0; p < static_cast<int>(all.size()); ++p) {
@@ -514,7 +523,7 @@ void WallNode::capture(std::uint32_t frameId) {
       at += static_cast<size_t>(layout_.displays[static_cast<size_t>(d)].rect.pixelCount());
     }
   }
-  writePng(wallPreviewPath(options_.captureDir, frameId), composeWallPreview(layout_, pixels));
+  captures_.writeWallPreview(frameId, composeWallPreview(layout_, pixels));
 }
 
 }  // namespace wall

@@ -32,7 +32,9 @@
 #include <utility>
 #include <vector>
 
+#include "base/ConfinedFolder.h"
 #include "messaging/Messenger.h"
+#include "wall/display/Capture.h"
 #include "wall/display/Presenter.h"
 #include "wall/display/WallPeers.h"
 #include "wall/image/Image.h"
@@ -43,8 +45,12 @@ namespace wall {
 struct WallNodeOptions {
   int tileSize = 64;
   bool gatherMode = false;  // one whole-display piece per frame from rank 0
-  std::string captureDir;   // empty: no captures
+  std::string captureDir;   // empty: no captures; with captureRoot, a folder beneath it
   int captureEvery = 0;     // capture every K-th frame; 0: only the last
+  // A service wall's job: captures only beneath this folder (captureDir as
+  // wall::resolveCaptureRequest returned it), at most captureQuota bytes (0: no limit).
+  std::shared_ptr<const base::ConfinedFolder> captureRoot;
+  std::uint64_t captureQuota = 0;
   std::uint32_t lastFrame = 0;
   // A service wall process that (re)joins a running job presents from this frame on; pieces of
   // earlier frames (sent before the job knew it was back) are dropped without a word. 0: not
@@ -193,6 +199,7 @@ class WallNode : public messaging::MessageHandler {
   int process_;
   std::vector<Presenter*> presenters_;
   WallNodeOptions options_;
+  CaptureWriter captures_;
   std::vector<int> mine_;               // display indices of this process
   std::vector<int> positionOfDisplay_;  // layout index -> position in mine_, or -1
   std::vector<int> expectedPieces_;     // by position in mine_

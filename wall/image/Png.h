@@ -14,8 +14,12 @@ inline void writePng(const std::string& path, const Image& image) {
   writePng(path, image.pixels.data(), image.width, image.height);
 }
 
-// The PNG file's bytes in memory (for a server to send), or throws base::Error.
-std::string encodePng(const Image& image);
+// The PNG file's bytes in memory (for a server to send, or a quota to weigh), or throws
+// base::Error.
+std::string encodePng(const std::uint32_t* rgba8, int width, int height);
+inline std::string encodePng(const Image& image) {
+  return encodePng(image.pixels.data(), image.width, image.height);
+}
 
 // Any PNG, converted to RGBA8.
 Image readPng(const std::string& path);

@@ -149,7 +149,15 @@ JobDesk::Actions JobDesk::answer(int p, const ServiceCommand& c, Clock::time_poi
       onReady(p, c);
       break;
     case Command::Failed:
-      if (state_ == State::Running) endJob(c.text);
+      if (state_ == State::Running) {
+        endJob(c.text);
+      } else if (state_ == State::Ending && failure_.empty()) {
+        // Past the job's last frame (a capture of it that could not be written, after another
+        // process was done): the job waits for that frame's credit, so it hears why instead.
+        failure_ = c.text;
+        reply(job_.peer, Kind::Ended, packText(Kind::Ended, job_.session, c.text));
+        log("dropping the job from " + job_.hello.host + ": " + c.text);
+      }
       break;
     case Command::Done:
       onDone(p, c);

@@ -9,7 +9,6 @@
 #include <random>
 #include <thread>
 
-#include "base/AtomicFile.h"
 #include "base/Error.h"
 #include "wall/display/Capture.h"
 #include "wall/display/IdleScreen.h"
@@ -207,13 +206,15 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   ServiceCommand answer;
   answer.header.session = start.header.session;
   answer.header.process = process;
-  const std::string& captureDir = start.text;
   // Anything a job asks for that this process cannot do refuses the job, never ends the wall.
-  std::string problem;
-  if (!captureDir.empty()) {
-    problem = checkCaptureFolders(captureDir, layout, process);
-    if (!problem.empty())
-      problem = "capture folder on wall process " + std::to_string(process) + ": " + problem;
+  // Nothing is made for it before every process said Ready: its capture folder is only checked.
+  std::string problem, captureDir;
+  if (!start.text.empty()) {
+    try {
+      captureDir = resolveCaptureRequest(options.captureRoot.get(), start.text, layout, process);
+    } catch (const std::exception& e) {
+      problem = "capture folder on wall process " + std::to_string(process) + ": " + e.what();
+    }
   }
   if (!problem.empty()) {
     answer.header.kind = Command::Ready;
@@ -227,6 +228,8 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   WallNodeOptions o;
   o.tileSize = static_cast<int>(start.header.tileSize);
   o.captureDir = captureDir;
+  o.captureRoot = options.captureRoot;
+  o.captureQuota = options.captureQuota;
   o.captureEvery = static_cast<int>(start.header.captureEvery);
   o.lastFrame = 0;  // the job says when it ends
   o.firstFrame = firstFrame;
@@ -282,6 +285,12 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
         }
       }
       job.finish();
+    } catch (const CaptureError& e) {
+      // The job asked for captures it cannot have (its quota spent, a link planted, a full
+      // disk): it ends, told why, rather than going on without them.
+      failure = std::string("wall process ") + std::to_string(process) + ": " + e.what();
+      log("ending the job: " + failure);
+      o.onAbandon(failure);
     } catch (const std::exception& e) {
       // A lost head (the barrier throws) or a broken display ends this process's part in the
       // job; the head drops it, the others go on.

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "base/ConfinedFolder.h"
 #include "wall/display/Presenter.h"
 #include "wall/layout/Layout.h"
 
@@ -31,6 +32,10 @@ struct ServiceOptions {
   std::chrono::milliseconds timeout{60000};  // a silent job or process is dropped after this long
   int handlerThreads = 0;                    // piece decoding threads per process (0: cores)
   int framesInFlight = 2;                    // the most a job is granted
+  // Where this process writes a job's captures (a folder the job names beneath it), and at most
+  // how many bytes per job; none: a job that asks for captures is refused.
+  std::shared_ptr<const base::ConfinedFolder> captureRoot;
+  std::uint64_t captureQuota = 0;
   // A stop asked of a process other than the head (a signal, a closed window) makes it leave
   // the wall alone (true: a process started on its own) or stop the whole wall (false).
   bool leaveAlone = false;
