@@ -239,7 +239,8 @@ struct Relay::Impl {
           if (r.processes[p].live) wallProcessAt(p, r.processes[p].endpoint);
         log("job from " + job.host + ": roster " + std::to_string(r.version) + ": " + r.why);
         body = toMessage(relayRoster(r, relayEndpoint()));
-      } else if (kind == Kind::Refused || kind == Kind::Ended) {
+      } else if ((kind == Kind::Refused && h.session == 0) || kind == Kind::Ended) {
+        // (A Refused with the job's session refuses one request of the job, which goes on.)
         const std::string text = parseText(bytesOf(body), body.size());
         log(std::string(kind == Kind::Refused ? "the wall refused the job from "
                                               : "the wall ended the job from ") +

@@ -209,8 +209,11 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   answer.header.process = process;
   const std::string& captureDir = start.text;
   // Anything a job asks for that this process cannot do refuses the job, never ends the wall.
-  std::string problem;
-  if (!captureDir.empty()) {
+  std::string problem = startProblem(start);
+  if (!problem.empty()) {
+    problem = "wall process " + std::to_string(process) + " refused the job's Start: " + problem;
+    log(problem);
+  } else if (!captureDir.empty()) {
     problem = checkCaptureFolders(captureDir, layout, process);
     if (!problem.empty())
       problem = "capture folder on wall process " + std::to_string(process) + ": " + problem;
