@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "base/Error.h"
+#include "wall/service/protocol/PeerText.h"
 #include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/Zmq.h"
 #include "wall/service/relay/RelayRoutes.h"
@@ -184,7 +185,7 @@ struct Relay::Impl {
       job->wall.connect(wallEndpoint);
       try {
         const std::string host = parseHello(bytesOf(body), body.size()).host;
-        if (!host.empty()) job->host = host;
+        if (!host.empty()) job->host = peerText(host);  // for the relay's log
       } catch (const std::exception&) {
         // The wall refuses it, saying why; the refusal comes back through.
       }
