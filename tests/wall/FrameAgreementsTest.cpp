@@ -12,10 +12,11 @@ using namespace std::chrono_literals;
 
 TEST(FrameAgreements, ABarrierWaitsForExactlyTheProcessesTakingPart) {
   FrameAgreements board(3);
+  const auto t = Clock::now();
   bool twoTakesPart = true;
   const auto takesPart = [&](int p, std::uint32_t) { return p != 2 || twoTakesPart; };
-  ASSERT_TRUE(board.arrive(0, 7, {1, -5}));
-  ASSERT_TRUE(board.arrive(1, 7, {3, -9}));
+  ASSERT_TRUE(board.arrive(0, 7, {1, -5}, t));
+  ASSERT_TRUE(board.arrive(1, 7, {3, -9}, t));
   EXPECT_TRUE(board.complete(takesPart).empty());  // process 2 is still awaited
   twoTakesPart = false;                            // dropped
   const auto released = board.complete(takesPart);
@@ -28,8 +29,31 @@ TEST(FrameAgreements, ABarrierWaitsForExactlyTheProcessesTakingPart) {
 
 TEST(FrameAgreements, AValueCountThatDiffersIsRefused) {
   FrameAgreements board(2);
-  ASSERT_TRUE(board.arrive(0, 1, {1, 2, 3}));
-  EXPECT_FALSE(board.arrive(1, 1, {1, 2}));
+  const auto t = Clock::now();
+  ASSERT_TRUE(board.arrive(0, 1, {1, 2, 3}, t));
+  EXPECT_FALSE(board.arrive(1, 1, {1, 2}, t));
+}
+
+TEST(FrameAgreements, ABarrierOpenPastTheDeadlineNamesWhoDidNotCome) {
+  FrameAgreements board(3);
+  bool twoTakesPart = true;
+  const auto takesPart = [&](int p, std::uint32_t) { return p != 2 || twoTakesPart; };
+  const auto t = Clock::now();
+  ASSERT_TRUE(board.arrive(0, 4, {1}, t));
+  ASSERT_TRUE(board.arrive(1, 4, {1}, t + 1s));  // the deadline counts from the first arrival
+  ASSERT_TRUE(board.arrive(0, 5, {1}, t + 2s));
+  EXPECT_TRUE(board.overdue(takesPart, t).empty());  // not open before t
+  const auto late = board.overdue(takesPart, t + 1500ms);
+  ASSERT_EQ(late.size(), 1u);
+  EXPECT_EQ(late[0].frameId, 4u);
+  EXPECT_EQ(late[0].missing, std::vector<int>{2});
+  const auto both = board.overdue(takesPart, t + 3s);
+  ASSERT_EQ(both.size(), 2u);
+  EXPECT_EQ(both[1].missing, (std::vector<int>{1, 2}));
+  twoTakesPart = false;  // dropped: frame 4 completes, frame 5 still waits for process 1
+  EXPECT_EQ(board.complete(takesPart).size(), 1u);
+  EXPECT_EQ(board.open(), 1u);
+  EXPECT_EQ(board.overdue(takesPart, t + 3s).at(0).missing, std::vector<int>{1});
 }
 
 TEST(FrameAgreements, AGatherCompletesWithEveryoneOrAtItsDeadlineWithGaps) {

@@ -441,5 +441,116 @@ TEST_F(JobDeskTest, JobRecordsAreJsonWhateverTheHostSends) {
   EXPECT_EQ(bad[0]["host"], "bad\xEF\xBF\xBD\"host\n");
 }
 
+TEST_F(JobDeskTest, AProcessThatBeatsButNeverComesToABarrierIsDroppedAtTheTimeout) {
+  run("job-a", "render1", t0);
+  const std::uint64_t session = jobs.session();
+  jobs.presented(session, 1, 0);
+  jobs.arrive(0, session, 2, {1}, t0 + 10ms);
+  jobs.arrive(1, session, 2, {1}, t0 + 20ms);
+  // Process 2 beats all along: not silent, yet never arrives. The job is alive.
+  members.heard(2, t0 + kTimeout);
+  jobs.message({"job-a", Kind::Keepalive, session, {}, {}}, t0 + 500ms);
+  EXPECT_TRUE(only<JobDesk::Drop>(jobs.tick(t0 + 10ms + kTimeout)).empty());
+  const auto drop = only<JobDesk::Drop>(jobs.tick(t0 + 11ms + kTimeout));
+  ASSERT_EQ(drop.size(), 1u);
+  EXPECT_EQ(drop[0].process, 2);
+  EXPECT_EQ(drop[0].why,
+            "it did not come to the swap barrier of frame 2 within 600 ms of the others");
+  // The desk drops it: the others' frame goes on.
+  EXPECT_EQ(only<JobDesk::Release>(lose(2, drop[0].why, t0 + 11ms + kTimeout)).size(), 2u);
+}
+
+TEST_F(JobDeskTest, ABarrierHeldUpByAJobThatDiedIsTheJobsTimeoutsToEnd) {
+  run("job-a", "render1", t0);
+  const std::uint64_t session = jobs.session();
+  jobs.message({"job-a", Kind::Keepalive, session, {}, {}}, t0 + 100ms);
+  jobs.arrive(0, session, 1, {1}, t0 + 50ms);  // the job died before process 2 had its pieces
+  jobs.arrive(1, session, 1, {1}, t0 + 50ms);
+  members.heard(2, t0 + kTimeout);
+  EXPECT_TRUE(only<JobDesk::Drop>(jobs.tick(t0 + 51ms + kTimeout)).empty());
+  const Actions silent = jobs.tick(t0 + 101ms + kTimeout);
+  EXPECT_TRUE(only<JobDesk::Drop>(silent).empty());
+  EXPECT_EQ(given(silent, Command::Abort), (std::vector<int>{0, 1, 2}));  // they give it up
+}
+
+TEST_F(JobDeskTest, TheHeadsOwnProcessIsNeverDroppedAtABarrier) {
+  run("job-a", "render1", t0);
+  jobs.arrive(1, jobs.session(), 1, {1}, t0);
+  jobs.arrive(2, jobs.session(), 1, {1}, t0);
+  EXPECT_TRUE(only<JobDesk::Drop>(jobs.tick(t0 + 10 * kTimeout)).empty());
+}
+
+TEST_F(JobDeskTest, ABarrierOutsideTheFramesInFlightDropsItsProcess) {
+  run("job-a", "render1", t0);
+  const std::uint64_t session = jobs.session();
+  for (std::uint32_t f = 1; f <= 3; ++f) jobs.presented(session, f, 0);
+  // Granted 2 frames in flight: frames 4..7 (framesAheadFor) may be on their way.
+  EXPECT_TRUE(only<JobDesk::Drop>(jobs.arrive(1, session, 7, {1}, t0)).empty());
+  auto drop = only<JobDesk::Drop>(jobs.arrive(2, session, 1000000, {1}, t0));
+  ASSERT_EQ(drop.size(), 1u);
+  EXPECT_EQ(drop[0].why,
+            "its swap barrier of frame 1000000 is outside the frames in flight (4..7)");
+  drop = only<JobDesk::Drop>(jobs.arrive(2, session, 3, {1}, t0));  // presented already
+  ASSERT_EQ(drop.size(), 1u);
+  EXPECT_EQ(drop[0].process, 2);
+}
+
+TEST_F(JobDeskTest, CaptureRequestsAreBoundedInNumberAndFrameRange) {
+  run("job-a", "render1", t0);
+  const std::uint64_t session = jobs.session();
+  const auto capture = [&](std::uint64_t frame, std::int64_t sequence) {
+    return jobs.message({"job-a", Kind::Capture, session, {frame, sequence}, {}}, t0);
+  };
+  for (int i = 1; i <= static_cast<int>(JobDesk::kMaxPendingCaptures); ++i)
+    EXPECT_EQ(given(capture(2, i), Command::Capture), (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(jobs.pendingCaptures(), JobDesk::kMaxPendingCaptures);
+  Actions over = capture(2, 9);
+  EXPECT_TRUE(given(over, Command::Capture).empty());
+  auto refused = replies(over, Kind::Refused);
+  ASSERT_EQ(refused.size(), 1u);
+  EXPECT_EQ(refused[0].peer, "job-a");
+  EXPECT_EQ(parseHeader(refused[0].message.data(), refused[0].message.size()).session, session);
+  EXPECT_EQ(textOf(refused[0]),
+            "capture request refused: 8 captures wait for their frames already");
+  EXPECT_EQ(jobs.state(), State::Running);  // the job goes on
+
+  // Frame 2 presented: its captures are taken; far frames and bad sequences are refused.
+  jobs.presented(session, 2, 0);
+  EXPECT_EQ(jobs.pendingCaptures(), 0u);
+  EXPECT_EQ(textOf(replies(capture(1000000, 10), Kind::Refused).at(0)),
+            "capture request refused: frame 1000000 is not near the frames in flight (1..6)");
+  EXPECT_EQ(textOf(replies(capture(0, 10), Kind::Refused).at(0)),
+            "capture request refused: frame 0 is not near the frames in flight (1..6)");
+  EXPECT_EQ(textOf(replies(capture(3, 0), Kind::Refused).at(0)),
+            "capture request refused: sequence 0 (expected 1 or more)");
+  EXPECT_EQ(given(capture(1, 10), Command::Capture).size(), 3u);  // behind: taken at frame 3
+  EXPECT_EQ(jobs.pendingCaptures(), 1u);
+  jobs.presented(session, 3, 0);
+  EXPECT_EQ(jobs.pendingCaptures(), 0u);
+}
+
+TEST_F(JobDeskTest, ASecondHelloOnTheSameConnectionIsRefused) {
+  run("job-a", "render1", t0);
+  const auto again = replies(jobs.hello("job-a", helloFrom("render1", true), t0), Kind::Refused);
+  ASSERT_EQ(again.size(), 1u);
+  EXPECT_EQ(textOf(again[0]), "this connection has a job at the wall already");
+  jobs.hello("job-b", helloFrom("render2", true), t0);
+  EXPECT_EQ(replies(jobs.hello("job-b", helloFrom("render2", true), t0), Kind::Refused).size(), 1u);
+  EXPECT_EQ(jobs.queued(), 1u);
+  // A queued connection that sends garbage leaves the queue.
+  jobs.failed("job-b", "malformed", t0);
+  EXPECT_EQ(jobs.queued(), 0u);
+  EXPECT_EQ(jobs.state(), State::Running);
+}
+
+TEST_F(JobDeskTest, NamesAPeerGaveAreLoggedPrintableAndShort) {
+  Hello h = helloFrom("evil\nlost wall process 1" + std::string(200, 'x'));
+  h.token = "wrong";
+  const auto logged = only<JobDesk::Log>(jobs.hello("s1", h, t0));
+  ASSERT_EQ(logged.size(), 1u);
+  EXPECT_EQ(logged[0].line, "refused a job from evil\\nlost wall process 1" + std::string(56, 'x') +
+                                "... (224 bytes): wrong token");
+}
+
 }  // namespace
 }  // namespace wall::service

@@ -26,7 +26,9 @@
 #include "wall/image/Image.h"
 #include "wall/layout/Layout.h"
 #include "wall/service/protocol/Codec.h"
+#include "wall/service/protocol/PeerText.h"
 #include "wall/service/protocol/Protocol.h"
+#include "wall/service/protocol/ServiceCommands.h"
 
 namespace wall::service {
 namespace {
@@ -661,6 +663,45 @@ TEST(ProtocolHostile, HelloFieldsOutOfRange) {
   ASSERT_EQ(bytes[waitAt], std::byte{1});
   bytes[waitAt] = std::byte{2};
   EXPECT_ERROR_HAS(parseHello(bytes.data(), bytes.size()), "wait flag 2");
+}
+
+// A wall process checks the Start the head sends as the head checked the job's hello.
+TEST(ProtocolHostile, AStartIsCheckedAsTheHelloIs) {
+  ServiceCommand start;
+  start.header.kind = Command::Start;
+  start.header.session = 7;
+  start.header.a = 1;
+  start.header.tileSize = 64;
+  start.header.renderRanks = 2;
+  start.header.framesInFlight = 2;
+  EXPECT_EQ(startProblem(start), "");
+  const auto problem = [&](const std::function<void(CommandHeader&)>& change) {
+    ServiceCommand bad = start;
+    change(bad.header);
+    return startProblem(parseCommand(packCommand(bad)));
+  };
+  EXPECT_EQ(problem([](CommandHeader& h) { h.tileSize = 0; }), "tile size 0 (expected 4..1024)");
+  EXPECT_EQ(problem([](CommandHeader& h) { h.tileSize = 5000; }),
+            "tile size 5000 (expected 4..1024)");
+  EXPECT_EQ(problem([](CommandHeader& h) { h.renderRanks = 0; }),
+            "render ranks 0 (expected 1..1048576)");
+  EXPECT_EQ(problem([](CommandHeader& h) { h.framesInFlight = 0; }),
+            "frames in flight 0 (expected 1..16)");
+  EXPECT_EQ(problem([](CommandHeader& h) { h.codec = 9; }), "codec 9 (expected 0..2)");
+  EXPECT_EQ(problem([](CommandHeader& h) { h.captureEvery = 0xffffffffu; }),
+            "capture-every 4294967295 (expected 0..1073741824)");
+  EXPECT_EQ(problem([](CommandHeader& h) { h.a = -1; }), "first frame -1 (expected 0..4294967295)");
+  EXPECT_EQ(problem([](CommandHeader& h) { h.session = 0; }), "session 0");
+}
+
+TEST(ProtocolHostile, WhatAPeerSaysIsLoggedPrintableAndShort) {
+  EXPECT_EQ(peerText("wall2.lab"), "wall2.lab");
+  EXPECT_EQ(peerText("evil\nlost wall process 1\x1b[2J\xff"),
+            "evil\\nlost wall process 1\\x1b[2J\\xff");
+  EXPECT_EQ(peerText(std::string("a\0b\\", 4)), "a\\x00b\\\\");
+  const std::string longName(5000, 'x');
+  EXPECT_EQ(peerText(longName), std::string(80, 'x') + "... (5000 bytes)");
+  EXPECT_EQ(peerText(longName, 3), "xxx... (5000 bytes)");
 }
 
 // A directory packed from a layout no loader would accept.

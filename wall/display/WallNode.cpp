@@ -23,6 +23,8 @@ using base::nsBetween;
 constexpr size_t kUploadBatches = 8;
 // Values of the swap barrier's reduction (presentFrame).
 constexpr int kAgreed = 5;
+// Capture requests not captured yet that a node keeps.
+constexpr std::size_t kMaxCaptureAsks = 64;
 
 }  // namespace
 
@@ -250,6 +252,8 @@ std::uint32_t WallNode::waitForStart(Clock::time_point deadline) {
 
 void WallNode::requestCapture(std::uint32_t frameId, std::uint64_t sequence) {
   std::lock_guard lock(mutex_);
+  // Whoever asks bounds its requests (the service's head does); this bound is the node's own.
+  if (captureAsks_.size() >= kMaxCaptureAsks) return;
   captureAsks_.emplace(sequence, frameId);  // a sequence seen before changes nothing
 }
 

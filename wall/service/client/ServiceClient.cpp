@@ -176,6 +176,11 @@ void ServiceClient::run() {
             rosterVersion_ = roster.version;
             rosterBytes_.assign(bytesOf(m), bytesOf(m) + m.size());
           }
+        } else if (h.kind == static_cast<std::uint16_t>(Kind::Refused)) {
+          // A request of the job (a capture) the wall would not take: the job goes on.
+          std::fprintf(stderr, "dfbwall: the wall at %s: %s\n", address_.c_str(),
+                       parseText(bytesOf(m), m.size()).c_str());
+          std::fflush(stderr);
         } else if (h.kind == static_cast<std::uint16_t>(Kind::Ended)) {
           fail("the wall at " + address_ + " ended the job: " + parseText(bytesOf(m), m.size()));
         } else if (h.kind != static_cast<std::uint16_t>(Kind::Keepalive)) {

@@ -25,6 +25,23 @@ DirectoryProcess readProcess(Reader& r, std::uint32_t index) {
 
 }  // namespace
 
+std::string jobFieldsProblem(const JobFields& f) {
+  const auto outside = [](const char* field, std::uint32_t value, std::uint32_t low,
+                          std::uint32_t high) {
+    return field + (" " + std::to_string(value)) + " (expected " + std::to_string(low) + ".." +
+           std::to_string(high) + ")";
+  };
+  if (f.renderRanks < 1 || f.renderRanks > kMaxRanks)
+    return outside("render ranks", f.renderRanks, 1, kMaxRanks);
+  if (f.tileSize < 4 || f.tileSize > 1024) return outside("tile size", f.tileSize, 4, 1024);
+  if (f.codec > static_cast<std::uint32_t>(Codec::Jpeg))
+    return outside("codec", f.codec, 0, static_cast<std::uint32_t>(Codec::Jpeg));
+  if (f.framesInFlight < 1 || f.framesInFlight > 16)
+    return outside("frames in flight", f.framesInFlight, 1, 16);
+  if (f.captureEvery > (1u << 30)) return outside("capture-every", f.captureEvery, 0, 1u << 30);
+  return {};
+}
+
 messaging::Bytes packHello(const Hello& h) {
   Writer w(Kind::Hello, 0);
   w.text(h.token);
@@ -56,17 +73,14 @@ Hello parseHello(const std::byte* data, std::size_t size) {
   h.captureDir = r.text();
   h.captureEvery = r.get<std::uint32_t>();
   r.end();
-  if (h.renderRanks < 1 || h.renderRanks > kMaxRanks)
-    r.fail("render ranks " + std::to_string(h.renderRanks));
-  if (h.tileSize < 4 || h.tileSize > 1024) r.fail("tile size " + std::to_string(h.tileSize));
-  if (codec > static_cast<std::uint8_t>(Codec::Jpeg)) r.fail("codec " + std::to_string(codec));
+  if (const std::string problem =
+          jobFieldsProblem({h.renderRanks, h.tileSize, codec, h.framesInFlight, h.captureEvery});
+      !problem.empty())
+    r.fail(problem);
   if (quality < 1 || quality > 100) r.fail("JPEG quality " + std::to_string(quality));
   if (subsampling > static_cast<std::uint8_t>(ChromaSubsampling::S420))
     r.fail("chroma subsampling " + std::to_string(subsampling));
   if (wait > 1) r.fail("wait flag " + std::to_string(wait));
-  if (h.framesInFlight < 1 || h.framesInFlight > 16)
-    r.fail("frames in flight " + std::to_string(h.framesInFlight));
-  if (h.captureEvery > (1u << 30)) r.fail("capture-every " + std::to_string(h.captureEvery));
   h.codec.codec = static_cast<Codec>(codec);
   h.codec.jpegQuality = quality;
   h.codec.subsampling = static_cast<ChromaSubsampling>(subsampling);

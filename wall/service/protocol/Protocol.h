@@ -4,8 +4,8 @@
 //
 //  - render rank 0 <-> wall process 0, the wall's directory socket (`--listen`): Hello, then
 //    Directory | Refused | Queued; during the job Keepalive, Capture, Bye from the job and
-//    Presented (the credit for frames in flight), Roster (a wall process was lost or came back)
-//    and Ended (the wall ended the job) back;
+//    Presented (the credit for frames in flight), Roster (a wall process was lost or came back),
+//    Refused (a capture request it will not take) and Ended (the wall ended the job) back;
 //  - every render rank -> the wall processes its tiles touch, each process's piece socket (its
 //    endpoint is in the directory): one Batch per (render rank, display, frame) of pieces,
 //    encoded with the job's codec (wall/service/protocol/Codec.h).
@@ -80,6 +80,14 @@ struct Hello {
   std::uint32_t captureEvery = 0;
 };
 
+// The fields of a job that its hello carries and each wall process's Start repeats: the head
+// checks them in the hello, and every process again in its Start (it never trusts that the head
+// did). Empty when they are fine, else the first field that is wrong, with its range.
+struct JobFields {
+  std::uint32_t renderRanks = 1, tileSize = 64, codec = 0, framesInFlight = 2, captureEvery = 0;
+};
+std::string jobFieldsProblem(const JobFields& fields);
+
 struct DirectoryProcess {
   std::string endpoint;  // "tcp://HOST:PORT" of the process's piece socket
   bool live = true;      // false: the process is lost; pieces of its displays are not sent
@@ -111,7 +119,8 @@ struct Roster {
 messaging::Bytes packHello(const Hello& hello);
 messaging::Bytes packDirectory(const Directory& directory);
 messaging::Bytes packRoster(const Roster& roster);
-// Refused, Ended: a reason. Queued: the job's place in the queue as text.
+// Refused, Ended: a reason (a Refused with a job's session refuses one request of the job, a
+// capture, and the job goes on). Queued: the job's place in the queue as text.
 messaging::Bytes packText(Kind kind, std::uint64_t session, const std::string& text);
 // Keepalive (value unused), Bye (the last frame), Capture (frame, sequence in `second`),
 // Presented (frame, completeNs in `second`).

@@ -31,4 +31,12 @@ ServiceCommand parseCommand(const messaging::Bytes& body) {
   return c;
 }
 
+std::string startProblem(const ServiceCommand& start) {
+  const CommandHeader& h = start.header;
+  if (h.session == 0) return "session 0";
+  if (h.a < 0 || h.a > std::int64_t{0xffffffff})
+    return "first frame " + std::to_string(h.a) + " (expected 0..4294967295)";
+  return jobFieldsProblem({h.renderRanks, h.tileSize, h.codec, h.framesInFlight, h.captureEvery});
+}
+
 }  // namespace wall::service

@@ -44,5 +44,9 @@ struct ServiceCommand {
 messaging::Bytes packCommand(const ServiceCommand& command);
 // Throws base::Error on a body that is not a command.
 ServiceCommand parseCommand(const messaging::Bytes& body);
+// What is wrong with a Start (a session, its first frame, the job's fields as a hello's: see
+// jobFieldsProblem); empty when nothing is. A wall process checks its Start before it builds
+// anything from it.
+std::string startProblem(const ServiceCommand& start);
 
 }  // namespace wall::service

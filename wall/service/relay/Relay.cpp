@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "base/Error.h"
+#include "wall/service/protocol/PeerText.h"
 #include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/Zmq.h"
 #include "wall/service/relay/RelayRoutes.h"
@@ -184,7 +185,7 @@ struct Relay::Impl {
       job->wall.connect(wallEndpoint);
       try {
         const std::string host = parseHello(bytesOf(body), body.size()).host;
-        if (!host.empty()) job->host = host;
+        if (!host.empty()) job->host = peerText(host);  // for the relay's log
       } catch (const std::exception&) {
         // The wall refuses it, saying why; the refusal comes back through.
       }
@@ -239,7 +240,8 @@ struct Relay::Impl {
           if (r.processes[p].live) wallProcessAt(p, r.processes[p].endpoint);
         log("job from " + job.host + ": roster " + std::to_string(r.version) + ": " + r.why);
         body = toMessage(relayRoster(r, relayEndpoint()));
-      } else if (kind == Kind::Refused || kind == Kind::Ended) {
+      } else if ((kind == Kind::Refused && h.session == 0) || kind == Kind::Ended) {
+        // (A Refused with the job's session refuses one request of the job, which goes on.)
         const std::string text = parseText(bytesOf(body), body.size());
         log(std::string(kind == Kind::Refused ? "the wall refused the job from "
                                               : "the wall ended the job from ") +

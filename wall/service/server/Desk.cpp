@@ -10,9 +10,12 @@
 #include <random>
 #include <set>
 #include <thread>
+#include <unordered_map>
+#include <unordered_set>
 
 #include "base/Error.h"
 #include "wall/service/protocol/LinkMessages.h"
+#include "wall/service/protocol/PeerText.h"
 #include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/Zmq.h"
 #include "wall/service/server/JobDesk.h"
@@ -24,6 +27,17 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kMaxLogged = 1024;  // lines about strangers between two jobs
 constexpr auto kTick = std::chrono::milliseconds(100);
+// Messages taken off the directory socket in one turn of the loop: then the desk's own work
+// (commands of the head's process, beats, silences, deadlines) runs, however many wait.
+constexpr int kMaxBurst = 256;
+// Connections whose messages are ignored (one sent something malformed), and connections whose
+// hellos are counted: the oldest forgotten past these.
+constexpr std::size_t kMaxBannedPeers = 4096;
+constexpr std::size_t kMaxCountedPeers = 4096;
+// A job says hello once per connection; past this a connection's messages are ignored.
+constexpr int kMaxHellosPerPeer = 3;
+// Parse errors quote what the peer sent.
+constexpr std::size_t kMaxLoggedError = 200;
 
 std::uint64_t randomId() {
   std::random_device device;
@@ -77,6 +91,12 @@ struct Desk::Impl {
   JobDesk jobs;
   std::set<std::string> logged;
   bool finished = false;
+  // Connections the desk no longer listens to (FIFO, bounded), hellos per connection, and
+  // connections a message could not be sent to this turn (why).
+  std::unordered_set<std::string> banned;
+  std::deque<std::string> bannedOrder;
+  std::unordered_map<std::string, int> hellos;
+  std::vector<std::pair<std::string, std::string>> unreachable;
 
   explicit Impl(Setup setup)
       : s(std::move(setup)),
@@ -85,7 +105,9 @@ struct Desk::Impl {
         members(membershipSetup(s), Clock::now()),
         jobs(jobSetup(s), members) {
     configureSocket(socket, static_cast<int>(s.options.timeout.count()));
-    socket.set(zmq::sockopt::router_mandatory, 0);
+    // A message the desk cannot hand to a connection (gone, or its queue full) is an error it
+    // sees, never a silent drop: a barrier release that does not go out loses that process.
+    socket.set(zmq::sockopt::router_mandatory, 1);
     absent = members.absent();
   }
 
@@ -104,10 +126,54 @@ struct Desk::Impl {
     if (logged.size() >= kMaxLogged || !logged.insert(peer + line).second) return;
     log(line);
   }
-  void reply(const std::string& peer, messaging::Bytes message) {
-    zmq::message_t id(peer.data(), peer.size());
-    socket.send(id, zmq::send_flags::sndmore | zmq::send_flags::dontwait);
-    socket.send(toMessage(std::move(message)), zmq::send_flags::dontwait);
+  // False when the message could not go out: the connection is gone or its queue is full.
+  // `mustArrive`: the desk then deals with that connection this turn (settleUnreachable).
+  bool reply(const std::string& peer, messaging::Bytes message, bool mustArrive = true) {
+    std::string why;
+    try {
+      zmq::message_t id(peer.data(), peer.size());
+      if (socket.send(id, zmq::send_flags::sndmore | zmq::send_flags::dontwait)) {
+        // Past the first part the router takes the rest of the message.
+        socket.send(toMessage(std::move(message)), zmq::send_flags::dontwait);
+        return true;
+      }
+      why = "its send queue is full";
+    } catch (const zmq::error_t& e) {
+      why = e.num() == EHOSTUNREACH ? std::string("it is no longer connected") : e.what();
+    }
+    if (mustArrive) unreachable.emplace_back(peer, why);
+    return false;
+  }
+  // A process the head cannot send to is lost; a job it cannot send to (its credits) ends.
+  void settleUnreachable() {
+    std::vector<std::pair<std::string, std::string>> now;
+    now.swap(unreachable);
+    for (const auto& [peer, why] : now) {
+      if (const int p = members.processOf(peer); p > 0)
+        drop(p, "the head could not send to it: " + why);
+      else
+        carry(jobs.failed(peer, "the wall could not send to the job: " + why, Clock::now()));
+    }
+  }
+  // A connection that sent something malformed: out of the desk's tables, and what it sends
+  // from now on is dropped unread (a ROUTER socket cannot close one connection; libzmq's
+  // heartbeats close it once the peer stops answering them).
+  void banish(const std::string& peer, const std::string& why) {
+    hellos.erase(peer);
+    carry(jobs.failed(peer, why, Clock::now()));
+    if (const int p = members.processOf(peer); p > 0) drop(p, why);
+    if (!banned.insert(peer).second) return;
+    bannedOrder.push_back(peer);
+    if (bannedOrder.size() > kMaxBannedPeers) {
+      banned.erase(bannedOrder.front());
+      bannedOrder.pop_front();
+    }
+  }
+  // The connection of the job whose credits must arrive (none: empty).
+  std::string jobPeer() const {
+    const JobDesk::State state = jobs.state();
+    return state == JobDesk::State::Idle || state == JobDesk::State::Closed ? std::string()
+                                                                            : jobs.peer();
   }
   void publishAbsent() {
     std::vector<int> now = members.absent();
@@ -129,7 +195,7 @@ struct Desk::Impl {
   }
   void carry(JobDesk::Actions actions) {
     const Overloaded carryOut{
-        [&](JobDesk::Reply& r) { reply(r.peer, std::move(r.message)); },
+        [&](JobDesk::Reply& r) { reply(r.peer, std::move(r.message), r.peer == jobPeer()); },
         [&](JobDesk::ToProcess& c) { sendTo(c.process, c.command); },
         [&](JobDesk::Release& r) { release(r); },
         [&](JobDesk::Gathered& g) {
@@ -161,7 +227,8 @@ struct Desk::Impl {
   void drop(int p, const std::string& why) {
     if (!members.drop(p)) return;
     publishAbsent();
-    reply(members.member(p).peer, packText(Kind::Dropped, 0, why));  // heard if it only hung
+    // Heard if it only hung; a link that cannot take it is gone already.
+    reply(members.member(p).peer, packText(Kind::Dropped, 0, why), false);
     carry(jobs.lost(p, why, Clock::now()));
   }
   void onJoin(const std::string& peer, const std::byte* data, size_t size) {
@@ -169,17 +236,18 @@ struct Desk::Impl {
     try {
       j = parseJoin(data, size);
     } catch (const std::exception& e) {
-      logOnce(peer, std::string("refused a wall process: ") + e.what());
-      reply(peer, packText(Kind::Refused, 0, e.what()));
+      logOnce(peer, "refused a wall process: " + peerText(e.what(), kMaxLoggedError));
+      reply(peer, packText(Kind::Refused, 0, e.what()), false);
+      banish(peer, e.what());
       return;
     }
     const Membership::Verdict verdict = members.check(j);
     const int p = static_cast<int>(j.process);
     const auto now = Clock::now();
     if (verdict.outcome == Membership::Verdict::Outcome::Refused) {
-      logOnce(peer, "refused wall process " + std::to_string(j.process) + " from " + j.host + ": " +
-                        verdict.problem);
-      reply(peer, packText(Kind::Refused, 0, verdict.problem));
+      logOnce(peer, "refused wall process " + std::to_string(j.process) + " from " +
+                        peerText(j.host) + ": " + verdict.problem);
+      reply(peer, packText(Kind::Refused, 0, verdict.problem), false);
       return;
     }
     if (verdict.outcome == Membership::Verdict::Outcome::Again) {  // it missed the welcome
@@ -200,7 +268,7 @@ struct Desk::Impl {
     const int p = members.processOf(peer);
     if (p < 0) {
       // A process the wall dropped, or that joined a head before this one: it must join again.
-      reply(peer, packText(Kind::Dropped, 0, "this wall process is not in the wall (now)"));
+      reply(peer, packText(Kind::Dropped, 0, "this wall process is not in the wall (now)"), false);
       return;
     }
     const auto now = Clock::now();
@@ -240,12 +308,16 @@ struct Desk::Impl {
                     size_t size) {
     const Kind kind = static_cast<Kind>(h.kind);
     if (kind == Kind::Hello) {
+      if (hellos.size() >= kMaxCountedPeers) hellos.clear();
+      if (++hellos[peer] > kMaxHellosPerPeer)
+        return banish(peer, "more than " + std::to_string(kMaxHellosPerPeer) + " hellos");
       Hello hello;
       try {
         hello = parseHello(data, size);
       } catch (const std::exception& e) {
-        log("refused a job: " + std::string(e.what()));
-        reply(peer, packText(Kind::Refused, 0, e.what()));
+        logOnce(peer, "refused a job: " + peerText(e.what(), kMaxLoggedError));
+        reply(peer, packText(Kind::Refused, 0, e.what()), false);
+        banish(peer, e.what());
         return;
       }
       return carry(jobs.hello(peer, hello, Clock::now()));
@@ -257,6 +329,7 @@ struct Desk::Impl {
       m.malformed = e.what();
     }
     carry(jobs.message(m, Clock::now()));
+    if (!m.malformed.empty()) banish(peer, m.malformed);
   }
 
   // ---- the thread ----
@@ -265,12 +338,14 @@ struct Desk::Impl {
     try {
       h = parseHeader(data, size);
     } catch (const std::exception& e) {
-      logOnce(peer, std::string("ignored a message on the directory port: ") + e.what());
+      logOnce(peer,
+              "ignored a message on the directory port: " + peerText(e.what(), kMaxLoggedError));
       // A dfbwall of another version learns why at once instead of at its timeout.
       MessageHeader mine;
       std::memcpy(&mine, data, std::min(size, sizeof mine));
       if (size >= sizeof mine && mine.magic == kMagic)
-        reply(peer, packText(Kind::Refused, 0, e.what()));
+        reply(peer, packText(Kind::Refused, 0, e.what()), false);
+      banish(peer, e.what());
       return;
     }
     const Kind kind = static_cast<Kind>(h.kind);
@@ -284,20 +359,28 @@ struct Desk::Impl {
     } catch (const std::exception& e) {
       // Nothing a client sends ends the wall; a failure handling it drops its job (or its
       // process) at most.
-      log(std::string("handling a message on the directory port: ") + e.what());
-      carry(jobs.failed(peer, e.what(), Clock::now()));
-      if (const int p = members.processOf(peer); p > 0) drop(p, e.what());
+      logOnce(peer,
+              "handling a message on the directory port: " + peerText(e.what(), kMaxLoggedError));
+      banish(peer, e.what());
     }
   }
   void receive() {
     zmq::message_t id, body;
-    while (socket.recv(id, zmq::recv_flags::dontwait)) {
+    for (int n = 0; n < kMaxBurst && socket.recv(id, zmq::recv_flags::dontwait); ++n) {
       if (!id.more() || !socket.recv(body, zmq::recv_flags::dontwait)) continue;
+      bool extra = false;
       while (body.more()) {
-        zmq::message_t extra;
-        if (!socket.recv(extra, zmq::recv_flags::dontwait)) break;
+        zmq::message_t more;
+        if (!socket.recv(more, zmq::recv_flags::dontwait)) break;
+        extra = true;
+        body.swap(more);  // the last part tells whether more follow
       }
       const std::string peer(static_cast<const char*>(id.data()), id.size());
+      if (banned.count(peer) != 0) continue;
+      if (extra) {
+        banish(peer, "a message of several parts");
+        continue;
+      }
       onMessage(peer, static_cast<const std::byte*>(body.data()), body.size());
     }
   }
@@ -313,9 +396,11 @@ struct Desk::Impl {
       }
       for (auto& task : now) task();
       receive();
+      settleUnreachable();
       // A closing wall waits for the processes' confirmations only: no beats, no drops.
       if (jobs.state() != JobDesk::State::Closed) watch(Clock::now());
       carry(jobs.tick(Clock::now()));
+      settleUnreachable();
     }
     isClosed = true;
     std::lock_guard lock(mutex);

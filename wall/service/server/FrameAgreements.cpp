@@ -14,12 +14,13 @@ void FrameAgreements::clear() {
 }
 
 bool FrameAgreements::arrive(int process, std::uint32_t frameId,
-                             const std::vector<std::int64_t>& values) {
+                             const std::vector<std::int64_t>& values, Clock::time_point now) {
   auto [at, fresh] = barriers_.try_emplace(frameId);
   Barrier& b = at->second;
   if (fresh) {
     b.values = values;
     b.arrived.assign(static_cast<size_t>(processCount_), false);
+    b.opened = now;
   } else {
     if (values.size() != b.values.size()) return false;
     for (size_t i = 0; i < values.size(); ++i) b.values[i] = std::max(b.values[i], values[i]);
@@ -45,6 +46,19 @@ std::vector<FrameAgreements::Release> FrameAgreements::complete(const TakesPart&
       if (b.arrived[static_cast<size_t>(p)]) r.processes.push_back(p);
     out.push_back(std::move(r));
     at = barriers_.erase(at);
+  }
+  return out;
+}
+
+std::vector<FrameAgreements::Overdue> FrameAgreements::overdue(
+    const TakesPart& takesPart, Clock::time_point openedBefore) const {
+  std::vector<Overdue> out;
+  for (const auto& [frameId, b] : barriers_) {
+    if (b.opened >= openedBefore) continue;
+    Overdue o{frameId, {}};
+    for (int p = 0; p < processCount_; ++p)
+      if (takesPart(p, frameId) && !b.arrived[static_cast<size_t>(p)]) o.missing.push_back(p);
+    if (!o.missing.empty()) out.push_back(std::move(o));
   }
   return out;
 }

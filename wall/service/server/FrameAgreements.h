@@ -23,9 +23,10 @@ class FrameAgreements {
   explicit FrameAgreements(int processCount) : processCount_(processCount) {}
   void clear();
 
-  // Process p's values for frame F's barrier (the element-wise maximum is kept). False when
-  // their count differs from the first arrival's: the caller treats p as broken.
-  bool arrive(int process, std::uint32_t frameId, const std::vector<std::int64_t>& values);
+  // Process p's values for frame F's barrier (the element-wise maximum is kept), at `now`. False
+  // when their count differs from the first arrival's: the caller treats p as broken.
+  bool arrive(int process, std::uint32_t frameId, const std::vector<std::int64_t>& values,
+              Clock::time_point now);
   struct Release {
     std::uint32_t frameId = 0;
     std::vector<std::int64_t> values;
@@ -33,6 +34,17 @@ class FrameAgreements {
   };
   // Every barrier whose taking-part processes have all arrived, removed from the board.
   std::vector<Release> complete(const TakesPart& takesPart);
+
+  // Barriers that the first process arrived at before `openedBefore` and that still wait: the
+  // processes taking part that have not arrived (a process that beats but never arrives would
+  // otherwise hold every frame).
+  struct Overdue {
+    std::uint32_t frameId = 0;
+    std::vector<int> missing;
+  };
+  std::vector<Overdue> overdue(const TakesPart& takesPart, Clock::time_point openedBefore) const;
+  // Barriers waiting now.
+  std::size_t open() const { return barriers_.size(); }
 
   // A process's pixels of captured frame F; the head's own with its deadline.
   void pixels(int process, std::uint32_t frameId, std::vector<std::uint32_t> pixels);
@@ -50,6 +62,7 @@ class FrameAgreements {
   struct Barrier {
     std::vector<std::int64_t> values;
     std::vector<bool> arrived;
+    Clock::time_point opened;  // the first arrival
   };
   struct Gather {
     std::vector<std::vector<std::uint32_t>> pixels;

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "wall/display/WallNode.h"
+#include "wall/service/protocol/PeerText.h"
+
 namespace wall::service {
 namespace {
 
@@ -14,6 +17,11 @@ constexpr std::uint32_t kNotYet = 0xffffffffu;  // a seat's first frame before t
 std::string jsonLine(const Json& j) {
   return j.dump(-1, ' ', false, Json::error_handler_t::replace);
 }
+
+// Reasons other processes send (a frame's missing pieces, a folder) are longer than names.
+constexpr std::size_t kMaxReasonBytes = 400;
+
+std::string reason(const std::string& text) { return peerText(text, kMaxReasonBytes); }
 
 ServiceCommand shutdownCommand() {
   ServiceCommand c;
@@ -34,8 +42,12 @@ JobDesk::JobDesk(Setup setup, const Membership& members)
 JobDesk::Actions JobDesk::hello(const std::string& peer, const Hello& hello,
                                 Clock::time_point now) {
   now_ = now;
-  const std::string from = hello.host.empty() ? "an unnamed host" : hello.host;
-  if (!s_.token.empty() && hello.token != s_.token) {
+  const std::string from = hello.host.empty() ? "an unnamed host" : peerText(hello.host);
+  if (hasJobFrom(peer)) {
+    log("refused a second job from " + from + " on the same connection", peer);
+    reply(peer, Kind::Refused,
+          packText(Kind::Refused, 0, "this connection has a job at the wall already"));
+  } else if (!s_.token.empty() && hello.token != s_.token) {
     log("refused a job from " + from + ": " + (hello.token.empty() ? "no token" : "wrong token"),
         peer);
     reply(peer, Kind::Refused,
@@ -52,6 +64,12 @@ JobDesk::Actions JobDesk::hello(const std::string& peer, const Hello& hello,
     queueOrRefuse(peer, hello, from);
   }
   return take();
+}
+
+bool JobDesk::hasJobFrom(const std::string& peer) const {
+  if (state_ != State::Idle && state_ != State::Closed && job_.peer == peer) return true;
+  return std::any_of(queue_.begin(), queue_.end(),
+                     [&](const Job& queued) { return queued.peer == peer; });
 }
 
 void JobDesk::queueOrRefuse(const std::string& peer, const Hello& hello, const std::string& from) {
@@ -118,8 +136,7 @@ void JobDesk::onControl(const JobMessage& m) {
       toJob(command(Command::KeepWaiting));
       break;
     case Kind::Capture:
-      toJob(
-          command(Command::Capture, static_cast<std::int64_t>(m.control.value), m.control.second));
+      onCapture(m);
       break;
     case Kind::Bye:
       if (m.control.second < 0) return endJob("the job left without naming its last frame");
@@ -128,6 +145,36 @@ void JobDesk::onControl(const JobMessage& m) {
     default:
       endJob("unexpected message kind " + std::to_string(static_cast<int>(m.kind)));
   }
+}
+
+// Every process keeps a capture request until its frame is presented: only requests near the
+// frames in flight, and a few at a time, go out to them.
+void JobDesk::onCapture(const JobMessage& m) {
+  const std::uint64_t frame = m.control.value;
+  const std::uint32_t earliest =
+      lastCredited_ > kCaptureFramesBehind ? lastCredited_ - kCaptureFramesBehind : 1;
+  const std::uint64_t latest =
+      std::uint64_t{lastCredited_} + framesAheadFor(static_cast<int>(granted_));
+  std::string refused;
+  if (frame < earliest || frame > latest)
+    refused = "frame " + std::to_string(frame) + " is not near the frames in flight (" +
+              std::to_string(earliest) + ".." + std::to_string(latest) + ")";
+  else if (m.control.second < 1)
+    refused = "sequence " + std::to_string(m.control.second) + " (expected 1 or more)";
+  else if (pendingCaptures_.size() >= kMaxPendingCaptures)
+    refused = std::to_string(kMaxPendingCaptures) + " captures wait for their frames already";
+  if (!refused.empty()) {
+    log("refused a capture request of the job from " + peerText(job_.hello.host) + ": " +
+            (pendingCaptures_.size() >= kMaxPendingCaptures ? "too many pending"
+                                                            : "a frame or sequence out of range"),
+        m.peer);
+    reply(m.peer, Kind::Refused,
+          packText(Kind::Refused, job_.session, "capture request refused: " + refused));
+    return;
+  }
+  // Taken at that frame, or at the next presented one when it is presented already.
+  pendingCaptures_.push_back(std::max(static_cast<std::uint32_t>(frame), lastCredited_ + 1));
+  toJob(command(Command::Capture, static_cast<std::int64_t>(frame), m.control.second));
 }
 
 JobDesk::Actions JobDesk::answer(int p, const ServiceCommand& c, Clock::time_point now) {
@@ -188,10 +235,10 @@ void JobDesk::onReady(int p, const ServiceCommand& c) {
   if (c.header.a == 0) {
     seat.done = true;
     if (state_ == State::Running) {  // a process that joined mid-job cannot take it
-      log(members_.who(p) + " cannot take the running job: " + c.text);
-      sendRoster(0, members_.who(p) + " cannot take the job: " + c.text);
+      log(members_.who(p) + " cannot take the running job: " + reason(c.text));
+      sendRoster(0, members_.who(p) + " cannot take the job: " + reason(c.text));
     } else if (failure_.empty()) {
-      failure_ = c.text;
+      failure_ = reason(c.text);
     }
   }
   if (state_ == State::Starting) maybeRun();
@@ -203,11 +250,11 @@ void JobDesk::onDone(int p, const ServiceCommand& c) {
   seats_[static_cast<size_t>(p)].done = true;
   if (state_ == State::Running && !c.text.empty() && p != 0) {
     // This process could not go on (its node failed); the others can.
-    log(members_.who(p) + " left the job: " + c.text);
-    sendRoster(0, members_.who(p) + " left the job: " + c.text);
+    log(members_.who(p) + " left the job: " + reason(c.text));
+    sendRoster(0, members_.who(p) + " left the job: " + reason(c.text));
     releaseWhatCan();
   } else {
-    if (!c.text.empty() && failure_.empty()) failure_ = c.text;
+    if (!c.text.empty() && failure_.empty()) failure_ = reason(c.text);
     if (state_ == State::Running) state_ = State::Ending;  // it ended by itself
   }
 }
@@ -255,7 +302,17 @@ JobDesk::Actions JobDesk::arrive(int p, std::uint64_t session, std::uint32_t fra
   if (session != job_.session || (state_ != State::Running && state_ != State::Ending) ||
       !participates(p, frameId))
     return take();
-  if (!agreements_.arrive(p, frameId, values)) {
+  // A process arrives at frame F once F - 1 was released; the head credits F - 1 right after
+  // its own release. Anything else would open a barrier nobody else comes to.
+  const std::uint64_t latest =
+      std::uint64_t{lastCredited_} + framesAheadFor(static_cast<int>(granted_));
+  if (p != 0 && (frameId <= lastCredited_ || frameId > latest)) {
+    emit(Drop{p, "its swap barrier of frame " + std::to_string(frameId) +
+                     " is outside the frames in flight (" + std::to_string(lastCredited_ + 1) +
+                     ".." + std::to_string(latest) + ")"});
+    return take();
+  }
+  if (!agreements_.arrive(p, frameId, values, now)) {
     emit(Drop{p, "its swap barrier of frame " + std::to_string(frameId) + " has " +
                      std::to_string(values.size()) + " values, not the others' count"});
     return take();
@@ -288,6 +345,7 @@ JobDesk::Actions JobDesk::presented(std::uint64_t session, std::uint32_t frameId
   if (session != job_.session || (state_ != State::Running && state_ != State::Ending))
     return take();
   lastCredited_ = std::max(lastCredited_, frameId);
+  std::erase_if(pendingCaptures_, [&](std::uint32_t f) { return f <= lastCredited_; });
   reply(job_.peer, Kind::Presented,
         packControl(Kind::Presented, job_.session, frameId, completeNs));
   return take();
@@ -305,6 +363,7 @@ JobDesk::Actions JobDesk::tick(Clock::time_point now) {
     return take();
   }
   releaseWhatCan();
+  if (state_ == State::Running || state_ == State::Ending) dropOverdue();
   if (state_ == State::Running && now - job_.lastHeard > s_.timeout)
     endJob("no word from the job for " + durationText(s_.timeout));
   closeIfIdle();
@@ -314,7 +373,8 @@ JobDesk::Actions JobDesk::tick(Clock::time_point now) {
 JobDesk::Actions JobDesk::failed(const std::string& peer, const std::string& why,
                                  Clock::time_point now) {
   now_ = now;
-  if (peer == job_.peer) endJob(why);
+  if (peer == job_.peer) endJob(reason(why));
+  std::erase_if(queue_, [&](const Job& queued) { return queued.peer == peer; });
   return take();
 }
 
@@ -385,7 +445,7 @@ void JobDesk::sendRoster(std::uint32_t fromFrame, const std::string& why) {
 }
 
 std::string JobDesk::busy() const {
-  return "busy: a job from " + job_.hello.host + " is connected";
+  return "busy: a job from " + peerText(job_.hello.host) + " is connected";
 }
 
 // ---- the job's life ----
@@ -401,6 +461,7 @@ void JobDesk::startJob() {
   processesLost_ = processesRejoined_ = 0;
   agreements_.clear();
   waitingToJoinJob_.clear();
+  pendingCaptures_.clear();
   granted_ = std::min<std::uint32_t>(job_.hello.framesInFlight,
                                      static_cast<std::uint32_t>(s_.framesInFlight));
   state_ = State::Starting;
@@ -425,7 +486,7 @@ void JobDesk::endJob(const std::string& why) {
   toJob(command(state_ == State::Starting ? Command::Cancel : Command::Abort, 0, 0, why));
   reply(job_.peer, Kind::Ended, packText(Kind::Ended, job_.session, why));
   state_ = State::Ending;
-  log("dropping the job from " + job_.hello.host + ": " + why);
+  log("dropping the job from " + peerText(job_.hello.host) + ": " + why);
   if (allDone()) jobOver();
 }
 
@@ -435,7 +496,7 @@ void JobDesk::nextJob() {
     job_ = queue_.front();
     queue_.pop_front();
     if (now_ - job_.lastHeard > s_.timeout) continue;  // it left the queue
-    log("taking the queued job from " + job_.hello.host);
+    log("taking the queued job from " + peerText(job_.hello.host));
     startJob();
     return;
   }
@@ -443,8 +504,8 @@ void JobDesk::nextJob() {
 
 void JobDesk::jobOver() {
   const double seconds = std::chrono::duration<double>(now_ - job_.started).count();
-  log("the job from " + job_.hello.host + " ended after frame " + std::to_string(lastPresented_) +
-      (failure_.empty() ? "" : " (" + failure_ + ")"));
+  log("the job from " + peerText(job_.hello.host) + " ended after frame " +
+      std::to_string(lastPresented_) + (failure_.empty() ? "" : " (" + failure_ + ")"));
   emit(Record{jsonLine(Json{{"job", job_.session % 1000000007},
                             {"host", job_.hello.host},
                             {"render_ranks", job_.hello.renderRanks},
@@ -467,7 +528,7 @@ void JobDesk::maybeRun() {
   if (!failure_.empty()) {
     toJob(command(Command::Cancel));
     reply(job_.peer, Kind::Refused, packText(Kind::Refused, 0, failure_));
-    log("refused the job from " + job_.hello.host + ": " + failure_);
+    log("refused the job from " + peerText(job_.hello.host) + ": " + failure_);
     state_ = State::Ending;
     if (allDone()) jobOver();
     return;
@@ -526,6 +587,21 @@ void JobDesk::joinedJob(int p) {
 bool JobDesk::participates(int p, std::uint32_t frameId) const {
   const Seat& seat = seats_[static_cast<size_t>(p)];
   return seat.in && !seat.done && seat.fromFrame <= frameId && members_.live(p);
+}
+
+// A process alive (it beats) that has not come to a barrier the others came to the timeout ago,
+// while the job is alive, is dropped as if silent; the head's own process is never dropped (its
+// presenting thread holds the wall's display side: when it hangs, so does the wall, beats or not).
+void JobDesk::dropOverdue() {
+  // Only while the job is heard from: pieces that stopped coming because the job died leave a
+  // barrier open too, and that is the job's timeout's to end (every process gives the frame up).
+  if (now_ - job_.lastHeard > s_.timeout / 2) return;
+  const auto takesPart = [this](int p, std::uint32_t frameId) { return participates(p, frameId); };
+  for (const FrameAgreements::Overdue& o : agreements_.overdue(takesPart, now_ - s_.timeout))
+    for (int p : o.missing)
+      if (p != 0)
+        emit(Drop{p, "it did not come to the swap barrier of frame " + std::to_string(o.frameId) +
+                         " within " + durationText(s_.timeout) + " of the others"});
 }
 
 // Barriers and gathers that nobody holds up any more go back to their processes.

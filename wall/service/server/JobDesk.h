@@ -12,7 +12,14 @@
 // and the job gets a roster without it; one that joins during the job is admitted from the first
 // frame the job cannot have started without it (the last credited frame + frames in flight + 1).
 // The job's swap barriers and capture gathers wait for the processes taking part in each frame
-// (FrameAgreements).
+// (FrameAgreements), for the timeout at most: a process that has not arrived at a barrier the
+// timeout after the first did, while the job is heard from, is dropped like a silent one, so one
+// that beats but never arrives cannot hold every frame. A barrier for a frame outside the frames in
+// flight drops its process.
+//
+// What a job may ask for is bounded: one job per connection (a second hello from it is refused),
+// capture requests for frames near the credited one only, at most kMaxPendingCaptures not yet
+// taken; anything over is refused with a message (Refused with the job's session: the job goes on).
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -34,6 +41,11 @@ class JobDesk {
  public:
   using Clock = std::chrono::steady_clock;
   static constexpr std::size_t kMaxQueued = 16;  // jobs waiting behind the connected one
+  // Capture requests of the job for frames not presented yet.
+  static constexpr std::size_t kMaxPendingCaptures = 8;
+  // How far behind the last credited frame a capture request may name a frame (it is taken at
+  // the next presented frame: the job's request crossed the credits on the way).
+  static constexpr std::uint32_t kCaptureFramesBehind = 256;
 
   struct Setup {
     const Layout* layout = nullptr;  // what the directory tells a job
@@ -127,15 +139,20 @@ class JobDesk {
                      Clock::time_point now);
   // The head's process presented `frameId` on every display in the job: the job's credit.
   Actions presented(std::uint64_t session, std::uint32_t frameId, std::int64_t completeNs);
-  // Time passing: gathers past their deadline, a job silent for the timeout, the shutdown.
+  // Time passing: gathers past their deadline, barriers a process has not arrived at within the
+  // timeout (it is dropped), a job silent for the timeout, the shutdown.
   Actions tick(Clock::time_point now);
-  // Handling a message from `peer` failed: if it is the job's connection, the job ends.
+  // Handling a message from `peer` failed, or the wall cannot send to it: if it is the job's
+  // connection, the job ends; a queued job from it leaves the queue.
   Actions failed(const std::string& peer, const std::string& why, Clock::time_point now);
 
   State state() const { return state_; }
   std::uint64_t session() const { return job_.session; }
+  // The connection of the job connected now (or last).
+  const std::string& peer() const { return job_.peer; }
   std::size_t queued() const { return queue_.size(); }
   std::uint32_t lastCredited() const { return lastCredited_; }
+  std::size_t pendingCaptures() const { return pendingCaptures_.size(); }
 
  private:
   struct Job {
@@ -155,6 +172,9 @@ class JobDesk {
   void queueOrRefuse(const std::string& peer, const Hello& hello, const std::string& from);
   bool queuedMessage(const JobMessage& m);
   void onControl(const JobMessage& m);
+  void onCapture(const JobMessage& m);
+  bool hasJobFrom(const std::string& peer) const;
+  void dropOverdue();
   void onReady(int p, const ServiceCommand& c);
   void onDone(int p, const ServiceCommand& c);
   void stopAsked(int p);
@@ -193,6 +213,8 @@ class JobDesk {
   std::deque<Job> queue_;
   std::vector<Seat> seats_;
   std::set<int> waitingToJoinJob_;  // joined while the job was starting
+  // The frames the job's capture requests are taken at, until they are presented.
+  std::deque<std::uint32_t> pendingCaptures_;
   std::string failure_;
   std::int64_t lastPresented_ = 0, bytes_ = 0;
   std::uint32_t lastCredited_ = 0, granted_ = 2, rosterVersion_ = 0;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "wall/service/protocol/PeerText.h"
+
 namespace wall::service {
 
 std::string durationText(std::chrono::milliseconds t) {
@@ -21,7 +23,7 @@ Membership::Membership(Setup setup, Clock::time_point now)
 }
 
 std::string Membership::who(int process) const {
-  return "wall process " + std::to_string(process) + " on " + member(process).host;
+  return "wall process " + std::to_string(process) + " on " + peerText(member(process).host);
 }
 
 std::vector<int> Membership::absent() const {

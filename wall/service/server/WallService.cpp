@@ -208,8 +208,11 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   answer.header.process = process;
   // Anything a job asks for that this process cannot do refuses the job, never ends the wall.
   // Nothing is made for it before every process said Ready: its capture folder is only checked.
-  std::string problem, captureDir;
-  if (!start.text.empty()) {
+  std::string problem = startProblem(start), captureDir;
+  if (!problem.empty()) {
+    problem = "wall process " + std::to_string(process) + " refused the job's Start: " + problem;
+    log(problem);
+  } else if (!start.text.empty()) {
     try {
       captureDir = resolveCaptureRequest(options.captureRoot.get(), start.text, layout, process);
     } catch (const std::exception& e) {
