@@ -279,9 +279,8 @@ def bad_scenario(work):
     code, _ = job.request("GET", "/api/nothing")
     if code != 404:
         job.fail("GET /api/nothing gave %d, expected 404" % code)
-    # No body and no Content-Length (curl -X POST): the body is {}, answered at once (httplib
-    # alone waited for the body until its 5 s read timeout, then answered 400), and the
-    # connection goes on. {} itself is refused by these (no fields, no --capture folder): the
+    # No body and no Content-Length (curl -X POST): the body is {}, answered at once (not after
+    # waiting for a body that never comes), and the connection goes on. {} itself is refused by these (no fields, no --capture folder): the
     # same answer, word for word.
     for path in ("/api/camera", "/api/settings", "/api/capture"):
         code, body, seconds, then = job.bodiless(path, then="/api/status")
