@@ -177,11 +177,18 @@ void addConnectGroup(CLI::App& app, Options& o) {
 void addControlGroup(CLI::App& app, Options& o) {
   app.add_option("--control", o.control,
                  "[ADDR:]PORT: serve the JSON control API and the controller page on render rank "
-                 "0 (default address 127.0.0.1; any other needs a token)")
+                 "0 (default address 127.0.0.1); always behind a token, generated and printed "
+                 "as the address to open unless --control-token-file or DFBWALL_CONTROL_TOKEN "
+                 "gives it")
       ->group(kControl);
-  app.add_option("--control-token", o.controlToken,
-                 "token clients must send (Authorization: Bearer TOKEN); generated and printed "
-                 "when --control binds beyond loopback without one")
+  app.add_option("--control-token-file", o.controlTokenFile,
+                 "FILE holding the control API's token (created mode 0600 with a fresh one when "
+                 "absent); clients send Authorization: Bearer TOKEN")
+      ->group(kControl);
+  app.add_option("--control-host", o.controlHosts,
+                 "NAME: a host name clients reach the control API by, besides its address and "
+                 "localhost (other Host headers get 403); repeatable")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
       ->group(kControl);
   app.add_option("--max-spp", o.maxSpp,
                  "with --frames 0: samples per pixel after which a still wall stops rendering "

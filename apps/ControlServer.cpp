@@ -1,211 +1,152 @@
 #include "apps/ControlServer.h"
 
+#include <fcntl.h>
+#include <ifaddrs.h>
+#include <microhttpd.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <arpa/inet.h>
+
 #include <algorithm>
-
-#include <httplib.h>
-
+#include <cerrno>
 #include <charconv>
-#include <cmath>
-#include <fstream>
-#include <map>
-#include <nlohmann/json.hpp>
+#include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <mutex>
 #include <stdexcept>
 #include <thread>
-#include <vector>
-
-#include "apps/FrameDirector.h"
-#include "apps/Job.h"
-#include "apps/StatusBoard.h"
-#include "apps/Steering.h"
-#include "renderers/TransferFunction.h"
+#include <unordered_map>
 
 namespace app {
 namespace {
 
-using Json = nlohmann::ordered_json;
+using Clock = std::chrono::steady_clock;
 
-// A request the API refuses: 400 with this message.
-struct BadRequest : std::runtime_error {
-  using std::runtime_error::runtime_error;
+// Every request, from its connection's first byte (or the end of the request before on a
+// kept-alive connection) to the last byte of its reply.
+constexpr auto kRequestDeadline = std::chrono::seconds(5);
+constexpr unsigned kMaxConnections = 256, kMaxConnectionsPerAddress = 128;
+constexpr unsigned kEventThreads = 2;
+constexpr size_t kConnectionMemory = 32 * 1024;  // a request's line and headers must fit
+
+// The name to put in a URL for `host` (brackets around IPv6 addresses).
+std::string urlHost(const std::string& host) {
+  return host.find(':') == std::string::npos ? host : "[" + host + "]";
+}
+
+bool isWildcard(const std::string& host) { return host == "0.0.0.0" || host == "::"; }
+
+// What a Host header may name when the server listens on every interface: this host's name and
+// addresses.
+std::vector<std::string> ownNames() {
+  std::vector<std::string> names;
+  char name[256] = {};
+  if (::gethostname(name, sizeof name - 1) == 0 && name[0]) names.emplace_back(name);
+  ifaddrs* list = nullptr;
+  if (::getifaddrs(&list) == 0) {
+    for (const ifaddrs* a = list; a; a = a->ifa_next) {
+      if (!a->ifa_addr) continue;
+      char text[INET6_ADDRSTRLEN] = {};
+      if (a->ifa_addr->sa_family == AF_INET)
+        ::inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(a->ifa_addr)->sin_addr, text,
+                    sizeof text);
+      else if (a->ifa_addr->sa_family == AF_INET6)
+        ::inet_ntop(AF_INET6, &reinterpret_cast<const sockaddr_in6*>(a->ifa_addr)->sin6_addr, text,
+                    sizeof text);
+      if (text[0]) names.emplace_back(text);
+    }
+    ::freeifaddrs(list);
+  }
+  return names;
+}
+
+// A listening socket on host:port (0: any free port); returns it and sets `bound` to the port.
+int listenOn(const std::string& address, const std::string& host, int port, int& bound) {
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
+  addrinfo* found = nullptr;
+  const std::string service = std::to_string(port);
+  if (const int code = ::getaddrinfo(host.c_str(), service.c_str(), &hints, &found); code != 0)
+    throw std::runtime_error("--control " + address + ": cannot resolve " + host + ": " +
+                             ::gai_strerror(code));
+  std::string problem;
+  int fd = -1;
+  for (const addrinfo* a = found; a && fd < 0; a = a->ai_next) {
+    fd = ::socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC | SOCK_NONBLOCK, a->ai_protocol);
+    if (fd < 0) continue;
+    const int on = 1;
+    ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on);
+    if (::bind(fd, a->ai_addr, a->ai_addrlen) != 0 || ::listen(fd, 128) != 0) {
+      problem = std::strerror(errno);
+      ::close(fd);
+      fd = -1;
+    }
+  }
+  ::freeaddrinfo(found);
+  if (fd < 0)
+    throw std::runtime_error("--control " + address + ": cannot listen on " + host + " port " +
+                             service + ": " + problem +
+                             " (in use, or not an address of this host)");
+  sockaddr_storage local{};
+  socklen_t length = sizeof local;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &length);
+  bound = ntohs(local.ss_family == AF_INET6 ? reinterpret_cast<sockaddr_in6*>(&local)->sin6_port
+                                            : reinterpret_cast<sockaddr_in*>(&local)->sin_port);
+  return fd;
+}
+
+// One request being read: its body, kept up to one byte past the limit (ControlRequests then
+// answers 413).
+struct Reading {
+  std::string body;
 };
 
-HttpReply json(int status, const Json& body) { return {status, "application/json", body.dump()}; }
-HttpReply error(int status, const std::string& message) {
-  return json(status, Json{{"error", message}});
-}
-
-bool isLoopback(const std::string& host) {
-  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
-}
-
-// 32 hex digits from the kernel's random pool.
-std::string generateToken() {
-  std::ifstream random("/dev/urandom", std::ios::binary);
-  unsigned char bytes[16];
-  if (!random.read(reinterpret_cast<char*>(bytes), sizeof bytes))
-    throw std::runtime_error("--control: cannot read /dev/urandom for a token");
-  static const char* hex = "0123456789abcdef";
-  std::string token;
-  for (unsigned char b : bytes) token += {hex[b >> 4], hex[b & 15]};
-  return token;
-}
-
-// Compares in time independent of where they differ: the token is a secret.
-bool sameSecret(const std::string& a, const std::string& b) {
-  if (a.size() != b.size()) return false;
-  unsigned char diff = 0;
-  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
-  return diff == 0;
-}
-
-Json vec3(const renderers::Vec3& v) { return Json::array({v.x, v.y, v.z}); }
-
-double finiteNumber(const Json& v, const std::string& field) {
-  if (!v.is_number()) throw BadRequest(field + " must be a number");
-  const double d = v.get<double>();
-  if (!std::isfinite(d)) throw BadRequest(field + " must be a finite number");
-  return d;
-}
-
-float boundedNumber(const Json& v, const std::string& field) {
-  const double d = finiteNumber(v, field);
-  if (std::abs(d) > 1e30) throw BadRequest(field + " is out of range");
-  return static_cast<float>(d);
-}
-
-std::int32_t integer(const Json& v, const std::string& field) {
-  if (!v.is_number_integer()) throw BadRequest(field + " must be an integer");
-  const std::int64_t i = v.get<std::int64_t>();
-  if (i < -(1ll << 30) || i > (1ll << 30)) throw BadRequest(field + " is out of range");
-  return static_cast<std::int32_t>(i);
-}
-
-renderers::Vec3 vector3(const Json& v, const std::string& field) {
-  if (!v.is_array() || v.size() != 3) throw BadRequest(field + " must be an array of 3 numbers");
-  return {boundedNumber(v[0], field), boundedNumber(v[1], field), boundedNumber(v[2], field)};
-}
-
-// An empty body is {}: `curl -X POST URL` sends none, and the first thing people type should work.
-Json parseObject(const std::string& body) {
-  if (body.empty()) return Json::object();
-  Json j = Json::parse(body, nullptr, /*allow_exceptions=*/false);
-  if (j.is_discarded()) throw BadRequest("the body is not valid JSON");
-  if (!j.is_object()) throw BadRequest("the body must be a JSON object");
-  return j;
-}
-
-SteeringRequest cameraRequest(const Json& j) {
-  using R = SteeringRequest;
-  R r;
-  r.kind = R::kCamera;
-  for (const auto& [key, value] : j.items()) {
-    if (key == "position") {
-      r.position = vector3(value, key), r.fields |= R::kPosition;
-    } else if (key == "look_at") {
-      r.lookAt = vector3(value, key), r.fields |= R::kLookAt;
-    } else if (key == "up") {
-      r.up = vector3(value, key), r.fields |= R::kUp;
-    } else if (key == "fov") {
-      r.fov = boundedNumber(value, key), r.fields |= R::kFov;
-    } else if (key == "orbit") {
-      r.orbit = boundedNumber(value, key), r.fields |= R::kOrbit;
-    } else if (key == "pan") {
-      if (!value.is_array() || value.size() != 2)
-        throw BadRequest("pan must be an array of 2 numbers [dx, dy]");
-      r.pan[0] = boundedNumber(value[0], key);
-      r.pan[1] = boundedNumber(value[1], key);
-      r.fields |= R::kPan;
-    } else if (key == "dolly") {
-      r.dolly = boundedNumber(value, key), r.fields |= R::kDolly;
-    } else {
-      throw BadRequest("unknown field '" + key +
-                       "' (camera fields: position, look_at, up, fov, orbit, pan, dolly)");
-    }
-  }
-  return r;
-}
-
-SteeringRequest settingsRequest(const Json& j, const std::string& renderer) {
-  using R = SteeringRequest;
-  R r;
-  r.kind = R::kSettings;
-  for (const auto& [key, value] : j.items()) {
-    if (key == "exposure") {
-      r.exposure = boundedNumber(value, key), r.fields |= R::kExposure;
-    } else if (key == "spp") {
-      r.spp = integer(value, key), r.fields |= R::kSpp;
-    } else if (key == "max_depth") {
-      if (renderer != "pathtracer") throw BadRequest("max_depth is a setting of the pathtracer");
-      r.maxDepth = integer(value, key), r.fields |= R::kMaxDepth;
-    } else if (key == "transfer_function") {
-      if (renderer != "scivis") throw BadRequest("transfer_function is a setting of scivis");
-      if (!value.is_string()) throw BadRequest("transfer_function must be a preset name");
-      const std::vector<std::string> names = renderers::transferFunctionPresetNames();
-      r.transferFunction = -1;
-      std::string known;
-      for (size_t i = 0; i < names.size(); ++i) {
-        if (names[i] == value.get<std::string>()) r.transferFunction = static_cast<int>(i);
-        known += (i ? ", " : "") + names[i];
-      }
-      if (r.transferFunction < 0)
-        throw BadRequest("unknown transfer_function preset (choose " + known + ")");
-      r.fields |= R::kTransferFunction;
-    } else if (key == "opacity_scale") {
-      if (renderer != "scivis") throw BadRequest("opacity_scale is a setting of scivis");
-      r.opacityScale = boundedNumber(value, key), r.fields |= R::kOpacityScale;
-    } else {
-      throw BadRequest("unknown field '" + key +
-                       "' (settings: exposure, spp, max_depth, transfer_function, opacity_scale)");
-    }
-  }
-  return r;
-}
-
-void reply(httplib::Response& res, const HttpReply& r) {
-  res.status = r.status;
-  res.set_content(r.body, r.contentType.c_str());
+MHD_Result collect(void* cls, MHD_ValueKind, const char* key, const char* value) {
+  static_cast<std::vector<std::pair<std::string, std::string>>*>(cls)->emplace_back(
+      key ? key : "", value ? value : "");
+  return MHD_YES;
 }
 
 }  // namespace
 
 struct ControlServer::Impl {
-  httplib::Server server;
-  std::string host, token;
+  std::string host;
   int port = 0;
-  std::thread thread;
-  std::vector<std::pair<std::string, std::function<HttpReply()>>> extraGets;
-  std::map<std::string, httplib::Server::Handler> posts;  // by path, for bodiless POSTs
+  ControlSecret secret;
+  std::unique_ptr<ControlRequests> requests;
+  int listenFd = -1;
+  MHD_Daemon* daemon = nullptr;
 
-  bool authorized(const httplib::Request& req) const {
-    if (token.empty()) return true;
-    const std::string auth = req.get_header_value("Authorization");
-    if (auth.rfind("Bearer ", 0) == 0 && sameSecret(auth.substr(7), token)) return true;
-    return req.has_param("token") && sameSecret(req.get_param_value("token"), token);
-  }
+  // The open connections and when their current request started; the reaper cuts the late.
+  struct Open {
+    int fd = -1;
+    Clock::time_point since;
+    bool cut = false;
+  };
+  std::mutex mutex;
+  std::condition_variable wake;
+  bool stopping = false;
+  std::unordered_map<MHD_Connection*, Open> open;
+  std::thread reaper;
 
-  // Every route: the token first, then the handler; a BadRequest is a 400, anything else a 500.
-  httplib::Server::Handler guarded(std::function<HttpReply(const httplib::Request&)> handler) {
-    return [this, handler](const httplib::Request& req, httplib::Response& res) {
-      if (!authorized(req)) {
-        res.set_header("WWW-Authenticate", "Bearer");
-        return reply(res, error(401, "a valid token is required (Authorization: Bearer TOKEN)"));
-      }
-      try {
-        reply(res, handler(req));
-      } catch (const BadRequest& e) {
-        reply(res, error(400, e.what()));
-      } catch (const std::invalid_argument& e) {  // Steering::submit's range checks
-        reply(res, error(400, e.what()));
-      } catch (const std::exception& e) {
-        reply(res, error(500, e.what()));
-      }
-    };
-  }
-  void addSteeringRoutes(const Job& job, Steering& steering, StatusBoard& status);
-  void answerWhatHttplibWouldNot();
+  void reap();
+  static MHD_Result answer(void* cls, MHD_Connection* connection, const char* url,
+                           const char* method, const char* version, const char* upload,
+                           size_t* uploadSize, void** state);
+  static void completed(void* cls, MHD_Connection* connection, void** state,
+                        MHD_RequestTerminationCode);
+  static void connectionEvent(void* cls, MHD_Connection* connection, void** socketState,
+                              MHD_ConnectionNotificationCode code);
 };
 
-ControlServer::ControlServer(const std::string& address, std::string token)
+ControlServer::ControlServer(const std::string& address, ControlSecret secret,
+                             std::vector<std::string> hosts)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   const size_t colon = address.rfind(':');
@@ -220,176 +161,142 @@ ControlServer::ControlServer(const std::string& address, std::string token)
     throw std::runtime_error("--control " + address +
                              ": expected [ADDR:]PORT with a port in 0..65535, e.g. 8080 or "
                              "0.0.0.0:8080");
-  m.token = std::move(token);
-  if (m.token.empty() && !isLoopback(m.host)) m.token = generateToken();
-  m.server.new_task_queue = [] { return new httplib::ThreadPool(2); };
-  m.server.set_payload_max_length(64 * 1024);
-  // The pool joins its threads on stop; an idle keep-alive connection holds one this long.
-  m.server.set_keep_alive_timeout(1);
-  if (value == 0) {
-    m.port = m.server.bind_to_any_port(m.host);
-  } else if (m.server.bind_to_port(m.host, value)) {
-    m.port = value;
-  }
-  if (m.port <= 0)
-    throw std::runtime_error("--control " + address + ": cannot listen on " + m.host + " port " +
-                             port + " (in use, or not an address of this host)");
+  m.listenFd = listenOn(address, m.host, value, m.port);
+  m.secret = std::move(secret);
+  hosts.push_back(m.host);
+  if (isWildcard(m.host))
+    for (std::string& name : ownNames()) hosts.push_back(std::move(name));
+  m.requests = std::make_unique<ControlRequests>(ControlAccess{m.secret.token, m.port, hosts});
 }
 
-ControlServer::~ControlServer() { stop(); }
-
-namespace {
-
-// GET /api/status: what rank 0 published last, and the job's fixed facts.
-Json statusJson(const StatusBoard& status, const Job& job,
-                const std::vector<std::string>& displays) {
-  const RunStatus s = status.snapshot();
-  Json j{{"frame", s.frame},
-         {"fps", s.fps},
-         {"spp", s.spp},
-         {"epoch", s.epoch},
-         {"idle", s.idle},
-         {"presented", s.presented},
-         {"camera",
-          {{"position", vec3(s.view.camera.position)},
-           {"look_at", vec3(s.view.camera.lookAt)},
-           {"up", vec3(s.view.camera.up)},
-           {"fov", s.view.camera.fovY}}},
-         {"settings",
-          {{"exposure", s.view.exposure},
-           {"spp", s.view.spp},
-           {"max_depth", s.view.maxDepth},
-           {"transfer_function", s.view.transferFunction < 0
-                                     ? Json("scene")
-                                     : Json(renderers::transferFunctionPresetNames().at(
-                                           static_cast<size_t>(s.view.transferFunction)))},
-           {"opacity_scale", s.view.opacityScale}}},
-         {"max_spp", job.options.maxSpp},
-         {"renderer", job.options.renderer},
-         {"last_request", {{"id", s.lastRequest}, {"frame", s.lastRequestFrame}}}};
-  Json list = Json::array();
-  // The swap barrier presents a frame on every display at once: one number each. A
-  // display of a wall process the wall lost (--connect) shows nothing of this job.
-  for (const std::string& name : displays) {
-    const bool lost =
-        std::find(s.lostDisplays.begin(), s.lostDisplays.end(), name) != s.lostDisplays.end();
-    list.push_back(
-        {{"name", name}, {"presented", s.presented}, {"state", lost ? "lost" : "presenting"}});
-  }
-  j["displays"] = list;
-  j["lost_displays"] = s.lostDisplays;
-  j["errors"] = s.errors;
-  return j;
+ControlServer::~ControlServer() {
+  stop();
+  if (impl_->listenFd >= 0) ::close(impl_->listenFd);
 }
-
-}  // namespace
 
 const std::string& ControlServer::host() const { return impl_->host; }
 int ControlServer::port() const { return impl_->port; }
-const std::string& ControlServer::token() const { return impl_->token; }
+const ControlSecret& ControlServer::secret() const { return impl_->secret; }
+ControlRequests& ControlServer::requests() { return *impl_->requests; }
 
-void ControlServer::addGet(const std::string& path, std::function<HttpReply()> handler) {
-  impl_->extraGets.emplace_back(path, std::move(handler));
+std::string ControlServer::startLine() const {
+  const Impl& m = *impl_;
+  // On every interface: the address that works on this host; other hosts use its name.
+  const std::string address =
+      "http://" + urlHost(isWildcard(m.host) ? "127.0.0.1" : m.host) + ":" + std::to_string(m.port);
+  if (m.secret.generated) return "control API on " + address + "/?token=" + m.secret.token;
+  return "control API on " + address + "/ (open " + address + "/?token=TOKEN, TOKEN from " +
+         m.secret.source + ")";
 }
 
-void ControlServer::start(const Job& job, Steering& steering, StatusBoard& status) {
+void ControlServer::start() {
   Impl& m = *impl_;
-  std::vector<std::string> displays;
-  if (job.layout)
-    for (const auto& d : job.layout->displays) displays.push_back(d.name);
-  m.server.Get("/api/status", m.guarded([&status, displays, &job](const auto&) {
-    return json(200, statusJson(status, job, displays));
-  }));
-  m.addSteeringRoutes(job, steering, status);
-  for (const auto& [path, handler] : m.extraGets)
-    m.server.Get(path, m.guarded([handler](const auto&) { return handler(); }));
-  m.answerWhatHttplibWouldNot();
-  m.thread = std::thread([&m] { m.server.listen_after_bind(); });
-}
-
-void ControlServer::Impl::addSteeringRoutes(const Job& job, Steering& steering,
-                                            StatusBoard& status) {
-  Impl& m = *this;
-  // Every POST route is kept by path too: the pre-routing handler below serves a POST without a
-  // body itself.
-  const auto post = [&m](const std::string& path, httplib::Server::Handler handler) {
-    m.posts[path] = handler;
-    m.server.Post(path, std::move(handler));
-  };
-  post("/api/camera", m.guarded([&steering, &status](const httplib::Request& req) {
-    SteeringRequest r = cameraRequest(parseObject(req.body));
-    if (const std::string problem = checkRequest(r); !problem.empty()) throw BadRequest(problem);
-    // Checked against the camera shown now (rank 0 checks again when applying).
-    if (!status.waitForFirstPublish(std::chrono::seconds(30)))
-      return json(503, Json{{"error", "the wall is still starting; try again"}});
-    FrameView view = status.snapshot().view;
-    if (!steerView(view, view.camera, r))
-      throw BadRequest("the camera would be unusable: look_at equal to position, or along up");
-    return json(200, Json{{"request", steering.submit(r)}});
-  }));
-  post("/api/settings",
-       m.guarded([&steering, renderer = job.options.renderer](const httplib::Request& req) {
-         const SteeringRequest r = settingsRequest(parseObject(req.body), renderer);
-         return json(200, Json{{"request", steering.submit(r)}});
-       }));
-  const bool canCapture = job.layout && !job.options.captureDir.empty();
-  post("/api/capture", m.guarded([&steering, canCapture](const httplib::Request& req) {
-    if (!parseObject(req.body).empty()) throw BadRequest("capture takes no fields");
-    if (!canCapture) throw BadRequest("captures need a wall started with --capture DIR");
-    SteeringRequest r;
-    r.kind = SteeringRequest::kCapture;
-    return json(200, Json{{"request", steering.submit(r)}});
-  }));
-  post("/api/stop", m.guarded([&steering](const httplib::Request& req) {
-    if (!parseObject(req.body).empty()) throw BadRequest("stop takes no fields");
-    SteeringRequest r;
-    r.kind = SteeringRequest::kStop;
-    return json(200, Json{{"request", steering.submit(r)}, {"stopping", true}});
-  }));
-}
-
-void ControlServer::Impl::answerWhatHttplibWouldNot() {
-  Impl& m = *this;
-  // A POST with neither Content-Length nor Transfer-Encoding has an empty body (RFC 9112, 6.3),
-  // and `curl -X POST URL` sends just that. httplib 0.11 instead reads such a body until the
-  // connection closes (Server::routing -> read_content -> detail::read_content_without_length),
-  // which a client waiting for its answer never does: 400 after the 5 s read timeout. The
-  // pre-routing handler runs before that read, so it serves these requests itself, with the
-  // empty body (the handlers take it as {}); the connection stays usable for the next request.
-  m.server.set_pre_routing_handler([&m](const httplib::Request& req, httplib::Response& res) {
-    if (req.method != "POST" || req.has_header("Content-Length") ||
-        req.has_header("Transfer-Encoding"))
-      return httplib::Server::HandlerResponse::Unhandled;
-    const auto found = m.posts.find(req.path);
-    if (found == m.posts.end())
-      reply(res, error(404, "no such endpoint (see README, \"Steering the wall\")"));
-    else
-      found->second(req, res);
-    return httplib::Server::HandlerResponse::Handled;
-  });
-  // httplib's own refusals come with no body: say what went wrong.
-  m.server.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
-    if (!res.body.empty()) return;
-    if (res.status == 404)
-      reply(res, error(404, "no such endpoint (see README, \"Steering the wall\")"));
-    else if (res.status == 400 && req.method == "POST")
-      reply(res, error(400,
-                       "the request's body could not be read: it must be as long as its "
-                       "Content-Length says, or validly chunked"));
-    else
-      reply(res, error(res.status, "request refused"));
-  });
+  const unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL;
+  m.daemon = MHD_start_daemon(
+      flags, 0, nullptr, nullptr, &Impl::answer, &m, MHD_OPTION_LISTEN_SOCKET, m.listenFd,
+      MHD_OPTION_THREAD_POOL_SIZE, kEventThreads, MHD_OPTION_CONNECTION_LIMIT, kMaxConnections,
+      MHD_OPTION_PER_IP_CONNECTION_LIMIT, kMaxConnectionsPerAddress, MHD_OPTION_CONNECTION_TIMEOUT,
+      static_cast<unsigned>(std::chrono::seconds(kRequestDeadline).count()),
+      MHD_OPTION_CONNECTION_MEMORY_LIMIT, kConnectionMemory, MHD_OPTION_NOTIFY_COMPLETED,
+      &Impl::completed, &m, MHD_OPTION_NOTIFY_CONNECTION, &Impl::connectionEvent, &m,
+      MHD_OPTION_END);
+  if (!m.daemon)
+    throw std::runtime_error("--control: libmicrohttpd could not start serving port " +
+                             std::to_string(m.port));
+  m.listenFd = -1;  // the daemon closes it
+  m.reaper = std::thread([&m] { m.reap(); });
 }
 
 void ControlServer::stop() {
   Impl& m = *impl_;
-  if (m.thread.joinable()) {
-    // stop() does nothing before the listening loop runs (httplib): let it start first.
-    for (int i = 0; i < 500 && !m.server.is_running(); ++i)
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    m.server.stop();
-    m.thread.join();
+  if (m.reaper.joinable()) {
+    {
+      std::lock_guard<std::mutex> lock(m.mutex);
+      m.stopping = true;
+    }
+    m.wake.notify_all();
+    m.reaper.join();
   }
+  if (m.daemon) MHD_stop_daemon(m.daemon);
+  m.daemon = nullptr;
+}
+
+void ControlServer::Impl::reap() {
+  std::unique_lock<std::mutex> lock(mutex);
+  while (!wake.wait_for(lock, std::chrono::milliseconds(200), [this] { return stopping; })) {
+    const Clock::time_point late = Clock::now() - kRequestDeadline;
+    for (auto& [connection, o] : open) {
+      // The daemon closes the socket only after telling connectionEvent, which waits for this
+      // lock: the descriptor is still this connection's. Its event loop sees the hang-up.
+      if (!o.cut && o.since < late) {
+        ::shutdown(o.fd, SHUT_RDWR);
+        o.cut = true;
+      }
+    }
+  }
+}
+
+void ControlServer::Impl::connectionEvent(void* cls, MHD_Connection* connection, void**,
+                                          MHD_ConnectionNotificationCode code) {
+  Impl& m = *static_cast<Impl*>(cls);
+  std::lock_guard<std::mutex> lock(m.mutex);
+  if (code == MHD_CONNECTION_NOTIFY_STARTED) {
+    const MHD_ConnectionInfo* info =
+        MHD_get_connection_info(connection, MHD_CONNECTION_INFO_CONNECTION_FD);
+    if (info) m.open[connection] = Open{info->connect_fd, Clock::now(), false};
+  } else {
+    m.open.erase(connection);
+  }
+}
+
+void ControlServer::Impl::completed(void* cls, MHD_Connection* connection, void** state,
+                                    MHD_RequestTerminationCode) {
+  Impl& m = *static_cast<Impl*>(cls);
+  delete static_cast<Reading*>(*state);
+  *state = nullptr;
+  // The next request on this connection has its own deadline.
+  std::lock_guard<std::mutex> lock(m.mutex);
+  if (const auto found = m.open.find(connection); found != m.open.end())
+    found->second.since = Clock::now();
+}
+
+MHD_Result ControlServer::Impl::answer(void* cls, MHD_Connection* connection, const char* url,
+                                       const char* method, const char*, const char* upload,
+                                       size_t* uploadSize, void** state) {
+  Impl& m = *static_cast<Impl*>(cls);
+  if (!*state) {  // the headers are in; the body (if any) follows
+    *state = new Reading;
+    return MHD_YES;
+  }
+  Reading& reading = *static_cast<Reading*>(*state);
+  if (*uploadSize) {
+    const size_t room = kMaxControlBody + 1 - std::min(reading.body.size(), kMaxControlBody + 1);
+    reading.body.append(upload, std::min(room, *uploadSize));
+    *uploadSize = 0;
+    return MHD_YES;
+  }
+  HttpRequest request;
+  request.method = method;
+  request.path = url;
+  request.body = std::move(reading.body);
+  MHD_get_connection_values(connection, MHD_HEADER_KIND, &collect, &request.headers);
+  MHD_get_connection_values(connection, MHD_GET_ARGUMENT_KIND, &collect, &request.query);
+  HttpReply reply;
+  try {
+    reply = m.requests->handle(request);
+  } catch (const std::exception& e) {  // never through libmicrohttpd's C frames
+    reply = HttpReply{500, "text/plain", std::string("the control server failed: ") + e.what(), {}};
+  }
+  MHD_Response* response = MHD_create_response_from_buffer(
+      reply.body.size(), const_cast<char*>(reply.body.data()), MHD_RESPMEM_MUST_COPY);
+  if (!response) return MHD_NO;
+  MHD_add_response_header(response, MHD_HTTP_HEADER_CONTENT_TYPE, reply.contentType.c_str());
+  for (const auto& [name, value] : reply.headers)
+    MHD_add_response_header(response, name.c_str(), value.c_str());
+  const MHD_Result queued =
+      MHD_queue_response(connection, static_cast<unsigned>(reply.status), response);
+  MHD_destroy_response(response);
+  return queued;
 }
 
 }  // namespace app

@@ -1,56 +1,47 @@
 #pragma once
-// --control [ADDR:]PORT: the JSON-over-HTTP control API on render rank 0 (docs/service.md,
-// "Steering the wall"). Debian's cpp-httplib serves it on two threads of its own; handlers only
-// read the status board and queue steering requests, so a slow or hostile client never stalls a
-// frame.
+// --control [ADDR:]PORT: the control API and the controller page on render rank 0, over HTTP
+// (docs/service.md, "Steering the wall"; docs/security.md, "The control API"). Debian's
+// libmicrohttpd serves it from two event-loop threads of its own, so slow or many clients never
+// stall each other or a frame: at most 256 connections (128 from one address), and every request
+// (or idle keep-alive wait) must be over within 5 s of its start, however slowly its bytes
+// arrive, or its connection is cut.
 //
-//   GET  /api/status    frame, fps, spp, camera, displays, renderer, errors
-//   POST /api/camera    {"position", "look_at", "up", "fov"} (any subset), "orbit", "pan", "dolly"
-//   POST /api/settings  {"exposure", "spp", "max_depth", "transfer_function", "opacity_scale"}
-//   POST /api/capture   every display captures the next frame to the --capture folder
-//   POST /api/stop      graceful stop: statistics and captures written, exit 0
-//
-// Anything but a loopback address needs a token (--control-token, or one generated and
-// printed); with a token every request must carry it (Authorization: Bearer TOKEN, or
-// ?token=TOKEN for a browser), else 401. A POST without a body (even without Content-Length, as
-// `curl -X POST` sends it) is taken as {}. Malformed JSON, unknown fields, NaN, values out of
-// range: 400 with a message; the wall keeps running.
-#include <functional>
+// Who may ask and what they may do is decided by apps/ControlRequests.h (a secret always,
+// loopback included; a Host allow-list; Origin and Content-Type for the page's changes); the
+// routes are apps/ControlApi.h and apps/PageRoutes.h. The secret comes from
+// apps/ControlSecret.h: a file, the environment, or generated and printed as the address to open.
 #include <memory>
 #include <string>
+#include <vector>
+
+#include "apps/ControlRequests.h"
+#include "apps/ControlSecret.h"
 
 namespace app {
 
-class RunControl;
-class StatusBoard;
-class Steering;
-struct Job;
-
-struct HttpReply {
-  int status = 200;
-  std::string contentType = "application/json";
-  std::string body;
-};
-
 class ControlServer {
  public:
-  // Binds `address` ([ADDR:]PORT; port 0 picks a free one). Throws std::runtime_error naming the
-  // address when it cannot be parsed or bound (a port in use).
-  ControlServer(const std::string& address, std::string token);
+  // Binds `address` ([ADDR:]PORT; port 0 picks a free one). `hosts`: more names a Host header
+  // may carry (--control-host). Throws std::runtime_error naming the address when it cannot be
+  // parsed or bound (a port in use).
+  ControlServer(const std::string& address, ControlSecret secret, std::vector<std::string> hosts);
   ~ControlServer();  // stops serving
   ControlServer(const ControlServer&) = delete;
   ControlServer& operator=(const ControlServer&) = delete;
 
-  const std::string& host() const;
+  const std::string& host() const;  // as bound ("0.0.0.0" for every interface)
   int port() const;
-  const std::string& token() const;  // empty: none needed (loopback without --control-token)
+  const ControlSecret& secret() const;
 
-  // Before start(): another GET route (e.g. "/" or "/api/preview.png"), behind the same token.
-  // `handler` runs on a server thread and must be thread-safe.
-  void addGet(const std::string& path, std::function<HttpReply()> handler);
-  // Serves until stop() or destruction. The objects must outlive the server.
-  void start(const Job& job, Steering& steering, StatusBoard& status);
+  // The routes, to add before start().
+  ControlRequests& requests();
+  // Serves until stop() or destruction.
+  void start();
   void stop();
+
+  // What to print once: the address to open, with the token when it was generated for this run
+  // (a token from a file or the environment is not repeated in the log).
+  std::string startLine() const;
 
  private:
   struct Impl;

@@ -151,8 +151,8 @@ std::string renderJobProblem(Options& o, const RawOptions& raw, bool ghostGiven)
     return "--offscreen, --capture, --mode and --dry-run need --wall FILE.toml (or --connect)";
   if (!o.cameraPath.empty() && o.orbit != 0.0f)
     return "--camera-path and --orbit both move the camera: choose one";
-  if (!o.controlToken.empty() && o.control.empty())
-    return "--control-token needs --control [ADDR:]PORT";
+  if ((!o.controlTokenFile.empty() || !o.controlHosts.empty()) && o.control.empty())
+    return "--control-token-file and --control-host need --control [ADDR:]PORT";
   return renderingProblem(o, ghostGiven);
 }
 

@@ -5,6 +5,7 @@
 // everywhere at once.
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace app {
 
@@ -67,8 +68,9 @@ struct Options {
   bool wait = false;             // connect: queue behind a connected job instead of failing
 
   // Steering.
-  std::string control;         // [ADDR:]PORT of the control server on render rank 0; empty: none
-  std::string controlToken;    // required from clients; generated when binding beyond loopback
+  std::string control;           // [ADDR:]PORT of the control server on render rank 0; empty: none
+  std::string controlTokenFile;  // the control API's secret (apps/ControlSecret.h)
+  std::vector<std::string> controlHosts;  // more names a Host header may carry (rebinding)
   std::int64_t maxSpp = 1024;  // with --frames 0: idle once an epoch has this many samples
   std::string cameraPath;      // FILE.toml: keyframes (apps/CameraPath.h)
 };

@@ -2,23 +2,23 @@
 
 #include <nlohmann/json.hpp>
 
-#include "apps/ControlServer.h"
+#include "apps/ControlRequests.h"
 #include "apps/Job.h"
 #include "apps/Preview.h"
 #include "apps/control/PageAssets.h"
 
 namespace app {
 
-void addPageRoutes(ControlServer& server, const Job& job, const Preview& preview) {
+void addPageRoutes(ControlRequests& server, const Job& job, const Preview& preview) {
   for (const PageAsset& asset : pageAssets()) {
-    auto serve = [&asset] {
-      return HttpReply{200, std::string(asset.contentType), std::string(asset.body)};
+    auto serve = [&asset](const HttpRequest&) {
+      return HttpReply{200, std::string(asset.contentType), std::string(asset.body), {}};
     };
-    server.addGet(std::string(asset.path), serve);
-    if (asset.path == "/index.html") server.addGet("/", serve);
+    server.get(std::string(asset.path), serve);
+    if (asset.path == "/index.html") server.get("/", serve);
   }
-  server.addGet("/api/preview.png", [&preview] {
-    return HttpReply{200, "image/png", *preview.png().bytes};
+  server.get("/api/preview.png", [&preview](const HttpRequest&) {
+    return HttpReply{200, "image/png", *preview.png().bytes, {}};
   });
 
   nlohmann::json layout;
@@ -31,8 +31,8 @@ void addPageRoutes(ControlServer& server, const Job& job, const Preview& preview
       layout["displays"].push_back({{"name", d.name},
                                     {"rect", {d.rect.x0, d.rect.y0, d.rect.x1, d.rect.y1}},
                                     {"process", d.process}});
-  server.addGet("/api/layout", [body = layout.dump()] {
-    return HttpReply{200, "application/json", body};
+  server.get("/api/layout", [body = layout.dump()](const HttpRequest&) {
+    return HttpReply{200, "application/json", body, {}};
   });
 }
 

@@ -1,7 +1,7 @@
 #pragma once
-// The controller page's routes on the control server: the page itself ("/" and its
-// files, embedded by cmake/EmbedFiles.cmake), the latest whole-wall preview as PNG, and the
-// layout the page draws the display outlines and names from.
+// The controller page's routes on the control server (behind its checks, apps/ControlRequests.h):
+// the page itself ("/" and its files, embedded by cmake/EmbedFiles.cmake), the latest whole-wall
+// preview as PNG, and the layout the page draws the display outlines and names from.
 //
 //   GET /, /index.html, /app.js, /style.css
 //   GET /api/preview.png   the assembled preview (bezels dark, outlines), canvas / factor
@@ -9,11 +9,11 @@
 //                           "displays": [{"name", "rect": [x0, y0, x1, y1], "process"}]}
 namespace app {
 
-class ControlServer;
+class ControlRequests;
 class Preview;
 struct Job;
 
 // Before the server starts. `preview` must outlive the server.
-void addPageRoutes(ControlServer& server, const Job& job, const Preview& preview);
+void addPageRoutes(ControlRequests& server, const Job& job, const Preview& preview);
 
 }  // namespace app

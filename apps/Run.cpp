@@ -8,6 +8,7 @@
 #include <new>
 #include <string>
 
+#include "apps/ControlApi.h"
 #include "apps/ControlServer.h"
 #include "apps/Failure.h"
 #include "apps/Job.h"
@@ -171,7 +172,8 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
     }
     // Bound now, so a port in use is a setup error on every rank; served once frames start.
     if (job.worldRank == 0 && !o.control.empty())
-      server = std::make_unique<ControlServer>(o.control, o.controlToken);
+      server = std::make_unique<ControlServer>(o.control, controlSecret(o.controlTokenFile),
+                                               o.controlHosts);
     return {};
   } catch (const std::bad_alloc&) {
     // Loaders name what they load; this is the net for whatever else allocates at setup.
@@ -201,6 +203,15 @@ std::string compareInputs(const Job& job, const InputHashes& mine,
            ": the render ranks read different bytes from this file or the files it refers to; "
            "every host must see the same scene";
   return {};
+}
+
+// What the control API reports and checks against, of this job.
+ControlFacts controlFacts(const Job& job) {
+  ControlFacts facts{
+      job.options.renderer, job.options.maxSpp, {}, job.layout && !job.options.captureDir.empty()};
+  if (job.layout)
+    for (const auto& d : job.layout->displays) facts.displays.push_back(d.name);
+  return facts;
 }
 
 // Every rank's totals to rank 0. Collective over MPI_COMM_WORLD; only with --stats.
@@ -295,12 +306,13 @@ int run(int argc, char** argv) {
     std::unique_ptr<StatusBoard> status;
     if (server) {
       status = std::make_unique<StatusBoard>();
-      addPageRoutes(*server, job, *preview);  // the controller page and the preview
-      server->start(job, steering, *status);
-      // One line a script can read: where the API is, and the token when one is needed.
-      std::printf("dfbwall: control API on http://%s:%d/%s%s\n", server->host().c_str(),
-                  server->port(),
-                  server->token().empty() ? "" : "  token: ", server->token().c_str());
+      addPageRoutes(server->requests(), job, *preview);  // the controller page and the preview
+      addApiRoutes(
+          server->requests(), controlFacts(job),
+          [&steering](const SteeringRequest& r) { return steering.submit(r); }, *status);
+      server->start();
+      // One line a script can read: the address to open.
+      std::printf("dfbwall: %s\n", server->startLine().c_str());
       std::fflush(stdout);
     }
     RankTotals totals;

@@ -25,17 +25,23 @@ import threading
 import time
 import urllib.request
 
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+# The control API's token, given through the environment as an operator would.
+TOKEN = os.urandom(16).hex()
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+           DFBWALL_CONTROL_TOKEN=TOKEN)
+AUTH = {"Authorization": "Bearer " + TOKEN}
 
 
 def post(url, path, body):
-    req = urllib.request.Request(url + path, data=json.dumps(body).encode(), method="POST")
+    req = urllib.request.Request(url + path, data=json.dumps(body).encode(), method="POST",
+                                 headers=AUTH)
     with urllib.request.urlopen(req, timeout=10) as r:
         return json.loads(r.read())
 
 
 def get(url, path):
-    with urllib.request.urlopen(url + path, timeout=10) as r:
+    with urllib.request.urlopen(urllib.request.Request(url + path, headers=AUTH),
+                                timeout=10) as r:
         return json.loads(r.read())
 
 

@@ -54,9 +54,9 @@ dfbwall_find_package(OpenGL libgl-dev)
 dfbwall_find_package(X11 libx11-dev)  # the GLFW presenter reads its window back; libgl-dev pulls it in
 dfbwall_find_package(PkgConfig pkg-config)
 dfbwall_pkg_module(OSMESA osmesa "OSMesa" libosmesa6-dev)
-# The control server (apps/ControlServer.cpp): Debian's compiled cpp-httplib. Its pkg-config
-# flags carry the library's build options (OpenSSL, zlib, Brotli), which the header must match.
-dfbwall_pkg_module(HTTPLIB cpp-httplib "cpp-httplib" libcpp-httplib-dev)
+# The control server (apps/ControlServer.cpp): Debian's libmicrohttpd, an event-loop HTTP server
+# with connection caps (docs/security.md, "The control API", says why not cpp-httplib).
+dfbwall_pkg_module(MICROHTTPD libmicrohttpd "libmicrohttpd" libmicrohttpd-dev)
 # Volume files (renderers/scivis/io/formats/): serial HDF5 (what Debian's NetCDF links; each rank
 # opens the file itself and reads its hyperslab), NetCDF, zlib for gzip-compressed NRRD/NIfTI.
 dfbwall_pkg_module(HDF5 hdf5-serial "HDF5" libhdf5-dev)

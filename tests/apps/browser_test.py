@@ -50,16 +50,16 @@ job = subprocess.Popen(
     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=mpi_env)
 output = []
 address = threading.Event()
-base = None
+base = token = None
 
 
 def read_output():
-    global base
+    global base, token
     for line in job.stdout:
         output.append(line)
-        m = re.search(r'control API on (http://[0-9.]+:\d+)/', line)
+        m = re.search(r'control API on (http://[0-9.]+:\d+)/\?token=(\S+)', line)
         if m and not base:
-            base = m.group(1)
+            base, token = m.groups()
             address.set()
 
 
@@ -70,7 +70,8 @@ driver = None
 def api(method, path, body=None):
     data = None if body is None else json.dumps(body).encode()
     request = urllib.request.Request(base + path, data=data, method=method,
-                                     headers={'Content-Type': 'application/json'})
+                                     headers={'Content-Type': 'application/json',
+                                              'Authorization': 'Bearer ' + token})
     with urllib.request.urlopen(request, timeout=10) as r:
         payload = r.read()
         return json.loads(payload) if r.headers.get_content_type() == 'application/json' else payload
@@ -126,7 +127,7 @@ try:
         options.add_argument(flag)
     driver = webdriver.Chrome(service=Service('/usr/bin/chromedriver'), options=options)
     driver.set_page_load_timeout(30)
-    driver.get(base + '/')
+    driver.get(base + '/?token=' + token)  # the address dfbwall printed
 
     # The preview loads, at the size the layout says.
     layout_info = api('GET', '/api/layout')

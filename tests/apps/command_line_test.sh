@@ -35,7 +35,7 @@ Rendering: --renderer --size --spp --frames --seed --max-depth --exposure --film
 Data-parallel scivis (bricks): --bricks --replication --ghost
 Wall: --wall --offscreen --mode --dry-run
 Connect to a wall service: --connect --token --codec --wait
-Control: --control --control-token --max-spp
+Control: --control --control-token-file --control-host --max-spp
 Throughput: --frames-in-flight --handler-threads --no-compress --compress-within-host
 Failure handling: --timeout --memory-limit
 Output: --image --capture --capture-every --preview --stats --quiet

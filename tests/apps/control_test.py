@@ -10,14 +10,20 @@ ranks, an OSMesa wall with captures, HTTP through the standard library's urllib.
                               with no body and no Content-Length (curl -X POST), over a raw
                               socket, is answered at once as if the body were {}, and stops the
                               job at the end
-  control_test.py token       binding beyond loopback without a token: one is generated and
-                              printed, requests without it (or with a wrong one) get 401, with
-                              it 200; --control-token on loopback likewise
+  control_test.py token       a token always, loopback included: generated and printed as the
+                              address to open; without it (or with a wrong one, or in a URL
+                              other than the page's first load) 401, with it 200; the page's
+                              address sets an HttpOnly SameSite=Strict cookie and redirects;
+                              --control-token-file (created 0600, read again, refused when
+                              others may read it) and DFBWALL_CONTROL_TOKEN, neither in the
+                              log nor in ps
+  control_attacks_test.py     the attacks themselves (rebinding, cross-origin, slow clients)
   control_test.py idle        converged (--max-spp): every rank uses < 5% of one core over 5 s
                               (/proc/PID/stat), and a change wakes the wall at once
 Each ends the job with POST /api/stop and checks exit code 0 and complete statistics.
 Needs DFBWALL, COMPARE (compare_captures) and MPIEXEC in the environment.
 """
+import http.client
 import json
 import os
 import queue
@@ -37,6 +43,7 @@ COMPARE = os.environ["COMPARE"]
 MPIEXEC = os.environ["MPIEXEC"]
 SOURCE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 WALL = os.path.join(SOURCE, "configs", "walls", "2x2.toml")
+WALL1 = os.path.join(SOURCE, "configs", "walls", "1x1.toml")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1")
 
@@ -49,16 +56,19 @@ def fail(message):
 class Job:
     """One dfbwall job under mpirun with a control server; stdout read on a thread."""
 
-    def __init__(self, work, ranks, *args):
+    def __init__(self, work, ranks, *args, token=None, env=None):
+        """`token`: the one the job was given (a file, the environment); otherwise the one it
+        prints."""
         self.work = work
         command = [MPIEXEC, "-n", str(ranks), "--oversubscribe", "--bind-to", "none", DFBWALL,
                    *args]
         self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                        text=True, env=ENV)
+                                        text=True, env=env or ENV)
         self.lines = queue.Queue()
         self.log = []
         threading.Thread(target=self._read, daemon=True).start()
-        self.url, self.token = self._wait_for_server()
+        self.url, self.printed_token = self._wait_for_server()
+        self.token = token or self.printed_token
 
     def _read(self):
         for line in self.process.stdout:
@@ -74,7 +84,7 @@ class Job:
                 if self.process.poll() is not None:
                     self.fail("the job ended before its control server started")
                 continue
-            m = re.search(r"control API on (http://\S+?)/(?:\s+token: (\S+))?\s*$", line)
+            m = re.search(r"control API on (http://[^/\s]+)/(?:\?token=(\S+))?", line)
             if m:
                 return m.group(1), m.group(2)
         self.fail("no 'control API on' line within 30 s")
@@ -269,9 +279,8 @@ def bad_scenario(work):
     code, _ = job.request("GET", "/api/nothing")
     if code != 404:
         job.fail("GET /api/nothing gave %d, expected 404" % code)
-    # No body and no Content-Length (curl -X POST): the body is {}, answered at once (httplib
-    # alone waited for the body until its 5 s read timeout, then answered 400), and the
-    # connection goes on. {} itself is refused by these (no fields, no --capture folder): the
+    # No body and no Content-Length (curl -X POST): the body is {}, answered at once (not after
+    # waiting for a body that never comes), and the connection goes on. {} itself is refused by these (no fields, no --capture folder): the
     # same answer, word for word.
     for path in ("/api/camera", "/api/settings", "/api/capture"):
         code, body, seconds, then = job.bodiless(path, then="/api/status")
@@ -297,11 +306,36 @@ def bad_scenario(work):
           " POSTs without a body were taken as {}, and one stopped the wall" % len(bad))
 
 
+def page_address(job, token):
+    """GET /?token=TOKEN without following the redirect: (status, headers)."""
+    host, port = re.match(r"http://([^:/]+):(\d+)", job.url).groups()
+    connection = http.client.HTTPConnection(host, int(port), timeout=10)
+    connection.request("GET", "/?token=" + token)
+    response = connection.getresponse()
+    response.read()
+    connection.close()
+    return response.status, response.headers
+
+
+def token_in_ps(token):
+    """A process whose command line holds `token`, or None."""
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            with open("/proc/%s/cmdline" % pid, "rb") as f:
+                if token.encode() in f.read():
+                    return pid
+        except OSError:
+            pass
+    return None
+
+
 def token_scenario(work):
-    job = Job(work, 6, "--wall", WALL, "--offscreen", "--frames", "0", "--renderer", "pattern",
-              "--control", "0.0.0.0:0", "--quiet")
-    if not job.token or len(job.token) < 32:
-        job.fail("binding 0.0.0.0 printed no generated token")
+    pattern = ("--wall", WALL1, "--offscreen", "--frames", "0", "--renderer", "pattern",
+               "--quiet")
+    # Loopback, no token given: one is generated and printed as the address to open.
+    job = Job(work, 2, *pattern, "--control", "127.0.0.1:0")
+    if not job.printed_token or len(job.printed_token) < 32:
+        job.fail("no generated token in the printed address")
     for token in (None, "wrong", job.token[:-1]):
         code, body = job.request("GET", "/api/status", token=token)
         if code != 401:
@@ -309,19 +343,63 @@ def token_scenario(work):
         code, body = job.request("POST", "/api/stop", token=token)
         if code != 401:
             job.fail("POST /api/stop with token %r gave %d, expected 401" % (token, code))
-    code, body = job.request("GET", "/api/status?token=" + job.token, token=None)
-    if code != 200:
-        job.fail("?token= gave %d" % code)
+    # Only the page's first load takes the token from its URL.
+    code, _ = job.request("GET", "/api/status?token=" + job.token, token=None)
+    if code != 401:
+        job.fail("?token= on /api/status gave %d, expected 401" % code)
+    code, headers = page_address(job, job.token)
+    cookie = headers.get("Set-Cookie", "")
+    if code != 303 or headers.get("Location") != "/" or "HttpOnly" not in cookie or \
+            "SameSite=Strict" not in cookie or job.token not in cookie:
+        job.fail("GET /?token= gave %d, Location %s, Set-Cookie %r" %
+                 (code, headers.get("Location"), cookie))
+    if page_address(job, "wrong-token-1234567890")[0] != 401:
+        job.fail("GET /?token=WRONG did not give 401")
     job.status()
     job.stop()
-    job = Job(work, 6, "--wall", WALL, "--offscreen", "--frames", "0", "--renderer", "pattern",
-              "--control", "127.0.0.1:0", "--control-token", "s3cret-token", "--quiet")
-    if job.token != "s3cret-token":
-        job.fail("the given token was not printed")
+
+    # --control-token-file: created 0600 with a fresh token, not printed, read again next time;
+    # on every interface the printed address is loopback's.
+    path = os.path.join(work, "control.token")
+    job = Job(work, 2, *pattern, "--control", "0.0.0.0:0", "--control-token-file", path,
+              token="unknown")
+    mode = os.stat(path).st_mode & 0o777
+    token = open(path).read().strip()
+    if mode != 0o600 or len(token) < 32:
+        job.fail("--control-token-file made mode %o with %r" % (mode, token))
+    job.token = token
+    if job.printed_token or token in "".join(job.log) or token_in_ps(token):
+        job.fail("the token of --control-token-file shows in the log or in ps")
     if job.request("GET", "/api/status", token=None)[0] != 401:
-        job.fail("loopback with --control-token answered without the token")
+        job.fail("a tokenless request was answered")
+    job.status()
     job.stop()
-    print("beyond loopback a token is generated; without it 401, with it 200")
+    job = Job(work, 2, *pattern, "--control", "127.0.0.1:0", "--control-token-file", path,
+              token=token)
+    job.status()
+    job.stop()
+
+    # DFBWALL_CONTROL_TOKEN.
+    secret = "env-token-0123456789abcdef"
+    job = Job(work, 2, *pattern, "--control", "127.0.0.1:0", token=secret,
+              env=dict(ENV, DFBWALL_CONTROL_TOKEN=secret))
+    job.status()
+    if job.printed_token or secret in "".join(job.log) or token_in_ps(secret):
+        job.fail("DFBWALL_CONTROL_TOKEN shows in the log or in ps")
+    if job.request("GET", "/api/status", token=None)[0] != 401:
+        job.fail("a tokenless request was answered")
+    job.stop()
+
+    # A token file others may read is refused, naming it.
+    os.chmod(path, 0o644)
+    result = subprocess.run([MPIEXEC, "-n", "2", "--oversubscribe", DFBWALL, *pattern,
+                             "--control", "127.0.0.1:0", "--control-token-file", path],
+                            capture_output=True, text=True, env=ENV, timeout=60)
+    if result.returncode == 0 or path + ": other users may read it" not in result.stderr:
+        fail("a token file of mode 644 gave exit %d: %s" % (result.returncode, result.stderr))
+    print("a token always: generated and printed, or from a 0600 file or the environment "
+          "(neither in the log nor in ps); without it 401; the page's address sets an HttpOnly "
+          "SameSite=Strict cookie and redirects to /")
 
 
 def rank_pids(mpirun):

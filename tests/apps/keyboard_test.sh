@@ -21,12 +21,16 @@ cleanup() {
 }
 trap cleanup EXIT
 
+# The control API's token, from the environment (never on a command line).
+DFBWALL_CONTROL_TOKEN=$(od -An -N16 -tx1 /dev/urandom | tr -d ' \n')
+export DFBWALL_CONTROL_TOKEN
+auth="Authorization: Bearer $DFBWALL_CONTROL_TOKEN"
 "$MPIEXEC" -n $((renders + w)) --oversubscribe --bind-to none -x DISPLAY -x XAUTHORITY \
   "$DFBWALL" --wall "$layout" --renderer primary --frames 0 --max-spp 4 --control 127.0.0.1:0 \
   --stats "$work/stats.json" --quiet >"$work/out.txt" 2>&1 &
 job=$!
 
-status() { curl -sf "$base/api/status"; }
+status() { curl -sf -H "$auth" "$base/api/status"; }
 camera() { status | /usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)["camera"])'; }
 # wait_until SECONDS WHAT COMMAND...: polls COMMAND until it succeeds.
 wait_until() {
@@ -41,21 +45,21 @@ wait_until() {
 
 wait_until 90 "the control address" grep -q "control API on http://" "$work/out.txt"
 base=$(grep -o 'http://[0-9.]*:[0-9]*' "$work/out.txt" | head -n1)
-wait_until 60 "the first frames" sh -c "curl -sf '$base/api/status' | grep -q '\"frame\": *[2-9]\|\"frame\": *[1-9][0-9]'"
+wait_until 60 "the first frames" sh -c "curl -sf -H '$auth' '$base/api/status' | grep -q '\"frame\": *[2-9]\|\"frame\": *[1-9][0-9]'"
 # The first display's window, by its title (the display's name).
-name=$(/usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)["displays"][0]["name"])' < <(curl -sf "$base/api/layout"))
+name=$(/usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)["displays"][0]["name"])' < <(curl -sf -H "$auth" "$base/api/layout"))
 window=$(xdotool search --sync --name "^$name\$" | head -n1)
 xdotool windowfocus --sync "$window"
 
 # Converged (4 samples per pixel): the renderers idle, the wall waits, and still hears its keys.
-wait_until 60 "the idle, converged wall" sh -c "curl -sf '$base/api/status' | grep -q '\"idle\": *true'"
+wait_until 60 "the idle, converged wall" sh -c "curl -sf -H '$auth' '$base/api/status' | grep -q '\"idle\": *true'"
 before=$(camera)
 xdotool key --delay 100 Right Right
-wait_until 20 "a new camera after the right arrow" sh -c "[ \"\$(curl -sf '$base/api/status' | /usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)[\"camera\"])')\" != \"$before\" ]"
+wait_until 20 "a new camera after the right arrow" sh -c "[ \"\$(curl -sf -H '$auth' '$base/api/status' | /usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)[\"camera\"])')\" != \"$before\" ]"
 orbited=$(camera)
 echo "right arrow: camera $before -> $orbited"
 xdotool key --delay 100 plus
-wait_until 20 "a new camera after '+'" sh -c "[ \"\$(curl -sf '$base/api/status' | /usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)[\"camera\"])')\" != \"$orbited\" ]"
+wait_until 20 "a new camera after '+'" sh -c "[ \"\$(curl -sf -H '$auth' '$base/api/status' | /usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)[\"camera\"])')\" != \"$orbited\" ]"
 echo "plus: camera $(camera)"
 
 xdotool key Escape

@@ -30,7 +30,10 @@ fail() {
 }
 # now, since, latest, advanced, presentedSince, waitFor, pidOf, freePort
 source "$(dirname "${BASH_SOURCE[0]}")/wall_watch.sh"
-status() { python3 -c "import json,sys,urllib.request; print(json.load(urllib.request.urlopen('http://127.0.0.1:$cport/api/status'))['lost_displays'])"; }
+# The job's control API token (DFBWALL_CONTROL_TOKEN: never on a command line).
+DFBWALL_CONTROL_TOKEN=$(od -An -N16 -tx1 /dev/urandom | tr -d ' \n')
+export DFBWALL_CONTROL_TOKEN
+status() { python3 -c "import json,os,urllib.request; print(json.load(urllib.request.urlopen(urllib.request.Request('http://127.0.0.1:$cport/api/status', headers={'Authorization': 'Bearer ' + os.environ['DFBWALL_CONTROL_TOKEN']})))['lost_displays'])"; }
 
 layout=$1
 timeout=3

@@ -3,14 +3,9 @@
 // Plain JavaScript, no library: served by dfbwall itself, with no network beyond it.
 'use strict';
 
-// A token given in the page's address (?token=…, printed by dfbwall when it binds beyond
-// loopback) goes with every request.
-const token = new URLSearchParams(location.search).get('token');
+// The page authenticates with the cookie the server set when it was opened at the address
+// dfbwall printed (…/?token=…, then redirected here): no URL of the page carries the token.
 const $ = (id) => document.getElementById(id);
-
-function withToken(path) {
-  return token ? path + (path.includes('?') ? '&' : '?') + 'token=' + encodeURIComponent(token) : path;
-}
 
 function showError(text) {
   const box = $('error');
@@ -28,19 +23,20 @@ async function explain(response) {
   if (response.status === 401)
     return 'The wall refused the request: it needs the access token. Open this page with the ' +
            'address dfbwall printed at start (it ends in ?token=…).';
+  if (response.status === 403) return 'The wall refused the request: ' + message;
   if (response.status === 400) return 'The wall did not accept that: ' + message;
   return 'The wall answered ' + response.status + ': ' + message;
 }
 
 async function api(method, path, body) {
+  // Changes go as JSON: the server takes a change by cookie only as application/json.
   const headers = {};
   if (body !== undefined) headers['Content-Type'] = 'application/json';
-  if (token) headers['Authorization'] = 'Bearer ' + token;
   let response;
   try {
-    response = await fetch(withToken(path), {
+    response = await fetch(path, {
       method, headers, body: body === undefined ? undefined : JSON.stringify(body),
-      cache: 'no-store'
+      cache: 'no-store', credentials: 'same-origin'
     });
   } catch (e) {
     throw new Error('Cannot reach the wall (the job may have ended, or the tunnel is down).');
@@ -117,7 +113,7 @@ let previewCount = 0;
 
 function nextPreview() {
   if (stopped) return;
-  img.src = withToken('/api/preview.png?n=' + (++previewCount));
+  img.src = '/api/preview.png?n=' + (++previewCount);
 }
 img.addEventListener('load', () => setTimeout(nextPreview, 200));
 img.addEventListener('error', () => setTimeout(nextPreview, 1000));
