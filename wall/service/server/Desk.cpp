@@ -454,8 +454,8 @@ void Desk::agreeMax(std::uint64_t, std::uint64_t session, std::uint32_t frameId,
   impl_->post([this, session, frameId, mine] {
     impl_->carry(impl_->jobs.arrive(0, session, frameId, mine, Clock::now()));
   });
-  // The desk releases the barrier once every process in it arrived or was dropped (a process
-  // whose frame is slow is alive and waited for; a silent one is dropped at the timeout; a job
+  // The desk releases the barrier once every process in it arrived or was dropped (one silent,
+  // or that has not come the timeout after the first while the job is alive, is dropped; a job
   // that goes silent is aborted, and every node then arrives giving the frame up): no deadline
   // of the node's applies here.
   std::unique_lock lock(impl_->mutex);

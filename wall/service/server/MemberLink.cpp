@@ -254,8 +254,8 @@ void MemberLink::agreeMax(std::uint64_t epoch, std::uint64_t session, std::uint3
   impl_->outbox.push_back(
       packBarrier(session, {frameId, std::vector<std::int64_t>(values, values + count)}));
   impl_->waker.notify();
-  // The head releases the barrier once every process in it arrived or was dropped (a slow
-  // frame elsewhere is waited for: its process is alive), and a silent head is lost after the
+  // The head releases the barrier once every process in it arrived or was dropped (one that
+  // has not come the timeout after the first is dropped), and a silent head is lost after the
   // timeout (a new generation): no deadline of the node's applies here.
   const auto key = std::make_pair(session, frameId);
   while (impl_->releases.count(key) == 0 && impl_->generation == generation) {
