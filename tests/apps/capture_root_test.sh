@@ -101,6 +101,7 @@ member=$(cat "$root"/quota/right/*.png 2>/dev/null | wc -c)
 [ "$head" -le $quota ] && [ "$member" -le $quota ] ||
   fail "the processes wrote $head and $member bytes for a quota of $quota"
 [ "$member" -gt 0 ] || fail "the quota job captured nothing on the member"
+[ -z "$(find "$root/quota" -name '.*')" ] || fail "temporaries left: $(find "$root/quota" -name '.*')"
 echo "quota job ended: the head wrote $head bytes, the member $member, quota $quota"
 
 # After all that, a good job: its captures equal the one-process render.

@@ -41,22 +41,19 @@ CaptureWriter::CaptureWriter(std::shared_ptr<const base::ConfinedFolder> root, s
 std::string CaptureWriter::writeDisplay(const Layout& layout, int display, std::uint32_t frameId,
                                         const std::uint32_t* rgba8) {
   const Display& d = layout.displays.at(static_cast<size_t>(display));
-  return write(d.name, frameName("frame", frameId),
-               encodePng(rgba8, d.rect.width(), d.rect.height()));
+  return write(d.name, frameName("frame", frameId), rgba8, d.rect.width(), d.rect.height());
 }
 
 std::string CaptureWriter::writeWallPreview(std::uint32_t frameId, const Image& canvas) {
-  return write({}, frameName("wall", frameId), encodePng(canvas));
+  return write({}, frameName("wall", frameId), canvas.pixels.data(), canvas.width, canvas.height);
 }
 
 std::string CaptureWriter::write(const std::string& sub, const std::string& name,
-                                 const std::string& bytes) {
+                                 const std::uint32_t* rgba8, int width, int height) {
   const std::filesystem::path folder = std::filesystem::path(dir_) / sub;
   const std::string path =
       ((root_ ? std::filesystem::path(root_->path()) / folder : folder) / name).string();
-  if (quota_ > 0 && written_ + bytes.size() > quota_)
-    throw CaptureError(path + ": not written: the job's captures would pass the capture quota of " +
-                       base::byteText(quota_) + " on this wall process (serve --capture-quota)");
+  std::uint64_t bytes = 0;
   try {
     base::FileDescriptor at;
     if (root_) {
@@ -70,15 +67,21 @@ std::string CaptureWriter::write(const std::string& sub, const std::string& name
         throw base::Error(path + ": cannot open the capture folder: " + std::strerror(errno));
     }
     base::AtomicFile file(at.get(), name, path);
-    if (std::fwrite(bytes.data(), 1, bytes.size(), file.stream()) != bytes.size())
-      throw base::Error(path + ": cannot write: " + std::strerror(errno));
+    writePngTo(file.stream(), path, rgba8, width, height);
+    const long end = std::ftell(file.stream());
+    bytes = end > 0 ? static_cast<std::uint64_t>(end) : 0;
+    // Past the quota the temporary goes with `file`: the capture never gets its name.
+    if (quota_ > 0 && written_ + bytes > quota_)
+      throw CaptureError(path +
+                         ": not written: the job's captures would pass the capture quota of " +
+                         base::byteText(quota_) + " on this wall process (serve --capture-quota)");
     file.commit();  // a full disk shows here
   } catch (const CaptureError&) {
     throw;
   } catch (const base::Error& e) {
     throw CaptureError(e.what());
   }
-  written_ += bytes.size();
+  written_ += bytes;
   return path;
 }
 

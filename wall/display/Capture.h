@@ -50,8 +50,10 @@ class CaptureWriter {
   std::uint64_t bytesWritten() const { return written_; }
 
  private:
-  // `bytes` as `name` in the capture folder's sub-folder `sub` ("" for the folder itself).
-  std::string write(const std::string& sub, const std::string& name, const std::string& bytes);
+  // A width x height PNG as `name` in the capture folder's sub-folder `sub` ("" for the folder
+  // itself). It is written to its temporary, weighed, and given its name only within the quota.
+  std::string write(const std::string& sub, const std::string& name, const std::uint32_t* rgba8,
+                    int width, int height);
 
   std::string dir_;  // the operator's folder, or the job's beneath root_
   std::shared_ptr<const base::ConfinedFolder> root_;

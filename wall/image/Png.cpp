@@ -28,9 +28,11 @@ void writePng(const std::string& path, const std::uint32_t* rgba8, int width, in
   writeAtomically(path, rgba8, width, height);
 }
 
-namespace {
-void writeAtomically(const std::string& path, const std::uint32_t* rgba8, int width, int height) {
-  base::AtomicFile file(path);
+void writePngTo(std::FILE* stream, const std::string& path, const std::uint32_t* rgba8, int width,
+                int height) {
+  if (width <= 0 || height <= 0)
+    throw base::Error(path + ": cannot write a " + std::to_string(width) + "x" +
+                      std::to_string(height) + " PNG");
   png_image image;
   std::memset(&image, 0, sizeof image);
   image.version = PNG_IMAGE_VERSION;
@@ -38,13 +40,19 @@ void writeAtomically(const std::string& path, const std::uint32_t* rgba8, int wi
   image.height = static_cast<png_uint_32>(height);
   image.format = PNG_FORMAT_RGBA;
   errno = 0;
-  const int written = png_image_write_to_stdio(&image, file.stream(), 0, rgba8, 0, nullptr);
+  const int written = png_image_write_to_stdio(&image, stream, 0, rgba8, 0, nullptr);
   const int error = errno;  // libpng says only "Write Error"; the cause (ENOSPC) is in errno
   const std::string message = image.message;
   png_image_free(&image);
   if (!written)
     throw base::Error(path + ": cannot write the PNG: " + message +
                       (error ? std::string(": ") + std::strerror(error) : std::string()));
+}
+
+namespace {
+void writeAtomically(const std::string& path, const std::uint32_t* rgba8, int width, int height) {
+  base::AtomicFile file(path);
+  writePngTo(file.stream(), path, rgba8, width, height);
   file.commit();  // a full disk shows here (base::Error, naming the path)
 }
 }  // namespace

@@ -3,6 +3,7 @@
 // renamed into place, so a reader never sees half a file. Both throw base::Error naming the
 // file on failure. Safe to call from several threads on different files.
 #include <cstdint>
+#include <cstdio>
 #include <string>
 
 #include "wall/image/Image.h"
@@ -13,6 +14,10 @@ void writePng(const std::string& path, const std::uint32_t* rgba8, int width, in
 inline void writePng(const std::string& path, const Image& image) {
   writePng(path, image.pixels.data(), image.width, image.height);
 }
+// The PNG into an open stream (a base::AtomicFile's, which the caller commits); `path` names it
+// in messages.
+void writePngTo(std::FILE* stream, const std::string& path, const std::uint32_t* rgba8, int width,
+                int height);
 
 // The PNG file's bytes in memory (for a server to send, or a quota to weigh), or throws
 // base::Error.
