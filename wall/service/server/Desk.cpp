@@ -15,6 +15,7 @@
 #include "wall/service/protocol/LinkMessages.h"
 #include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/Zmq.h"
+#include "wall/service/security/Gatekeeper.h"
 #include "wall/service/server/JobDesk.h"
 #include "wall/service/server/Membership.h"
 
@@ -33,12 +34,13 @@ std::uint64_t randomId() {
 }
 
 Membership::Setup membershipSetup(const Desk::Setup& s) {
-  return {s.layout->processCount, s.token,       layoutHash(*s.layout),
-          s.layout->file,         s.ownEndpoint, s.options.timeout};
+  // Tokens are checked at the handshake (the desk's gatekeeper), before any message arrives.
+  return {s.layout->processCount, {}, layoutHash(*s.layout), s.layout->file, s.ownEndpoint,
+          s.options.timeout};
 }
 
 JobDesk::Setup jobSetup(const Desk::Setup& s) {
-  return {s.layout, s.token, s.options.timeout, s.options.framesInFlight, randomId};
+  return {s.layout, {}, s.options.timeout, s.options.framesInFlight, randomId};
 }
 
 template <class... F>
@@ -56,6 +58,7 @@ struct Desk::Impl {
   Setup s;
   const int processCount;
   zmq::context_t context{1};
+  Gatekeeper gatekeeper;
   zmq::socket_t socket;
   Waker waker;
   std::thread thread;
@@ -81,10 +84,12 @@ struct Desk::Impl {
   explicit Impl(Setup setup)
       : s(std::move(setup)),
         processCount(s.layout->processCount),
+        gatekeeper(context, s.options.credentials, s.options.log),
         socket(context, zmq::socket_type::router),
         members(membershipSetup(s), Clock::now()),
         jobs(jobSetup(s), members) {
-    configureSocket(socket, static_cast<int>(s.options.timeout.count()));
+    configureSocket(socket, static_cast<int>(s.options.timeout.count()), kMaxLinkMessageBytes);
+    makeServer(socket, s.options.credentials);
     socket.set(zmq::sockopt::router_mandatory, 0);
     absent = members.absent();
   }
@@ -293,11 +298,10 @@ struct Desk::Impl {
     zmq::message_t id, body;
     while (socket.recv(id, zmq::recv_flags::dontwait)) {
       if (!id.more() || !socket.recv(body, zmq::recv_flags::dontwait)) continue;
-      while (body.more()) {
-        zmq::message_t extra;
-        if (!socket.recv(extra, zmq::recv_flags::dontwait)) break;
-      }
       const std::string peer(static_cast<const char*>(id.data()), id.size());
+      // Parts (a process's captured pixels) join into one message; only a member sends them.
+      const std::size_t joinable = members.processOf(peer) > 0 ? kMaxMessageBytes : 0;
+      if (body.more() && !receiveJoined(socket, body, joinable)) continue;
       onMessage(peer, static_cast<const std::byte*>(body.data()), body.size());
     }
   }
