@@ -29,8 +29,9 @@ service_subset() {
     "$state/rank-hosts" >"$state/$name-rankfile"
   awk '{sub(/=/, " "); n[$3]++} END {for (x in n) print x " slots=" n[x]}' \
     "$state/$name-rankfile" >"$state/$name-hostfile"
-  sed -e "s| -np [0-9]* | -np $count |" -e "s|$state/hostfile|$state/$name-hostfile|" \
-    -e "s|$state/rankfile|$state/$name-rankfile|" "$state/mpirun" >"$state/$name-mpirun"
+  # The cluster's mpirun runs a subset of its ranks with --subset NP HOSTFILE RANKFILE.
+  printf '#!/bin/sh\nexec "%s" --subset %s "%s" "%s" "$@"\n' "$state/mpirun" "$count" \
+    "$state/$name-hostfile" "$state/$name-rankfile" >"$state/$name-mpirun"
   chmod +x "$state/$name-mpirun"
 }
 
