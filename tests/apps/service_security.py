@@ -12,9 +12,10 @@ Usage: service_security.py LAYOUT   (env DFBWALL, COMPARE, MPIEXEC; LAYOUT: one 
      get no message through. A good job then equals the one-process render.
   3. A job with a wrong token is refused at the handshake, at once, saying so; a token file other
      users may read is refused.
-  4. CURVE (dfbwall keygen, serve --curve, --server-key): a job works; a tcpdump of loopback
-     shows neither the token nor a run of the job's pixels, which the same capture of a PLAIN
-     job does show; a job pinning another key is refused within seconds.
+  4. CURVE (dfbwall keygen, serve --curve, --server-key): a job works, directly and through a
+     relay serving CURVE; a tcpdump of the wall's ports shows neither the token nor a run of the
+     job's pixels, which the same capture of a PLAIN job does show; a job pinning another key is
+     refused within seconds.
   5. A relay with the token: hundreds of tokenless connections do not keep a good job out.
   6. --advertise: an address the process does not listen on is refused; one it does is what
      jobs are told.
@@ -375,6 +376,18 @@ try:
     print("4. CURVE: the job's captures equal the render; on the wire no token and 0 of %d pixel "
           "runs (PLAIN: %d of %d and the token); another key refused in %.1f s" %
           (len(runs), len(seen_plain), len(runs), took_s), flush=True)
+    # Through a relay that pins the wall's key and serves CURVE itself with the same key pair.
+    relay_port = free_port()
+    relay = start([dfbwall, "relay", "--listen", "127.0.0.1:%d" % relay_port, "--wall",
+                   "127.0.0.1:%d" % port, "--token-file", token_file, "--server-key",
+                   os.path.join(keys, "wall-public.key"), "--curve", keys, "--timeout", "30"],
+                  "relay-curve")
+    wait_for("relay-curve", "relay on", relay)
+    good_job("curve-relay", "127.0.0.1:%d" % relay_port, "--token-file", token_file,
+             "--server-key", os.path.join(keys, "wall-public.key"))
+    relay.send_signal(signal.SIGUSR1)
+    relay.wait(timeout=10)
+    print("   a job through a CURVE relay to the CURVE wall equals the render", flush=True)
     stop(wall)
 
     # ---- 5. a relay and tokenless connections --------------------------------------------------
