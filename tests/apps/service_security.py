@@ -389,6 +389,32 @@ try:
     relay.wait(timeout=10)
     print("   a job through a CURVE relay to the CURVE wall equals the render", flush=True)
     stop(wall)
+    # A joining process pins the head's key from its own key folder: another pair is refused at
+    # once with the reason, the right one joins.
+    layout4 = os.path.join(os.path.dirname(layout), "2x2.toml")
+    port = free_port()
+    head = start([dfbwall, "serve", "--wall", layout4, "--process", "0", "--listen",
+                  "127.0.0.1:%d" % port, "--offscreen", "--timeout", str(TIMEOUT_S),
+                  "--token-file", token_file, "--curve", keys], "head-curve")
+    wait_for("head-curve", "wall service on", head)
+    member = lambda name, key_dir: start(
+        [dfbwall, "serve", "--wall", layout4, "--process", "1", "--join", "127.0.0.1:%d" % port,
+         "--offscreen", "--timeout", str(TIMEOUT_S), "--token-file", token_file, "--curve",
+         key_dir], name)
+    stranger = member("member-other-key", other)
+    try:
+        rc = stranger.wait(timeout=20)
+    except subprocess.TimeoutExpired:
+        fail("a joining process with another key pair neither joined nor gave up")
+    if rc == 0 or "the handshake broke off" not in log_of("member-other-key"):
+        fail("a joining process with another key pair: exit %d, %r" %
+             (rc, log_of("member-other-key")[-300:]))
+    joined = member("member-curve", keys)
+    wait_for("member-curve", "joined the wall", joined)
+    stop(joined)
+    stop(head)
+    print("   a joining process with another key pair exits 1 naming the handshake; with the "
+          "wall's it joins", flush=True)
 
     # ---- 5. a relay and tokenless connections --------------------------------------------------
     port = free_port()

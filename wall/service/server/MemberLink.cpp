@@ -78,14 +78,20 @@ struct MemberLink::Impl {
     else
       socket->send(toMessage(std::move(bytes)), zmq::send_flags::dontwait);
   }
-  // A head that refuses the token will not change its mind: fatal. One whose handshake breaks
-  // off may be a head that is stopped or restarting: said once, and the link keeps trying.
+  // A head that refuses the token will not change its mind: fatal. So is a handshake that breaks
+  // off before this process ever joined (another key: a start with the wrong files). One that
+  // breaks off later may be a head that is stopped or restarting: said once, and the link keeps
+  // trying.
   void checkHandshake() {
     const HandshakeWatch::State state = watch->poll();
-    if (state == HandshakeWatch::State::Refused) {
+    if (state == HandshakeWatch::State::Refused ||
+        (state == HandshakeWatch::State::Failed && !everJoined)) {
       std::lock_guard lock(mutex);
       refusedWhy = "at the handshake: " + watch->problem() +
-                   " (this process needs the wall's token: --token-file FILE or DFBWALL_TOKEN)";
+                   (state == HandshakeWatch::State::Refused
+                        ? " (this process needs the wall's token: --token-file FILE or "
+                          "DFBWALL_TOKEN)"
+                        : "");
       changed.notify_all();
     } else if (state == HandshakeWatch::State::Failed && !handshakeLogged) {
       log("no handshake with the head at " + s.head + " yet: " + watch->problem());
