@@ -2,10 +2,10 @@
 // A render job's side of a persistent wall (`dfbwall serve`, wall/service/server/WallService.h).
 //
 // ServiceClient, on render rank 0 only: says hello to the wall's directory socket and gets the
-// directory (or a refusal: wrong token, busy, another protocol version), then keeps the job
-// alive (a keepalive every second: the wall drops a job it has not heard from within its
-// timeout), turns the wall's Presented messages into frame credits (wall/route/FrameCredits.h), and
-// tells the wall about captures and the last frame.
+// directory (or a refusal: a token refused at the handshake, busy, another protocol version),
+// then keeps the job alive (a keepalive every second: the wall drops a job it has not heard from
+// within its timeout), turns the wall's Presented messages into frame credits
+// (wall/route/FrameCredits.h), and tells the wall about captures and the last frame.
 //
 // ServicePieceSink, on every render rank: the display-routing op's pieces for a service wall,
 // encoded with the job's codec into one batch per (display, frame), sent to the wall process

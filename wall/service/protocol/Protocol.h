@@ -79,8 +79,9 @@ static_assert(sizeof(MessageHeader) == 16, "the header is part of the protocol")
 
 // The first thing a job says.
 struct Hello {
-  std::string token;  // empty: none
-  std::string host;   // the job's rank-0 host, for the wall's log and the busy message
+  // Unused: the token is checked at the ZeroMQ handshake (wall/service/security/); sent empty.
+  std::string token;
+  std::string host;  // the job's rank-0 host, for the wall's log and the busy message
   std::uint32_t renderRanks = 1;
   std::uint32_t tileSize = 64;
   CodecSpec codec;
