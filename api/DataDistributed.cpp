@@ -112,6 +112,7 @@ struct Session::Impl {
   // With SessionOptions::connect: the wall's directory and the link to it (render rank 0, until
   // the wall side takes it).
   std::optional<wall::service::Directory> directory;
+  wall::service::Credentials credentials;  // what every rank presents to the wall
   std::shared_ptr<wall::service::ServiceClient> service;
   std::unique_ptr<runtime::RenderWall> wallSide;  // with a layout or a connected wall
   std::unique_ptr<renderers::scivis::BrickFrameDriver> driver;
@@ -161,6 +162,7 @@ Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make
   }
   if (!options.connect.empty()) {
     m.directory = wall::service::shareDirectory(m.own, m.service.get(), m.timeout);
+    m.credentials = wall::service::shareCredentials(m.own, m.service.get(), m.timeout);
     m.layout = m.directory->layout;
     m.width = m.layout->canvasWidth;
     m.height = m.layout->canvasHeight;
@@ -210,6 +212,7 @@ void Session::Impl::startRendering() {
     w.framesInFlight = options.framesInFlight;
     w.timeout = timeout;
     if (directory) w.directory = &*directory;
+    w.credentials = credentials;
     w.service = std::move(service);
     w.codec = wall::service::parseCodec(options.codec);
     w.mpiControl = wallControl.get();
@@ -233,9 +236,10 @@ void Session::Impl::setUp() {
     if (rank == 0)
       service = std::make_shared<wall::service::ServiceClient>(
           options.connect,
+          wall::service::loadCredentials(
+              {options.token, options.tokenFile, {}, options.serverKeyFile}, false),
           wall::service::jobHello(size, options.tileSize, codec, options.framesInFlight,
-                                  options.token, options.wait, options.captureDir,
-                                  options.captureEvery),
+                                  options.wait, options.captureDir, options.captureEvery),
           timeout);
   } else if (!options.wall.empty()) {
     layout = wall::loadLayout(options.wall);

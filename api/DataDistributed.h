@@ -174,11 +174,16 @@ struct SessionOptions {
   // A wall that `dfbwall serve` runs ("HOST:PORT"), instead of `wall`: every rank of the
   // communicator renders, and the pieces go straight from the tile owners to the wall's
   // processes (the wall is not part of this job). Render rank 0 reads the wall's layout from it;
-  // captureDir is then a folder on the wall's hosts. `token`: the wall's, when it needs one;
-  // `codec`: "raw", "snappy" or "jpeg[:QUALITY]"; `wait`: queue behind a job the wall is
-  // showing instead of failing with its "busy" error.
+  // captureDir is then a folder on the wall's hosts. The wall's token: `tokenFile`, else `token`
+  // (for tests), else the environment variable DFBWALL_TOKEN, else the default token file
+  // (~/.local/state/dfbwall/wall-token; docs/security.md); read by rank 0 only. `serverKeyFile`:
+  // the wall's CURVE public key (serve --curve): the links are encrypted and a wall that does not
+  // hold the key is refused. `codec`: "raw", "snappy" or "jpeg[:QUALITY]"; `wait`: queue behind
+  // a job the wall is showing instead of failing with its "busy" error.
   std::string connect;
   std::string token;
+  std::string tokenFile;
+  std::string serverKeyFile;
   std::string codec = "snappy";
   bool wait = false;
 };

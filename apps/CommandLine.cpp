@@ -57,10 +57,29 @@ void addListen(CLI::App& app, std::string& address, const std::string& group,
   app.add_option("--listen", address, help)->group(group);
 }
 
-// The render job (with --connect) and serve: the token a serving wall asks of its jobs.
-void addToken(CLI::App& app, std::string& token, const std::string& group,
-              const std::string& help) {
-  app.add_option("--token", token, help)->group(group);
+// The render job (with --connect), serve and relay: the wall's token, and the wall's public key
+// to pin (docs/security.md, "The wall service").
+void addWallCredentials(CLI::App& app, std::string& token, std::string& tokenFile,
+                        std::string& serverKey, const std::string& group,
+                        const std::string& tokenFileHelp, const std::string& serverKeyHelp) {
+  app.add_option("--token-file", tokenFile,
+                 tokenFileHelp +
+                     " (default: $DFBWALL_TOKEN, else "
+                     "~/.local/state/dfbwall/wall-token)")
+      ->group(group);
+  app.add_option("--token", token,
+                 "the wall's token itself: visible in ps, for tests (use --token-file or "
+                 "DFBWALL_TOKEN)")
+      ->group(group);
+  app.add_option("--server-key", serverKey, serverKeyHelp)->group(group);
+}
+
+// serve and relay: serve every socket with CURVE.
+void addCurve(CLI::App& app, std::string& dir, const std::string& group) {
+  app.add_option("--curve", dir,
+                 "DIR of a key pair (dfbwall keygen DIR): every socket encrypted with CURVE; "
+                 "clients pin DIR/wall-public.key with --server-key")
+      ->group(group);
 }
 
 // Last, so that every command lists it after its own groups.
@@ -164,7 +183,10 @@ void addConnectGroup(CLI::App& app, Options& o) {
                  "HOST:PORT of a wall that `dfbwall serve` runs (or a relay): every rank renders "
                  "for it")
       ->group(kConnect);
-  addToken(app, o.token, kConnect, "with --connect: the wall's token (what serve printed)");
+  addWallCredentials(app, o.token, o.tokenFile, o.serverKey, kConnect,
+                     "with --connect: FILE holding the wall's token",
+                     "with --connect: FILE of the wall's CURVE public key (serve --curve): "
+                     "encrypt, and refuse a wall that does not hold it");
   app.add_option("--codec", o.codec,
                  "with --connect: how pieces travel: raw, snappy (lossless, plane-delta "
                  "filtered) or jpeg[:QUALITY[:444|422|420]] (lossy, for thin links)")
@@ -263,8 +285,7 @@ void addServe(CLI::App& serve, Options& o, RawOptions& raw) {
   addWallGroup(serve, o.wall, o.offscreen);
   addListen(serve, o.listen, kNetworkSecurity,
             "[ADDR:]PORT of wall process 0's directory, where jobs connect and the other "
-            "processes join (default address 127.0.0.1; any other needs a token, generated and "
-            "printed when not given)");
+            "processes join (default address 127.0.0.1)");
   serve
       .add_option("--process", o.process,
                   "start (or restart) only the layout's wall process N, on its own (not under "
@@ -276,9 +297,18 @@ void addServe(CLI::App& serve, Options& o, RawOptions& raw) {
                   "with --process N > 0: HOST:PORT of the running wall's head (what it prints "
                   "as 'wall service on')")
       ->group(kNetworkSecurity);
-  addToken(serve, o.token, kNetworkSecurity,
-           "required from jobs and joining processes; generated and printed when --listen is "
-           "beyond loopback and none is given (with --process N > 0: the head's)");
+  serve
+      .add_option("--advertise", o.advertise,
+                  "HOST: the address jobs (and the head) are told to dial for this process, one "
+                  "it listens on (default: the --listen address, or with 0.0.0.0 this host's "
+                  "first)")
+      ->group(kNetworkSecurity);
+  addWallCredentials(serve, o.token, o.tokenFile, o.serverKey, kNetworkSecurity,
+                     "FILE holding the token every job, relay and process must present (created "
+                     "mode 0600 with a new token when absent)",
+                     "with --process N > 0: FILE of the head's CURVE public key (default with "
+                     "--curve DIR: DIR/wall-public.key)");
+  addCurve(serve, o.curveDir, kNetworkSecurity);
   addThroughputGroup(serve, o.framesInFlight, "the most frames a job may render ahead of the wall",
                      o.handlerThreads,
                      "threads of each wall process that decode received pieces at once (0: the "
@@ -309,6 +339,12 @@ void addRelay(CLI::App& relay, RelayCommand& c) {
       .add_option("--wall", c.wall,
                   "required: HOST:PORT of the wall (what `dfbwall serve` printed)")
       ->group(kNetwork);
+  addWallCredentials(relay, c.token, c.tokenFile, c.serverKey, kNetwork,
+                     "FILE holding the wall's token: jobs must present it, and the relay does to "
+                     "the wall",
+                     "FILE of the wall's CURVE public key (serve --curve): the relay encrypts its "
+                     "links to the wall, and refuses a wall that does not hold it");
+  addCurve(relay, c.curveDir, kNetwork);
   addTimeout(relay, c.timeoutSeconds, "seconds after which a silent job is forgotten");
   addStats(relay, c.statsFile, "append one JSON line per job to FILE");
   addHelp(relay);

@@ -16,6 +16,7 @@
 #include "wall/layout/Ranks.h"
 #include "wall/service/protocol/Codec.h"
 #include "wall/service/protocol/Protocol.h"
+#include "wall/service/security/Credentials.h"
 
 namespace wall::service {
 class ServiceClient;
@@ -34,6 +35,7 @@ struct Job {
   std::optional<wall::Layout> layout;  // --wall's, or the serving wall's (--connect)
   // --connect: the wall's directory (every rank) and the link to it (render rank 0).
   std::optional<wall::service::Directory> directory;
+  wall::service::Credentials credentials;  // what every rank presents to the wall
   std::shared_ptr<wall::service::ServiceClient> service;
   wall::service::CodecSpec codec;
   wall::RankRoles roles;  // without a wall: every rank renders

@@ -111,6 +111,9 @@ std::string serveProblem(Options& o, const RawOptions& raw) {
     return "serve --join is for --process N > 0; the head (process 0) uses --listen";
   if (o.process <= 0 && o.listen.empty())
     return "serve needs --listen [ADDR:]PORT: where the head takes jobs and processes";
+  if (o.process <= 0 && !o.serverKey.empty())
+    return "serve --server-key pins the head's key for a joining process (--process N > 0); the "
+           "head serves with --curve DIR";
   return {};
 }
 
@@ -122,8 +125,9 @@ std::string renderJobProblem(Options& o, const RawOptions& raw, bool ghostGiven)
   if (!o.connect.empty() && (o.offscreen || o.mode != "route"))
     return "--offscreen and --mode are for a wall of this job (--wall); with --connect the wall "
            "decides how it presents and pieces always go straight to it";
-  if (o.connect.empty() && (o.wait || !o.token.empty()))
-    return "--token and --wait are for --connect";
+  if (o.connect.empty() &&
+      (o.wait || !o.token.empty() || !o.tokenFile.empty() || !o.serverKey.empty()))
+    return "--token, --token-file, --server-key and --wait are for --connect";
   if (!o.connect.empty()) {
     try {
       wall::service::parseCodec(o.codec);

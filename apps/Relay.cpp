@@ -27,6 +27,14 @@ int runRelay(int argc, char** argv, StopSignals& signals) {
   options.listen = command.listen;
   options.wall = wall;
   options.timeout = std::chrono::seconds(command.timeoutSeconds);
+  try {
+    options.credentials = wall::service::loadCredentials(
+        {command.token, command.tokenFile, command.curveDir, command.serverKey}, false);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "dfbwall relay: error: %s\n", e.what());
+    if (stats) std::fclose(stats);
+    return 1;
+  }
   options.stopRequested = [&] {
     if (const int s = signals.poll()) stopSignal = s;
     return stopSignal != 0;

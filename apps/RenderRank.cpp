@@ -256,6 +256,7 @@ void RenderRank::connectWall(runtime::MpiWallControl& wallControl) {
   w.framesInFlight = o_.framesInFlight;
   w.timeout = timeout_;
   if (job_.directory) w.directory = &*job_.directory;
+  w.credentials = job_.credentials;
   w.service = job_.service;
   w.codec = job_.codec;
   w.mpiControl = &wallControl;

@@ -153,12 +153,13 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
       job.roles = wall::RankRoles{worldSize, 0};  // every rank renders; the wall is elsewhere
       job.codec = wall::service::parseCodec(o.codec);
       if (job.worldRank == 0) {
-        const wall::service::Hello hello = wall::service::jobHello(
-            worldSize, o.tileSize, job.codec, o.framesInFlight, o.token, o.wait,
-            o.dryRun ? std::string() : o.captureDir, o.captureEvery);
+        const wall::service::Hello hello =
+            wall::service::jobHello(worldSize, o.tileSize, job.codec, o.framesInFlight, o.wait,
+                                    o.dryRun ? std::string() : o.captureDir, o.captureEvery);
         job.service = std::make_shared<wall::service::ServiceClient>(
-            o.connect, hello, std::chrono::seconds(o.timeoutSeconds),
-            [](const std::string& queued) {
+            o.connect,
+            wall::service::loadCredentials({o.token, o.tokenFile, {}, o.serverKey}, false), hello,
+            std::chrono::seconds(o.timeoutSeconds), [](const std::string& queued) {
               std::printf("dfbwall: %s\n", queued.c_str());
               std::fflush(stdout);
             });
@@ -226,6 +227,7 @@ std::vector<RankTotals> collectTotals(RankTotals mine, std::chrono::milliseconds
 // --connect: render rank 0 read the wall's directory; every rank routes with it.
 void shareDirectory(Job& job, std::chrono::milliseconds timeout) {
   job.directory = wall::service::shareDirectory(MPI_COMM_WORLD, job.service.get(), timeout);
+  job.credentials = wall::service::shareCredentials(MPI_COMM_WORLD, job.service.get(), timeout);
   job.layout = job.directory->layout;
   job.canvasWidth = job.layout->canvasWidth;
   job.canvasHeight = job.layout->canvasHeight;
@@ -238,6 +240,7 @@ int run(int argc, char** argv) {
   StopSignals signals;
   // The relay runs on a gateway, alone: no MPI.
   if (argc > 1 && std::string(argv[1]) == "relay") return runRelay(argc - 1, argv + 1, signals);
+  if (argc > 1 && std::string(argv[1]) == "keygen") return runKeygen(argc - 1, argv + 1);
   std::unique_ptr<messaging::MpiSession> mpi;
   try {
     mpi = std::make_unique<messaging::MpiSession>(&argc, &argv);

@@ -20,4 +20,8 @@ int runServe(const Options& options, int worldRank, StopSignals& signals, Failur
 // (wall/service/relay/Relay.h); no MPI. Returns the exit code.
 int runRelay(int argc, char** argv, StopSignals& signals);
 
+// `dfbwall keygen DIR` (argv from "keygen" on): writes a CURVE key pair for serve --curve DIR;
+// no MPI. Returns the exit code.
+int runKeygen(int argc, char** argv);
+
 }  // namespace app

@@ -42,10 +42,10 @@ namespace {
 }
 
 // Under mpirun: the head's address and token to every process (empty: the head failed to start
-// and said why).
+// and said why). MPI carries it between the wall's own hosts only; it is never printed.
 std::pair<std::string, std::string> shareHead(const std::string& address, const std::string& token,
                                               std::chrono::milliseconds timeout) {
-  char buffer[1024] = {};
+  char buffer[2304] = {};  // an address and a token of up to 1024 characters
   if (!address.empty())
     std::snprintf(buffer, sizeof buffer, "%s\n%s", address.c_str(), token.c_str());
   base::bcast(buffer, sizeof buffer, 0, MPI_COMM_WORLD,
@@ -85,7 +85,7 @@ wall::service::ServiceOptions serviceOptions(const Options& o, int process, bool
   service.process = process;
   service.listen = o.listen;
   service.join = o.join;
-  service.token = o.token;
+  service.advertise = o.advertise;
   service.timeout = std::chrono::seconds(o.timeoutSeconds);
   service.handlerThreads = o.handlerThreads;
   service.framesInFlight = o.framesInFlight;
@@ -120,9 +120,9 @@ void reportStart(const wall::service::WallService& wall, const wall::service::Se
           " did not join within " + std::to_string(timeoutSeconds) +
           " s; the wall starts without them (they join when they come)");
   }
-  // One line a script can read: where jobs connect, and the token when one is needed.
-  std::printf("dfbwall: wall service on %s%s%s\n", wall.address().c_str(),
-              wall.token().empty() ? "" : "  token: ", wall.token().c_str());
+  // One line a script can read: where jobs connect, and where the token is (never the token).
+  std::printf("dfbwall: wall service on %s  token: %s%s\n", wall.address().c_str(),
+              s.credentials.tokenSource.c_str(), s.credentials.secretKey.empty() ? "" : "  CURVE");
   std::fflush(stdout);
 }
 
@@ -171,23 +171,29 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
         serviceOptions(o, process, alone, signals, stopSignal, stats);
     service.captureRoot = captureRoot;
     service.captureQuota = o.captureQuota;
+    // The token: the head's own (its file created when absent), or a process's on its own; under
+    // mpirun the others get the head's. Key files: every process reads its own.
+    wall::service::CredentialOptions credentials{o.token, o.tokenFile, o.curveDir, o.serverKey};
     std::optional<wall::service::WallService> wallService;
     if (process == 0) {
       try {
+        service.credentials = wall::service::loadCredentials(credentials, true);
         wallService.emplace(*layout, presenters->list(), service);
       } catch (const std::exception& e) {
         if (!alone) shareHead({}, {}, timeout);  // the others learn there is no head, and stop
         std::fprintf(stderr, "dfbwall: error: %s\n", e.what());
         return 1;
       }
-      if (!alone) shareHead(wallService->address(), wallService->token(), timeout);
+      if (!alone) shareHead(wallService->address(), service.credentials.token, timeout);
     } else {
       if (!alone) {
         const auto [address, token] = shareHead({}, {}, timeout);
         if (address.empty()) return 1;  // the head said why
         service.join = address;
-        service.token = token;
+        credentials.token = token;
+        credentials.tokenFile.clear();
       }
+      service.credentials = wall::service::loadCredentials(credentials, false);
       wallService.emplace(*layout, presenters->list(), service);
     }
     reportStart(*wallService, service,

@@ -9,7 +9,9 @@
 #     raw captures of the same frame (same seed, frames, camera), and snappy's (lossless) too.
 #  3. The relay's cost at 1 Gbit/s (bench/service_relay.sh): the same job straight to the wall and
 #     through `dfbwall relay` on a gateway, with 2 render hosts and with 1, interleaved.
-# BENCH_SERVICE_PARTS (default "route codecs relay") runs some of them only.
+#  4. The cost of CURVE at 1 Gbit/s: the same jobs (pattern raw, path tracer snappy) on a wall
+#     serving PLAIN and on one serving CURVE (serve --curve, jobs --server-key), interleaved.
+# BENCH_SERVICE_PARTS (default "route codecs relay curve") runs some of them only.
 # Launching only some of a cluster's ranks: scripts/cluster up writes one mpirun for every rank
 # (render ranks 0..R-1, then the wall processes). service_subset writes beside it a hostfile, a
 # rankfile and an mpirun for the ranks of one role only (same agent, same TCP settings): the
@@ -27,19 +29,22 @@ service_subset() {
     "$state/rank-hosts" >"$state/$name-rankfile"
   awk '{sub(/=/, " "); n[$3]++} END {for (x in n) print x " slots=" n[x]}' \
     "$state/$name-rankfile" >"$state/$name-hostfile"
-  sed -e "s| -np [0-9]* | -np $count |" -e "s|$state/hostfile|$state/$name-hostfile|" \
-    -e "s|$state/rankfile|$state/$name-rankfile|" "$state/mpirun" >"$state/$name-mpirun"
+  # The cluster's mpirun runs a subset of its ranks with --subset NP HOSTFILE RANKFILE.
+  printf '#!/bin/sh\nexec "%s" --subset %s "%s" "%s" "$@"\n' "$state/mpirun" "$count" \
+    "$state/$name-hostfile" "$state/$name-rankfile" >"$state/$name-mpirun"
   chmod +x "$state/$name-mpirun"
 }
 
 source "$root/bench/service_relay.sh"
 
 service_pid=""
-# service_start STATE PORT OUT: dfbwall serve on the wall hosts; waits for its address line.
+# service_start STATE PORT OUT [SERVE OPTIONS]: dfbwall serve on the wall hosts; waits for its
+# address line.
 service_start() {
   local state=$1 port=$2 out=$3
+  shift 3
   "$state/wall-mpirun" "$dfbwall" serve --wall "$service_wall" --listen "0.0.0.0:$port" --offscreen \
-    --timeout 30 --token "$service_token" --stats "$out.jsonl" --capture-root "$work" \
+    --timeout 30 --token "$service_token" --stats "$out.jsonl" --capture-root "$work" "$@" \
     >"$out.out" 2>"$out.err" &
   service_pid=$!
   local i
@@ -93,7 +98,7 @@ fig_service() {
   service_token=$(od -An -tx1 -N16 /dev/urandom | tr -d ' \n')
   service_port=7000
   local gbit=125000000 mbit100=12500000 loadAtStart goals=() rows="" parts panels=()
-  parts=" ${BENCH_SERVICE_PARTS:-route codecs relay} "
+  parts=" ${BENCH_SERVICE_PARTS:-route codecs relay curve} "
   loadAtStart=$(cut -d' ' -f1-3 /proc/loadavg)
   echo "== service: dfbwall serve on the wall hosts vs the single-job route; codecs at 100 Mbit/s; the relay's cost; load $loadAtStart"
   [ "$(id -u)" -eq 0 ] || { echo "bench: the service figure needs root (scripts/cluster)" >&2; return 1; }
@@ -200,6 +205,45 @@ fig_service() {
   fi
 
   [[ "$parts" != *" relay "* ]] || service_relay_part
+
+  if [[ "$parts" == *" curve "* ]]; then
+  # --- 4. 1 Gbit/s: the same jobs on a PLAIN wall and on a CURVE wall, interleaved.
+  service_cluster 1gbit
+  rm -rf "$work/svc-keys"
+  "$dfbwall" keygen "$work/svc-keys" >/dev/null
+  local sec serveKey=() jobKey=()
+  for rep in $(seq "$reps"); do
+    for sec in plain curve; do
+      serveKey=() jobKey=()
+      [ $sec = plain ] || serveKey=(--curve "$work/svc-keys") jobKey=(--server-key "$work/svc-keys/wall-public.key")
+      service_start "$service_state" $service_port "$work/svc-serve-$sec-$rep" ${serveKey[@]+"${serveKey[@]}"}
+      service_job "svc-sec-$sec-pattern-$rep" raw --renderer pattern --frames "$frames" \
+        ${jobKey[@]+"${jobKey[@]}"}
+      service_job "svc-sec-$sec-pathtracer-$rep" snappy --renderer pathtracer --scene builtin:cornell \
+        --spp 1 --seed 7 --frames "$rframes" ${jobKey[@]+"${jobKey[@]}"}
+      service_stop
+    done
+  done
+  cluster_down_all
+  local r
+  for r in pattern pathtracer; do
+    local plainFps="" curveFps=""
+    for sec in plain curve; do
+      local files=("$work"/svc-sec-$sec-$r-*.json) med mad cnt fr wire
+      read -r med mad cnt < <(pooled frame_ms "${files[@]}" | medmad)
+      fr=$(awk -v m="$med" 'BEGIN {printf "%.4g", (m > 0) ? 1000 / m : 0}')
+      wire=$(pooled wall_bytes_sent "${files[@]}" | median)
+      rows+="${rows:+,}
+    {\"part\": \"curve\", \"variant\": \"$sec\", \"renderer\": \"$r\", \"median_frame_ms\": $med, \"mad_frame_ms\": $mad, \"frames\": $cnt, \"fps\": $fr, \"wall_bytes_wire_per_frame\": $wire}"
+      echo "  1 Gbit/s, $r, $sec: $fr fps (median $med ms, MAD $mad), $wire bytes/frame"
+      [ $sec = plain ] && plainFps=$fr || curveFps=$fr
+    done
+    local cr
+    cr=$(awk -v a="$curveFps" -v b="$plainFps" 'BEGIN {printf "%.3g", (b > 0) ? a / b : 0}')
+    echo "  $r: CURVE/PLAIN frame rate ${cr}x"
+    goals+=("CURVE >= 0.9x PLAIN frame rate, $r, 1 Gbit/s: ${cr}x, $(awk -v a="$cr" 'BEGIN {print (a >= 0.9) ? "met" : "missed"}')")
+  done
+  fi
 
   goals_json ${goals[@]+"${goals[@]}"}
   cat >"$results/service.json" <<EOF

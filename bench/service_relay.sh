@@ -25,7 +25,7 @@ relay_run() {
   if [ "$variant" = relay ]; then
     target=$(awk '$1 == "gateway1" {print $5}' "$state/hosts"):$((service_port + 1))
     "$root/scripts/cluster" exec gateway1 --id "$id" -- "$dfbwall" relay --listen "$target" \
-      --wall "$wallAddress:$service_port" --timeout 30 --stats "$out-relay.jsonl" \
+      --wall "$wallAddress:$service_port" --token "$service_token" --timeout 30 --stats "$out-relay.jsonl" \
       >"$out-relay.out" 2>"$out-relay.err" &
     relayPid=$!
     for i in $(seq 100); do grep -q "relay on" "$out-relay.out" 2>/dev/null && break; sleep 0.1; done

@@ -74,3 +74,6 @@ endif()
 dfbwall_pkg_module(ZMQ libzmq "ZeroMQ" libzmq3-dev)
 dfbwall_pkg_module(TURBOJPEG libturbojpeg "TurboJPEG" libturbojpeg0-dev)
 dfbwall_pkg_module(FREETYPE freetype2 "FreeType" libfreetype-dev)
+# The wall service's credentials (wall/service/security/): a CURVE key pair derived from the token,
+# constant-time comparisons, random tokens.
+dfbwall_pkg_module(SODIUM libsodium "libsodium" libsodium-dev)

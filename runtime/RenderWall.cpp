@@ -22,7 +22,7 @@ RenderWall::RenderWall(messaging::Messenger& messenger, int renderRank,
   if (!settings.gather) {
     if (settings.directory) {
       serviceSink_ = std::make_shared<wall::service::ServicePieceSink>(
-          *settings.directory, renderRank, settings.codec,
+          *settings.directory, settings.credentials, renderRank, settings.codec,
           static_cast<int>(settings.timeout.count()));
       routing_ = std::make_shared<wall::DisplayRoutingOp>(serviceSink_, layout, settings.tileSize);
     } else {

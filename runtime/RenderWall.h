@@ -35,6 +35,7 @@ struct RenderWallSettings {
   std::chrono::milliseconds timeout{60000};
   // A wall service: its directory (every rank) and render rank 0's link to it.
   const wall::service::Directory* directory = nullptr;
+  wall::service::Credentials credentials;  // what the piece sockets present (every rank)
   std::shared_ptr<wall::service::ServiceClient> service;
   wall::service::CodecSpec codec;
   // The job's own wall ranks: every rank's wall control (render rank 0 speaks through it).

@@ -5,7 +5,8 @@
 //
 //   mpirun -np 6 insitu --wall 2x2.toml --capture caps    # 2 simulating ranks, 4 wall ranks
 //   mpirun -np 2 insitu --size 400x300 --image last.png   # no wall: the last frame as a PNG
-//   mpirun -np 2 insitu --connect wall0:7000 --token T     # a wall that `dfbwall serve` runs
+//   mpirun -np 2 insitu --connect wall0:7000 --token-file F   # a wall that `dfbwall serve` runs
+//                      (the wall's token: F, else DFBWALL_TOKEN, else serve's default file)
 //
 // The grid is cut into --blocks slabs whatever the rank count (rank r holds slabs r, r + R, ...),
 // so any number of ranks computes the same field and shows the same pixels.
@@ -35,7 +36,8 @@ struct Args {
       stderr,
       "insitu: %s\nusage: insitu [--grid N] [--blocks B] [--steps S] [--show-every K]\n"
       "              [--wall LAYOUT.toml [--windows] [--capture DIR]]\n"
-      "              [--connect HOST:PORT [--token T] [--codec C] [--wait] [--capture DIR]]\n"
+      "              [--connect HOST:PORT [--token-file F] [--server-key F] [--codec C] [--wait]\n"
+      "               [--capture DIR]]\n"
       "              [--size WxH --image FILE.png] [--threads T]\n",
       problem);
   std::exit(2);
@@ -61,8 +63,10 @@ Args parse(int argc, char** argv) {
       a.session.wall = value();
     else if (k == "--connect")
       a.session.connect = value();
-    else if (k == "--token")
-      a.session.token = value();
+    else if (k == "--token-file")
+      a.session.tokenFile = value();
+    else if (k == "--server-key")
+      a.session.serverKeyFile = value();
     else if (k == "--codec")
       a.session.codec = value();
     else if (k == "--wait")

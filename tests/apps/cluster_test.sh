@@ -264,14 +264,18 @@ case "$scenario" in
     done
     address=$(awk -v h="${wallHosts[0]}" '$1 == h {print $3}' "$state/hosts")
     port=7000  # a host of its own: nothing else listens there
-    token=$(od -An -N12 -tx1 /dev/urandom | tr -d ' \n')
+    # The token in a file serve creates (mode 0600), never on a command line or in a log.
+    tokenFile=$work/wall-token
     "$CLUSTER" mpirun-hosts "${wallHosts[@]}" --id "$id" -- "$DFBWALL" serve --wall "$layout" \
-      --listen "0.0.0.0:$port" --offscreen --timeout $((5 * ${DFBWALL_TIME_SCALE:-1})) --token "$token" --stats "$work/serve.jsonl" \
+      --listen "0.0.0.0:$port" --offscreen --timeout $((5 * ${DFBWALL_TIME_SCALE:-1})) --token-file "$tokenFile" --stats "$work/serve.jsonl" \
       --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
     serve=$!
     for _ in $(seq 200); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
-    grep -qx "dfbwall: wall service on $address:$port  token: $token" "$work/serve.out" \
-      || fail "serve did not start on ${wallHosts[0]} ($address:$port) with the token given"
+    grep -qx "dfbwall: wall service on $address:$port  token: --token-file $tokenFile" "$work/serve.out" \
+      || fail "serve did not start on ${wallHosts[0]} ($address:$port) with the token file given"
+    [ "$(stat -c %a "$tokenFile")" = 600 ] || fail "serve created $tokenFile with mode $(stat -c %a "$tokenFile")"
+    token=$(cat "$tokenFile")
+    if grep -qF "$token" "$work/serve.out" "$work/serve.err"; then fail "the token is in serve's log"; fi
     # The wall's processes, one per layout process, each on its host: they must outlive every job.
     wallPids() {
       local h p
@@ -285,7 +289,7 @@ case "$scenario" in
     wall=$(wallPids)
     [ "$(wc -w <<<"$wall")" -eq "$("$COMPARE" --info "$layout" | cut -d' ' -f1)" ] \
       || fail "expected one serve process per layout process on the wall hosts, found: $wall"
-    connect=(--connect "$address:$port" --token "$token")
+    connect=(--connect "$address:$port" --token-file "$tokenFile")
 
     # job NAME FRAMES CODEC [scene options]: a render job on the render hosts, then its
     # one-process reference, compared display by display.
@@ -388,7 +392,7 @@ case "$scenario" in
       >"$work/serve.out" 2>"$work/serve.err" &
     serve=$!
     "$CLUSTER" exec gateway1 --id "$id" -- "$DFBWALL" relay --listen "$gatewayRender:$port" \
-      --wall "$address:$port" --timeout 5 --stats "$work/relay.jsonl" >"$work/relay.out" 2>"$work/relay.err" &
+      --wall "$address:$port" --token "$token" --timeout 5 --stats "$work/relay.jsonl" >"$work/relay.out" 2>"$work/relay.err" &
     relay=$!
     for _ in $(seq 200); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
     grep -q "wall service on $address:$port" "$work/serve.out" || fail "serve did not start"

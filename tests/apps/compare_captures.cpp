@@ -5,6 +5,8 @@
 //                  --preview LAYOUT PREVIEW_PNG FULL_CANVAS_PNG
 //                  --colors PNG: how many distinct colours the image has, to tell a picture
 //                  from a blank
+//                  --raw PNG OUT: the image's pixels as they sit in memory (and travel in a raw
+//                  batch) to OUT; prints "WIDTH HEIGHT"
 // Invariant 2 of docs/design.md: every display's capture of frame FRAME equals its rectangle cut
 // out of a single-process render of the whole canvas, byte for byte; the wall preview exists and
 // shows the same pixels. Exit 0 when all match, 1 with a message naming the first mismatch.
@@ -14,6 +16,7 @@
 #include <exception>
 #include <filesystem>
 #include <set>
+#include <stdexcept>
 #include <string>
 
 #include "wall/display/Capture.h"
@@ -85,6 +88,20 @@ int main(int argc, char** argv) {
     try {
       return comparePreview(wall::loadLayout(argv[2]), wall::readPng(argv[3]),
                             wall::readPng(argv[4]));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "compare_captures: %s\n", e.what());
+      return 1;
+    }
+  }
+  if (argc == 4 && std::string(argv[1]) == "--raw") {
+    try {
+      const wall::Image image = wall::readPng(argv[2]);
+      FILE* out = std::fopen(argv[3], "wb");
+      if (!out) throw std::runtime_error(std::string(argv[3]) + ": cannot write it");
+      std::fwrite(image.pixels.data(), sizeof(std::uint32_t), image.pixels.size(), out);
+      std::fclose(out);
+      std::printf("%d %d\n", image.width, image.height);
+      return 0;
     } catch (const std::exception& e) {
       std::fprintf(stderr, "compare_captures: %s\n", e.what());
       return 1;

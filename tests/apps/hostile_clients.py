@@ -6,15 +6,17 @@ Usage: hostile_clients.py LAYOUT   (env DFBWALL, COMPARE, MPIEXEC as for wall_te
 
 Which attacks the wall can see, and which ZeroMQ absorbs below our code (so nothing is logged,
 and the test checks only that the connection is closed and the wall stays up):
-  - garbage on the raw TCP port (but libzmq's ZMTP/1.0 fallback may take random bytes as
-    length-prefixed messages and hand them over: then the wall logs "not the dfbwall protocol"),
-    a ZMTP frame claiming 4 GiB, half a greeting then silence,
-    half a frame then silence, connect-and-vanish, the flood of 200 connections: libzmq's
-    ZMTP engine drops these connections itself (bad greeting, maxmsgsize = 1 GiB, handshake_ivl /
-    heartbeat timeout = --timeout), never handing dfbwall a message. Not logged.
-  - everything that arrives as a whole ZeroMQ message is ours and is logged (wrong token,
-    version 7, garbage body, unknown kind, oversize text length, batches for a display that
-    does not exist or a frame outside the window, the silent job dropped after --timeout, busy).
+  - a wrong token: the wall's ZAP handler refuses the PLAIN handshake (logged once per address),
+    no message gets through;
+  - garbage on the raw TCP port, a ZMTP frame claiming 4 GiB during the handshake, half a
+    greeting then silence, half a frame then silence, connect-and-vanish, the flood of 200
+    connections: libzmq's ZMTP engine drops these connections itself (bad greeting, maxmsgsize
+    = 64 KiB on the directory socket, handshake_ivl / heartbeat timeout), never handing dfbwall a
+    message. Not logged.
+  - everything that arrives as a whole ZeroMQ message from a peer with the token is ours and is
+    logged (version 7, garbage body, unknown kind, oversize text length, batches for a display
+    that does not exist or a frame outside the window, the silent job dropped after --timeout,
+    busy).
 """
 import os
 import shutil
@@ -114,7 +116,7 @@ def text(s):
     return struct.pack("<H", len(b)) + b
 
 
-def hello(token=TOKEN, host="hostile", version=PROTOCOL, ranks=1):
+def hello(token="", host="hostile", version=PROTOCOL, ranks=1):
     return (header(HELLO, 0, version) + text(token) + text(host) +
             struct.pack("<II", ranks, 64) + struct.pack("<BBBB", 0, 90, 0, 0) +
             struct.pack("<I", 2) + text("") + struct.pack("<I", 0))
@@ -150,16 +152,19 @@ def parse_directory(m):
     return session, owners, endpoints
 
 
-def dealer(endpoint):
+def dealer(endpoint, token=TOKEN):
+    """A DEALER that passes the wall's handshake (PLAIN, the token as the password)."""
     s = ctx.socket(zmq.DEALER)
     s.setsockopt(zmq.LINGER, 1000)  # a message sent just before close still goes out
+    s.plain_username = b"dfbwall"
+    s.plain_password = token.encode()
     s.connect(endpoint)
     return s
 
 
-def ask(endpoint, message, wait_s=3.0):
+def ask(endpoint, message, wait_s=3.0, token=TOKEN):
     """Sends one message from a fresh DEALER; the reply or None. Returns (socket, reply)."""
-    s = dealer(endpoint)
+    s = dealer(endpoint, token)
     s.send(message)
     if s.poll(int(wait_s * 1000)):
         return s, s.recv()
@@ -214,16 +219,15 @@ def closed_by_peer(s, seconds):
     return False
 
 
-# A ZMTP 3.1 greeting (NULL mechanism, as client) and a READY command from a DEALER.
-GREETING = (b"\xff" + b"\x00" * 8 + b"\x7f" + b"\x03\x01" + b"NULL".ljust(20, b"\x00") +
+# A ZMTP 3.1 greeting of a PLAIN client: the wall's sockets go on to the handshake, where the
+# client's HELLO command would come next.
+GREETING = (b"\xff" + b"\x00" * 8 + b"\x7f" + b"\x03\x01" + b"PLAIN".ljust(20, b"\x00") +
             b"\x00" + b"\x00" * 31)
-_props = b"\x0bSocket-Type" + struct.pack(">I", 6) + b"DEALER"
-READY = b"\x04" + bytes([6 + len(_props)]) + b"\x05READY" + _props
 
 
 def zmtp_handshake(port):
     s = raw(port)
-    s.sendall(GREETING + READY)
+    s.sendall(GREETING)
     return s
 
 
@@ -277,12 +281,14 @@ try:
         time.sleep(0.1)
     print("up: " + next(l for l in lines if "wall service on" in l).strip(), flush=True)
 
-    # (a) a hello with a wrong token: refused, with a reply, and logged.
-    s, reply = ask(endpoint, hello(token="wrong", host="hostile-a"))
-    if reply is None or parse_header(reply)[0] != REFUSED or b"wrong token" not in reply:
-        fail("(a) wrong token: expected a Refused 'wrong token' reply, got %r" % reply)
+    # (a) a hello with a wrong token: refused at the handshake (no reply: the hello never
+    # arrives), and logged.
+    s, reply = ask(endpoint, hello(host="hostile-a"), 2.0, token="wrong")
+    if reply is not None:
+        fail("(a) wrong token: the wall answered %r" % reply)
     s.close()
-    expect_log("(a) wrong token", "refused a job from hostile-a: wrong token")
+    expect_log("(a) wrong token", "refused a connection from 127.0.0.1 at the handshake: not the "
+               "wall's token")
 
     # (b) garbage bytes on the raw TCP port: zmq's greeting check drops the connection (not
     # ours to log); garbage as a whole zmq message is ours and logged.
@@ -304,9 +310,9 @@ try:
     s.close()
     expect_log("(c) version 7", "protocol version 7, this side speaks %d" % PROTOCOL)
 
-    # (d) sizes that lie. (d1) raw ZMTP: a valid greeting and READY, then a frame whose 64-bit
-    # length says 4 GiB: libzmq refuses it against maxmsgsize (1 GiB) before allocating and
-    # drops the connection; dfbwall never sees it, so nothing is logged. (d2) a whole zmq
+    # (d) sizes that lie. (d1) raw ZMTP: a valid greeting, then a frame whose 64-bit length says
+    # 4 GiB: libzmq refuses it against maxmsgsize (64 KiB here) before allocating and drops the
+    # connection; dfbwall never sees it, so nothing is logged. (d2) a whole zmq
     # message (a hello) whose text length says 65535 bytes: ours, refused and logged.
     d = zmtp_handshake(port)
     d.sendall(b"\x02" + struct.pack(">Q", 4 << 30) + b"\x00" * 4096)
@@ -329,15 +335,14 @@ try:
     s.close()
     expect_log("(j) kind outside a job", "message kind 6 outside a job")
 
-    # (k) strangers posing as wall processes: a join with a wrong token, as the head (process
-    # 0), as a process the layout does not have, with another layout; a barrier and a beat
-    # from a link that never joined. Each refused (or told it is not in the wall), logged, and
-    # the wall goes on.
-    def join(token=TOKEN, process=1, layout_hash=0):
+    # (k) strangers with the token posing as wall processes: as the head (process 0), as a
+    # process the layout does not have, with another layout; a barrier and a beat from a link
+    # that never joined. Each refused (or told it is not in the wall), logged, and the wall goes
+    # on. (Without the token nothing gets past the handshake: (a).)
+    def join(token="", process=1, layout_hash=0):
         return (header(JOIN) + text(token) + struct.pack("<I", process) + text("hostile-k") +
                 text("tcp://127.0.0.1:9") + struct.pack("<QQ", layout_hash, 1))
     for case, message, needle in [
-            ("wrong token", join(token="wrong"), b"wrong token"),
             ("as the head", join(process=0), b"is the head"),
             ("process 99", join(process=99), b"is not one of them"),
             ("another layout", join(layout_hash=12345), b"layout is not the wall's")]:
@@ -345,7 +350,7 @@ try:
         if reply is None or parse_header(reply)[0] != REFUSED or needle not in reply:
             fail("(k) join %s: expected a Refused reply naming %r, got %r" % (case, needle, reply))
         s.close()
-    expect_log("(k) join with a wrong token", "refused wall process 1 from hostile-k: wrong token")
+    expect_log("(k) join as the head", "refused wall process 0 from hostile-k")
     for case, message in [("barrier", header(BARRIER, 5) + struct.pack("<IIq", 1, 1, 0)),
                           ("beat", header(BEAT) + struct.pack("<Qq", 1, 0))]:
         s, reply = ask(endpoint, message)
@@ -380,8 +385,8 @@ try:
                "sent a piece for frame 1000000, more than")
     alive("(f)")
 
-    # (g) half a message then silence: half a greeting, and half a frame after a full handshake.
-    # libzmq's handshake_ivl / heartbeat timeout (= --timeout) closes both; not logged.
+    # (g) half a message then silence: half a greeting, and half a frame after the greeting.
+    # libzmq's handshake_ivl (--timeout, at most 10 s) closes both; not logged.
     g1 = raw(port)
     g1.sendall(GREETING[:30])
     g2 = zmtp_handshake(port)

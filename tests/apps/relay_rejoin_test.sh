@@ -37,10 +37,11 @@ port=$(freePort) relayPort=$(freePort)
   "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" --offscreen --timeout $timeout \
   --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
+# The relay reads the token file the wall created (the default one): it starts once the wall is up.
+waitFor 20 grep -q "wall service on" "$work/serve.out" || fail "serve did not start"
 "$DFBWALL" relay --listen "127.0.0.1:$relayPort" --wall "127.0.0.1:$port" --timeout $timeout \
   >"$work/relay.out" 2>"$work/relay.err" &
 relay=$!
-waitFor 20 grep -q "wall service on" "$work/serve.out" || fail "serve did not start"
 waitFor 5 grep -q "relay on" "$work/relay.out" || fail "the relay did not start"
 "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 -np 2 "$DFBWALL" \
   --connect "127.0.0.1:$relayPort" --renderer pattern --frames 0 --quiet --timeout 30 \

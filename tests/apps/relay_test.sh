@@ -3,11 +3,11 @@
 # wall. One `dfbwall serve` and one relay in front of it, on loopback:
 #  - a 2-rank job through the relay (pattern, raw): its captures, written by the wall, equal the
 #    one-process render; the relay's --stats line counts its batches;
-#  - a stranger sends the relay's piece socket a batch of a session the wall never gave, a batch
-#    with no session and garbage, and its directory socket a message of the wall's own link: the
-#    relay drops and logs them, the wall never sees them;
+#  - a stranger with the token sends the relay's piece socket a batch of a session the wall never
+#    gave, a batch with no session and garbage, and its directory socket a message of the wall's
+#    own link: the relay drops and logs them, the wall never sees them;
 #  - the next job through the relay (scivis, 4 bricks, snappy) equals its one-process render, and
-#    a job without the wall's token is refused through the relay with the wall's reason;
+#    a job without the wall's token is refused at the relay's handshake, saying so;
 #  - kill -9 of the relay during a job ends the job within its timeout, the wall drops it, and a
 #    relay started again serves the next job;
 #  - a relay whose wall does not answer refuses the job, saying so, within its timeout.
@@ -39,7 +39,7 @@ token=relaytesttoken
   -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" \
   --token "$token" --offscreen --timeout 5 --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
-"$DFBWALL" relay --listen "127.0.0.1:$relayPort" --wall "127.0.0.1:$port" --timeout 5 \
+"$DFBWALL" relay --listen "127.0.0.1:$relayPort" --wall "127.0.0.1:$port" --token "$token" --timeout 5 \
   --stats "$work/relay.jsonl" >"$work/relay.out" 2>"$work/relay.err" &
 relay=$!
 for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
@@ -68,12 +68,17 @@ batches=$(field "$work/relay.jsonl" batches_forwarded)
 
 # A stranger on the relay's piece socket of process 1: nothing reaches the wall.
 endpoint=$(sed -n 's/.*wall process 1: pieces on \(tcp:[^ ]*\).*/\1/p' "$work/relay.err")
-/usr/bin/python3 - "$endpoint" "tcp://127.0.0.1:$relayPort" <<'PY' || fail "the stranger could not send"
+/usr/bin/python3 - "$endpoint" "tcp://127.0.0.1:$relayPort" "$token" <<'PY' || fail "the stranger could not send"
 import struct, sys, time, zmq
 ctx = zmq.Context()
-s = ctx.socket(zmq.DEALER)
-s.setsockopt(zmq.LINGER, 2000)
-s.connect(sys.argv[1])
+def dealer(endpoint):  # past the relay's handshake: PLAIN, the token as the password
+    s = ctx.socket(zmq.DEALER)
+    s.setsockopt(zmq.LINGER, 2000)
+    s.plain_username = b"dfbwall"
+    s.plain_password = sys.argv[3].encode()
+    s.connect(endpoint)
+    return s
+s = dealer(sys.argv[1])
 def batch(session):  # header (magic, version 2, kind Batch), frame 1, display 1, rank 0, raw, 1 piece
     piece = struct.pack("<iiiiI", 0, 0, 4, 4, 64) + b"\xff" * 64
     return struct.pack("<IHHQ", 0x57424644, 2, 10, session) + struct.pack("<IiIII", 1, 1, 0, 0, 1) + piece
@@ -81,9 +86,7 @@ s.send(batch(0x5eed5eed5eed5eed))
 s.send(batch(0))
 s.send(b"not the protocol at all")
 # On the relay's directory socket: a wall-link message (Join, kind 12) for the wall's head.
-d = ctx.socket(zmq.DEALER)
-d.setsockopt(zmq.LINGER, 2000)
-d.connect(sys.argv[2])
+d = dealer(sys.argv[2])
 d.send(struct.pack("<IHHQ", 0x57424644, 2, 12, 0) + b"\0" * 32)
 time.sleep(1)
 PY
@@ -103,7 +106,7 @@ if mpi -np 1 "$DFBWALL" --connect "127.0.0.1:$relayPort" --token wrong --rendere
   --frames 1 --quiet --timeout 30 >"$work/wrong.out" 2>&1; then
   fail "a job with the wrong token was accepted through the relay"
 fi
-grep -q "refused the job: wrong token" "$work/wrong.out" || { cat "$work/wrong.out"; fail "no refusal"; }
+grep -q "refused the job at the handshake" "$work/wrong.out" || { cat "$work/wrong.out"; fail "no refusal"; }
 for _ in $(seq 100); do [ "$(wc -l <"$work/relay.jsonl")" -ge 2 ] && break; sleep 0.1; done
 [ "$(wc -l <"$work/relay.jsonl")" -eq 2 ] || fail "expected 2 --stats lines (accepted jobs only)"
 strangers=$(tail -1 "$work/relay.jsonl" | grep -o '"strangers_dropped":[0-9]*' | cut -d: -f2)
@@ -123,17 +126,17 @@ if wait "$long"; then fail "the job went on without its relay"; fi
 long=""
 took=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN {print b - a}')
 awk -v t="$took" 'BEGIN {exit !(t < 9)}' || fail "the job ended $took s after its relay died (timeout 5 s)"
-"$DFBWALL" relay --listen "127.0.0.1:$relayPort" --wall "127.0.0.1:$port" --timeout 5 \
+"$DFBWALL" relay --listen "127.0.0.1:$relayPort" --wall "127.0.0.1:$port" --token "$token" --timeout 5 \
   >"$work/relay.out" 2>>"$work/relay.err" &
 relay=$!
 wait=--wait job again 2 raw --renderer pattern
 grep -q "dropping the job from" "$work/serve.err" || fail "the wall did not drop the orphaned job"
 
 # A relay whose wall does not answer tells the job so within its timeout (2 s here).
-"$DFBWALL" relay --listen "127.0.0.1:$((relayPort + 1))" --wall "127.0.0.1:$((port + 1))" --timeout 2 \
+"$DFBWALL" relay --listen "127.0.0.1:$((relayPort + 1))" --wall "127.0.0.1:$((port + 1))" --token "$token" --timeout 2 \
   >"$work/lonely.out" 2>"$work/lonely.err" &
 lonely=$!
-if mpi -np 1 "$DFBWALL" --connect "127.0.0.1:$((relayPort + 1))" --renderer pattern --frames 1 \
+if mpi -np 1 "$DFBWALL" --connect "127.0.0.1:$((relayPort + 1))" --token "$token" --renderer pattern --frames 1 \
   --quiet --timeout 30 >"$work/lonely-job.out" 2>&1; then
   fail "a job was accepted by a relay without a wall"
 fi

@@ -3,7 +3,7 @@
 # restarted takes render jobs one after another, each a separate mpirun.
 #   service_test.sh jobs-in-a-row LAYOUT
 # Jobs: the pattern (raw), scivis with 4 bricks (snappy), the path tracer (jpeg). Raw and Snappy
-# captures equal the one-process render byte for byte; a JPEG job's captures exist and are a
+# captures equal the one-process render byte for byte (the pattern's whole-wall preview too); a JPEG job's captures exist and are a
 # picture. Render rank 0 receives 0 pixel bytes. A second job while one is connected is refused
 # at once with the busy error; kill -9 of a render rank of a running job leaves the wall
 # running and the next job works. SIGUSR1 stops the wall with exit 0.
@@ -48,6 +48,9 @@ job() {
 }
 job pattern 3 raw --renderer pattern
 "$COMPARE" "$layout" "$work/pattern" "$work/pattern-full.png" 3 || fail "pattern job (raw)"
+# The whole-wall preview: the other processes' pixels reach the head in 64 KiB parts.
+"$COMPARE" --preview "$layout" "$work/pattern/wall-000003.png" "$work/pattern-full.png" ||
+  fail "the wall preview of the pattern job"
 job bricks 2 snappy --renderer scivis --scene builtin:wavelet --bricks 4 --tile-size 32
 "$COMPARE" "$layout" "$work/bricks" "$work/bricks-full.png" 2 || fail "bricks job (snappy)"
 job cornell 2 jpeg:90 --scene builtin:cornell

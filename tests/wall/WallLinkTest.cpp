@@ -105,7 +105,7 @@ class WallLinkTest : public ::testing::Test {
     setup.options.log = [](const std::string& line) {
       std::fprintf(stderr, "head: %s\n", line.c_str());
     };
-    setup.token = "t";
+    setup.options.credentials.token = "t";
     setup.ownEndpoint = "tcp://127.0.0.1:1";
     setup.deliver = [this](const ServiceCommand& c) { head.deliver(c); };
     desk = std::make_unique<Desk>(std::move(setup));
@@ -118,7 +118,7 @@ class WallLinkTest : public ::testing::Test {
   void join(int p, const std::string& token = "t") {
     MemberLink::Setup setup;
     setup.head = address;
-    setup.join.token = token;
+    setup.credentials.token = token;
     setup.join.process = static_cast<std::uint32_t>(p);
     setup.join.host = "test";
     setup.join.pieceEndpoint = "tcp://127.0.0.1:" + std::to_string(10000 + p);
@@ -135,9 +135,10 @@ class WallLinkTest : public ::testing::Test {
   // A job: its directory names every live process.
   void connectJob() {
     Hello hello;
-    hello.token = "t";
     hello.host = "job";
-    client = std::make_unique<ServiceClient>(address, hello, 5s);
+    Credentials credentials;
+    credentials.token = "t";
+    client = std::make_unique<ServiceClient>(address, credentials, hello, 5s);
     client->start(credits, [this](const std::string& why) { jobError = why; });
   }
   // Frame `frameId`'s barrier among `who` (0: the head), each with its own values; the
@@ -270,7 +271,7 @@ TEST_F(WallLinkTest, AnAnswerOfAnEarlierEpochIsNotTakenForTheNewOnes) {
 TEST_F(WallLinkTest, AJoinWithAWrongTokenOrAnotherLayoutIsRefusedWithTheReason) {
   MemberLink::Setup setup;
   setup.head = address;
-  setup.join.token = "wrong";
+  setup.credentials.token = "wrong";
   setup.join.process = 1;
   setup.join.host = "stranger";
   setup.join.pieceEndpoint = "tcp://127.0.0.1:9";
@@ -282,9 +283,9 @@ TEST_F(WallLinkTest, AJoinWithAWrongTokenOrAnotherLayoutIsRefusedWithTheReason) 
     wrongToken.waitUntilJoined(Clock::now() + 5s);
     FAIL() << "joined with a wrong token";
   } catch (const base::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("wrong token"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("refused this token"), std::string::npos) << e.what();
   }
-  setup.join.token = "t";
+  setup.credentials.token = "t";
   setup.join.layoutHash ^= 1;
   MemberLink otherLayout(setup);
   otherLayout.start();

@@ -7,6 +7,7 @@
 #include "base/Collectives.h"
 #include "base/Error.h"
 #include "base/Timing.h"
+#include "wall/service/security/HandshakeWatch.h"
 
 namespace wall::service {
 namespace {
@@ -23,13 +24,15 @@ const std::byte* bytesOf(const zmq::message_t& m) {
 
 }  // namespace
 
-ServiceClient::ServiceClient(const std::string& address, const Hello& hello,
-                             std::chrono::milliseconds timeout,
+ServiceClient::ServiceClient(const std::string& address, const Credentials& credentials,
+                             const Hello& hello, std::chrono::milliseconds timeout,
                              const std::function<void(const std::string&)>& onQueued)
-    : address_(address), socket_(context_, zmq::socket_type::dealer) {
+    : address_(address), credentials_(credentials), socket_(context_, zmq::socket_type::dealer) {
   const std::string endpoint = tcpEndpoint(address, "--connect");
   // The goodbye of a job that fails gets a second to leave.
-  configureSocket(socket_, static_cast<int>(timeout.count()), 1000);
+  configureSocket(socket_, static_cast<int>(timeout.count()), kMaxMessageBytes, 1000);
+  makeClient(socket_, credentials);
+  HandshakeWatch watch(context_, socket_);
   socket_.connect(endpoint);
   socket_.send(toMessage(packHello(hello)), zmq::send_flags::none);
   auto deadline = Clock::now() + timeout;
@@ -41,8 +44,17 @@ ServiceClient::ServiceClient(const std::string& address, const Hello& hello,
       throw base::Error("no dfbwall wall answered at " + address + " within " +
                         std::to_string(timeout.count() / 1000) +
                         " s (is `dfbwall serve` running there?)");
-    zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
-    if (zmq::poll(&item, 1, std::min<std::chrono::milliseconds>(left, kKeepalive)) == 0) {
+    const HandshakeWatch::State handshake = watch.poll();
+    if (handshake == HandshakeWatch::State::Refused)
+      throw base::Error("the wall at " + address + " refused the job at the handshake: " +
+                        watch.problem() + "; give the wall's token (--token-file FILE or " +
+                        "DFBWALL_TOKEN; this job's came from " + credentials.tokenSource + ")");
+    if (handshake == HandshakeWatch::State::Failed)
+      throw base::Error("no handshake with the wall at " + address + ": " + watch.problem());
+    zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}, watch.pollItem()};
+    zmq::poll(items, 2, std::min<std::chrono::milliseconds>(left, kKeepalive));
+    if (items[1].revents) continue;  // the handshake's news first
+    if (items[0].revents == 0) {
       // Waiting in the wall's queue: say so every second, or the wall forgets the job.
       if (queued)
         socket_.send(toMessage(packControl(Kind::Keepalive, 0, 0)), zmq::send_flags::none);
@@ -210,6 +222,29 @@ Directory shareDirectory(MPI_Comm comm, const ServiceClient* client,
   return parseDirectory(bytes.data(), bytes.size());
 }
 
+Credentials shareCredentials(MPI_Comm comm, const ServiceClient* client,
+                             std::chrono::milliseconds timeout) {
+  const Credentials* mine = client ? &client->credentials() : nullptr;
+  // What a client needs: the token and the pinned key, each at most 1024 bytes.
+  char buffer[2 * 1024 + 8] = {};
+  std::uint32_t sizes[2] = {0, 0};
+  if (mine) {
+    sizes[0] = static_cast<std::uint32_t>(std::min<std::size_t>(mine->token.size(), 1024));
+    sizes[1] = static_cast<std::uint32_t>(std::min<std::size_t>(mine->serverKey.size(), 1024));
+    std::memcpy(buffer, mine->token.data(), sizes[0]);
+    std::memcpy(buffer + 1024, mine->serverKey.data(), sizes[1]);
+  }
+  const base::Bound bound{.until = timeout,
+                          .late = "sharing the wall's credentials: a rank did not join in time"};
+  base::bcast(sizes, sizeof sizes, 0, comm, bound);
+  base::bcast(buffer, sizeof buffer, 0, comm, bound);
+  Credentials shared;
+  shared.token.assign(buffer, std::min<std::uint32_t>(sizes[0], 1024));
+  shared.serverKey.assign(buffer + 1024, std::min<std::uint32_t>(sizes[1], 1024));
+  shared.tokenSource = "render rank 0";
+  return shared;
+}
+
 Roster shareRoster(MPI_Comm comm, const ServiceClient* client, std::chrono::milliseconds timeout) {
   messaging::Bytes bytes = client ? client->rosterBytes() : messaging::Bytes{};
   std::uint64_t size = bytes.size();
@@ -222,11 +257,9 @@ Roster shareRoster(MPI_Comm comm, const ServiceClient* client, std::chrono::mill
   return parseRoster(bytes.data(), bytes.size());
 }
 
-Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int framesInFlight,
-               const std::string& token, bool wait, const std::string& captureDir,
-               int captureEvery) {
+Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int framesInFlight, bool wait,
+               const std::string& captureDir, int captureEvery) {
   Hello hello;
-  hello.token = token;
   char name[MPI_MAX_PROCESSOR_NAME];
   int length = 0;
   MPI_Get_processor_name(name, &length);
@@ -241,9 +274,10 @@ Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int frames
   return hello;
 }
 
-ServicePieceSink::ServicePieceSink(const Directory& directory, int renderRank,
-                                   const CodecSpec& codec, int deadPeerMs)
+ServicePieceSink::ServicePieceSink(const Directory& directory, const Credentials& credentials,
+                                   int renderRank, const CodecSpec& codec, int deadPeerMs)
     : session_(directory.session),
+      credentials_(credentials),
       renderRank_(renderRank),
       codec_(codec),
       deadPeerMs_(deadPeerMs),
@@ -265,7 +299,8 @@ ServicePieceSink::ServicePieceSink(const Directory& directory, int renderRank,
 void ServicePieceSink::connect(size_t process, const std::string& endpoint) {
   zmq::socket_t socket(context_, zmq::socket_type::dealer);
   // A rank that is done still delivers its last batches (up to the timeout) as it exits.
-  configureSocket(socket, deadPeerMs_, deadPeerMs_);
+  configureSocket(socket, deadPeerMs_, kMaxLinkMessageBytes, deadPeerMs_);
+  makeClient(socket, credentials_);
   // A few frames of a whole display in flight at most; then send() waits (back-pressure).
   socket.set(zmq::sockopt::sndhwm, 64);
   socket.connect(endpoint);

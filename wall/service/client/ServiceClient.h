@@ -2,10 +2,10 @@
 // A render job's side of a persistent wall (`dfbwall serve`, wall/service/server/WallService.h).
 //
 // ServiceClient, on render rank 0 only: says hello to the wall's directory socket and gets the
-// directory (or a refusal: wrong token, busy, another protocol version), then keeps the job
-// alive (a keepalive every second: the wall drops a job it has not heard from within its
-// timeout), turns the wall's Presented messages into frame credits (wall/route/FrameCredits.h), and
-// tells the wall about captures and the last frame.
+// directory (or a refusal: a token refused at the handshake, busy, another protocol version),
+// then keeps the job alive (a keepalive every second: the wall drops a job it has not heard from
+// within its timeout), turns the wall's Presented messages into frame credits
+// (wall/route/FrameCredits.h), and tells the wall about captures and the last frame.
 //
 // ServicePieceSink, on every render rank: the display-routing op's pieces for a service wall,
 // encoded with the job's codec into one batch per (display, frame), sent to the wall process
@@ -25,22 +25,26 @@
 #include "wall/route/PieceSink.h"
 #include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/Zmq.h"
+#include "wall/service/security/Credentials.h"
 
 namespace wall::service {
 
 class ServiceClient {
  public:
-  // Connects to "HOST:PORT" and waits up to `timeout` for the directory. With hello.wait, a
-  // busy wall queues the job: `onQueued(text)` is told, and the wait for the directory starts
-  // over each time the wall says where the job stands. Throws base::Error with the wall's
-  // reason, or "no dfbwall wall answered at HOST:PORT within S s".
-  ServiceClient(const std::string& address, const Hello& hello, std::chrono::milliseconds timeout,
+  // Connects to "HOST:PORT" with `credentials` and waits up to `timeout` for the directory.
+  // With hello.wait, a busy wall queues the job: `onQueued(text)` is told, and the wait for the
+  // directory starts over each time the wall says where the job stands. Throws base::Error with
+  // the wall's reason, a handshake the wall refused (the token) or that cannot complete (the
+  // pinned key), or "no dfbwall wall answered at HOST:PORT within S s".
+  ServiceClient(const std::string& address, const Credentials& credentials, const Hello& hello,
+                std::chrono::milliseconds timeout,
                 const std::function<void(const std::string&)>& onQueued = {});
   ~ServiceClient();  // says goodbye if bye() was not called (the wall drops the job at once)
   ServiceClient(const ServiceClient&) = delete;
   ServiceClient& operator=(const ServiceClient&) = delete;
 
   const Directory& directory() const { return directory_; }
+  const Credentials& credentials() const { return credentials_; }
   // The directory as the wall sent it (for the job's other ranks: parseDirectory).
   const messaging::Bytes& directoryBytes() const { return directoryBytes_; }
 
@@ -63,6 +67,7 @@ class ServiceClient {
   void post(messaging::Bytes message);
 
   std::string address_;
+  Credentials credentials_;
   zmq::context_t context_{1};
   zmq::socket_t socket_;
   Directory directory_;
@@ -83,20 +88,24 @@ class ServiceClient {
 // read the wall's directory; every rank gets it (bounded by `timeout`).
 Directory shareDirectory(MPI_Comm comm, const ServiceClient* client,
                          std::chrono::milliseconds timeout);
+// Collective over `comm`: the credentials `client` (non-null on rank 0 of `comm` only) connected
+// with, on every rank (for their piece sockets; bounded by `timeout`).
+Credentials shareCredentials(MPI_Comm comm, const ServiceClient* client,
+                             std::chrono::milliseconds timeout);
 // Collective over `comm`, when the roster version a frame order carries is new to the ranks:
 // the roster `client` (rank 0 of `comm` only) has, on every rank (bounded by `timeout`).
 Roster shareRoster(MPI_Comm comm, const ServiceClient* client, std::chrono::milliseconds timeout);
-// The hello of a job of `renderRanks` ranks on this host.
-Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int framesInFlight,
-               const std::string& token, bool wait, const std::string& captureDir,
-               int captureEvery);
+// The hello of a job of `renderRanks` ranks on this host (its token is checked at the handshake,
+// not in the hello).
+Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int framesInFlight, bool wait,
+               const std::string& captureDir, int captureEvery);
 
 // Every render rank: DEALER sockets to the wall processes' piece sockets (connected at once;
 // ZeroMQ queues until they are up).
 class ServicePieceSink : public PieceSink {
  public:
-  ServicePieceSink(const Directory& directory, int renderRank, const CodecSpec& codec,
-                   int deadPeerMs);
+  ServicePieceSink(const Directory& directory, const Credentials& credentials, int renderRank,
+                   const CodecSpec& codec, int deadPeerMs);
   ~ServicePieceSink() override;
   std::size_t send(std::uint32_t frameId, int display, const dfb::Region& local,
                    const std::uint32_t* pixels, int stride) override;
@@ -126,6 +135,7 @@ class ServicePieceSink : public PieceSink {
   void flush(int display, Batch& batch);  // with batch.mutex held
 
   std::uint64_t session_;
+  Credentials credentials_;
   int renderRank_;
   CodecSpec codec_;
   std::vector<int> processOfDisplay_;

@@ -3,9 +3,9 @@
 // process but the head (process 0) keeps one link to the head's directory socket, so the processes
 // need no common MPI job and each may die, hang or be restarted alone.
 //
-//  - Join (member -> head): "I am process N of this layout, my piece socket is E", with the
-//    wall's token; Welcome or Refused back. A process that restarts joins again with a new
-//    incarnation; the head forgets the old one.
+//  - Join (member -> head): "I am process N of this layout, my piece socket is E" (its token
+//    field unused: the handshake checked the token); Welcome or Refused back. A process that
+//    restarts joins again with a new incarnation; the head forgets the old one.
 //  - Beat (both ways, every quarter of the timeout): a member the head has not heard for the
 //    timeout is dropped, and a head a member has not heard for the timeout is lost (the member
 //    gives up its job and joins again, which also brings it back after a cut link).
@@ -26,7 +26,7 @@
 namespace wall::service {
 
 struct Join {
-  std::string token;
+  std::string token;  // unused: the token is checked at the ZeroMQ handshake; sent empty
   std::uint32_t process = 0;
   std::string host;           // for the head's log
   std::string pieceEndpoint;  // "tcp://HOST:PORT" render jobs send this process's pieces to

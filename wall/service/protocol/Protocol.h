@@ -32,7 +32,17 @@ namespace wall::service {
 constexpr std::uint32_t kMagic = 0x57424644;  // "DFBW"
 // 2: wall processes come and go (Roster, live flags in the directory, the wall link).
 constexpr std::uint16_t kProtocolVersion = 2;
-// Caps of what one message may say, checked before anything is allocated.
+// Caps of what one message part may say, per socket, checked by libzmq before anything is
+// allocated (ZMQ_MAXMSGSIZE; a peer that announces more is disconnected):
+//  - the directory socket of the head (and a relay's socket for jobs) carries hellos, controls
+//    and the wall's own link; a wall process's captured pixels reach the head in parts of this
+//    size (joined there, up to kMaxMessageBytes, from processes that are members only);
+constexpr std::size_t kMaxLinkMessageBytes = std::size_t{64} << 10;
+//  - a piece socket carries batches, which a job flushes at 4 MiB: the last piece added (a tile
+//    of at most 1024 x 1024 pixels, encoded) may take one past that;
+constexpr std::size_t kMaxBatchBytes = std::size_t{16} << 20;
+//  - what a job or member receives from the wall (a directory, a roster), and a message joined
+//    from parts.
 constexpr std::size_t kMaxMessageBytes = std::size_t{1} << 30;
 constexpr std::size_t kMaxStringBytes = 4096;
 
@@ -69,8 +79,9 @@ static_assert(sizeof(MessageHeader) == 16, "the header is part of the protocol")
 
 // The first thing a job says.
 struct Hello {
-  std::string token;  // empty: none
-  std::string host;   // the job's rank-0 host, for the wall's log and the busy message
+  // Unused: the token is checked at the ZeroMQ handshake (wall/service/security/); sent empty.
+  std::string token;
+  std::string host;  // the job's rank-0 host, for the wall's log and the busy message
   std::uint32_t renderRanks = 1;
   std::uint32_t tileSize = 64;
   CodecSpec codec;

@@ -2,11 +2,15 @@
 
 #include <arpa/inet.h>
 #include <ifaddrs.h>
+#include <netdb.h>
 #include <netinet/in.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdint>
+#include <cstring>
+#include <set>
 
 #include "base/Error.h"
 #include "wall/service/protocol/Protocol.h"
@@ -20,13 +24,45 @@ zmq::message_t toMessage(messaging::Bytes&& bytes) {
       [](void*, void* hint) { delete static_cast<messaging::Bytes*>(hint); }, owned);
 }
 
-void configureSocket(zmq::socket_t& socket, int deadPeerMs, int lingerMs) {
+void configureSocket(zmq::socket_t& socket, int deadPeerMs, std::size_t maxMessageBytes,
+                     int lingerMs) {
   socket.set(zmq::sockopt::linger, lingerMs);
-  socket.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxMessageBytes));
+  socket.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(maxMessageBytes));
   socket.set(zmq::sockopt::heartbeat_ivl, std::max(100, deadPeerMs / 4));
   socket.set(zmq::sockopt::heartbeat_timeout, deadPeerMs);
   socket.set(zmq::sockopt::heartbeat_ttl, deadPeerMs);
-  socket.set(zmq::sockopt::handshake_ivl, deadPeerMs);
+  // A handshake takes milliseconds; a peer that dawdles in it holds a connection for nothing.
+  socket.set(zmq::sockopt::handshake_ivl, std::min(deadPeerMs, 10000));
+}
+
+void sendInParts(zmq::socket_t& socket, const messaging::Bytes& bytes, std::size_t partBytes) {
+  for (std::size_t at = 0; at < bytes.size() || at == 0; at += partBytes) {
+    const std::size_t n = std::min(partBytes, bytes.size() - at);
+    const bool last = at + n >= bytes.size();
+    // Once the first part is taken, ZeroMQ takes the others: a message goes whole or not at all.
+    if (!socket.send(zmq::buffer(bytes.data() + at, n),
+                     last ? zmq::send_flags::dontwait
+                          : zmq::send_flags::dontwait | zmq::send_flags::sndmore))
+      return;
+    if (last) break;
+  }
+}
+
+bool receiveJoined(zmq::socket_t& socket, zmq::message_t& first, std::size_t maxBytes) {
+  if (!first.more()) return first.size() <= maxBytes;
+  messaging::Bytes joined(first.data<std::byte>(), first.data<std::byte>() + first.size());
+  bool fits = joined.size() <= maxBytes;
+  zmq::message_t part;
+  bool more = true;
+  while (more && socket.recv(part, zmq::recv_flags::dontwait)) {
+    more = part.more();
+    fits = fits && joined.size() + part.size() <= maxBytes;
+    if (fits)
+      joined.insert(joined.end(), part.data<std::byte>(), part.data<std::byte>() + part.size());
+  }
+  if (!fits) return false;
+  first = toMessage(std::move(joined));
+  return true;
 }
 
 std::string hostOf(const std::string& address) {
@@ -66,6 +102,57 @@ std::string advertisedHost(const std::string& listenHost) {
   }
   freeifaddrs(list);
   return found;
+}
+
+namespace {
+// This host's IPv4 addresses.
+std::set<std::string> localAddresses() {
+  std::set<std::string> found;
+  ifaddrs* list = nullptr;
+  if (getifaddrs(&list) != 0) return found;
+  for (ifaddrs* a = list; a; a = a->ifa_next) {
+    if (!a->ifa_addr || a->ifa_addr->sa_family != AF_INET) continue;
+    char text[INET_ADDRSTRLEN];
+    const auto* in = reinterpret_cast<const sockaddr_in*>(a->ifa_addr);
+    if (inet_ntop(AF_INET, &in->sin_addr, text, sizeof text)) found.insert(text);
+  }
+  freeifaddrs(list);
+  return found;
+}
+
+// The IPv4 addresses `host` names (itself when it is one).
+std::set<std::string> addressesOf(const std::string& host) {
+  std::set<std::string> found;
+  addrinfo hints{};
+  hints.ai_family = AF_INET;
+  addrinfo* list = nullptr;
+  if (getaddrinfo(host.c_str(), nullptr, &hints, &list) != 0) return found;
+  for (addrinfo* a = list; a; a = a->ai_next) {
+    char text[INET_ADDRSTRLEN];
+    const auto* in = reinterpret_cast<const sockaddr_in*>(a->ai_addr);
+    if (inet_ntop(AF_INET, &in->sin_addr, text, sizeof text)) found.insert(text);
+  }
+  freeaddrinfo(list);
+  return found;
+}
+}  // namespace
+
+std::string checkAdvertised(const std::string& advertise, const std::string& bindHost,
+                            const std::string& option) {
+  if (advertise.empty() || advertise.find_first_of(" /\\\"':") != std::string::npos)
+    throw base::Error(option + " '" + advertise + "': expected a host name or IPv4 address");
+  const std::set<std::string> named = addressesOf(advertise);
+  if (named.empty())
+    throw base::Error(option + " " + advertise + ": no IPv4 address has that name");
+  const bool everywhere = bindHost == "0.0.0.0" || bindHost == "*" || bindHost.empty();
+  const std::set<std::string> bound = everywhere ? localAddresses() : addressesOf(bindHost);
+  for (const std::string& a : named)
+    if (bound.count(a)) return advertise;
+  std::string list;
+  for (const std::string& a : bound) list += (list.empty() ? "" : ", ") + a;
+  throw base::Error(option + " " + advertise + ": this process does not listen there (it " +
+                    (everywhere ? "listens on this host's addresses: " : "listens on ") +
+                    (everywhere ? list : bindHost) + ")");
 }
 
 std::string lastEndpoint(zmq::socket_t& socket) { return socket.get(zmq::sockopt::last_endpoint); }

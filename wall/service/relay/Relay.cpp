@@ -14,6 +14,8 @@
 #include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/Zmq.h"
 #include "wall/service/relay/RelayRoutes.h"
+#include "wall/service/security/Gatekeeper.h"
+#include "wall/service/security/HandshakeWatch.h"
 
 namespace wall::service {
 namespace {
@@ -22,6 +24,9 @@ using Clock = std::chrono::steady_clock;
 // Job connections at once (a queue of waiting jobs included): a flood of connections gets
 // refusals, not a socket each.
 constexpr std::size_t kMaxJobs = 256;
+// Job connections at once from one peer address: enough for a host's jobs queued behind each
+// other, too few for one host to hold every slot.
+constexpr std::size_t kMaxJobsPerPeer = 8;
 // Batches queued per wall process towards the wall, and per job connection towards the relay:
 // a batch holds up to a few MiB, so this bounds the relay's memory (about 16 x 4 MiB per wall
 // process and connection), and a full queue stops the relay reading that process's socket.
@@ -57,6 +62,7 @@ std::string hex(const void* data, std::size_t size) {
 struct Relay::Impl {
   RelayOptions options;
   zmq::context_t context{1};
+  std::unique_ptr<Gatekeeper> gatekeeper;                  // before any socket binds
   zmq::socket_t front{context, zmq::socket_type::router};  // the jobs' directory links
   std::string wallEndpoint;                                // the wall's directory
   std::string bindHost, advertised, address;
@@ -64,8 +70,9 @@ struct Relay::Impl {
 
   // One job connection (a render job's rank 0), by its routing id on `front`.
   struct Job {
-    zmq::socket_t wall;  // its own connection to the wall's directory
-    std::string id, host = "an unnamed host";
+    zmq::socket_t wall;                         // its own connection to the wall's directory
+    std::unique_ptr<HandshakeWatch> handshake;  // of `wall`
+    std::string id, host = "an unnamed host", peerAddress;
     std::uint64_t session = 0;  // from the wall's Directory
     Clock::time_point lastHeard, started;
     bool wallAnswered = false;
@@ -111,13 +118,15 @@ struct Relay::Impl {
     while (processes.size() < count) {
       auto p = std::make_unique<Process>();
       p->down = zmq::socket_t(context, zmq::socket_type::router);
-      configureSocket(p->down, deadPeerMs);
+      configureSocket(p->down, deadPeerMs, kMaxBatchBytes);
+      makeServer(p->down, options.credentials);
       p->down.set(zmq::sockopt::rcvhwm, kPieceHwm);
       p->down.bind("tcp://" + bindHost + ":*");
       p->relayEndpoint =
           "tcp://" + advertised + ":" + std::to_string(portOf(lastEndpoint(p->down)));
       p->up = zmq::socket_t(context, zmq::socket_type::dealer);
-      configureSocket(p->up, deadPeerMs);
+      configureSocket(p->up, deadPeerMs, kMaxLinkMessageBytes);
+      makeClient(p->up, options.credentials);
       p->up.set(zmq::sockopt::sndhwm, kPieceHwm);
       log("wall process " + std::to_string(processes.size()) + ": pieces on " + p->relayEndpoint);
       processes.push_back(std::move(p));
@@ -142,6 +151,11 @@ struct Relay::Impl {
     return [this](int p) { return processes.at(static_cast<std::size_t>(p))->relayEndpoint; };
   }
 
+  std::size_t jobsFrom(const std::string& peerAddress) const {
+    std::size_t n = 0;
+    for (const auto& [id, job] : jobs) n += job->peerAddress == peerAddress;
+    return n;
+  }
   void fromJob(const std::string& id, zmq::message_t&& body) {
     const std::string peer = hex(id.data(), id.size());
     MessageHeader h;
@@ -175,13 +189,25 @@ struct Relay::Impl {
         logOnce("", "full", "refused a job: " + std::to_string(kMaxJobs) + " connections already");
         return refuse(id, "it has " + std::to_string(kMaxJobs) + " job connections already");
       }
+      const char* peerAddress = body.gets("Peer-Address");
+      const std::string from = peerAddress ? peerAddress : "";
+      if (jobsFrom(from) >= kMaxJobsPerPeer) {
+        logOnce(from, "peer full",
+                "refused a job from " + from + ": " + std::to_string(kMaxJobsPerPeer) +
+                    " job connections from there already");
+        return refuse(id, "it has " + std::to_string(kMaxJobsPerPeer) +
+                              " job connections from this address already");
+      }
       auto job = std::make_unique<Job>();
       job->id = id;
+      job->peerAddress = from;
       job->started = Clock::now();
       job->wall = zmq::socket_t(context, zmq::socket_type::dealer);
       // A job's goodbye gets a second to reach the wall after the relay forgets the job.
-      configureSocket(job->wall, deadPeerMs, 1000);
+      configureSocket(job->wall, deadPeerMs, kMaxMessageBytes, 1000);
       job->wall.set(zmq::sockopt::sndhwm, kPieceHwm * 4);
+      makeClient(job->wall, options.credentials);
+      job->handshake = std::make_unique<HandshakeWatch>(context, job->wall);
       job->wall.connect(wallEndpoint);
       try {
         const std::string host = parseHello(bytesOf(body), body.size()).host;
@@ -345,6 +371,19 @@ struct Relay::Impl {
     std::vector<std::pair<Job*, std::string>> done;
     const auto helloAnswer = std::min<std::chrono::milliseconds>(kHelloAnswer, options.timeout);
     for (auto& [id, job] : jobs) {
+      const HandshakeWatch::State handshake = job->handshake->poll();
+      if (!job->wallAnswered && !job->over &&
+          (handshake == HandshakeWatch::State::Refused ||
+           handshake == HandshakeWatch::State::Failed)) {
+        const std::string why = "no link to the wall at " + options.wall + ": " +
+                                job->handshake->problem() +
+                                " (the relay's --token-file or "
+                                "--server-key is not the wall's)";
+        log("job from " + job->host + ": " + why);
+        refuse(job->id, why);
+        job->over = now;
+        job->end = why;
+      }
       if (!job->wallAnswered && !job->over && now - job->started > helloAnswer) {
         const std::string why = "the wall at " + options.wall + " did not answer within " +
                                 std::to_string(helloAnswer.count() / 1000) + " s";
@@ -377,7 +416,9 @@ Relay::Relay(RelayOptions options) : impl_(std::make_unique<Impl>()) {
   // can reach: the listen address, or this host's first when listening on every interface.
   m.bindHost = listenHost == "*" ? "0.0.0.0" : listenHost;
   m.advertised = advertisedHost(listenHost);
-  configureSocket(m.front, m.deadPeerMs);
+  m.gatekeeper = std::make_unique<Gatekeeper>(m.context, m.options.credentials, m.options.log);
+  configureSocket(m.front, m.deadPeerMs, kMaxLinkMessageBytes);
+  makeServer(m.front, m.options.credentials);
   m.front.set(zmq::sockopt::router_mandatory, 0);
   try {
     m.front.bind(endpoint);

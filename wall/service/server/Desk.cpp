@@ -18,6 +18,7 @@
 #include "wall/service/protocol/PeerText.h"
 #include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/Zmq.h"
+#include "wall/service/security/Gatekeeper.h"
 #include "wall/service/server/JobDesk.h"
 #include "wall/service/server/Membership.h"
 
@@ -47,12 +48,13 @@ std::uint64_t randomId() {
 }
 
 Membership::Setup membershipSetup(const Desk::Setup& s) {
-  return {s.layout->processCount, s.token,       layoutHash(*s.layout),
-          s.layout->file,         s.ownEndpoint, s.options.timeout};
+  // Tokens are checked at the handshake (the desk's gatekeeper), before any message arrives.
+  return {s.layout->processCount, {}, layoutHash(*s.layout), s.layout->file, s.ownEndpoint,
+          s.options.timeout};
 }
 
 JobDesk::Setup jobSetup(const Desk::Setup& s) {
-  return {s.layout, s.token, s.options.timeout, s.options.framesInFlight, randomId};
+  return {s.layout, {}, s.options.timeout, s.options.framesInFlight, randomId};
 }
 
 template <class... F>
@@ -70,6 +72,7 @@ struct Desk::Impl {
   Setup s;
   const int processCount;
   zmq::context_t context{1};
+  Gatekeeper gatekeeper;
   zmq::socket_t socket;
   Waker waker;
   std::thread thread;
@@ -101,10 +104,12 @@ struct Desk::Impl {
   explicit Impl(Setup setup)
       : s(std::move(setup)),
         processCount(s.layout->processCount),
+        gatekeeper(context, s.options.credentials, s.options.log),
         socket(context, zmq::socket_type::router),
         members(membershipSetup(s), Clock::now()),
         jobs(jobSetup(s), members) {
-    configureSocket(socket, static_cast<int>(s.options.timeout.count()));
+    configureSocket(socket, static_cast<int>(s.options.timeout.count()), kMaxLinkMessageBytes);
+    makeServer(socket, s.options.credentials);
     // A message the desk cannot hand to a connection (gone, or its queue full) is an error it
     // sees, never a silent drop: a barrier release that does not go out loses that process.
     socket.set(zmq::sockopt::router_mandatory, 1);
@@ -368,17 +373,16 @@ struct Desk::Impl {
     zmq::message_t id, body;
     for (int n = 0; n < kMaxBurst && socket.recv(id, zmq::recv_flags::dontwait); ++n) {
       if (!id.more() || !socket.recv(body, zmq::recv_flags::dontwait)) continue;
-      bool extra = false;
-      while (body.more()) {
-        zmq::message_t more;
-        if (!socket.recv(more, zmq::recv_flags::dontwait)) break;
-        extra = true;
-        body.swap(more);  // the last part tells whether more follow
-      }
       const std::string peer(static_cast<const char*>(id.data()), id.size());
-      if (banned.count(peer) != 0) continue;
-      if (extra) {
-        banish(peer, "a message of several parts");
+      const bool banishedPeer = banned.count(peer) != 0;
+      // Parts (a process's captured pixels) join into one message; only a member sends them.
+      // Every part is read even from a banished peer, so the next message starts where it should.
+      const std::size_t joinable =
+          !banishedPeer && members.processOf(peer) > 0 ? kMaxMessageBytes : 0;
+      const bool whole = !body.more() || receiveJoined(socket, body, joinable);
+      if (banishedPeer) continue;
+      if (!whole) {
+        banish(peer, "a message of several parts or too large");
         continue;
       }
       onMessage(peer, static_cast<const std::byte*>(body.data()), body.size());

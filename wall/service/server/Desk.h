@@ -34,7 +34,6 @@ class Desk : public ProcessLink {
   struct Setup {
     const Layout* layout = nullptr;
     ServiceOptions options;
-    std::string token;        // what jobs and joining processes must present (empty: none)
     std::string ownEndpoint;  // process 0's piece socket
     // Commands for the head's own process, called on the desk thread.
     std::function<void(const ServiceCommand&)> deliver;

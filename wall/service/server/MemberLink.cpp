@@ -10,7 +10,9 @@
 #include <vector>
 
 #include "base/Error.h"
+#include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/Zmq.h"
+#include "wall/service/security/HandshakeWatch.h"
 
 namespace wall::service {
 namespace {
@@ -30,6 +32,8 @@ struct MemberLink::Impl {
   const std::chrono::milliseconds beat;
   zmq::context_t context{1};
   std::unique_ptr<zmq::socket_t> socket;
+  std::unique_ptr<HandshakeWatch> watch;  // of `socket`
+  bool handshakeLogged = false;
   Waker waker;
   std::thread thread;
   std::atomic<bool> stop{false};
@@ -57,15 +61,44 @@ struct MemberLink::Impl {
     if (s.log) s.log(line);
   }
   void newSocket() {
+    watch.reset();
     socket = std::make_unique<zmq::socket_t>(context, zmq::socket_type::dealer);
-    configureSocket(*socket, static_cast<int>(s.timeout.count()));
+    configureSocket(*socket, static_cast<int>(s.timeout.count()), kMaxBatchBytes);
+    makeClient(*socket, s.credentials);
+    watch = std::make_unique<HandshakeWatch>(context, *socket);
     // Nothing queues for a head that is not connected: joins are repeated, and anything else
     // sent while the link is down belongs to a job the head will have forgotten.
     socket->set(zmq::sockopt::immediate, 1);
     socket->connect(tcpEndpoint(s.head, "--join"));
   }
   void send(messaging::Bytes bytes) {
-    socket->send(toMessage(std::move(bytes)), zmq::send_flags::dontwait);
+    // The head takes parts of at most kMaxLinkMessageBytes (captured pixels are larger).
+    if (bytes.size() > kMaxLinkMessageBytes)
+      sendInParts(*socket, bytes, kMaxLinkMessageBytes);
+    else
+      socket->send(toMessage(std::move(bytes)), zmq::send_flags::dontwait);
+  }
+  // A head that refuses the token will not change its mind: fatal. So is a handshake that breaks
+  // off before this process ever joined (another key: a start with the wrong files). One that
+  // breaks off later may be a head that is stopped or restarting: said once, and the link keeps
+  // trying.
+  void checkHandshake() {
+    const HandshakeWatch::State state = watch->poll();
+    if (state == HandshakeWatch::State::Refused ||
+        (state == HandshakeWatch::State::Failed && !everJoined)) {
+      std::lock_guard lock(mutex);
+      refusedWhy = "at the handshake: " + watch->problem() +
+                   (state == HandshakeWatch::State::Refused
+                        ? " (this process needs the wall's token: --token-file FILE or "
+                          "DFBWALL_TOKEN)"
+                        : "");
+      changed.notify_all();
+    } else if (state == HandshakeWatch::State::Failed && !handshakeLogged) {
+      log("no handshake with the head at " + s.head + " yet: " + watch->problem());
+      handshakeLogged = true;
+    } else if (state == HandshakeWatch::State::Succeeded) {
+      handshakeLogged = false;
+    }
   }
   void post(messaging::Bytes bytes, std::uint64_t epoch) {
     {
@@ -160,6 +193,7 @@ struct MemberLink::Impl {
         out.swap(outbox);
         joinedNow = isJoined;
       }
+      checkHandshake();
       const auto now = Clock::now();
       for (messaging::Bytes& m : out) send(std::move(m));
       const bool mainIsAlive = now.time_since_epoch().count() - mainAliveNs <

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "wall/service/protocol/LinkMessages.h"
+#include "wall/service/security/Credentials.h"
 #include "wall/service/server/ProcessLink.h"
 
 namespace wall::service {
@@ -23,8 +24,9 @@ namespace wall::service {
 class MemberLink : public ProcessLink {
  public:
   struct Setup {
-    std::string head;  // HOST:PORT of the head's directory socket (--join)
-    Join join;         // token, process, host, piece endpoint, layout hash
+    std::string head;         // HOST:PORT of the head's directory socket (--join)
+    Join join;                // process, host, piece endpoint, layout hash
+    Credentials credentials;  // the wall's token (and its public key, with CURVE)
     std::chrono::milliseconds timeout{60000};
     // On the link thread: a command of the head; the link was lost (why).
     std::function<void(const ServiceCommand&)> deliver;
@@ -40,7 +42,8 @@ class MemberLink : public ProcessLink {
   // Until joined (true), refused by the head (throws base::Error with its reason), or `until`.
   bool waitUntilJoined(Clock::time_point until);
   bool joined() const;
-  // Non-empty once the head refused this process (a wrong token, another layout): fatal.
+  // Non-empty once the head refused this process (its token at the handshake, another layout):
+  // fatal.
   std::string refusal() const;
   // Thread-safe: the process's presenting thread is alive. The link beats only while it was
   // last called within the timeout, so a process whose presenting thread hangs (a driver) is

@@ -21,12 +21,14 @@ std::string hex(const zmq::message_t& id) {
 }
 }  // namespace
 
-PieceReceiver::PieceReceiver(const std::string& bindEndpoint, int handlerThreads, int deadPeerMs,
-                             Log log)
-    : socket_(context_, zmq::socket_type::router),
+PieceReceiver::PieceReceiver(const std::string& bindEndpoint, const Credentials& credentials,
+                             int handlerThreads, int deadPeerMs, Log log)
+    : gatekeeper_(context_, credentials, log),
+      socket_(context_, zmq::socket_type::router),
       log_(std::move(log)),
       arena_(handlerThreads > 0 ? handlerThreads : tbb::task_arena::automatic) {
-  configureSocket(socket_, deadPeerMs);
+  configureSocket(socket_, deadPeerMs, kMaxBatchBytes);
+  makeServer(socket_, credentials);
   socket_.set(zmq::sockopt::rcvhwm, 256);
   socket_.bind(bindEndpoint);
   port_ = portOf(lastEndpoint(socket_));

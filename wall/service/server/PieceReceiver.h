@@ -19,6 +19,7 @@
 #include "wall/display/WallNode.h"
 #include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/Zmq.h"
+#include "wall/service/security/Gatekeeper.h"
 
 namespace wall::service {
 
@@ -26,8 +27,10 @@ class PieceReceiver {
  public:
   using Log = std::function<void(const std::string&)>;
   // Binds a ROUTER socket to `bindEndpoint` ("tcp://ADDR:PORT", port 0 or * for any) and starts
-  // receiving. `handlerThreads`: decoding threads (0: the cores). `deadPeerMs`: heartbeat bound.
-  PieceReceiver(const std::string& bindEndpoint, int handlerThreads, int deadPeerMs, Log log);
+  // receiving; only peers with `credentials` get through its handshake. `handlerThreads`:
+  // decoding threads (0: the cores). `deadPeerMs`: heartbeat bound.
+  PieceReceiver(const std::string& bindEndpoint, const Credentials& credentials, int handlerThreads,
+                int deadPeerMs, Log log);
   ~PieceReceiver();
   PieceReceiver(const PieceReceiver&) = delete;
   PieceReceiver& operator=(const PieceReceiver&) = delete;
@@ -46,6 +49,7 @@ class PieceReceiver {
   void logOnce(const std::string& peer, const std::string& what);
 
   zmq::context_t context_{1};
+  Gatekeeper gatekeeper_;
   zmq::socket_t socket_;
   int port_ = 0;
   Log log_;

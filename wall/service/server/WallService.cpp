@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <mutex>
 #include <optional>
-#include <random>
 #include <thread>
 
 #include "base/Error.h"
@@ -24,14 +23,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::string randomToken() {
-  static const char* digits = "0123456789abcdef";
-  std::random_device device;
-  std::string token;
-  for (int i = 0; i < 24; ++i) token += digits[device() % 16];
-  return token;
-}
-
 std::string hostName() {
   char name[256] = {};
   if (gethostname(name, sizeof name - 1) != 0) return "an unnamed host";
@@ -45,7 +36,7 @@ struct WallService::Impl {
   std::vector<Presenter*> presenters;
   ServiceOptions options;
   int process = 0, processCount = 1;
-  std::string address, token;
+  std::string address;
   std::unique_ptr<PieceReceiver> receiver;
   std::unique_ptr<Desk> desk;        // the head
   std::unique_ptr<MemberLink> link;  // every other process
@@ -125,34 +116,36 @@ WallService::WallService(const Layout& layout, std::vector<Presenter*> presenter
   const std::string endpoint = tcpEndpoint(headAddress, isHead ? "--listen" : "--join");
   const std::string headHost = hostOf(headAddress);
   const bool loopback = isLoopback(headHost);
-  m.token = m.options.token;
-  if (isHead && !loopback && m.token.empty()) m.token = randomToken();
   // Pieces: any port, on the listen address where it is this host's (loopback, or the head's
   // own), else on every interface.
   const std::string pieceHost =
       loopback ? headHost : (isHead && headHost != "0.0.0.0" ? headHost : "0.0.0.0");
+  // What others dial: --advertise (an address this process listens on), else as bound.
+  std::string advertised = loopback ? headHost : advertisedHost(pieceHost);
+  if (!m.options.advertise.empty()) {
+    advertised = checkAdvertised(m.options.advertise, pieceHost, "--advertise");
+    if (isHead) checkAdvertised(m.options.advertise, headHost, "--advertise");
+  }
   const int deadPeerMs = static_cast<int>(m.options.timeout.count());
-  m.receiver = std::make_unique<PieceReceiver>("tcp://" + pieceHost + ":*",
+  m.receiver = std::make_unique<PieceReceiver>("tcp://" + pieceHost + ":*", m.options.credentials,
                                                m.options.handlerThreads, deadPeerMs, m.options.log);
-  const std::string mine = "tcp://" + (loopback ? headHost : advertisedHost(pieceHost)) + ":" +
-                           std::to_string(m.receiver->port());
+  const std::string mine = "tcp://" + advertised + ":" + std::to_string(m.receiver->port());
   if (isHead) {
     Desk::Setup setup;
     setup.layout = &layout;
     setup.options = m.options;
-    setup.token = m.token;
     setup.ownEndpoint = mine;
     setup.deliver = [this](const ServiceCommand& c) { impl_->incoming(c); };
     m.desk = std::make_unique<Desk>(std::move(setup));
     const std::string bound = m.desk->bind(endpoint);
-    m.address = (loopback || headHost != "0.0.0.0" ? headHost : advertisedHost(headHost)) + ":" +
-                std::to_string(portOf(bound));
+    m.address = (m.options.advertise.empty() && headHost != "0.0.0.0" ? headHost : advertised) +
+                ":" + std::to_string(portOf(bound));
     m.head = m.desk.get();
     m.desk->start();
   } else {
     MemberLink::Setup setup;
     setup.head = m.options.join;
-    setup.join.token = m.token;
+    setup.credentials = m.options.credentials;
     setup.join.process = static_cast<std::uint32_t>(m.process);
     setup.join.host = hostName();
     setup.join.pieceEndpoint = mine;
@@ -175,7 +168,6 @@ WallService::~WallService() {
 }
 
 std::string WallService::address() const { return impl_->address; }
-std::string WallService::token() const { return impl_->token; }
 
 std::vector<int> WallService::waitForProcesses(Clock::time_point until) {
   Impl& m = *impl_;

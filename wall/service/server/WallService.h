@@ -21,6 +21,7 @@
 #include "base/ConfinedFolder.h"
 #include "wall/display/Presenter.h"
 #include "wall/layout/Layout.h"
+#include "wall/service/security/Credentials.h"
 
 namespace wall::service {
 
@@ -28,7 +29,12 @@ struct ServiceOptions {
   int process = 0;     // which of the layout's processes this is (0: the head)
   std::string listen;  // the head: [ADDR:]PORT of the directory socket
   std::string join;    // the others: the head's HOST:PORT
-  std::string token;   // required from jobs and joining processes when not empty
+  // What every peer must hold at the handshake (the token; with CURVE this process's key pair
+  // and, for a joining process, the head's public key): wall/service/security/Credentials.h.
+  Credentials credentials;
+  // The address jobs and the head are told to dial for this process (--advertise); empty: the
+  // listen address, or this host's first when listening on every interface.
+  std::string advertise;
   std::chrono::milliseconds timeout{60000};  // a silent job or process is dropped after this long
   int handlerThreads = 0;                    // piece decoding threads per process (0: cores)
   int framesInFlight = 2;                    // the most a job is granted
@@ -57,11 +63,9 @@ class WallService {
   WallService(const WallService&) = delete;
   WallService& operator=(const WallService&) = delete;
 
-  // The head: "HOST:PORT" that jobs pass to --connect and processes to --join, and the token they
-  // need (generated when the listen address is not loopback and none was given; empty: none).
-  // The others: the head's address they joined.
+  // The head: "HOST:PORT" that jobs pass to --connect and processes to --join. The others: the
+  // head's address they joined.
   std::string address() const;
-  std::string token() const;
   // The head: waits until every process joined, or `until`; returns those that did not.
   // Another process: waits until it joined (returns nothing) or `until` (returns itself); throws
   // base::Error when the head refused it (wrong token, another layout).
