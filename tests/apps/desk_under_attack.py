@@ -212,8 +212,11 @@ def join(process, endpoint, hash_, incarnation):
 
 
 def dealer(endpoint):
+    """A DEALER that passes the wall's handshake (PLAIN, the token as the password)."""
     s = ctx.socket(zmq.DEALER)
     s.setsockopt(zmq.LINGER, 0)
+    s.plain_username = b"dfbwall"
+    s.plain_password = TOKEN.encode()
     s.connect(endpoint)
     return s
 
@@ -231,7 +234,7 @@ def recv_kind(s, kinds, seconds):
 
 def serve_args(extra):
     return [dfbwall, "serve", "--wall", layout, "--offscreen", "--timeout", str(TIMEOUT_S),
-            "--token", TOKEN] + extra
+            "--token", TOKEN, "--capture-root", work] + extra
 
 
 def start_serve(name, launcher, extra):
@@ -443,6 +446,7 @@ def attack_member_that_never_arrives():
     # Its piece socket takes the job's pieces and drops them.
     pieces = ctx.socket(zmq.ROUTER)
     pieces.setsockopt(zmq.LINGER, 0)
+    pieces.plain_server = True  # the wall's processes present the token (no ZAP here: any passes)
     piece_port = pieces.bind_to_random_port("tcp://127.0.0.1")
     member = dealer(endpoint)
     incarnation = 424242
@@ -517,6 +521,7 @@ def attack_member_that_never_arrives():
 def attack_bad_start():
     head = ctx.socket(zmq.ROUTER)
     head.setsockopt(zmq.LINGER, 0)
+    head.plain_server = True  # the member presents the token (no ZAP here: any passes)
     port = head.bind_to_random_port("tcp://127.0.0.1")
     member, member_log = start("member-serve", serve_args(["--process", "1", "--join",
                                                            "127.0.0.1:%d" % port]))

@@ -116,8 +116,8 @@ def free_port():
 
 def serve(name, port, *extra):
     p = start([dfbwall, "serve", "--wall", layout, "--process", "0", "--listen",
-               "127.0.0.1:%d" % port, "--offscreen", "--timeout", str(TIMEOUT_S)] + list(extra),
-              name)
+               "127.0.0.1:%d" % port, "--offscreen", "--timeout", str(TIMEOUT_S),
+               "--capture-root", work] + list(extra), name)
     wait_for(name, "wall service on", p)
     return p
 
