@@ -34,6 +34,7 @@ import threading
 import time
 
 import zmq
+import zmq.auth.thread
 
 MAGIC = 0x57424644
 PROTOCOL = 2
@@ -53,6 +54,8 @@ layout = os.path.join(work, "2x1.toml")
 with open(layout, "w") as f:
     f.write("[grid]\ncolumns = 2\nrows = 1\ndisplay_size = [96, 64]\n")
 ctx = zmq.Context()
+authenticator = None  # the fake wall sockets' ZAP handler, started by plain_server()
+stoppers = []  # what cleanup() stops before the context goes (threads that use its sockets)
 procs = []
 logs = []  # (name, path) shown on failure
 started = time.monotonic()
@@ -71,6 +74,10 @@ def cleanup():
     kill_all()
     for p in procs:
         p.wait()
+    for stop in stoppers:
+        stop()
+    if authenticator is not None:
+        authenticator.stop()
     ctx.destroy(linger=0)
 
 
@@ -219,6 +226,17 @@ def dealer(endpoint):
     s.plain_password = TOKEN.encode()
     s.connect(endpoint)
     return s
+
+
+def plain_server(s):
+    """Makes s take the wall processes' handshake (PLAIN, the token as the password). libzmq
+    fails a PLAIN handshake when no ZAP handler answers, so one is started for the context."""
+    global authenticator
+    if authenticator is None:
+        authenticator = zmq.auth.thread.ThreadAuthenticator(ctx)
+        authenticator.start()
+        authenticator.configure_plain(domain="*", passwords={"dfbwall": TOKEN})
+    s.plain_server = True
 
 
 def recv_kind(s, kinds, seconds):
@@ -446,7 +464,7 @@ def attack_member_that_never_arrives():
     # Its piece socket takes the job's pieces and drops them.
     pieces = ctx.socket(zmq.ROUTER)
     pieces.setsockopt(zmq.LINGER, 0)
-    pieces.plain_server = True  # the wall's processes present the token (no ZAP here: any passes)
+    plain_server(pieces)
     piece_port = pieces.bind_to_random_port("tcp://127.0.0.1")
     member = dealer(endpoint)
     incarnation = 424242
@@ -466,6 +484,7 @@ def attack_member_that_never_arrives():
                 last_beat = now
             while pieces.poll(0):
                 pieces.recv_multipart()
+                events.setdefault("pieces", time.monotonic())
             if not member.poll(20):
                 continue
             m = member.recv()
@@ -484,6 +503,11 @@ def attack_member_that_never_arrives():
                 events.setdefault("dropped", time.monotonic())
 
     t = threading.Thread(target=fake_member)
+
+    def stop_member():  # before its sockets close, by the finally below or by fail()
+        stop.set()
+        t.join()
+    stoppers.append(stop_member)
     t.start()
     try:
         wait_for("the fake member's welcome", lambda: "joined" in events, 10)
@@ -505,12 +529,14 @@ def attack_member_that_never_arrives():
         frames = latest(cap, "r0c0")
         if frames != 60:
             fail("3. the head's display presented up to frame %d of 60" % frames)
+        if "pieces" not in events:
+            fail("3. the fake member's piece socket got no pieces (its handshake failed?)")
         print("3. a member that beats but never arrives: dropped %.1f s after its Start "
               "(timeout %d s): '%s'; the job's 60 frames presented on the head's display, exit 0"
               % (after, TIMEOUT_S, line.strip()), flush=True)
     finally:
-        stop.set()
-        t.join()
+        stop_member()
+        stoppers.remove(stop_member)
         member.close()
         pieces.close()
     stop_serve(serve, "head-serve")
@@ -521,7 +547,7 @@ def attack_member_that_never_arrives():
 def attack_bad_start():
     head = ctx.socket(zmq.ROUTER)
     head.setsockopt(zmq.LINGER, 0)
-    head.plain_server = True  # the member presents the token (no ZAP here: any passes)
+    plain_server(head)
     port = head.bind_to_random_port("tcp://127.0.0.1")
     member, member_log = start("member-serve", serve_args(["--process", "1", "--join",
                                                            "127.0.0.1:%d" % port]))

@@ -120,6 +120,7 @@ void ServiceClient::bye(std::uint32_t lastFrame) {
   {
     std::lock_guard lock(mutex_);
     byeSent_ = true;
+    lastFrame_ = lastFrame;
   }
   post(packControl(Kind::Bye, directory_.session, lastFrame));
 }
@@ -143,6 +144,7 @@ void ServiceClient::run() {
   auto lastKeepalive = Clock::time_point{};
   auto lastHeard = Clock::now();
   bool failed = false;
+  std::uint64_t credited = 0;  // the latest frame the wall presented
   const auto fail = [&](const std::string& why) {
     if (!failed && onError_) onError_(why);
     failed = true;
@@ -172,6 +174,7 @@ void ServiceClient::run() {
           const Control c = parseControl(bytesOf(m), m.size());
           credits_->acknowledged(static_cast<std::uint32_t>(c.value), c.second,
                                  "the wall at " + address_);
+          credited = std::max(credited, c.value);
         } else if (h.kind == static_cast<std::uint16_t>(Kind::Roster)) {
           const Roster roster = parseRoster(bytesOf(m), m.size());
           if (roster.processes.size() != directory_.processes.size())
@@ -199,7 +202,14 @@ void ServiceClient::run() {
           fail("the wall at " + address_ + " sent message kind " + std::to_string(h.kind));
         }
       }
-      if (!failed && Clock::now() - lastHeard > wallTimeout + kKeepalive * 2)
+      // Once the last frame is credited the wall's job is over and it answers no keepalive: its
+      // silence while this rank winds down is no failure.
+      bool over = false;
+      {
+        std::lock_guard lock(mutex_);
+        over = byeSent_ && credited >= lastFrame_ && credited > 0;
+      }
+      if (!failed && !over && Clock::now() - lastHeard > wallTimeout + kKeepalive * 2)
         fail("the wall at " + address_ + " has not answered for " +
              std::to_string(wallTimeout.count() / 1000) + " s");
     }
@@ -317,6 +327,13 @@ void ServicePieceSink::setRoster(const Roster& roster) {
   for (size_t p = 0; p < sockets_.size(); ++p) {
     const DirectoryProcess& next = roster.processes[p];
     std::lock_guard lock(*socketMutex_[p]);
+    if (!next.live && sockets_[p]) {
+      // Batches still queued for a lost process would hold the rank's exit for its linger; the
+      // process gets a fresh socket if it comes back.
+      sockets_[p].set(zmq::sockopt::linger, 0);
+      sockets_[p].close();
+      endpoints_[p].clear();
+    }
     if (next.live && next.endpoint != endpoints_[p]) connect(p, next.endpoint);
     live_[p] = next.live;
   }

@@ -49,8 +49,8 @@ class ServiceClient {
   const messaging::Bytes& directoryBytes() const { return directoryBytes_; }
 
   // Starts the link's thread: keepalives, credits into `credits`, and a wall that ends the job
-  // (Ended: its reason) or goes silent for its timeout reported through `onError` (on the
-  // link's thread; call it once).
+  // (Ended: its reason) or goes silent for its timeout before the last frame's credit reported
+  // through `onError` (on the link's thread; call it once).
   void start(FrameCredits& credits, std::function<void(const std::string&)> onError);
   // Thread-safe. Capture frame `frameId` (or the first after it), request `sequence`.
   void capture(std::uint32_t frameId, std::uint64_t sequence);
@@ -77,6 +77,7 @@ class ServiceClient {
   mutable std::mutex mutex_;
   std::vector<messaging::Bytes> outbox_;
   bool byeSent_ = false;
+  std::uint32_t lastFrame_ = 0;  // named by bye()
   std::uint32_t rosterVersion_ = 0;
   messaging::Bytes rosterBytes_;
   Waker waker_;
@@ -112,9 +113,9 @@ class ServicePieceSink : public PieceSink {
   void endFrame(std::uint32_t frameId) override;
   bool otherHost(int) const override { return true; }
   // Between frames (no send in progress): the wall processes pieces go to from the next frame
-  // on. A lost process's pieces are dropped here and counted; a process back at another
-  // endpoint (restarted) gets a fresh socket. Throws base::Error when the roster does not fit the
-  // directory.
+  // on. A lost process's pieces are dropped here and counted (what its socket still held is
+  // discarded); a process back (restarted) gets a fresh socket. Throws base::Error when the roster
+  // does not fit the directory.
   void setRoster(const Roster& roster);
   // Pieces not sent since the last call: their wall process was lost, or took nothing for the
   // timeout.
