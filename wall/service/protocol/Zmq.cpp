@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <cstring>
 #include <set>
+#include <vector>
 
 #include "base/Error.h"
 #include "wall/service/protocol/Protocol.h"
@@ -86,35 +87,17 @@ bool isLoopback(const std::string& host) {
   return host == "localhost" || host.rfind("127.", 0) == 0 || host == "::1";
 }
 
-std::string advertisedHost(const std::string& listenHost) {
-  if (listenHost != "0.0.0.0" && listenHost != "*" && !listenHost.empty()) return listenHost;
-  std::string found = "127.0.0.1";
-  ifaddrs* list = nullptr;
-  if (getifaddrs(&list) != 0) return found;
-  for (ifaddrs* a = list; a; a = a->ifa_next) {
-    if (!a->ifa_addr || a->ifa_addr->sa_family != AF_INET) continue;
-    char text[INET_ADDRSTRLEN];
-    const auto* in = reinterpret_cast<const sockaddr_in*>(a->ifa_addr);
-    if (!inet_ntop(AF_INET, &in->sin_addr, text, sizeof text)) continue;
-    if (isLoopback(text)) continue;
-    found = text;
-    break;
-  }
-  freeifaddrs(list);
-  return found;
-}
-
 namespace {
-// This host's IPv4 addresses.
-std::set<std::string> localAddresses() {
-  std::set<std::string> found;
+// This host's IPv4 addresses, in the order of its interfaces.
+std::vector<std::string> localAddresses() {
+  std::vector<std::string> found;
   ifaddrs* list = nullptr;
   if (getifaddrs(&list) != 0) return found;
   for (ifaddrs* a = list; a; a = a->ifa_next) {
     if (!a->ifa_addr || a->ifa_addr->sa_family != AF_INET) continue;
     char text[INET_ADDRSTRLEN];
     const auto* in = reinterpret_cast<const sockaddr_in*>(a->ifa_addr);
-    if (inet_ntop(AF_INET, &in->sin_addr, text, sizeof text)) found.insert(text);
+    if (inet_ntop(AF_INET, &in->sin_addr, text, sizeof text)) found.emplace_back(text);
   }
   freeifaddrs(list);
   return found;
@@ -137,6 +120,13 @@ std::set<std::string> addressesOf(const std::string& host) {
 }
 }  // namespace
 
+std::string advertisedHost(const std::string& listenHost) {
+  if (listenHost != "0.0.0.0" && listenHost != "*" && !listenHost.empty()) return listenHost;
+  for (const std::string& address : localAddresses())
+    if (!isLoopback(address)) return address;
+  return "127.0.0.1";
+}
+
 std::string checkAdvertised(const std::string& advertise, const std::string& bindHost,
                             const std::string& option) {
   if (advertise.empty() || advertise.find_first_of(" /\\\"':") != std::string::npos)
@@ -145,7 +135,9 @@ std::string checkAdvertised(const std::string& advertise, const std::string& bin
   if (named.empty())
     throw base::Error(option + " " + advertise + ": no IPv4 address has that name");
   const bool everywhere = bindHost == "0.0.0.0" || bindHost == "*" || bindHost.empty();
-  const std::set<std::string> bound = everywhere ? localAddresses() : addressesOf(bindHost);
+  std::set<std::string> bound = everywhere ? std::set<std::string>{} : addressesOf(bindHost);
+  if (everywhere)
+    for (std::string& a : localAddresses()) bound.insert(std::move(a));
   for (const std::string& a : named)
     if (bound.count(a)) return advertise;
   std::string list;
