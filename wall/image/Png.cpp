@@ -57,20 +57,21 @@ void writeAtomically(const std::string& path, const std::uint32_t* rgba8, int wi
 }
 }  // namespace
 
-std::string encodePng(const std::uint32_t* rgba8, int width, int height) {
-  if (width <= 0 || height <= 0) throw base::Error("cannot encode an empty image as PNG");
+std::string encodePng(const Image& image) {
+  if (image.width <= 0 || image.height <= 0)
+    throw base::Error("cannot encode an empty image as PNG");
   png_image png;
   std::memset(&png, 0, sizeof png);
   png.version = PNG_IMAGE_VERSION;
-  png.width = static_cast<png_uint_32>(width);
-  png.height = static_cast<png_uint_32>(height);
+  png.width = static_cast<png_uint_32>(image.width);
+  png.height = static_cast<png_uint_32>(image.height);
   png.format = PNG_FORMAT_RGBA;
   // libpng's simplified API: a first call sizes the buffer, the second fills it.
   png_alloc_size_t size = 0;
   std::string out;
-  if (png_image_write_to_memory(&png, nullptr, &size, 0, rgba8, 0, nullptr)) {
+  if (png_image_write_to_memory(&png, nullptr, &size, 0, image.pixels.data(), 0, nullptr)) {
     out.resize(size);
-    if (png_image_write_to_memory(&png, out.data(), &size, 0, rgba8, 0, nullptr)) {
+    if (png_image_write_to_memory(&png, out.data(), &size, 0, image.pixels.data(), 0, nullptr)) {
       out.resize(size);
       png_image_free(&png);
       return out;

@@ -19,12 +19,8 @@ inline void writePng(const std::string& path, const Image& image) {
 void writePngTo(std::FILE* stream, const std::string& path, const std::uint32_t* rgba8, int width,
                 int height);
 
-// The PNG file's bytes in memory (for a server to send, or a quota to weigh), or throws
-// base::Error.
-std::string encodePng(const std::uint32_t* rgba8, int width, int height);
-inline std::string encodePng(const Image& image) {
-  return encodePng(image.pixels.data(), image.width, image.height);
-}
+// The PNG file's bytes in memory (for a server to send), or throws base::Error.
+std::string encodePng(const Image& image);
 
 // Any PNG, converted to RGBA8.
 Image readPng(const std::string& path);
