@@ -57,15 +57,15 @@ struct Options {
   // The wall as a service. `dfbwall serve`: these processes are the wall of `wall`, listening
   // for render jobs on `listen`. `--connect`: this job renders for such a wall.
   bool serve = false;
-  std::string listen;            // serve, the head: [ADDR:]PORT
-  int process = -1;              // serve --process N: this is the layout's process N, alone
-  std::string join;              // serve --join HOST:PORT: the head a process N > 0 joins
-  std::string connect;           // HOST:PORT of a serving wall; empty: none
-  std::string token;             // serve, connect: the wall's token (tests: visible in ps)
-  std::string tokenFile;         // serve, connect: the file holding it (serve creates it)
-  std::string serverKey;         // connect, serve --join: the wall's public key (CURVE)
-  std::string curveDir;          // serve: the wall's key pair; every socket CURVE
-  std::string advertise;         // serve: the address others are told to dial for this process
+  std::string listen;       // serve, the head: [ADDR:]PORT
+  int process = -1;         // serve --process N: this is the layout's process N, alone
+  std::string join;         // serve --join HOST:PORT: the head a process N > 0 joins
+  std::string connect;      // HOST:PORT of a serving wall; empty: none
+  std::string token;        // serve, connect: the wall's token (tests: visible in ps)
+  std::string tokenFile;    // serve, connect: the file holding it (serve creates it)
+  std::string serverKey;    // connect, serve --join: the wall's public key (CURVE)
+  std::string curveDir;     // serve: the wall's key pair; every socket CURVE
+  std::string advertise;    // serve: the address others are told to dial for this process
   std::string captureRoot;  // serve: jobs' captures only beneath it; empty: none taken
   std::uint64_t captureQuota = std::uint64_t(1) << 30;  // serve: bytes per job and process
   std::string codec = "snappy";  // connect: raw | snappy | jpeg[:QUALITY[:SUBSAMPLING]]
