@@ -251,6 +251,8 @@ def camera_scenario(work):
 def bad_scenario(work):
     stats = os.path.join(work, "stats.json")
     job = wall_job(work, "--renderer", "pattern", "--stats", stats)
+    # Before the first frame a camera request is answered 503 (try again), not checked.
+    job.wait_for("the first frame", lambda s: s["frame"] >= 1)
     bad = [
         ("/api/camera", b"{not json"),
         ("/api/camera", b"[1, 2, 3]"),
