@@ -36,6 +36,14 @@
 namespace app {
 namespace {
 
+// This process's rank as the MPI launcher gave it (OpenMPI, then PMIx and MPICH's names); 0
+// when started without one.
+int launcherRank() {
+  for (const char* name : {"OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK"})
+    if (const char* value = std::getenv(name)) return std::atoi(value);
+  return 0;
+}
+
 // Every rank calls this with its own verdict; the lowest failing rank prints its message, so a
 // problem every rank finds (a bad layout) is printed once. True when every rank is fine.
 bool agree(const std::string& problem, int rank, std::chrono::milliseconds timeout) {
@@ -241,6 +249,12 @@ int run(int argc, char** argv) {
   // The relay runs on a gateway, alone: no MPI.
   if (argc > 1 && std::string(argv[1]) == "relay") return runRelay(argc - 1, argv + 1, signals);
   if (argc > 1 && std::string(argv[1]) == "keygen") return runKeygen(argc - 1, argv + 1);
+  // The command line is read before MPI starts, so --help and a mistyped option answer at once
+  // (a process started without mpirun would first spawn MPI's runtime); every rank reads the
+  // same one, and the rank the launcher numbers 0 prints.
+  Job job;
+  const int parsed = parseOptions(argc, argv, job.options, launcherRank() == 0);
+  if (parsed >= 0) return parsed;
   std::unique_ptr<messaging::MpiSession> mpi;
   try {
     mpi = std::make_unique<messaging::MpiSession>(&argc, &argv);
@@ -248,14 +262,11 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "dfbwall: error: %s\n", e.what());
     return 1;
   }
-  Job job;
   job.worldRank = mpi->worldRank();
   if (const char* at = std::getenv("DFBWALL_FAIL_AT"))
     std::sscanf(at, "%d:%u", &job.failAtRank, &job.failAtFrame);
   FailurePath failure(job.worldRank);
   job.failure = &failure;
-  const int parsed = parseOptions(argc, argv, job.options, job.worldRank == 0);
-  if (parsed >= 0) return parsed;
   base::setMemoryLimit(job.options.memoryLimit);
   base::setRanksOnHost(ranksOnThisHost());
   if (job.options.serve) return runServe(job.options, job.worldRank, signals, failure);

@@ -77,10 +77,11 @@ for _ in $(seq 100); do grep -q "job from" "$work/serve.err" 2>/dev/null &&
   [ "$(grep -c "job from .*render ranks" "$work/serve.err")" -ge 5 ] && break; sleep 0.1; done
 start=$(date +%s.%N)
 if mpi -np 1 "$DFBWALL" --connect "127.0.0.1:$port" --renderer pattern --frames 1 --quiet \
-  >"$work/busy.out" 2>&1; then fail "a second job was accepted while one was connected"; fi
+  --timeout 60 >"$work/busy.out" 2>&1; then fail "a second job was accepted while one was connected"; fi
 grep -q "busy: a job from .* is connected" "$work/busy.out" || { cat "$work/busy.out"; fail "no busy error"; }
 took=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN {print b - a}')
-awk -v t="$took" 'BEGIN {exit !(t < 5)}' || fail "the busy refusal took $took s"
+# "At once" is: not after the job's --timeout (60 s); mpirun's own start-up is slow on a loaded host.
+awk -v t="$took" 'BEGIN {exit !(t < 30)}' || fail "the busy refusal took $took s (its --timeout is 60 s)"
 
 # kill -9 of one render rank of the running job: the job ends, the wall drops it and goes on.
 rank=$(pgrep -f -n -- "--connect 127.0.0.1:$port --renderer pattern --frames 0" | head -1)
