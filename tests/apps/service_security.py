@@ -2,7 +2,7 @@
 """The wall service's authentication and encryption, tried as an attacker would on one host
 (docs/security.md, "The wall service"). Each attack, then a good job that still works.
 
-Usage: service_security.py LAYOUT   (env DFBWALL, COMPARE, MPIEXEC; LAYOUT: one wall process)
+Usage: service_security.py LAYOUT tokens|curve|relay   (env DFBWALL, COMPARE, MPIEXEC; LAYOUT: one wall process)
 
   1. serve --token-file FILE creates FILE mode 0600 with a fresh token; the token is in no log and
      no command line.
@@ -22,6 +22,7 @@ Usage: service_security.py LAYOUT   (env DFBWALL, COMPARE, MPIEXEC; LAYOUT: one 
 """
 import os
 import re
+import secrets
 import shutil
 import signal
 import socket
@@ -35,6 +36,10 @@ import time
 import zmq
 
 layout = os.path.abspath(sys.argv[1])
+# tokens (1-3), curve (4), relay (5-6): three tests that ctest runs side by side.
+part = sys.argv[2] if len(sys.argv) > 2 else ""
+if part not in ("tokens", "curve", "relay"):
+    sys.exit("usage: service_security.py LAYOUT tokens|curve|relay")
 dfbwall = os.environ["DFBWALL"]
 compare = os.environ["COMPARE"]
 mpiexec = os.environ.get("MPIEXEC") or "mpirun"
@@ -259,209 +264,222 @@ timer = threading.Timer(WATCHDOG_S, watchdog)
 timer.daemon = True
 timer.start()
 try:
-    # ---- 1. the token file -----------------------------------------------------------------
     token_file = os.path.join(work, "wall-token")
-    port = free_port()
-    wall = serve("serve", port, "--token-file", token_file)
-    mode = os.stat(token_file).st_mode & 0o777
-    if mode != 0o600:
-        fail("serve created the token file with mode %o, not 600" % mode)
-    with open(token_file) as f:
-        token = f.read().strip()
-    if not re.fullmatch(r"[0-9a-f]{64}", token):
-        fail("the token file holds %r, not 64 hex digits" % token)
-    with open("/proc/%d/cmdline" % wall.pid, "rb") as f:
-        if token.encode() in f.read():
-            fail("the token is on serve's command line")
-    print("1. serve --token-file: created mode 600, a 64-digit token, not on the command line",
-          flush=True)
+    if part == "tokens":
+        # ---- 1. the token file -----------------------------------------------------------------
+        port = free_port()
+        wall = serve("serve", port, "--token-file", token_file)
+        mode = os.stat(token_file).st_mode & 0o777
+        if mode != 0o600:
+            fail("serve created the token file with mode %o, not 600" % mode)
+        with open(token_file) as f:
+            token = f.read().strip()
+        if not re.fullmatch(r"[0-9a-f]{64}", token):
+            fail("the token file holds %r, not 64 hex digits" % token)
+        with open("/proc/%d/cmdline" % wall.pid, "rb") as f:
+            if token.encode() in f.read():
+                fail("the token is on serve's command line")
+        print("1. serve --token-file: created mode 600, a 64-digit token, not on the command line",
+              flush=True)
 
-    # ---- 2. memory an unauthenticated peer can cost; wrong tokens ----------------------------
-    ports = listening_ports(wall.pid)
-    if port not in ports or len(ports) < 2:
-        fail("expected the directory and a piece port among serve's ports, got %s" % ports)
-    time.sleep(0.5)
-    before = vm_hwm_kib(wall.pid)
-    took = []
-    for p in ports:  # the directory socket and the piece socket
-        for _ in range(4):
-            took.append(big_frame_attack(p, 1 << 30, 8 << 20))
-    liars = [plain_dealer("tcp://127.0.0.1:%d" % port, "wrong") for _ in range(20)]
-    for s in liars:
-        s.send(hello())
-    time.sleep(2.0)
-    answered = sum(1 for s in liars if s.poll(0))
-    for s in liars:
-        s.close()
-    after = vm_hwm_kib(wall.pid)
-    grew_mib = (after - before) / 1024.0
-    if answered:
-        fail("%d wrong-token connections got an answer" % answered)
-    if grew_mib > 4:
-        fail("8 connections announcing 1 GiB raised the wall's peak RSS by %.1f MiB" % grew_mib)
-    if "refused a connection from 127.0.0.1 at the handshake" not in log_of("serve"):
-        fail("the wall did not log the refused handshakes")
-    print("2. 8 x 1 GiB frames announced (%d KiB sent before the wall hung up, at most), 20 "
-          "wrong-token hellos unanswered: peak RSS %+.2f MiB" % (max(took) // 1024, grew_mib),
-          flush=True)
-    good_job("after-attacks", "127.0.0.1:%d" % port, "--token-file", token_file)
-    print("   then a good job: captures equal the one-process render", flush=True)
+        # ---- 2. memory an unauthenticated peer can cost; wrong tokens ----------------------------
+        ports = listening_ports(wall.pid)
+        if port not in ports or len(ports) < 2:
+            fail("expected the directory and a piece port among serve's ports, got %s" % ports)
+        time.sleep(0.5)
+        before = vm_hwm_kib(wall.pid)
+        took = []
+        for p in ports:  # the directory socket and the piece socket
+            for _ in range(4):
+                took.append(big_frame_attack(p, 1 << 30, 8 << 20))
+        liars = [plain_dealer("tcp://127.0.0.1:%d" % port, "wrong") for _ in range(20)]
+        for s in liars:
+            s.send(hello())
+        time.sleep(2.0)
+        answered = sum(1 for s in liars if s.poll(0))
+        for s in liars:
+            s.close()
+        after = vm_hwm_kib(wall.pid)
+        grew_mib = (after - before) / 1024.0
+        if answered:
+            fail("%d wrong-token connections got an answer" % answered)
+        if grew_mib > 4:
+            fail("8 connections announcing 1 GiB raised the wall's peak RSS by %.1f MiB" % grew_mib)
+        if "refused a connection from 127.0.0.1 at the handshake" not in log_of("serve"):
+            fail("the wall did not log the refused handshakes")
+        print("2. 8 x 1 GiB frames announced (%d KiB sent before the wall hung up, at most), 20 "
+              "wrong-token hellos unanswered: peak RSS %+.2f MiB" % (max(took) // 1024, grew_mib),
+              flush=True)
+        good_job("after-attacks", "127.0.0.1:%d" % port, "--token-file", token_file)
+        print("   then a good job: captures equal the one-process render", flush=True)
 
-    # ---- 3. wrong tokens on the job's side ----------------------------------------------------
-    t0 = time.monotonic()
-    rc, _ = job("wrong-token", "127.0.0.1:%d" % port, extra_env={"DFBWALL_TOKEN": "wrong"},
-                ranks=1)
-    took_s = time.monotonic() - t0
-    if rc == 0 or "refused the job at the handshake" not in log_of("wrong-token"):
-        fail("a job with a wrong token: exit %d, %r" % (rc, log_of("wrong-token")[-300:]))
-    if took_s > 15:
-        fail("the wrong-token refusal took %.1f s" % took_s)
-    loose = os.path.join(work, "loose-token")
-    with open(loose, "w") as f:
-        f.write(token + "\n")
-    os.chmod(loose, 0o644)
-    rc, _ = job("loose-token", "127.0.0.1:%d" % port, "--token-file", loose, ranks=1)
-    if rc == 0 or "other users may read it" not in log_of("loose-token"):
-        fail("a token file mode 644 was used: exit %d" % rc)
-    for name in ("serve", "after-attacks", "wrong-token", "loose-token"):
-        if token in log_of(name):
-            fail("the token appears in the log of " + name)
-    print("3. wrong token refused at the handshake in %.1f s; a 644 token file refused; the token "
-          "in no log" % took_s, flush=True)
+        # ---- 3. wrong tokens on the job's side ----------------------------------------------------
+        t0 = time.monotonic()
+        rc, _ = job("wrong-token", "127.0.0.1:%d" % port, extra_env={"DFBWALL_TOKEN": "wrong"},
+                    ranks=1)
+        took_s = time.monotonic() - t0
+        if rc == 0 or "refused the job at the handshake" not in log_of("wrong-token"):
+            fail("a job with a wrong token: exit %d, %r" % (rc, log_of("wrong-token")[-300:]))
+        if took_s > 15:
+            fail("the wrong-token refusal took %.1f s" % took_s)
+        loose = os.path.join(work, "loose-token")
+        with open(loose, "w") as f:
+            f.write(token + "\n")
+        os.chmod(loose, 0o644)
+        rc, _ = job("loose-token", "127.0.0.1:%d" % port, "--token-file", loose, ranks=1)
+        if rc == 0 or "other users may read it" not in log_of("loose-token"):
+            fail("a token file mode 644 was used: exit %d" % rc)
+        for name in ("serve", "after-attacks", "wrong-token", "loose-token"):
+            if token in log_of(name):
+                fail("the token appears in the log of " + name)
+        print("3. wrong token refused at the handshake in %.1f s; a 644 token file refused; the token "
+              "in no log" % took_s, flush=True)
 
-    # A PLAIN job under tcpdump: the control for 4 (its pixels and token are in clear).
-    dump, path = pcap("plain", ports)
-    capture = good_job("plain-wire", "127.0.0.1:%d" % port, "--token-file", token_file,
-                       "--codec", "raw")
-    wire = end_pcap(dump, path)
-    runs = pixel_runs(capture)
-    seen_plain = [r for r in runs if r in wire]
-    if not seen_plain or token.encode() not in wire:
-        fail("the PLAIN control: %d of %d pixel runs and %s token on the wire; the check for "
-             "CURVE would prove nothing" % (len(seen_plain), len(runs),
-                                            "the" if token.encode() in wire else "no"))
-    stop(wall)
+        stop(wall)
+    else:  # the token file as serve makes it
+        token = secrets.token_hex(32)
+        fd = os.open(token_file, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        os.write(fd, (token + "\n").encode())
+        os.close(fd)
 
-    # ---- 4. CURVE ----------------------------------------------------------------------------
-    keys, other = os.path.join(work, "keys"), os.path.join(work, "other-keys")
-    for d in (keys, other):
-        if subprocess.run([dfbwall, "keygen", d], env=env).returncode != 0:
-            fail("dfbwall keygen %s failed" % d)
-    if os.stat(os.path.join(keys, "wall-secret.key")).st_mode & 0o777 != 0o600:
-        fail("keygen wrote the secret key readable by others")
-    if subprocess.run([dfbwall, "keygen", keys], env=env, capture_output=True).returncode == 0:
-        fail("keygen overwrote a key pair")
-    port = free_port()
-    wall = serve("serve-curve", port, "--token-file", token_file, "--curve", keys)
-    dump, path = pcap("curve", listening_ports(wall.pid))
-    capture = good_job("curve", "127.0.0.1:%d" % port, "--token-file", token_file, "--codec", "raw",
-                       "--server-key", os.path.join(keys, "wall-public.key"))
-    wire = end_pcap(dump, path)
-    runs = pixel_runs(capture)
-    leaked = [r for r in runs if r in wire]
-    if token.encode() in wire or leaked:
-        fail("with CURVE the wire shows %s token and %d of %d pixel runs" %
-             ("the" if token.encode() in wire else "no", len(leaked), len(runs)))
-    t0 = time.monotonic()
-    rc, _ = job("wrong-key", "127.0.0.1:%d" % port, "--token-file", token_file, "--server-key",
-                os.path.join(other, "wall-public.key"), ranks=1)
-    took_s = time.monotonic() - t0
-    if rc == 0 or "no handshake with the wall" not in log_of("wrong-key"):
-        fail("a job pinning another key: exit %d, %r" % (rc, log_of("wrong-key")[-300:]))
-    if took_s > 15:
-        fail("the job pinning another key took %.1f s to fail" % took_s)
-    rc, _ = job("plain-at-curve", "127.0.0.1:%d" % port, "--token-file", token_file, ranks=1)
-    if rc == 0:
-        fail("a PLAIN job was accepted by a CURVE wall")
-    print("4. CURVE: the job's captures equal the render; on the wire no token and 0 of %d pixel "
-          "runs (PLAIN: %d of %d and the token); another key refused in %.1f s" %
-          (len(runs), len(seen_plain), len(runs), took_s), flush=True)
-    # Through a relay that pins the wall's key and serves CURVE itself with the same key pair.
-    relay_port = free_port()
-    relay = start([dfbwall, "relay", "--listen", "127.0.0.1:%d" % relay_port, "--wall",
-                   "127.0.0.1:%d" % port, "--token-file", token_file, "--server-key",
-                   os.path.join(keys, "wall-public.key"), "--curve", keys, "--timeout", "30"],
-                  "relay-curve")
-    wait_for("relay-curve", "relay on", relay)
-    good_job("curve-relay", "127.0.0.1:%d" % relay_port, "--token-file", token_file,
-             "--server-key", os.path.join(keys, "wall-public.key"))
-    relay.send_signal(signal.SIGUSR1)
-    relay.wait(timeout=10)
-    print("   a job through a CURVE relay to the CURVE wall equals the render", flush=True)
-    stop(wall)
-    # A joining process pins the head's key from its own key folder: another pair is refused at
-    # once with the reason, the right one joins.
-    layout4 = os.path.join(os.path.dirname(layout), "2x2.toml")
-    port = free_port()
-    head = start([dfbwall, "serve", "--wall", layout4, "--process", "0", "--listen",
-                  "127.0.0.1:%d" % port, "--offscreen", "--timeout", str(TIMEOUT_S),
-                  "--token-file", token_file, "--curve", keys], "head-curve")
-    wait_for("head-curve", "wall service on", head)
-    member = lambda name, key_dir: start(
-        [dfbwall, "serve", "--wall", layout4, "--process", "1", "--join", "127.0.0.1:%d" % port,
-         "--offscreen", "--timeout", str(TIMEOUT_S), "--token-file", token_file, "--curve",
-         key_dir], name)
-    stranger = member("member-other-key", other)
-    try:
-        rc = stranger.wait(timeout=20)
-    except subprocess.TimeoutExpired:
-        fail("a joining process with another key pair neither joined nor gave up")
-    if rc == 0 or "the handshake broke off" not in log_of("member-other-key"):
-        fail("a joining process with another key pair: exit %d, %r" %
-             (rc, log_of("member-other-key")[-300:]))
-    joined = member("member-curve", keys)
-    wait_for("member-curve", "joined the wall", joined)
-    stop(joined)
-    stop(head)
-    print("   a joining process with another key pair exits 1 naming the handshake; with the "
-          "wall's it joins", flush=True)
+    if part == "curve":
+        port = free_port()
+        wall = serve("serve", port, "--token-file", token_file)
+        ports = listening_ports(wall.pid)
+        # A PLAIN job under tcpdump: the control for 4 (its pixels and token are in clear).
+        dump, path = pcap("plain", ports)
+        capture = good_job("plain-wire", "127.0.0.1:%d" % port, "--token-file", token_file,
+                           "--codec", "raw")
+        wire = end_pcap(dump, path)
+        runs = pixel_runs(capture)
+        seen_plain = [r for r in runs if r in wire]
+        if not seen_plain or token.encode() not in wire:
+            fail("the PLAIN control: %d of %d pixel runs and %s token on the wire; the check for "
+                 "CURVE would prove nothing" % (len(seen_plain), len(runs),
+                                                "the" if token.encode() in wire else "no"))
+        stop(wall)
 
-    # ---- 5. a relay and tokenless connections --------------------------------------------------
-    port = free_port()
-    wall = serve("serve-relayed", port, "--token-file", token_file)
-    relay_port = free_port()
-    relay = start([dfbwall, "relay", "--listen", "127.0.0.1:%d" % relay_port, "--wall",
-                   "127.0.0.1:%d" % port, "--token-file", token_file, "--timeout", "30"], "relay")
-    wait_for("relay", "relay on", relay)
-    strangers = []
-    for i in range(300):
-        s = ctx.socket(zmq.DEALER)
-        s.setsockopt(zmq.LINGER, 0)
-        if i % 2:
-            s.plain_username = b"dfbwall"
-            s.plain_password = b"wrong"
-        s.connect("tcp://127.0.0.1:%d" % relay_port)
-        s.send(hello())
-        strangers.append(s)
-    time.sleep(2.0)
-    good_job("through-relay", "127.0.0.1:%d" % relay_port, "--token-file", token_file)
-    answered = sum(1 for s in strangers if s.poll(0))
-    for s in strangers:
-        s.close()
-    if answered:
-        fail("%d tokenless connections to the relay got an answer" % answered)
-    print("5. relay: 300 tokenless connections held nothing; a good job through it equals the "
-          "render", flush=True)
-    relay.send_signal(signal.SIGUSR1)
-    relay.wait(timeout=10)
-    stop(wall)
+        # ---- 4. CURVE ----------------------------------------------------------------------------
+        keys, other = os.path.join(work, "keys"), os.path.join(work, "other-keys")
+        for d in (keys, other):
+            if subprocess.run([dfbwall, "keygen", d], env=env).returncode != 0:
+                fail("dfbwall keygen %s failed" % d)
+        if os.stat(os.path.join(keys, "wall-secret.key")).st_mode & 0o777 != 0o600:
+            fail("keygen wrote the secret key readable by others")
+        if subprocess.run([dfbwall, "keygen", keys], env=env, capture_output=True).returncode == 0:
+            fail("keygen overwrote a key pair")
+        port = free_port()
+        wall = serve("serve-curve", port, "--token-file", token_file, "--curve", keys)
+        dump, path = pcap("curve", listening_ports(wall.pid))
+        capture = good_job("curve", "127.0.0.1:%d" % port, "--token-file", token_file, "--codec", "raw",
+                           "--server-key", os.path.join(keys, "wall-public.key"))
+        wire = end_pcap(dump, path)
+        runs = pixel_runs(capture)
+        leaked = [r for r in runs if r in wire]
+        if token.encode() in wire or leaked:
+            fail("with CURVE the wire shows %s token and %d of %d pixel runs" %
+                 ("the" if token.encode() in wire else "no", len(leaked), len(runs)))
+        t0 = time.monotonic()
+        rc, _ = job("wrong-key", "127.0.0.1:%d" % port, "--token-file", token_file, "--server-key",
+                    os.path.join(other, "wall-public.key"), ranks=1)
+        took_s = time.monotonic() - t0
+        if rc == 0 or "no handshake with the wall" not in log_of("wrong-key"):
+            fail("a job pinning another key: exit %d, %r" % (rc, log_of("wrong-key")[-300:]))
+        if took_s > 15:
+            fail("the job pinning another key took %.1f s to fail" % took_s)
+        rc, _ = job("plain-at-curve", "127.0.0.1:%d" % port, "--token-file", token_file, ranks=1)
+        if rc == 0:
+            fail("a PLAIN job was accepted by a CURVE wall")
+        print("4. CURVE: the job's captures equal the render; on the wire no token and 0 of %d pixel "
+              "runs (PLAIN: %d of %d and the token); another key refused in %.1f s" %
+              (len(runs), len(seen_plain), len(runs), took_s), flush=True)
+        # Through a relay that pins the wall's key and serves CURVE itself with the same key pair.
+        relay_port = free_port()
+        relay = start([dfbwall, "relay", "--listen", "127.0.0.1:%d" % relay_port, "--wall",
+                       "127.0.0.1:%d" % port, "--token-file", token_file, "--server-key",
+                       os.path.join(keys, "wall-public.key"), "--curve", keys, "--timeout", "30"],
+                      "relay-curve")
+        wait_for("relay-curve", "relay on", relay)
+        good_job("curve-relay", "127.0.0.1:%d" % relay_port, "--token-file", token_file,
+                 "--server-key", os.path.join(keys, "wall-public.key"))
+        relay.send_signal(signal.SIGUSR1)
+        relay.wait(timeout=10)
+        print("   a job through a CURVE relay to the CURVE wall equals the render", flush=True)
+        stop(wall)
+        # A joining process pins the head's key from its own key folder: another pair is refused at
+        # once with the reason, the right one joins.
+        layout4 = os.path.join(os.path.dirname(layout), "2x2.toml")
+        port = free_port()
+        head = start([dfbwall, "serve", "--wall", layout4, "--process", "0", "--listen",
+                      "127.0.0.1:%d" % port, "--offscreen", "--timeout", str(TIMEOUT_S),
+                      "--token-file", token_file, "--curve", keys], "head-curve")
+        wait_for("head-curve", "wall service on", head)
+        member = lambda name, key_dir: start(
+            [dfbwall, "serve", "--wall", layout4, "--process", "1", "--join", "127.0.0.1:%d" % port,
+             "--offscreen", "--timeout", str(TIMEOUT_S), "--token-file", token_file, "--curve",
+             key_dir], name)
+        stranger = member("member-other-key", other)
+        try:
+            rc = stranger.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            fail("a joining process with another key pair neither joined nor gave up")
+        if rc == 0 or "the handshake broke off" not in log_of("member-other-key"):
+            fail("a joining process with another key pair: exit %d, %r" %
+                 (rc, log_of("member-other-key")[-300:]))
+        joined = member("member-curve", keys)
+        wait_for("member-curve", "joined the wall", joined)
+        stop(joined)
+        stop(head)
+        print("   a joining process with another key pair exits 1 naming the handshake; with the "
+              "wall's it joins", flush=True)
 
-    # ---- 6. --advertise ------------------------------------------------------------------------
-    port = free_port()
-    bad = start([dfbwall, "serve", "--wall", layout, "--process", "0", "--listen",
-                 "127.0.0.1:%d" % port, "--advertise", "10.254.254.254", "--offscreen",
-                 "--token-file", token_file], "advertise-bad")
-    if bad.wait(timeout=30) == 0 or "--advertise 10.254.254.254: this process does not listen " \
-                                     "there" not in log_of("advertise-bad"):
-        fail("serve advertised an address it does not listen on")
-    port = free_port()
-    good = start([dfbwall, "serve", "--wall", layout, "--process", "0", "--listen",
-                  "0.0.0.0:%d" % port, "--advertise", "127.0.0.1", "--offscreen",
-                  "--token-file", token_file], "advertise-good")
-    wait_for("advertise-good", "wall service on 127.0.0.1:%d" % port, good)
-    stop(good)
-    print("6. --advertise: an address not listened on refused; 127.0.0.1 on 0.0.0.0 advertised",
-          flush=True)
+    if part == "relay":
+        # ---- 5. a relay and tokenless connections --------------------------------------------------
+        port = free_port()
+        wall = serve("serve-relayed", port, "--token-file", token_file)
+        relay_port = free_port()
+        relay = start([dfbwall, "relay", "--listen", "127.0.0.1:%d" % relay_port, "--wall",
+                       "127.0.0.1:%d" % port, "--token-file", token_file, "--timeout", "30"], "relay")
+        wait_for("relay", "relay on", relay)
+        strangers = []
+        for i in range(300):
+            s = ctx.socket(zmq.DEALER)
+            s.setsockopt(zmq.LINGER, 0)
+            if i % 2:
+                s.plain_username = b"dfbwall"
+                s.plain_password = b"wrong"
+            s.connect("tcp://127.0.0.1:%d" % relay_port)
+            s.send(hello())
+            strangers.append(s)
+        time.sleep(2.0)
+        good_job("through-relay", "127.0.0.1:%d" % relay_port, "--token-file", token_file)
+        answered = sum(1 for s in strangers if s.poll(0))
+        for s in strangers:
+            s.close()
+        if answered:
+            fail("%d tokenless connections to the relay got an answer" % answered)
+        print("5. relay: 300 tokenless connections held nothing; a good job through it equals the "
+              "render", flush=True)
+        relay.send_signal(signal.SIGUSR1)
+        relay.wait(timeout=10)
+        stop(wall)
+
+        # ---- 6. --advertise ------------------------------------------------------------------------
+        port = free_port()
+        bad = start([dfbwall, "serve", "--wall", layout, "--process", "0", "--listen",
+                     "127.0.0.1:%d" % port, "--advertise", "10.254.254.254", "--offscreen",
+                     "--token-file", token_file], "advertise-bad")
+        if bad.wait(timeout=30) == 0 or "--advertise 10.254.254.254: this process does not listen " \
+                                         "there" not in log_of("advertise-bad"):
+            fail("serve advertised an address it does not listen on")
+        port = free_port()
+        good = start([dfbwall, "serve", "--wall", layout, "--process", "0", "--listen",
+                      "0.0.0.0:%d" % port, "--advertise", "127.0.0.1", "--offscreen",
+                      "--token-file", token_file], "advertise-good")
+        wait_for("advertise-good", "wall service on 127.0.0.1:%d" % port, good)
+        stop(good)
+        print("6. --advertise: an address not listened on refused; 127.0.0.1 on 0.0.0.0 advertised",
+              flush=True)
     kill_all()
     ctx.destroy(linger=0)
     shutil.rmtree(work, ignore_errors=True)
