@@ -476,8 +476,10 @@ void Relay::run() {
     }
     for (std::size_t i = firstProcess; i < afterProcesses; ++i)
       if (items[i].revents) m.pump(*m.processes[i - firstProcess]);
+    // Read even when the poll saw nothing: a connection's close is acted on only once what it
+    // sent before is taken.
     bool frontRead = true;  // every message of the jobs taken
-    if (items[0].revents) {
+    {
       zmq::message_t id, body;
       int n = 0;
       for (; n < kBurst && m.front.recv(id, zmq::recv_flags::dontwait); ++n) {
