@@ -348,7 +348,8 @@ case "$scenario" in
     finish 20
     [ "$code" -ne 124 ] || fail "the long job still ran 20 s after one of its ranks was killed"
     kill -0 "$serve" 2>/dev/null || fail "the wall died with the killed job"
-    # The wall notices within its --timeout (5 s); --wait queues the next job until then.
+    # mpirun ends rank 0 too: its connection closes and the wall drops the job at once (--wait
+    # covers the moment until it has).
     t0=$(now)
     wait=--wait job after 2 snappy --renderer pattern
     after=$(since "$t0")

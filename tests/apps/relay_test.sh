@@ -8,8 +8,10 @@
 #    own link: the relay drops and logs them, the wall never sees them;
 #  - the next job through the relay (scivis, 4 bricks, snappy) equals its one-process render, and
 #    a job without the wall's token is refused at the relay's handshake, saying so;
-#  - kill -9 of the relay during a job ends the job within its timeout, the wall drops it, and a
-#    relay started again serves the next job;
+#  - kill -9 of a job's rank: the relay closes the job's link to the wall, which drops the job at
+#    once (its connection closed), not at its timeout;
+#  - kill -9 of the relay during a job ends the job within its timeout, the wall drops it at once
+#    (its connection closed), and a relay started again serves the next job;
 #  - a relay whose wall does not answer refuses the job, saying so, within its timeout.
 # Needs DFBWALL, COMPARE and MPIEXEC in the environment, and /usr/bin/python3 with pyzmq.
 set -euo pipefail
@@ -112,6 +114,27 @@ for _ in $(seq 100); do [ "$(wc -l <"$work/relay.jsonl")" -ge 2 ] && break; slee
 strangers=$(tail -1 "$work/relay.jsonl" | grep -o '"strangers_dropped":[0-9]*' | cut -d: -f2)
 [ "$strangers" -ge 3 ] || fail "the second job's line counts $strangers strangers' messages, not 3"
 
+# kill -9 of a job's rank: mpirun ends the other, the job's connection to the relay closes, the
+# relay closes the job's own link to the wall, and the wall drops the job at once.
+mpi -np 2 "$DFBWALL" --connect "127.0.0.1:$relayPort" --token "$token" --renderer pattern \
+  --frames 0 --timeout 30 >"$work/killed.out" 2>&1 &
+long=$!
+for _ in $(seq 100); do grep -q '^frame [0-9]' "$work/killed.out" && break; sleep 0.1; done
+grep -q '^frame [0-9]' "$work/killed.out" || { cat "$work/killed.out"; fail "the job to kill showed no frame"; }
+rank=""
+for p in $(pgrep -f -- "--connect 127.0.0.1:$relayPort --token $token --renderer pattern --frames 0 --timeout 30"); do
+  [ "$(cat /proc/$p/comm)" = dfbwall ] && rank=$p
+done
+[ -n "$rank" ] || fail "no rank of the job to kill"
+kill -9 "$rank"
+# Within the wall's --timeout (5 s), and said so: a drop at the timeout would give its silence.
+for _ in $(seq 50); do grep -q "ended after frame [0-9]* (its connection closed)" "$work/serve.err" && break; sleep 0.1; done
+grep -q "dropping the job from .*: its connection closed" "$work/serve.err" ||
+  fail "the wall did not drop the job behind the relay when its connection closed"
+grep -q "its connection to the relay closed" "$work/relay.err" || fail "the relay did not say the job's connection closed"
+wait "$long" 2>/dev/null || true
+long=""
+
 # kill -9 of the relay during a job is a cut link: the job ends within its timeout (5 s), the
 # wall drops it, and a relay started again on the same port serves the next job (--wait).
 mpi -np 2 "$DFBWALL" --connect "127.0.0.1:$relayPort" --token "$token" --renderer pattern \
@@ -130,7 +153,8 @@ awk -v t="$took" 'BEGIN {exit !(t < 9)}' || fail "the job ended $took s after it
   >"$work/relay.out" 2>>"$work/relay.err" &
 relay=$!
 wait=--wait job again 2 raw --renderer pattern
-grep -q "dropping the job from" "$work/serve.err" || fail "the wall did not drop the orphaned job"
+[ "$(grep -c "dropping the job from .*: its connection closed" "$work/serve.err")" -ge 2 ] ||
+  fail "the wall did not drop the orphaned job when the relay's connection closed"
 
 # A relay whose wall does not answer tells the job so within its timeout (2 s here).
 "$DFBWALL" relay --listen "127.0.0.1:$((relayPort + 1))" --wall "127.0.0.1:$((port + 1))" --token "$token" --timeout 2 \

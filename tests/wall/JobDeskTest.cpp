@@ -260,6 +260,80 @@ TEST_F(JobDeskTest, AJobThatGoesSilentEndsAndTheNextStarts) {
   EXPECT_EQ(jobs.queued(), 0u);
 }
 
+TEST_F(JobDeskTest, AJobWhoseConnectionClosesEndsAtOnceAndAQueuedOneLeavesTheQueue) {
+  run("job-a", "render1", t0);
+  jobs.hello("job-c", helloFrom("render3", true), t0);
+  jobs.hello("job-b", helloFrom("render2", true), t0);
+  // A connection that never had a job: nothing happens.
+  EXPECT_TRUE(jobs.disconnected("stranger", t0 + 10ms).empty());
+  // job-c dies while queued: it leaves the queue, the running job goes on.
+  const Actions left = jobs.disconnected("job-c", t0 + 20ms);
+  EXPECT_EQ(jobs.queued(), 1u);
+  EXPECT_TRUE(only<JobDesk::ToProcess>(left).empty());
+  ASSERT_EQ(only<JobDesk::Log>(left).size(), 1u);
+  EXPECT_EQ(only<JobDesk::Log>(left)[0].line,
+            "a queued job from render3 left the queue: its connection closed");
+  EXPECT_EQ(jobs.state(), State::Running);
+
+  // job-a's connection closes long before its silence would end it: it ends now, as if silent.
+  const Actions gone = jobs.disconnected("job-a", t0 + 100ms);
+  EXPECT_EQ(given(gone, Command::Abort), (std::vector<int>{0, 1, 2}));  // they give it up
+  EXPECT_EQ(commandTo(gone, 1, Command::Abort).text, "its connection closed");
+  const auto ended = replies(gone, Kind::Ended);
+  ASSERT_EQ(ended.size(), 1u);
+  EXPECT_EQ(ended[0].peer, "job-a");
+  const auto logged = only<JobDesk::Log>(gone);
+  ASSERT_EQ(logged.size(), 1u);
+  EXPECT_EQ(logged[0].line, "dropping the job from render1: its connection closed");
+  EXPECT_EQ(jobs.state(), State::Ending);
+
+  // Once the processes gave the frame up: the job's record, then job-b.
+  const Actions next = allDone(3, t0 + 200ms);
+  const auto job = records(next);
+  ASSERT_EQ(job.size(), 1u);
+  EXPECT_EQ(job[0]["ended"], "its connection closed");
+  EXPECT_EQ(given(next, Command::Start), (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(replies(allReady(t0 + 210ms), Kind::Directory).at(0).peer, "job-b");
+  EXPECT_EQ(jobs.queued(), 0u);
+}
+
+TEST_F(JobDeskTest, AJobThatClosesOnceItsLastFrameIsCreditedEndsAsUsual) {
+  run("job-a", "render1", t0);
+  const std::uint64_t session = jobs.session();
+  jobs.message({"job-a", Kind::Bye, session, {3, 0}, {}}, t0 + 10ms);
+  jobs.presented(session, 2, 0);
+  jobs.presented(session, 3, 0);
+  // Its rank 0 leaves once it saw that credit: the processes' Done end the job.
+  const Actions closed = jobs.disconnected("job-a", t0 + 20ms);
+  EXPECT_TRUE(given(closed, Command::Abort).empty());
+  EXPECT_TRUE(replies(closed, Kind::Ended).empty());
+  EXPECT_EQ(jobs.state(), State::Running);
+  const auto job = records(allDone(3, t0 + 30ms));
+  ASSERT_EQ(job.size(), 1u);
+  EXPECT_EQ(job[0]["ended"], "last frame");
+
+  // The next job names its last frame, 3, and its connection closes after frame 2: it died.
+  run("job-b", "render2", t0 + 40ms);
+  jobs.message({"job-b", Kind::Bye, jobs.session(), {3, 0}, {}}, t0 + 50ms);
+  jobs.presented(jobs.session(), 2, 0);
+  const Actions died = jobs.disconnected("job-b", t0 + 60ms);
+  EXPECT_EQ(given(died, Command::Abort), (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(textOf(replies(died, Kind::Ended).at(0)), "its connection closed");
+}
+
+TEST_F(JobDeskTest, AJobWhoseConnectionClosesWhileItStartsIsCancelled) {
+  jobs.hello("job-a", helloFrom("render1"), t0);
+  ASSERT_EQ(jobs.state(), State::Starting);
+  const Actions gone = jobs.disconnected("job-a", t0 + 10ms);
+  EXPECT_EQ(given(gone, Command::Cancel), (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(jobs.state(), State::Ending);
+  // The processes say Done: the wall is free for the next job.
+  allDone(0, t0 + 20ms);
+  EXPECT_EQ(jobs.state(), State::Idle);
+  EXPECT_EQ(given(jobs.hello("job-b", helloFrom("render2"), t0 + 30ms), Command::Start),
+            (std::vector<int>{0, 1, 2}));
+}
+
 TEST_F(JobDeskTest, AProcessThatMissesBeatsIsDroppedAndTheJobGetsANewRoster) {
   run("job-a", "render1", t0);
   jobs.presented(jobs.session(), 1, 0);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "base/Error.h"
+#include "wall/service/protocol/ConnectionWatch.h"
 #include "wall/service/protocol/PeerText.h"
 #include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/Zmq.h"
@@ -64,7 +65,10 @@ struct Relay::Impl {
   zmq::context_t context{1};
   std::unique_ptr<Gatekeeper> gatekeeper;                  // before any socket binds
   zmq::socket_t front{context, zmq::socket_type::router};  // the jobs' directory links
-  std::string wallEndpoint;                                // the wall's directory
+  // Of `front`: a job connection that closes closes the job's own link to the wall at once, so
+  // the wall drops it at once too (and a relay that dies closes every job's link).
+  ConnectionWatch frontConnections{context, front};
+  std::string wallEndpoint;  // the wall's directory
   std::string bindHost, advertised, address;
   int deadPeerMs = 60000;
 
@@ -366,6 +370,16 @@ struct Relay::Impl {
       if (p->pendingJob == &job) p->pendingJob = nullptr;
     jobs.erase(job.id);
   }
+  // Job connections that closed: the job is forgotten and its link to the wall closes.
+  void forgetClosed() {
+    for (const std::string& id : frontConnections.closed()) {
+      const auto found = jobs.find(id);
+      if (found == jobs.end()) continue;
+      Job& job = *found->second;
+      if (!job.over) log("job from " + job.host + ": its connection to the relay closed");
+      forget(job, job.over ? job.end : "its connection closed");
+    }
+  }
   void reap() {
     const auto now = Clock::now();
     std::vector<std::pair<Job*, std::string>> done;
@@ -452,18 +466,25 @@ void Relay::run() {
       items.push_back(writable ? zmq::pollitem_t{p->down.handle(), 0, ZMQ_POLLIN, 0}
                                : zmq::pollitem_t{p->up.handle(), 0, ZMQ_POLLOUT, 0});
     }
+    const std::size_t afterProcesses = items.size();
+    items.push_back(m.frontConnections.pollItem());
     try {
       zmq::poll(items.data(), items.size(), std::chrono::milliseconds(200));
     } catch (const zmq::error_t& e) {
       if (e.num() == EINTR) continue;  // a signal the caller did not block: poll again
       throw;
     }
-    for (std::size_t i = firstProcess; i < items.size(); ++i)
+    for (std::size_t i = firstProcess; i < afterProcesses; ++i)
       if (items[i].revents) m.pump(*m.processes[i - firstProcess]);
-    if (items[0].revents) {
+    // Read even when the poll saw nothing: a connection's close is acted on only once what it
+    // sent before is taken.
+    bool frontRead = true;  // every message of the jobs taken
+    {
       zmq::message_t id, body;
-      for (int n = 0; n < kBurst && m.front.recv(id, zmq::recv_flags::dontwait); ++n) {
+      int n = 0;
+      for (; n < kBurst && m.front.recv(id, zmq::recv_flags::dontwait); ++n) {
         if (!id.more() || !m.front.recv(body, zmq::recv_flags::dontwait)) continue;
+        m.frontConnections.heard(std::string(static_cast<const char*>(id.data()), id.size()), body);
         while (body.more()) {  // several parts: only the last goes on, as at the wall
           zmq::message_t extra;
           if (!m.front.recv(extra, zmq::recv_flags::dontwait)) break;
@@ -471,6 +492,7 @@ void Relay::run() {
         }
         m.fromJob(std::string(static_cast<const char*>(id.data()), id.size()), std::move(body));
       }
+      frontRead = n < kBurst;
     }
     for (std::size_t i = 1; i < firstProcess; ++i) {
       if (!items[i].revents) continue;
@@ -486,6 +508,8 @@ void Relay::run() {
         m.fromWall(*job, std::move(body));
       }
     }
+    // Once what a job sent before its connection closed went on (its goodbye first).
+    if (frontRead) m.forgetClosed();
     if (Clock::now() - lastTick > std::chrono::milliseconds(250)) {
       m.reap();
       lastTick = Clock::now();

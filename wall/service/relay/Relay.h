@@ -9,7 +9,8 @@
 //    at most a few job connections, so no host takes every slot;
 //  - the directory link: every job connection on the relay's --listen socket gets a connection
 //    of its own to the wall's directory socket, so the wall sees each job as it would directly
-//    (its hello decides; refusals and queue places come back through). The
+//    (its hello decides; refusals and queue places come back through); when a job's connection
+//    closes, so does its link to the wall, and the wall drops the job at once. The
 //    wall's Directory and Roster reach the job rewritten (wall/service/relay/RelayRoutes.h): each
 //    wall process's endpoint becomes the relay's piece endpoint for it;
 //  - the piece path: per wall process a socket of the relay's (its endpoint in the rewritten

@@ -14,6 +14,7 @@
 #include <unordered_set>
 
 #include "base/Error.h"
+#include "wall/service/protocol/ConnectionWatch.h"
 #include "wall/service/protocol/LinkMessages.h"
 #include "wall/service/protocol/PeerText.h"
 #include "wall/service/protocol/Protocol.h"
@@ -74,6 +75,7 @@ struct Desk::Impl {
   zmq::context_t context{1};
   Gatekeeper gatekeeper;
   zmq::socket_t socket;
+  ConnectionWatch connections;  // of `socket`: a job whose connection closed is gone at once
   Waker waker;
   std::thread thread;
   std::atomic<bool> stop{false}, isClosed{false};
@@ -106,6 +108,7 @@ struct Desk::Impl {
         processCount(s.layout->processCount),
         gatekeeper(context, s.options.credentials, s.options.log),
         socket(context, zmq::socket_type::router),
+        connections(context, socket),
         members(membershipSetup(s), Clock::now()),
         jobs(jobSetup(s), members) {
     configureSocket(socket, static_cast<int>(s.options.timeout.count()), kMaxLinkMessageBytes);
@@ -369,11 +372,14 @@ struct Desk::Impl {
       banish(peer, e.what());
     }
   }
-  void receive() {
+  // True when every message waiting was taken.
+  bool receive() {
     zmq::message_t id, body;
-    for (int n = 0; n < kMaxBurst && socket.recv(id, zmq::recv_flags::dontwait); ++n) {
+    int n = 0;
+    for (; n < kMaxBurst && socket.recv(id, zmq::recv_flags::dontwait); ++n) {
       if (!id.more() || !socket.recv(body, zmq::recv_flags::dontwait)) continue;
       const std::string peer(static_cast<const char*>(id.data()), id.size());
+      connections.heard(peer, body);
       const bool banishedPeer = banned.count(peer) != 0;
       // Parts (a process's captured pixels) join into one message; only a member sends them.
       // Every part is read even from a banished peer, so the next message starts where it should.
@@ -387,11 +393,22 @@ struct Desk::Impl {
       }
       onMessage(peer, static_cast<const std::byte*>(body.data()), body.size());
     }
+    return n < kMaxBurst;
+  }
+  // Connections that closed: a job's ends at once (a job that dies closes its socket; mpirun
+  // ends its other ranks), a queued one leaves the queue. A wall process's link is left to its
+  // beats: it rejoins over a new connection, and its silence or its Join decides.
+  void settleClosed() {
+    for (const std::string& peer : connections.closed()) {
+      hellos.erase(peer);
+      if (members.processOf(peer) < 0) carry(jobs.disconnected(peer, Clock::now()));
+    }
   }
   void run() {
     while (!stop && !finished) {
-      zmq::pollitem_t items[2] = {{socket.handle(), 0, ZMQ_POLLIN, 0}, waker.pollItem()};
-      zmq::poll(items, 2, kTick);
+      zmq::pollitem_t items[3] = {
+          {socket.handle(), 0, ZMQ_POLLIN, 0}, waker.pollItem(), connections.pollItem()};
+      zmq::poll(items, 3, kTick);
       if (items[1].revents) waker.drain();
       std::deque<std::function<void()>> now;
       {
@@ -399,7 +416,8 @@ struct Desk::Impl {
         now.swap(tasks);
       }
       for (auto& task : now) task();
-      receive();
+      // A closed connection once all it sent before is read: its goodbye decides first.
+      if (receive()) settleClosed();
       settleUnreachable();
       // A closing wall waits for the processes' confirmations only: no beats, no drops.
       if (jobs.state() != JobDesk::State::Closed) watch(Clock::now());

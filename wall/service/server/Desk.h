@@ -5,7 +5,8 @@
 // LinkMessages.h).
 //
 // For jobs: one at a time (a second is refused as busy, or queued with `wait`), their keepalives,
-// captures and goodbye, their credits, and the end of a job that goes silent.
+// captures and goodbye, their credits, and the end of a job that goes silent or whose connection
+// closes (at once: wall/service/protocol/ConnectionWatch.h).
 // For the wall's processes: who is in the wall (Join, Beat), the commands of a job to every
 // process in it, its swap barriers and capture gathers. A process that stops answering (dies,
 // hangs, its link is cut) is dropped after the timeout: the barriers go on without it, the job

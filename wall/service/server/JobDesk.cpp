@@ -140,6 +140,7 @@ void JobDesk::onControl(const JobMessage& m) {
       break;
     case Kind::Bye:
       if (m.control.second < 0) return endJob("the job left without naming its last frame");
+      namedLastFrame_ = static_cast<std::uint32_t>(m.control.value);
       toJob(command(Command::LastFrame, static_cast<std::int64_t>(m.control.value)));
       break;
     default:
@@ -378,6 +379,20 @@ JobDesk::Actions JobDesk::failed(const std::string& peer, const std::string& why
   return take();
 }
 
+JobDesk::Actions JobDesk::disconnected(const std::string& peer, Clock::time_point now) {
+  now_ = now;
+  const auto queued =
+      std::find_if(queue_.begin(), queue_.end(), [&](const Job& job) { return job.peer == peer; });
+  if (queued != queue_.end()) {
+    log("a queued job from " + peerText(queued->hello.host) +
+        " left the queue: its connection closed");
+    queue_.erase(queued);
+  }
+  const bool over = namedLastFrame_ && lastCredited_ >= *namedLastFrame_;
+  if (peer == job_.peer && !over) endJob("its connection closed");
+  return take();
+}
+
 // ---- what goes out ----
 
 JobDesk::Actions JobDesk::take() {
@@ -455,6 +470,7 @@ void JobDesk::startJob() {
   emit(Session{job_.session, false});
   job_.started = now_;
   failure_.clear();
+  namedLastFrame_.reset();
   lastPresented_ = bytes_ = 0;
   lastCredited_ = 0;
   rosterVersion_ = 0;

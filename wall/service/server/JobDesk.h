@@ -7,7 +7,8 @@
 // queued (`wait`, at most kMaxQueued), and queued jobs start in order. A job starts when every
 // process in the wall answered Start (its node attached), gets its directory, sends keepalives,
 // captures and goodbye (turned into commands to the processes), is credited each presented frame
-// and ends with every process's Done, a failure, or the timeout of its silence; then the next.
+// and ends with every process's Done, a failure, its connection closing (at once), or the timeout
+// of its silence; then the next.
 // Each process has a seat in the job (in it, ready, done, first frame): a process lost is done
 // and the job gets a roster without it; one that joins during the job is admitted from the first
 // frame the job cannot have started without it (the last credited frame + frames in flight + 1).
@@ -24,6 +25,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <optional>
 #include <set>
 #include <string>
 #include <variant>
@@ -145,6 +147,11 @@ class JobDesk {
   // Handling a message from `peer` failed, or the wall cannot send to it: if it is the job's
   // connection, the job ends; a queued job from it leaves the queue.
   Actions failed(const std::string& peer, const std::string& why, Clock::time_point now);
+  // The connection `peer` closed (the desk's socket says so): its job is gone, ended at once as
+  // if silent for the timeout, and a queued job from it leaves the queue. Not a job whose named
+  // last frame was credited: its rank 0 leaves once it saw that credit, and the processes' Done
+  // end it as usual.
+  Actions disconnected(const std::string& peer, Clock::time_point now);
 
   State state() const { return state_; }
   std::uint64_t session() const { return job_.session; }
@@ -216,6 +223,7 @@ class JobDesk {
   // The frames the job's capture requests are taken at, until they are presented.
   std::deque<std::uint32_t> pendingCaptures_;
   std::string failure_;
+  std::optional<std::uint32_t> namedLastFrame_;  // from the job's goodbye
   std::int64_t lastPresented_ = 0, bytes_ = 0;
   std::uint32_t lastCredited_ = 0, granted_ = 2, rosterVersion_ = 0;
   int processesLost_ = 0, processesRejoined_ = 0;
