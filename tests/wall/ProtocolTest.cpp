@@ -963,6 +963,10 @@ TEST(Protocol, WritesFuzzSeeds) {
   snappy.token.clear();
   snappy.wait = false;
   writeSeed(hello, "hello-snappy", packHello(snappy));
+  snappy.window = parseWindowRequest("90,70,250,170");
+  writeSeed(hello, "hello-window", packHello(snappy));
+  snappy.window = parseWindowRequest("r1c0");
+  writeSeed(hello, "hello-window-display", packHello(snappy));
   writeSeed(hello, "text-refused", packText(Kind::Refused, 0, "the wall is busy"));
   writeSeed(hello, "text-queued", packText(Kind::Queued, 5, "2"));
   writeSeed(hello, "text-ended", packText(Kind::Ended, 5, "no word from the job for 60 s"));
@@ -987,6 +991,10 @@ TEST(Protocol, WritesFuzzSeeds) {
 
   const std::filesystem::path directory = dir / "service_directory";
   writeSeed(directory, "directory-2x2-bezels", packDirectory(twoByTwo()));
+  Directory window = twoByTwo();
+  window.window = {205, 100, 412, 300};
+  window.layout = windowLayout(twoByTwo().layout, window.window);
+  writeSeed(directory, "directory-2x2-window", packDirectory(window));
   writeSeed(directory, "directory-3x2-by-column",
             packDirectory(directoryOf(k3x2ByColumn, "3x2.toml")));
   writeSeed(directory, "directory-1x1",
