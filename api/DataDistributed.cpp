@@ -31,6 +31,7 @@
 #include "wall/image/Png.h"
 #include "wall/layout/Layout.h"
 #include "wall/layout/Ranks.h"
+#include "wall/layout/Window.h"
 #include "wall/service/client/ServiceClient.h"
 
 namespace dfbwall {
@@ -227,20 +228,26 @@ void Session::Impl::startRendering() {
 }
 
 void Session::Impl::setUp() {
+  if (options.connect.empty() && !options.window.empty())
+    throw std::runtime_error(
+        "dfbwall: SessionOptions window is for connect: a window of a wall that `dfbwall serve` "
+        "runs");
   if (!options.connect.empty()) {
     if (!options.wall.empty())
       throw std::runtime_error(
           "dfbwall: SessionOptions wall and connect: a wall you connect to has its own layout");
     const wall::service::CodecSpec codec = wall::service::parseCodec(options.codec);
     roles = wall::RankRoles{size, 0};  // every rank renders; the wall is elsewhere
+    wall::service::Hello hello =
+        wall::service::jobHello(size, options.tileSize, codec, options.framesInFlight, options.wait,
+                                options.captureDir, options.captureEvery);
+    hello.window = wall::parseWindowRequest(options.window);
     if (rank == 0)
       service = std::make_shared<wall::service::ServiceClient>(
           options.connect,
           wall::service::loadCredentials(
               {options.token, options.tokenFile, {}, options.serverKeyFile}, false),
-          wall::service::jobHello(size, options.tileSize, codec, options.framesInFlight,
-                                  options.wait, options.captureDir, options.captureEvery),
-          timeout);
+          hello, timeout);
   } else if (!options.wall.empty()) {
     layout = wall::loadLayout(options.wall);
     if (auto problem = wall::checkRankCount(*layout, size)) throw std::runtime_error(*problem);

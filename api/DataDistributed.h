@@ -179,8 +179,12 @@ struct SessionOptions {
   // (~/.local/state/dfbwall/wall-token; docs/security.md); read by rank 0 only. `serverKeyFile`:
   // the wall's CURVE public key (serve --curve): the links are encrypted and a wall that does not
   // hold the key is refused. `codec`: "raw", "snappy" or "jpeg[:QUALITY]"; `wait`: queue behind
-  // a job the wall is showing instead of failing with its "busy" error.
+  // a job the wall is showing instead of failing with its "busy" error. `window`: the part of
+  // the wall the session covers, as `dfbwall --window`: "X,Y,W,H" (wall canvas pixels, bezels
+  // included), a display's name, or "full"/empty (the whole canvas); the session's canvas is the
+  // window (docs/service.md, "A job in a window").
   std::string connect;
+  std::string window;
   std::string token;
   std::string tokenFile;
   std::string serverKeyFile;

@@ -194,6 +194,10 @@ void addConnectGroup(CLI::App& app, Options& o) {
       ->group(kConnect);
   app.add_flag("--wait", o.wait, "with --connect: wait for a busy wall instead of failing")
       ->group(kConnect);
+  app.add_option("--window", o.window,
+                 "with --connect: the part of the wall this job covers: X,Y,W,H (wall canvas "
+                 "pixels, bezels included), a display's name, or full (default)")
+      ->group(kConnect);
 }
 
 void addControlGroup(CLI::App& app, Options& o) {
@@ -326,6 +330,10 @@ void addServe(CLI::App& serve, Options& o, RawOptions& raw) {
       .add_option("--capture-quota", raw.captureQuota,
                   "BYTES, or with a suffix K, M, G, T: the most one job's captures may take on "
                   "each wall process; a capture past it ends the job (default: 1G)")
+      ->group(kOutput);
+  serve
+      .add_option("--background", raw.background,
+                  "#rrggbb: what the displays show outside a job's --window (default: black)")
       ->group(kOutput);
   addHelp(serve);
 }

@@ -12,7 +12,7 @@ namespace app {
 
 // Option values that need more than CLI11's checks (apps/Options.cpp reads them).
 struct RawOptions {
-  std::string size, memoryLimit, captureQuota;
+  std::string size, memoryLimit, captureQuota, background;
 };
 
 struct CommandLine {

@@ -20,6 +20,9 @@ void printDryRun(const Job& job) {
                 o.connect.c_str(), static_cast<unsigned>(wall::service::kProtocolVersion),
                 static_cast<unsigned long long>(job.directory->session),
                 job.directory->framesInFlight);
+    const dfb::Region& w = job.directory->window;
+    std::printf("  window %d,%d,%d,%d of the wall's canvas (the canvas above)\n", w.x0, w.y0,
+                w.width(), w.height());
     for (size_t p = 0; p < job.directory->processes.size(); ++p)
       std::printf("  wall process %zu: pieces to %s\n", p,
                   job.directory->processes[p].endpoint.c_str());

@@ -4,6 +4,7 @@
 
 #include "apps/CommandLine.h"
 #include "base/MemoryBudget.h"
+#include "wall/layout/Window.h"
 #include "wall/service/protocol/Codec.h"
 
 #include <algorithm>
@@ -101,6 +102,15 @@ std::string serveProblem(Options& o, const RawOptions& raw) {
              raw.captureQuota + "'";
     o.captureQuota = *bytes;
   }
+  if (!raw.background.empty()) {
+    // "#rrggbb"; RGBA8 with R in the low byte (wall/image/Image.h).
+    const std::string& b = raw.background;
+    std::uint32_t rgb = 0;
+    const bool hex = b.size() == 7 && b[0] == '#' &&
+                     std::from_chars(b.data() + 1, b.data() + 7, rgb, 16).ptr == b.data() + 7;
+    if (!hex) return "--background must be #rrggbb (e.g. #000000), not '" + b + "'";
+    o.background = 0xff000000u | (rgb >> 16) | (rgb & 0xff00u) | ((rgb & 0xffu) << 16);
+  }
   if (o.process > 0 && o.join.empty())
     return "serve --process " + std::to_string(o.process) +
            " needs --join HOST:PORT: the head of the wall it joins";
@@ -128,8 +138,12 @@ std::string renderJobProblem(Options& o, const RawOptions& raw, bool ghostGiven)
   if (o.connect.empty() &&
       (o.wait || !o.token.empty() || !o.tokenFile.empty() || !o.serverKey.empty()))
     return "--token, --token-file, --server-key and --wait are for --connect";
+  if (o.connect.empty() && !o.window.empty())
+    return "--window is for --connect: a window of a wall that `dfbwall serve` runs (a job of "
+           "its own wall, --wall, covers the whole canvas)";
   if (!o.connect.empty()) {
     try {
+      wall::parseWindowRequest(o.window);
       wall::service::parseCodec(o.codec);
     } catch (const std::exception& e) {
       return e.what();

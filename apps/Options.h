@@ -70,6 +70,8 @@ struct Options {
   std::uint64_t captureQuota = std::uint64_t(1) << 30;  // serve: bytes per job and process
   std::string codec = "snappy";  // connect: raw | snappy | jpeg[:QUALITY[:SUBSAMPLING]]
   bool wait = false;             // connect: queue behind a connected job instead of failing
+  std::string window;            // connect: full | X,Y,W,H | DISPLAY (wall/layout/Window.h)
+  std::uint32_t background = 0xff000000u;  // serve: RGBA8 outside a job's window (black)
 
   // Steering.
   std::string control;           // [ADDR:]PORT of the control server on render rank 0; empty: none

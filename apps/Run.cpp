@@ -31,6 +31,7 @@
 #include "runtime/SetupAgreement.h"
 #include "runtime/WallControl.h"
 #include "wall/display/Capture.h"
+#include "wall/layout/Window.h"
 #include "wall/service/client/ServiceClient.h"
 
 namespace app {
@@ -161,9 +162,10 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
       job.roles = wall::RankRoles{worldSize, 0};  // every rank renders; the wall is elsewhere
       job.codec = wall::service::parseCodec(o.codec);
       if (job.worldRank == 0) {
-        const wall::service::Hello hello =
+        wall::service::Hello hello =
             wall::service::jobHello(worldSize, o.tileSize, job.codec, o.framesInFlight, o.wait,
                                     o.dryRun ? std::string() : o.captureDir, o.captureEvery);
+        hello.window = wall::parseWindowRequest(o.window);
         job.service = std::make_shared<wall::service::ServiceClient>(
             o.connect,
             wall::service::loadCredentials({o.token, o.tokenFile, {}, o.serverKey}, false), hello,

@@ -171,6 +171,7 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
         serviceOptions(o, process, alone, signals, stopSignal, stats);
     service.captureRoot = captureRoot;
     service.captureQuota = o.captureQuota;
+    service.background = o.background;
     // The token: the head's own (its file created when absent), or a process's on its own; under
     // mpirun the others get the head's. Key files: every process reads its own.
     wall::service::CredentialOptions credentials{o.token, o.tokenFile, o.curveDir, o.serverKey};

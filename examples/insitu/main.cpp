@@ -37,7 +37,7 @@ struct Args {
       "insitu: %s\nusage: insitu [--grid N] [--blocks B] [--steps S] [--show-every K]\n"
       "              [--wall LAYOUT.toml [--windows] [--capture DIR]]\n"
       "              [--connect HOST:PORT [--token-file F] [--server-key F] [--codec C] [--wait]\n"
-      "               [--capture DIR]]\n"
+      "               [--window X,Y,W,H|DISPLAY|full] [--capture DIR]]\n"
       "              [--size WxH --image FILE.png] [--threads T]\n",
       problem);
   std::exit(2);
@@ -71,6 +71,8 @@ Args parse(int argc, char** argv) {
       a.session.codec = value();
     else if (k == "--wait")
       a.session.wait = true;
+    else if (k == "--window")
+      a.session.window = value();
     else if (k == "--windows")
       a.session.offscreen = false;
     else if (k == "--capture")

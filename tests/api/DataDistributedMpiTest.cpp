@@ -113,6 +113,19 @@ TEST(DataDistributedApi, BricksThatDisagreeFailOnEveryRank) {
   session.close();
 }
 
+// A window is a part of a serving wall: without `connect` every rank refuses the session.
+TEST(DataDistributedApi, AWindowNeedsAServingWall) {
+  dfbwall::SessionOptions o;
+  o.width = 32, o.height = 32, o.timeoutSeconds = 20;
+  o.window = "0,0,8,8";
+  try {
+    dfbwall::Session session(MPI_COMM_WORLD, o);
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("window is for connect"), std::string::npos) << e.what();
+  }
+}
+
 // Voxels given as float64, int16 or int32 render as the same values given as float32 (the field
 // rounded to integers, which all three hold exactly).
 TEST(DataDistributedApi, OtherVoxelTypesRenderAsTheirFloat32Values) {

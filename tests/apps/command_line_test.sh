@@ -34,7 +34,7 @@ render_job='Scene: --scene --camera-path --orbit
 Rendering: --renderer --size --spp --frames --seed --max-depth --exposure --filmic --tile-size --threads --distribution
 Data-parallel scivis (bricks): --bricks --replication --ghost
 Wall: --wall --offscreen --mode --dry-run
-Connect to a wall service: --connect --token-file --token --server-key --codec --wait
+Connect to a wall service: --connect --token-file --token --server-key --codec --wait --window
 Control: --control --control-token-file --control-host --max-spp
 Throughput: --frames-in-flight --handler-threads --no-compress --compress-within-host
 Failure handling: --timeout --memory-limit
@@ -45,7 +45,7 @@ serve_command='Wall: --wall --offscreen
 Network and security: --listen --process --join --advertise --token-file --token --server-key --curve
 Throughput: --frames-in-flight --handler-threads
 Failure handling: --timeout
-Output: --stats --capture-root --capture-quota
+Output: --stats --capture-root --capture-quota --background
 Help: --help'
 relay_command='Network: --listen --wall --token-file --token --server-key --curve
 Failure handling: --timeout

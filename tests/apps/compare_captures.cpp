@@ -7,6 +7,10 @@
 //                  from a blank
 //                  --raw PNG OUT: the image's pixels as they sit in memory (and travel in a raw
 //                  batch) to OUT; prints "WIDTH HEIGHT"
+//                  --window X,Y,W,H LAYOUT CAPTURE_DIR WINDOW_PNG FRAME: a service job in that
+//                  window of the wall (wall/layout/Window.h): each display's capture is the
+//                  window's part of it, equal to that part cut out of a single-process render of
+//                  the window (W x H), and the job's wall preview equals it where displays are
 // Invariant 2 of docs/design.md: every display's capture of frame FRAME equals its rectangle cut
 // out of a single-process render of the whole canvas, byte for byte; the wall preview exists and
 // shows the same pixels. Exit 0 when all match, 1 with a message naming the first mismatch.
@@ -23,6 +27,7 @@
 #include "wall/image/Image.h"
 #include "wall/image/Png.h"
 #include "wall/layout/Layout.h"
+#include "wall/layout/Window.h"
 #include "wall/route/Preview.h"
 
 namespace {
@@ -68,6 +73,52 @@ int comparePreview(const wall::Layout& layout, const wall::Image& preview,
       "%d preview cells (%d exact) equal the single-process render's box filter "
       "within %d\n",
       checked, exact, worst);
+  return 0;
+}
+
+// Every display's capture of `frame` in `dir` (and the wall preview, unless `only` names one
+// display) against its rectangle of `full`, a single-process render of `layout`'s canvas.
+int compareCaptures(const wall::Layout& layout, const std::string& dir, const wall::Image& full,
+                    std::uint32_t frame, const std::string& only) {
+  if (full.width != layout.canvasWidth || full.height != layout.canvasHeight) {
+    std::fprintf(stderr, "reference is %dx%d, the canvas %dx%d\n", full.width, full.height,
+                 layout.canvasWidth, layout.canvasHeight);
+    return 1;
+  }
+  const wall::Image preview =
+      only.empty() ? wall::readPng(wall::wallPreviewPath(dir, frame)) : wall::Image(1, 1);
+  bool found = false;
+  for (const wall::Display& d : layout.displays) {
+    if (!only.empty() && d.name != only) continue;
+    found = true;
+    const wall::Image expected = wall::crop(full, d.rect);
+    const wall::Image got = wall::readPng(wall::displayCapturePath(dir, d.name, frame));
+    const wall::Image shown = only.empty() ? wall::crop(preview, d.rect) : got;
+    for (const auto* image : {&got, &shown}) {
+      if (image->width != expected.width || image->height != expected.height) {
+        std::fprintf(stderr, "display %s: capture is %dx%d, its rectangle %dx%d\n", d.name.c_str(),
+                     image->width, image->height, expected.width, expected.height);
+        return 1;
+      }
+      for (int y = 0; y < expected.height; ++y)
+        for (int x = 0; x < expected.width; ++x)
+          if (image->at(x, y) != expected.at(x, y)) {
+            std::fprintf(stderr, "display %s (%s), pixel (%d, %d): 0x%08x, single process 0x%08x\n",
+                         d.name.c_str(), image == &got ? "capture" : "wall preview", x, y,
+                         image->at(x, y), expected.at(x, y));
+            return 1;
+          }
+    }
+  }
+  if (!found) {
+    std::fprintf(stderr, "the layout has no display '%s'\n", only.c_str());
+    return 1;
+  }
+  if (only.empty())
+    std::printf("%zu displays of frame %u equal the single-process render\n",
+                layout.displays.size(), frame);
+  else
+    std::printf("display %s of frame %u equals the single-process render\n", only.c_str(), frame);
   return 0;
 }
 
@@ -118,58 +169,26 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
+  if (argc == 7 && std::string(argv[1]) == "--window") {
+    try {
+      const wall::Layout wall = wall::loadLayout(argv[3]);
+      const wall::WindowRequest request = wall::parseWindowRequest(argv[2]);
+      const wall::Layout seen = wall::windowLayout(wall, wall::resolveWindow(wall, request));
+      return compareCaptures(seen, argv[4], wall::readPng(argv[5]),
+                             static_cast<std::uint32_t>(std::stoul(argv[6])), "");
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "compare_captures: %s\n", e.what());
+      return 1;
+    }
+  }
   if (argc != 5 && argc != 6) {
     std::fprintf(stderr, "usage: %s LAYOUT CAPTURE_DIR FULL_CANVAS_PNG FRAME [DISPLAY]\n", argv[0]);
     return 2;
   }
-  const std::string only = argc == 6 ? argv[5] : "";
   try {
-    const wall::Layout layout = wall::loadLayout(argv[1]);
-    const std::string dir = argv[2];
-    const wall::Image full = wall::readPng(argv[3]);
-    const auto frame = static_cast<std::uint32_t>(std::stoul(argv[4]));
-    if (full.width != layout.canvasWidth || full.height != layout.canvasHeight) {
-      std::fprintf(stderr, "reference is %dx%d, the canvas %dx%d\n", full.width, full.height,
-                   layout.canvasWidth, layout.canvasHeight);
-      return 1;
-    }
-    const wall::Image preview =
-        only.empty() ? wall::readPng(wall::wallPreviewPath(dir, frame)) : wall::Image(1, 1);
-    bool found = false;
-    for (const wall::Display& d : layout.displays) {
-      if (!only.empty() && d.name != only) continue;
-      found = true;
-      const wall::Image expected = wall::crop(full, d.rect);
-      const wall::Image got = wall::readPng(wall::displayCapturePath(dir, d.name, frame));
-      const wall::Image shown = only.empty() ? wall::crop(preview, d.rect) : got;
-      for (const auto* image : {&got, &shown}) {
-        if (image->width != expected.width || image->height != expected.height) {
-          std::fprintf(stderr, "display %s: capture is %dx%d, its rectangle %dx%d\n",
-                       d.name.c_str(), image->width, image->height, expected.width,
-                       expected.height);
-          return 1;
-        }
-        for (int y = 0; y < expected.height; ++y)
-          for (int x = 0; x < expected.width; ++x)
-            if (image->at(x, y) != expected.at(x, y)) {
-              std::fprintf(stderr,
-                           "display %s (%s), pixel (%d, %d): 0x%08x, single process 0x%08x\n",
-                           d.name.c_str(), image == &got ? "capture" : "wall preview", x, y,
-                           image->at(x, y), expected.at(x, y));
-              return 1;
-            }
-      }
-    }
-    if (!found) {
-      std::fprintf(stderr, "the layout has no display '%s'\n", only.c_str());
-      return 1;
-    }
-    if (only.empty())
-      std::printf("%zu displays of frame %u equal the single-process render\n",
-                  layout.displays.size(), frame);
-    else
-      std::printf("display %s of frame %u equals the single-process render\n", only.c_str(), frame);
-    return 0;
+    return compareCaptures(wall::loadLayout(argv[1]), argv[2], wall::readPng(argv[3]),
+                           static_cast<std::uint32_t>(std::stoul(argv[4])),
+                           argc == 6 ? argv[5] : "");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "compare_captures: %s\n", e.what());
     return 1;

@@ -104,7 +104,7 @@ def free_port():
     return port
 
 
-PROTOCOL = 2
+PROTOCOL = 3
 
 
 def header(kind, session=0, version=PROTOCOL, magic=MAGIC):
@@ -119,7 +119,8 @@ def text(s):
 def hello(token="", host="hostile", version=PROTOCOL, ranks=1):
     return (header(HELLO, 0, version) + text(token) + text(host) +
             struct.pack("<II", ranks, 64) + struct.pack("<BBBB", 0, 90, 0, 0) +
-            struct.pack("<I", 2) + text("") + struct.pack("<I", 0))
+            struct.pack("<I", 2) + text("") + struct.pack("<I", 0) +
+            struct.pack("<Biiii", 0, 0, 0, 0, 0) + text(""))  # the window: full
 
 
 def parse_header(m):

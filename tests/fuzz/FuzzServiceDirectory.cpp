@@ -32,12 +32,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size)
         display.rect.x1 > l.canvasWidth || display.rect.y1 > l.canvasHeight ||
         display.process < 0 || display.process >= l.processCount)
       std::abort();  // a display outside its canvas or driven by no process
-  if (!wall::validateLayout(l).empty()) std::abort();
+  if (!wall::validateLayout(l, true).empty()) std::abort();
   const messaging::Bytes packed = packDirectory(d);
   const Directory back = parseDirectory(packed.data(), packed.size());
   bool same = back.session == d.session && back.framesInFlight == d.framesInFlight &&
               back.timeoutMs == d.timeoutMs && back.layout.file == l.file &&
-              back.layout.canvasWidth == l.canvasWidth &&
+              back.window == d.window && back.layout.canvasWidth == l.canvasWidth &&
               back.layout.canvasHeight == l.canvasHeight &&
               back.layout.processCount == l.processCount &&
               back.layout.displays.size() == l.displays.size() &&

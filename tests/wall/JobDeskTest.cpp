@@ -165,6 +165,61 @@ TEST_F(JobDeskTest, AJobStartsOnceEveryProcessIsReadyAndGetsTheDirectory) {
   for (const DirectoryProcess& p : d.processes) EXPECT_TRUE(p.live);
 }
 
+// A job in a window (wall/layout/Window.h): every process gets the window in its Start, the job
+// the window's layout, and a process with no display in it is told to start (it has no pieces
+// to wait for) once the job runs.
+TEST_F(JobDeskTest, AJobInAWindowGetsTheWindowsLayout) {
+  Hello hello = helloFrom("render1");
+  hello.window = parseWindowRequest("100,10,50,50");  // displays 1 (64..128) and 2 (128..192)
+  const Actions started = jobs.hello("job-a", hello, t0);
+  const ServiceCommand start = commandTo(started, 0, Command::Start);
+  EXPECT_EQ(start.header.windowX0, 100);
+  EXPECT_EQ(start.header.windowY0, 10);
+  EXPECT_EQ(start.header.windowX1, 150);
+  EXPECT_EQ(start.header.windowY1, 60);
+  const Actions running = allReady(t0);
+  const auto directory = replies(running, Kind::Directory);
+  ASSERT_EQ(directory.size(), 1u);
+  const Directory d = parseDirectory(directory[0].message.data(), directory[0].message.size());
+  EXPECT_EQ(d.window, (dfb::Region{100, 10, 150, 60}));
+  EXPECT_EQ(d.layout.canvasWidth, 50);
+  EXPECT_EQ(d.layout.canvasHeight, 50);
+  EXPECT_EQ(d.layout.processCount, 3);
+  ASSERT_EQ(d.layout.displays.size(), 2u);
+  EXPECT_EQ(d.layout.displays[0].rect, (dfb::Region{0, 0, 28, 50}));
+  EXPECT_EQ(d.layout.displays[0].process, 1);
+  EXPECT_EQ(d.layout.displays[1].rect, (dfb::Region{28, 0, 50, 50}));
+  EXPECT_EQ(d.layout.displays[1].process, 2);
+  EXPECT_EQ(d.processes.size(), 3u);
+  EXPECT_EQ(given(running, Command::FirstFrame), (std::vector<int>{0}));
+  // The whole canvas: no process waits for a FirstFrame.
+  allDone(0, t0);
+  ASSERT_EQ(jobs.state(), State::Idle);
+  jobs.hello("job-b", helloFrom("render2"), t0);
+  EXPECT_TRUE(given(allReady(t0), Command::FirstFrame).empty());
+}
+
+TEST_F(JobDeskTest, AWindowTheWallDoesNotHaveIsRefusedAndTheNextJobRuns) {
+  // An unknown display, a rectangle past the canvas (192x64), an empty one (from the wire).
+  WindowRequest unknown, outside, empty;
+  unknown.kind = WindowRequest::Kind::Display;
+  unknown.display = "nope";
+  outside.kind = empty.kind = WindowRequest::Kind::Rect;
+  outside.rect = {150, 0, 214, 64};
+  for (const WindowRequest& window : {unknown, outside, empty}) {
+    SCOPED_TRACE(windowText(window));
+    Hello hello = helloFrom("render1");
+    hello.window = window;
+    const Actions refused = jobs.hello("job-a", hello, t0);
+    const auto reply = replies(refused, Kind::Refused);
+    ASSERT_EQ(reply.size(), 1u);
+    EXPECT_NE(textOf(reply[0]).find("window"), std::string::npos) << textOf(reply[0]);
+    EXPECT_TRUE(given(refused, Command::Start).empty());
+    EXPECT_EQ(jobs.state(), State::Idle);
+  }
+  run("job-b", "render2", t0);
+}
+
 TEST_F(JobDeskTest, AWrongTokenIsRefused) {
   Hello wrong = helloFrom("stranger");
   wrong.token = "guess";

@@ -143,6 +143,7 @@ Directory directoryOf(const char* toml, const std::string& file) {
         {"tcp://wall" + std::to_string(p + 1) + ".example:" + std::to_string(5600 + p)});
   d.framesInFlight = 3;
   d.timeoutMs = 15000;
+  d.window = {0, 0, d.layout.canvasWidth, d.layout.canvasHeight};
   return d;
 }
 
@@ -722,12 +723,80 @@ TEST(ProtocolHostile, ADirectoryWhoseCanvasDoesNotMatch) {
   messaging::Bytes bytes = packDirectory(twoByTwo());
   poke(bytes, kDirectoryCanvasWidthAt, 413);
   EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()),
-                   "canvas or process count does not match its displays");
+                   "its window does not match its canvas");
   poke(bytes, kDirectoryCanvasWidthAt, -412);
   EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "does not match");
-  // Five endpoints for four processes.
-  bytes = directoryWith([](Directory& d) { d.processes.push_back({"tcp://extra:1"}); });
-  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "does not match");
+  // A display driven by a process the directory does not list (four endpoints).
+  bytes = directoryWith([](Directory& d) { d.layout.displays[3].process = 4; });
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()),
+                   "outside its canvas or its processes");
+  // A display outside the window's canvas, a window of another size than the canvas.
+  bytes = directoryWith([](Directory& d) { d.layout.displays[3].rect = {212, 160, 413, 310}; });
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "outside its canvas");
+  bytes = directoryWith([](Directory& d) { d.window = {0, 0, 412, 311}; });
+  EXPECT_ERROR_HAS(parseDirectory(bytes.data(), bytes.size()), "its window does not match");
+}
+
+// A job in a window (wall/layout/Window.h): the directory is the window's layout, whose displays
+// may leave process indices out and need not reach the canvas's corners.
+TEST(Protocol, DirectoryOfAWindowRoundTrips) {
+  Directory d = twoByTwo();
+  const Layout wall = d.layout;
+  d.window = {205, 100, 412, 300};  // r0c1 and r1c1 (processes 1 and 3), a bezel at the left
+  d.layout = windowLayout(wall, d.window);
+  ASSERT_EQ(d.layout.displays.size(), 2u);
+  EXPECT_EQ(d.layout.displays[0].name, "r0c1");
+  EXPECT_EQ(d.layout.displays[0].rect, (dfb::Region{7, 0, 207, 50}));
+  EXPECT_EQ(d.layout.displays[1].name, "r1c1");
+  EXPECT_EQ(d.layout.displays[1].rect, (dfb::Region{7, 60, 207, 200}));
+  EXPECT_EQ(d.layout.displays[1].process, 3);
+  const messaging::Bytes bytes = packDirectory(d);
+  const Directory back = parseDirectory(bytes.data(), bytes.size());
+  EXPECT_EQ(back.window, d.window);
+  EXPECT_EQ(back.layout.canvasWidth, 207);
+  EXPECT_EQ(back.layout.canvasHeight, 200);
+  EXPECT_EQ(back.layout.processCount, 4);
+  ASSERT_EQ(back.layout.displays.size(), 2u);
+  EXPECT_EQ(back.layout.displays[1].rect, d.layout.displays[1].rect);
+  EXPECT_EQ(back.layout.displays[1].process, 3);
+}
+
+TEST(Protocol, AWindowRequestIsResolvedAgainstTheWall) {
+  const Layout wall = twoByTwo().layout;
+  EXPECT_EQ(resolveWindow(wall, parseWindowRequest("full")), (dfb::Region{0, 0, 412, 310}));
+  EXPECT_EQ(resolveWindow(wall, parseWindowRequest("")), (dfb::Region{0, 0, 412, 310}));
+  EXPECT_EQ(resolveWindow(wall, parseWindowRequest("90,70,250,170")),
+            (dfb::Region{90, 70, 340, 240}));
+  EXPECT_EQ(resolveWindow(wall, parseWindowRequest("r1c0")), (dfb::Region{0, 160, 200, 310}));
+  EXPECT_ERROR_HAS(resolveWindow(wall, parseWindowRequest("300,200,200,200")),
+                   "is not inside the wall's canvas (412x310)");
+  EXPECT_ERROR_HAS(resolveWindow(wall, parseWindowRequest("nope")),
+                   "no display of that name (r0c0, r0c1, r1c0, r1c1)");
+  EXPECT_ERROR_HAS(resolveWindow(wall, parseWindowRequest("201,151,10,8")), "touches no display");
+  EXPECT_ERROR_HAS(parseWindowRequest("1,2,0,4"), "the window is empty");
+  EXPECT_ERROR_HAS(parseWindowRequest("1,2,3"), "expected X,Y,W,H");
+  EXPECT_ERROR_HAS(parseWindowRequest("-1,2,3,4"), "expected X,Y,W,H");
+  EXPECT_ERROR_HAS(parseWindowRequest("a b"), "expected full, X,Y,W,H or a display's name");
+  // From the wire: a rectangle no parser would make is refused by the wall.
+  WindowRequest raw;
+  raw.kind = WindowRequest::Kind::Rect;
+  raw.rect = {10, 10, 5, 20};
+  EXPECT_ERROR_HAS(resolveWindow(wall, raw), "empty or negative");
+  raw.rect = {std::numeric_limits<int>::min(), 0, 10, 10};
+  EXPECT_ERROR_HAS(resolveWindow(wall, raw), "empty or negative");
+}
+
+TEST(ProtocolHostile, AHelloWithABadWindowKind) {
+  Hello hello = fullHello();
+  hello.window.kind = WindowRequest::Kind::Rect;
+  hello.window.rect = {1, 2, 3, 4};
+  messaging::Bytes bytes = packHello(hello);
+  const Hello back = parseHello(bytes.data(), bytes.size());
+  EXPECT_EQ(back.window.kind, WindowRequest::Kind::Rect);
+  EXPECT_EQ(back.window.rect, hello.window.rect);
+  // The window kind: 19 bytes from the end (kind, rectangle, an empty name's length).
+  bytes[bytes.size() - 19] = std::byte{3};
+  EXPECT_ERROR_HAS(parseHello(bytes.data(), bytes.size()), "window kind 3");
 }
 
 TEST(ProtocolHostile, ADirectoryWithBadCountsOrDisplays) {
@@ -894,6 +963,10 @@ TEST(Protocol, WritesFuzzSeeds) {
   snappy.token.clear();
   snappy.wait = false;
   writeSeed(hello, "hello-snappy", packHello(snappy));
+  snappy.window = parseWindowRequest("90,70,250,170");
+  writeSeed(hello, "hello-window", packHello(snappy));
+  snappy.window = parseWindowRequest("r1c0");
+  writeSeed(hello, "hello-window-display", packHello(snappy));
   writeSeed(hello, "text-refused", packText(Kind::Refused, 0, "the wall is busy"));
   writeSeed(hello, "text-queued", packText(Kind::Queued, 5, "2"));
   writeSeed(hello, "text-ended", packText(Kind::Ended, 5, "no word from the job for 60 s"));
@@ -918,6 +991,10 @@ TEST(Protocol, WritesFuzzSeeds) {
 
   const std::filesystem::path directory = dir / "service_directory";
   writeSeed(directory, "directory-2x2-bezels", packDirectory(twoByTwo()));
+  Directory window = twoByTwo();
+  window.window = {205, 100, 412, 300};
+  window.layout = windowLayout(twoByTwo().layout, window.window);
+  writeSeed(directory, "directory-2x2-window", packDirectory(window));
   writeSeed(directory, "directory-3x2-by-column",
             packDirectory(directoryOf(k3x2ByColumn, "3x2.toml")));
   writeSeed(directory, "directory-1x1",

@@ -27,6 +27,7 @@ Directory wallDirectory() {
   d.framesInFlight = 3;
   d.timeoutMs = 7000;
   d.rosterVersion = 4;
+  d.window = {0, 0, d.layout.canvasWidth, d.layout.canvasHeight};
   return d;
 }
 

@@ -186,7 +186,7 @@ void GlFrameDrawer::resize(int width, int height) {
   m.textureHeight = height;
 }
 
-void GlFrameDrawer::upload(const std::uint32_t* frame, int stride, int x, int y, int w, int h) {
+void GlFrameDrawer::upload(const std::uint32_t* first, int stride, int x, int y, int w, int h) {
   Impl& m = *impl_;
   const GlFunctions& gl = m.gl;
   gl.glActiveTexture(GL_TEXTURE0);
@@ -194,8 +194,6 @@ void GlFrameDrawer::upload(const std::uint32_t* frame, int stride, int x, int y,
   gl.glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
   gl.glPixelStorei(GL_UNPACK_ROW_LENGTH, stride);
   // Bytes R, G, B, A in memory (wall/image/Image.h) are GL_RGBA + GL_UNSIGNED_BYTE.
-  const std::uint32_t* first =
-      frame + static_cast<std::ptrdiff_t>(y) * stride + static_cast<std::ptrdiff_t>(x);
   gl.glTexSubImage2D(GL_TEXTURE_2D, 0, x, y, w, h, GL_RGBA, GL_UNSIGNED_BYTE, first);
   gl.glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
   m.check("uploading pixels");

@@ -27,9 +27,9 @@ class GlFrameDrawer {
   // Makes the texture `width` x `height` (reallocated only when the size changes; its contents
   // are then undefined until uploaded).
   void resize(int width, int height);
-  // Copies the `w` x `h` pixels at (x, y) of a frame into the texture at (x, y): `frame` points
-  // at the frame's pixel (0, 0), rows `stride` pixels apart. Row 0 is the frame's top.
-  void upload(const std::uint32_t* frame, int stride, int x, int y, int w, int h);
+  // Copies `w` x `h` pixels into the texture at (x, y): `first` points at the first of them,
+  // rows `stride` pixels apart. Row 0 is the frame's top.
+  void upload(const std::uint32_t* first, int stride, int x, int y, int w, int h);
   // Draws the texture with its top-left at the drawable's top-left; the rest of the drawable is
   // cleared to black. Waits for nothing; call finish() or swap to be sure it is drawn.
   void draw(int drawableWidth, int drawableHeight);

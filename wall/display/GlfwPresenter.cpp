@@ -130,9 +130,9 @@ class GlfwPresenter : public Presenter {
     lastHeight_ = height;
   }
 
-  void upload(const std::uint32_t* frame, int stride, const dfb::Region& rect) override {
+  void uploadAt(const std::uint32_t* first, int stride, const dfb::Region& rect) override {
     makeCurrent();
-    drawer_->upload(frame, stride, rect.x0, rect.y0, rect.width(), rect.height());
+    drawer_->upload(first, stride, rect.x0, rect.y0, rect.width(), rect.height());
   }
 
   // Into the back buffer, finished: the swap after the wall's barrier then only exchanges

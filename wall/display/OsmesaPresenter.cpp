@@ -62,9 +62,9 @@ class OsmesaPresenter : public Presenter {
     drawer_->resize(width, height);
   }
 
-  void upload(const std::uint32_t* frame, int stride, const dfb::Region& rect) override {
+  void uploadAt(const std::uint32_t* first, int stride, const dfb::Region& rect) override {
     makeCurrent();
-    drawer_->upload(frame, stride, rect.x0, rect.y0, rect.width(), rect.height());
+    drawer_->upload(first, stride, rect.x0, rect.y0, rect.width(), rect.height());
   }
 
   // The drawable is the buffer itself (no front buffer): drawn and finished here, so swap() has

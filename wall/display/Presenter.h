@@ -6,6 +6,7 @@
 // Threading: a presenter is used from the thread that made it (its GL context is made current
 // there on every call). Several presenters may live on one thread (a process driving several
 // displays); each call switches to its own context.
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -38,7 +39,12 @@ class Presenter {
   // The texture keeps its contents until the next upload, so upload for frame F+1 only after
   // draw() of F. Throws base::Error on a GL failure.
   virtual void beginFrame(int width, int height) = 0;
-  virtual void upload(const std::uint32_t* frame, int stride, const dfb::Region& rect) = 0;
+  void upload(const std::uint32_t* frame, int stride, const dfb::Region& rect) {
+    uploadAt(frame + static_cast<std::ptrdiff_t>(rect.y0) * stride + rect.x0, stride, rect);
+  }
+  // Step 2 with `first` pointing at the pixel that goes to (rect.x0, rect.y0): the source need
+  // not be the frame itself (a window's part of a display, wall/display/WindowPresenter.h).
+  virtual void uploadAt(const std::uint32_t* first, int stride, const dfb::Region& rect) = 0;
   virtual void draw() = 0;
   virtual void swap() = 0;
   // All four steps for a whole frame at once.

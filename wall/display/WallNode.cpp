@@ -307,6 +307,9 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     const auto stopsBefore = [&] { return stopAfter_ >= 0 && frameId > stopAfter_; };
     const auto ready = [&] {
       if (!error_.empty() || aborted_ || stopsBefore()) return true;
+      // A process none of whose displays a job's window touches has every frame at once: it
+      // only takes part in the swap barrier (and the capture gather).
+      if (mine_.empty()) return true;
       auto found = slots_.find(frameId);
       return found != slots_.end() &&
              found->second.displaysComplete == static_cast<int>(mine_.size()) &&
@@ -371,7 +374,7 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
       report.failure = late;
     }
     if (report.failure.empty()) {
-      slot = &slots_.at(frameId);
+      slot = &slotFor(frameId);  // made here for a process with no displays in the job
       report.bytesReceived = bytesReceived_;
       bytesReceived_ = 0;
       report.unpackMs = static_cast<double>(unpackNs_) * 1e-6;

@@ -65,8 +65,9 @@ LayoutResult readLayoutFile(const std::string& path);
 LayoutResult readLayoutText(std::string_view toml, const std::string& fileName);
 
 // Semantic checks on a layout that parsed: positive sizes, valid and unique names, no two
-// displays overlapping, process indices 0..W-1 without gaps. Returns every problem.
-Problems validateLayout(const Layout& layout);
+// displays overlapping, process indices 0..W-1 without gaps (`processGaps`: gaps allowed, as in a
+// window's layout, wall/layout/Window.h). Returns every problem.
+Problems validateLayout(const Layout& layout, bool processGaps = false);
 
 // Reads and validates a layout file; throws base::Error carrying every problem otherwise.
 Layout loadLayout(const std::string& path);

@@ -9,7 +9,8 @@
 namespace wall::detail {
 
 // `trusted` has one entry per display, or is empty for "all". Problems go to `report`.
+// `processGaps`: process indices need not run from 0 without gaps (a window's layout).
 void validateDisplays(const Layout& layout, const std::vector<bool>& trusted,
-                      base::TomlDiagnostics& report);
+                      base::TomlDiagnostics& report, bool processGaps = false);
 
 }  // namespace wall::detail

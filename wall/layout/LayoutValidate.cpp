@@ -38,7 +38,7 @@ std::string rectText(const dfb::Region& r) {
 namespace detail {
 
 void validateDisplays(const Layout& layout, const std::vector<bool>& trusted,
-                      base::TomlDiagnostics& report) {
+                      base::TomlDiagnostics& report, bool processGaps) {
   const size_t before = report.count();
   // At the field's place, or the display's when the field was not written.
   auto add = [&](int Display::Places::*place, const Display& d, size_t i, const char* field,
@@ -101,7 +101,7 @@ void validateDisplays(const Layout& layout, const std::vector<bool>& trusted,
 
   // Process indices 0..W-1 without gaps: a gap would be a wall rank with nothing to show, which
   // is always a typo. Only judged when every display's index is known.
-  if (allTrusted) {
+  if (allTrusted && !processGaps) {
     std::set<int> used;
     for (const Display& d : layout.displays)
       if (d.process >= 0) used.insert(d.process);
@@ -149,13 +149,13 @@ void validateDisplays(const Layout& layout, const std::vector<bool>& trusted,
 
 }  // namespace detail
 
-Problems validateLayout(const Layout& layout) {
+Problems validateLayout(const Layout& layout, bool processGaps) {
   base::TomlDiagnostics report(layout.file);
   // (The TOML reader reports a file without displays itself, with its own wording.)
   if (layout.displays.empty())
     report.add(0, 0, "", "the layout has no displays");
   else
-    detail::validateDisplays(layout, {}, report);
+    detail::validateDisplays(layout, {}, report, processGaps);
   return report.texts();
 }
 

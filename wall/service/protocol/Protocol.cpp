@@ -55,6 +55,12 @@ messaging::Bytes packHello(const Hello& h) {
   w.put<std::uint32_t>(h.framesInFlight);
   w.text(h.captureDir);
   w.put<std::uint32_t>(h.captureEvery);
+  w.put<std::uint8_t>(static_cast<std::uint8_t>(h.window.kind));
+  w.put<std::int32_t>(h.window.rect.x0);
+  w.put<std::int32_t>(h.window.rect.y0);
+  w.put<std::int32_t>(h.window.rect.x1);
+  w.put<std::int32_t>(h.window.rect.y1);
+  w.text(h.window.display);
   return w.take();
 }
 
@@ -72,7 +78,17 @@ Hello parseHello(const std::byte* data, std::size_t size) {
   h.framesInFlight = r.get<std::uint32_t>();
   h.captureDir = r.text();
   h.captureEvery = r.get<std::uint32_t>();
+  const auto window = r.get<std::uint8_t>();
+  h.window.rect.x0 = r.get<std::int32_t>();
+  h.window.rect.y0 = r.get<std::int32_t>();
+  h.window.rect.x1 = r.get<std::int32_t>();
+  h.window.rect.y1 = r.get<std::int32_t>();
+  h.window.display = r.text();
   r.end();
+  // The rectangle and the name are judged against the layout by the wall (resolveWindow).
+  if (window > static_cast<std::uint8_t>(WindowRequest::Kind::Display))
+    r.fail("window kind " + std::to_string(window));
+  h.window.kind = static_cast<WindowRequest::Kind>(window);
   if (const std::string problem =
           jobFieldsProblem({h.renderRanks, h.tileSize, codec, h.framesInFlight, h.captureEvery});
       !problem.empty())
@@ -110,6 +126,10 @@ messaging::Bytes packDirectory(const Directory& d) {
   w.put<std::uint32_t>(d.timeoutMs);
   w.put<std::uint32_t>(d.rosterVersion);
   w.text(d.layout.file);
+  w.put<std::int32_t>(d.window.x0);
+  w.put<std::int32_t>(d.window.y0);
+  w.put<std::int32_t>(d.window.x1);
+  w.put<std::int32_t>(d.window.y1);
   return w.take();
 }
 
@@ -145,18 +165,28 @@ Directory parseDirectory(const std::byte* data, std::size_t size) {
   d.timeoutMs = r.get<std::uint32_t>();
   d.rosterVersion = r.get<std::uint32_t>();
   d.layout.file = r.text();
+  d.window.x0 = r.get<std::int32_t>();
+  d.window.y0 = r.get<std::int32_t>();
+  d.window.x1 = r.get<std::int32_t>();
+  d.window.y1 = r.get<std::int32_t>();
   r.end();
   if (d.framesInFlight < 1 || d.framesInFlight > 16)
     r.fail("frames in flight " + std::to_string(d.framesInFlight));
-  // The same checks as a layout file gets, before computeCanvas moves the displays (which
-  // overflows an int for displays 2^31 apart; validateLayout refuses such a canvas in 64 bits);
-  // the canvas must be what the displays make.
-  if (const Problems problems = validateLayout(d.layout); !problems.empty())
+  if (d.window.x0 < 0 || d.window.y0 < 0 || !dfb::isSaneRegion(d.window, kMaxCanvasSide) ||
+      width != d.window.width() || height != d.window.height())
+    r.fail("its window does not match its canvas (" + std::to_string(width) + "x" +
+           std::to_string(height) + ")");
+  // The same checks as a layout file gets (process indices may leave gaps: a window touches
+  // some displays only); every display inside the window's canvas, every process index named.
+  if (const Problems problems = validateLayout(d.layout, true); !problems.empty())
     r.fail("its layout: " + joinProblems(problems));
-  computeCanvas(d.layout);
-  if (d.layout.canvasWidth != width || d.layout.canvasHeight != height ||
-      d.layout.processCount != static_cast<int>(processes))
-    r.fail("canvas or process count does not match its displays");
+  for (const Display& display : d.layout.displays)
+    if (display.rect.x0 < 0 || display.rect.y0 < 0 || display.rect.x1 > width ||
+        display.rect.y1 > height || display.process >= static_cast<int>(processes))
+      r.fail("display '" + display.name + "' lies outside its canvas or its processes");
+  d.layout.canvasWidth = width;
+  d.layout.canvasHeight = height;
+  d.layout.processCount = static_cast<int>(processes);
   return d;
 }
 

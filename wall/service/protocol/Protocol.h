@@ -25,13 +25,15 @@
 #include "dfb/Tile.h"
 #include "messaging/Compression.h"
 #include "wall/layout/Layout.h"
+#include "wall/layout/Window.h"
 #include "wall/service/protocol/Codec.h"
 
 namespace wall::service {
 
 constexpr std::uint32_t kMagic = 0x57424644;  // "DFBW"
 // 2: wall processes come and go (Roster, live flags in the directory, the wall link).
-constexpr std::uint16_t kProtocolVersion = 2;
+// 3: a job asks for a window of the wall (Hello.window); its directory is the window's layout.
+constexpr std::uint16_t kProtocolVersion = 3;
 // Caps of what one message part may say, per socket, checked by libzmq before anything is
 // allocated (ZMQ_MAXMSGSIZE; a peer that announces more is disconnected):
 //  - the directory socket of the head (and a relay's socket for jobs) carries hellos, controls
@@ -89,6 +91,9 @@ struct Hello {
   bool wait = false;       // queue behind the connected job instead of being refused
   std::string captureDir;  // on the wall hosts; empty: no captures
   std::uint32_t captureEvery = 0;
+  // The part of the wall the job covers (wall/layout/Window.h); the wall resolves it against its
+  // layout and refuses one that is empty, outside its canvas or names no display of it.
+  WindowRequest window;
 };
 
 // The fields of a job that its hello carries and each wall process's Start repeats: the head
@@ -107,7 +112,11 @@ struct DirectoryProcess {
 // What the wall tells a job it accepted: everything needed to route pieces to the displays.
 struct Directory {
   std::uint64_t session = 0;
-  Layout layout;  // displays (name, rect, process), canvas, process count; file = the wall's
+  // The job's window's layout (wall/layout/Window.h: windowLayout): canvas = the window, the
+  // displays it touches clipped to it, in window coordinates, with the wall's names and process
+  // indices (which may leave gaps); processCount = the wall's. For the whole wall, the wall's.
+  Layout layout;
+  dfb::Region window;  // the window on the wall's canvas (its size is the layout's canvas)
   std::vector<DirectoryProcess> processes;
   std::uint32_t framesInFlight = 2;  // what the wall grants (at most what the job asked for)
   std::uint32_t timeoutMs = 60000;   // the wall drops a job it has not heard from for this long

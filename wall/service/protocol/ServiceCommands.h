@@ -33,6 +33,8 @@ struct CommandHeader {
   std::int64_t a, b;
   std::uint32_t tileSize, renderRanks, framesInFlight, captureEvery;
   std::uint32_t codec;
+  // Start: the job's window on the wall's canvas (resolved by the head; each process checks it).
+  std::int32_t windowX0, windowY0, windowX1, windowY1;
   std::uint32_t textBytes;
 };
 

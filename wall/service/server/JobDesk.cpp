@@ -55,15 +55,28 @@ JobDesk::Actions JobDesk::hello(const std::string& peer, const Hello& hello,
                    hello.token.empty() ? "this wall needs a token (--token)" : "wrong token"));
   } else if (shuttingDown_) {
     reply(peer, Kind::Refused, packText(Kind::Refused, 0, "the wall is shutting down"));
+  } else if (const std::string problem = reason(windowProblem(hello)); !problem.empty()) {
+    // reason(): a display name from the wire is printable, bounded text in the wall's log.
+    log("refused a job from " + from + ": " + problem, peer);
+    reply(peer, Kind::Refused, packText(Kind::Refused, 0, problem));
   } else if (state_ == State::Idle) {
     job_ = {peer, hello, now, 0, {}};
     log("job from " + from + ": " + std::to_string(hello.renderRanks) + " render ranks, codec " +
-        codecName(hello.codec));
+        codecName(hello.codec) + ", window " + peerText(windowText(hello.window)));
     startJob();
   } else {
     queueOrRefuse(peer, hello, from);
   }
   return take();
+}
+
+std::string JobDesk::windowProblem(const Hello& hello) const {
+  try {
+    resolveWindow(*s_.layout, hello.window);
+    return {};
+  } catch (const std::exception& e) {
+    return e.what();
+  }
 }
 
 bool JobDesk::hasJobFrom(const std::string& peer) const {
@@ -427,6 +440,11 @@ ServiceCommand JobDesk::startCommand(std::uint32_t firstFrame) const {
   c.header.framesInFlight = granted_;
   c.header.captureEvery = job_.hello.captureEvery;
   c.header.codec = static_cast<std::uint32_t>(job_.hello.codec.codec);
+  const dfb::Region window = resolveWindow(*s_.layout, job_.hello.window);  // checked at hello
+  c.header.windowX0 = window.x0;
+  c.header.windowY0 = window.y0;
+  c.header.windowX1 = window.x1;
+  c.header.windowY1 = window.y1;
   return c;
 }
 
@@ -551,13 +569,21 @@ void JobDesk::maybeRun() {
   }
   Directory d;
   d.session = job_.session;
-  d.layout = *s_.layout;
+  d.window = resolveWindow(*s_.layout, job_.hello.window);
+  d.layout = windowLayout(*s_.layout, d.window);
   d.processes = roster();
   d.framesInFlight = granted_;
   d.timeoutMs = static_cast<std::uint32_t>(s_.timeout.count());
   d.rosterVersion = 0;
   reply(job_.peer, Kind::Directory, packDirectory(d));
   state_ = State::Running;
+  // A process none of whose displays the window touches waits for this before its first swap
+  // barrier (it has no pieces to wait for): one it came to before the job ran would be lost.
+  for (int p = 0; p < members_.processCount(); ++p) {
+    const Seat& seat = seats_[static_cast<size_t>(p)];
+    if (seat.in && !seat.done && d.layout.displaysOfProcess(p).empty())
+      emit(ToProcess{p, command(Command::FirstFrame, 1)});
+  }
   for (int p : waitingToJoinJob_) admitToJob(p);
   waitingToJoinJob_.clear();
 }

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "wall/layout/Layout.h"
+#include "wall/layout/Window.h"
 #include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/ServiceCommands.h"
 #include "wall/service/server/FrameAgreements.h"
@@ -181,6 +182,8 @@ class JobDesk {
   void onControl(const JobMessage& m);
   void onCapture(const JobMessage& m);
   bool hasJobFrom(const std::string& peer) const;
+  // Why the window the hello asks for does not fit the wall (empty: it does).
+  std::string windowProblem(const Hello& hello) const;
   void dropOverdue();
   void onReady(int p, const ServiceCommand& c);
   void onDone(int p, const ServiceCommand& c);

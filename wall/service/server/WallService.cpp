@@ -12,6 +12,8 @@
 #include "wall/display/Capture.h"
 #include "wall/display/IdleScreen.h"
 #include "wall/display/WallNode.h"
+#include "wall/display/WindowPresenter.h"
+#include "wall/layout/Window.h"
 #include "wall/service/protocol/LinkMessages.h"
 #include "wall/service/protocol/Zmq.h"
 #include "wall/service/server/Desk.h"
@@ -211,6 +213,15 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
       problem = "capture folder on wall process " + std::to_string(process) + ": " + e.what();
     }
   }
+  // The job's window, resolved by the head: checked here too (a process never trusts it did).
+  const dfb::Region window{start.header.windowX0, start.header.windowY0, start.header.windowX1,
+                           start.header.windowY1};
+  if (problem.empty() && (window.empty() || window.x0 < 0 || window.y0 < 0 ||
+                          window.x1 > layout.canvasWidth || window.y1 > layout.canvasHeight))
+    problem = "wall process " + std::to_string(process) + " refused the job's window " +
+              std::to_string(window.x0) + "," + std::to_string(window.y0) + " to " +
+              std::to_string(window.x1) + "," + std::to_string(window.y1) + " (the canvas is " +
+              std::to_string(layout.canvasWidth) + "x" + std::to_string(layout.canvasHeight) + ")";
   if (!problem.empty()) {
     answer.header.kind = Command::Ready;
     answer.header.a = 0;  // counts as this process's Done too: it runs no node for the job
@@ -243,9 +254,39 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   };
   std::string failure;
   std::int64_t lastPresented = 0, bytes = 0;
+  // A job in a window: its node sees the window's layout (what the job's directory said) and
+  // presents through WindowPresenters, which put its part of each display at its offset over
+  // the background. Every process takes part in the job's frames; a display the window does not
+  // touch shows the background from the start of the job on. The whole canvas: as ever.
+  const bool whole = window == dfb::Region{0, 0, layout.canvasWidth, layout.canvasHeight};
+  const Layout seen = whole ? Layout{} : windowLayout(layout, window);
+  std::vector<std::unique_ptr<WindowPresenter>> parts;
+  std::vector<Presenter*> jobPresenters = presenters;
+  if (!whole) {
+    jobPresenters.clear();
+    const std::vector<int> ours = layout.displaysOfProcess(process);
+    for (size_t i = 0; i < ours.size(); ++i) {
+      const Display& d = layout.displays[static_cast<size_t>(ours[i])];
+      const dfb::Region part = dfb::intersect(d.rect, window);
+      if (part.empty()) {
+        WindowPresenter::presentBackground(*presenters[i], d.rect.width(), d.rect.height(),
+                                           options.background);
+        continue;
+      }
+      parts.push_back(
+          std::make_unique<WindowPresenter>(*presenters[i], d.rect.width(), d.rect.height(),
+                                            dfb::Region{part.x0 - d.rect.x0, part.y0 - d.rect.y0,
+                                                        part.x1 - d.rect.x0, part.y1 - d.rect.y0},
+                                            options.background));
+      jobPresenters.push_back(parts.back().get());
+    }
+  }
+  // With no display in the window this process has no pieces to wait for: it waits for the
+  // head's FirstFrame, sent once the job runs, before it comes to a swap barrier.
+  if (!whole && jobPresenters.empty()) o.firstFrame = firstFrame = 0;
   {
     LinkPeers peers(*head, epoch, session, process, processCount);
-    WallNode job(layout, peers, presenters, o);
+    WallNode job(whole ? layout : seen, peers, jobPresenters, o);
     {
       std::lock_guard lock(mutex);
       node = &job;

@@ -42,6 +42,9 @@ struct ServiceOptions {
   // how many bytes per job; none: a job that asks for captures is refused.
   std::shared_ptr<const base::ConfinedFolder> captureRoot;
   std::uint64_t captureQuota = 0;
+  // What a display shows where no job's window covers it (RGBA8 as in Image; --background,
+  // default black): see docs/service.md, "A job in a window".
+  std::uint32_t background = 0xff000000u;
   // A stop asked of a process other than the head (a signal, a closed window) makes it leave
   // the wall alone (true: a process started on its own) or stop the whole wall (false).
   bool leaveAlone = false;
