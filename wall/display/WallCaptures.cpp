@@ -42,6 +42,7 @@ void WallCaptures::presented(std::uint64_t wallFrame) {
   for (Presenter* p : presenters_) frame.displays.push_back(p->readBack());
   {
     std::lock_guard lock(mutex_);
+    if (failed_) return;  // while this frame was read back
     queue_.push_back(std::move(frame));
   }
   changed_.notify_all();
@@ -74,6 +75,8 @@ void WallCaptures::run() {
         failure = e.what();
       }
     }
+    // Said before flush() can return on it.
+    if (!failure.empty() && log_) log_("the wall's captures stop: " + failure);
     {
       std::lock_guard lock(mutex_);
       writing_ = false;
@@ -83,7 +86,6 @@ void WallCaptures::run() {
       }
     }
     changed_.notify_all();
-    if (!failure.empty() && log_) log_("the wall's captures stop: " + failure);
   }
 }
 
