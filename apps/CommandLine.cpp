@@ -329,7 +329,19 @@ void addServe(CLI::App& serve, Options& o, RawOptions& raw) {
   serve
       .add_option("--capture-quota", raw.captureQuota,
                   "BYTES, or with a suffix K, M, G, T: the most one job's captures may take on "
-                  "each wall process; a capture past it ends the job (default: 1G)")
+                  "each wall process; a capture past it ends the job (default: 1G); the wall's own "
+                  "--capture gets as much over its run, then stops capturing")
+      ->group(kOutput);
+  serve
+      .add_option("--capture", o.captureDir,
+                  "write what each of this process's displays shows (the job's window over "
+                  "the background) as DIR/<display>/frame-N.png, N the wall's presented-frame "
+                  "count (a folder outside --capture-root; made when missing)")
+      ->group(kOutput);
+  serve
+      .add_option("--capture-every", o.captureEvery,
+                  "with --capture: every K-th presented frame (default: 1, every frame)")
+      ->check(CLI::Range(1, 1 << 30))
       ->group(kOutput);
   serve
       .add_option("--background", raw.background,

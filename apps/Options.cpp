@@ -111,6 +111,8 @@ std::string serveProblem(Options& o, const RawOptions& raw) {
     if (!hex) return "--background must be #rrggbb (e.g. #000000), not '" + b + "'";
     o.background = 0xff000000u | (rgb >> 16) | (rgb & 0xff00u) | ((rgb & 0xffu) << 16);
   }
+  if (o.captureEvery > 0 && o.captureDir.empty())
+    return "serve --capture-every K needs --capture DIR: the folder the wall's captures go to";
   if (o.process > 0 && o.join.empty())
     return "serve --process " + std::to_string(o.process) +
            " needs --join HOST:PORT: the head of the wall it joins";

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -22,6 +23,7 @@
 #include "base/ConfinedFolder.h"
 #include "base/OutputFile.h"
 #include "runtime/SetupAgreement.h"
+#include "wall/display/Capture.h"
 #include "wall/display/DisplayPresenters.h"
 #include "wall/layout/Ranks.h"
 #include "wall/service/server/WallService.h"
@@ -76,6 +78,34 @@ std::string checkStart(const Options& o, int worldSize, int process, bool alone,
     return {};
   } catch (const std::exception& e) {
     return e.what();
+  }
+}
+
+// serve --capture DIR: the operator's folder, made with its parents, each display folder of this
+// process made in it and written to once, never a folder where jobs name theirs (a job's
+// --capture could then land on the wall's files). The problem, or an empty string.
+std::string openWallCapture(const Options& o, const wall::Layout& layout, int process,
+                            std::shared_ptr<const base::ConfinedFolder>& folder) {
+  namespace fs = std::filesystem;
+  const std::string prefix = "--capture " + o.captureDir + ": ";
+  try {
+    std::error_code ec;
+    fs::create_directories(o.captureDir, ec);
+    if (ec) return prefix + "cannot create the folder: " + ec.message();
+    if (!o.captureRoot.empty()) {
+      const fs::path inRoot = fs::weakly_canonical(o.captureDir)
+                                  .lexically_relative(fs::weakly_canonical(o.captureRoot));
+      if (!inRoot.empty() && *inRoot.begin() != "..")
+        return prefix + "lies inside --capture-root " + o.captureRoot +
+               ", where jobs name their capture folders; give the wall's captures a folder of "
+               "their own";
+    }
+    folder =
+        std::make_shared<const base::ConfinedFolder>(o.captureDir, "the wall's capture folder");
+    const std::string problem = wall::checkWallCaptureFolders(*folder, layout, process);
+    return problem.empty() ? problem : prefix + problem;
+  } catch (const std::exception& e) {
+    return prefix + e.what();
   }
 }
 
@@ -154,6 +184,9 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
       problem = std::string("--capture-root ") + e.what();
     }
   }
+  std::shared_ptr<const base::ConfinedFolder> wallCapture;
+  if (problem.empty() && !o.captureDir.empty())
+    problem = openWallCapture(o, *layout, process, wallCapture);
   if (alone && !problem.empty()) {
     std::fprintf(stderr, "dfbwall: error: %s\n", problem.c_str());
     return 1;
@@ -172,6 +205,8 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
     service.captureRoot = captureRoot;
     service.captureQuota = o.captureQuota;
     service.background = o.background;
+    service.wallCapture = wallCapture;
+    service.wallCaptureEvery = o.captureEvery;
     // The token: the head's own (its file created when absent), or a process's on its own; under
     // mpirun the others get the head's. Key files: every process reads its own.
     wall::service::CredentialOptions credentials{o.token, o.tokenFile, o.curveDir, o.serverKey};

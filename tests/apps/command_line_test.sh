@@ -45,7 +45,7 @@ serve_command='Wall: --wall --offscreen
 Network and security: --listen --process --join --advertise --token-file --token --server-key --curve
 Throughput: --frames-in-flight --handler-threads
 Failure handling: --timeout
-Output: --stats --capture-root --capture-quota --background
+Output: --stats --capture-root --capture-quota --capture --capture-every --background
 Help: --help'
 relay_command='Network: --listen --wall --token-file --token --server-key --curve
 Failure handling: --timeout

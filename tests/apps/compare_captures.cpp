@@ -11,6 +11,9 @@
 //                  window of the wall (wall/layout/Window.h): each display's capture is the
 //                  window's part of it, equal to that part cut out of a single-process render of
 //                  the window (W x H), and the job's wall preview equals it where displays are
+//                  --composite X,Y,W,H LAYOUT CAPTURE_DIR WINDOW_PNG FRAME #rrggbb: a serving
+//                  wall's own captures (serve --capture): each display's equals its rectangle of
+//                  the canvas filled with the background, the window's render at its offset
 // Invariant 2 of docs/design.md: every display's capture of frame FRAME equals its rectangle cut
 // out of a single-process render of the whole canvas, byte for byte; the wall preview exists and
 // shows the same pixels. Exit 0 when all match, 1 with a message naming the first mismatch.
@@ -78,22 +81,24 @@ int comparePreview(const wall::Layout& layout, const wall::Image& preview,
 
 // Every display's capture of `frame` in `dir` (and the wall preview, unless `only` names one
 // display) against its rectangle of `full`, a single-process render of `layout`'s canvas.
+// `preview`: the folder holds the wall preview too (a job's captures, not the wall's own).
 int compareCaptures(const wall::Layout& layout, const std::string& dir, const wall::Image& full,
-                    std::uint32_t frame, const std::string& only) {
+                    std::uint32_t frame, const std::string& only, bool preview = true) {
   if (full.width != layout.canvasWidth || full.height != layout.canvasHeight) {
     std::fprintf(stderr, "reference is %dx%d, the canvas %dx%d\n", full.width, full.height,
                  layout.canvasWidth, layout.canvasHeight);
     return 1;
   }
-  const wall::Image preview =
-      only.empty() ? wall::readPng(wall::wallPreviewPath(dir, frame)) : wall::Image(1, 1);
+  const bool withPreview = preview && only.empty();
+  const wall::Image wallPreview =
+      withPreview ? wall::readPng(wall::wallPreviewPath(dir, frame)) : wall::Image(1, 1);
   bool found = false;
   for (const wall::Display& d : layout.displays) {
     if (!only.empty() && d.name != only) continue;
     found = true;
     const wall::Image expected = wall::crop(full, d.rect);
     const wall::Image got = wall::readPng(wall::displayCapturePath(dir, d.name, frame));
-    const wall::Image shown = only.empty() ? wall::crop(preview, d.rect) : got;
+    const wall::Image shown = withPreview ? wall::crop(wallPreview, d.rect) : got;
     for (const auto* image : {&got, &shown}) {
       if (image->width != expected.width || image->height != expected.height) {
         std::fprintf(stderr, "display %s: capture is %dx%d, its rectangle %dx%d\n", d.name.c_str(),
@@ -176,6 +181,28 @@ int main(int argc, char** argv) {
       const wall::Layout seen = wall::windowLayout(wall, wall::resolveWindow(wall, request));
       return compareCaptures(seen, argv[4], wall::readPng(argv[5]),
                              static_cast<std::uint32_t>(std::stoul(argv[6])), "");
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "compare_captures: %s\n", e.what());
+      return 1;
+    }
+  }
+  if (argc == 8 && std::string(argv[1]) == "--composite") {
+    try {
+      const wall::Layout wall = wall::loadLayout(argv[3]);
+      const dfb::Region window = wall::resolveWindow(wall, wall::parseWindowRequest(argv[2]));
+      const wall::Image part = wall::readPng(argv[5]);
+      if (part.width != window.width() || part.height != window.height())
+        throw std::runtime_error(std::string(argv[5]) + " is not the window's size");
+      const std::string b = argv[7];
+      if (b.size() != 7 || b[0] != '#') throw std::runtime_error("background: #rrggbb");
+      const auto rgb = static_cast<std::uint32_t>(std::stoul(b.substr(1), nullptr, 16));
+      wall::Image canvas(
+          wall.canvasWidth, wall.canvasHeight,
+          wall::rgba8(static_cast<std::uint8_t>(rgb >> 16), static_cast<std::uint8_t>(rgb >> 8),
+                      static_cast<std::uint8_t>(rgb)));
+      wall::blit(canvas, window.x0, window.y0, part.pixels.data(), part.width, part.height);
+      return compareCaptures(wall, argv[4], canvas, static_cast<std::uint32_t>(std::stoul(argv[6])),
+                             "", false);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "compare_captures: %s\n", e.what());
       return 1;

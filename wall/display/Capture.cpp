@@ -35,8 +35,8 @@ std::string wallPreviewPath(const std::string& dir, std::uint32_t frameId) {
 CaptureWriter::CaptureWriter(std::string dir) : dir_(std::move(dir)) {}
 
 CaptureWriter::CaptureWriter(std::shared_ptr<const base::ConfinedFolder> root, std::string relative,
-                             std::uint64_t quota)
-    : dir_(std::move(relative)), root_(std::move(root)), quota_(quota) {}
+                             std::uint64_t quota, std::string whose)
+    : dir_(std::move(relative)), root_(std::move(root)), quota_(quota), whose_(std::move(whose)) {}
 
 std::string CaptureWriter::writeDisplay(const Layout& layout, int display, std::uint32_t frameId,
                                         const std::uint32_t* rgba8) {
@@ -72,8 +72,7 @@ std::string CaptureWriter::write(const std::string& sub, const std::string& name
     bytes = end > 0 ? static_cast<std::uint64_t>(end) : 0;
     // Past the quota the temporary goes with `file`: the capture never gets its name.
     if (quota_ > 0 && written_ + bytes > quota_)
-      throw CaptureError(path +
-                         ": not written: the job's captures would pass the capture quota of " +
+      throw CaptureError(path + ": not written: " + whose_ + " would pass the capture quota of " +
                          base::byteText(quota_) + " on this wall process (serve --capture-quota)");
     file.commit();  // a full disk shows here
   } catch (const CaptureError&) {
@@ -94,6 +93,22 @@ std::string checkCaptureFolders(const std::string& dir, const Layout& layout, in
   for (int d : layout.displaysOfProcess(process)) {
     const std::string folder =
         (std::filesystem::path(dir) / layout.displays[static_cast<size_t>(d)].name).string();
+    if (std::string problem = base::checkWritableFolder(folder); !problem.empty()) return problem;
+  }
+  return {};
+}
+
+std::string checkWallCaptureFolders(const base::ConfinedFolder& dir, const Layout& layout,
+                                    int process) {
+  for (int d : layout.displaysOfProcess(process)) {
+    const std::string& name = layout.displays[static_cast<size_t>(d)].name;
+    try {
+      dir.openFolder(name, true);
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    // Reached without a link just now: the probe's path leads where the captures will go.
+    const std::string folder = (std::filesystem::path(dir.path()) / name).string();
     if (std::string problem = base::checkWritableFolder(folder); !problem.empty()) return problem;
   }
   return {};

@@ -38,9 +38,10 @@ class CaptureWriter {
   // Into the operator's folder `dir`, made with its parents as needed; no quota.
   explicit CaptureWriter(std::string dir);
   // Into `relative` beneath `root` (what resolveCaptureRequest returned), folders reached and
-  // made without following a link, at most `quota` bytes in all (0: no limit).
+  // made without following a link, at most `quota` bytes in all (0: no limit). `whose` names
+  // the captures in the quota's message.
   CaptureWriter(std::shared_ptr<const base::ConfinedFolder> root, std::string relative,
-                std::uint64_t quota);
+                std::uint64_t quota, std::string whose = "the job's captures");
 
   // Display `display`'s frame (its rect's width x height pixels); returns the path. Throws
   // CaptureError.
@@ -58,6 +59,7 @@ class CaptureWriter {
   std::string dir_;  // the operator's folder, or the job's beneath root_
   std::shared_ptr<const base::ConfinedFolder> root_;
   std::uint64_t quota_ = 0, written_ = 0;
+  std::string whose_;
 };
 
 // Writes display `display`'s frame into the operator's folder `dir`; returns the path.
@@ -67,6 +69,11 @@ std::string writeDisplayCapture(const std::string& dir, const Layout& layout, in
 // For setup, before any frame: the folder of each display of wall process `process` under `dir`
 // made and writable. Returns the first problem, or an empty string.
 std::string checkCaptureFolders(const std::string& dir, const Layout& layout, int process);
+
+// serve --capture DIR, at start: the folder of each display of wall process `process` beneath
+// `dir` made (no link followed) and writable. Returns the first problem, or an empty string.
+std::string checkWallCaptureFolders(const base::ConfinedFolder& dir, const Layout& layout,
+                                    int process);
 
 // A service wall, when a job asks for captures in `request`: its folder beneath `root`, as a path
 // relative to it ("." for the root itself), with the folders of process `process`'s displays

@@ -22,7 +22,7 @@ using base::nsBetween;
 // (and once more when the frame is complete).
 constexpr size_t kUploadBatches = 8;
 // Values of the swap barrier's reduction (presentFrame).
-constexpr int kAgreed = 5;
+constexpr int kAgreed = 6;
 // Capture requests not captured yet that a node keeps.
 constexpr std::size_t kMaxCaptureAsks = 64;
 
@@ -40,6 +40,7 @@ WallNode::WallNode(const Layout& layout, WallPeers& peers, std::vector<Presenter
                                      : CaptureWriter(options_.captureDir)),
       mine_(layout.displaysOfProcess(process_)) {
   const int process = process_;
+  wallFrame_ = options_.wallFramesBefore;
   if (presenters_.size() != mine_.size())
     throw base::Error("wall process " + std::to_string(process) + " drives " +
                       std::to_string(mine_.size()) + " displays but got " +
@@ -387,7 +388,7 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     // This process gives the frame up: it says so in the swap barrier, which every process
     // joins for this frame whether it has it or not, so none shows it and none waits in vain.
     if (options_.onAbandon) options_.onAbandon(report.failure);
-    std::int64_t abandon[kAgreed] = {0, 0, lastSwapNs_, -lastSwapNs_, 1};
+    std::int64_t abandon[kAgreed] = {0, 0, lastSwapNs_, -lastSwapNs_, 1, 0};
     peers_.agreeMax(frameId, abandon, kAgreed, Clock::now() + options_.timeout);
     dropSlot(frameId);
     report.stopped = report.abandoned = true;
@@ -407,8 +408,10 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   // request for a later frame waits for it, even when it came before one for this frame (two
   // requests in a row, both here before either frame, are two captures). So do the previous
   // frame's swap times (latest and, negated, earliest): how far apart the displays changed.
-  // The last value: some process gave the frame up (abandonOnFailure): nobody shows it.
-  std::int64_t agreed[kAgreed] = {report.completeNs, 0, lastSwapNs_, -lastSwapNs_, 0};
+  // Then: some process gave the frame up (abandonOnFailure): nobody shows it. The last: the
+  // wall's frame count (PresentReport::wallFrame).
+  std::int64_t agreed[kAgreed] = {report.completeNs, 0, lastSwapNs_,
+                                  -lastSwapNs_,      0, static_cast<std::int64_t>(wallFrame_ + 1)};
   {
     std::lock_guard lock(mutex_);
     for (auto ask = captureAsks_.begin(); ask != captureAsks_.end();) {
@@ -431,6 +434,7 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
   }
   const auto released = Clock::now();
   report.wallCompleteNs = agreed[0];
+  wallFrame_ = report.wallFrame = static_cast<std::uint64_t>(agreed[5]);
   if (lastSwapNs_ != 0)
     report.previousSwapSpreadMs = static_cast<double>(agreed[2] + agreed[3]) * 1e-6;
   const bool asked = agreed[1] > static_cast<std::int64_t>(captureDone_);

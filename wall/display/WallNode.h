@@ -77,6 +77,9 @@ struct WallNodeOptions {
   // (a driver that hangs) stops saying it is alive, and the wall drops it.
   std::function<void()> alive;
   std::chrono::milliseconds aliveEvery{250};
+  // The wall's presented frames before this node's first (a service wall counts them across its
+  // jobs): see PresentReport::wallFrame.
+  std::uint64_t wallFramesBefore = 0;
 };
 
 // The one rule for WallNodeOptions::framesAhead: render rank 0 starts frame F once frame
@@ -114,6 +117,10 @@ struct PresentReport {
   // another) and not presented; the displays still show the last presented frame.
   bool abandoned = false;
   std::string failure;
+  // The wall's count of presented frames, this one included: one more than the highest count
+  // any process brought to the swap barrier, so every process names a frame alike, also one
+  // that missed frames (rejoined) or a job that is not the wall's first (serve --capture).
+  std::uint64_t wallFrame = 0;
 };
 
 class WallNode : public messaging::MessageHandler {
@@ -228,6 +235,7 @@ class WallNode : public messaging::MessageHandler {
   // Highest sequence captured (the same on every process); presenting thread only.
   std::uint64_t captureDone_ = 0;
   std::int64_t lastSwapNs_ = 0;  // steady_clock time the last frame's swaps ended here
+  std::uint64_t wallFrame_ = 0;  // PresentReport::wallFrame of the last presented frame
   std::string error_;
   bool aborted_ = false;
   std::string abortReason_;

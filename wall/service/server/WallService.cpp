@@ -11,6 +11,7 @@
 #include "base/Error.h"
 #include "wall/display/Capture.h"
 #include "wall/display/IdleScreen.h"
+#include "wall/display/WallCaptures.h"
 #include "wall/display/WallNode.h"
 #include "wall/display/WindowPresenter.h"
 #include "wall/layout/Window.h"
@@ -40,9 +41,11 @@ struct WallService::Impl {
   int process = 0, processCount = 1;
   std::string address;
   std::unique_ptr<PieceReceiver> receiver;
-  std::unique_ptr<Desk> desk;        // the head
-  std::unique_ptr<MemberLink> link;  // every other process
-  ProcessLink* head = nullptr;       // one of the two
+  std::unique_ptr<Desk> desk;                  // the head
+  std::unique_ptr<MemberLink> link;            // every other process
+  ProcessLink* head = nullptr;                 // one of the two
+  std::unique_ptr<WallCaptures> wallCaptures;  // serve --capture
+  std::uint64_t wallFrames = 0;                // presented, over every job (PresentReport)
 
   // Commands for the main thread; the node of the job in progress for the link's thread.
   std::mutex mutex;
@@ -128,6 +131,10 @@ WallService::WallService(const Layout& layout, std::vector<Presenter*> presenter
     advertised = checkAdvertised(m.options.advertise, pieceHost, "--advertise");
     if (isHead) checkAdvertised(m.options.advertise, headHost, "--advertise");
   }
+  if (m.options.wallCapture)
+    m.wallCaptures = std::make_unique<WallCaptures>(
+        layout, m.process, m.presenters, m.options.wallCapture, m.options.wallCaptureEvery,
+        m.options.captureQuota, m.options.log);
   const int deadPeerMs = static_cast<int>(m.options.timeout.count());
   m.receiver = std::make_unique<PieceReceiver>("tcp://" + pieceHost + ":*", m.options.credentials,
                                                m.options.handlerThreads, deadPeerMs, m.options.log);
@@ -242,6 +249,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   o.timeout = options.timeout;
   o.framesAhead = framesAheadFor(static_cast<int>(start.header.framesInFlight));
   o.abandonOnFailure = true;
+  o.wallFramesBefore = wallFrames;
   if (link) o.alive = [this] { link->mainAlive(); };
   const std::uint64_t session = start.header.session;
   o.onAbandon = [this, session, epoch](const std::string& why) {
@@ -308,6 +316,8 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
         }
         lastPresented = frameId;
         bytes += static_cast<std::int64_t>(r.bytesReceived);
+        wallFrames = r.wallFrame;
+        if (wallCaptures) wallCaptures->presented(r.wallFrame);
         if (!asked && options.stopRequested && options.stopRequested()) {
           asked = true;
           if (process != 0 && options.leaveAlone) {

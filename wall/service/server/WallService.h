@@ -42,6 +42,11 @@ struct ServiceOptions {
   // how many bytes per job; none: a job that asks for captures is refused.
   std::shared_ptr<const base::ConfinedFolder> captureRoot;
   std::uint64_t captureQuota = 0;
+  // serve --capture: what this process's displays show, written beneath this folder every
+  // `wallCaptureEvery`-th wall frame (wall/display/WallCaptures.h), within captureQuota bytes
+  // over the process's run; none: not captured.
+  std::shared_ptr<const base::ConfinedFolder> wallCapture;
+  int wallCaptureEvery = 1;
   // What a display shows where no job's window covers it (RGBA8 as in Image; --background,
   // default black): see docs/service.md, "A job in a window".
   std::uint32_t background = 0xff000000u;
