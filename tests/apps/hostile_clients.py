@@ -166,7 +166,10 @@ def dealer(endpoint, token=TOKEN):
 def ask(endpoint, message, wait_s=3.0, token=TOKEN):
     """Sends one message from a fresh DEALER; the reply or None. Returns (socket, reply)."""
     s = dealer(endpoint, token)
-    s.send(message)
+    try:  # never blocks: a refused peer's pipe may be gone already, and no peer would come
+        s.send(message, zmq.NOBLOCK)
+    except zmq.Again:
+        pass
     if s.poll(int(wait_s * 1000)):
         return s, s.recv()
     return s, None
