@@ -856,4 +856,42 @@ TEST_F(TwoJobsTest, AProcessLostLeavesEveryJob) {
   EXPECT_EQ(records(lost).size(), 1u);  // one "lost" line for the wall
 }
 
+// A job that asks for the whole wall while another is on it gets a display the other's window
+// does not touch; with none free, the whole wall (on top). The first job gets the whole wall.
+TEST_F(TwoJobsTest, AJobWithoutAWindowIsPlacedOnAFreeDisplay) {
+  const Actions first = two.hello("job-a", helloFrom("render1"), t0);
+  const ServiceCommand whole = commandTo(first, 0, Command::Start);
+  EXPECT_EQ((dfb::Region{whole.header.windowX0, whole.header.windowY0, whole.header.windowX1,
+                         whole.header.windowY1}),
+            (dfb::Region{0, 0, 192, 64}));
+  for (int p = 0; p < 3; ++p) two.answer(p, answerOf(whole.header.session, Command::Ready, 1), t0);
+  for (int p = 0; p < 3; ++p)
+    two.answer(p, answerOf(whole.header.session, Command::Done, 0, 0), t0);
+  ASSERT_TRUE(two.sessions().empty());
+
+  runIn("job-a", "render1", "0,0,100,64", t0);  // displays 0 and 1 (64 pixels wide each)
+  const Actions placed = two.hello("job-b", helloFrom("render2"), t0);
+  const ServiceCommand start = commandTo(placed, 1, Command::Start);
+  EXPECT_EQ((dfb::Region{start.header.windowX0, start.header.windowY0, start.header.windowX1,
+                         start.header.windowY1}),
+            (dfb::Region{128, 0, 192, 64}));
+  Actions ready;
+  for (int p = 0; p < 3; ++p)
+    ready = two.answer(p, answerOf(start.header.session, Command::Ready, 1), t0);
+  const auto directory = replies(ready, Kind::Directory);
+  ASSERT_EQ(directory.size(), 1u);
+  const Directory d = parseDirectory(directory[0].message.data(), directory[0].message.size());
+  EXPECT_EQ(d.window, (dfb::Region{128, 0, 192, 64}));
+  EXPECT_EQ(d.layout.canvasWidth, 64);
+}
+
+TEST_F(TwoJobsTest, AJobWithoutAWindowGetsTheWholeWallWhenNoDisplayIsFree) {
+  runIn("job-a", "render1", "60,0,80,64", t0);  // displays 0, 1 and 2
+  const ServiceCommand start =
+      commandTo(two.hello("job-b", helloFrom("render2"), t0), 0, Command::Start);
+  EXPECT_EQ((dfb::Region{start.header.windowX0, start.header.windowY0, start.header.windowX1,
+                         start.header.windowY1}),
+            (dfb::Region{0, 0, 192, 64}));
+}
+
 }  // namespace wall::service

@@ -529,7 +529,7 @@ ServiceCommand JobDesk::startCommand(std::uint32_t firstFrame) const {
   c.header.framesInFlight = j_->granted;
   c.header.captureEvery = j_->job.hello.captureEvery;
   c.header.codec = static_cast<std::uint32_t>(j_->job.hello.codec.codec);
-  const dfb::Region window = resolveWindow(*s_.layout, j_->job.hello.window);  // checked at hello
+  const dfb::Region window = j_->window;
   c.header.windowX0 = window.x0;
   c.header.windowY0 = window.y0;
   c.header.windowX1 = window.x1;
@@ -581,6 +581,7 @@ std::string JobDesk::busy() const {
 void JobDesk::startJob() {
   j_->job.session = s_.newSession();
   j_->order = ++jobsStarted_;
+  j_->window = placeWindow(j_->job.hello);
   emit(Session{j_->job.session, false});
   j_->job.started = now_;
   j_->failure.clear();
@@ -598,6 +599,23 @@ void JobDesk::startJob() {
   for (int p = 0; p < members_.processCount(); ++p)
     j_->seats[static_cast<size_t>(p)] = {members_.live(p), false, false, 1};
   toJob(startCommand(1));
+}
+
+// A job that asks for the whole wall while others are on it gets the first display no other
+// job's window touches, if there is one, else the whole wall (on top). Any other window is the
+// one asked for (checked at hello), wherever the others are.
+dfb::Region JobDesk::placeWindow(const Hello& hello) const {
+  const dfb::Region asked = resolveWindow(*s_.layout, hello.window);
+  if (hello.window.kind != WindowRequest::Kind::Full) return asked;
+  std::vector<dfb::Region> taken;
+  for (const Slot* slot : inOrder())
+    if (slot != j_) taken.push_back(slot->window);
+  if (taken.empty()) return asked;
+  for (const Display& d : s_.layout->displays)
+    if (std::none_of(taken.begin(), taken.end(),
+                     [&](const dfb::Region& w) { return !dfb::intersect(w, d.rect).empty(); }))
+      return d.rect;
+  return asked;
 }
 
 bool JobDesk::allDone() const {
@@ -666,7 +684,7 @@ void JobDesk::maybeRun() {
   }
   Directory d;
   d.session = j_->job.session;
-  d.window = resolveWindow(*s_.layout, j_->job.hello.window);
+  d.window = j_->window;
   d.layout = windowLayout(*s_.layout, d.window);
   d.processes = roster();
   d.framesInFlight = j_->granted;

@@ -211,6 +211,7 @@ class JobDesk {
   std::string busy() const;
 
   void startJob();
+  dfb::Region placeWindow(const Hello& hello) const;
   bool allDone() const;
   void endJob(const std::string& why);
   void nextJob();
@@ -228,6 +229,7 @@ class JobDesk {
     explicit Slot(int processes) : seats(static_cast<size_t>(processes)), agreements(processes) {}
     State state = State::Idle;
     std::uint64_t order = 0;  // when it started among the wall's jobs (z-order: newest on top)
+    dfb::Region window;       // on the wall's canvas: asked for, or placed (placeWindow)
     Job job;
     std::vector<Seat> seats;
     std::set<int> waitingToJoinJob;  // joined while the job was starting
