@@ -666,7 +666,7 @@ void JobDesk::jobOver() {
                             {"seconds", std::round(seconds * 1e6) / 1e6},
                             {"ended", j_->failure.empty() ? "last frame" : j_->failure}})});
   j_->agreements.clear();
-  emit(Session{0, true});
+  emit(Session{j_->job.session, true});
   nextJob();
 }
 

@@ -101,7 +101,8 @@ class JobDesk {
   struct Record {
     std::string json;
   };
-  // The job the head's process waits for is now `session` (0: none); `ended`: a job ended.
+  // Job `session` is on the wall now (the head's process waits for its barriers), or it ended
+  // (`ended`: it is not any more).
   struct Session {
     std::uint64_t session = 0;
     bool ended = false;
@@ -163,6 +164,8 @@ class JobDesk {
   std::uint64_t session() const { return shown().job.session; }
   const std::string& peer() const { return shown().job.peer; }
   std::size_t queued() const { return queue_.size(); }
+  // A job on the wall (starting, running or ending) has this connection.
+  bool connected(const std::string& peer) const { return byPeer(peer) != nullptr; }
   std::uint32_t lastCredited() const { return shown().lastCredited; }
   std::size_t pendingCaptures() const { return shown().pendingCaptures.size(); }
   // The jobs on the wall now (Starting, Running or Ending), oldest first; one of them by session

@@ -333,7 +333,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
       if (failure.empty()) failure = e.what();
       log("gave the job up: " + failure);
     }
-    receiver->detach();
+    receiver->detach(session);
     std::lock_guard lock(mutex);
     node = nullptr;
     nodeSession = 0;
