@@ -55,7 +55,7 @@ Membership::Setup membershipSetup(const Desk::Setup& s) {
 }
 
 JobDesk::Setup jobSetup(const Desk::Setup& s) {
-  return {s.layout, {}, s.options.timeout, s.options.framesInFlight, randomId};
+  return {s.layout, {}, s.options.timeout, s.options.framesInFlight, randomId, s.options.maxJobs};
 }
 
 template <class... F>
