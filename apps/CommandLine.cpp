@@ -287,6 +287,13 @@ void addRenderJob(CLI::App& app, Options& o, RawOptions& raw) {
 
 void addServe(CLI::App& serve, Options& o, RawOptions& raw) {
   addWallGroup(serve, o.wall, o.offscreen);
+  serve
+      .add_option("--max-jobs", o.maxJobs,
+                  "N: jobs on the wall at once, each in its window, the newest on top; a job "
+                  "beyond them is refused busy or waits with --wait (default: 1; above 1 needs "
+                  "--offscreen)")
+      ->check(CLI::Range(1, 16))
+      ->group(kWall);
   addListen(serve, o.listen, kNetworkSecurity,
             "[ADDR:]PORT of wall process 0's directory, where jobs connect and the other "
             "processes join (default address 127.0.0.1)");

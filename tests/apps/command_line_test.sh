@@ -41,7 +41,7 @@ Failure handling: --timeout --memory-limit
 Output: --image --capture --capture-every --preview --stats --quiet
 Help: --help
 Subcommands: serve relay'
-serve_command='Wall: --wall --offscreen
+serve_command='Wall: --wall --offscreen --max-jobs
 Network and security: --listen --process --join --advertise --token-file --token --server-key --curve
 Throughput: --frames-in-flight --handler-threads
 Failure handling: --timeout

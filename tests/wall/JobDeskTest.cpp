@@ -682,4 +682,216 @@ TEST_F(JobDeskTest, NamesAPeerGaveAreLoggedPrintableAndShort) {
 }
 
 }  // namespace
+// ---- several jobs on one wall (Setup::maxJobs; issue 37) ----
+
+// The same wall with room for two jobs at once, each in its window.
+class TwoJobsTest : public JobDeskTest {
+ protected:
+  TwoJobsTest() : two({&layout, "t", kTimeout, 2, [this] { return ++lastSession; }, 2}, members) {}
+
+  static Hello inWindow(const std::string& host, const std::string& window, bool wait = false) {
+    Hello h = helloFrom(host, wait);
+    h.window = parseWindowRequest(window);
+    return h;
+  }
+  ServiceCommand answerOf(std::uint64_t session, Command kind, std::int64_t a = 0,
+                          std::int64_t b = 0, std::string text = {}) const {
+    ServiceCommand c = answer(kind, a, b, std::move(text));
+    c.header.session = session;
+    return c;
+  }
+  // A job from `host` on `peer` in `window`, started and running: its session.
+  std::uint64_t runIn(const std::string& peer, const std::string& host, const std::string& window,
+                      Clock::time_point now) {
+    const Actions started = two.hello(peer, inWindow(host, window), now);
+    const auto starts = only<JobDesk::ToProcess>(started);
+    EXPECT_EQ(given(started, Command::Start), (std::vector<int>{0, 1, 2}));
+    if (starts.empty()) return 0;
+    const std::uint64_t session = starts[0].command.header.session;
+    Actions last;
+    for (int p = 0; p < 3; ++p) last = two.answer(p, answerOf(session, Command::Ready, 1), now);
+    const auto directory = replies(last, Kind::Directory);
+    EXPECT_EQ(directory.size(), 1u);
+    if (!directory.empty()) {
+      EXPECT_EQ(directory[0].peer, peer);
+    }
+    EXPECT_EQ(two.state(session), State::Running);
+    return session;
+  }
+  // Every process arrives at frame F of `session`: the releases of the last arrival.
+  std::vector<JobDesk::Release> frame(std::uint64_t session, std::uint32_t f,
+                                      Clock::time_point now) {
+    Actions last;
+    for (int p = 0; p < 3; ++p) last = two.arrive(p, session, f, {1}, now);
+    return only<JobDesk::Release>(last);
+  }
+
+  JobDesk two;
+};
+
+TEST_F(TwoJobsTest, TwoJobsRunAtOnceEachWithItsOwnBarriersAndCredits) {
+  const std::uint64_t a = runIn("job-a", "render1", "0,0,100,64", t0);
+  const std::uint64_t b = runIn("job-b", "render2", "50,0,100,64", t0);
+  EXPECT_NE(a, b);
+  EXPECT_EQ(two.sessions(), (std::vector<std::uint64_t>{a, b}));
+  // Interleaved: a barrier of one job is not completed by the other's arrivals.
+  two.arrive(0, a, 1, {1}, t0);
+  two.arrive(1, b, 1, {2}, t0);
+  two.arrive(1, a, 1, {3}, t0);
+  two.arrive(0, b, 1, {4}, t0);
+  const auto releaseA = only<JobDesk::Release>(two.arrive(2, a, 1, {5}, t0));
+  ASSERT_EQ(releaseA.size(), 3u);
+  for (const JobDesk::Release& r : releaseA) {
+    EXPECT_EQ(r.session, a);
+    EXPECT_EQ(r.values, (std::vector<std::int64_t>{5}));
+  }
+  const auto releaseB = only<JobDesk::Release>(two.arrive(2, b, 1, {1}, t0));
+  ASSERT_EQ(releaseB.size(), 3u);
+  EXPECT_EQ(releaseB[0].session, b);
+  EXPECT_EQ(releaseB[0].values, (std::vector<std::int64_t>{4}));
+  // Each job's credit goes to its own connection and counts for it alone.
+  const auto creditA = replies(two.presented(a, 1, 0), Kind::Presented);
+  ASSERT_EQ(creditA.size(), 1u);
+  EXPECT_EQ(creditA[0].peer, "job-a");
+  EXPECT_EQ(two.lastCredited(a), 1u);
+  EXPECT_EQ(two.lastCredited(b), 0u);
+  EXPECT_EQ(replies(two.presented(b, 1, 0), Kind::Presented).at(0).peer, "job-b");
+  // A job's capture, keepalive and goodbye go to the processes with its own session.
+  const Actions kept = two.message({"job-b", Kind::Keepalive, b, {}, {}}, t0 + 10ms);
+  for (const JobDesk::ToProcess& c : only<JobDesk::ToProcess>(kept))
+    EXPECT_EQ(c.command.header.session, b);
+  EXPECT_EQ(replies(kept, Kind::Keepalive).at(0).peer, "job-b");
+  // A message naming the other job's session on this connection is not theirs.
+  EXPECT_TRUE(
+      only<JobDesk::ToProcess>(two.message({"job-b", Kind::Keepalive, a, {}, {}}, t0)).empty());
+  // Job a ends with its goodbye; b runs on.
+  two.message({"job-a", Kind::Bye, a, {1, 0}, {}}, t0 + 20ms);
+  Actions over;
+  for (int p = 0; p < 3; ++p) over = two.answer(p, answerOf(a, Command::Done, 1, 10), t0 + 30ms);
+  EXPECT_EQ(records(over).at(0)["host"], "render1");
+  EXPECT_EQ(two.sessions(), (std::vector<std::uint64_t>{b}));
+  EXPECT_EQ(two.state(b), State::Running);
+  EXPECT_EQ(frame(b, 2, t0 + 40ms).size(), 3u);
+}
+
+TEST_F(TwoJobsTest, AJobThatGoesSilentEndsAloneWhileTheOtherIsCredited) {
+  const std::uint64_t a = runIn("job-a", "render1", "0,0,100,64", t0);
+  const std::uint64_t b = runIn("job-b", "render2", "full", t0);
+  // Job a is never heard from again (and its frame 1 stays open: its pieces stopped); job b keeps
+  // its keepalives, frames and credits going.
+  two.arrive(0, a, 1, {1}, t0);
+  for (std::uint32_t f = 1; f <= 8; ++f) {
+    const Clock::time_point now = t0 + f * 100ms;
+    two.message({"job-b", Kind::Keepalive, b, {}, {}}, now);
+    const auto released = frame(b, f, now);
+    EXPECT_EQ(released.size(), 3u) << "frame " << f;
+    EXPECT_EQ(replies(two.presented(b, f, 0), Kind::Presented).size(), 1u);
+    const Actions ticked = two.tick(now);
+    // Job a's open barrier drops nobody: a is silent, its timeout ends it.
+    EXPECT_TRUE(only<JobDesk::Drop>(ticked).empty()) << "frame " << f;
+    if (now - t0 <= kTimeout) {
+      EXPECT_TRUE(replies(ticked, Kind::Ended).empty()) << "frame " << f;
+    } else if (two.state(a) == State::Running) {
+      ADD_FAILURE() << "job a not ended at " << f;
+    }
+  }
+  EXPECT_EQ(two.state(a), State::Ending);
+  EXPECT_EQ(two.state(b), State::Running);
+  EXPECT_EQ(two.lastCredited(b), 8u);
+  // Its processes give it up; b goes on.
+  for (int p = 0; p < 3; ++p) two.answer(p, answerOf(a, Command::Done, 0, 0), t0 + 900ms);
+  EXPECT_EQ(two.sessions(), (std::vector<std::uint64_t>{b}));
+  EXPECT_EQ(frame(b, 9, t0 + 900ms).size(), 3u);
+}
+
+TEST_F(TwoJobsTest, AThirdJobIsRefusedBusyAndAQueuedOneStartsWhenOneEnds) {
+  const std::uint64_t a = runIn("job-a", "render1", "0,0,100,64", t0);
+  const std::uint64_t b = runIn("job-b", "render2", "100,0,92,64", t0);
+  const Actions busy = two.hello("job-c", helloFrom("render3"), t0);
+  ASSERT_EQ(replies(busy, Kind::Refused).size(), 1u);
+  EXPECT_EQ(textOf(replies(busy, Kind::Refused)[0]),
+            "busy: 2 jobs are on the wall (from render1, render2)");
+  EXPECT_TRUE(only<JobDesk::ToProcess>(busy).empty());
+  const Actions queued = two.hello("job-d", helloFrom("render4", true), t0);
+  EXPECT_EQ(textOf(replies(queued, Kind::Queued).at(0)),
+            "busy: 2 jobs are on the wall (from render1, render2); waiting (place 1)");
+  EXPECT_EQ(two.queued(), 1u);
+  // Job a's connection closes: it ends at once, and once its processes are done the queued job
+  // takes its seat, next to b.
+  EXPECT_EQ(given(two.disconnected("job-a", t0 + 10ms), Command::Abort),
+            (std::vector<int>{0, 1, 2}));
+  Actions over;
+  for (int p = 0; p < 3; ++p) over = two.answer(p, answerOf(a, Command::Done, 0, 0), t0 + 20ms);
+  EXPECT_EQ(records(over).at(0)["ended"], "its connection closed");
+  EXPECT_EQ(given(over, Command::Start), (std::vector<int>{0, 1, 2}));
+  const std::uint64_t d = commandTo(over, 0, Command::Start).header.session;
+  EXPECT_EQ(two.queued(), 0u);
+  EXPECT_EQ(two.sessions(), (std::vector<std::uint64_t>{b, d}));
+  Actions ready;
+  for (int p = 0; p < 3; ++p) ready = two.answer(p, answerOf(d, Command::Ready, 1), t0 + 30ms);
+  EXPECT_EQ(replies(ready, Kind::Directory).at(0).peer, "job-d");
+  EXPECT_EQ(two.state(d), State::Running);
+  EXPECT_EQ(two.state(b), State::Running);
+}
+
+// A process lost is out of every job it was in: each job's barrier that waited for it completes
+// and each job hears its own roster.
+TEST_F(TwoJobsTest, AProcessLostLeavesEveryJob) {
+  const std::uint64_t a = runIn("job-a", "render1", "full", t0);
+  const std::uint64_t b = runIn("job-b", "render2", "full", t0);
+  for (const std::uint64_t s : {a, b}) {
+    two.arrive(0, s, 1, {1}, t0);
+    two.arrive(1, s, 1, {1}, t0);
+  }
+  EXPECT_TRUE(members.drop(2));
+  const Actions lost = two.lost(2, "silent", t0 + 10ms);
+  const auto rosters = replies(lost, Kind::Roster);
+  ASSERT_EQ(rosters.size(), 2u);
+  EXPECT_EQ(rosters[0].peer, "job-a");
+  EXPECT_EQ(rosters[1].peer, "job-b");
+  const auto released = only<JobDesk::Release>(lost);
+  ASSERT_EQ(released.size(), 4u);  // processes 0 and 1 of each job
+  EXPECT_EQ(released[0].session, a);
+  EXPECT_EQ(released[3].session, b);
+  EXPECT_EQ(records(lost).size(), 1u);  // one "lost" line for the wall
+}
+
+// A job that asks for the whole wall while another is on it gets a display the other's window
+// does not touch; with none free, the whole wall (on top). The first job gets the whole wall.
+TEST_F(TwoJobsTest, AJobWithoutAWindowIsPlacedOnAFreeDisplay) {
+  const Actions first = two.hello("job-a", helloFrom("render1"), t0);
+  const ServiceCommand whole = commandTo(first, 0, Command::Start);
+  EXPECT_EQ((dfb::Region{whole.header.windowX0, whole.header.windowY0, whole.header.windowX1,
+                         whole.header.windowY1}),
+            (dfb::Region{0, 0, 192, 64}));
+  for (int p = 0; p < 3; ++p) two.answer(p, answerOf(whole.header.session, Command::Ready, 1), t0);
+  for (int p = 0; p < 3; ++p)
+    two.answer(p, answerOf(whole.header.session, Command::Done, 0, 0), t0);
+  ASSERT_TRUE(two.sessions().empty());
+
+  runIn("job-a", "render1", "0,0,100,64", t0);  // displays 0 and 1 (64 pixels wide each)
+  const Actions placed = two.hello("job-b", helloFrom("render2"), t0);
+  const ServiceCommand start = commandTo(placed, 1, Command::Start);
+  EXPECT_EQ((dfb::Region{start.header.windowX0, start.header.windowY0, start.header.windowX1,
+                         start.header.windowY1}),
+            (dfb::Region{128, 0, 192, 64}));
+  Actions ready;
+  for (int p = 0; p < 3; ++p)
+    ready = two.answer(p, answerOf(start.header.session, Command::Ready, 1), t0);
+  const auto directory = replies(ready, Kind::Directory);
+  ASSERT_EQ(directory.size(), 1u);
+  const Directory d = parseDirectory(directory[0].message.data(), directory[0].message.size());
+  EXPECT_EQ(d.window, (dfb::Region{128, 0, 192, 64}));
+  EXPECT_EQ(d.layout.canvasWidth, 64);
+}
+
+TEST_F(TwoJobsTest, AJobWithoutAWindowGetsTheWholeWallWhenNoDisplayIsFree) {
+  runIn("job-a", "render1", "60,0,80,64", t0);  // displays 0, 1 and 2
+  const ServiceCommand start =
+      commandTo(two.hello("job-b", helloFrom("render2"), t0), 0, Command::Start);
+  EXPECT_EQ((dfb::Region{start.header.windowX0, start.header.windowY0, start.header.windowX1,
+                         start.header.windowY1}),
+            (dfb::Region{0, 0, 192, 64}));
+}
+
 }  // namespace wall::service

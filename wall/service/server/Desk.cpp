@@ -55,7 +55,7 @@ Membership::Setup membershipSetup(const Desk::Setup& s) {
 }
 
 JobDesk::Setup jobSetup(const Desk::Setup& s) {
-  return {s.layout, {}, s.options.timeout, s.options.framesInFlight, randomId};
+  return {s.layout, {}, s.options.timeout, s.options.framesInFlight, randomId, s.options.maxJobs};
 }
 
 template <class... F>
@@ -88,8 +88,8 @@ struct Desk::Impl {
   std::map<std::pair<std::uint64_t, std::uint32_t>, std::vector<std::int64_t>> releases;
   std::map<std::pair<std::uint64_t, std::uint32_t>, std::vector<std::vector<std::uint32_t>>>
       gathered;
-  std::vector<int> absent;       // copy of members.absent(), for absentProcesses()
-  std::uint64_t jobSession = 0;  // copy of the job's session, for the head's barrier waits
+  std::vector<int> absent;              // copy of members.absent(), for absentProcesses()
+  std::set<std::uint64_t> jobSessions;  // the jobs on the wall, for the head's barrier waits
 
   // The desk thread's own.
   Membership members;
@@ -177,12 +177,6 @@ struct Desk::Impl {
       bannedOrder.pop_front();
     }
   }
-  // The connection of the job whose credits must arrive (none: empty).
-  std::string jobPeer() const {
-    const JobDesk::State state = jobs.state();
-    return state == JobDesk::State::Idle || state == JobDesk::State::Closed ? std::string()
-                                                                            : jobs.peer();
-  }
   void publishAbsent() {
     std::vector<int> now = members.absent();
     std::lock_guard lock(mutex);
@@ -203,7 +197,7 @@ struct Desk::Impl {
   }
   void carry(JobDesk::Actions actions) {
     const Overloaded carryOut{
-        [&](JobDesk::Reply& r) { reply(r.peer, std::move(r.message), r.peer == jobPeer()); },
+        [&](JobDesk::Reply& r) { reply(r.peer, std::move(r.message), jobs.connected(r.peer)); },
         [&](JobDesk::ToProcess& c) { sendTo(c.process, c.command); },
         [&](JobDesk::Release& r) { release(r); },
         [&](JobDesk::Gathered& g) {
@@ -215,7 +209,12 @@ struct Desk::Impl {
           if (s.options.jobRecord) s.options.jobRecord(r.json);
         },
         [&](JobDesk::Session& j) {
-          handBack([&] { jobSession = j.session; });
+          handBack([&] {
+            if (j.ended)
+              jobSessions.erase(j.session);
+            else
+              jobSessions.insert(j.session);
+          });
           if (j.ended) logged.clear();
         },
         [&](JobDesk::Closing&) { socket.set(zmq::sockopt::linger, 1000); },
@@ -483,7 +482,8 @@ void Desk::agreeMax(std::uint64_t, std::uint64_t session, std::uint32_t frameId,
   std::unique_lock lock(impl_->mutex);
   const auto key = std::make_pair(session, frameId);
   impl_->handedBack.wait(lock, [&] {
-    return impl_->releases.count(key) > 0 || impl_->isClosed || impl_->jobSession != session;
+    return impl_->releases.count(key) > 0 || impl_->isClosed ||
+           impl_->jobSessions.count(session) == 0;
   });
   if (impl_->releases.count(key) == 0)
     throw base::Error("swap barrier of frame " + std::to_string(frameId) +

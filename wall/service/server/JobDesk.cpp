@@ -34,8 +34,7 @@ ServiceCommand shutdownCommand() {
 JobDesk::JobDesk(Setup setup, const Membership& members)
     : s_(std::move(setup)),
       members_(members),
-      seats_(static_cast<size_t>(members.processCount())),
-      agreements_(members.processCount()) {}
+      ended_(std::make_unique<Slot>(members.processCount())) {}
 
 // ---- events ----
 
@@ -59,8 +58,10 @@ JobDesk::Actions JobDesk::hello(const std::string& peer, const Hello& hello,
     // reason(): a display name from the wire is printable, bounded text in the wall's log.
     log("refused a job from " + from + ": " + problem, peer);
     reply(peer, Kind::Refused, packText(Kind::Refused, 0, problem));
-  } else if (state_ == State::Idle) {
-    job_ = {peer, hello, now, 0, {}};
+  } else if (slots_.size() < std::max<std::size_t>(s_.maxJobs, 1)) {
+    slots_.push_back(std::make_unique<Slot>(members_.processCount()));
+    j_ = slots_.back().get();
+    j_->job = {peer, hello, now, 0, {}};
     log("job from " + from + ": " + std::to_string(hello.renderRanks) + " render ranks, codec " +
         codecName(hello.codec) + ", window " + peerText(windowText(hello.window)));
     startJob();
@@ -80,7 +81,7 @@ std::string JobDesk::windowProblem(const Hello& hello) const {
 }
 
 bool JobDesk::hasJobFrom(const std::string& peer) const {
-  if (state_ != State::Idle && state_ != State::Closed && job_.peer == peer) return true;
+  if (byPeer(peer)) return true;
   return std::any_of(queue_.begin(), queue_.end(),
                      [&](const Job& queued) { return queued.peer == peer; });
 }
@@ -107,8 +108,8 @@ void JobDesk::queueOrRefuse(const std::string& peer, const Hello& hello, const s
 JobDesk::Actions JobDesk::message(const JobMessage& m, Clock::time_point now) {
   now_ = now;
   if (queuedMessage(m)) return take();
-  const bool ours = state_ != State::Idle && state_ != State::Closed && m.peer == job_.peer &&
-                    m.session == job_.session;
+  j_ = byPeer(m.peer);
+  const bool ours = j_ && m.session == j_->job.session;
   if (!ours) {
     if (m.kind != Kind::Keepalive && m.kind != Kind::Bye)
       log("ignored a message on the directory port: message kind " +
@@ -116,7 +117,7 @@ JobDesk::Actions JobDesk::message(const JobMessage& m, Clock::time_point now) {
           m.peer);
     return take();
   }
-  job_.lastHeard = now;
+  j_->job.lastHeard = now;
   if (!m.malformed.empty()) {
     endJob(m.malformed);
     return take();
@@ -124,8 +125,8 @@ JobDesk::Actions JobDesk::message(const JobMessage& m, Clock::time_point now) {
   // The job counts the wall silent after its --timeout without a message: a frame that takes
   // longer to render than that must not end it, so every keepalive is answered.
   if (m.kind == Kind::Keepalive)
-    reply(m.peer, Kind::Keepalive, packControl(Kind::Keepalive, job_.session, 0));
-  if (state_ == State::Running) onControl(m);
+    reply(m.peer, Kind::Keepalive, packControl(Kind::Keepalive, j_->job.session, 0));
+  if (j_->state == State::Running) onControl(m);
   return take();
 }
 
@@ -153,7 +154,7 @@ void JobDesk::onControl(const JobMessage& m) {
       break;
     case Kind::Bye:
       if (m.control.second < 0) return endJob("the job left without naming its last frame");
-      namedLastFrame_ = static_cast<std::uint32_t>(m.control.value);
+      j_->namedLastFrame = static_cast<std::uint32_t>(m.control.value);
       toJob(command(Command::LastFrame, static_cast<std::int64_t>(m.control.value)));
       break;
     default:
@@ -166,28 +167,29 @@ void JobDesk::onControl(const JobMessage& m) {
 void JobDesk::onCapture(const JobMessage& m) {
   const std::uint64_t frame = m.control.value;
   const std::uint32_t earliest =
-      lastCredited_ > kCaptureFramesBehind ? lastCredited_ - kCaptureFramesBehind : 1;
+      j_->lastCredited > kCaptureFramesBehind ? j_->lastCredited - kCaptureFramesBehind : 1;
   const std::uint64_t latest =
-      std::uint64_t{lastCredited_} + framesAheadFor(static_cast<int>(granted_));
+      std::uint64_t{j_->lastCredited} + framesAheadFor(static_cast<int>(j_->granted));
   std::string refused;
   if (frame < earliest || frame > latest)
     refused = "frame " + std::to_string(frame) + " is not near the frames in flight (" +
               std::to_string(earliest) + ".." + std::to_string(latest) + ")";
   else if (m.control.second < 1)
     refused = "sequence " + std::to_string(m.control.second) + " (expected 1 or more)";
-  else if (pendingCaptures_.size() >= kMaxPendingCaptures)
+  else if (j_->pendingCaptures.size() >= kMaxPendingCaptures)
     refused = std::to_string(kMaxPendingCaptures) + " captures wait for their frames already";
   if (!refused.empty()) {
-    log("refused a capture request of the job from " + peerText(job_.hello.host) + ": " +
-            (pendingCaptures_.size() >= kMaxPendingCaptures ? "too many pending"
-                                                            : "a frame or sequence out of range"),
+    log("refused a capture request of the job from " + peerText(j_->job.hello.host) + ": " +
+            (j_->pendingCaptures.size() >= kMaxPendingCaptures
+                 ? "too many pending"
+                 : "a frame or sequence out of range"),
         m.peer);
     reply(m.peer, Kind::Refused,
-          packText(Kind::Refused, job_.session, "capture request refused: " + refused));
+          packText(Kind::Refused, j_->job.session, "capture request refused: " + refused));
     return;
   }
   // Taken at that frame, or at the next presented one when it is presented already.
-  pendingCaptures_.push_back(std::max(static_cast<std::uint32_t>(frame), lastCredited_ + 1));
+  j_->pendingCaptures.push_back(std::max(static_cast<std::uint32_t>(frame), j_->lastCredited + 1));
   toJob(command(Command::Capture, static_cast<std::int64_t>(frame), m.control.second));
 }
 
@@ -195,29 +197,28 @@ JobDesk::Actions JobDesk::answer(int p, const ServiceCommand& c, Clock::time_poi
   now_ = now;
   const CommandHeader& e = c.header;
   if (e.kind == Command::Shutdown) {  // a member confirms the wall's shutdown
-    if (state_ == State::Closed) ++shutdownAcks_;
+    if (closed_) ++shutdownAcks_;
     return take();
   }
   if (e.kind == Command::StopAsked) {
     stopAsked(p);
     return take();
   }
-  if (state_ == State::Idle || state_ == State::Closed || e.session != job_.session ||
-      !seats_[static_cast<size_t>(p)].in)
-    return take();
+  j_ = bySession(e.session);
+  if (!j_ || !j_->seats[static_cast<size_t>(p)].in) return take();
   switch (e.kind) {
     case Command::Ready:
       onReady(p, c);
       break;
     case Command::Failed:
-      if (state_ == State::Running) {
+      if (j_->state == State::Running) {
         endJob(c.text);
-      } else if (state_ == State::Ending && failure_.empty()) {
+      } else if (j_->state == State::Ending && j_->failure.empty()) {
         // Past the job's last frame (a capture of it that could not be written, after another
         // process was done): the job waits for that frame's credit, so it hears why instead.
-        failure_ = c.text;
-        reply(job_.peer, Kind::Ended, packText(Kind::Ended, job_.session, c.text));
-        log("dropping the job from " + job_.hello.host + ": " + c.text);
+        j_->failure = c.text;
+        reply(j_->job.peer, Kind::Ended, packText(Kind::Ended, j_->job.session, c.text));
+        log("dropping the job from " + j_->job.hello.host + ": " + c.text);
       }
       break;
     case Command::Done:
@@ -236,97 +237,116 @@ void JobDesk::stopAsked(int p) {
   for (const Job& queued : queue_)
     reply(queued.peer, Kind::Refused, packText(Kind::Refused, 0, "the wall is shutting down"));
   queue_.clear();
-  endJob("the wall is shutting down");
+  for (Slot* slot : inOrder()) {
+    j_ = slot;
+    endJob("the wall is shutting down");
+  }
 }
 
 void JobDesk::onReady(int p, const ServiceCommand& c) {
-  Seat& seat = seats_[static_cast<size_t>(p)];
+  Seat& seat = j_->seats[static_cast<size_t>(p)];
   seat.ready = true;
   if (c.header.a != 0 && seat.fromFrame == kNotYet) {
-    if (state_ == State::Running) joinedJob(p);
+    if (j_->state == State::Running) joinedJob(p);
     return;
   }
   if (c.header.a == 0) {
     seat.done = true;
-    if (state_ == State::Running) {  // a process that joined mid-job cannot take it
+    if (j_->state == State::Running) {  // a process that joined mid-job cannot take it
       log(members_.who(p) + " cannot take the running job: " + reason(c.text));
       sendRoster(0, members_.who(p) + " cannot take the job: " + reason(c.text));
-    } else if (failure_.empty()) {
-      failure_ = reason(c.text);
+    } else if (j_->failure.empty()) {
+      j_->failure = reason(c.text);
     }
   }
-  if (state_ == State::Starting) maybeRun();
+  if (j_->state == State::Starting) maybeRun();
 }
 
 void JobDesk::onDone(int p, const ServiceCommand& c) {
-  lastPresented_ = std::max(lastPresented_, c.header.a);
-  bytes_ += c.header.b;
-  seats_[static_cast<size_t>(p)].done = true;
-  if (state_ == State::Running && !c.text.empty() && p != 0) {
+  j_->lastPresented = std::max(j_->lastPresented, c.header.a);
+  j_->bytes += c.header.b;
+  j_->seats[static_cast<size_t>(p)].done = true;
+  if (j_->state == State::Running && !c.text.empty() && p != 0) {
     // This process could not go on (its node failed); the others can.
     log(members_.who(p) + " left the job: " + reason(c.text));
     sendRoster(0, members_.who(p) + " left the job: " + reason(c.text));
     releaseWhatCan();
   } else {
-    if (!c.text.empty() && failure_.empty()) failure_ = reason(c.text);
-    if (state_ == State::Running) state_ = State::Ending;  // it ended by itself
+    if (!c.text.empty() && j_->failure.empty()) j_->failure = reason(c.text);
+    if (j_->state == State::Running) j_->state = State::Ending;  // it ended by itself
   }
 }
 
 JobDesk::Actions JobDesk::joined(int p, Clock::time_point now) {
   now_ = now;
-  if (state_ == State::Closed) {  // the wall is stopping: so does this process
+  if (closed_) {  // the wall is stopping: so does this process
     emit(ToProcess{p, shutdownCommand()});
-  } else if (state_ == State::Running) {
-    admitToJob(p);
-  } else {
-    log(members_.who(p) + " joined the wall");
-    if (state_ == State::Starting) waitingToJoinJob_.insert(p);
+    return take();
+  }
+  bool running = false;  // a job running takes it in (admitToJob); said otherwise
+  for (const auto& slot : slots_) running = running || slot->state == State::Running;
+  if (!running) log(members_.who(p) + " joined the wall");
+  for (Slot* slot : inOrder()) {
+    j_ = slot;
+    if (j_->state == State::Running)
+      admitToJob(p);
+    else if (j_->state == State::Starting)
+      j_->waitingToJoinJob.insert(p);
   }
   return take();
 }
 
 JobDesk::Actions JobDesk::lost(int p, const std::string& why, Clock::time_point now) {
   now_ = now;
-  Seat& seat = seats_[static_cast<size_t>(p)];
-  const bool inJob = state_ != State::Idle && state_ != State::Closed && seat.in && !seat.done;
-  const std::string line = "lost " + members_.who(p) +
-                           (inJob ? " after frame " + std::to_string(lastCredited_) : "") + ": " +
-                           why;
+  const auto inJob = [p](const Slot& slot) {
+    const Seat& seat = slot.seats[static_cast<size_t>(p)];
+    return slot.state != State::Idle && seat.in && !seat.done;
+  };
+  // The frame said is that of the oldest job it was in (with one job: the job's).
+  const Slot* in = nullptr;
+  for (const Slot* slot : inOrder())
+    if (!in && inJob(*slot)) in = slot;
+  const std::uint32_t frame = in ? in->lastCredited : shown().lastCredited;
+  const std::string line =
+      "lost " + members_.who(p) + (in ? " after frame " + std::to_string(frame) : "") + ": " + why;
   log(line);
   emit(Record{jsonLine(Json{{"event", "lost"},
                             {"process", p},
                             {"host", members_.member(p).host},
-                            {"frame", lastCredited_},
+                            {"frame", frame},
                             {"why", why}})});
-  waitingToJoinJob_.erase(p);
-  if (!inJob) return take();
-  ++processesLost_;
-  seat.done = true;
-  sendRoster(0, line);
-  if (state_ == State::Starting) maybeRun();
-  releaseWhatCan();
-  overIfAllDone();
+  for (Slot* slot : inOrder()) {
+    j_ = slot;
+    j_->waitingToJoinJob.erase(p);
+    if (!inJob(*j_)) continue;
+    ++j_->processesLost;
+    j_->seats[static_cast<size_t>(p)].done = true;
+    sendRoster(0, line);
+    if (j_->state == State::Starting) maybeRun();
+    releaseWhatCan();
+    overIfAllDone();
+  }
   return take();
 }
 
 JobDesk::Actions JobDesk::arrive(int p, std::uint64_t session, std::uint32_t frameId,
                                  const std::vector<std::int64_t>& values, Clock::time_point now) {
   now_ = now;
-  if (session != job_.session || (state_ != State::Running && state_ != State::Ending) ||
+  j_ = bySession(session);
+  if (!j_ || (j_->state != State::Running && j_->state != State::Ending) ||
       !participates(p, frameId))
     return take();
   // A process arrives at frame F once F - 1 was released; the head credits F - 1 right after
   // its own release. Anything else would open a barrier nobody else comes to.
   const std::uint64_t latest =
-      std::uint64_t{lastCredited_} + framesAheadFor(static_cast<int>(granted_));
-  if (p != 0 && (frameId <= lastCredited_ || frameId > latest)) {
+      std::uint64_t{j_->lastCredited} + framesAheadFor(static_cast<int>(j_->granted));
+  if (p != 0 && (frameId <= j_->lastCredited || frameId > latest)) {
     emit(Drop{p, "its swap barrier of frame " + std::to_string(frameId) +
-                     " is outside the frames in flight (" + std::to_string(lastCredited_ + 1) +
+                     " is outside the frames in flight (" + std::to_string(j_->lastCredited + 1) +
                      ".." + std::to_string(latest) + ")"});
     return take();
   }
-  if (!agreements_.arrive(p, frameId, values, now)) {
+  if (!j_->agreements.arrive(p, frameId, values, now)) {
     emit(Drop{p, "its swap barrier of frame " + std::to_string(frameId) + " has " +
                      std::to_string(values.size()) + " values, not the others' count"});
     return take();
@@ -338,8 +358,9 @@ JobDesk::Actions JobDesk::arrive(int p, std::uint64_t session, std::uint32_t fra
 JobDesk::Actions JobDesk::pixels(int p, std::uint64_t session, std::uint32_t frameId,
                                  std::vector<std::uint32_t> pixels, Clock::time_point now) {
   now_ = now;
-  if (session != job_.session || !participates(p, frameId)) return take();
-  agreements_.pixels(p, frameId, std::move(pixels));
+  j_ = bySession(session);
+  if (!j_ || !participates(p, frameId)) return take();
+  j_->agreements.pixels(p, frameId, std::move(pixels));
   releaseWhatCan();
   return take();
 }
@@ -348,26 +369,27 @@ JobDesk::Actions JobDesk::headPixels(std::uint64_t session, std::uint32_t frameI
                                      std::vector<std::uint32_t> pixels, Clock::time_point deadline,
                                      Clock::time_point now) {
   now_ = now;
-  if (session != job_.session) return take();
-  agreements_.headPixels(frameId, std::move(pixels), deadline);
+  j_ = bySession(session);
+  if (!j_) return take();
+  j_->agreements.headPixels(frameId, std::move(pixels), deadline);
   releaseWhatCan();
   return take();
 }
 
 JobDesk::Actions JobDesk::presented(std::uint64_t session, std::uint32_t frameId,
                                     std::int64_t completeNs) {
-  if (session != job_.session || (state_ != State::Running && state_ != State::Ending))
-    return take();
-  lastCredited_ = std::max(lastCredited_, frameId);
-  std::erase_if(pendingCaptures_, [&](std::uint32_t f) { return f <= lastCredited_; });
-  reply(job_.peer, Kind::Presented,
-        packControl(Kind::Presented, job_.session, frameId, completeNs));
+  j_ = bySession(session);
+  if (!j_ || (j_->state != State::Running && j_->state != State::Ending)) return take();
+  j_->lastCredited = std::max(j_->lastCredited, frameId);
+  std::erase_if(j_->pendingCaptures, [&](std::uint32_t f) { return f <= j_->lastCredited; });
+  reply(j_->job.peer, Kind::Presented,
+        packControl(Kind::Presented, j_->job.session, frameId, completeNs));
   return take();
 }
 
 JobDesk::Actions JobDesk::tick(Clock::time_point now) {
   now_ = now;
-  if (state_ == State::Closed) {
+  if (closed_) {
     // Every process said it got the shutdown, or a second passed (a process that did not hear
     // it stops once it misses the head): only then the head's own process stops.
     if (shutdownAcks_ == members_.liveMembers() || now > closedAt_ + std::chrono::seconds(1)) {
@@ -376,10 +398,14 @@ JobDesk::Actions JobDesk::tick(Clock::time_point now) {
     }
     return take();
   }
-  releaseWhatCan();
-  if (state_ == State::Running || state_ == State::Ending) dropOverdue();
-  if (state_ == State::Running && now - job_.lastHeard > s_.timeout)
-    endJob("no word from the job for " + durationText(s_.timeout));
+  // Each job on its own: one silent or slow holds up its own frames only.
+  for (std::size_t i = 0; i < slots_.size(); ++i) {
+    j_ = slots_[i].get();
+    releaseWhatCan();
+    if (j_->state == State::Running || j_->state == State::Ending) dropOverdue();
+    if (j_->state == State::Running && now - j_->job.lastHeard > s_.timeout)
+      endJob("no word from the job for " + durationText(s_.timeout));
+  }
   closeIfIdle();
   return take();
 }
@@ -387,7 +413,8 @@ JobDesk::Actions JobDesk::tick(Clock::time_point now) {
 JobDesk::Actions JobDesk::failed(const std::string& peer, const std::string& why,
                                  Clock::time_point now) {
   now_ = now;
-  if (peer == job_.peer) endJob(reason(why));
+  j_ = byPeer(peer);
+  if (j_) endJob(reason(why));
   std::erase_if(queue_, [&](const Job& queued) { return queued.peer == peer; });
   return take();
 }
@@ -401,17 +428,79 @@ JobDesk::Actions JobDesk::disconnected(const std::string& peer, Clock::time_poin
         " left the queue: its connection closed");
     queue_.erase(queued);
   }
-  const bool over = namedLastFrame_ && lastCredited_ >= *namedLastFrame_;
-  if (peer == job_.peer && !over) endJob("its connection closed");
+  j_ = byPeer(peer);
+  if (j_ && !(j_->namedLastFrame && j_->lastCredited >= *j_->namedLastFrame))
+    endJob("its connection closed");
   return take();
 }
 
 // ---- what goes out ----
 
 JobDesk::Actions JobDesk::take() {
+  removeEnded();
+  j_ = nullptr;
   Actions out;
   out.swap(out_);
   return out;
+}
+
+JobDesk::Slot* JobDesk::bySession(std::uint64_t session) const {
+  for (const auto& slot : slots_)
+    if (slot->state != State::Idle && slot->job.session == session) return slot.get();
+  return nullptr;
+}
+
+JobDesk::Slot* JobDesk::byPeer(const std::string& peer) const {
+  for (const auto& slot : slots_)
+    if (slot->state != State::Idle && slot->job.peer == peer) return slot.get();
+  return nullptr;
+}
+
+const JobDesk::Slot& JobDesk::shown() const {
+  const std::vector<Slot*> jobs = inOrder();
+  return jobs.empty() ? *ended_ : *jobs.back();
+}
+
+std::vector<JobDesk::Slot*> JobDesk::inOrder() const {
+  std::vector<Slot*> out;
+  for (const auto& slot : slots_)
+    if (slot->state != State::Idle) out.push_back(slot.get());
+  std::sort(out.begin(), out.end(),
+            [](const Slot* x, const Slot* y) { return x->order < y->order; });
+  return out;
+}
+
+void JobDesk::removeEnded() {
+  for (auto it = slots_.begin(); it != slots_.end();) {
+    if ((*it)->state != State::Idle) {
+      ++it;
+      continue;
+    }
+    ended_ = std::move(*it);
+    it = slots_.erase(it);
+  }
+}
+
+JobDesk::State JobDesk::state() const {
+  if (closed_) return State::Closed;
+  const std::vector<Slot*> jobs = inOrder();
+  return jobs.empty() ? State::Idle : jobs.back()->state;
+}
+
+std::vector<std::uint64_t> JobDesk::sessions() const {
+  std::vector<std::uint64_t> out;
+  for (const Slot* slot : inOrder()) out.push_back(slot->job.session);
+  return out;
+}
+
+JobDesk::State JobDesk::state(std::uint64_t session) const {
+  const Slot* slot = bySession(session);
+  return slot ? slot->state : State::Idle;
+}
+
+std::uint32_t JobDesk::lastCredited(std::uint64_t session) const {
+  const Slot* slot = bySession(session);
+  return slot ? slot->lastCredited : 0;
 }
 
 void JobDesk::log(std::string line, std::string oncePer) {
@@ -426,7 +515,7 @@ ServiceCommand JobDesk::command(Command kind, std::int64_t a, std::int64_t b,
                                 std::string text) const {
   ServiceCommand c;
   c.header.kind = kind;
-  c.header.session = job_.session;
+  c.header.session = j_->job.session;
   c.header.a = a;
   c.header.b = b;
   c.text = std::move(text);
@@ -434,13 +523,13 @@ ServiceCommand JobDesk::command(Command kind, std::int64_t a, std::int64_t b,
 }
 
 ServiceCommand JobDesk::startCommand(std::uint32_t firstFrame) const {
-  ServiceCommand c = command(Command::Start, firstFrame, 0, job_.hello.captureDir);
-  c.header.tileSize = job_.hello.tileSize;
-  c.header.renderRanks = job_.hello.renderRanks;
-  c.header.framesInFlight = granted_;
-  c.header.captureEvery = job_.hello.captureEvery;
-  c.header.codec = static_cast<std::uint32_t>(job_.hello.codec.codec);
-  const dfb::Region window = resolveWindow(*s_.layout, job_.hello.window);  // checked at hello
+  ServiceCommand c = command(Command::Start, firstFrame, 0, j_->job.hello.captureDir);
+  c.header.tileSize = j_->job.hello.tileSize;
+  c.header.renderRanks = j_->job.hello.renderRanks;
+  c.header.framesInFlight = j_->granted;
+  c.header.captureEvery = j_->job.hello.captureEvery;
+  c.header.codec = static_cast<std::uint32_t>(j_->job.hello.codec.codec);
+  const dfb::Region window = j_->window;
   c.header.windowX0 = window.x0;
   c.header.windowY0 = window.y0;
   c.header.windowX1 = window.x1;
@@ -451,7 +540,7 @@ ServiceCommand JobDesk::startCommand(std::uint32_t firstFrame) const {
 // To every process in the job that is not done with it.
 void JobDesk::toJob(const ServiceCommand& c) {
   for (int p = 0; p < members_.processCount(); ++p) {
-    const Seat& seat = seats_[static_cast<size_t>(p)];
+    const Seat& seat = j_->seats[static_cast<size_t>(p)];
     if (seat.in && !seat.done) emit(ToProcess{p, c});
   }
 }
@@ -459,7 +548,7 @@ void JobDesk::toJob(const ServiceCommand& c) {
 std::vector<DirectoryProcess> JobDesk::roster() const {
   std::vector<DirectoryProcess> out;
   for (int p = 0; p < members_.processCount(); ++p) {
-    const Seat& seat = seats_[static_cast<size_t>(p)];
+    const Seat& seat = j_->seats[static_cast<size_t>(p)];
     out.push_back({members_.member(p).endpoint,
                    members_.live(p) && seat.in && !seat.done && seat.fromFrame != kNotYet});
   }
@@ -467,131 +556,157 @@ std::vector<DirectoryProcess> JobDesk::roster() const {
 }
 
 void JobDesk::sendRoster(std::uint32_t fromFrame, const std::string& why) {
-  if (state_ != State::Running) return;  // a starting job gets the directory, which has it all
+  if (j_->state != State::Running) return;  // a starting job gets the directory, which has it all
   Roster r;
-  r.session = job_.session;
-  r.version = ++rosterVersion_;
+  r.session = j_->job.session;
+  r.version = ++j_->rosterVersion;
   r.fromFrame = fromFrame;
   r.processes = roster();
   r.why = why;
-  reply(job_.peer, Kind::Roster, packRoster(r));
+  reply(j_->job.peer, Kind::Roster, packRoster(r));
 }
 
 std::string JobDesk::busy() const {
-  return "busy: a job from " + peerText(job_.hello.host) + " is connected";
+  if (s_.maxJobs <= 1)
+    return "busy: a job from " + peerText(shown().job.hello.host) + " is connected";
+  std::string hosts;
+  const std::vector<Slot*> jobs = inOrder();
+  for (const Slot* slot : jobs)
+    hosts += (hosts.empty() ? "" : ", ") + peerText(slot->job.hello.host);
+  return "busy: " + std::to_string(jobs.size()) + " jobs are on the wall (from " + hosts + ")";
 }
 
 // ---- the job's life ----
 
 void JobDesk::startJob() {
-  job_.session = s_.newSession();
-  emit(Session{job_.session, false});
-  job_.started = now_;
-  failure_.clear();
-  namedLastFrame_.reset();
-  lastPresented_ = bytes_ = 0;
-  lastCredited_ = 0;
-  rosterVersion_ = 0;
-  processesLost_ = processesRejoined_ = 0;
-  agreements_.clear();
-  waitingToJoinJob_.clear();
-  pendingCaptures_.clear();
-  granted_ = std::min<std::uint32_t>(job_.hello.framesInFlight,
-                                     static_cast<std::uint32_t>(s_.framesInFlight));
-  state_ = State::Starting;
+  j_->job.session = s_.newSession();
+  j_->order = ++jobsStarted_;
+  j_->window = placeWindow(j_->job.hello);
+  emit(Session{j_->job.session, false});
+  j_->job.started = now_;
+  j_->failure.clear();
+  j_->namedLastFrame.reset();
+  j_->lastPresented = j_->bytes = 0;
+  j_->lastCredited = 0;
+  j_->rosterVersion = 0;
+  j_->processesLost = j_->processesRejoined = 0;
+  j_->agreements.clear();
+  j_->waitingToJoinJob.clear();
+  j_->pendingCaptures.clear();
+  j_->granted = std::min<std::uint32_t>(j_->job.hello.framesInFlight,
+                                        static_cast<std::uint32_t>(s_.framesInFlight));
+  j_->state = State::Starting;
   for (int p = 0; p < members_.processCount(); ++p)
-    seats_[static_cast<size_t>(p)] = {members_.live(p), false, false, 1};
+    j_->seats[static_cast<size_t>(p)] = {members_.live(p), false, false, 1};
   toJob(startCommand(1));
 }
 
+// A job that asks for the whole wall while others are on it gets the first display no other
+// job's window touches, if there is one, else the whole wall (on top). Any other window is the
+// one asked for (checked at hello), wherever the others are.
+dfb::Region JobDesk::placeWindow(const Hello& hello) const {
+  const dfb::Region asked = resolveWindow(*s_.layout, hello.window);
+  if (hello.window.kind != WindowRequest::Kind::Full) return asked;
+  std::vector<dfb::Region> taken;
+  for (const Slot* slot : inOrder())
+    if (slot != j_) taken.push_back(slot->window);
+  if (taken.empty()) return asked;
+  for (const Display& d : s_.layout->displays)
+    if (std::none_of(taken.begin(), taken.end(),
+                     [&](const dfb::Region& w) { return !dfb::intersect(w, d.rect).empty(); }))
+      return d.rect;
+  return asked;
+}
+
 bool JobDesk::allDone() const {
-  return std::none_of(seats_.begin(), seats_.end(),
+  return std::none_of(j_->seats.begin(), j_->seats.end(),
                       [](const Seat& seat) { return seat.in && !seat.done; });
 }
 
 void JobDesk::overIfAllDone() {
-  if ((state_ == State::Ending || state_ == State::Running) && allDone()) jobOver();
+  if ((j_->state == State::Ending || j_->state == State::Running) && allDone()) jobOver();
 }
 
 // The job is gone or broken: drop it everywhere.
 void JobDesk::endJob(const std::string& why) {
-  if (state_ != State::Running && state_ != State::Starting) return;
-  failure_ = why;
-  toJob(command(state_ == State::Starting ? Command::Cancel : Command::Abort, 0, 0, why));
-  reply(job_.peer, Kind::Ended, packText(Kind::Ended, job_.session, why));
-  state_ = State::Ending;
-  log("dropping the job from " + peerText(job_.hello.host) + ": " + why);
+  if (j_->state != State::Running && j_->state != State::Starting) return;
+  j_->failure = why;
+  toJob(command(j_->state == State::Starting ? Command::Cancel : Command::Abort, 0, 0, why));
+  reply(j_->job.peer, Kind::Ended, packText(Kind::Ended, j_->job.session, why));
+  j_->state = State::Ending;
+  log("dropping the job from " + peerText(j_->job.hello.host) + ": " + why);
   if (allDone()) jobOver();
 }
 
+// The seat of the job that ended goes to the first job still waiting.
 void JobDesk::nextJob() {
-  state_ = State::Idle;
+  j_->state = State::Idle;
   while (!queue_.empty() && !shuttingDown_) {
-    job_ = queue_.front();
+    j_->job = queue_.front();
     queue_.pop_front();
-    if (now_ - job_.lastHeard > s_.timeout) continue;  // it left the queue
-    log("taking the queued job from " + peerText(job_.hello.host));
+    if (now_ - j_->job.lastHeard > s_.timeout) continue;  // it left the queue
+    log("taking the queued job from " + peerText(j_->job.hello.host));
     startJob();
     return;
   }
 }
 
 void JobDesk::jobOver() {
-  const double seconds = std::chrono::duration<double>(now_ - job_.started).count();
-  log("the job from " + peerText(job_.hello.host) + " ended after frame " +
-      std::to_string(lastPresented_) + (failure_.empty() ? "" : " (" + failure_ + ")"));
-  emit(Record{jsonLine(Json{{"job", job_.session % 1000000007},
-                            {"host", job_.hello.host},
-                            {"render_ranks", job_.hello.renderRanks},
-                            {"codec", codecName(job_.hello.codec)},
-                            {"frames_presented", lastPresented_},
-                            {"wall_bytes_received", bytes_},
-                            {"processes_lost", processesLost_},
-                            {"processes_rejoined", processesRejoined_},
+  const double seconds = std::chrono::duration<double>(now_ - j_->job.started).count();
+  log("the job from " + peerText(j_->job.hello.host) + " ended after frame " +
+      std::to_string(j_->lastPresented) + (j_->failure.empty() ? "" : " (" + j_->failure + ")"));
+  emit(Record{jsonLine(Json{{"job", j_->job.session % 1000000007},
+                            {"host", j_->job.hello.host},
+                            {"render_ranks", j_->job.hello.renderRanks},
+                            {"codec", codecName(j_->job.hello.codec)},
+                            {"frames_presented", j_->lastPresented},
+                            {"wall_bytes_received", j_->bytes},
+                            {"processes_lost", j_->processesLost},
+                            {"processes_rejoined", j_->processesRejoined},
                             {"seconds", std::round(seconds * 1e6) / 1e6},
-                            {"ended", failure_.empty() ? "last frame" : failure_}})});
-  agreements_.clear();
-  emit(Session{0, true});
+                            {"ended", j_->failure.empty() ? "last frame" : j_->failure}})});
+  j_->agreements.clear();
+  emit(Session{j_->job.session, true});
   nextJob();
 }
 
 // Every process in the job answered Start: the job gets its directory (or the refusal).
 void JobDesk::maybeRun() {
-  for (const Seat& seat : seats_)
+  for (const Seat& seat : j_->seats)
     if (seat.in && !seat.ready && !seat.done) return;
-  if (!failure_.empty()) {
+  if (!j_->failure.empty()) {
     toJob(command(Command::Cancel));
-    reply(job_.peer, Kind::Refused, packText(Kind::Refused, 0, failure_));
-    log("refused the job from " + peerText(job_.hello.host) + ": " + failure_);
-    state_ = State::Ending;
+    reply(j_->job.peer, Kind::Refused, packText(Kind::Refused, 0, j_->failure));
+    log("refused the job from " + peerText(j_->job.hello.host) + ": " + j_->failure);
+    j_->state = State::Ending;
     if (allDone()) jobOver();
     return;
   }
   Directory d;
-  d.session = job_.session;
-  d.window = resolveWindow(*s_.layout, job_.hello.window);
+  d.session = j_->job.session;
+  d.window = j_->window;
   d.layout = windowLayout(*s_.layout, d.window);
   d.processes = roster();
-  d.framesInFlight = granted_;
+  d.framesInFlight = j_->granted;
   d.timeoutMs = static_cast<std::uint32_t>(s_.timeout.count());
   d.rosterVersion = 0;
-  reply(job_.peer, Kind::Directory, packDirectory(d));
-  state_ = State::Running;
+  reply(j_->job.peer, Kind::Directory, packDirectory(d));
+  j_->state = State::Running;
   // A process none of whose displays the window touches waits for this before its first swap
   // barrier (it has no pieces to wait for): one it came to before the job ran would be lost.
   for (int p = 0; p < members_.processCount(); ++p) {
-    const Seat& seat = seats_[static_cast<size_t>(p)];
+    const Seat& seat = j_->seats[static_cast<size_t>(p)];
     if (seat.in && !seat.done && d.layout.displaysOfProcess(p).empty())
       emit(ToProcess{p, command(Command::FirstFrame, 1)});
   }
-  for (int p : waitingToJoinJob_) admitToJob(p);
-  waitingToJoinJob_.clear();
+  for (int p : j_->waitingToJoinJob) admitToJob(p);
+  j_->waitingToJoinJob.clear();
 }
 
 void JobDesk::closeIfIdle() {
-  if (!shuttingDown_ || state_ != State::Idle) return;
+  if (!shuttingDown_ || closed_ || state() != State::Idle) return;
   for (int p = 1; p < members_.processCount(); ++p) emit(ToProcess{p, shutdownCommand()});
-  state_ = State::Closed;
+  closed_ = true;
   closedAt_ = now_;
   emit(Closing{});
 }
@@ -601,7 +716,7 @@ void JobDesk::closeIfIdle() {
 // It takes part from the frame named once it is Ready (taking pieces): see joinedJob.
 void JobDesk::admitToJob(int p) {
   if (!members_.live(p)) return;
-  seats_[static_cast<size_t>(p)] = {true, false, false, kNotYet};
+  j_->seats[static_cast<size_t>(p)] = {true, false, false, kNotYet};
   emit(ToProcess{p, startCommand(0)});
 }
 
@@ -609,10 +724,10 @@ void JobDesk::admitToJob(int p) {
 // granted may have started without it; the next credit (sent after the roster, on the same
 // socket) is the first that lets the job start a later one.
 void JobDesk::joinedJob(int p) {
-  const std::uint32_t first = lastCredited_ + granted_ + 1;
-  seats_[static_cast<size_t>(p)].fromFrame = first;
+  const std::uint32_t first = j_->lastCredited + j_->granted + 1;
+  j_->seats[static_cast<size_t>(p)].fromFrame = first;
   emit(ToProcess{p, command(Command::FirstFrame, first)});
-  ++processesRejoined_;
+  ++j_->processesRejoined;
   const std::string line = members_.who(p) +
                            " is back in the wall; it shows the job's frames from " +
                            std::to_string(first);
@@ -627,7 +742,7 @@ void JobDesk::joinedJob(int p) {
 // ---- barriers and gathers ----
 
 bool JobDesk::participates(int p, std::uint32_t frameId) const {
-  const Seat& seat = seats_[static_cast<size_t>(p)];
+  const Seat& seat = j_->seats[static_cast<size_t>(p)];
   return seat.in && !seat.done && seat.fromFrame <= frameId && members_.live(p);
 }
 
@@ -637,9 +752,9 @@ bool JobDesk::participates(int p, std::uint32_t frameId) const {
 void JobDesk::dropOverdue() {
   // Only while the job is heard from: pieces that stopped coming because the job died leave a
   // barrier open too, and that is the job's timeout's to end (every process gives the frame up).
-  if (now_ - job_.lastHeard > s_.timeout / 2) return;
+  if (now_ - j_->job.lastHeard > s_.timeout / 2) return;
   const auto takesPart = [this](int p, std::uint32_t frameId) { return participates(p, frameId); };
-  for (const FrameAgreements::Overdue& o : agreements_.overdue(takesPart, now_ - s_.timeout))
+  for (const FrameAgreements::Overdue& o : j_->agreements.overdue(takesPart, now_ - s_.timeout))
     for (int p : o.missing)
       if (p != 0)
         emit(Drop{p, "it did not come to the swap barrier of frame " + std::to_string(o.frameId) +
@@ -649,10 +764,10 @@ void JobDesk::dropOverdue() {
 // Barriers and gathers that nobody holds up any more go back to their processes.
 void JobDesk::releaseWhatCan() {
   const auto takesPart = [this](int p, std::uint32_t frameId) { return participates(p, frameId); };
-  for (FrameAgreements::Release& r : agreements_.complete(takesPart))
-    for (int p : r.processes) emit(Release{p, job_.session, r.frameId, r.values});
-  for (FrameAgreements::Gathered& g : agreements_.gathered(takesPart, now_))
-    emit(Gathered{job_.session, g.frameId, std::move(g.pixels)});
+  for (FrameAgreements::Release& r : j_->agreements.complete(takesPart))
+    for (int p : r.processes) emit(Release{p, j_->job.session, r.frameId, r.values});
+  for (FrameAgreements::Gathered& g : j_->agreements.gathered(takesPart, now_))
+    emit(Gathered{j_->job.session, g.frameId, std::move(g.pixels)});
 }
 
 }  // namespace wall::service

@@ -3,20 +3,21 @@
 // socket, thread or clock of its own: the desk decodes each message and hands it in with the
 // time, and carries out the actions it gets back, in order. Testable in process.
 //
-// One job at a time: a hello with the wrong token is refused, a second job is refused as busy or
-// queued (`wait`, at most kMaxQueued), and queued jobs start in order. A job starts when every
-// process in the wall answered Start (its node attached), gets its directory, sends keepalives,
-// captures and goodbye (turned into commands to the processes), is credited each presented frame
-// and ends with every process's Done, a failure, its connection closing (at once), or the timeout
-// of its silence; then the next.
-// Each process has a seat in the job (in it, ready, done, first frame): a process lost is done
-// and the job gets a roster without it; one that joins during the job is admitted from the first
-// frame the job cannot have started without it (the last credited frame + frames in flight + 1).
-// The job's swap barriers and capture gathers wait for the processes taking part in each frame
-// (FrameAgreements), for the timeout at most: a process that has not arrived at a barrier the
-// timeout after the first did, while the job is heard from, is dropped like a silent one, so one
-// that beats but never arrives cannot hold every frame. A barrier for a frame outside the frames in
-// flight drops its process.
+// Up to Setup::maxJobs jobs at a time, each with its own seats, credits, agreements, captures and
+// timeout (a job silent or slow holds up only itself): a hello with the wrong token is refused, a
+// job beyond them is refused as busy or queued (`wait`, at most kMaxQueued), and queued jobs
+// start in order as jobs leave. An event for a job finds it by its session or its connection. A job
+// starts when every process in the wall answered Start (its node attached), gets its directory,
+// sends keepalives, captures and goodbye (turned into commands to the processes), is credited each
+// presented frame and ends with every process's Done, a failure, its connection closing (at once),
+// or the timeout of its silence; then the next. Each process has a seat in the job (in it, ready,
+// done, first frame): a process lost is done and the job gets a roster without it; one that joins
+// during the job is admitted from the first frame the job cannot have started without it (the last
+// credited frame + frames in flight + 1). The job's swap barriers and capture gathers wait for the
+// processes taking part in each frame (FrameAgreements), for the timeout at most: a process that
+// has not arrived at a barrier the timeout after the first did, while the job is heard from, is
+// dropped like a silent one, so one that beats but never arrives cannot hold every frame. A barrier
+// for a frame outside the frames in flight drops its process.
 //
 // What a job may ask for is bounded: one job per connection (a second hello from it is refused),
 // capture requests for frames near the credited one only, at most kMaxPendingCaptures not yet
@@ -25,6 +26,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <set>
 #include <string>
@@ -57,6 +59,7 @@ class JobDesk {
     int framesInFlight = 2;  // the most a job is granted
     // A fresh, non-zero session id for each job.
     std::function<std::uint64_t()> newSession;
+    std::size_t maxJobs = 1;  // jobs on the wall at once (each in its window)
   };
 
   // A message to a connection on the directory socket (a job, or a refused stranger).
@@ -98,7 +101,8 @@ class JobDesk {
   struct Record {
     std::string json;
   };
-  // The job the head's process waits for is now `session` (0: none); `ended`: a job ended.
+  // Job `session` is on the wall now (the head's process waits for its barriers), or it ended
+  // (`ended`: it is not any more).
   struct Session {
     std::uint64_t session = 0;
     bool ended = false;
@@ -154,13 +158,21 @@ class JobDesk {
   // end it as usual.
   Actions disconnected(const std::string& peer, Clock::time_point now);
 
-  State state() const { return state_; }
-  std::uint64_t session() const { return job_.session; }
-  // The connection of the job connected now (or last).
-  const std::string& peer() const { return job_.peer; }
+  // The wall's state: Closed, Idle without a job, else the state of the newest job.
+  State state() const;
+  // The newest job (or the last that ended): its session, connection, credits, captures.
+  std::uint64_t session() const { return shown().job.session; }
+  const std::string& peer() const { return shown().job.peer; }
   std::size_t queued() const { return queue_.size(); }
-  std::uint32_t lastCredited() const { return lastCredited_; }
-  std::size_t pendingCaptures() const { return pendingCaptures_.size(); }
+  // A job on the wall (starting, running or ending) has this connection.
+  bool connected(const std::string& peer) const { return byPeer(peer) != nullptr; }
+  std::uint32_t lastCredited() const { return shown().lastCredited; }
+  std::size_t pendingCaptures() const { return shown().pendingCaptures.size(); }
+  // The jobs on the wall now (Starting, Running or Ending), oldest first; one of them by session
+  // (Idle: none such on the wall).
+  std::vector<std::uint64_t> sessions() const;
+  State state(std::uint64_t session) const;
+  std::uint32_t lastCredited(std::uint64_t session) const;
 
  private:
   struct Job {
@@ -202,6 +214,7 @@ class JobDesk {
   std::string busy() const;
 
   void startJob();
+  dfb::Region placeWindow(const Hello& hello) const;
   bool allDone() const;
   void endJob(const std::string& why);
   void nextJob();
@@ -214,26 +227,45 @@ class JobDesk {
   void releaseWhatCan();
   void closeIfIdle();
 
+  // One job on the wall and all that is its own (up to Setup::maxJobs side by side).
+  struct Slot {
+    explicit Slot(int processes) : seats(static_cast<size_t>(processes)), agreements(processes) {}
+    State state = State::Idle;
+    std::uint64_t order = 0;  // when it started among the wall's jobs (z-order: newest on top)
+    dfb::Region window;       // on the wall's canvas: asked for, or placed (placeWindow)
+    Job job;
+    std::vector<Seat> seats;
+    std::set<int> waitingToJoinJob;  // joined while the job was starting
+    // The frames the job's capture requests are taken at, until they are presented.
+    std::deque<std::uint32_t> pendingCaptures;
+    std::string failure;
+    std::optional<std::uint32_t> namedLastFrame;  // from the job's goodbye
+    std::int64_t lastPresented = 0, bytes = 0;
+    std::uint32_t lastCredited = 0, granted = 2, rosterVersion = 0;
+    int processesLost = 0, processesRejoined = 0;
+    FrameAgreements agreements;
+  };
+  // The job on the wall with this session / connection (none: nullptr).
+  Slot* bySession(std::uint64_t session) const;
+  Slot* byPeer(const std::string& peer) const;
+  const Slot& shown() const;
+  // The jobs on the wall (not Idle), oldest first.
+  std::vector<Slot*> inOrder() const;
+  // Jobs that ended leave the wall (the last one is kept for the accessors).
+  void removeEnded();
+
   Setup s_;
   const Membership& members_;
   Clock::time_point now_;
   Actions out_;
-  State state_ = State::Idle;
-  Job job_;
+  std::vector<std::unique_ptr<Slot>> slots_;  // a queued job takes the seat of the one that left
+  std::unique_ptr<Slot> ended_;               // the last job that left the wall
+  Slot* j_ = nullptr;                         // the job the event at hand is for
   std::deque<Job> queue_;
-  std::vector<Seat> seats_;
-  std::set<int> waitingToJoinJob_;  // joined while the job was starting
-  // The frames the job's capture requests are taken at, until they are presented.
-  std::deque<std::uint32_t> pendingCaptures_;
-  std::string failure_;
-  std::optional<std::uint32_t> namedLastFrame_;  // from the job's goodbye
-  std::int64_t lastPresented_ = 0, bytes_ = 0;
-  std::uint32_t lastCredited_ = 0, granted_ = 2, rosterVersion_ = 0;
-  int processesLost_ = 0, processesRejoined_ = 0;
-  bool shuttingDown_ = false;
+  std::uint64_t jobsStarted_ = 0;
+  bool shuttingDown_ = false, closed_ = false;
   int shutdownAcks_ = 0;  // members that confirmed the shutdown (State::Closed)
   Clock::time_point closedAt_;
-  FrameAgreements agreements_;
 };
 
 }  // namespace wall::service

@@ -36,25 +36,29 @@ PieceReceiver::PieceReceiver(const std::string& bindEndpoint, const Credentials&
 }
 
 PieceReceiver::~PieceReceiver() {
-  detach();
+  std::vector<std::uint64_t> sessions;
+  {
+    std::lock_guard lock(mutex_);
+    for (const auto& [session, attached] : attached_) sessions.push_back(session);
+  }
+  for (const std::uint64_t session : sessions) detach(session);
   stop_ = true;
   thread_.join();
 }
 
 void PieceReceiver::attach(std::uint64_t session, Codec codec, int renderRanks, WallNode* node) {
   std::lock_guard lock(mutex_);
-  session_ = session;
-  codec_ = codec;
-  renderRanks_ = renderRanks;
-  node_ = node;
+  attached_[session] = {codec, renderRanks, node, 0};
   logged_.clear();
 }
 
-void PieceReceiver::detach() {
+void PieceReceiver::detach(std::uint64_t session) {
   std::unique_lock lock(mutex_);
-  session_ = 0;
-  node_ = nullptr;
-  idle_.wait(lock, [&] { return inFlight_ == 0; });
+  const auto it = attached_.find(session);
+  if (it == attached_.end()) return;
+  it->second.node = nullptr;  // no new batch goes to it
+  idle_.wait(lock, [&] { return it->second.inFlight == 0; });
+  attached_.erase(it);
 }
 
 void PieceReceiver::logOnce(const std::string& peer, const std::string& what) {
@@ -106,21 +110,20 @@ void PieceReceiver::handle(std::string peer, zmq::message_t message) {
   int renderRanks = 0;
   {
     std::lock_guard lock(mutex_);
-    if (session_ == 0 || session != session_) {
-      node = nullptr;
-    } else {
-      node = node_;
-      codec = codec_;
-      renderRanks = renderRanks_;
-      ++inFlight_;
+    const auto it = session == 0 ? attached_.end() : attached_.find(session);
+    if (it != attached_.end() && it->second.node) {
+      node = it->second.node;
+      codec = it->second.codec;
+      renderRanks = it->second.renderRanks;
+      ++it->second.inFlight;
     }
   }
   if (!node) {
-    logOnce(peer, "not of the connected job's session");
+    logOnce(peer, "not of a connected job's session");
     return;
   }
   auto work = std::make_shared<zmq::message_t>(std::move(message));
-  arena_.enqueue([this, work, node, codec, renderRanks, peer] {
+  arena_.enqueue([this, work, session, node, codec, renderRanks, peer] {
     const auto* bytes = static_cast<const std::byte*>(work->data());
     std::vector<BatchPiece> pieces;
     std::string sender = "connection " + peer;
@@ -149,7 +152,8 @@ void PieceReceiver::handle(std::string peer, zmq::message_t message) {
       logOnce(peer, e.what());
     }
     std::lock_guard lock(mutex_);
-    if (--inFlight_ == 0) idle_.notify_all();
+    // Still there: detach() waits for this before it erases the session.
+    if (--attached_.at(session).inFlight == 0) idle_.notify_all();
   });
 }
 

@@ -1,7 +1,8 @@
 #pragma once
-// A service wall process's piece socket: every render rank of the connected job sends it the
+// A service wall process's piece socket: every render rank of each connected job sends it the
 // batches of this process's displays (wall/service/protocol/Protocol.h). One thread receives;
-// batches of the attached session are decoded and handed to the wall node (WallNode::receivePiece)
+// batches of an attached session (one per job on the wall; each batch names its session) are
+// decoded and handed to that job's wall node (WallNode::receivePiece)
 // on a TBB arena, several at once, as the messenger does with MPI pieces. Anything else — another
 // session's batch, a malformed message, a stranger — is dropped and logged (one line per peer
 // connection and kind of problem), never an error of the wall.
@@ -9,6 +10,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <set>
 #include <string>
@@ -38,10 +40,11 @@ class PieceReceiver {
   int port() const { return port_; }
 
   // From now on batches of `session` go to `node`: their codec must be `codec`, their render
-  // rank below `renderRanks`.
+  // rank below `renderRanks`. Other sessions attached stay so.
   void attach(std::uint64_t session, Codec codec, int renderRanks, WallNode* node);
-  // No batch reaches the node any more once this returns (it waits for those being decoded).
-  void detach();
+  // No batch of `session` reaches its node any more once this returns (it waits for those being
+  // decoded).
+  void detach(std::uint64_t session);
 
  private:
   void run();
@@ -56,12 +59,14 @@ class PieceReceiver {
   tbb::task_arena arena_;
   std::mutex mutex_;
   std::condition_variable idle_;
-  std::uint64_t session_ = 0;
-  Codec codec_ = Codec::Raw;
-  int renderRanks_ = 0;
-  WallNode* node_ = nullptr;
-  int inFlight_ = 0;
-  std::set<std::string> logged_;  // peer + problem, bounded
+  struct Attached {
+    Codec codec = Codec::Raw;
+    int renderRanks = 0;
+    WallNode* node = nullptr;
+    int inFlight = 0;  // batches being decoded
+  };
+  std::map<std::uint64_t, Attached> attached_;  // by session
+  std::set<std::string> logged_;                // peer + problem, bounded
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };

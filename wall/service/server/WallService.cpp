@@ -1,9 +1,12 @@
 #include "wall/service/server/WallService.h"
 
 #include <unistd.h>
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <filesystem>
+#include <list>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -14,6 +17,7 @@
 #include "wall/display/WallCaptures.h"
 #include "wall/display/WallNode.h"
 #include "wall/display/WindowPresenter.h"
+#include "wall/display/WindowStack.h"
 #include "wall/layout/Window.h"
 #include "wall/service/protocol/LinkMessages.h"
 #include "wall/service/protocol/Zmq.h"
@@ -47,13 +51,21 @@ struct WallService::Impl {
   std::unique_ptr<WallCaptures> wallCaptures;  // serve --capture
   std::uint64_t wallFrames = 0;                // presented, over every job (PresentReport)
 
-  // Commands for the main thread; the node of the job in progress for the link's thread.
+  // Commands for the main thread; the nodes of the jobs in progress, by session, for the link's
+  // thread.
   std::mutex mutex;
   std::condition_variable commanded;
   std::deque<ServiceCommand> commands;
-  WallNode* node = nullptr;
-  std::uint64_t nodeSession = 0;
+  std::map<std::uint64_t, WallNode*> nodes;
   bool linkLost = false;
+  // Several jobs at once (maxJobs > 1): each display's composition, and each job's thread (done:
+  // it returned, to be joined).
+  std::vector<std::unique_ptr<WindowStack>> stacks;
+  struct JobThread {
+    std::thread thread;
+    std::shared_ptr<std::atomic<bool>> done;
+  };
+  std::list<JobThread> jobThreads;
 
   Impl(const Layout& l, std::vector<Presenter*> p, ServiceOptions o)
       : layout(l), presenters(std::move(p)), options(std::move(o)) {}
@@ -65,12 +77,16 @@ struct WallService::Impl {
   void lost(const std::string& why);
   void showIdle(const std::string& status);
   void runJob(const ServiceCommand& start);
+  void startJobThread(const ServiceCommand& start);
+  // Joins the job threads that returned (all: waits for every one).
+  void reapJobs(bool all);
 };
 
 void WallService::Impl::incoming(const ServiceCommand& c) {
   const CommandHeader& h = c.header;
   std::lock_guard lock(mutex);
-  if (node && h.session == nodeSession) {
+  if (const auto found = nodes.find(h.session); found != nodes.end()) {
+    WallNode* node = found->second;
     switch (h.kind) {
       case Command::Cancel:
         node->stopAfter(0);
@@ -104,7 +120,7 @@ void WallService::Impl::incoming(const ServiceCommand& c) {
 // barrier throws), and the process shows that it is out of the wall until it joined again.
 void WallService::Impl::lost(const std::string& why) {
   std::lock_guard lock(mutex);
-  if (node) node->abort("lost the wall's head: " + why);
+  for (const auto& [session, node] : nodes) node->abort("lost the wall's head: " + why);
   commands.clear();
   linkLost = true;
   commanded.notify_all();
@@ -269,8 +285,21 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   const bool whole = window == dfb::Region{0, 0, layout.canvasWidth, layout.canvasHeight};
   const Layout seen = whole ? Layout{} : windowLayout(layout, window);
   std::vector<std::unique_ptr<WindowPresenter>> parts;
+  std::vector<std::unique_ptr<Presenter>> layers;  // several jobs: this job's on each display
   std::vector<Presenter*> jobPresenters = presenters;
-  if (!whole) {
+  if (!stacks.empty()) {
+    // On top of the windows there (newest on top); removed when the job ends (layers go first).
+    jobPresenters.clear();
+    const std::vector<int> ours = layout.displaysOfProcess(process);
+    for (size_t i = 0; i < ours.size(); ++i) {
+      const Display& d = layout.displays[static_cast<size_t>(ours[i])];
+      const dfb::Region part = dfb::intersect(d.rect, window);
+      if (part.empty()) continue;
+      layers.push_back(stacks[i]->add(
+          {part.x0 - d.rect.x0, part.y0 - d.rect.y0, part.x1 - d.rect.x0, part.y1 - d.rect.y0}));
+      jobPresenters.push_back(layers.back().get());
+    }
+  } else if (!whole) {
     jobPresenters.clear();
     const std::vector<int> ours = layout.displaysOfProcess(process);
     for (size_t i = 0; i < ours.size(); ++i) {
@@ -297,8 +326,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
     WallNode job(whole ? layout : seen, peers, jobPresenters, o);
     {
       std::lock_guard lock(mutex);
-      node = &job;
-      nodeSession = session;
+      nodes[session] = &job;
     }
     receiver->attach(session, static_cast<Codec>(start.header.codec),
                      static_cast<int>(start.header.renderRanks), &job);
@@ -343,11 +371,11 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
       if (failure.empty()) failure = e.what();
       log("gave the job up: " + failure);
     }
-    receiver->detach();
+    receiver->detach(session);
     std::lock_guard lock(mutex);
-    node = nullptr;
-    nodeSession = 0;
+    nodes.erase(session);
   }
+  layers.clear();  // the job's windows leave the displays at once
   answer.header.kind = Command::Done;
   answer.header.a = lastPresented;
   answer.header.b = bytes;
@@ -355,8 +383,48 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   head->toHead(answer, epoch);
 }
 
+// Several jobs at once: each job's loop on its own thread, so a Start of the next comes through
+// while others run.
+void WallService::Impl::startJobThread(const ServiceCommand& start) {
+  auto done = std::make_shared<std::atomic<bool>>(false);
+  std::thread thread([this, start, done] {
+    try {
+      runJob(start);
+    } catch (const std::exception& e) {
+      log(std::string("a job's loop failed: ") + e.what());
+    }
+    *done = true;
+    commanded.notify_all();
+  });
+  jobThreads.push_back({std::move(thread), std::move(done)});
+}
+
+void WallService::Impl::reapJobs(bool all) {
+  for (auto it = jobThreads.begin(); it != jobThreads.end();) {
+    if (!all && !*it->done) {
+      ++it;
+      continue;
+    }
+    it->thread.join();
+    it = jobThreads.erase(it);
+  }
+}
+
 void WallService::run() {
   Impl& m = *impl_;
+  if (m.options.maxJobs > 1 && m.stacks.empty())
+    for (size_t i = 0; i < m.presenters.size(); ++i) {
+      const Display& d =
+          m.layout.displays[static_cast<size_t>(m.layout.displaysOfProcess(m.process)[i])];
+      m.stacks.push_back(std::make_unique<WindowStack>(*m.presenters[i], d.rect.width(),
+                                                       d.rect.height(), m.options.background));
+    }
+  // Every job's thread ends before this returns (the desk ends the jobs before its shutdown; a
+  // lost head aborts them).
+  struct Joiner {
+    Impl& m;
+    ~Joiner() { m.reapJobs(true); }
+  } joiner{m};
   bool idleShown = false, wasJoined = true, asked = false;
   while (true) {
     std::optional<ServiceCommand> command;
@@ -378,7 +446,12 @@ void WallService::run() {
     const bool joined = !m.link || m.link->joined();
     // Asked to stop, this process waits for the head's shutdown; without a head there is none.
     if (asked && !joined) return;
-    if (!idleShown || lostNow || joined != wasJoined) {
+    if (!m.jobThreads.empty()) {
+      const std::size_t before = m.jobThreads.size();
+      m.reapJobs(false);
+      if (m.jobThreads.empty() && before > 0) idleShown = false;  // the wall's last job ended
+    }
+    if (m.jobThreads.empty() && (!idleShown || lostNow || joined != wasJoined)) {
       m.showIdle(joined ? "waiting for a render job"
                         : "not in the wall: joining the head at " + m.address + " again");
       idleShown = true;
@@ -400,7 +473,9 @@ void WallService::run() {
     }
     if (!command) continue;
     if (command->header.kind == Command::Shutdown) break;
-    if (command->header.kind == Command::Start) {
+    if (command->header.kind == Command::Start && m.options.maxJobs > 1) {
+      m.startJobThread(*command);
+    } else if (command->header.kind == Command::Start) {
       m.runJob(*command);
       if (m.link && !m.link->joined()) idleShown = false;  // it left the job by losing the head
     }

@@ -50,6 +50,9 @@ struct ServiceOptions {
   // What a display shows where no job's window covers it (RGBA8 as in Image; --background,
   // default black): see docs/service.md, "A job in a window".
   std::uint32_t background = 0xff000000u;
+  // Jobs on the wall at once, each in its window (--max-jobs): above 1, each job runs on its own
+  // thread of every process and the displays compose their windows (wall/display/WindowStack.h).
+  std::size_t maxJobs = 1;
   // A stop asked of a process other than the head (a signal, a closed window) makes it leave
   // the wall alone (true: a process started on its own) or stop the whole wall (false).
   bool leaveAlone = false;

@@ -1,0 +1,108 @@
+#!/usr/bin/env bash
+# Several jobs on one wall at once, each in its window (docs/service.md, "Several jobs at once").
+#   multi_job_test.sh LAYOUT (the 2x2 wall)
+# One `dfbwall serve --max-jobs 2 --background "#000000"`; two jobs of the pattern renderer in
+# overlapping windows across display borders, running at the same time:
+#  - each job's captures (its window's part of each display) equal the one-process render of its
+#    window, byte for byte, though the other job's window covers part of it on the displays;
+#  - a third job is refused busy while both run;
+#  - kill -9 of a rank of one job: the other keeps presenting new frames (well within the
+#    timeout that would end the dead one) and ends as usual.
+# Needs DFBWALL, COMPARE and MPIEXEC in the environment.
+set -euo pipefail
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+work=$(mktemp -d)
+serve="" a="" b=""
+cleanup() {
+  # mpirun and its ranks (killed alone it would leave them running).
+  for p in $a $b $serve; do kill -9 $(pgrep -P "$p") "$p" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  [ -n "${KEEP:-}" ] || rm -rf "$work"
+}
+trap cleanup EXIT
+fail() {
+  echo "FAIL: $*"
+  for f in serve.out serve.err a.out b.out c.out; do echo "--- $f:"; cat "$work/$f" 2>/dev/null || true; done
+  exit 1
+}
+mpi() { "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 "$@"; }
+processes() { "$COMPARE" --info "$1" | cut -d' ' -f1; }
+scale=${DFBWALL_TIME_SCALE:-1}
+timeout=$((8 * scale))
+# newest DIR DISPLAY: the newest captured frame's number (0: none yet).
+newest() {
+  local f
+  f=$(ls "$1/$2" 2>/dev/null | grep -E '^frame-[0-9]+\.png$' | sort | tail -1)
+  [ -n "$f" ] || { echo 0; return; }
+  f=${f#frame-}; echo $((10#${f%.png}))
+}
+# until_frame DIR DISPLAY N SECONDS: waits until frame N (or later) of DIR is captured.
+until_frame() {
+  for _ in $(seq $(($4 * 10))); do [ "$(newest "$1" "$2")" -ge "$3" ] && return 0; sleep 0.1; done
+  return 1
+}
+
+layout=$1
+port=$((20000 + $$ % 20000))
+"$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
+  -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" \
+  --offscreen --timeout "$timeout" --capture-root "$work" --max-jobs 2 \
+  --background "#000000" >"$work/serve.out" 2>"$work/serve.err" &
+serve=$!
+for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
+grep -q "wall service on 127.0.0.1:$port" "$work/serve.out" || fail "serve did not start"
+
+# The one-process renders of both windows at frame 10.
+mpi -np 1 "$DFBWALL" --renderer pattern --size 250x170 --frames 10 --quiet \
+  --image "$work/ref-a.png" || fail "reference a"
+mpi -np 1 "$DFBWALL" --renderer pattern --size 200x150 --frames 10 --quiet \
+  --image "$work/ref-b.png" || fail "reference b"
+
+# Job a: 90..340 x 70..240, all four displays; job b: 20..220 x 20..170, over a's top-left.
+window_a=90,70,250,170 window_b=20,20,200,150
+"$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
+  -np 2 "$DFBWALL" --connect "127.0.0.1:$port" --window "$window_a" --renderer pattern \
+  --frames 100000 --capture-every 10 --quiet --timeout 30 --capture "$work/a" \
+  >"$work/a.out" 2>&1 &
+a=$!
+until_frame "$work/a" r1c1 10 $((20 * scale)) || fail "job a presents no frame"
+"$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
+  -np 2 "$DFBWALL" --connect "127.0.0.1:$port" --window "$window_b" --renderer pattern \
+  --frames 100000 --capture-every 10 --quiet --timeout 30 --capture "$work/b" \
+  >"$work/b.out" 2>&1 &
+b=$!
+until_frame "$work/b" r0c0 10 $((20 * scale)) || fail "job b presents no frame while a runs"
+kill -0 "$a" 2>/dev/null || fail "job a ended when b came"
+
+# A third job: busy.
+if mpi -np 1 "$DFBWALL" --connect "127.0.0.1:$port" --renderer pattern --frames 1 --quiet \
+  --timeout 30 >"$work/c.out" 2>&1; then
+  fail "a third job was taken"
+fi
+grep -q "busy: 2 jobs are on the wall" "$work/c.out" || fail "the third job was not told busy"
+
+# Each job's captures: its window's part, equal to its one-process render.
+"$COMPARE" --window "$window_a" "$layout" "$work/a" "$work/ref-a.png" 10 || fail "job a's captures"
+"$COMPARE" --window "$window_b" "$layout" "$work/b" "$work/ref-b.png" 10 || fail "job b's captures"
+
+# kill -9 of one of a's ranks: b goes on presenting, well within the timeout.
+rank=$(pgrep -P "$a" -f dfbwall | head -1)
+[ -n "$rank" ] || fail "no rank of job a"
+kill -9 "$rank"
+before=$(newest "$work/b" r0c0)
+until_frame "$work/b" r0c0 $((before + 20)) $((timeout / 2)) ||
+  fail "job b froze after a's rank died (frame $before, then $(newest "$work/b" r0c0))"
+kill -0 "$b" 2>/dev/null || fail "job b ended when a died"
+after=$(newest "$work/b" r0c0)
+# a's mpirun ends its other rank; the wall's stop ends b (told so: it exits non-zero).
+wait "$a" 2>/dev/null || true
+a=""
+kill -USR1 "$serve"
+for _ in $(seq $((100 * scale))); do kill -0 "$serve" 2>/dev/null || break; sleep 0.1; done
+kill -0 "$serve" 2>/dev/null && fail "serve did not stop on SIGUSR1"
+wait "$serve" || fail "serve exited non-zero after SIGUSR1"
+serve=""
+if wait "$b"; then fail "job b did not hear that the wall stopped"; fi
+b=""
+grep -q "the wall is shutting down" "$work/b.out" || fail "job b was not told the wall stopped"
+echo "PASS: two jobs at once in overlapping windows equal their one-process renders; a third busy; b goes on after a's rank died (frame $before, then $after)"
