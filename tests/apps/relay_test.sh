@@ -37,9 +37,12 @@ field() { grep -o "\"$2\": *[0-9.]*" "$1" | sed 's/.*: *//'; }
 layout=$1
 port=$((20000 + $$ % 20000)) relayPort=$((20000 + ($$ + 7) % 20000))
 token=relaytesttoken
+# The wall's deadline for a frame: the bricks job's first one (4 wavelet bricks built on 2 ranks)
+# took over 5 s under the sanitizers and a loaded host.
+wallTimeout=$((10 * ${DFBWALL_TIME_SCALE:-1}))
 "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
   -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" \
-  --token "$token" --offscreen --timeout 5 --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
+  --token "$token" --offscreen --timeout "$wallTimeout" --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
 "$DFBWALL" relay --listen "127.0.0.1:$relayPort" --wall "127.0.0.1:$port" --token "$token" --timeout 5 \
   --stats "$work/relay.jsonl" >"$work/relay.out" 2>"$work/relay.err" &
@@ -127,7 +130,7 @@ for p in $(pgrep -f -- "--connect 127.0.0.1:$relayPort --token $token --renderer
 done
 [ -n "$rank" ] || fail "no rank of the job to kill"
 kill -9 "$rank"
-# Within the wall's --timeout (5 s), and said so: a drop at the timeout would give its silence.
+# Within the wall's --timeout, and said so: a drop at the timeout would give its silence.
 for _ in $(seq 50); do grep -q "ended after frame [0-9]* (its connection closed)" "$work/serve.err" && break; sleep 0.1; done
 grep -q "dropping the job from .*: its connection closed" "$work/serve.err" ||
   fail "the wall did not drop the job behind the relay when its connection closed"
