@@ -2,6 +2,7 @@
 // in, actions out, the time the test's. The messages the actions carry are the real wire
 // messages, read back with the protocol's parsers; the processes are a real Membership.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -21,7 +22,8 @@ constexpr auto kTimeout = 600ms;
 const Clock::time_point t0{std::chrono::hours(1)};
 
 Layout threeProcessLayout() {
-  const auto path = std::filesystem::temp_directory_path() / "dfbwall-jobdesk-layout.toml";
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("dfbwall-jobdesk-layout-" + std::to_string(::getpid()) + ".toml");
   std::ofstream(path) << "[grid]\ncolumns = 3\nrows = 1\ndisplay_size = [64, 64]\n";
   Layout layout = loadLayout(path.string());
   std::filesystem::remove(path);

@@ -2,6 +2,7 @@
 // real files: every K-th wall frame is written, from the writer's thread, as what the display
 // showed; a quota that is spent stops the captures with a line in the log, never the caller.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <random>
@@ -23,7 +24,8 @@ wall::Image noise(int w, int h, unsigned seed) {
 
 struct Folder {
   fs::path path;
-  explicit Folder(const char* name) : path(fs::temp_directory_path() / name) {
+  explicit Folder(const char* name)
+      : path(fs::temp_directory_path() / (name + std::string("-") + std::to_string(::getpid()))) {
     fs::remove_all(path);
     fs::create_directories(path);
   }

@@ -5,6 +5,7 @@
 // down exactly: who takes part in which swap barrier, when a silent process is dropped, the
 // roster the job gets, the first frame a process that comes back is given, refusals.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -32,7 +33,8 @@ using namespace std::chrono_literals;
 constexpr auto kTimeout = 600ms;
 
 Layout threeProcessLayout() {
-  const auto path = std::filesystem::temp_directory_path() / "dfbwall-walllink-layout.toml";
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("dfbwall-walllink-layout-" + std::to_string(::getpid()) + ".toml");
   std::ofstream(path) << "[grid]\ncolumns = 3\nrows = 1\ndisplay_size = [64, 64]\n";
   Layout layout = loadLayout(path.string());
   std::filesystem::remove(path);
