@@ -36,6 +36,13 @@ std::string hostName() {
   return name;
 }
 
+// A window's part of display `d`, in the display's own coordinates (empty: it misses `d`).
+dfb::Region partOnDisplay(const Display& d, const dfb::Region& window) {
+  const dfb::Region part = dfb::intersect(d.rect, window);
+  if (part.empty()) return {};
+  return {part.x0 - d.rect.x0, part.y0 - d.rect.y0, part.x1 - d.rect.x0, part.y1 - d.rect.y0};
+}
+
 }  // namespace
 
 struct WallService::Impl {
@@ -292,11 +299,9 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
     jobPresenters.clear();
     const std::vector<int> ours = layout.displaysOfProcess(process);
     for (size_t i = 0; i < ours.size(); ++i) {
-      const Display& d = layout.displays[static_cast<size_t>(ours[i])];
-      const dfb::Region part = dfb::intersect(d.rect, window);
+      const dfb::Region part = partOnDisplay(layout.displays[static_cast<size_t>(ours[i])], window);
       if (part.empty()) continue;
-      layers.push_back(stacks[i]->add(
-          {part.x0 - d.rect.x0, part.y0 - d.rect.y0, part.x1 - d.rect.x0, part.y1 - d.rect.y0}));
+      layers.push_back(stacks[i]->add(part));
       jobPresenters.push_back(layers.back().get());
     }
   } else if (!whole) {
@@ -304,17 +309,14 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
     const std::vector<int> ours = layout.displaysOfProcess(process);
     for (size_t i = 0; i < ours.size(); ++i) {
       const Display& d = layout.displays[static_cast<size_t>(ours[i])];
-      const dfb::Region part = dfb::intersect(d.rect, window);
+      const dfb::Region part = partOnDisplay(d, window);
       if (part.empty()) {
         WindowPresenter::presentBackground(*presenters[i], d.rect.width(), d.rect.height(),
                                            options.background);
         continue;
       }
-      parts.push_back(
-          std::make_unique<WindowPresenter>(*presenters[i], d.rect.width(), d.rect.height(),
-                                            dfb::Region{part.x0 - d.rect.x0, part.y0 - d.rect.y0,
-                                                        part.x1 - d.rect.x0, part.y1 - d.rect.y0},
-                                            options.background));
+      parts.push_back(std::make_unique<WindowPresenter>(*presenters[i], d.rect.width(),
+                                                        d.rect.height(), part, options.background));
       jobPresenters.push_back(parts.back().get());
     }
   }
