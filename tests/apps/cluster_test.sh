@@ -7,6 +7,7 @@
 #   cluster_test.sh link-cut      LAYOUT RENDER_HOSTS HOST TIMEOUT
 #   cluster_test.sh link-flap     LAYOUT RENDER_HOSTS HOST TIMEOUT
 #   cluster_test.sh service       LAYOUT RENDER_HOSTS
+#   cluster_test.sh two-jobs      LAYOUT RENDER_HOSTS   (2: one job from each render host)
 #   cluster_test.sh relay         LAYOUT RENDER_HOSTS
 #   cluster_test.sh survive       LAYOUT RENDER_HOSTS   (wall processes 0, 1 on wall1; 2, 3 on wall2)
 # Needs DFBWALL, COMPARE (compare_captures), MPIEXEC and CLUSTER (scripts/cluster) in the
@@ -369,6 +370,76 @@ case "$scenario" in
     [ "$code" -eq 0 ] || fail "serve exited $code after SIGUSR1"
     echo "PASS: 5 jobs from ${renderHosts[*]} on one wall on ${wallHosts[*]} (raw, snappy, snappy, killed, after);" \
       "busy refused in $busy s, the job after the kill done $after s after it"
+    ;;
+  two-jobs)
+    # Two jobs at once on a wall across hosts (docs/service.md, "Several jobs at once"): `serve
+    # --max-jobs 2` on the wall hosts; a path-traced job from render1 and a scivis job with 2
+    # bricks from render2, in overlapping windows that cross display and wall-host borders, each
+    # routed straight to the processes its window touches. Each job's captures equal its
+    # one-process render at its window's size; neither job's rank 0 receives a pixel; the first
+    # keeps presenting after the second ended.
+    layout=$1 hosts=$2
+    [ "$hosts" -eq 2 ] || fail "two-jobs runs one job from each of 2 render hosts"
+    up "$layout" "$hosts"
+    state=$(dirname "$mpirun")
+    mapfile -t wallHosts < <(tail -n +$((hosts + 1)) "$state/rank-hosts" | awk '!seen[$0]++')
+    address=$(awk -v h="${wallHosts[0]}" '$1 == h {print $3}' "$state/hosts")
+    port=7000
+    tokenFile=$work/wall-token
+    "$CLUSTER" mpirun-hosts "${wallHosts[@]}" --id "$id" -- "$DFBWALL" serve --wall "$layout" \
+      --listen "0.0.0.0:$port" --offscreen --timeout $((5 * ${DFBWALL_TIME_SCALE:-1})) --token-file "$tokenFile" \
+      --max-jobs 2 --background "#000000" --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
+    serve=$!
+    for _ in $(seq 200); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
+    grep -q "wall service on $address:$port" "$work/serve.out" || fail "serve did not start on ${wallHosts[0]}"
+    connect=(--connect "$address:$port" --token-file "$tokenFile")
+    # newest DIR DISPLAY: the newest captured frame's number (0: none yet).
+    newest() {
+      local f
+      f=$(ls "$1/$2" 2>/dev/null | grep -E '^frame-[0-9]+\.png$' | sort | tail -1)
+      [ -n "$f" ] || { echo 0; return; }
+      f=${f#frame-}; echo $((10#${f%.png}))
+    }
+    scale=${DFBWALL_TIME_SCALE:-1}
+    # Window a: all four displays (both wall hosts); window b: over a's top-left, two displays.
+    window_a=90,70,250,170 window_b=20,20,200,150
+    cornell=(--scene builtin:cornell --spp 1 --seed 11)
+    bricks=(--renderer scivis --scene builtin:wavelet --bricks 2 --tile-size 32)
+    "$CLUSTER" mpirun-hosts render1 --id "$id" -- "$DFBWALL" "${connect[@]}" --window "$window_a" \
+      "${cornell[@]}" --frames 100000 --capture-every 5 --capture "$work/a" --stats "$work/a.jsonl" \
+      --quiet --timeout 30 >"$work/log" 2>&1 &
+    job=$!
+    for _ in $(seq $((300 * scale))); do [ "$(newest "$work/a" r1c1)" -ge 5 ] && break; sleep 0.1; done
+    [ "$(newest "$work/a" r1c1)" -ge 5 ] || fail "job a presented no 5th frame"
+    t0=$(now)
+    "$CLUSTER" mpirun-hosts render2 --id "$id" -- "$DFBWALL" "${connect[@]}" --window "$window_b" \
+      "${bricks[@]}" --frames 3 --capture "$work/b" --stats "$work/b.jsonl" --quiet --timeout 30 \
+      >"$work/b.out" 2>&1 || { cat "$work/b.out"; fail "job b failed beside job a"; }
+    echo "job b (scivis, 2 bricks, beside a): $(since "$t0") s"
+    kill -0 "$job" 2>/dev/null || fail "job a ended while b ran"
+    before=$(newest "$work/a" r1c1)
+    for _ in $(seq $((100 * scale))); do [ "$(newest "$work/a" r1c1)" -ge $((before + 10)) ] && break; sleep 0.1; done
+    [ "$(newest "$work/a" r1c1)" -ge $((before + 10)) ] || fail "job a stopped presenting after b ended"
+    kill -TERM "$job"
+    finish 20
+    [ "$code" -ne 124 ] || fail "job a did not stop within 20 s of SIGTERM"
+    for name in a b; do
+      [ "$(field "$work/$name.jsonl" rank0_pixel_bytes_received | wc -l)" -gt 0 ] || fail "job $name: no stats"
+      for v in $(field "$work/$name.jsonl" rank0_pixel_bytes_received); do
+        [ "$v" = 0 ] || fail "job $name: render rank 0 received $v pixel bytes"
+      done
+    done
+    "$MPIEXEC" -n 1 "$DFBWALL" --size 250x170 --frames 5 --quiet --image "$work/a-ref.png" "${cornell[@]}" \
+      || fail "the one-process reference of a"
+    "$MPIEXEC" -n 1 "$DFBWALL" --size 200x150 --frames 3 --quiet --image "$work/b-ref.png" "${bricks[@]}" \
+      || fail "the one-process reference of b"
+    "$COMPARE" --window "$window_a" "$layout" "$work/a" "$work/a-ref.png" 5 || fail "job a's captures"
+    "$COMPARE" --window "$window_b" "$layout" "$work/b" "$work/b-ref.png" 3 || fail "job b's captures"
+    kill -USR1 "$serve"
+    for _ in $(seq 100); do kill -0 "$serve" 2>/dev/null || break; sleep 0.1; done
+    kill -0 "$serve" 2>/dev/null && fail "serve did not stop within 10 s of SIGUSR1"
+    echo "PASS: a path-traced and a scivis job at once from two render hosts on a wall of two hosts;" \
+      "captures equal their one-process renders; rank 0 received no pixels"
     ;;
   relay)
     # `dfbwall relay` on a gateway (README, "A wall that stays up"): the render hosts are on a
