@@ -127,11 +127,30 @@ ControlRequests::ControlRequests(ControlAccess access)
 }
 
 void ControlRequests::get(const std::string& path, Handler handler) {
-  gets_[path] = std::move(handler);
+  routes_["GET"][path] = std::move(handler);
 }
 
 void ControlRequests::post(const std::string& path, Handler handler) {
-  posts_[path] = std::move(handler);
+  routes_["POST"][path] = std::move(handler);
+}
+
+void ControlRequests::remove(const std::string& path, Handler handler) {
+  routes_["DELETE"][path] = std::move(handler);
+}
+
+std::string lastSegment(const std::string& path) { return path.substr(path.rfind('/') + 1); }
+
+const ControlRequests::Handler* ControlRequests::find(const std::string& method,
+                                                      const std::string& path) const {
+  const auto routes = routes_.find(method == "HEAD" ? "GET" : method);
+  if (routes == routes_.end()) return nullptr;
+  if (const auto exact = routes->second.find(path); exact != routes->second.end())
+    return &exact->second;
+  // One segment below a "/*" route: not empty, no further '/'.
+  const size_t slash = path.rfind('/');
+  if (slash == std::string::npos || slash + 1 == path.size()) return nullptr;
+  const auto pattern = routes->second.find(path.substr(0, slash + 1) + "*");
+  return pattern == routes->second.end() ? nullptr : &pattern->second;
 }
 
 // 403 with why the request's Host is not this server, or nullopt.
@@ -211,23 +230,24 @@ HttpReply ControlRequests::handle(const HttpRequest& request) const {
 }
 
 HttpReply ControlRequests::route(const HttpRequest& request) const {
-  const bool read = request.method == "GET" || request.method == "HEAD";
-  const auto& routes = read ? gets_ : posts_;
-  const auto found = routes.find(request.path);
-  if (found == routes.end() || (!read && request.method != "POST")) {
-    const bool elsewhere = gets_.count(request.path) || posts_.count(request.path);
+  const Handler* found = find(request.method, request.path);
+  if (!found) {
+    std::string allowed;
+    for (const auto& [method, routes] : routes_)
+      if (find(method, request.path)) allowed += (allowed.empty() ? "" : ", ") + method;
     HttpReply reply =
-        elsewhere ? error(405, quoted(request.method) + " is not served at " + quoted(request.path))
-                  : error(404,
-                          "no such endpoint (see docs/service.md, \"Steering "
-                          "the wall\")");
-    if (elsewhere) reply.headers.emplace_back("Allow", gets_.count(request.path) ? "GET" : "POST");
+        !allowed.empty()
+            ? error(405, quoted(request.method) + " is not served at " + quoted(request.path))
+            : error(404,
+                    "no such endpoint (see docs/service.md, \"Steering "
+                    "the wall\")");
+    if (!allowed.empty()) reply.headers.emplace_back("Allow", allowed);
     return reply;
   }
   if (request.body.size() > kMaxControlBody)
     return error(413, "the body is larger than " + std::to_string(kMaxControlBody) + " bytes");
   try {
-    return found->second(request);
+    return (*found)(request);
   } catch (const std::invalid_argument& e) {
     return error(400, e.what());
   } catch (const std::exception& e) {

@@ -57,9 +57,11 @@ class ControlRequests {
   explicit ControlRequests(ControlAccess access);
 
   // Before the first handle(). A handler that throws std::invalid_argument gives 400 with its
-  // message, any other exception 500.
+  // message, any other exception 500. A path ending in "/*" serves every path one segment
+  // deeper (its handler reads the segment from the request's path: see lastSegment).
   void get(const std::string& path, Handler handler);
   void post(const std::string& path, Handler handler);
+  void remove(const std::string& path, Handler handler);  // DELETE
 
   // Thread-safe once the routes are set.
   HttpReply handle(const HttpRequest& request) const;
@@ -72,11 +74,16 @@ class ControlRequests {
   std::optional<HttpReply> hostRefusal(const HttpRequest& request) const;
   std::optional<HttpReply> authRefusal(const HttpRequest& request) const;
   HttpReply route(const HttpRequest& request) const;
+  // The handler of `method` for `path` (exact, else its "/*" pattern), or nullptr.
+  const Handler* find(const std::string& method, const std::string& path) const;
 
   ControlAccess access_;
   std::string cookieName_;
-  std::map<std::string, Handler> gets_, posts_;
+  std::map<std::string, std::map<std::string, Handler>> routes_;  // method -> path -> handler
 };
+
+// What follows the last '/' of a path served by a "/*" route ("/api/windows/3": "3").
+std::string lastSegment(const std::string& path);
 
 // Bodies larger than this are refused with 413 before they are read to the end.
 constexpr std::size_t kMaxControlBody = 64 * 1024;

@@ -897,3 +897,68 @@ TEST_F(TwoJobsTest, AJobWithoutAWindowGetsTheWholeWallWhenNoDisplayIsFree) {
 }
 
 }  // namespace wall::service
+
+namespace wall::service {
+namespace {
+
+TEST_F(TwoJobsTest, TheWindowManagerListsRaisesAndClosesWindows) {
+  const std::uint64_t a = runIn("job-a", "render1", "0,0,100,64", t0);
+  const std::uint64_t b = runIn("job-b", "render2", "50,0,100,64", t0);
+  std::vector<JobDesk::Window> windows = two.windows(t0);
+  ASSERT_EQ(windows.size(), 2u);
+  EXPECT_EQ(windows[0].number, 1u);
+  EXPECT_EQ(windows[0].host, "render1");
+  EXPECT_EQ(windows[0].rect, (dfb::Region{0, 0, 100, 64}));
+  EXPECT_EQ(windows[0].z, 0);
+  EXPECT_EQ(windows[1].number, 2u);
+  EXPECT_EQ(windows[1].rect, (dfb::Region{50, 0, 150, 64}));
+  EXPECT_EQ(windows[1].z, 1);  // the newest on top
+  EXPECT_EQ(windows[1].state, State::Running);
+  // Frames credited: counted, and their rate over the last two seconds.
+  for (std::uint32_t f = 1; f <= 10; ++f) {
+    frame(a, f, t0 + f * 100ms);
+    two.presented(a, f, 0, t0 + f * 100ms);
+  }
+  windows = two.windows(t0 + 2s);
+  EXPECT_EQ(windows[0].frames, 10u);
+  EXPECT_NEAR(windows[0].fps, 5.0, 0.01);
+  EXPECT_FALSE(windows[0].idle);
+  EXPECT_FALSE(windows[1].idle);
+  EXPECT_TRUE(two.windows(t0 + 2500ms)[1].idle);  // running, nothing presented for over 2 s
+  EXPECT_EQ(two.windows(t0 + 10s)[0].fps, 0.0);
+
+  // Raise: a Raise with an order above every other to each process in the job; a window on top
+  // already is left as it is.
+  EXPECT_FALSE(two.raise(7).has_value());
+  const std::optional<Actions> raised = two.raise(1);
+  ASSERT_TRUE(raised.has_value());
+  EXPECT_EQ(given(*raised, Command::Raise), (std::vector<int>{0, 1, 2}));
+  const ServiceCommand raise = commandTo(*raised, 1, Command::Raise);
+  EXPECT_EQ(raise.header.session, a);
+  EXPECT_EQ(raise.header.a, 3);  // orders 1 and 2 were the two starts
+  windows = two.windows(t0 + 2s);
+  EXPECT_EQ(windows[0].z, 1);
+  EXPECT_EQ(windows[1].z, 0);
+  EXPECT_TRUE(given(*two.raise(1), Command::Raise).empty());
+  // A process that joins the job later gets the order in its Start.
+  lose(2, "gone", t0 + 2s);
+  members.admit("link2b", joinOf(2, 2), t0 + 2s);
+  const Actions rejoined = two.joined(2, t0 + 2s);
+  EXPECT_EQ(commandTo(rejoined, 2, Command::Start).header.b, 3);
+
+  // Close: the job is told why and its window closes (Abort to the processes); the other runs.
+  EXPECT_FALSE(two.close(9, "closed", t0 + 3s).has_value());
+  const std::optional<Actions> closed =
+      two.close(2, "closed from the wall's control page", t0 + 3s);
+  ASSERT_TRUE(closed.has_value());
+  const auto ended = replies(*closed, Kind::Ended);
+  ASSERT_EQ(ended.size(), 1u);
+  EXPECT_EQ(ended[0].peer, "job-b");
+  EXPECT_EQ(textOf(ended[0]), "closed from the wall's control page");
+  EXPECT_EQ(given(*closed, Command::Abort), (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(two.state(b), State::Ending);
+  EXPECT_EQ(two.state(a), State::Running);
+}
+
+}  // namespace
+}  // namespace wall::service

@@ -81,6 +81,31 @@ TEST(WindowStack, WindowsComposeNewestOnTopEachAtItsOwnSwap) {
   EXPECT_EQ(display->readBack(), wall::Image(kWidth, kHeight, kBackground));
 }
 
+TEST(WindowStack, ARaisedWindowGoesOnTopAndALateLayerTakesItsPlaceByOrder) {
+  auto display = wall::makeOsmesaPresenter(kWidth, kHeight);
+  wall::WindowStack stack(*display, kWidth, kHeight, kBackground);
+  auto a = stack.add(kPartA, 1);
+  auto b = stack.add(kPartB, 2);
+  const wall::Image a1 = frameOf(kPartA, 1), b1 = frameOf(kPartB, 1);
+  upload(*a, a1);
+  a->swap();
+  upload(*b, b1);
+  b->swap();
+  EXPECT_EQ(display->readBack(), expected({{kPartA, &a1}, {kPartB, &b1}}));
+  // Raised (the window manager's order 3): A over B at once, without a new frame of either.
+  stack.setOrder(*a, 3);
+  EXPECT_EQ(display->readBack(), expected({{kPartB, &b1}, {kPartA, &a1}}));
+  // A layer added with a lower order (a process that joins a running job, or a Start overtaken
+  // by a Raise) goes beneath the higher ones, not on top.
+  const dfb::Region partC{0, 0, 64, 48};
+  auto c = stack.add(partC, 2);
+  const wall::Image c1 = frameOf(partC, 1);
+  upload(*c, c1);
+  c->swap();
+  EXPECT_EQ(display->readBack(), expected({{kPartB, &b1}, {partC, &c1}, {kPartA, &a1}}));
+  EXPECT_ANY_THROW(stack.setOrder(*display, 1));  // not a layer
+}
+
 TEST(WindowStack, APartOutsideTheDisplayOrAnUploadOutsideThePartIsRefused) {
   auto display = wall::makeOsmesaPresenter(kWidth, kHeight);
   wall::WindowStack stack(*display, kWidth, kHeight, kBackground);

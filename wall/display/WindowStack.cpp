@@ -13,6 +13,7 @@ class WindowStack::Layer : public Presenter {
   Layer(WindowStack& stack, Shown& shown)
       : stack_(stack), shown_(shown), pending_(shown.part.width(), shown.part.height()) {}
   ~Layer() override { stack_.remove(&shown_); }
+  const Shown& shown() const { return shown_; }
 
   void beginFrame(int, int) override {}
   void uploadAt(const std::uint32_t* first, int stride, const dfb::Region& rect) override {
@@ -53,11 +54,41 @@ WindowStack::WindowStack(Presenter& display, int width, int height, std::uint32_
 WindowStack::~WindowStack() = default;
 
 std::unique_ptr<Presenter> WindowStack::add(const dfb::Region& part) {
+  std::uint64_t top = 0;
+  {
+    std::lock_guard lock(mutex_);
+    if (!shown_.empty()) top = shown_.back().order;
+  }
+  return add(part, top);
+}
+
+std::unique_ptr<Presenter> WindowStack::add(const dfb::Region& part, std::uint64_t order) {
   if (part.empty() || part.x0 < 0 || part.y0 < 0 || part.x1 > width_ || part.y1 > height_)
     throw base::Error("a window's part of a display lies outside it");
   std::lock_guard lock(mutex_);
-  shown_.push_back({part, Image(part.width(), part.height()), false});
-  return std::make_unique<Layer>(*this, shown_.back());
+  shown_.push_back({part, order, Image(part.width(), part.height()), false});
+  Shown& added = shown_.back();  // a list's elements stay where they are when it is re-linked
+  placeLocked(std::prev(shown_.end()));
+  return std::make_unique<Layer>(*this, added);
+}
+
+void WindowStack::setOrder(const Presenter& layer, std::uint64_t order) {
+  const auto* ours = dynamic_cast<const Layer*>(&layer);
+  if (!ours) throw base::Error("WindowStack::setOrder: not a layer of a window stack");
+  std::lock_guard lock(mutex_);
+  const auto found = std::find_if(shown_.begin(), shown_.end(),
+                                  [&](const Shown& s) { return &s == &ours->shown(); });
+  if (found == shown_.end()) throw base::Error("WindowStack::setOrder: not a layer of this stack");
+  found->order = order;
+  placeLocked(found);
+  presentLocked();
+}
+
+void WindowStack::placeLocked(std::list<Shown>::iterator shown) {
+  // Above every layer of a lower or equal order, below the first of a higher one.
+  auto before = shown_.begin();
+  while (before != shown_.end() && (before == shown || before->order <= shown->order)) ++before;
+  shown_.splice(before, shown_, shown);
 }
 
 void WindowStack::present() {

@@ -12,7 +12,8 @@ namespace wall::service {
 
 enum class Command : std::uint32_t {
   Start = 1,      // a job: run a wall node for it (text: its capture folder; a: its first frame, or
-                  // 0 for a process joining a running job: FirstFrame follows its Ready)
+                  // 0 for a process joining a running job: FirstFrame follows its Ready; b: its
+                  // window's stacking order, higher on top)
   Cancel = 2,     // the job never started (a process could not): stop before frame 1
   LastFrame = 3,  // a: the job's last frame
   Abort = 4,      // the job is gone (text: why): give the frame in progress up
@@ -24,6 +25,7 @@ enum class Command : std::uint32_t {
   Failed = 10,      // this process gave a frame up (text: why)
   StopAsked = 11,   // this process was asked to stop the wall
   FirstFrame = 12,  // a: the first frame of a process that joined a running job
+  Raise = 13,       // a: the job's window's new stacking order (above every other window's)
 };
 
 struct CommandHeader {

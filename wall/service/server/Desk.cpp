@@ -7,6 +7,7 @@
 #include <deque>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <set>
 #include <thread>
@@ -88,8 +89,9 @@ struct Desk::Impl {
   std::map<std::pair<std::uint64_t, std::uint32_t>, std::vector<std::int64_t>> releases;
   std::map<std::pair<std::uint64_t, std::uint32_t>, std::vector<std::vector<std::uint32_t>>>
       gathered;
-  std::vector<int> absent;              // copy of members.absent(), for absentProcesses()
-  std::set<std::uint64_t> jobSessions;  // the jobs on the wall, for the head's barrier waits
+  std::vector<int> absent;               // copy of members.absent(), for absentProcesses()
+  std::vector<JobDesk::Window> windows;  // copy of jobs.windows(), for the window manager
+  std::set<std::uint64_t> jobSessions;   // the jobs on the wall, for the head's barrier waits
 
   // The desk thread's own.
   Membership members;
@@ -181,6 +183,25 @@ struct Desk::Impl {
     std::vector<int> now = members.absent();
     std::lock_guard lock(mutex);
     absent = std::move(now);
+  }
+  void publishWindows() {
+    std::vector<JobDesk::Window> now = jobs.windows(Clock::now());
+    std::lock_guard lock(mutex);
+    windows = std::move(now);
+  }
+  // `work` on the desk thread; its answer, once it ran.
+  bool onDeskThread(std::function<bool()> work) {
+    auto answer = std::make_shared<std::optional<bool>>();
+    post([this, work, answer] {
+      const bool result = work();
+      publishWindows();
+      handBack([&] { *answer = result; });
+    });
+    std::unique_lock lock(mutex);
+    handedBack.wait_for(lock, std::chrono::seconds(5),
+                        [&] { return answer->has_value() || isClosed; });
+    if (!answer->has_value()) throw base::Error("the wall's desk did not answer (it stopped)");
+    return **answer;
   }
   void handBack(const std::function<void()>& change) {
     std::lock_guard lock(mutex);
@@ -422,6 +443,7 @@ struct Desk::Impl {
       if (jobs.state() != JobDesk::State::Closed) watch(Clock::now());
       carry(jobs.tick(Clock::now()));
       settleUnreachable();
+      publishWindows();
     }
     isClosed = true;
     std::lock_guard lock(mutex);
@@ -464,6 +486,27 @@ std::vector<int> Desk::absentProcesses() const {
 }
 
 bool Desk::closed() const { return impl_->isClosed; }
+
+std::vector<JobDesk::Window> Desk::windows() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->windows;
+}
+
+bool Desk::raise(std::uint64_t number) {
+  return impl_->onDeskThread([this, number] {
+    std::optional<JobDesk::Actions> actions = impl_->jobs.raise(number);
+    if (actions) impl_->carry(std::move(*actions));
+    return actions.has_value();
+  });
+}
+
+bool Desk::close(std::uint64_t number, const std::string& why) {
+  return impl_->onDeskThread([this, number, why] {
+    std::optional<JobDesk::Actions> actions = impl_->jobs.close(number, why, Clock::now());
+    if (actions) impl_->carry(std::move(*actions));
+    return actions.has_value();
+  });
+}
 
 void Desk::toHead(const ServiceCommand& command, std::uint64_t) {
   impl_->post([this, command] { impl_->carry(impl_->jobs.answer(0, command, Clock::now())); });
@@ -516,7 +559,7 @@ std::vector<std::vector<std::uint32_t>> Desk::gatherToFirst(std::uint64_t, std::
 
 void Desk::presented(std::uint64_t session, std::uint32_t frameId, std::int64_t completeNs) {
   impl_->post([this, session, frameId, completeNs] {
-    impl_->carry(impl_->jobs.presented(session, frameId, completeNs));
+    impl_->carry(impl_->jobs.presented(session, frameId, completeNs, Clock::now()));
   });
 }
 

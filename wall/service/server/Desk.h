@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "wall/layout/Layout.h"
+#include "wall/service/server/JobDesk.h"
 #include "wall/service/server/ProcessLink.h"
 #include "wall/service/server/WallService.h"
 
@@ -52,6 +53,14 @@ class Desk : public ProcessLink {
   std::vector<int> absentProcesses() const;
   // The desk thread ended (after the wall's shutdown was sent to every process).
   bool closed() const;
+
+  // The window manager (serve --control), thread-safe. The jobs' windows as of the desk's last
+  // turn (at most 100 ms ago); a raise or a close is carried out on the desk thread before it
+  // returns (false: no job of that number is on the wall). Throws base::Error when the desk
+  // does not answer within a few seconds (it stopped).
+  std::vector<JobDesk::Window> windows() const;
+  bool raise(std::uint64_t number);
+  bool close(std::uint64_t number, const std::string& why);
 
   std::uint64_t epoch() const override { return 0; }
   void toHead(const ServiceCommand& command, std::uint64_t epoch) override;

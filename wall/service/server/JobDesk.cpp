@@ -377,9 +377,13 @@ JobDesk::Actions JobDesk::headPixels(std::uint64_t session, std::uint32_t frameI
 }
 
 JobDesk::Actions JobDesk::presented(std::uint64_t session, std::uint32_t frameId,
-                                    std::int64_t completeNs) {
+                                    std::int64_t completeNs, Clock::time_point now) {
   j_ = bySession(session);
   if (!j_ || (j_->state != State::Running && j_->state != State::Ending)) return take();
+  if (frameId > j_->lastCredited) {
+    j_->credits.push_back(now);
+    while (j_->credits.front() < now - kFpsWindow) j_->credits.pop_front();
+  }
   j_->lastCredited = std::max(j_->lastCredited, frameId);
   std::erase_if(j_->pendingCaptures, [&](std::uint32_t f) { return f <= j_->lastCredited; });
   reply(j_->job.peer, Kind::Presented,
@@ -466,8 +470,64 @@ std::vector<JobDesk::Slot*> JobDesk::inOrder() const {
   for (const auto& slot : slots_)
     if (slot->state != State::Idle) out.push_back(slot.get());
   std::sort(out.begin(), out.end(),
-            [](const Slot* x, const Slot* y) { return x->order < y->order; });
+            [](const Slot* x, const Slot* y) { return x->number < y->number; });
   return out;
+}
+
+JobDesk::Slot* JobDesk::byNumber(std::uint64_t number) const {
+  for (const auto& slot : slots_)
+    if (slot->state != State::Idle && slot->number == number) return slot.get();
+  return nullptr;
+}
+
+// ---- the window manager ----
+
+std::vector<JobDesk::Window> JobDesk::windows(Clock::time_point now) const {
+  std::vector<Slot*> jobs = inOrder();
+  std::vector<Slot*> stacked = jobs;
+  std::sort(stacked.begin(), stacked.end(),
+            [](const Slot* x, const Slot* y) { return x->order < y->order; });
+  std::vector<Window> out;
+  for (const Slot* slot : jobs) {
+    Window w;
+    w.number = slot->number;
+    w.host = peerText(slot->job.hello.host);
+    w.rect = slot->window;
+    w.z = static_cast<int>(std::find(stacked.begin(), stacked.end(), slot) - stacked.begin());
+    w.state = slot->state;
+    w.frames = slot->lastCredited;
+    const auto recent = std::count_if(slot->credits.begin(), slot->credits.end(),
+                                      [&](Clock::time_point t) { return t >= now - kFpsWindow; });
+    // Frames over the window, or since the job started when that is shorter.
+    const double span = std::chrono::duration<double>(
+                            std::min<Clock::duration>(kFpsWindow, now - slot->job.started))
+                            .count();
+    w.fps = span > 0 ? static_cast<double>(recent) / span : 0;
+    const Clock::time_point last = slot->credits.empty() ? slot->job.started : slot->credits.back();
+    w.idle = slot->state == State::Running && now - last > kIdleAfter;
+    out.push_back(std::move(w));
+  }
+  return out;
+}
+
+std::optional<JobDesk::Actions> JobDesk::raise(std::uint64_t number) {
+  j_ = byNumber(number);
+  if (!j_) return std::nullopt;
+  // Already on top: nothing to tell the processes.
+  if (j_->order != stackTop_) {
+    j_->order = ++stackTop_;
+    toJob(command(Command::Raise, static_cast<std::int64_t>(j_->order)));
+  }
+  return take();
+}
+
+std::optional<JobDesk::Actions> JobDesk::close(std::uint64_t number, const std::string& why,
+                                               Clock::time_point now) {
+  now_ = now;
+  j_ = byNumber(number);
+  if (!j_) return std::nullopt;
+  endJob(why);
+  return take();
 }
 
 void JobDesk::removeEnded() {
@@ -523,7 +583,8 @@ ServiceCommand JobDesk::command(Command kind, std::int64_t a, std::int64_t b,
 }
 
 ServiceCommand JobDesk::startCommand(std::uint32_t firstFrame) const {
-  ServiceCommand c = command(Command::Start, firstFrame, 0, j_->job.hello.captureDir);
+  ServiceCommand c = command(Command::Start, firstFrame, static_cast<std::int64_t>(j_->order),
+                             j_->job.hello.captureDir);
   c.header.tileSize = j_->job.hello.tileSize;
   c.header.renderRanks = j_->job.hello.renderRanks;
   c.header.framesInFlight = j_->granted;
@@ -580,7 +641,9 @@ std::string JobDesk::busy() const {
 
 void JobDesk::startJob() {
   j_->job.session = s_.newSession();
-  j_->order = ++jobsStarted_;
+  j_->number = ++jobsStarted_;
+  j_->order = ++stackTop_;  // a new window opens on top
+  j_->credits.clear();
   j_->window = placeWindow(j_->job.hello);
   emit(Session{j_->job.session, false});
   j_->job.started = now_;

@@ -145,7 +145,8 @@ class JobDesk {
                      std::vector<std::uint32_t> pixels, Clock::time_point deadline,
                      Clock::time_point now);
   // The head's process presented `frameId` on every display in the job: the job's credit.
-  Actions presented(std::uint64_t session, std::uint32_t frameId, std::int64_t completeNs);
+  Actions presented(std::uint64_t session, std::uint32_t frameId, std::int64_t completeNs,
+                    Clock::time_point now = Clock::now());
   // Time passing: gathers past their deadline, barriers a process has not arrived at within the
   // timeout (it is dropped), a job silent for the timeout, the shutdown.
   Actions tick(Clock::time_point now);
@@ -173,6 +174,28 @@ class JobDesk {
   std::vector<std::uint64_t> sessions() const;
   State state(std::uint64_t session) const;
   std::uint32_t lastCredited(std::uint64_t session) const;
+
+  // ---- the window manager (serve --control: apps/WallControl.h) ----
+  // A job's window on the wall. `number` names it (1 for the wall's first job, never reused):
+  // the session id stays between the wall and the job, since pieces are checked against it.
+  struct Window {
+    std::uint64_t number = 0;
+    std::string host;  // the job's rank-0 host, as its hello said (printable)
+    dfb::Region rect;  // on the wall's canvas
+    int z = 0;         // 0 at the bottom
+    State state = State::Starting;
+    bool idle = false;         // running, no frame presented for kIdleAfter (converged, or stalled)
+    std::uint32_t frames = 0;  // presented on every display (credited)
+    double fps = 0;            // presented frames per second over the last kFpsWindow
+  };
+  static constexpr auto kFpsWindow = std::chrono::seconds(2);
+  static constexpr auto kIdleAfter = std::chrono::seconds(2);
+  std::vector<Window> windows(Clock::time_point now) const;
+  // Job `number`'s window goes on top of the others on every display; `nullopt` when no job of
+  // that number is on the wall.
+  std::optional<Actions> raise(std::uint64_t number);
+  // Job `number` ends as a dropped job does: told `why` (Ended), its window closed at once.
+  std::optional<Actions> close(std::uint64_t number, const std::string& why, Clock::time_point now);
 
  private:
   struct Job {
@@ -231,8 +254,10 @@ class JobDesk {
   struct Slot {
     explicit Slot(int processes) : seats(static_cast<size_t>(processes)), agreements(processes) {}
     State state = State::Idle;
-    std::uint64_t order = 0;  // when it started among the wall's jobs (z-order: newest on top)
-    dfb::Region window;       // on the wall's canvas: asked for, or placed (placeWindow)
+    std::uint64_t number = 0;  // when it started among the wall's jobs (1: the first)
+    std::uint64_t order = 0;   // its window's stacking order (higher on top): started or raised
+    std::deque<Clock::time_point> credits;  // when frames were credited, over kFpsWindow
+    dfb::Region window;  // on the wall's canvas: asked for, or placed (placeWindow)
     Job job;
     std::vector<Seat> seats;
     std::set<int> waitingToJoinJob;  // joined while the job was starting
@@ -251,6 +276,7 @@ class JobDesk {
   const Slot& shown() const;
   // The jobs on the wall (not Idle), oldest first.
   std::vector<Slot*> inOrder() const;
+  Slot* byNumber(std::uint64_t number) const;
   // Jobs that ended leave the wall (the last one is kept for the accessors).
   void removeEnded();
 
@@ -262,7 +288,7 @@ class JobDesk {
   std::unique_ptr<Slot> ended_;               // the last job that left the wall
   Slot* j_ = nullptr;                         // the job the event at hand is for
   std::deque<Job> queue_;
-  std::uint64_t jobsStarted_ = 0;
+  std::uint64_t jobsStarted_ = 0, stackTop_ = 0;
   bool shuttingDown_ = false, closed_ = false;
   int shutdownAcks_ = 0;  // members that confirmed the shutdown (State::Closed)
   Clock::time_point closedAt_;

@@ -65,6 +65,10 @@ struct WallService::Impl {
   std::deque<ServiceCommand> commands;
   std::map<std::uint64_t, WallNode*> nodes;
   bool linkLost = false;
+  // Several jobs at once: each job's stacking order (Start, then Raise) and its layers on this
+  // process's displays, by session.
+  std::map<std::uint64_t, std::uint64_t> orders;
+  std::map<std::uint64_t, std::vector<std::pair<WindowStack*, Presenter*>>> layersOf;
   // Several jobs at once (maxJobs > 1): each display's composition, and each job's thread (done:
   // it returned, to be joined).
   std::vector<std::unique_ptr<WindowStack>> stacks;
@@ -92,6 +96,13 @@ struct WallService::Impl {
 void WallService::Impl::incoming(const ServiceCommand& c) {
   const CommandHeader& h = c.header;
   std::lock_guard lock(mutex);
+  if (h.kind == Command::Raise) {
+    // Kept for layers not added yet (a Raise that overtakes its job's start on this process).
+    orders[h.session] = static_cast<std::uint64_t>(std::max<std::int64_t>(0, h.a));
+    if (const auto layers = layersOf.find(h.session); layers != layersOf.end())
+      for (const auto& [stack, layer] : layers->second) stack->setOrder(*layer, orders[h.session]);
+    return;
+  }
   if (const auto found = nodes.find(h.session); found != nodes.end()) {
     WallNode* node = found->second;
     switch (h.kind) {
@@ -295,14 +306,21 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   std::vector<std::unique_ptr<Presenter>> layers;  // several jobs: this job's on each display
   std::vector<Presenter*> jobPresenters = presenters;
   if (!stacks.empty()) {
-    // On top of the windows there (newest on top); removed when the job ends (layers go first).
+    // At the job's stacking order (a new window on top; a Raise may have come already); removed
+    // when the job ends (layers go first).
     jobPresenters.clear();
     const std::vector<int> ours = layout.displaysOfProcess(process);
+    std::lock_guard lock(mutex);
+    const std::uint64_t order =
+        orders
+            .emplace(session, static_cast<std::uint64_t>(std::max<std::int64_t>(0, start.header.b)))
+            .first->second;
     for (size_t i = 0; i < ours.size(); ++i) {
       const dfb::Region part = partOnDisplay(layout.displays[static_cast<size_t>(ours[i])], window);
       if (part.empty()) continue;
-      layers.push_back(stacks[i]->add(part));
+      layers.push_back(stacks[i]->add(part, order));
       jobPresenters.push_back(layers.back().get());
+      layersOf[session].emplace_back(stacks[i].get(), layers.back().get());
     }
   } else if (!whole) {
     jobPresenters.clear();
@@ -376,6 +394,11 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
     receiver->detach(session);
     std::lock_guard lock(mutex);
     nodes.erase(session);
+  }
+  {
+    std::lock_guard lock(mutex);
+    layersOf.erase(session);
+    orders.erase(session);
   }
   layers.clear();  // the job's windows leave the displays at once
   answer.header.kind = Command::Done;
@@ -482,6 +505,21 @@ void WallService::run() {
       if (m.link && !m.link->joined()) idleShown = false;  // it left the job by losing the head
     }
   }
+}
+
+std::vector<JobDesk::Window> WallService::windows() const {
+  if (!impl_->desk) throw base::Error("only the wall's head (process 0) manages its windows");
+  return impl_->desk->windows();
+}
+
+bool WallService::raise(std::uint64_t number) {
+  if (!impl_->desk) throw base::Error("only the wall's head (process 0) manages its windows");
+  return impl_->desk->raise(number);
+}
+
+bool WallService::close(std::uint64_t number, const std::string& why) {
+  if (!impl_->desk) throw base::Error("only the wall's head (process 0) manages its windows");
+  return impl_->desk->close(number, why);
 }
 
 }  // namespace wall::service

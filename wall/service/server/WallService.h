@@ -22,6 +22,7 @@
 #include "wall/display/Presenter.h"
 #include "wall/layout/Layout.h"
 #include "wall/service/security/Credentials.h"
+#include "wall/service/server/JobDesk.h"
 
 namespace wall::service {
 
@@ -84,6 +85,13 @@ class WallService {
   // Presents jobs until the wall is asked to stop (or this process leaves it); returns then.
   // Throws base::Error when the head refuses this process.
   void run();
+
+  // The head only (process 0; others throw base::Error), thread-safe: the window manager of
+  // serve --control (apps/WallControl.h). The jobs' windows; a job's window raised on every
+  // display of every process, or the job ended, told `why` (false: no job of that number).
+  std::vector<JobDesk::Window> windows() const;
+  bool raise(std::uint64_t number);
+  bool close(std::uint64_t number, const std::string& why);
 
  private:
   struct Impl;
