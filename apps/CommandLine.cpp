@@ -285,6 +285,27 @@ void addRenderJob(CLI::App& app, Options& o, RawOptions& raw) {
 
 // ---- serve and relay ------------------------------------------------------------------------
 
+// serve --control: the wall's own window manager on the head, with the job's --control rules.
+void addWallControl(CLI::App& serve, Options& o) {
+  serve
+      .add_option("--control", o.control,
+                  "[ADDR:]PORT: the head (process 0) serves the wall's window manager (JSON API "
+                  "and page: list, raise, close the jobs' windows) there (default address "
+                  "127.0.0.1); always behind a token, as a job's --control")
+      ->group(kControl);
+  serve
+      .add_option("--control-token-file", o.controlTokenFile,
+                  "FILE holding the window manager's token (created mode 0600 with a fresh one "
+                  "when absent); clients send Authorization: Bearer TOKEN")
+      ->group(kControl);
+  serve
+      .add_option("--control-host", o.controlHosts,
+                  "NAME: a host name clients reach the window manager by, besides its address "
+                  "and localhost (other Host headers get 403); repeatable")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+      ->group(kControl);
+}
+
 void addServe(CLI::App& serve, Options& o, RawOptions& raw) {
   addWallGroup(serve, o.wall, o.offscreen);
   serve
@@ -328,6 +349,7 @@ void addServe(CLI::App& serve, Options& o, RawOptions& raw) {
              "seconds after which a silent job or wall process is dropped");
   addStats(serve, o.statsFile,
            "wall process 0: append one JSON line per job and per process lost or back to FILE");
+  addWallControl(serve, o);
   serve
       .add_option("--capture-root", o.captureRoot,
                   "an existing folder: a job's --capture names a folder inside it (relative to "

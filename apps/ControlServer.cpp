@@ -189,6 +189,12 @@ std::string ControlServer::startLine() const {
          m.secret.source + ")";
 }
 
+std::string ControlServer::pageAddress(const std::string& thisHost) const {
+  const Impl& m = *impl_;
+  return "http://" + urlHost(isWildcard(m.host) ? thisHost : m.host) + ":" +
+         std::to_string(m.port) + "/";
+}
+
 void ControlServer::start() {
   Impl& m = *impl_;
   const unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL;

@@ -42,6 +42,9 @@ class ControlServer {
   // What to print once: the address to open, with the token when it was generated for this run
   // (a token from a file or the environment is not repeated in the log).
   std::string startLine() const;
+  // The page's address for others to link (no token): http://HOST:PORT/, `thisHost` (this host's
+  // name) for a server on every interface.
+  std::string pageAddress(const std::string& thisHost) const;
 
  private:
   struct Impl;

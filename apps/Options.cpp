@@ -126,6 +126,10 @@ std::string serveProblem(Options& o, const RawOptions& raw) {
   if (o.process <= 0 && !o.serverKey.empty())
     return "serve --server-key pins the head's key for a joining process (--process N > 0); the "
            "head serves with --curve DIR";
+  if ((!o.controlTokenFile.empty() || !o.controlHosts.empty()) && o.control.empty())
+    return "serve --control-token-file and --control-host need --control [ADDR:]PORT";
+  if (o.process > 0 && !o.control.empty())
+    return "serve --control is for the head (process 0): it serves the wall's window manager";
   return {};
 }
 

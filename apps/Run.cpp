@@ -158,6 +158,11 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
       if (job.worldRank == 0 && !o.cameraPath.empty())
         job.cameraPath = CameraPath::load(o.cameraPath, job.scene.desc->camera);
     }
+    // Bound now, so a port in use is a setup error on every rank (and a job's hello can name its
+    // page); served once frames start.
+    if (job.worldRank == 0 && !o.control.empty() && !o.dryRun)
+      server = std::make_unique<ControlServer>(o.control, controlSecret(o.controlTokenFile),
+                                               o.controlHosts);
     if (!o.connect.empty()) {
       job.roles = wall::RankRoles{worldSize, 0};  // every rank renders; the wall is elsewhere
       job.codec = wall::service::parseCodec(o.codec);
@@ -166,6 +171,9 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
             wall::service::jobHello(worldSize, o.tileSize, job.codec, o.framesInFlight, o.wait,
                                     o.dryRun ? std::string() : o.captureDir, o.captureEvery);
         hello.window = wall::parseWindowRequest(o.window);
+        // For the wall's window manager: what this job renders, and where its page is.
+        hello.job = (o.renderer + " " + o.scene).substr(0, 256);
+        if (server) hello.page = server->pageAddress(hello.host);
         job.service = std::make_shared<wall::service::ServiceClient>(
             o.connect,
             wall::service::loadCredentials({o.token, o.tokenFile, {}, o.serverKey}, false), hello,
@@ -181,10 +189,6 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
       stats = std::make_unique<StatsStream>(o.statsFile);
       stats->writeRun(job);
     }
-    // Bound now, so a port in use is a setup error on every rank; served once frames start.
-    if (job.worldRank == 0 && !o.control.empty())
-      server = std::make_unique<ControlServer>(o.control, controlSecret(o.controlTokenFile),
-                                               o.controlHosts);
     return {};
   } catch (const std::bad_alloc&) {
     // Loaders name what they load; this is the net for whatever else allocates at setup.

@@ -15,10 +15,12 @@
 #include <optional>
 #include <thread>
 
+#include "apps/ControlServer.h"
 #include "apps/Failure.h"
 #include "apps/Options.h"
 #include "apps/Run.h"
 #include "apps/StopSignals.h"
+#include "apps/WallControl.h"
 #include "base/Collectives.h"
 #include "base/ConfinedFolder.h"
 #include "base/OutputFile.h"
@@ -157,6 +159,23 @@ void reportStart(const wall::service::WallService& wall, const wall::service::Se
   std::fflush(stdout);
 }
 
+// serve --control on the head: the window manager's routes on a control server, serving.
+std::unique_ptr<ControlServer> startWallControl(const Options& o, const wall::Layout& layout,
+                                                wall::service::WallService& wall) {
+  auto server =
+      std::make_unique<ControlServer>(o.control, controlSecret(o.controlTokenFile), o.controlHosts);
+  WallWindows windows;
+  windows.list = [&wall] { return wall.windows(); };
+  windows.raise = [&wall](std::uint64_t number) { return wall.raise(number); };
+  windows.close = [&wall](std::uint64_t number, const std::string& why) {
+    return wall.close(number, why);
+  };
+  addWallRoutes(server->requests(), WallFacts{&layout, o.background, o.maxJobs},
+                std::move(windows));
+  server->start();
+  return server;
+}
+
 }  // namespace
 
 int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath& /*failure*/) {
@@ -222,10 +241,12 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
     // mpirun the others get the head's. Key files: every process reads its own.
     wall::service::CredentialOptions credentials{o.token, o.tokenFile, o.curveDir, o.serverKey};
     std::optional<wall::service::WallService> wallService;
+    std::unique_ptr<ControlServer> control;  // serve --control: the head's window manager
     if (process == 0) {
       try {
         service.credentials = wall::service::loadCredentials(credentials, true);
         wallService.emplace(*layout, presenters->list(), service);
+        if (!o.control.empty()) control = startWallControl(o, *layout, *wallService);
       } catch (const std::exception& e) {
         if (!alone) shareHead({}, {}, timeout);  // the others learn there is no head, and stop
         std::fprintf(stderr, "dfbwall: error: %s\n", e.what());
@@ -246,7 +267,12 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
     reportStart(*wallService, service,
                 wallService->waitForProcesses(std::chrono::steady_clock::now() + timeout),
                 o.timeoutSeconds);
+    if (control) {
+      std::printf("dfbwall: window manager: %s\n", control->startLine().c_str());
+      std::fflush(stdout);
+    }
     wallService->run();
+    control.reset();  // its routes use the wall
     wallService.reset();
     if (stats) std::fclose(stats);
     const int code = stopSignal ? exitCodeForStop(stopSignal) : 0;

@@ -1,5 +1,5 @@
 #pragma once
-// The controller page's files (apps/control/page/), compiled into the binary by
+// The controller page's files (apps/control/page/) and the wall's (apps/control/wall/), compiled into the binary by
 // cmake/EmbedFiles.cmake: the control server serves them with no file on disk and no CDN.
 #include <string_view>
 #include <vector>
@@ -13,6 +13,8 @@ struct PageAsset {
 };
 
 const std::vector<PageAsset>& pageAssets();
+// The wall's own page (serve --control: apps/WallControl.h), from apps/control/wall/.
+const std::vector<PageAsset>& wallPageAssets();
 
 // The asset served at `path` ("/" is "/index.html"), or nullptr.
 inline const PageAsset* findPageAsset(std::string_view path) {

@@ -960,5 +960,23 @@ TEST_F(TwoJobsTest, TheWindowManagerListsRaisesAndClosesWindows) {
   EXPECT_EQ(two.state(a), State::Running);
 }
 
+TEST_F(TwoJobsTest, AWindowLinksOnlyAPlainWebAddressAsItsJobsPage) {
+  Hello good = inWindow("render1", "0,0,100,64");
+  good.job = "scivis builtin:wavelet";
+  good.page = "http://render1:8080/";
+  Hello bad = inWindow("render2", "50,0,100,64");
+  bad.job = "pattern\x1b[2J";
+  bad.page = "javascript:alert(1)";
+  two.hello("job-a", good, t0);
+  two.hello("job-b", bad, t0);
+  const std::vector<JobDesk::Window> windows = two.windows(t0);
+  ASSERT_EQ(windows.size(), 2u);
+  EXPECT_EQ(windows[0].state, State::Starting);
+  EXPECT_EQ(windows[0].job, "scivis builtin:wavelet");
+  EXPECT_EQ(windows[0].page, "http://render1:8080/");
+  EXPECT_EQ(windows[1].page, "");
+  EXPECT_EQ(windows[1].job.find('\x1b'), std::string::npos);
+}
+
 }  // namespace
 }  // namespace wall::service

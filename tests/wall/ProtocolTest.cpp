@@ -106,6 +106,8 @@ Hello fullHello() {
   h.wait = true;
   h.captureDir = "/scratch/captures/run 1";
   h.captureEvery = 10;
+  h.job = "scivis builtin:wavelet";
+  h.page = "http://render-node-07:8080/";
   return h;
 }
 
@@ -236,6 +238,21 @@ TEST(Protocol, HelloRoundTrips) {
     EXPECT_EQ(back.wait, hello.wait);
     EXPECT_EQ(back.captureDir, hello.captureDir);
     EXPECT_EQ(back.captureEvery, hello.captureEvery);
+    EXPECT_EQ(back.job, hello.job);
+    EXPECT_EQ(back.page, hello.page);
+  }
+  // A hello of before the window manager (no job and page at its end) reads as before; a cut one
+  // is refused.
+  {
+    messaging::Bytes bytes = packHello(fullHello());
+    const std::size_t tail = 2 + fullHello().job.size() + 2 + fullHello().page.size();
+    bytes.resize(bytes.size() - tail);
+    const Hello back = parseHello(bytes.data(), bytes.size());
+    EXPECT_EQ(back.host, "render-node-07");
+    EXPECT_EQ(back.job, "");
+    EXPECT_EQ(back.page, "");
+    bytes.resize(bytes.size() + 3);  // half a job field
+    EXPECT_THROW(parseHello(bytes.data(), bytes.size()), base::Error);
   }
   // Each codec, and the longest strings allowed.
   for (const char* codec : {"raw", "snappy", "jpeg:1:420", "jpeg:100:422"}) {
@@ -503,6 +520,8 @@ TEST(ProtocolHostile, UnknownKind) {
 
 TEST(ProtocolHostile, EveryTruncationOfAHello) {
   const messaging::Bytes whole = packHello(fullHello());
+  // Where a hello of before the window manager's fields (job, page) ends: a whole hello.
+  const std::size_t older = whole.size() - 4 - fullHello().job.size() - fullHello().page.size();
   for (std::size_t n = 0; n < whole.size(); ++n) {
     SCOPED_TRACE(n);
     const messaging::Bytes cut(whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(n));
@@ -510,6 +529,10 @@ TEST(ProtocolHostile, EveryTruncationOfAHello) {
       EXPECT_ERROR_HAS(parseHeader(cut.data(), cut.size()), "not the dfbwall protocol");
     } else {
       EXPECT_NO_THROW(parseHeader(cut.data(), cut.size()));
+    }
+    if (n == older) {
+      EXPECT_NO_THROW(parseHello(cut.data(), cut.size()));
+      continue;
     }
     EXPECT_ERROR_HAS(parseHello(cut.data(), cut.size()),
                      "malformed hello: ends after " + std::to_string(n) + " bytes");
@@ -794,8 +817,9 @@ TEST(ProtocolHostile, AHelloWithABadWindowKind) {
   const Hello back = parseHello(bytes.data(), bytes.size());
   EXPECT_EQ(back.window.kind, WindowRequest::Kind::Rect);
   EXPECT_EQ(back.window.rect, hello.window.rect);
-  // The window kind: 19 bytes from the end (kind, rectangle, an empty name's length).
-  bytes[bytes.size() - 19] = std::byte{3};
+  // The window kind: 19 bytes before the job and page fields (kind, rectangle, an empty name's
+  // length).
+  bytes[bytes.size() - 4 - hello.job.size() - hello.page.size() - 19] = std::byte{3};
   EXPECT_ERROR_HAS(parseHello(bytes.data(), bytes.size()), "window kind 3");
 }
 

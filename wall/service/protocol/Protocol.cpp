@@ -61,6 +61,8 @@ messaging::Bytes packHello(const Hello& h) {
   w.put<std::int32_t>(h.window.rect.x1);
   w.put<std::int32_t>(h.window.rect.y1);
   w.text(h.window.display);
+  w.text(h.job);
+  w.text(h.page);
   return w.take();
 }
 
@@ -84,6 +86,10 @@ Hello parseHello(const std::byte* data, std::size_t size) {
   h.window.rect.x1 = r.get<std::int32_t>();
   h.window.rect.y1 = r.get<std::int32_t>();
   h.window.display = r.text();
+  if (r.left() > 0) {  // a job of the window manager's time (a hello of before ends here)
+    h.job = r.text();
+    h.page = r.text();
+  }
   r.end();
   // The rectangle and the name are judged against the layout by the wall (resolveWindow).
   if (window > static_cast<std::uint8_t>(WindowRequest::Kind::Display))

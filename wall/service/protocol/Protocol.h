@@ -94,6 +94,11 @@ struct Hello {
   // The part of the wall the job covers (wall/layout/Window.h); the wall resolves it against its
   // layout and refuses one that is empty, outside its canvas or names no display of it.
   WindowRequest window;
+  // For the wall's window manager (serve --control), optional at the end of the message (a
+  // hello without them is read as before): what the job renders ("scivis builtin:wavelet"), and
+  // the address of its own control page (`--control`), empty when it has none.
+  std::string job;
+  std::string page;
 };
 
 // The fields of a job that its hello carries and each wall process's Start repeats: the head

@@ -23,6 +23,16 @@ constexpr std::size_t kMaxReasonBytes = 400;
 
 std::string reason(const std::string& text) { return peerText(text, kMaxReasonBytes); }
 
+// A job's page as the window manager links it: a plain http(s) address of printable ASCII, else
+// nothing (a page that links a hostile job's `javascript:` would run it).
+std::string pageAddress(const std::string& page) {
+  const bool web = page.rfind("http://", 0) == 0 || page.rfind("https://", 0) == 0;
+  const bool plain = page.size() <= 256 && std::all_of(page.begin(), page.end(), [](char c) {
+                       return c > ' ' && c < 127 && c != '"' && c != '<' && c != '>' && c != '\\';
+                     });
+  return web && plain ? page : std::string();
+}
+
 ServiceCommand shutdownCommand() {
   ServiceCommand c;
   c.header.kind = Command::Shutdown;
@@ -492,6 +502,8 @@ std::vector<JobDesk::Window> JobDesk::windows(Clock::time_point now) const {
     Window w;
     w.number = slot->number;
     w.host = peerText(slot->job.hello.host);
+    w.job = peerText(slot->job.hello.job);
+    w.page = pageAddress(slot->job.hello.page);
     w.rect = slot->window;
     w.z = static_cast<int>(std::find(stacked.begin(), stacked.end(), slot) - stacked.begin());
     w.state = slot->state;

@@ -181,6 +181,8 @@ class JobDesk {
   struct Window {
     std::uint64_t number = 0;
     std::string host;  // the job's rank-0 host, as its hello said (printable)
+    std::string job;   // what it renders, as its hello said (printable; may be empty)
+    std::string page;  // its own control page: an http(s) address, or empty
     dfb::Region rect;  // on the wall's canvas
     int z = 0;         // 0 at the bottom
     State state = State::Starting;

@@ -1,0 +1,291 @@
+#!/usr/bin/python3
+"""The wall's window manager (serve --control; docs/service.md, "The wall's control page") on a
+real service wall: a 2x2 OSMesa wall, `serve --max-jobs 2 --control`, two pattern jobs in
+overlapping windows across display borders.
+
+  wall_manager_test.py LAYOUT (the 2x2 wall)
+
+ - GET /api/wall: canvas, displays, background, max jobs; GET /api/windows: both windows with
+   their rectangles, z (the newest on top), running, frames and rate growing, job a's page;
+ - POST {"raise": true} puts job a's window on top (z), and on the wall: a Raise reaches every
+   process (job a's frames still equal its one-process render);
+ - move and resize answer 501, other bodies 400, unknown windows 404;
+ - attacks: no token, a wrong token, a rebinding Host, the page's cookie without JSON or from
+   another Origin, a body over 64 KiB: refused, nothing changed; then a good client still works;
+ - DELETE of job b's window: b exits non-zero saying "closed from the wall's control page" on
+   its rank 0, its window leaves the list at once, and job a keeps presenting new frames.
+Needs DFBWALL, COMPARE and MPIEXEC in the environment.
+"""
+import http.client
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+DFBWALL, COMPARE, MPIEXEC = os.environ["DFBWALL"], os.environ["COMPARE"], os.environ["MPIEXEC"]
+SCALE = int(os.environ.get("DFBWALL_TIME_SCALE", "1"))
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+MPI = [MPIEXEC, "--oversubscribe", "--bind-to", "none", "--mca", "mpi_yield_when_idle", "1"]
+WINDOW_A, WINDOW_B = "90,70,250,170", "20,20,200,150"
+
+
+class Test:
+    def __init__(self, layout):
+        self.layout = layout
+        self.work = tempfile.mkdtemp(prefix="wall-manager-")
+        self.procs = {}
+
+    def start(self, name, args):
+        out = open(os.path.join(self.work, name + ".out"), "w")
+        self.procs[name] = subprocess.Popen(args, stdout=out, stderr=subprocess.STDOUT, env=ENV,
+                                            start_new_session=True)
+        return self.procs[name]
+
+    def log(self, name):
+        try:
+            with open(os.path.join(self.work, name + ".out")) as f:
+                return f.read()
+        except OSError:
+            return ""
+
+    def fail(self, why):
+        print("FAIL: " + why)
+        for name in self.procs:
+            print("--- %s:\n%s" % (name, self.log(name)))
+        self.cleanup()
+        sys.exit(1)
+
+    def cleanup(self):
+        for p in self.procs.values():
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.wait()
+        if not os.environ.get("KEEP"):
+            shutil.rmtree(self.work, ignore_errors=True)
+
+    def wait_for(self, what, check, seconds):
+        end = time.time() + seconds * SCALE
+        while time.time() < end:
+            value = check()
+            if value:
+                return value
+            time.sleep(0.1)
+        self.fail("timed out waiting for " + what)
+
+    def newest(self, job, display):
+        folder = os.path.join(self.work, job, display)
+        frames = [int(f[6:12]) for f in os.listdir(folder)
+                  if re.fullmatch(r"frame-\d{6}\.png", f)] if os.path.isdir(folder) else []
+        return max(frames, default=0)
+
+
+class Http:
+    """Requests with exactly the headers given."""
+
+    def __init__(self, port, token):
+        self.port, self.token = port, token
+        self.own = "127.0.0.1:%d" % port
+
+    def send(self, method, path, headers=None, body=None, auth=True, host=None):
+        connection = http.client.HTTPConnection("127.0.0.1", self.port, timeout=10)
+        connection.putrequest(method, path, skip_host=True, skip_accept_encoding=True)
+        sent = {"Host": host or self.own}
+        if auth:
+            sent["Authorization"] = "Bearer " + self.token
+        sent.update(headers or {})
+        for name, value in sent.items():
+            if value is not None:
+                connection.putheader(name, value)
+        if body is not None:
+            body = body.encode() if isinstance(body, str) else body
+            connection.putheader("Content-Length", str(len(body)))
+        connection.endheaders(body)
+        response = connection.getresponse()
+        payload = response.read()
+        connection.close()
+        try:
+            parsed = json.loads(payload)
+        except ValueError:
+            parsed = payload
+        return response.status, response.headers, parsed
+
+    def get(self, path):
+        return self.send("GET", path)
+
+
+def main():
+    t = Test(sys.argv[1])
+    try:
+        run(t)
+    except SystemExit:
+        raise
+    except BaseException as e:  # noqa: B902 (a Python error fails the test with the logs)
+        t.fail("%s: %s" % (type(e).__name__, e))
+    t.cleanup()
+
+
+def run(t):
+    port = 20000 + os.getpid() % 20000
+    control = port + 1
+    token_file = os.path.join(t.work, "wall-control-token")
+    processes = int(subprocess.check_output([COMPARE, "--info", t.layout]).split()[0])
+    serve = t.start("serve", MPI + [
+        "-np", str(processes), DFBWALL, "serve", "--wall", t.layout, "--listen",
+        "127.0.0.1:%d" % port, "--offscreen", "--timeout", str(8 * SCALE), "--capture-root",
+        t.work, "--max-jobs", "2", "--background", "#000000", "--control", "127.0.0.1:%d" % control,
+        "--control-token-file", token_file])
+    t.wait_for("serve to start", lambda: "window manager:" in t.log("serve"), 20)
+    line = re.search(r"window manager: control API on (http://\S+)", t.log("serve"))
+    if not line or line.group(1) != "http://127.0.0.1:%d/" % control:
+        t.fail("serve did not print the window manager's address")
+    if open(token_file).read().strip() in t.log("serve"):
+        t.fail("serve printed the token of its --control-token-file")
+    api = Http(control, open(token_file).read().strip())
+
+    status, _, wall = api.get("/api/wall")
+    if status != 200 or wall["canvas"] != {"w": 412, "h": 310} or len(wall["displays"]) != 4 or \
+            wall["background"] != "#000000" or wall["max_jobs"] != 2:
+        t.fail("GET /api/wall: %d %r" % (status, wall))
+    if wall["displays"][0] != {"name": "r0c0", "rect": {"x": 0, "y": 0, "w": 200, "h": 150},
+                               "process": 0}:
+        t.fail("GET /api/wall: display 0 is %r" % wall["displays"][0])
+    if api.get("/api/windows")[2] != []:
+        t.fail("windows before any job")
+
+    # One-process renders of both windows, for job a's captures.
+    subprocess.check_call(MPI + ["-np", "1", DFBWALL, "--renderer", "pattern", "--size", "250x170",
+                                 "--frames", "10", "--quiet", "--image",
+                                 os.path.join(t.work, "ref-a.png")], env=ENV)
+    job = ["--renderer", "pattern", "--frames", "100000", "--capture-every", "10", "--quiet",
+           "--timeout", "30"]
+    t.start("a", MPI + ["-np", "2", DFBWALL, "--connect", "127.0.0.1:%d" % port, "--window",
+                        WINDOW_A, "--capture", os.path.join(t.work, "a"), "--control",
+                        "127.0.0.1:0", "--control-token-file",
+                        os.path.join(t.work, "job-token")] + job)
+    t.wait_for("job a's frame 10", lambda: t.newest("a", "r1c1") >= 10, 20)
+    t.start("b", MPI + ["-np", "2", DFBWALL, "--connect", "127.0.0.1:%d" % port, "--window",
+                        WINDOW_B, "--capture", os.path.join(t.work, "b")] + job)
+    t.wait_for("job b's frame 10", lambda: t.newest("b", "r0c0") >= 10, 20)
+
+    # Both windows, the newest on top.
+    windows = api.get("/api/windows")[2]
+    if [w["id"] for w in windows] != ["1", "2"]:
+        t.fail("GET /api/windows: %r" % windows)
+    a, b = windows
+    if a["rect"] != {"x": 90, "y": 70, "w": 250, "h": 170} or \
+            b["rect"] != {"x": 20, "y": 20, "w": 200, "h": 150}:
+        t.fail("window rectangles: %r" % windows)
+    if (a["z"], b["z"]) != (0, 1) or a["state"] != "running" or b["state"] != "running":
+        t.fail("z and state: %r" % windows)
+    if a["host"] == "" or a["job"] != "pattern builtin:cornell" or b["page"] is not None:
+        t.fail("host, job, page: %r" % windows)
+    page = re.search(r"control API on (http://127\.0\.0\.1:\d+/)", t.log("a"))
+    if not page or a["page"] != page.group(1):
+        t.fail("job a's page is %r, its log says %r" % (a["page"], page and page.group(1)))
+    time.sleep(1)
+    later = api.get("/api/windows")[2]
+    if later[0]["frames"] <= a["frames"] or later[0]["fps"] <= 0 or later[1]["fps"] <= 0:
+        t.fail("frames and rates do not grow: %r then %r" % (windows, later))
+
+    # Raise job a: on top; b under it. Raising the top window again changes nothing.
+    status, _, body = api.send("POST", "/api/windows/1", body='{"raise": true}')
+    if status != 200 or body != {"id": "1", "raised": True}:
+        t.fail("raise: %d %r" % (status, body))
+    z = {w["id"]: w["z"] for w in api.get("/api/windows")[2]}
+    if z != {"1": 1, "2": 0}:
+        t.fail("z after raising window 1: %r" % z)
+    if api.send("POST", "/api/windows/1", body='{"raise": true}')[0] != 200:
+        t.fail("raising the top window again")
+    # Refused bodies and windows.
+    for body, expected in [('{"x": 10, "y": 10, "w": 100, "h": 100}', 501),
+                           ('{"fullscreen": true}', 501), ('{"raise": false}', 400),
+                           ('{"nope": 1}', 400), ('raise', 400), ('[]', 400), ('{}', 400),
+                           (None, 400)]:
+        status, _, reply = api.send("POST", "/api/windows/2", body=body)
+        if status != expected or "error" not in reply:
+            t.fail("POST %r: %d %r, expected %d" % (body, status, reply, expected))
+    for path in ["/api/windows/3", "/api/windows/01", "/api/windows/x", "/api/windows/-1",
+                 "/api/windows/99999999999999999999999"]:
+        status, _, reply = api.send("POST", path, body='{"raise": true}')
+        if status != 404:
+            t.fail("POST %s: %d %r" % (path, status, reply))
+        if api.send("DELETE", path)[0] != 404:
+            t.fail("DELETE %s was not 404" % path)
+    if api.send("PUT", "/api/windows/1", body="{}")[0] != 405:
+        t.fail("PUT was not 405")
+
+    # Attacks: each refused, nothing changed.
+    attacks = [
+        ("no token", dict(method="DELETE", path="/api/windows/2", auth=False), 401),
+        ("a wrong token", dict(method="DELETE", path="/api/windows/2", auth=False,
+                               headers={"Authorization": "Bearer " + "0" * 32}), 401),
+        ("a rebinding Host", dict(method="DELETE", path="/api/windows/2",
+                                  host="evil.example:%d" % control), 403),
+        ("a body over 64 KiB", dict(method="POST", path="/api/windows/2",
+                                    body='{"raise": true, "pad": "' + "x" * 70000 + '"}'), 413),
+    ]
+    status, headers, _ = api.send("GET", "/?token=" + api.token, auth=False)
+    if status != 303:
+        t.fail("GET /?token= gave %d" % status)
+    cookie = headers["Set-Cookie"].split(";")[0]
+    for name, request, origin, kind in [
+            ("the page's cookie without JSON", "DELETE", api.own, None),
+            ("the page's cookie from another Origin", "DELETE", "evil.example", "application/json"),
+            ("the page's cookie without an Origin", "POST", None, "application/json")]:
+        attacks.append((name, dict(method=request, path="/api/windows/2", auth=False,
+                                   body='{"raise": true}' if request == "POST" else None,
+                                   headers={"Cookie": cookie, "Content-Type": kind,
+                                            "Origin": origin and "http://" + origin}), 403))
+    for name, request, expected in attacks:
+        status, _, reply = api.send(**request)
+        if status != expected:
+            t.fail("%s: %d %r, expected %d" % (name, status, reply, expected))
+    z = {w["id"]: (w["z"], w["state"]) for w in api.get("/api/windows")[2]}
+    if z != {"1": (1, "running"), "2": (0, "running")}:
+        t.fail("an attack changed the windows: %r" % z)
+    # The page's own way works: its cookie, JSON, its Origin.
+    status, _, reply = api.send("POST", "/api/windows/2", body='{"raise": true}', auth=False,
+                                headers={"Cookie": cookie, "Content-Type": "application/json",
+                                         "Origin": "http://" + api.own})
+    if status != 200 or {w["id"]: w["z"] for w in api.get("/api/windows")[2]} != {"1": 0, "2": 1}:
+        t.fail("the page's raise after the attacks: %d %r" % (status, reply))
+
+    # Close job b: it ends non-zero, told why; its window leaves at once; a goes on.
+    closed_at = time.time()
+    status, _, reply = api.send("DELETE", "/api/windows/2")
+    if status != 200 or reply != {"id": "2", "closed": True}:
+        t.fail("DELETE: %d %r" % (status, reply))
+    ids = [w["id"] for w in api.get("/api/windows")[2] if w["state"] != "ending"]
+    if ids != ["1"]:
+        t.fail("window 2 still open after its DELETE: %r" % api.get("/api/windows")[2])
+    code = t.procs["b"].wait(timeout=20 * SCALE)
+    if code == 0 or "closed from the wall's control page" not in t.log("b"):
+        t.fail("job b: exit %d after its window was closed" % code)
+    t.wait_for("window 2 to leave", lambda: [w["id"] for w in api.get("/api/windows")[2]] == ["1"],
+               5)
+    gone = time.time() - closed_at
+    before = t.newest("a", "r1c1")
+    t.wait_for("job a's next frames", lambda: t.newest("a", "r1c1") >= before + 20, 10)
+    if subprocess.call([COMPARE, "--window", WINDOW_A, t.layout, os.path.join(t.work, "a"),
+                        os.path.join(t.work, "ref-a.png"), "10"]) != 0:
+        t.fail("job a's captures")
+
+    # Stop: job a is told the wall stops.
+    serve.send_signal(signal.SIGUSR1)
+    if serve.wait(timeout=20 * SCALE) != 0:
+        t.fail("serve exited non-zero after SIGUSR1")
+    if t.procs["a"].wait(timeout=20 * SCALE) == 0:
+        t.fail("job a did not hear that the wall stopped")
+    print("PASS: /api/wall and /api/windows describe the wall and both windows; raise reorders "
+          "them; move/resize 501; bad bodies 400, unknown windows 404; 7 attacks refused; DELETE "
+          "ended job b (window gone %.2f s after the request) while job a went on (frame %d, then "
+          "%d)" % (gone, before, t.newest("a", "r1c1")))
+
+
+if __name__ == "__main__":
+    main()
