@@ -9,14 +9,24 @@
 
 namespace app {
 
-void addPageRoutes(ControlRequests& server, const Job& job, const Preview& preview) {
-  for (const PageAsset& asset : pageAssets()) {
+namespace {
+
+void addAssets(ControlRequests& server, const std::vector<PageAsset>& assets) {
+  for (const PageAsset& asset : assets) {
     auto serve = [&asset](const HttpRequest&) {
       return HttpReply{200, std::string(asset.contentType), std::string(asset.body), {}};
     };
     server.get(std::string(asset.path), serve);
     if (asset.path == "/index.html") server.get("/", serve);
   }
+}
+
+}  // namespace
+
+void addWallPageRoutes(ControlRequests& server) { addAssets(server, wallPageAssets()); }
+
+void addPageRoutes(ControlRequests& server, const Job& job, const Preview& preview) {
+  addAssets(server, pageAssets());
   server.get("/api/preview.png", [&preview](const HttpRequest&) {
     return HttpReply{200, "image/png", *preview.png().bytes, {}};
   });

@@ -15,5 +15,7 @@ struct Job;
 
 // Before the server starts. `preview` must outlive the server.
 void addPageRoutes(ControlRequests& server, const Job& job, const Preview& preview);
+// The wall's own page (serve --control; its API: apps/WallControl.h): "/" and its files.
+void addWallPageRoutes(ControlRequests& server);
 
 }  // namespace app

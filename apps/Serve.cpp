@@ -18,6 +18,7 @@
 #include "apps/ControlServer.h"
 #include "apps/Failure.h"
 #include "apps/Options.h"
+#include "apps/PageRoutes.h"
 #include "apps/Run.h"
 #include "apps/StopSignals.h"
 #include "apps/WallControl.h"
@@ -172,6 +173,7 @@ std::unique_ptr<ControlServer> startWallControl(const Options& o, const wall::La
   };
   addWallRoutes(server->requests(), WallFacts{&layout, o.background, o.maxJobs},
                 std::move(windows));
+  addWallPageRoutes(server->requests());
   server->start();
   return server;
 }

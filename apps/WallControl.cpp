@@ -7,7 +7,6 @@
 #include <stdexcept>
 
 #include "apps/ControlRequests.h"
-#include "apps/control/PageAssets.h"
 
 namespace app {
 namespace {
@@ -137,13 +136,6 @@ std::optional<std::uint64_t> windowNumber(const std::string& id) {
 }
 
 void addWallRoutes(ControlRequests& requests, WallFacts facts, WallWindows windows) {
-  for (const PageAsset& asset : wallPageAssets()) {
-    auto serve = [&asset](const HttpRequest&) {
-      return HttpReply{200, std::string(asset.contentType), std::string(asset.body), {}};
-    };
-    requests.get(std::string(asset.path), serve);
-    if (asset.path == "/index.html") requests.get("/", serve);
-  }
   requests.get("/api/wall",
                [body = wallJson(facts)](const HttpRequest&) { return json(200, body); });
   requests.get("/api/windows", [windows](const HttpRequest&) {

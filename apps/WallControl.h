@@ -11,7 +11,8 @@
 //   POST   /api/windows/ID   {"raise": true}: on top on every display; {"x", "y", "w", "h"} and
 //                            {"fullscreen": true} (move, resize): 501 for now
 //   DELETE /api/windows/ID   the job is ended, told kClosedFromThePage; its window closes at once
-//   GET    /, /index.html, /wall.js, /wall.css   the page (apps/control/wall/)
+// The page itself (/, /index.html, /wall.js, /wall.css, from apps/control/wall/) is served by
+// addWallPageRoutes (apps/PageRoutes.h).
 //
 // The handlers read the desk's last published windows and hand a raise or a close to the desk
 // thread (wall::service::Desk), which answers within a turn: a client never holds up a frame.
@@ -46,7 +47,7 @@ struct WallFacts {
 // What a job closed from the page is told (its log: "the wall at … ended the job: …").
 constexpr const char* kClosedFromThePage = "closed from the wall's control page";
 
-// Before the server starts.
+// Before the server starts: the API routes above.
 void addWallRoutes(ControlRequests& requests, WallFacts facts, WallWindows windows);
 
 // The window number an id names ("3": 3): decimal digits only, no sign or leading zero, within

@@ -1,5 +1,6 @@
 // libFuzzer target: the control API's request handling (apps/ControlRequests.h and the API's
-// routes, apps/ControlApi.h), as the server runs it, without a socket. The input is a request
+// routes, apps/ControlApi.h, with the wall's window manager's, apps/WallControl.h), as the
+// server runs it, without a socket. The input is a request
 // as text: "METHOD PATH?A=B&C=D", header lines "Name: value", an empty line, the body. Every
 // request ends in a reply, never a crash; a reply to a request without the secret is 401 or 403.
 #include <cstddef>
@@ -12,6 +13,7 @@
 #include "apps/ControlApi.h"
 #include "apps/ControlRequests.h"
 #include "apps/StatusBoard.h"
+#include "apps/WallControl.h"
 
 namespace {
 
@@ -34,6 +36,27 @@ const app::ControlRequests& requests() {
           return 1;
         },
         status);
+    // The wall's routes (serve --control) on the same server: paths of their own.
+    static const wall::Layout layout = [] {
+      wall::Layout l;
+      l.canvasWidth = 300;
+      l.canvasHeight = 200;
+      l.processCount = 1;
+      l.displays.push_back(wall::Display{});
+      l.displays.back().name = "main";
+      l.displays.back().rect = {0, 0, 300, 200};
+      return l;
+    }();
+    app::WallWindows windows;
+    windows.list = [] {
+      wall::service::JobDesk::Window w;
+      w.number = 1;
+      w.rect = {0, 0, 300, 200};
+      return std::vector<wall::service::JobDesk::Window>{w};
+    };
+    windows.raise = [](std::uint64_t n) { return n == 1; };
+    windows.close = [](std::uint64_t n, const std::string&) { return n == 1; };
+    app::addWallRoutes(*r, app::WallFacts{&layout, 0xff000000u, 2}, windows);
     return r;
   }();
   return *requests;

@@ -1,0 +1,188 @@
+// The wall's window manager routes (apps/WallControl.h) behind the control server's checks: what
+// each request is answered and what it asks of the wall. The wall here is a list the test holds;
+// the routes on a real service wall are service_window_manager (wall_manager_test.py).
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/ControlRequests.h"
+#include "apps/WallControl.h"
+#include "wall/layout/Layout.h"
+
+namespace app {
+namespace {
+
+using Window = wall::service::JobDesk::Window;
+using State = wall::service::JobDesk::State;
+const std::string kToken = "0123456789abcdef0123456789abcdef";
+
+constexpr const char* k2x1 = R"(
+[[display]]
+name = "left"
+origin = [0, 0]
+size = [200, 150]
+process = 0
+[[display]]
+name = "right"
+origin = [210, 0]
+size = [200, 150]
+process = 1
+)";
+
+wall::Layout twoByOne() {
+  wall::LayoutResult result = wall::readLayoutText(k2x1, "2x1.toml");
+  EXPECT_TRUE(result.ok());
+  return result.layout;
+}
+
+class WallControlTest : public ::testing::Test {
+ protected:
+  WallControlTest() : layout(twoByOne()), requests(ControlAccess{kToken, 8080, {"127.0.0.1"}}) {
+    Window a;
+    a.number = 1;
+    a.host = "render1";
+    a.job = "scivis builtin:wavelet";
+    a.page = "http://render1:8081/";
+    a.rect = {0, 0, 300, 150};
+    a.z = 0;
+    a.state = State::Running;
+    a.frames = 40;
+    a.fps = 19.96;
+    Window b = a;
+    b.number = 12;
+    b.page.clear();
+    b.rect = {100, 20, 400, 120};
+    b.z = 1;
+    b.idle = true;
+    list = {a, b};
+    WallWindows windows;
+    windows.list = [this] { return list; };
+    windows.raise = [this](std::uint64_t n) {
+      raised.push_back(n);
+      return n != 12 || !goneBeforeRaise;
+    };
+    windows.close = [this](std::uint64_t n, const std::string& why) {
+      closed.emplace_back(n, why);
+      return true;
+    };
+    addWallRoutes(requests, WallFacts{&layout, 0xff302010u, 3}, std::move(windows));
+  }
+
+  HttpReply send(const std::string& method, const std::string& path, const std::string& body = {}) {
+    HttpRequest q;
+    q.method = method;
+    q.path = path;
+    q.body = body;
+    q.headers = {{"Host", "127.0.0.1:8080"}, {"Authorization", "Bearer " + kToken}};
+    return requests.handle(q);
+  }
+  static nlohmann::json json(const HttpReply& r) { return nlohmann::json::parse(r.body); }
+
+  wall::Layout layout;
+  ControlRequests requests;
+  std::vector<Window> list;
+  std::vector<std::uint64_t> raised;
+  std::vector<std::pair<std::uint64_t, std::string>> closed;
+  bool goneBeforeRaise = false;
+};
+
+TEST_F(WallControlTest, TheWallAndItsWindowsAreDescribed) {
+  const HttpReply wall = send("GET", "/api/wall");
+  ASSERT_EQ(wall.status, 200);
+  EXPECT_EQ(json(wall), nlohmann::json::parse(R"({
+    "canvas": {"w": 410, "h": 150},
+    "displays": [{"name": "left", "rect": {"x": 0, "y": 0, "w": 200, "h": 150}, "process": 0},
+                 {"name": "right", "rect": {"x": 210, "y": 0, "w": 200, "h": 150}, "process": 1}],
+    "background": "#102030", "max_jobs": 3})"));
+  const HttpReply windows = send("GET", "/api/windows");
+  ASSERT_EQ(windows.status, 200);
+  EXPECT_EQ(json(windows), nlohmann::json::parse(R"([
+    {"id": "1", "job": "scivis builtin:wavelet", "host": "render1",
+     "rect": {"x": 0, "y": 0, "w": 300, "h": 150}, "z": 0, "fps": 20.0, "state": "running",
+     "frames": 40, "page": "http://render1:8081/"},
+    {"id": "12", "job": "scivis builtin:wavelet", "host": "render1",
+     "rect": {"x": 100, "y": 20, "w": 300, "h": 100}, "z": 1, "fps": 20.0, "state": "idle",
+     "frames": 40, "page": null}])"));
+  list[1].state = State::Starting;
+  EXPECT_EQ(json(send("GET", "/api/windows"))[1]["state"], "starting");
+  list[1].state = State::Ending;
+  EXPECT_EQ(json(send("GET", "/api/windows"))[1]["state"], "ending");
+  list.clear();
+  EXPECT_EQ(send("GET", "/api/windows").body, "[]");
+}
+
+TEST_F(WallControlTest, RaiseAndCloseReachTheWall) {
+  const HttpReply raise = send("POST", "/api/windows/12", R"({"raise": true})");
+  EXPECT_EQ(raise.status, 200);
+  EXPECT_EQ(json(raise), nlohmann::json::parse(R"({"id": "12", "raised": true})"));
+  EXPECT_EQ(raised, (std::vector<std::uint64_t>{12}));
+  const HttpReply close = send("DELETE", "/api/windows/1");
+  EXPECT_EQ(close.status, 200);
+  EXPECT_EQ(json(close), nlohmann::json::parse(R"({"id": "1", "closed": true})"));
+  ASSERT_EQ(closed.size(), 1u);
+  EXPECT_EQ(closed[0].first, 1u);
+  EXPECT_EQ(closed[0].second, "closed from the wall's control page");
+  // A window that leaves between the look-up and the raise.
+  goneBeforeRaise = true;
+  EXPECT_EQ(send("POST", "/api/windows/12", R"({"raise": true})").status, 404);
+}
+
+TEST_F(WallControlTest, BadBodiesAndUnknownWindowsAreRefusedAndNothingIsDone) {
+  for (const char* body : {R"({"x": 1, "y": 2, "w": 30, "h": 40})", R"({"fullscreen": true})",
+                           R"({"raise": true, "x": 5})"}) {
+    const HttpReply r = send("POST", "/api/windows/1", body);
+    EXPECT_EQ(r.status, 501) << body;
+    EXPECT_NE(json(r)["error"].get<std::string>().find("not done yet"), std::string::npos);
+  }
+  for (const char* body : {"", "raise", "[]", "{}", "null", R"({"raise": false})",
+                           R"({"raise": 1})", R"({"raise": true, "colour": "red"})"}) {
+    const HttpReply r = send("POST", "/api/windows/1", body);
+    EXPECT_EQ(r.status, 400) << body;
+    EXPECT_TRUE(json(r).contains("error")) << body;
+  }
+  for (const char* path :
+       {"/api/windows/2", "/api/windows/01", "/api/windows/+1", "/api/windows/1x",
+        "/api/windows/18446744073709551616", "/api/windows/%31"}) {
+    EXPECT_EQ(send("POST", path, R"({"raise": true})").status, 404) << path;
+    EXPECT_EQ(send("DELETE", path).status, 404) << path;
+  }
+  // Routes are one segment deep; other methods are told which serve them.
+  EXPECT_EQ(send("POST", "/api/windows/", R"({"raise": true})").status, 404);
+  EXPECT_EQ(send("POST", "/api/windows/1/x", R"({"raise": true})").status, 404);
+  EXPECT_EQ(send("DELETE", "/api/windows").status, 405);
+  const HttpReply put = send("PUT", "/api/windows/1", "{}");
+  EXPECT_EQ(put.status, 405);
+  EXPECT_TRUE(raised.empty());
+  EXPECT_TRUE(closed.empty());
+}
+
+TEST_F(WallControlTest, EveryRouteIsBehindTheServersChecks) {
+  for (const auto& [method, path] :
+       std::vector<std::pair<std::string, std::string>>{{"GET", "/api/wall"},
+                                                        {"GET", "/api/windows"},
+                                                        {"POST", "/api/windows/1"},
+                                                        {"DELETE", "/api/windows/1"}}) {
+    HttpRequest q;
+    q.method = method;
+    q.path = path;
+    q.body = R"({"raise": true})";
+    q.headers = {{"Host", "127.0.0.1:8080"}};
+    EXPECT_EQ(requests.handle(q).status, 401) << method << " " << path;
+    q.headers = {{"Host", "evil.example:8080"}, {"Authorization", "Bearer " + kToken}};
+    EXPECT_EQ(requests.handle(q).status, 403) << method << " " << path;
+  }
+  EXPECT_EQ(send("POST", "/api/windows/1", std::string(kMaxControlBody + 1, ' ')).status, 413);
+  EXPECT_TRUE(raised.empty());
+  EXPECT_TRUE(closed.empty());
+}
+
+TEST(WindowNumber, OnlyPlainDecimalNumbers) {
+  EXPECT_EQ(windowNumber("1"), 1u);
+  EXPECT_EQ(windowNumber("18446744073709551615"), 18446744073709551615u);
+  for (const char* id : {"", "0", "01", "-1", "+1", " 1", "1 ", "1e3", "0x10",
+                         "18446744073709551616", "999999999999999999999"})
+    EXPECT_FALSE(windowNumber(id).has_value()) << id;
+}
+
+}  // namespace
+}  // namespace app
