@@ -99,13 +99,13 @@ done
   --stats "$work/still.json" "$work/plot.png" >"$work/show.out" 2>&1 &
 still=$!
 for _ in $(seq $((100 * scale))); do [ "$(frames "$work/still.json")" -ge 1 ] && break; sleep 0.1; done
-sleep 2
+sleep 1
 kill -0 "$still" 2>/dev/null || fail "a still picture did not stay on the wall"
 kill -USR1 "$still"
 wait "$still" || fail "show of a still picture did not end cleanly on SIGUSR1"
 still=""
 [ "$(frames "$work/still.json")" -eq 1 ] ||
-  fail "a still picture was sent $(frames "$work/still.json") times in 2 s, not once"
+  fail "a still picture was sent $(frames "$work/still.json") times in 1 s, not once"
 
 # --loop goes on past the last picture.
 "$DFBWALL" show --connect "127.0.0.1:$port" --token show-test --quiet --window "$window" --loop \
