@@ -4,7 +4,8 @@ Pillow, put over the background, fitted into the window keeping its aspect and s
 docs/service.md ("Pictures beside renders") defines it, in numpy integer arithmetic.
 
   picture_expected.py make DIR         test pictures: plot.png (RGBA, 97x61, partly transparent)
-                                       and seq-0001.jpg .. seq-0003.jpg (4:4:4, 60x80)
+                                       and seq-0001.jpg .. seq-0003.jpg (60x80, 4:2:0 as
+                                       photos are)
   picture_expected.py fit PICTURE W H nearest|bilinear #rrggbb OUT.png
 """
 import sys
@@ -27,7 +28,7 @@ def make(folder):
         frame = np.zeros((80, 60, 3), np.uint8)
         frame[..., k - 1] = 200
         frame[10 * k:10 * k + 20, 5:55] = (255, 255, 255)
-        Image.fromarray(frame, "RGB").save(f"{folder}/seq-{k:04d}.jpg", quality=95, subsampling=0)
+        Image.fromarray(frame, "RGB").save(f"{folder}/seq-{k:04d}.jpg", quality=90)
 
 
 def fit(pw, ph, ww, wh):
