@@ -381,7 +381,7 @@ void addRelay(CLI::App& relay, RelayCommand& c) {
 
 void addShow(CLI::App& show, Options& o, RawOptions& raw) {
   ShowOptions& s = o.pictures;
-  show.add_option("IMAGE", s.pictures,
+  show.add_option("IMAGE", s.arguments,
                   "PNG or JPEG files, or numbered sequences (plot-%04d.png: every number from the "
                   "lowest to the highest, no gap), shown one after another")
       ->required()

@@ -141,7 +141,7 @@ std::string showProblem(Options& o, const RawOptions& raw) {
       return problem;
   if (std::string problem = connectProblem(o); !problem.empty()) return problem;
   try {
-    s.files = renderers::picture::expandPictures(s.pictures);
+    s.files = renderers::picture::expandPictures(s.arguments);
   } catch (const std::exception& e) {
     return e.what();
   }

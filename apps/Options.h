@@ -12,7 +12,7 @@ namespace app {
 // `dfbwall show`: ready-made pictures in a window of a serving wall, played as a job's frames
 // (renderers/picture/PictureRenderer.h). The connection options are the job's (Options below).
 struct ShowOptions {
-  std::vector<std::string> pictures;       // as given: files and numbered sequences
+  std::vector<std::string> arguments;      // as given: files and numbered sequences
   std::vector<std::string> files;          // expanded, in play order
   double fps = 1;                          // pictures per second of a sequence
   bool loop = false, once = false;         // after the last: start again / end (default: hold it)

@@ -225,9 +225,13 @@ std::string compareInputs(const Job& job, const InputHashes& mine,
            ": the ranks read different bytes from this file; every host "
            "must see the same layout";
   if (high[2] != (high[3] ? ~high[3] : 0))
-    return job.options.scene +
-           ": the render ranks read different bytes from this file or the files it refers to; "
-           "every host must see the same scene";
+    return job.options.show
+               ? std::string(
+                     "show: the ranks read different bytes from the pictures; every "
+                     "host must see the same files")
+               : job.options.scene +
+                     ": the render ranks read different bytes from this file or the files it "
+                     "refers to; every host must see the same scene";
   return {};
 }
 
