@@ -4,7 +4,9 @@
 // arithmetic only (exact rationals, rounded once), so every pixel is reproducible anywhere and
 // by an independent program (tests/apps/picture_expected.py).
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "renderers/picture/PictureFile.h"
 
@@ -36,5 +38,28 @@ void flattenOver(Picture& picture, std::uint32_t background);
 //            rational n / (2w); the four neighbours weighted by it, rounded to nearest once.
 std::uint32_t fittedPixel(const Picture& picture, const Placement& placement, Filter filter,
                           std::uint32_t background, int x, int y);
+
+// The same pixels a row at a time: every column's and row's source taps worked out once per
+// picture and window, so a pixel costs multiplications and one exact division per channel
+// (cheaper than fittedPixel: docs/benchmarks.md, "Pictures"). Thread-safe once built.
+class FittedPicture {
+ public:
+  FittedPicture(std::shared_ptr<const Picture> picture, int windowWidth, int windowHeight,
+                Filter filter, std::uint32_t background);
+  // Window pixels x0 .. x1-1 of row y into out[0 .. x1-x0-1]; each equals fittedPixel's.
+  void row(int y, int x0, int x1, std::uint32_t* out) const;
+  const Placement& placement() const { return placement_; }
+
+ private:
+  struct Tap {
+    int first = 0, second = 0;
+    std::uint64_t weight = 0;  // of `second`, over 2 * the scaled size (bilinear)
+  };
+  std::shared_ptr<const Picture> picture_;
+  Placement placement_;
+  Filter filter_;
+  std::uint32_t background_;
+  std::vector<Tap> columns_, rows_;  // per placement column and row
+};
 
 }  // namespace renderers::picture

@@ -36,16 +36,17 @@ std::shared_ptr<const Picture> PictureSet::picture(std::size_t index) const {
 
 PictureRenderer::PictureRenderer(const PictureSet& pictures, const RenderSettings& settings)
     : pictures_(pictures), width_(settings.width), height_(settings.height) {
-  picture_ = pictures_.picture(0);
-  placement_ = fitPicture(picture_->width, picture_->height, width_, height_);
+  const PictureDesc& desc = pictures_.desc();
+  fitted_ = std::make_unique<FittedPicture>(pictures_.picture(0), width_, height_, desc.filter,
+                                            desc.background);
 }
 
 void PictureRenderer::beginFrame(const dfb::FrameInfo& frame, const CameraDesc& /*camera*/) {
   const PictureDesc& desc = pictures_.desc();
   const std::size_t index = pictureOfFrame(frame.frameId, desc.files.size(), desc.loop);
   if (index == shown_) return;
-  picture_ = pictures_.picture(index);
-  placement_ = fitPicture(picture_->width, picture_->height, width_, height_);
+  fitted_ = std::make_unique<FittedPicture>(pictures_.picture(index), width_, height_, desc.filter,
+                                            desc.background);
   shown_ = index;
 }
 
@@ -55,11 +56,10 @@ void PictureRenderer::render(const dfb::Region& region, std::uint32_t accumulati
   prepareTile(region, accumulationId, firstSample, samples, out);
   out.color.clear();  // display pixels only (RenderSettings::displayPixels)
   out.rgba8.resize(static_cast<std::size_t>(region.pixelCount()));
-  const PictureDesc& desc = pictures_.desc();
-  std::uint32_t* px = out.rgba8.data();
+  const std::size_t width = static_cast<std::size_t>(region.x1 - region.x0);
   for (int y = region.y0; y < region.y1; ++y)
-    for (int x = region.x0; x < region.x1; ++x)
-      *px++ = fittedPixel(*picture_, placement_, desc.filter, desc.background, x, y);
+    fitted_->row(y, region.x0, region.x1,
+                 out.rgba8.data() + static_cast<std::size_t>(y - region.y0) * width);
 }
 
 void registerPictures() {

@@ -62,8 +62,7 @@ class PictureRenderer final : public Renderer {
   const PictureSet& pictures_;
   int width_, height_;
   std::size_t shown_ = 0;
-  std::shared_ptr<const Picture> picture_;
-  Placement placement_;
+  std::unique_ptr<FittedPicture> fitted_;  // the picture shown, fitted into the canvas
 };
 
 // Registers the renderer kPictureName (RendererRegistry.h); calling it again does nothing.

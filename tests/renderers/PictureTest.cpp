@@ -5,9 +5,11 @@
 #include <turbojpeg.h>
 #include <unistd.h>
 
+#include <array>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -118,6 +120,35 @@ TEST(PictureFit, NearestDoublesAndBilinearWeighsExactly) {
   EXPECT_EQ(fittedPixel(p, letterboxed, Filter::Bilinear, bg, 0, 0), bg);
   EXPECT_EQ(fittedPixel(p, letterboxed, Filter::Bilinear, bg, 0, 3), bg);
   EXPECT_NE(fittedPixel(p, letterboxed, Filter::Bilinear, bg, 3, 2), bg);
+}
+
+// The row at a time path equals the pixel at a time definition, for both filters, up and down,
+// in and out of the placement, from any column.
+TEST(PictureFit, RowsEqualPixels) {
+  std::uint32_t seed = 1;
+  auto random = [&seed] { return seed = seed * 1664525u + 1013904223u; };
+  for (const auto& [pw, ph, ww, wh] : std::vector<std::array<int, 4>>{{97, 61, 250, 170},
+                                                                      {61, 97, 250, 170},
+                                                                      {400, 300, 37, 29},
+                                                                      {1, 1, 5, 3},
+                                                                      {3, 1000, 64, 64},
+                                                                      {640, 360, 1920, 1080}}) {
+    Picture p{pw, ph, {}};
+    for (int i = 0; i < pw * ph; ++i) p.rgba.push_back(random() | 0xff000000u);
+    const auto shared = std::make_shared<const Picture>(p);
+    for (Filter f : {Filter::Nearest, Filter::Bilinear}) {
+      const FittedPicture fitted(shared, ww, wh, f, rgba(9, 8, 7));
+      const Placement at = fitPicture(pw, ph, ww, wh);
+      std::vector<std::uint32_t> row(static_cast<size_t>(ww));
+      for (int y = 0; y < wh; y += std::max(1, wh / 40)) {
+        const int x0 = y % 3 == 0 ? 0 : ww / 3;
+        fitted.row(y, x0, ww, row.data());
+        for (int x = x0; x < ww; ++x)
+          ASSERT_EQ(row[static_cast<size_t>(x - x0)], fittedPixel(p, at, f, rgba(9, 8, 7), x, y))
+              << pw << "x" << ph << " into " << ww << "x" << wh << " at " << x << "," << y;
+      }
+    }
+  }
 }
 
 TEST(PictureFit, TransparencyShowsTheBackground) {
