@@ -73,6 +73,15 @@ def run(t):
         "--control", "127.0.0.1:%d" % control, "--control-token-file", token_file])
     t.wait_for("serve to start", lambda: "window manager:" in t.log("serve"), 20)
     api = Http(control, open(token_file).read().strip())
+    # The browser first: it starts slowly on a host the jobs keep busy.
+    options = Options()
+    options.binary_location = "/usr/bin/chromium"
+    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                 "--window-size=1280,900"):
+        options.add_argument(flag)
+    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+    DRIVERS.append(driver)
+    driver.set_page_load_timeout(30)
     job = ["--renderer", "pattern", "--frames", "100000", "--quiet", "--timeout", "30"]
     t.start("a", MPI + ["-np", "1", DFBWALL, "--connect", "127.0.0.1:%d" % port, "--window",
                         WINDOW_A, "--control", "127.0.0.1:0", "--control-token-file",
@@ -85,14 +94,6 @@ def run(t):
                ["running", "running"], 20)
     page_a = re.search(r"control API on (http://127\.0\.0\.1:\d+/)", t.log("a")).group(1)
 
-    options = Options()
-    options.binary_location = "/usr/bin/chromium"
-    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                 "--window-size=1280,900"):
-        options.add_argument(flag)
-    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
-    DRIVERS.append(driver)
-    driver.set_page_load_timeout(30)
     driver.get("http://127.0.0.1:%d/?token=%s" % (control, api.token))  # what serve printed
     if "token" in driver.current_url:
         t.fail("the token stayed in the address bar: " + driver.current_url)
