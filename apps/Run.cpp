@@ -187,7 +187,10 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
                                     o.dryRun ? std::string() : o.captureDir, o.captureEvery);
         hello.window = wall::parseWindowRequest(o.window);
         // For the wall's window manager: what this job renders, and where its page is.
-        hello.job = (o.renderer + " " + o.scene).substr(0, 256);
+        std::string what = o.show ? "show" : o.renderer + " " + o.scene;
+        if (o.show)
+          for (const std::string& picture : o.pictures.arguments) what += " " + picture;
+        hello.job = what.substr(0, 256);
         if (server) hello.page = server->pageAddress(hello.host);
         job.service = std::make_shared<wall::service::ServiceClient>(
             o.connect,
