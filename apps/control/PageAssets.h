@@ -1,6 +1,7 @@
 #pragma once
-// The controller page's files (apps/control/page/) and the wall's (apps/control/wall/), compiled into the binary by
-// cmake/EmbedFiles.cmake: the control server serves them with no file on disk and no CDN.
+// The controller page's files (apps/control/page/) and the wall's (apps/control/wall/), compiled
+// into the binary by cmake/EmbedFiles.cmake: the control server serves them with no file on disk
+// and no CDN.
 #include <string_view>
 #include <vector>
 
