@@ -66,8 +66,11 @@ TEST(FrameAgreements, ABarrierOnlyProcessesOutOfTheWindowCameToWaitsForTheWindow
   EXPECT_TRUE(board.overdue(takesPart, t + 1h).empty());  // not open: the job may idle
   oneTakesPart = false;                                   // process 1 is done
   EXPECT_TRUE(board.complete(takesPart).empty());         // nobody rendered frame 2
-  EXPECT_TRUE(board.complete(takesPart, 3).empty());      // the job ends after frame 2
-  const auto released = board.complete(takesPart, 2);     // the job ends after frame 1
+  const auto from = [](std::uint32_t first) {
+    return [first](std::uint32_t frameId) { return frameId >= first; };
+  };
+  EXPECT_TRUE(board.complete(takesPart, from(3)).empty());   // the job ends after frame 2
+  const auto released = board.complete(takesPart, from(2));  // the job ends after frame 1
   ASSERT_EQ(released.size(), 1u);
   EXPECT_EQ(released[0].processes, std::vector<int>{0});
 }

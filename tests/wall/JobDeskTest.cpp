@@ -261,6 +261,35 @@ TEST_F(JobDeskTest, ProcessesOutOfAWindowWithNobodyInItAreLetGoWhenTheJobEnds) {
   EXPECT_EQ(letGo[0].frameId, 1u);
 }
 
+// The window's only process lost, the others wait rather than present frames nobody shows; back
+// in the job from a later frame, the frames before it go (the job may have rendered them and
+// needs their credits to render that one), and the later ones wait for it again.
+TEST_F(JobDeskTest, AWindowsProcessBackInTheJobLetsTheFramesBeforeItsFirstGo) {
+  Hello hello = helloFrom("render1");
+  hello.window = parseWindowRequest("130,0,40,40");
+  jobs.hello("job-a", hello, t0);
+  allReady(t0);
+  const std::uint64_t session = jobs.session();
+  for (int p = 0; p < 3; ++p) jobs.arrive(p, session, 1, {1}, t0);
+  jobs.presented(session, 1, 0);
+  jobs.arrive(0, session, 2, {1}, t0 + 10ms);
+  jobs.arrive(1, session, 2, {1}, t0 + 10ms);
+  EXPECT_TRUE(only<JobDesk::Release>(lose(2, "gone", t0 + 20ms)).empty());
+  EXPECT_TRUE(only<JobDesk::Release>(jobs.tick(t0 + 30ms)).empty());
+  members.admit("link2b", joinOf(2, 2), t0 + 40ms);
+  EXPECT_EQ(given(jobs.joined(2, t0 + 40ms), Command::Start), std::vector<int>{2});
+  const Actions back = jobs.answer(2, answer(Command::Ready, 1), t0 + 50ms);
+  EXPECT_EQ(commandTo(back, 2, Command::FirstFrame).header.a, 4);  // credited 1, granted 2
+  const auto frame2 = only<JobDesk::Release>(back);
+  ASSERT_EQ(frame2.size(), 2u);
+  EXPECT_EQ(frame2[0].frameId, 2u);
+  jobs.arrive(0, session, 3, {1}, t0 + 60ms);
+  EXPECT_EQ(only<JobDesk::Release>(jobs.arrive(1, session, 3, {1}, t0 + 60ms)).size(), 2u);
+  jobs.arrive(0, session, 4, {1}, t0 + 70ms);
+  EXPECT_TRUE(only<JobDesk::Release>(jobs.arrive(1, session, 4, {1}, t0 + 70ms)).empty());
+  EXPECT_EQ(only<JobDesk::Release>(jobs.arrive(2, session, 4, {1}, t0 + 80ms)).size(), 3u);
+}
+
 TEST_F(JobDeskTest, AWindowTheWallDoesNotHaveIsRefusedAndTheNextJobRuns) {
   // An unknown display, a rectangle past the canvas (192x64), an empty one (from the wire).
   WindowRequest unknown, outside, empty;

@@ -38,14 +38,13 @@ bool FrameAgreements::arrive(int process, std::uint32_t frameId,
   return true;
 }
 
-std::vector<FrameAgreements::Release> FrameAgreements::complete(
-    const TakesPart& takesPart, std::optional<std::uint32_t> unrenderedFrom) {
+std::vector<FrameAgreements::Release> FrameAgreements::complete(const TakesPart& takesPart,
+                                                                const GoesUnpaced& goesUnpaced) {
   std::vector<Release> out;
   for (auto at = barriers_.begin(); at != barriers_.end();) {
     const std::uint32_t frameId = at->first;
     Barrier& b = at->second;
-    bool all =
-        (pacedUpTo_ && frameId <= *pacedUpTo_) || (unrenderedFrom && frameId >= *unrenderedFrom);
+    bool all = (pacedUpTo_ && frameId <= *pacedUpTo_) || (goesUnpaced && goesUnpaced(frameId));
     for (int p = 0; p < processCount_ && all; ++p)
       all = !takesPart(p, frameId) || b.arrived[static_cast<size_t>(p)];
     if (!all) {

@@ -10,8 +10,9 @@
 // for, so they come to frame F's barrier as soon as F - 1 is released, whether or not the job
 // renders F (it may idle, converged, or end at F - 1). Only a process in the window *paces* the
 // job: a barrier opens (its overdue clock starts) at the first pacing arrival, and one no pacing
-// process came to, at this frame or a later one, is released only from the frame on that the
-// caller says the job does not render (its processes were told to stop or abort first).
+// process came to, at this frame or a later one, is released only where the caller says so (a
+// frame the job does not render, its processes told to stop or abort first; a frame no process of
+// the window can show).
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -41,11 +42,11 @@ class FrameAgreements {
     std::vector<std::int64_t> values;
     std::vector<int> processes;  // those that arrived, to be released
   };
+  // Whether frame F's barrier goes without a pacing process (above).
+  using GoesUnpaced = std::function<bool(std::uint32_t frameId)>;
   // Every barrier whose taking-part processes have all arrived and that is paced (a pacing
-  // process came to it or to a later one) or at `unrenderedFrom` or later, removed from the
-  // board.
-  std::vector<Release> complete(const TakesPart& takesPart,
-                                std::optional<std::uint32_t> unrenderedFrom = std::nullopt);
+  // process came to it or to a later one) or goes unpaced, removed from the board.
+  std::vector<Release> complete(const TakesPart& takesPart, const GoesUnpaced& goesUnpaced = {});
 
   // Barriers that opened (above) before `openedBefore` and that still wait: the
   // processes taking part that have not arrived (a process that beats but never arrives would

@@ -744,6 +744,7 @@ void JobDesk::joinedJob(int p) {
                             {"host", members_.member(p).host},
                             {"frame", first}})});
   sendRoster(first, line);
+  releaseWhatCan();  // frames before its first that no other process of the window shows
 }
 
 // ---- barriers and gathers ----
@@ -778,7 +779,21 @@ void JobDesk::dropOverdue() {
 // Barriers and gathers that nobody holds up any more go back to their processes.
 void JobDesk::releaseWhatCan() {
   const auto takesPart = [this](int p, std::uint32_t frameId) { return participates(p, frameId); };
-  for (FrameAgreements::Release& r : j_->agreements.complete(takesPart, j_->unrenderedFrom))
+  // A frame no process of the window came to goes when the job will not render it, or when no
+  // process of the window can show it: one back in the job shows frames from a later one only,
+  // and the job may have rendered those before it (it gets their credits to go on).
+  const auto goesUnpaced = [this](std::uint32_t frameId) {
+    if (j_->unrenderedFrom && frameId >= *j_->unrenderedFrom) return true;
+    bool later = false;
+    for (int p = 0; p < members_.processCount(); ++p) {
+      if (!j_->inWindow[static_cast<size_t>(p)]) continue;
+      if (participates(p, frameId)) return false;
+      const Seat& seat = j_->seats[static_cast<size_t>(p)];
+      later = later || (seat.in && !seat.done && members_.live(p) && seat.fromFrame != kNotYet);
+    }
+    return later;
+  };
+  for (FrameAgreements::Release& r : j_->agreements.complete(takesPart, goesUnpaced))
     for (int p : r.processes) emit(Release{p, j_->job.session, r.frameId, r.values});
   for (FrameAgreements::Gathered& g : j_->agreements.gathered(takesPart, now_))
     emit(Gathered{j_->job.session, g.frameId, std::move(g.pixels)});
