@@ -1,8 +1,5 @@
 #include "wall/display/WindowStack.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <atomic>
 
@@ -231,33 +228,24 @@ void composeLayers(Image& frame, std::uint32_t background,
     }
     bands.push_back(std::move(band));
   }
-  const auto rows = [&](int y0, int y1) {
-    size_t b = 0;
-    while (bands[b].y1 <= y0) ++b;
-    for (int y = y0; y < y1; ++y) {
-      if (y >= bands[b].y1) ++b;
-      std::uint32_t* out = frame.pixels.data() + static_cast<std::ptrdiff_t>(y) * width;
-      for (const Span& s : bands[b].spans) {
-        if (s.layer < 0) {
-          std::fill(out + s.x0, out + s.x1, background);
-          continue;
-        }
-        const ComposedLayer& l = layers[static_cast<size_t>(s.layer)];
-        const std::uint32_t* in = l.pixels->pixels.data() +
-                                  static_cast<std::ptrdiff_t>(y - l.part.y0) * l.part.width() +
-                                  (s.x0 - l.part.x0);
-        std::copy(in, in + (s.x1 - s.x0), out + s.x0);
+  // One thread: composing is a copy bound by memory bandwidth; TBB's threads bought nothing here
+  // (docs/benchmarks.md, "Composition") and would take cores from the pieces' decoding.
+  std::size_t b = 0;
+  for (int y = 0; y < height; ++y) {
+    if (y >= bands[b].y1) ++b;
+    std::uint32_t* out = frame.pixels.data() + static_cast<std::ptrdiff_t>(y) * width;
+    for (const Span& s : bands[b].spans) {
+      if (s.layer < 0) {
+        std::fill(out + s.x0, out + s.x1, background);
+        continue;
       }
+      const ComposedLayer& l = layers[static_cast<size_t>(s.layer)];
+      const std::uint32_t* in = l.pixels->pixels.data() +
+                                static_cast<std::ptrdiff_t>(y - l.part.y0) * l.part.width() +
+                                (s.x0 - l.part.x0);
+      std::copy(in, in + (s.x1 - s.x0), out + s.x0);
     }
-  };
-  // A row is a few KB: chunks of rows amortise a task; a small display is not worth the tasks.
-  constexpr std::int64_t kParallelPixels = 1 << 18;
-  if (static_cast<std::int64_t>(width) * height < kParallelPixels) {
-    rows(0, height);
-    return;
   }
-  tbb::parallel_for(tbb::blocked_range<int>(0, height, 64),
-                    [&](const tbb::blocked_range<int>& r) { rows(r.begin(), r.end()); });
 }
 
 }  // namespace wall

@@ -103,8 +103,9 @@ class WindowStack::Window {
 };
 
 // Writes the display frame: every pixel the top layer's that covers it, else the background,
-// by spans of rows (TBB over rows where the frame is large). `layers` bottom first; each pixel
-// image is its part's size. Shared by WindowStack and bench/composition_bench.
+// by spans of rows (bands of rows the same layers cover, each cut where a layer begins or ends).
+// `layers` bottom first; each pixel image is its part's size. Shared by WindowStack and
+// bench/composition_bench.
 struct ComposedLayer {
   dfb::Region part;
   const Image* pixels = nullptr;
