@@ -487,7 +487,19 @@ void WallService::run() {
       wasJoined = joined;
     }
     if (m.stack && m.jobThreads.empty()) m.stack->dropChanges();  // the idle screen shows
-    if (m.stack && !m.jobThreads.empty()) m.presentWindows();
+    if (m.stack && !m.jobThreads.empty()) {
+      try {
+        m.presentWindows();
+      } catch (const std::exception& e) {
+        // A display that fails ends this process's part in every job (their threads then
+        // return, so the Joiner does not wait for their timeouts), then the process.
+        std::lock_guard lock(m.mutex);
+        for (const auto& [session, node] : m.nodes)
+          node->abort(std::string("a display of wall process ") + std::to_string(m.process) +
+                      " failed: " + e.what());
+        throw;
+      }
+    }
     if (m.link) m.link->mainAlive();
     for (Presenter* p : m.presenters) p->pollEvents();
     bool closed = false;
