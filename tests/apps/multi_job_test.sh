@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Several jobs on one wall at once, each in its window (docs/service.md, "Several jobs at once").
-#   multi_job_test.sh LAYOUT [glfw]   (the 2x2 wall; glfw: only the composite part, in GLFW
-#                                       windows under Xvfb, captures read from the X server)
+#   multi_job_test.sh LAYOUT [composite|glfw]   (the 2x2 wall; composite: only the composite
+#       part, offscreen; glfw: only the composite part, in GLFW windows under Xvfb, captures read
+#       from the X server)
 # One `dfbwall serve --max-jobs 2 --background "#000000"`; two jobs of the pattern renderer in
 # overlapping windows across display borders, running at the same time:
 #  - each job's captures (its window's part of each display) equal the one-process render of its
@@ -9,7 +10,7 @@
 #  - a third job is refused busy while both run;
 #  - kill -9 of a rank of one job: the other keeps presenting new frames (well within the
 #    timeout that would end the dead one) and ends as usual.
-# Then the composite: a `serve --capture` wall (default --max-jobs) with two jobs of the primary
+# The composite: a `serve --capture` wall (default --max-jobs) with two jobs of the primary
 # renderer (the same frame every frame; one raw, one snappy) in the same windows: some capture of
 # every display equals the background with both one-process renders at their windows, the newer
 # on top, byte for byte.
@@ -109,6 +110,11 @@ if [ "${2:-}" = glfw ]; then
   echo "PASS: two jobs at once in GLFW windows: the displays show both windows, the newer on top, byte for byte"
   exit 0
 fi
+if [ "${2:-}" = composite ]; then
+  composite --offscreen
+  echo "PASS: two jobs at once (raw, snappy): the wall's captures show both windows, the newer on top, byte for byte"
+  exit 0
+fi
 "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
   -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" \
   --offscreen --timeout "$timeout" --capture-root "$work" --max-jobs 2 \
@@ -169,5 +175,4 @@ serve=""
 if wait "$b"; then fail "job b did not hear that the wall stopped"; fi
 b=""
 grep -q "the wall is shutting down" "$work/b.out" || fail "job b was not told the wall stopped"
-composite --offscreen
-echo "PASS: two jobs at once in overlapping windows equal their one-process renders; a third busy; b goes on after a's rank died (frame $before, then $after); the wall's captures equal the composite"
+echo "PASS: two jobs at once in overlapping windows equal their one-process renders; a third busy; b goes on after a's rank died (frame $before, then $after)"
