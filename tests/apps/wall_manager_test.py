@@ -1,14 +1,15 @@
 #!/usr/bin/python3
 """The wall's window manager (serve --control; docs/service.md, "The wall's control page") on a
-real service wall: a 2x2 OSMesa wall, `serve --max-jobs 2 --control`, two pattern jobs in
-overlapping windows across display borders.
+real service wall: a 2x2 OSMesa wall, `serve --max-jobs 2 --control --capture`, two jobs of the
+primary renderer (the same picture every frame) in overlapping windows across display borders.
 
   wall_manager_test.py LAYOUT (the 2x2 wall)
 
  - GET /api/wall: canvas, displays, background, max jobs; GET /api/windows: both windows with
    their rectangles, z (the newest on top), running, frames and rate growing, job a's page;
  - POST {"raise": true} puts job a's window on top (z), and on the wall: a Raise reaches every
-   process (job a's frames still equal its one-process render);
+   process, and the wall's own captures, which showed b over a (and never a over b) before,
+   show a over b (the composite, compare_captures --composite) without either job restarting;
  - move and resize answer 501, other bodies 400, unknown windows 404;
  - attacks: no token, a wrong token, a rebinding Host, the page's cookie without JSON or from
    another Origin, a body over 64 KiB: refused, nothing changed; then a good client still works;
@@ -78,7 +79,7 @@ class Test:
         self.fail("timed out waiting for " + what)
 
     def newest(self, job, display):
-        folder = os.path.join(self.work, job, display)
+        folder = os.path.join(self.work, "jobs", job, display)
         frames = [int(f[6:12]) for f in os.listdir(folder)
                   if re.fullmatch(r"frame-\d{6}\.png", f)] if os.path.isdir(folder) else []
         return max(frames, default=0)
@@ -133,11 +134,13 @@ def run(t):
     port = 20000 + os.getpid() % 20000
     control = port + 1
     token_file = os.path.join(t.work, "wall-control-token")
+    jobs, wall_captures = os.path.join(t.work, "jobs"), os.path.join(t.work, "wall")
+    os.mkdir(jobs)  # the jobs' capture root; the wall's own captures outside it
     processes = int(subprocess.check_output([COMPARE, "--info", t.layout]).split()[0])
     serve = t.start("serve", MPI + [
         "-np", str(processes), DFBWALL, "serve", "--wall", t.layout, "--listen",
         "127.0.0.1:%d" % port, "--offscreen", "--timeout", str(8 * SCALE), "--capture-root",
-        t.work, "--max-jobs", "2", "--background", "#000000", "--control", "127.0.0.1:%d" % control,
+        jobs, "--capture", wall_captures, "--capture-every", "4", "--max-jobs", "2", "--background", "#000000", "--control", "127.0.0.1:%d" % control,
         "--control-token-file", token_file])
     t.wait_for("serve to start", lambda: "window manager:" in t.log("serve"), 20)
     line = re.search(r"window manager: control API on (http://\S+)", t.log("serve"))
@@ -157,22 +160,23 @@ def run(t):
     if api.get("/api/windows")[2] != []:
         t.fail("windows before any job")
 
-    # One-process renders of both windows, for job a's captures.
-    subprocess.check_call(MPI + ["-np", "1", DFBWALL, "--renderer", "pattern", "--size", "250x170",
-                                 "--frames", "10", "--quiet", "--image",
-                                 os.path.join(t.work, "ref-a.png")], env=ENV)
-    job = ["--renderer", "pattern", "--frames", "100000", "--capture-every", "10", "--quiet",
+    # One-process renders of both windows, for the jobs' and the wall's captures.
+    ref_a, ref_b = os.path.join(t.work, "ref-a.png"), os.path.join(t.work, "ref-b.png")
+    for size, ref in [("250x170", ref_a), ("200x150", ref_b)]:
+        subprocess.check_call(MPI + ["-np", "1", DFBWALL, "--renderer", "primary", "--size", size,
+                                     "--frames", "1", "--quiet", "--image", ref], env=ENV)
+    job = ["--renderer", "primary", "--frames", "100000", "--capture-every", "10", "--quiet",
            "--timeout", "30"]
     # Job a has a page (--control). One rank: with two, a fast pattern job's preview on rank 0
     # was seen to end it under load ("preview message from rank 0 for frame 440, far ahead of
     # frame 423": the other rank's preview cells lag behind its pieces).
     t.start("a", MPI + ["-np", "1", DFBWALL, "--connect", "127.0.0.1:%d" % port, "--window",
-                        WINDOW_A, "--capture", os.path.join(t.work, "a"), "--control",
+                        WINDOW_A, "--capture", os.path.join(jobs, "a"), "--control",
                         "127.0.0.1:0", "--control-token-file",
                         os.path.join(t.work, "job-token")] + job)
     t.wait_for("job a's frame 10", lambda: t.newest("a", "r1c1") >= 10, 20)
     t.start("b", MPI + ["-np", "2", DFBWALL, "--connect", "127.0.0.1:%d" % port, "--window",
-                        WINDOW_B, "--capture", os.path.join(t.work, "b")] + job)
+                        WINDOW_B, "--capture", os.path.join(jobs, "b")] + job)
     t.wait_for("job b's frame 10", lambda: t.newest("b", "r0c0") >= 10, 20)
 
     # Both windows, the newest on top.
@@ -185,7 +189,7 @@ def run(t):
         t.fail("window rectangles: %r" % windows)
     if (a["z"], b["z"]) != (0, 1) or a["state"] != "running" or b["state"] != "running":
         t.fail("z and state: %r" % windows)
-    if a["host"] == "" or a["job"] != "pattern builtin:cornell" or b["page"] is not None:
+    if a["host"] == "" or a["job"] != "primary builtin:cornell" or b["page"] is not None:
         t.fail("host, job, page: %r" % windows)
     page = re.search(r"control API on (http://127\.0\.0\.1:\d+/)", t.log("a"))
     if not page or a["page"] != page.group(1):
@@ -195,13 +199,24 @@ def run(t):
     if later[0]["frames"] <= a["frames"] or later[0]["fps"] <= 0 or later[1]["fps"] <= 0:
         t.fail("frames and rates do not grow: %r then %r" % (windows, later))
 
-    # Raise job a: on top; b under it. Raising the top window again changes nothing.
+    # The wall shows b over a (the newer on top), never a over b so far.
+    b_over_a = lambda: composite(t, WINDOW_A + "+" + WINDOW_B, ref_a + "+" + ref_b, wall_captures)
+    a_over_b = lambda: composite(t, WINDOW_B + "+" + WINDOW_A, ref_b + "+" + ref_a, wall_captures)
+    t.wait_for("the wall's captures of b over a", b_over_a, 10)
+    if a_over_b():
+        t.fail("the wall showed window a over b before any raise")
+
+    # Raise job a: on top; b under it, in the list and on the wall's captures. Raising the top
+    # window again changes nothing.
     status, _, body = api.send("POST", "/api/windows/1", body='{"raise": true}')
     if status != 200 or body != {"id": "1", "raised": True}:
         t.fail("raise: %d %r" % (status, body))
     z = {w["id"]: w["z"] for w in api.get("/api/windows")[2]}
     if z != {"1": 1, "2": 0}:
         t.fail("z after raising window 1: %r" % z)
+    raised_at = time.time()
+    t.wait_for("the wall's captures of a over b after the raise", a_over_b, 10)
+    shown = time.time() - raised_at
     if api.send("POST", "/api/windows/1", body='{"raise": true}')[0] != 200:
         t.fail("raising the top window again")
     # Refused bodies and windows.
@@ -274,8 +289,8 @@ def run(t):
     gone = time.time() - closed_at
     before = t.newest("a", "r1c1")
     t.wait_for("job a's next frames", lambda: t.newest("a", "r1c1") >= before + 20, 10)
-    if subprocess.call([COMPARE, "--window", WINDOW_A, t.layout, os.path.join(t.work, "a"),
-                        os.path.join(t.work, "ref-a.png"), "10"]) != 0:
+    if subprocess.call([COMPARE, "--window", WINDOW_A, t.layout, os.path.join(jobs, "a"), ref_a,
+                        "10"]) != 0:
         t.fail("job a's captures")
 
     # Stop: job a is told the wall stops.
@@ -285,9 +300,17 @@ def run(t):
     if t.procs["a"].wait(timeout=20 * SCALE) == 0:
         t.fail("job a did not hear that the wall stopped")
     print("PASS: /api/wall and /api/windows describe the wall and both windows; raise reorders "
-          "them; move/resize 501; bad bodies 400, unknown windows 404; 7 attacks refused; DELETE "
-          "ended job b (window gone %.2f s after the request) while job a went on (frame %d, then "
-          "%d)" % (gone, before, t.newest("a", "r1c1")))
+          "them (the wall's captures show it %.2f s after the request); move/resize 501; bad "
+          "bodies 400, unknown windows 404; 7 attacks refused; DELETE ended job b (window gone "
+          "%.2f s after the request) while job a went on (frame %d, then %d)"
+          % (shown, gone, before, t.newest("a", "r1c1")))
+
+
+def composite(t, windows, renders, captures):
+    """Some capture of each display of the wall equals the background with the renders at their
+    windows, bottom first (compare_captures --composite, FRAME any)."""
+    return subprocess.call([COMPARE, "--composite", windows, t.layout, captures, renders, "any",
+                            "#000000"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) == 0
 
 
 if __name__ == "__main__":
