@@ -10,8 +10,9 @@ install(TARGETS dfbwall_api base messaging dfb renderers wall runtime wall_glfw 
   EXPORT dfbwallTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
-  INCLUDES DESTINATION include/dfbwall)
-install(FILES ${PROJECT_SOURCE_DIR}/api/DataDistributed.h DESTINATION include/dfbwall/api)
+  INCLUDES DESTINATION include)
+# The public header only: <dfbwall/DataDistributed.h> (the tests' api/SessionTesting.h stays out).
+install(FILES ${PROJECT_SOURCE_DIR}/api/DataDistributed.h DESTINATION include/dfbwall)
 install(EXPORT dfbwallTargets NAMESPACE dfbwall:: DESTINATION ${DFBWALL_CMAKE_DIR})
 configure_package_config_file(${CMAKE_CURRENT_LIST_DIR}/dfbwallConfig.cmake.in
   ${CMAKE_CURRENT_BINARY_DIR}/dfbwallConfig.cmake INSTALL_DESTINATION ${DFBWALL_CMAKE_DIR})
