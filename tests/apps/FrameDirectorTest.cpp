@@ -3,6 +3,7 @@
 // wall has converged.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -45,6 +46,20 @@ TEST(FrameDirector, AStillCameraKeepsItsEpochAndConvergesAtTheBudget) {
     EXPECT_EQ(o.requestId, 0u);
   }
   EXPECT_EQ(d.epochSpp(), 6);
+  EXPECT_TRUE(d.converged());
+}
+
+// `dfbwall show`: a sequence of three pictures, one sample each; converged only once the next
+// frame would show the picture the last one showed.
+TEST(FrameDirector, ASequenceConvergesWhenTheNextFrameShowsTheSamePicture) {
+  DirectorOptions o = still(1);
+  o.content = [](std::uint32_t frameId) { return std::min<std::uint32_t>(frameId, 3); };
+  FrameDirector d(o);
+  for (std::uint32_t f = 1; f <= 2; ++f) {
+    d.next(f, {});
+    EXPECT_FALSE(d.converged()) << "frame " << f;
+  }
+  d.next(3, {});
   EXPECT_TRUE(d.converged());
 }
 
