@@ -225,6 +225,7 @@ class JobDesk {
   void joinedJob(int p);
   bool participates(int p, std::uint32_t frameId) const;
   void releaseWhatCan();
+  void notRenderedFrom(std::uint32_t frameId);
   void closeIfIdle();
 
   // One job on the wall and all that is its own (up to Setup::maxJobs side by side).
@@ -240,6 +241,11 @@ class JobDesk {
     std::deque<std::uint32_t> pendingCaptures;
     std::string failure;
     std::optional<std::uint32_t> namedLastFrame;  // from the job's goodbye
+    // Whether each process has a display in the window (paces the job's frames: FrameAgreements)
+    // and the first frame the job will not render, once its processes were told (LastFrame, or
+    // Abort: every frame).
+    std::vector<bool> inWindow;
+    std::optional<std::uint32_t> unrenderedFrom;
     std::int64_t lastPresented = 0, bytes = 0;
     std::uint32_t lastCredited = 0, granted = 2, rosterVersion = 0;
     int processesLost = 0, processesRejoined = 0;

@@ -65,9 +65,11 @@ struct WallService::Impl {
   std::deque<ServiceCommand> commands;
   std::map<std::uint64_t, WallNode*> nodes;
   bool linkLost = false;
-  // Several jobs at once (maxJobs > 1): each display's composition, and each job's thread (done:
-  // it returned, to be joined).
-  std::vector<std::unique_ptr<WindowStack>> stacks;
+  // Several jobs at once (maxJobs > 1): the windows on this process's displays, composed and
+  // presented by the main thread (composeWanted: a window changed since), and each job's thread
+  // (done: it returned, to be joined).
+  std::unique_ptr<WindowStack> stack;
+  bool composeWanted = false;
   struct JobThread {
     std::thread thread;
     std::shared_ptr<std::atomic<bool>> done;
@@ -83,6 +85,8 @@ struct WallService::Impl {
   void incoming(const ServiceCommand& c);
   void lost(const std::string& why);
   void showIdle(const std::string& status);
+  // Several jobs: composes the displays whose windows changed and presents them (main thread).
+  void presentWindows();
   void runJob(const ServiceCommand& start);
   void startJobThread(const ServiceCommand& start);
   // Joins the job threads that returned (all: waits for every one).
@@ -272,7 +276,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   o.timeout = options.timeout;
   o.framesAhead = framesAheadFor(static_cast<int>(start.header.framesInFlight));
   o.abandonOnFailure = true;
-  o.wallFramesBefore = wallFrames;
+  o.wallFramesBefore = stack ? 0 : wallFrames;
   if (link) o.alive = [this] { link->mainAlive(); };
   const std::uint64_t session = start.header.session;
   o.onAbandon = [this, session, epoch](const std::string& why) {
@@ -292,18 +296,16 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   const bool whole = window == dfb::Region{0, 0, layout.canvasWidth, layout.canvasHeight};
   const Layout seen = whole ? Layout{} : windowLayout(layout, window);
   std::vector<std::unique_ptr<WindowPresenter>> parts;
-  std::vector<std::unique_ptr<Presenter>> layers;  // several jobs: this job's on each display
+  std::unique_ptr<WindowStack::Window> onStack;  // several jobs: this job's window
   std::vector<Presenter*> jobPresenters = presenters;
-  if (!stacks.empty()) {
-    // On top of the windows there (newest on top); removed when the job ends (layers go first).
-    jobPresenters.clear();
-    const std::vector<int> ours = layout.displaysOfProcess(process);
-    for (size_t i = 0; i < ours.size(); ++i) {
-      const dfb::Region part = partOnDisplay(layout.displays[static_cast<size_t>(ours[i])], window);
-      if (part.empty()) continue;
-      layers.push_back(stacks[i]->add(part));
-      jobPresenters.push_back(layers.back().get());
-    }
+  if (stack) {
+    // On top of the windows there (newest on top); it leaves the displays when the job ends. The
+    // node only trades its frames into the window's layers; the main thread presents.
+    std::vector<dfb::Region> partsOf;
+    for (int d : layout.displaysOfProcess(process))
+      partsOf.push_back(partOnDisplay(layout.displays[static_cast<size_t>(d)], window));
+    onStack = stack->add(partsOf);
+    jobPresenters = onStack->presenters();
   } else if (!whole) {
     jobPresenters.clear();
     const std::vector<int> ours = layout.displaysOfProcess(process);
@@ -346,8 +348,10 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
         }
         lastPresented = frameId;
         bytes += static_cast<std::int64_t>(r.bytesReceived);
-        wallFrames = r.wallFrame;
-        if (wallCaptures) wallCaptures->presented(r.wallFrame);
+        if (!stack) {  // several jobs: the main thread counts and captures what it presents
+          wallFrames = r.wallFrame;
+          if (wallCaptures) wallCaptures->presented(r.wallFrame);
+        }
         if (!asked && options.stopRequested && options.stopRequested()) {
           asked = true;
           if (process != 0 && options.leaveAlone) {
@@ -377,7 +381,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
     std::lock_guard lock(mutex);
     nodes.erase(session);
   }
-  layers.clear();  // the job's windows leave the displays at once
+  onStack.reset();  // the job's window leaves the displays at once
   answer.header.kind = Command::Done;
   answer.header.a = lastPresented;
   answer.header.b = bytes;
@@ -412,15 +416,37 @@ void WallService::Impl::reapJobs(bool all) {
   }
 }
 
+// What the displays show while jobs run: one frame per display that changed, drawn on every
+// display before any swaps (a window across two displays changes on both at once). Each such
+// presentation is one of this process's wall frames (serve --capture's numbering).
+void WallService::Impl::presentWindows() {
+  const std::vector<int> changed = stack->compose();
+  if (changed.empty()) return;
+  for (int d : changed) {
+    const Image& frame = stack->frame(d);
+    Presenter& p = *presenters[static_cast<size_t>(d)];
+    p.beginFrame(frame.width, frame.height);
+    p.upload(frame.pixels.data(), frame.width, {0, 0, frame.width, frame.height});
+    p.draw();
+  }
+  for (int d : changed) presenters[static_cast<size_t>(d)]->swap();
+  ++wallFrames;
+  if (wallCaptures) wallCaptures->presented(wallFrames);
+}
+
 void WallService::run() {
   Impl& m = *impl_;
-  if (m.options.maxJobs > 1 && m.stacks.empty())
-    for (size_t i = 0; i < m.presenters.size(); ++i) {
-      const Display& d =
-          m.layout.displays[static_cast<size_t>(m.layout.displaysOfProcess(m.process)[i])];
-      m.stacks.push_back(std::make_unique<WindowStack>(*m.presenters[i], d.rect.width(),
-                                                       d.rect.height(), m.options.background));
-    }
+  if (m.options.maxJobs > 1 && !m.stack) {
+    std::vector<WindowStack::Size> sizes;
+    for (int d : m.layout.displaysOfProcess(m.process))
+      sizes.push_back({m.layout.displays[static_cast<size_t>(d)].rect.width(),
+                       m.layout.displays[static_cast<size_t>(d)].rect.height()});
+    m.stack = std::make_unique<WindowStack>(std::move(sizes), m.options.background, [&m] {
+      std::lock_guard lock(m.mutex);
+      m.composeWanted = true;
+      m.commanded.notify_all();
+    });
+  }
   // Every job's thread ends before this returns (the desk ends the jobs before its shutdown; a
   // lost head aborts them).
   struct Joiner {
@@ -434,7 +460,8 @@ void WallService::run() {
     {
       std::unique_lock lock(m.mutex);
       m.commanded.wait_for(lock, std::chrono::milliseconds(50),
-                           [&] { return !m.commands.empty() || m.linkLost; });
+                           [&] { return !m.commands.empty() || m.linkLost || m.composeWanted; });
+      m.composeWanted = false;
       if (!m.commands.empty()) {
         command = std::move(m.commands.front());
         m.commands.pop_front();
@@ -458,6 +485,20 @@ void WallService::run() {
                         : "not in the wall: joining the head at " + m.address + " again");
       idleShown = true;
       wasJoined = joined;
+    }
+    if (m.stack && m.jobThreads.empty()) m.stack->dropChanges();  // the idle screen shows
+    if (m.stack && !m.jobThreads.empty()) {
+      try {
+        m.presentWindows();
+      } catch (const std::exception& e) {
+        // A display that fails ends this process's part in every job (their threads then
+        // return, so the Joiner does not wait for their timeouts), then the process.
+        std::lock_guard lock(m.mutex);
+        for (const auto& [session, node] : m.nodes)
+          node->abort(std::string("a display of wall process ") + std::to_string(m.process) +
+                      " failed: " + e.what());
+        throw;
+      }
     }
     if (m.link) m.link->mainAlive();
     for (Presenter* p : m.presenters) p->pollEvents();
