@@ -67,6 +67,9 @@ ServiceClient::ServiceClient(const std::string& address, const Credentials& cred
       case Kind::Directory:
         directory_ = parseDirectory(bytesOf(reply), reply.size());
         directoryBytes_.assign(bytesOf(reply), bytesOf(reply) + reply.size());
+        // The wall counts the job from now on: keepalives go while the job still sets up (a
+        // scene or bricks that take longer than the wall's timeout to load under load).
+        thread_ = std::thread([this] { run(); });
         return;
       case Kind::Refused:
         throw base::Error("the wall at " + address +
@@ -98,9 +101,12 @@ ServiceClient::~ServiceClient() {
 }
 
 void ServiceClient::start(FrameCredits& credits, std::function<void(const std::string&)> onError) {
-  credits_ = &credits;
-  onError_ = std::move(onError);
-  thread_ = std::thread([this] { run(); });
+  {
+    std::lock_guard lock(mutex_);
+    credits_ = &credits;
+    onError_ = std::move(onError);
+  }
+  waker_.notify();  // a failure the link saw before now is reported at once
 }
 
 void ServiceClient::post(messaging::Bytes message) {
@@ -144,13 +150,27 @@ void ServiceClient::run() {
   auto lastKeepalive = Clock::time_point{};
   auto lastHeard = Clock::now();
   bool failed = false;
+  std::string failure;         // what failed before start() gave somewhere to report it
   std::uint64_t credited = 0;  // the latest frame the wall presented
+  // Reports through onError_ once start() set it, else keeps the reason until then.
+  const auto report = [&] {
+    std::function<void(const std::string&)> onError;
+    {
+      std::lock_guard lock(mutex_);
+      onError = onError_;
+    }
+    if (failure.empty() || !onError) return;
+    onError(failure);
+    failure.clear();
+  };
   const auto fail = [&](const std::string& why) {
-    if (!failed && onError_) onError_(why);
+    if (!failed) failure = why;
     failed = true;
+    report();
   };
   try {
     while (!stop_) {
+      report();
       zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}, waker_.pollItem()};
       zmq::poll(items, 2,
                 std::min<std::chrono::milliseconds>(keepalive, std::chrono::milliseconds(200)));
@@ -172,8 +192,18 @@ void ServiceClient::run() {
         if (h.session != session) continue;  // a late answer to nothing of ours
         if (h.kind == static_cast<std::uint16_t>(Kind::Presented)) {
           const Control c = parseControl(bytesOf(m), m.size());
-          credits_->acknowledged(static_cast<std::uint32_t>(c.value), c.second,
-                                 "the wall at " + address_);
+          FrameCredits* credits = nullptr;
+          {
+            std::lock_guard lock(mutex_);
+            credits = credits_;
+          }
+          // No frame goes to the wall before start(): a credit without credits is the wall's
+          // mistake.
+          if (!credits)
+            throw base::Error("the wall at " + address_ + " presented frame " +
+                              std::to_string(c.value) + " before the job sent any");
+          credits->acknowledged(static_cast<std::uint32_t>(c.value), c.second,
+                                "the wall at " + address_);
           credited = std::max(credited, c.value);
         } else if (h.kind == static_cast<std::uint16_t>(Kind::Roster)) {
           const Roster roster = parseRoster(bytesOf(m), m.size());

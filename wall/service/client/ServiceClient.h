@@ -48,9 +48,11 @@ class ServiceClient {
   // The directory as the wall sent it (for the job's other ranks: parseDirectory).
   const messaging::Bytes& directoryBytes() const { return directoryBytes_; }
 
-  // Starts the link's thread: keepalives, credits into `credits`, and a wall that ends the job
-  // (Ended: its reason) or goes silent for its timeout before the last frame's credit reported
-  // through `onError` (on the link's thread; call it once).
+  // The link's thread runs from the directory on (keepalives: a job that sets up for longer
+  // than the wall's timeout is not dropped). start() hands it the credits to fill and `onError`
+  // to report a wall that ends the job (Ended: its reason) or goes silent for its timeout
+  // before the last frame's credit (on the link's thread; also what failed before start();
+  // call it once).
   void start(FrameCredits& credits, std::function<void(const std::string&)> onError);
   // Thread-safe. Capture frame `frameId` (or the first after it), request `sequence`.
   void capture(std::uint32_t frameId, std::uint64_t sequence);
@@ -72,8 +74,8 @@ class ServiceClient {
   zmq::socket_t socket_;
   Directory directory_;
   messaging::Bytes directoryBytes_;
-  FrameCredits* credits_ = nullptr;
-  std::function<void(const std::string&)> onError_;
+  FrameCredits* credits_ = nullptr;                  // set by start(), under mutex_
+  std::function<void(const std::string&)> onError_;  // set by start(), under mutex_
   mutable std::mutex mutex_;
   std::vector<messaging::Bytes> outbox_;
   bool byeSent_ = false;
