@@ -179,7 +179,10 @@ code=0
 "$DFBWALL_LAYOUT" --wall "$layout" 2>"$work/layout-refused.err" || code=$?
 [ "$code" -eq 2 ] && grep -q "^dfbwall-layout: error: --wall is not an option of dfbwall-layout" \
   "$work/layout-refused.err" || fail "dfbwall-layout --wall: exit $code"
-"$DFBWALL_LAYOUT" "$layout" | grep -qx "processes 1" || fail "dfbwall-layout LAYOUT"
+# (Its whole output first: grep -q stops reading at the match, and under pipefail the writer's
+# SIGPIPE would fail the test now and then.)
+layoutText=$("$DFBWALL_LAYOUT" "$layout") || fail "dfbwall-layout LAYOUT exited non-zero"
+grep -qx "processes 1" <<<"$layoutText" || fail "dfbwall-layout LAYOUT"
 
 # 3. Good command lines still run.
 mpi -np 2 "$DFBWALL" --wall "$layout" --dry-run --tile-size 32 --mode gather >"$work/dry.out" 2>&1 ||
