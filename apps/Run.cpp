@@ -20,6 +20,7 @@
 #include "apps/StatusBoard.h"
 #include "apps/Steering.h"
 #include "apps/StopSignals.h"
+#include "apps/WallKeys.h"
 #include "base/AtomicFile.h"
 #include "base/Collectives.h"
 #include "base/Error.h"
@@ -338,6 +339,25 @@ int run(int argc, char** argv) {
       job.preview = preview.get();
     }
     Steering steering(messenger);
+    // A job of a service wall: keys and the mouse over its window there steer it as its page
+    // does (docs/service.md, "Several jobs at once"); never after `steering` goes.
+    struct InputGuard {
+      wall::service::ServiceClient* client;
+      ~InputGuard() {
+        if (client) client->onInput({});
+      }
+    } inputGuard{job.service.get()};
+    if (job.service)
+      job.service->onInput([&steering, w = job.canvasWidth,
+                            h = job.canvasHeight](const wall::service::WindowInput& in) {
+        if (const std::optional<SteeringRequest> r = requestForInput(in, w, h)) {
+          try {
+            steering.submit(*r);
+          } catch (const std::exception&) {
+            // Out of range after all: the event is dropped, the job goes on.
+          }
+        }
+      });
     std::unique_ptr<StatusBoard> status;
     if (server) {
       status = std::make_unique<StatusBoard>();

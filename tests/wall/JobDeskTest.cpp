@@ -865,6 +865,95 @@ TEST_F(TwoJobsTest, TwoJobsRunAtOnceEachWithItsOwnBarriersAndCredits) {
   EXPECT_EQ(frame(b, 2, t0 + 40ms).size(), 3u);
 }
 
+// Keys and the mouse over a window on the wall: a wall process tells the head where on the canvas
+// (Command::Input); the head tells the job under it in its window's pixels, and drops what a
+// process could not have seen (another process's display, outside the window), what does not
+// parse, names another session or a gone job, and what comes faster than the job's rate.
+ServiceCommand inputFrom(int process, std::uint64_t session, WindowInput in,
+                         std::uint64_t sessionInMessage = 0) {
+  const messaging::Bytes packed = packInput(sessionInMessage ? sessionInMessage : session, in);
+  ServiceCommand c;
+  c.header.kind = Command::Input;
+  c.header.session = session;
+  c.header.process = process;
+  c.text.assign(reinterpret_cast<const char*>(packed.data()), packed.size());
+  return c;
+}
+WindowInput keyAt(int x, int y, std::uint32_t key = WindowInput::kRight) {
+  WindowInput in;
+  in.key = key;
+  in.x = x;
+  in.y = y;
+  return in;
+}
+
+TEST_F(TwoJobsTest, InputGoesToTheJobUnderItInItsWindowsPixelsAndTheHeadDropsTheRest) {
+  const std::uint64_t a = runIn("job-a", "render1", "0,0,100,64", t0);
+  const std::uint64_t b = runIn("job-b", "render2", "50,0,100,64", t0);
+  // Process 1 drives display 1 (64..128): a key at (70, 10) over b, told to b at (20, 10).
+  auto told = replies(two.answer(1, inputFrom(1, b, keyAt(70, 10)), t0), Kind::Input);
+  ASSERT_EQ(told.size(), 1u);
+  EXPECT_EQ(told[0].peer, "job-b");
+  WindowInput in = parseInput(told[0].message.data(), told[0].message.size());
+  EXPECT_EQ(parseHeader(told[0].message.data(), told[0].message.size()).session, b);
+  EXPECT_EQ(in.kind, WindowInput::kKey);
+  EXPECT_EQ(in.key, WindowInput::kRight);
+  EXPECT_EQ(in.x, 20);
+  EXPECT_EQ(in.y, 10);
+  // A drag on display 0 over a (where b does not reach): a, with its move and flag.
+  WindowInput drag;
+  drag.kind = WindowInput::kDrag;
+  drag.x = 30;
+  drag.y = 40;
+  drag.dx = -25;
+  drag.dy = 7;
+  drag.pan = true;
+  told = replies(two.answer(0, inputFrom(0, a, drag), t0), Kind::Input);
+  ASSERT_EQ(told.size(), 1u);
+  EXPECT_EQ(told[0].peer, "job-a");
+  in = parseInput(told[0].message.data(), told[0].message.size());
+  EXPECT_EQ(in.kind, WindowInput::kDrag);
+  EXPECT_EQ(in.x, 30);
+  EXPECT_EQ(in.dx, -25);
+  EXPECT_EQ(in.dy, 7);
+  EXPECT_TRUE(in.pan);
+
+  const auto dropped = [&](int p, const ServiceCommand& c) {
+    return replies(two.answer(p, c, t0), Kind::Input).empty();
+  };
+  // Not on the sending process's display; outside the window named.
+  EXPECT_TRUE(dropped(0, inputFrom(0, b, keyAt(70, 10))));
+  EXPECT_TRUE(dropped(2, inputFrom(2, a, keyAt(130, 10))));
+  EXPECT_TRUE(dropped(0, inputFrom(0, b, keyAt(-1, 10))));
+  // Malformed: a key the job does not know, a kind, a move too large, another session inside,
+  // bytes that are not an input event, a job that is not on the wall.
+  EXPECT_TRUE(dropped(1, inputFrom(1, b, keyAt(70, 10, WindowInput::kKeyCount))));
+  WindowInput odd = keyAt(70, 10);
+  odd.kind = 7;
+  EXPECT_TRUE(dropped(1, inputFrom(1, b, odd)));
+  WindowInput far = drag;
+  far.x = 70;
+  far.dx = kMaxInputMove + 1;
+  EXPECT_TRUE(dropped(1, inputFrom(1, b, far)));
+  EXPECT_TRUE(dropped(1, inputFrom(1, b, keyAt(70, 10), a)));
+  ServiceCommand garbage = inputFrom(1, b, keyAt(70, 10));
+  garbage.text = "not an input event";
+  const Actions logged = two.answer(1, garbage, t0);
+  EXPECT_TRUE(replies(logged, Kind::Input).empty());
+  EXPECT_FALSE(only<JobDesk::Log>(logged).empty());
+  EXPECT_TRUE(dropped(1, inputFrom(1, 999, keyAt(70, 10))));
+  EXPECT_EQ(two.state(b), State::Running);  // none of it harms the job
+
+  // At most kMaxInputsPerSecond a second per job; the next second takes more.
+  std::size_t passed = 0;
+  for (int i = 0; i < JobDesk::kMaxInputsPerSecond + 30; ++i)
+    passed += replies(two.answer(1, inputFrom(1, a, keyAt(70, 10)), t0 + 2s), Kind::Input).size();
+  EXPECT_EQ(passed, static_cast<std::size_t>(JobDesk::kMaxInputsPerSecond));
+  EXPECT_EQ(
+      replies(two.answer(1, inputFrom(1, a, keyAt(70, 10)), t0 + 3s + 1ms), Kind::Input).size(),
+      1u);
+}
+
 TEST_F(TwoJobsTest, AJobThatGoesSilentEndsAloneWhileTheOtherIsCredited) {
   const std::uint64_t a = runIn("job-a", "render1", "0,0,100,64", t0);
   const std::uint64_t b = runIn("job-b", "render2", "full", t0);

@@ -336,6 +336,49 @@ TEST(Protocol, ControlMessagesRoundTrip) {
   }
 }
 
+TEST(Protocol, InputEventsRoundTripAndBadFieldsAreRefusedByName) {
+  WindowInput in;
+  in.kind = WindowInput::kDrag;
+  in.x = 12;
+  in.y = -3;
+  in.dx = -kMaxInputMove;
+  in.dy = 40;
+  in.pan = true;
+  messaging::Bytes bytes = packInput(0xBEEF, in);
+  EXPECT_EQ(parseHeader(bytes.data(), bytes.size()).session, 0xBEEFu);
+  const WindowInput back = parseInput(bytes.data(), bytes.size());
+  EXPECT_EQ(back.kind, in.kind);
+  EXPECT_EQ(back.x, 12);
+  EXPECT_EQ(back.y, -3);
+  EXPECT_EQ(back.dx, -kMaxInputMove);
+  EXPECT_EQ(back.dy, 40);
+  EXPECT_TRUE(back.pan);
+  const auto refused = [](const WindowInput& bad, const std::string& why) {
+    const messaging::Bytes b = packInput(1, bad);
+    try {
+      parseInput(b.data(), b.size());
+      ADD_FAILURE() << "accepted: " << why;
+    } catch (const base::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  };
+  WindowInput bad = in;
+  bad.kind = 0;
+  refused(bad, "kind 0");
+  bad = WindowInput{};
+  bad.key = WindowInput::kKeyCount;
+  refused(bad, "key 6");
+  bad = in;
+  bad.dy = kMaxInputMove + 1;
+  refused(bad, "move");
+  bytes.back() = std::byte{2};
+  EXPECT_THROW(parseInput(bytes.data(), bytes.size()), base::Error);  // the pan flag
+  bytes.pop_back();
+  EXPECT_THROW(parseInput(bytes.data(), bytes.size()), base::Error);  // cut short
+  const messaging::Bytes control = packControl(Kind::Keepalive, 1, 0);
+  EXPECT_THROW(parseInput(control.data(), control.size()), base::Error);
+}
+
 TEST(Protocol, LosslessBatchesRoundTripBitExactly) {
   // 150 x 100: pieces of 64x64, 64x36, 22x64, 22x36; a random and a smooth image (Snappy stores
   // the one and compresses the other).
@@ -493,7 +536,7 @@ TEST(ProtocolHostile, WrongVersionNamesBothVersions) {
 }
 
 TEST(ProtocolHostile, UnknownKind) {
-  for (const std::uint16_t kind : {std::uint16_t{0}, std::uint16_t{19}, std::uint16_t{0xFFFF}}) {
+  for (const std::uint16_t kind : {std::uint16_t{0}, std::uint16_t{20}, std::uint16_t{0xFFFF}}) {
     messaging::Bytes bytes = packControl(Kind::Keepalive, 3, 0);
     poke(bytes, kKindAt, kind);
     EXPECT_ERROR_HAS(parseHeader(bytes.data(), bytes.size()),

@@ -125,10 +125,10 @@ TEST(RelayRoutes, OnlyBatchesOfTheWallsSessionsPass) {
 TEST(RelayRoutes, TheDirectoryLinkCarriesJobKindsOnly) {
   for (Kind k : {Kind::Hello, Kind::Keepalive, Kind::Capture, Kind::Bye}) EXPECT_TRUE(jobKind(k));
   for (Kind k : {Kind::Batch, Kind::Join, Kind::Welcome, Kind::Beat, Kind::Command, Kind::Barrier,
-                 Kind::Pixels, Kind::Dropped, Kind::Directory, Kind::Presented})
+                 Kind::Pixels, Kind::Dropped, Kind::Directory, Kind::Presented, Kind::Input})
     EXPECT_FALSE(jobKind(k)) << static_cast<int>(k);
   for (Kind k : {Kind::Directory, Kind::Refused, Kind::Queued, Kind::Keepalive, Kind::Presented,
-                 Kind::Ended, Kind::Roster})
+                 Kind::Ended, Kind::Roster, Kind::Input})
     EXPECT_TRUE(wallToJobKind(k));
   for (Kind k : {Kind::Welcome, Kind::Command, Kind::Barrier, Kind::Hello, Kind::Batch})
     EXPECT_FALSE(wallToJobKind(k)) << static_cast<int>(k);

@@ -135,6 +135,11 @@ messaging::Bytes ServiceClient::rosterBytes() const {
   return rosterBytes_;
 }
 
+void ServiceClient::onInput(std::function<void(const WindowInput&)> handler) {
+  std::lock_guard lock(mutex_);
+  onInput_ = std::move(handler);
+}
+
 void ServiceClient::run() {
   const std::uint64_t session = directory_.session;
   const auto wallTimeout = std::chrono::milliseconds(directory_.timeoutMs);
@@ -196,6 +201,10 @@ void ServiceClient::run() {
           std::fprintf(stderr, "dfbwall: the wall at %s: %s\n", address_.c_str(),
                        parseText(bytesOf(m), m.size()).c_str());
           std::fflush(stderr);
+        } else if (h.kind == static_cast<std::uint16_t>(Kind::Input)) {
+          const WindowInput in = parseInput(bytesOf(m), m.size());
+          std::lock_guard lock(mutex_);
+          if (onInput_) onInput_(in);
         } else if (h.kind == static_cast<std::uint16_t>(Kind::Ended)) {
           fail("the wall at " + address_ + " ended the job: " + parseText(bytesOf(m), m.size()));
         } else if (h.kind != static_cast<std::uint16_t>(Kind::Keepalive)) {

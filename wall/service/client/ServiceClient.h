@@ -61,6 +61,9 @@ class ServiceClient {
   // a frame starts with is never older than the one the wall counted on (Protocol.h, Roster).
   std::uint32_t rosterVersion() const;
   messaging::Bytes rosterBytes() const;
+  // Thread-safe. Where the wall's key and mouse events over the job's window go (called on the
+  // link's thread; none: they are dropped). docs/service.md, "Several jobs at once".
+  void onInput(std::function<void(const WindowInput&)> handler);
 
  private:
   void run();
@@ -80,6 +83,7 @@ class ServiceClient {
   std::uint32_t lastFrame_ = 0;  // named by bye()
   std::uint32_t rosterVersion_ = 0;
   messaging::Bytes rosterBytes_;
+  std::function<void(const WindowInput&)> onInput_;
   Waker waker_;
   std::atomic<bool> stop_{false};
   std::thread thread_;

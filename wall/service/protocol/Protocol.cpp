@@ -239,6 +239,45 @@ messaging::Bytes packControl(Kind kind, std::uint64_t session, std::uint64_t val
   return w.take();
 }
 
+messaging::Bytes packInput(std::uint64_t session, const WindowInput& in) {
+  Writer w(Kind::Input, session);
+  w.put<std::uint32_t>(in.kind);
+  w.put<std::uint32_t>(in.key);
+  w.put<std::int32_t>(in.x);
+  w.put<std::int32_t>(in.y);
+  w.put<std::int32_t>(in.dx);
+  w.put<std::int32_t>(in.dy);
+  w.put<std::uint8_t>(in.pan ? 1 : 0);
+  return w.take();
+}
+
+WindowInput parseInput(const std::byte* data, std::size_t size) {
+  Reader r(data, size, "input event");
+  if (parseHeader(data, size).kind != static_cast<std::uint16_t>(Kind::Input))
+    r.fail("not an input event");
+  WindowInput in;
+  in.kind = r.get<std::uint32_t>();
+  in.key = r.get<std::uint32_t>();
+  in.x = r.get<std::int32_t>();
+  in.y = r.get<std::int32_t>();
+  in.dx = r.get<std::int32_t>();
+  in.dy = r.get<std::int32_t>();
+  const auto pan = r.get<std::uint8_t>();
+  r.end();
+  if (in.kind < WindowInput::kKey || in.kind > WindowInput::kScroll)
+    r.fail("kind " + std::to_string(in.kind) + " (expected 1..3)");
+  if (in.kind == WindowInput::kKey && in.key >= WindowInput::kKeyCount)
+    r.fail("key " + std::to_string(in.key) + " (expected 0.." +
+           std::to_string(WindowInput::kKeyCount - 1) + ")");
+  if (in.dx < -kMaxInputMove || in.dx > kMaxInputMove || in.dy < -kMaxInputMove ||
+      in.dy > kMaxInputMove)
+    r.fail("move " + std::to_string(in.dx) + "," + std::to_string(in.dy) + " (at most " +
+           std::to_string(kMaxInputMove) + " a side)");
+  if (pan > 1) r.fail("pan flag " + std::to_string(pan));
+  in.pan = pan == 1;
+  return in;
+}
+
 Control parseControl(const std::byte* data, std::size_t size) {
   Reader r(data, size, "control message");
   Control c;

@@ -5,7 +5,8 @@
 //  - render rank 0 <-> wall process 0, the wall's directory socket (`--listen`): Hello, then
 //    Directory | Refused | Queued; during the job Keepalive, Capture, Bye from the job and
 //    Presented (the credit for frames in flight), Roster (a wall process was lost or came back),
-//    Refused (a capture request it will not take) and Ended (the wall ended the job) back;
+//    Refused (a capture request it will not take), Input (a key or the mouse over the job's
+//    window on the wall) and Ended (the wall ended the job) back;
 //  - every render rank -> the wall processes its tiles touch, each process's piece socket (its
 //    endpoint is in the directory): one Batch per (render rank, display, frame) of pieces,
 //    encoded with the job's codec (wall/service/protocol/Codec.h).
@@ -68,8 +69,9 @@ enum class Kind : std::uint16_t {
   Barrier = 16,
   Pixels = 17,
   Dropped = 18,
+  Input = 19,  // wall -> job: an operator's key or mouse event over its window (WindowInput)
 };
-constexpr Kind kLastKind = Kind::Dropped;
+constexpr Kind kLastKind = Kind::Input;
 
 struct MessageHeader {
   std::uint32_t magic = kMagic;
@@ -135,6 +137,26 @@ struct Roster {
   std::vector<DirectoryProcess> processes;
   std::string why;  // one line for the job's log: which process, which host, why
 };
+
+// An operator's key or mouse event in a wall window (wall/display/Presenter.h, WallInput), over a
+// job's window: the wall process sends it to the head on the canvas (Command::Input), the head
+// checks it and tells the job in its window's pixels (Kind::Input), which steers as its control
+// API does (docs/service.md, "Several jobs at once": input).
+struct WindowInput {
+  enum Kind : std::uint32_t { kKey = 1, kDrag = 2, kScroll = 3 };
+  // The keys a job is told of (wall::WallKey's first six, in its order); Esc stays on the wall.
+  enum Key : std::uint32_t { kLeft = 0, kRight, kUp, kDown, kPlus, kMinus, kKeyCount };
+  std::uint32_t kind = kKey;
+  std::uint32_t key = kLeft;    // kKey
+  std::int32_t x = 0, y = 0;    // where the cursor was (kDrag: where the button went down)
+  std::int32_t dx = 0, dy = 0;  // kDrag: pixels moved; kScroll: dy notches, up positive
+  bool pan = false;             // kDrag: pan rather than orbit
+};
+// The most a drag or wheel event may move (pixels, notches) in one message.
+constexpr std::int32_t kMaxInputMove = 1 << 16;
+messaging::Bytes packInput(std::uint64_t session, const WindowInput& input);
+// Checks the kind, the key, the move's size and the flag; the position is the caller's to check.
+WindowInput parseInput(const std::byte* data, std::size_t size);
 
 messaging::Bytes packHello(const Hello& hello);
 messaging::Bytes packDirectory(const Directory& directory);

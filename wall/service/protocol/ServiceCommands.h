@@ -24,6 +24,9 @@ enum class Command : std::uint32_t {
   Failed = 10,      // this process gave a frame up (text: why)
   StopAsked = 11,   // this process was asked to stop the wall
   FirstFrame = 12,  // a: the first frame of a process that joined a running job
+  // A key or the mouse in this process's windows over the job's window (text: packInput's
+  // message, the position on the wall's canvas); the head checks it and tells the job.
+  Input = 20,
 };
 
 struct CommandHeader {

@@ -27,7 +27,7 @@ bool jobKind(Kind kind) {
 bool wallToJobKind(Kind kind) {
   return kind == Kind::Directory || kind == Kind::Refused || kind == Kind::Queued ||
          kind == Kind::Keepalive || kind == Kind::Presented || kind == Kind::Ended ||
-         kind == Kind::Roster;
+         kind == Kind::Roster || kind == Kind::Input;
 }
 
 RelaySessions::Verdict RelaySessions::admit(const std::byte* data, std::size_t size) const {

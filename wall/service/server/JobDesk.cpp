@@ -4,6 +4,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "base/Error.h"
 #include "wall/display/WallNode.h"
 #include "wall/service/protocol/PeerText.h"
 
@@ -225,11 +226,51 @@ JobDesk::Actions JobDesk::answer(int p, const ServiceCommand& c, Clock::time_poi
     case Command::Done:
       onDone(p, c);
       break;
+    case Command::Input:
+      onInput(p, c);
+      break;
     default:
       break;
   }
   overIfAllDone();
   return take();
+}
+
+// A key or the mouse over the job's window on process p's display: told to the job in its
+// window's pixels, if it is a running job's, on a display of p's inside the window, well formed,
+// and within the job's rate. Anything else is dropped (a window that went, a process that lies).
+void JobDesk::onInput(int p, const ServiceCommand& c) {
+  if (j_->state != State::Running) return;
+  const std::string from = "wall process " + std::to_string(p);
+  WindowInput in;
+  try {
+    const auto* data = reinterpret_cast<const std::byte*>(c.text.data());
+    if (parseHeader(data, c.text.size()).session != j_->job.session)
+      throw base::Error("an input event for another session");
+    in = parseInput(data, c.text.size());
+  } catch (const std::exception& e) {
+    log(from + " sent a malformed input event: " + e.what(), "input " + from);
+    return;
+  }
+  const dfb::Region& w = j_->window;
+  bool onItsDisplay = false;
+  for (const Display& d : s_.layout->displays)
+    onItsDisplay = onItsDisplay || (d.process == p && in.x >= d.rect.x0 && in.x < d.rect.x1 &&
+                                    in.y >= d.rect.y0 && in.y < d.rect.y1);
+  if (!onItsDisplay || in.x < w.x0 || in.x >= w.x1 || in.y < w.y0 || in.y >= w.y1) {
+    log(from + " sent an input event at " + std::to_string(in.x) + "," + std::to_string(in.y) +
+            ", outside the job's window on its displays",
+        "input " + from);
+    return;
+  }
+  if (now_ - j_->inputSince >= std::chrono::seconds(1)) {
+    j_->inputSince = now_;
+    j_->inputs = 0;
+  }
+  if (++j_->inputs > kMaxInputsPerSecond) return;
+  in.x -= w.x0;
+  in.y -= w.y0;
+  reply(j_->job.peer, Kind::Input, packInput(j_->job.session, in));
 }
 
 void JobDesk::stopAsked(int p) {

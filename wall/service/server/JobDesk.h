@@ -22,6 +22,9 @@
 // What a job may ask for is bounded: one job per connection (a second hello from it is refused),
 // capture requests for frames near the credited one only, at most kMaxPendingCaptures not yet
 // taken; anything over is refused with a message (Refused with the job's session: the job goes on).
+// Key and mouse events from a wall process over a running job's window are told to the job only
+// when well formed, on a display of that process inside the window, and within
+// kMaxInputsPerSecond; the rest are dropped.
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -51,6 +54,8 @@ class JobDesk {
   // How far behind the last credited frame a capture request may name a frame (it is taken at
   // the next presented frame: the job's request crossed the credits on the way).
   static constexpr std::uint32_t kCaptureFramesBehind = 256;
+  // Key and mouse events from the wall's windows told to a job per second (more are dropped).
+  static constexpr int kMaxInputsPerSecond = 120;
 
   struct Setup {
     const Layout* layout = nullptr;  // what the directory tells a job
@@ -200,6 +205,7 @@ class JobDesk {
   void onReady(int p, const ServiceCommand& c);
   void onDone(int p, const ServiceCommand& c);
   void stopAsked(int p);
+  void onInput(int p, const ServiceCommand& c);
 
   void emit(Action action) { out_.push_back(std::move(action)); }
   Actions take();
@@ -250,6 +256,8 @@ class JobDesk {
     std::uint32_t lastCredited = 0, granted = 2, rosterVersion = 0;
     int processesLost = 0, processesRejoined = 0;
     FrameAgreements agreements;
+    Clock::time_point inputSince{};  // the second kMaxInputsPerSecond counts in
+    int inputs = 0;
   };
   // The job on the wall with this session / connection (none: nullptr).
   Slot* bySession(std::uint64_t session) const;

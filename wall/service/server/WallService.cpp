@@ -1,6 +1,7 @@
 #include "wall/service/server/WallService.h"
 
 #include <unistd.h>
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <deque>
@@ -87,6 +88,9 @@ struct WallService::Impl {
   void showIdle(const std::string& status);
   // Several jobs: composes the displays whose windows changed and presents them (main thread).
   void presentWindows();
+  // Several jobs: keys and the mouse in this process's windows go to the job whose window is
+  // under the cursor, through the head (main thread).
+  void forwardInput();
   void runJob(const ServiceCommand& start);
   void startJobThread(const ServiceCommand& start);
   // Joins the job threads that returned (all: waits for every one).
@@ -304,7 +308,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
     std::vector<dfb::Region> partsOf;
     for (int d : layout.displaysOfProcess(process))
       partsOf.push_back(partOnDisplay(layout.displays[static_cast<size_t>(d)], window));
-    onStack = stack->add(partsOf);
+    onStack = stack->add(partsOf, session);
     jobPresenters = onStack->presenters();
   } else if (!whole) {
     jobPresenters.clear();
@@ -434,6 +438,40 @@ void WallService::Impl::presentWindows() {
   if (wallCaptures) wallCaptures->presented(wallFrames);
 }
 
+static_assert(static_cast<std::uint32_t>(WallKey::Left) == WindowInput::kLeft &&
+                  static_cast<std::uint32_t>(WallKey::Minus) == WindowInput::kMinus,
+              "the wire's keys are WallKey's");
+
+void WallService::Impl::forwardInput() {
+  const std::vector<int> ours = layout.displaysOfProcess(process);
+  for (size_t i = 0; i < presenters.size(); ++i) {
+    for (const WallInput& in : presenters[i]->takeInput()) {
+      // Esc stops a single job's wall; on a shared wall a stray press would end others' work.
+      if (!stack || (in.kind == WallInput::Kind::Key && in.key == WallKey::Escape)) continue;
+      const std::uint64_t session = stack->topAt(static_cast<int>(i), in.x, in.y);
+      if (session == 0) continue;  // over the background
+      const Display& d = layout.displays[static_cast<size_t>(ours[i])];
+      WindowInput w;
+      w.kind = in.kind == WallInput::Kind::Key    ? WindowInput::kKey
+               : in.kind == WallInput::Kind::Drag ? WindowInput::kDrag
+                                                  : WindowInput::kScroll;
+      w.key = static_cast<std::uint32_t>(in.key);
+      w.x = d.rect.x0 + in.x;
+      w.y = d.rect.y0 + in.y;
+      w.dx = std::clamp(in.dx, -kMaxInputMove, kMaxInputMove);
+      w.dy = std::clamp(in.dy, -kMaxInputMove, kMaxInputMove);
+      w.pan = in.pan;
+      const messaging::Bytes packed = packInput(session, w);
+      ServiceCommand c;
+      c.header.kind = Command::Input;
+      c.header.session = session;
+      c.header.process = process;
+      c.text.assign(reinterpret_cast<const char*>(packed.data()), packed.size());
+      head->toHead(c, head->epoch());
+    }
+  }
+}
+
 void WallService::run() {
   Impl& m = *impl_;
   if (m.options.maxJobs > 1 && !m.stack) {
@@ -502,6 +540,7 @@ void WallService::run() {
     }
     if (m.link) m.link->mainAlive();
     for (Presenter* p : m.presenters) p->pollEvents();
+    m.forwardInput();
     bool closed = false;
     for (Presenter* p : m.presenters) closed = closed || p->closeRequested();
     if (!asked && (closed || (m.options.stopRequested && m.options.stopRequested()))) {
