@@ -37,7 +37,7 @@ import zmq
 import zmq.auth.thread
 
 MAGIC = 0x57424644
-PROTOCOL = 3
+PROTOCOL = 4
 HELLO, DIRECTORY, REFUSED, QUEUED, KEEPALIVE, CAPTURE, BYE, PRESENTED, ENDED, BATCH = range(1, 11)
 ROSTER, JOIN, WELCOME, BEAT, COMMAND, BARRIER, PIXELS, DROPPED = range(11, 19)
 CMD_START, CMD_SHUTDOWN, CMD_READY = 1, 7, 8
@@ -149,7 +149,8 @@ def control(kind, session, value, second=0):
 def hello(token=TOKEN, host="attacker"):
     return (header(HELLO) + text(token) + text(host) + struct.pack("<II", 1, 64) +
             struct.pack("<BBBB", 0, 90, 0, 0) + struct.pack("<I", 2) + text("") +
-            struct.pack("<I", 0) + struct.pack("<Biiii", 0, 0, 0, 0, 0) + text(""))
+            struct.pack("<I", 0) + struct.pack("<Biiii", 0, 0, 0, 0, 0) + text("") +
+            struct.pack("<B", 0))
 
 
 def kind_of(m):

@@ -128,7 +128,7 @@ TEST(RelayRoutes, TheDirectoryLinkCarriesJobKindsOnly) {
                  Kind::Pixels, Kind::Dropped, Kind::Directory, Kind::Presented})
     EXPECT_FALSE(jobKind(k)) << static_cast<int>(k);
   for (Kind k : {Kind::Directory, Kind::Refused, Kind::Queued, Kind::Keepalive, Kind::Presented,
-                 Kind::Ended, Kind::Roster})
+                 Kind::Ended, Kind::Roster, Kind::Reshape})
     EXPECT_TRUE(wallToJobKind(k));
   for (Kind k : {Kind::Welcome, Kind::Command, Kind::Barrier, Kind::Hello, Kind::Batch})
     EXPECT_FALSE(wallToJobKind(k)) << static_cast<int>(k);

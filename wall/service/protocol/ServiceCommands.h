@@ -24,6 +24,12 @@ enum class Command : std::uint32_t {
   Failed = 10,      // this process gave a frame up (text: why)
   StopAsked = 11,   // this process was asked to stop the wall
   FirstFrame = 12,  // a: the first frame of a process that joined a running job
+  // The job's window moves (docs/design.md, "Moving and resizing a window"): build its node for
+  // the window in the header beside the running one, its pieces stamped with the piece session
+  // b; answer Reshaped. Its first frame follows in ReshapeAt.
+  Reshape = 13,
+  ReshapeAt = 14,  // a: the frame the node of piece session b takes over (0: drop it)
+  Reshaped = 15,   // a: 1 built, 0 not (text: why); b: the piece session
 };
 
 struct CommandHeader {
