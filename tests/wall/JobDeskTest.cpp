@@ -962,6 +962,15 @@ TEST_F(TwoJobsTest, AMoveBuildsTheNewWindowEverywhereThenTellsTheJobItsSwitchFra
   frame(a, 6, t0);
   two.presented(a, 6, 0);
   EXPECT_FALSE(two.moving(a));
+  // A process that comes back after the move is given the moved window and its piece session.
+  EXPECT_TRUE(members.drop(2));
+  two.lost(2, "killed", t0 + 1s);
+  members.admit("link2-again", joinOf(2, 2), t0 + 2s);
+  const ServiceCommand back = commandTo(two.joined(2, t0 + 2s), 2, Command::Start);
+  EXPECT_EQ(static_cast<std::uint64_t>(back.header.b), pieceSession);
+  EXPECT_EQ((dfb::Region{back.header.windowX0, back.header.windowY0, back.header.windowX1,
+                         back.header.windowY1}),
+            (dfb::Region{40, 10, 140, 60}));
 }
 
 TEST_F(TwoJobsTest, AMoveIsRefusedWithTheReason) {

@@ -12,7 +12,8 @@ namespace wall::service {
 
 enum class Command : std::uint32_t {
   Start = 1,      // a job: run a wall node for it (text: its capture folder; a: its first frame, or
-                  // 0 for a process joining a running job: FirstFrame follows its Ready)
+                  // 0 for a process joining a running job: FirstFrame follows its Ready; b: the
+                  // piece session of its window after a move, 0: the job's session)
   Cancel = 2,     // the job never started (a process could not): stop before frame 1
   LastFrame = 3,  // a: the job's last frame
   Abort = 4,      // the job is gone (text: why): give the frame in progress up

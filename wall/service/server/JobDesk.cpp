@@ -530,7 +530,9 @@ ServiceCommand JobDesk::command(Command kind, std::int64_t a, std::int64_t b,
 }
 
 ServiceCommand JobDesk::startCommand(std::uint32_t firstFrame) const {
-  ServiceCommand c = command(Command::Start, firstFrame, 0, j_->job.hello.captureDir);
+  // b: the piece session of the window now (a process that joins after a move gets its shape).
+  ServiceCommand c = command(Command::Start, firstFrame,
+                             static_cast<std::int64_t>(j_->pieceSession), j_->job.hello.captureDir);
   c.header.tileSize = j_->job.hello.tileSize;
   c.header.renderRanks = j_->job.hello.renderRanks;
   c.header.framesInFlight = j_->granted;
@@ -602,6 +604,7 @@ void JobDesk::startJob() {
   j_->pendingCaptures.clear();
   j_->move.reset();
   j_->reshapeVersion = 0;
+  j_->pieceSession = 0;
   j_->granted = std::min<std::uint32_t>(j_->job.hello.framesInFlight,
                                         static_cast<std::uint32_t>(s_.framesInFlight));
   j_->state = State::Starting;
@@ -856,6 +859,7 @@ void JobDesk::commitMoveIfBuilt() {
   Slot::Move& move = *j_->move;
   move.fromFrame = switchFrame(j_->lastCredited, j_->granted);
   j_->window = move.window;
+  j_->pieceSession = move.pieceSession;
   Reshape r;
   r.session = j_->job.session;
   r.version = ++j_->reshapeVersion;

@@ -272,6 +272,7 @@ class JobDesk {
     };
     std::optional<Move> move;
     std::uint32_t reshapeVersion = 0;
+    std::uint64_t pieceSession = 0;  // what the job's pieces are stamped with (0: its session)
   };
   // The job on the wall with this session / connection (none: nullptr).
   Slot* bySession(std::uint64_t session) const;

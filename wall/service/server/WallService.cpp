@@ -451,7 +451,10 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   running.epoch = epoch;
   running.codec = static_cast<Codec>(start.header.codec);
   running.renderRanks = static_cast<int>(start.header.renderRanks);
-  std::unique_ptr<Shape> current = makeShape(window, session, session, epoch, o);
+  // A process that joins after a move takes the moved window's pieces.
+  const std::uint64_t pieceSession =
+      start.header.b > 0 ? static_cast<std::uint64_t>(start.header.b) : session;
+  std::unique_ptr<Shape> current = makeShape(window, pieceSession, session, epoch, o);
   if (current->waitsForFirstFrame) firstFrame = 0;
   running.current = current.get();
   // The shape a move replaced: its windows stay until the new shape presented a frame.
@@ -461,7 +464,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
       std::lock_guard lock(mutex);
       jobs[session] = &running;
     }
-    receiver->attach(session, running.codec, running.renderRanks, current->node.get());
+    receiver->attach(pieceSession, running.codec, running.renderRanks, current->node.get());
     answer.header.kind = Command::Ready;
     answer.header.a = 1;
     head->toHead(answer, epoch);
