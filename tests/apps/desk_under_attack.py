@@ -198,13 +198,13 @@ def layout_hash(canvas, displays, processes):
 
 
 # CommandHeader (wall/service/protocol/ServiceCommands.h): kind, process, session, a, b,
-# tileSize, renderRanks, framesInFlight, captureEvery, codec, the window (x0, y0, x1, y1),
-# textBytes.
-COMMAND_HEADER = "<IiQqq5I4iI"
+# pieceSession, tileSize, renderRanks, framesInFlight, captureEvery, codec, the window (x0, y0,
+# x1, y1), textBytes.
+COMMAND_HEADER = "<IiQqqQ5I4iI"
 
 
 def command(kind, session, a=0, tile=64, ranks=1, in_flight=2, text_=b""):
-    body = struct.pack(COMMAND_HEADER, kind, 0, session, a, 0, tile, ranks, in_flight, 0, 0,
+    body = struct.pack(COMMAND_HEADER, kind, 0, session, a, 0, 0, tile, ranks, in_flight, 0, 0,
                        0, 0, 0, 0, len(text_)) + text_
     return header(COMMAND, session) + body
 
@@ -498,7 +498,7 @@ def attack_member_that_never_arrives():
                 fields, _ = parse_command(m)
                 if fields[0] == CMD_START:
                     answer = struct.pack(COMMAND_HEADER, CMD_READY, 1, fields[2], 1, 0, 0, 0, 0,
-                                         0, 0, 0, 0, 0, 0, 0)
+                                         0, 0, 0, 0, 0, 0, 0, 0)
                     member.send(header(COMMAND, fields[2]) + answer)
                     events.setdefault("start", time.monotonic())
             elif kind == DROPPED:

@@ -917,7 +917,7 @@ TEST_F(TwoJobsTest, AMoveBuildsTheNewWindowEverywhereThenTellsTheJobItsSwitchFra
   // Every process builds the new node first; the job hears nothing yet.
   EXPECT_EQ(given(asked, Command::Reshape), (std::vector<int>{0, 1, 2}));
   const ServiceCommand build = commandTo(asked, 1, Command::Reshape);
-  const auto pieceSession = static_cast<std::uint64_t>(build.header.b);
+  const std::uint64_t pieceSession = build.header.pieceSession;
   EXPECT_NE(pieceSession, a);
   EXPECT_EQ((dfb::Region{build.header.windowX0, build.header.windowY0, build.header.windowX1,
                          build.header.windowY1}),
@@ -932,14 +932,17 @@ TEST_F(TwoJobsTest, AMoveBuildsTheNewWindowEverywhereThenTellsTheJobItsSwitchFra
   // Frames go on while the processes build: the switch frame counts from the credits then.
   frame(a, 3, t0);
   two.presented(a, 3, 0);
-  two.answer(0, answerOf(a, Command::Reshaped, 1, static_cast<std::int64_t>(pieceSession)), t0);
-  two.answer(2, answerOf(a, Command::Reshaped, 1, static_cast<std::int64_t>(pieceSession)), t0);
+  const auto built = [&](std::uint64_t pieces) {
+    ServiceCommand c = answerOf(a, Command::Reshaped, 1);
+    c.header.pieceSession = pieces;
+    return c;
+  };
+  two.answer(0, built(pieceSession), t0);
+  two.answer(2, built(pieceSession), t0);
   // An answer naming another piece session is not this move's.
-  EXPECT_TRUE(
-      replies(two.answer(1, answerOf(a, Command::Reshaped, 1, 77), t0), Kind::Reshape).empty());
-  const Actions built =
-      two.answer(1, answerOf(a, Command::Reshaped, 1, static_cast<std::int64_t>(pieceSession)), t0);
-  const auto told = replies(built, Kind::Reshape);
+  EXPECT_TRUE(replies(two.answer(1, built(77), t0), Kind::Reshape).empty());
+  const Actions committed = two.answer(1, built(pieceSession), t0);
+  const auto told = replies(committed, Kind::Reshape);
   ASSERT_EQ(told.size(), 1u);
   EXPECT_EQ(told[0].peer, "job-a");
   const Reshape r = parseReshape(told[0].message.data(), told[0].message.size());
@@ -950,8 +953,9 @@ TEST_F(TwoJobsTest, AMoveBuildsTheNewWindowEverywhereThenTellsTheJobItsSwitchFra
   EXPECT_EQ(r.directory.window, (dfb::Region{40, 10, 140, 60}));
   EXPECT_EQ(r.directory.layout.canvasWidth, 100);
   EXPECT_EQ(r.directory.layout.displays.size(), 3u);  // 64-wide displays: 40..140 touches all
-  EXPECT_EQ(given(built, Command::ReshapeAt), (std::vector<int>{0, 1, 2}));
-  EXPECT_EQ(commandTo(built, 2, Command::ReshapeAt).header.a, 6);
+  EXPECT_EQ(given(committed, Command::ReshapeAt), (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(commandTo(committed, 2, Command::ReshapeAt).header.a, 6);
+  EXPECT_EQ(commandTo(committed, 2, Command::ReshapeAt).header.pieceSession, pieceSession);
   EXPECT_EQ(two.window(a), (dfb::Region{40, 10, 140, 60}));
   // Until frame 6 is credited the move is under way; then the next may come.
   for (std::uint32_t f = 4; f <= 5; ++f) {
@@ -967,7 +971,7 @@ TEST_F(TwoJobsTest, AMoveBuildsTheNewWindowEverywhereThenTellsTheJobItsSwitchFra
   two.lost(2, "killed", t0 + 1s);
   members.admit("link2-again", joinOf(2, 2), t0 + 2s);
   const ServiceCommand back = commandTo(two.joined(2, t0 + 2s), 2, Command::Start);
-  EXPECT_EQ(static_cast<std::uint64_t>(back.header.b), pieceSession);
+  EXPECT_EQ(back.header.pieceSession, pieceSession);
   EXPECT_EQ((dfb::Region{back.header.windowX0, back.header.windowY0, back.header.windowX1,
                          back.header.windowY1}),
             (dfb::Region{40, 10, 140, 60}));
@@ -999,9 +1003,9 @@ TEST_F(TwoJobsTest, AMoveIsRefusedWithTheReason) {
   // A process that cannot build the new window ends the job, told why.
   const Actions asked = two.reshape(b, {0, 0, 64, 64}, t0, v);
   ASSERT_EQ(v.code, JobDesk::MoveVerdict::Code::Moving);
-  const auto pieceSession = commandTo(asked, 0, Command::Reshape).header.b;
-  const Actions refused =
-      two.answer(2, answerOf(b, Command::Reshaped, 0, pieceSession, "no memory"), t0);
+  ServiceCommand cannot = answerOf(b, Command::Reshaped, 0, 0, "no memory");
+  cannot.header.pieceSession = commandTo(asked, 0, Command::Reshape).header.pieceSession;
+  const Actions refused = two.answer(2, cannot, t0);
   EXPECT_EQ(given(refused, Command::ReshapeAt), (std::vector<int>{0, 1, 2}));
   EXPECT_EQ(commandTo(refused, 1, Command::ReshapeAt).header.a, 0);
   const auto ended = replies(refused, Kind::Ended);

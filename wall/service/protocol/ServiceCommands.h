@@ -12,8 +12,7 @@ namespace wall::service {
 
 enum class Command : std::uint32_t {
   Start = 1,      // a job: run a wall node for it (text: its capture folder; a: its first frame, or
-                  // 0 for a process joining a running job: FirstFrame follows its Ready; b: the
-                  // piece session of its window after a move, 0: the job's session)
+                  // 0 for a process joining a running job: FirstFrame follows its Ready)
   Cancel = 2,     // the job never started (a process could not): stop before frame 1
   LastFrame = 3,  // a: the job's last frame
   Abort = 4,      // the job is gone (text: why): give the frame in progress up
@@ -26,11 +25,11 @@ enum class Command : std::uint32_t {
   StopAsked = 11,   // this process was asked to stop the wall
   FirstFrame = 12,  // a: the first frame of a process that joined a running job
   // The job's window moves (docs/design.md, "Moving and resizing a window"): build its node for
-  // the window in the header beside the running one, its pieces stamped with the piece session
-  // b; answer Reshaped. Its first frame follows in ReshapeAt.
+  // the window in the header beside the running one, taking the pieces stamped with the header's
+  // piece session; answer Reshaped. Its first frame follows in ReshapeAt.
   Reshape = 13,
-  ReshapeAt = 14,  // a: the frame the node of piece session b takes over (0: drop it)
-  Reshaped = 15,   // a: 1 built, 0 not (text: why); b: the piece session
+  ReshapeAt = 14,  // a: the frame the node of the piece session takes over (0: drop it)
+  Reshaped = 15,   // a: 1 built, 0 not (text: why); the piece session built
 };
 
 struct CommandHeader {
@@ -38,12 +37,17 @@ struct CommandHeader {
   std::int32_t process;
   std::uint64_t session;
   std::int64_t a, b;
+  // Start, Reshape, ReshapeAt, Reshaped: what the job's pieces for the window are stamped with
+  // (a moved window's own; 0 in a Start: the job's session).
+  std::uint64_t pieceSession;
   std::uint32_t tileSize, renderRanks, framesInFlight, captureEvery;
   std::uint32_t codec;
   // Start: the job's window on the wall's canvas (resolved by the head; each process checks it).
   std::int32_t windowX0, windowY0, windowX1, windowY1;
   std::uint32_t textBytes;
 };
+
+static_assert(sizeof(CommandHeader) == 80, "the wall link's command layout (no padding)");
 
 struct ServiceCommand {
   CommandHeader header{};

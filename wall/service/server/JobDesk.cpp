@@ -530,9 +530,9 @@ ServiceCommand JobDesk::command(Command kind, std::int64_t a, std::int64_t b,
 }
 
 ServiceCommand JobDesk::startCommand(std::uint32_t firstFrame) const {
-  // b: the piece session of the window now (a process that joins after a move gets its shape).
-  ServiceCommand c = command(Command::Start, firstFrame,
-                             static_cast<std::int64_t>(j_->pieceSession), j_->job.hello.captureDir);
+  ServiceCommand c = command(Command::Start, firstFrame, 0, j_->job.hello.captureDir);
+  // A process that joins after a move takes the moved window's pieces.
+  c.header.pieceSession = j_->pieceSession;
   c.header.tileSize = j_->job.hello.tileSize;
   c.header.renderRanks = j_->job.hello.renderRanks;
   c.header.framesInFlight = j_->granted;
@@ -815,7 +815,7 @@ JobDesk::Actions JobDesk::reshape(std::uint64_t session, const dfb::Region& wind
   move.pieceSession = s_.newSession();
   ServiceCommand build = startCommand(0);
   build.header.kind = Command::Reshape;
-  build.header.b = static_cast<std::int64_t>(move.pieceSession);
+  build.header.pieceSession = move.pieceSession;
   build.header.windowX0 = window.x0;
   build.header.windowY0 = window.y0;
   build.header.windowX1 = window.x1;
@@ -835,12 +835,13 @@ JobDesk::Actions JobDesk::reshape(std::uint64_t session, const dfb::Region& wind
 }
 
 void JobDesk::onReshaped(int p, const ServiceCommand& c) {
-  if (!j_->move || j_->move->fromFrame > 0 ||
-      static_cast<std::uint64_t>(c.header.b) != j_->move->pieceSession)
+  if (!j_->move || j_->move->fromFrame > 0 || c.header.pieceSession != j_->move->pieceSession)
     return;
   if (c.header.a == 0) {
     // A process that cannot show the new window cannot show the job: it ends, told why.
-    toJob(command(Command::ReshapeAt, 0, c.header.b));
+    ServiceCommand drop = command(Command::ReshapeAt, 0);
+    drop.header.pieceSession = j_->move->pieceSession;
+    toJob(drop);
     j_->move.reset();
     endJob(members_.who(p) + " could not move the window: " + reason(c.text));
     return;
@@ -872,7 +873,9 @@ void JobDesk::commitMoveIfBuilt() {
   r.directory.timeoutMs = static_cast<std::uint32_t>(s_.timeout.count());
   r.directory.rosterVersion = j_->rosterVersion;
   reply(j_->job.peer, Kind::Reshape, packReshape(r));
-  toJob(command(Command::ReshapeAt, move.fromFrame, static_cast<std::int64_t>(move.pieceSession)));
+  ServiceCommand at = command(Command::ReshapeAt, move.fromFrame);
+  at.header.pieceSession = move.pieceSession;
+  toJob(at);
 }
 
 dfb::Region JobDesk::window(std::uint64_t session) const {

@@ -156,7 +156,7 @@ void WallService::Impl::incoming(const ServiceCommand& c) {
           epoch = job.epoch;
           break;
         case Command::ReshapeAt:
-          if (!job.next || job.next->pieceSession != static_cast<std::uint64_t>(h.b)) return;
+          if (!job.next || job.next->pieceSession != h.pieceSession) return;
           if (h.a <= 0 || h.a > std::int64_t{0xffffffff}) {  // the move is given up
             receiver->detach(job.next->pieceSession);
             dropped = std::move(job.next);
@@ -234,9 +234,9 @@ ServiceCommand WallService::Impl::buildNext(const ServiceCommand& c, RunningJob&
   answer.header.kind = Command::Reshaped;
   answer.header.session = h.session;
   answer.header.process = process;
-  answer.header.b = h.b;
+  answer.header.pieceSession = h.pieceSession;
   const dfb::Region window{h.windowX0, h.windowY0, h.windowX1, h.windowY1};
-  const auto pieceSession = static_cast<std::uint64_t>(h.b);
+  const std::uint64_t pieceSession = h.pieceSession;
   std::string problem;
   if (stacks.empty())
     problem = "this wall process composes no windows (serve --max-jobs 1)";
@@ -453,7 +453,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   running.renderRanks = static_cast<int>(start.header.renderRanks);
   // A process that joins after a move takes the moved window's pieces.
   const std::uint64_t pieceSession =
-      start.header.b > 0 ? static_cast<std::uint64_t>(start.header.b) : session;
+      start.header.pieceSession != 0 ? start.header.pieceSession : session;
   std::unique_ptr<Shape> current = makeShape(window, pieceSession, session, epoch, o);
   if (current->waitsForFirstFrame) firstFrame = 0;
   running.current = current.get();
