@@ -14,7 +14,7 @@ const std::string kScene = "Scene", kRendering = "Rendering",
                   kConnect = "Connect to a wall service", kControl = "Control",
                   kNetwork = "Network", kNetworkSecurity = "Network and security",
                   kThroughput = "Throughput", kFailures = "Failure handling", kOutput = "Output",
-                  kHelp = "Help";
+                  kPictures = "Pictures", kHelp = "Help";
 
 // ---- Options of more than one command -------------------------------------------------------
 
@@ -377,11 +377,52 @@ void addRelay(CLI::App& relay, RelayCommand& c) {
   addHelp(relay);
 }
 
+// ---- show -----------------------------------------------------------------------------------
+
+void addShow(CLI::App& show, Options& o, RawOptions& raw) {
+  ShowOptions& s = o.pictures;
+  show.add_option("IMAGE", s.arguments,
+                  "PNG or JPEG files, or numbered sequences (plot-%04d.png: every number from the "
+                  "lowest to the highest, no gap), shown one after another")
+      ->required()
+      ->group(kPictures);
+  show.add_option("--fps", s.fps, "pictures per second when there are several")
+      ->check(CLI::Range(0.01, 1000.0))
+      ->capture_default_str()
+      ->group(kPictures);
+  show.add_flag("--loop", s.loop, "after the last picture, start again from the first")
+      ->group(kPictures);
+  show.add_flag("--once", s.once,
+                "end after the last picture is shown (default: keep showing it until stopped)")
+      ->group(kPictures);
+  show.add_option("--filter", s.filter, "how a picture is scaled into the window")
+      ->check(CLI::IsMember({"bilinear", "nearest"}))
+      ->capture_default_str()
+      ->group(kPictures);
+  show.add_option("--background", raw.background,
+                  "#rrggbb: around the picture (it keeps its aspect) and under its transparent "
+                  "parts (default: black)")
+      ->group(kPictures);
+  addConnectGroup(show, o);
+  addTimeout(show, o.timeoutSeconds, "seconds any wait may take before it is an error");
+  addJobFailureOptions(show, raw);
+  show.add_option("--capture", o.captureDir,
+                  "a folder inside the wall's serve --capture-root: write the window's part of "
+                  "each display, the last frame (and every K-th with --capture-every)")
+      ->group(kOutput);
+  show.add_option("--capture-every", o.captureEvery, "with --capture: every K-th frame too")
+      ->check(CLI::Range(0, 1 << 30))
+      ->group(kOutput);
+  addStats(show, o.statsFile, "write per-frame statistics as JSON Lines to FILE");
+  show.add_flag("--quiet", o.quiet, "no progress line")->group(kOutput);
+  addHelp(show);
+}
+
 // The commands that take `option` ("--scene"), as a message names them.
 std::vector<std::string> commandsTaking(const CommandLine& cli, const std::string& option) {
   std::vector<std::string> names;
   if (cli.root.get_option_no_throw(option)) names.push_back("the render job (dfbwall)");
-  for (const CLI::App* sub : {cli.serve, cli.relay})
+  for (const CLI::App* sub : {cli.serve, cli.relay, cli.show})
     if (sub->get_option_no_throw(option)) names.push_back("dfbwall " + sub->get_name());
   return names;
 }
@@ -401,8 +442,8 @@ CommandLine::CommandLine(Options& options, RelayCommand& relayCommand, RawOption
           "  image: mpirun -np N dfbwall --scene S --size WxH --image out.png\n"
           "  wall:  mpirun -np R+W dfbwall --wall configs/walls/2x2.toml --offscreen --capture "
           "DIR\n"
-          "These options are the render job's; serve and relay take their own "
-          "(dfbwall serve --help, dfbwall relay --help).",
+          "These options are the render job's; serve, relay and show take their own "
+          "(dfbwall serve --help, dfbwall relay --help, dfbwall show --help).",
           "dfbwall") {
   addRenderJob(root, options, raw);
   serve = root.add_subcommand(
@@ -416,15 +457,21 @@ CommandLine::CommandLine(Options& options, RelayCommand& relayCommand, RawOption
       "their pieces (dfbwall relay --listen [ADDR:]PORT --wall HOST:PORT; jobs: dfbwall "
       "--connect RELAY:PORT)");
   addRelay(*relay, relayCommand);
+  show = root.add_subcommand(
+      "show",
+      "put ready-made pictures (PNG, JPEG, numbered sequences) in a window of a serving wall, "
+      "sent as a render job's frames (dfbwall show --connect HOST:PORT [--window W] IMAGE...)");
+  addShow(*show, options, raw);
   root.require_subcommand(0, 1);
   // Arguments a command does not take are kept, not thrown at: misplacedArgument names them
   // with the command and where they belong.
-  for (CLI::App* app : {&root, serve, relay}) app->allow_extras();
+  for (CLI::App* app : {&root, serve, relay, show}) app->allow_extras();
 }
 
 const CLI::App& CommandLine::command() const {
   if (serve->parsed()) return *serve;
   if (relay->parsed()) return *relay;
+  if (show->parsed()) return *show;
   return root;
 }
 

@@ -1,5 +1,6 @@
 #pragma once
-// The dfbwall commands as CLI11 sees them: the render job (dfbwall itself), `serve` and `relay`,
+// The dfbwall commands as CLI11 sees them: the render job (dfbwall itself), `serve`, `relay` and
+// `show`,
 // each with only the options it reads, in help groups. An option several commands take is added
 // by one function, so its name, check and default cannot drift between them.
 #include <CLI/CLI.hpp>
@@ -16,13 +17,14 @@ struct RawOptions {
 };
 
 struct CommandLine {
-  // Binds every option to its field: the render job's and serve's to `options`, relay's to
-  // `relay`.
+  // Binds every option to its field: the render job's, serve's and show's to `options`, relay's
+  // to `relay`.
   CommandLine(Options& options, RelayCommand& relay, RawOptions& raw);
 
   CLI::App root;  // the render job
   CLI::App* serve = nullptr;
   CLI::App* relay = nullptr;
+  CLI::App* show = nullptr;
 
   // The subcommand given, else the render job.
   const CLI::App& command() const;

@@ -133,6 +133,8 @@ FrameOrder FrameDirector::next(std::uint32_t frameId,
 bool FrameDirector::converged() const {
   if (options_.maxSpp <= 0 || epochSpp_ < options_.maxSpp || options_.orbitDegrees != 0)
     return false;
+  if (options_.content && options_.content(lastFrame_ + 1) != options_.content(lastFrame_))
+    return false;
   // A camera path that has reached its last keyframe holds still.
   if (!pathActive_) return true;
   const renderers::CameraDesc next = options_.path(lastFrame_ + 1);

@@ -25,6 +25,9 @@ struct DirectorOptions {
   // The camera of frame F from a --camera-path (empty: none). A steering camera request ends
   // the path: the operator has the camera from then on.
   std::function<renderers::CameraDesc(std::uint32_t frameId)> path;
+  // What frame F draws besides the camera (`dfbwall show`: the index of its picture); not
+  // converged while the next frame's differs. Empty: nothing else.
+  std::function<std::uint64_t(std::uint32_t frameId)> content;
 };
 
 class FrameDirector {

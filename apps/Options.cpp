@@ -4,6 +4,8 @@
 
 #include "apps/CommandLine.h"
 #include "base/MemoryBudget.h"
+#include "renderers/picture/PictureRenderer.h"
+#include "renderers/picture/PictureSequence.h"
 #include "wall/layout/Window.h"
 #include "wall/service/protocol/Codec.h"
 
@@ -92,6 +94,69 @@ int parseArguments(CommandLine& cli, std::vector<std::string> args, bool print) 
   return -1;
 }
 
+// "#rrggbb" into RGBA8 with R in the low byte (wall/image/Image.h). Empty when fine.
+std::string parseBackground(const std::string& b, std::uint32_t& rgba) {
+  std::uint32_t rgb = 0;
+  const bool hex = b.size() == 7 && b[0] == '#' &&
+                   std::from_chars(b.data() + 1, b.data() + 7, rgb, 16).ptr == b.data() + 7;
+  if (!hex) return "--background must be #rrggbb (e.g. #000000), not '" + b + "'";
+  rgba = 0xff000000u | (rgb >> 16) | (rgb & 0xff00u) | ((rgb & 0xffu) << 16);
+  return {};
+}
+
+std::string parseMemoryLimit(const std::string& text, std::uint64_t& limit) {
+  const std::optional<std::uint64_t> bytes = base::parseByteSize(text);
+  if (!bytes)
+    return "--memory-limit must be BYTES or a number with K, M, G or T (e.g. 4G), not '" + text +
+           "'";
+  limit = *bytes;
+  return {};
+}
+
+// --connect's window and codec. Empty when fine.
+std::string connectProblem(const Options& o) {
+  try {
+    wall::parseWindowRequest(o.window);
+    wall::service::parseCodec(o.codec);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return {};
+}
+
+// show: a job of the picture renderer for a serving wall. Empty when fine; sets the job's
+// options it implies.
+std::string showProblem(Options& o, const RawOptions& raw) {
+  ShowOptions& s = o.pictures;
+  if (o.connect.empty())
+    return "show needs --connect HOST:PORT: the serving wall (what `dfbwall serve` printed)";
+  if (s.loop && s.once)
+    return "--loop and --once: after the last picture, start again or end; choose one";
+  if (!std::isfinite(s.fps)) return "--fps must be a finite number";
+  if (!raw.background.empty())
+    if (std::string problem = parseBackground(raw.background, s.background); !problem.empty())
+      return problem;
+  if (!raw.memoryLimit.empty())
+    if (std::string problem = parseMemoryLimit(raw.memoryLimit, o.memoryLimit); !problem.empty())
+      return problem;
+  if (std::string problem = connectProblem(o); !problem.empty()) return problem;
+  try {
+    s.files = renderers::picture::expandPictures(s.arguments);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  // Every rank waits for each frame's order within the timeout.
+  if (s.files.size() > 1 && 1.0 / s.fps >= o.timeoutSeconds)
+    return "--fps " + std::to_string(s.fps) + ": a picture every " + std::to_string(1.0 / s.fps) +
+           " s is not within --timeout " + std::to_string(o.timeoutSeconds) + " s";
+  if (s.files.size() > (1u << 30)) return "show: more than 2^30 pictures";
+  o.show = true;
+  o.renderer = renderers::picture::kPictureName;
+  o.frames = s.once ? static_cast<int>(s.files.size()) : 0;  // 0: until stopped
+  o.spp = 1;
+  return {};
+}
+
 // serve: the processes of one wall, all under mpirun or one on its own. Empty when fine.
 std::string serveProblem(Options& o, const RawOptions& raw) {
   if (o.wall.empty()) return "serve needs --wall FILE.toml: the wall it runs";
@@ -102,15 +167,9 @@ std::string serveProblem(Options& o, const RawOptions& raw) {
              raw.captureQuota + "'";
     o.captureQuota = *bytes;
   }
-  if (!raw.background.empty()) {
-    // "#rrggbb"; RGBA8 with R in the low byte (wall/image/Image.h).
-    const std::string& b = raw.background;
-    std::uint32_t rgb = 0;
-    const bool hex = b.size() == 7 && b[0] == '#' &&
-                     std::from_chars(b.data() + 1, b.data() + 7, rgb, 16).ptr == b.data() + 7;
-    if (!hex) return "--background must be #rrggbb (e.g. #000000), not '" + b + "'";
-    o.background = 0xff000000u | (rgb >> 16) | (rgb & 0xff00u) | ((rgb & 0xffu) << 16);
-  }
+  if (!raw.background.empty())
+    if (std::string problem = parseBackground(raw.background, o.background); !problem.empty())
+      return problem;
   if (o.captureEvery > 0 && o.captureDir.empty())
     return "serve --capture-every K needs --capture DIR: the folder the wall's captures go to";
   if (o.process > 0 && o.join.empty())
@@ -143,21 +202,11 @@ std::string renderJobProblem(Options& o, const RawOptions& raw, bool ghostGiven)
   if (o.connect.empty() && !o.window.empty())
     return "--window is for --connect: a window of a wall that `dfbwall serve` runs (a job of "
            "its own wall, --wall, covers the whole canvas)";
-  if (!o.connect.empty()) {
-    try {
-      wall::parseWindowRequest(o.window);
-      wall::service::parseCodec(o.codec);
-    } catch (const std::exception& e) {
-      return e.what();
-    }
-  }
-  if (!raw.memoryLimit.empty()) {
-    const std::optional<std::uint64_t> bytes = base::parseByteSize(raw.memoryLimit);
-    if (!bytes)
-      return "--memory-limit must be BYTES or a number with K, M, G or T (e.g. 4G), not '" +
-             raw.memoryLimit + "'";
-    o.memoryLimit = *bytes;
-  }
+  if (!o.connect.empty())
+    if (std::string problem = connectProblem(o); !problem.empty()) return problem;
+  if (!raw.memoryLimit.empty())
+    if (std::string problem = parseMemoryLimit(raw.memoryLimit, o.memoryLimit); !problem.empty())
+      return problem;
   if (!raw.size.empty()) {
     const std::string problem = parseSize(raw.size, o.width, o.height);
     if (!problem.empty()) return problem + " (got '" + raw.size + "')";
@@ -194,8 +243,9 @@ int parseOptions(int argc, char** argv, Options& o, bool print) {
     return fail("relay comes first: dfbwall relay --listen [ADDR:]PORT --wall HOST:PORT");
   o.serve = cli.serve->parsed();
   const std::string problem =
-      o.serve ? serveProblem(o, raw)
-              : renderJobProblem(o, raw, cli.root.get_option("--ghost")->count() > 0);
+      o.serve              ? serveProblem(o, raw)
+      : cli.show->parsed() ? showProblem(o, raw)
+                           : renderJobProblem(o, raw, cli.root.get_option("--ghost")->count() > 0);
   return problem.empty() ? -1 : fail(problem);
 }
 

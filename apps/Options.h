@@ -9,6 +9,17 @@
 
 namespace app {
 
+// `dfbwall show`: ready-made pictures in a window of a serving wall, played as a job's frames
+// (renderers/picture/PictureRenderer.h). The connection options are the job's (Options below).
+struct ShowOptions {
+  std::vector<std::string> arguments;      // as given: files and numbered sequences
+  std::vector<std::string> files;          // expanded, in play order
+  double fps = 1;                          // pictures per second of a sequence
+  bool loop = false, once = false;         // after the last: start again / end (default: hold it)
+  std::string filter = "bilinear";         // nearest | bilinear
+  std::uint32_t background = 0xff000000u;  // RGBA8 around the picture (black)
+};
+
 // The render job's options, and serve's (marked below): serve reads only those marked.
 struct Options {
   // Scene and rendering.
@@ -80,10 +91,14 @@ struct Options {
   std::vector<std::string> controlHosts;  // more names a Host header may carry (rebinding)
   std::int64_t maxSpp = 1024;  // with --frames 0: idle once an epoch has this many samples
   std::string cameraPath;      // FILE.toml: keyframes (apps/CameraPath.h)
+
+  // `dfbwall show`: a job of the renderer "picture" with --connect.
+  bool show = false;
+  ShowOptions pictures;
 };
 
-// Parses argv (the render job, or `serve ...`). Returns an exit code to stop with (0 after --help)
-// or -1 to go on; messages go to stdout/stderr only when `print` (rank 0).
+// Parses argv (the render job, `serve ...` or `show ...`). Returns an exit code to stop with (0
+// after --help) or -1 to go on; messages go to stdout/stderr only when `print` (rank 0).
 int parseOptions(int argc, char** argv, Options& options, bool print);
 // True when the hub or the wall is on the other end: a wall of this job (--wall) or a serving
 // wall (--connect).

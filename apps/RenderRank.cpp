@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <deque>
 #include <optional>
+#include <thread>
 
 #include "apps/CameraPath.h"
 #include "apps/FrameDirector.h"
@@ -21,6 +22,7 @@
 #include "renderers/FrameDriver.h"
 #include "renderers/Renderer.h"
 #include "renderers/WorkDistribution.h"
+#include "renderers/picture/PictureSequence.h"
 #include "renderers/scivis/Registration.h"
 #include "renderers/scivis/bricks/BrickFrameDriver.h"
 #include "renderers/scivis/scene/SciVisScene.h"
@@ -58,14 +60,25 @@ DirectorOptions directorOptions(const Job& job, const FrameView& initial) {
   DirectorOptions d;
   d.initial = initial;
   d.orbitDegrees = job.options.orbit;
-  // The pattern draws a new picture every frame (its marker moves): it never converges.
-  d.maxSpp = job.options.renderer == "pattern" ? 0 : job.options.maxSpp;
+  // The pattern draws a new picture every frame (its marker moves): it never converges. A
+  // picture is drawn whole in one sample: converged while the next frame shows the same one.
+  d.maxSpp = job.options.renderer == "pattern" ? 0 : job.options.show ? 1 : job.options.maxSpp;
+  if (job.options.show) {
+    const std::size_t count = job.options.pictures.files.size();
+    const bool loop = job.options.pictures.loop;
+    d.content = [count, loop](std::uint32_t frameId) {
+      return renderers::picture::pictureOfFrame(frameId, count, loop);
+    };
+  }
   if (job.cameraPath) {
     const CameraPath path = *job.cameraPath;
     d.path = [path](std::uint32_t frameId) { return path.at(frameId); };
   }
   return d;
 }
+
+// Renderers that draw display pixels straight away, a new picture each frame, nothing to average.
+bool drawsDisplayPixels(const Options& o) { return o.renderer == "pattern" || o.show; }
 
 bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() &&
@@ -87,6 +100,7 @@ class RenderRank {
   void connectWall(runtime::MpiWallControl& wallControl);
   FrameOrder orderFrame(std::uint32_t frameId);
   std::vector<SteeringRequest> waitWhileConverged();
+  void waitForFrameTime(std::uint32_t frameId);
   void followWall(const FrameOrder& order, std::uint32_t frameId);
   void replan(const wall::service::Reshape& moved, std::uint32_t frameId);
   void idle();
@@ -193,9 +207,10 @@ void RenderRank::chooseFormat() {
   // Without a wall the gathered image is only --image's, written once after the last frame.
   fb.gatherEveryFrame = hasWall_;
   dfbOptions_ = runtime::frameBufferOptions(fb, messenger_);
-  // The pattern is a new picture every frame (its marker moves): nothing to average.
+  // The pattern is a new picture every frame (its marker moves), and so is a shown picture:
+  // nothing to average.
   dfbOptions_.operation =
-      o_.renderer == "pattern" ? dfb::writeOperation() : dfb::accumulateOperation();
+      drawsDisplayPixels(o_) ? dfb::writeOperation() : dfb::accumulateOperation();
   if (route_) {
     driving_.activeTiles = runtime::routeToDisplays(dfbOptions_, *layout_, o_.tileSize);
   } else if (hasWall_ || endsWith(o_.image, ".png")) {
@@ -206,7 +221,7 @@ void RenderRank::chooseFormat() {
     dfbOptions_.format = dfb::DisplayFormat::NONE;
   }
   // The pattern writes display pixels straight away, unless linear output is asked for.
-  if (o_.renderer == "pattern" && dfbOptions_.format != dfb::DisplayFormat::RGBAF32)
+  if (drawsDisplayPixels(o_) && dfbOptions_.format != dfb::DisplayFormat::RGBAF32)
     settings_.displayPixels = dfbOptions_.toneMap;
 }
 
@@ -323,6 +338,7 @@ FrameOrder RenderRank::orderFrame(std::uint32_t frameId) {
     const std::uint32_t reshapeVersion =
         wall_ ? wall_->reshapeVersionFor(frameId, wall_->reshapeVersion()) : 0;
     if (wall_ && reshapeVersion != wall_->reshapeVersion()) director_->restartAccumulation();
+    if (!order.idle) waitForFrameTime(frameId);
     if (!order.idle) order = director_->next(frameId, requests);
     if (wall_) {
       order.rosterVersion = wall_->rosterVersion();
@@ -350,6 +366,19 @@ std::vector<SteeringRequest> RenderRank::waitWhileConverged() {
     control_.pollSignals();
   }
   return steering_.take();
+}
+
+// Rank 0, `dfbwall show` with several pictures: frame F (picture F-1) starts (F-1)/fps seconds
+// after the first, looking at signals meanwhile.
+void RenderRank::waitForFrameTime(std::uint32_t frameId) {
+  if (!o_.show || o_.pictures.files.size() < 2) return;
+  const auto due =
+      runStart_ + std::chrono::duration_cast<Clock::duration>(
+                      std::chrono::duration<double>(double(frameId - 1) / o_.pictures.fps));
+  while (Clock::now() < due && !control_.stopRequested()) {
+    std::this_thread::sleep_for(std::min<Clock::duration>(due - Clock::now(), kSignalPoll));
+    control_.pollSignals();
+  }
 }
 
 // The pieces of this frame on go where the wall now is (Protocol.h, Roster).

@@ -26,6 +26,7 @@
 #include "base/MemoryBudget.h"
 #include "messaging/MpiSession.h"
 #include "renderers/BuiltinScenes.h"
+#include "renderers/picture/PictureRenderer.h"
 #include "renderers/scivis/bricks/BrickLoad.h"
 #include "renderers/scivis/bricks/BrickPlan.h"
 #include "runtime/SetupAgreement.h"
@@ -87,6 +88,16 @@ std::uint64_t hashFile(const std::string& path, std::uint64_t hash = 0xcbf29ce48
   return hash;
 }
 
+// `dfbwall show`: a scene of nothing but its pictures, drawn by the picture renderer.
+renderers::SceneDesc showScene(const ShowOptions& show) {
+  renderers::picture::PictureDesc desc;
+  desc.files = show.files;
+  desc.filter = renderers::picture::filterFromName(show.filter);
+  desc.background = show.background;
+  desc.loop = show.loop;
+  return renderers::picture::pictureScene(desc);
+}
+
 struct InputHashes {
   std::uint64_t layout = 0, scene = 0;
 };
@@ -142,8 +153,12 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
     }
     if (std::string problem = canvasMemoryProblem(job); !problem.empty()) return problem;
     if (!job.isWallRank() && !o.dryRun) {
-      renderers::SceneDesc desc = renderers::loadSceneDesc(o.scene);
-      if (o.scene.rfind("builtin:", 0) != 0) {
+      renderers::SceneDesc desc =
+          o.show ? showScene(o.pictures) : renderers::loadSceneDesc(o.scene);
+      if (o.show) {
+        for (const std::string& file : desc.inputFiles())
+          hashes.scene = hashFile(file, hashes.scene);
+      } else if (o.scene.rfind("builtin:", 0) != 0) {
         hashes.scene = hashFile(o.scene);
         for (const std::string& file : desc.inputFiles())
           hashes.scene = hashFile(file, hashes.scene);
@@ -213,9 +228,13 @@ std::string compareInputs(const Job& job, const InputHashes& mine,
            ": the ranks read different bytes from this file; every host "
            "must see the same layout";
   if (high[2] != (high[3] ? ~high[3] : 0))
-    return job.options.scene +
-           ": the render ranks read different bytes from this file or the files it refers to; "
-           "every host must see the same scene";
+    return job.options.show
+               ? std::string(
+                     "show: the ranks read different bytes from the pictures; every "
+                     "host must see the same files")
+               : job.options.scene +
+                     ": the render ranks read different bytes from this file or the files it "
+                     "refers to; every host must see the same scene";
   return {};
 }
 

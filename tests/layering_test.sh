@@ -45,6 +45,7 @@ sublibrary() {  # sublibrary FOLDER NAMESPACE PARENT_NAMESPACE
   fi
 }
 sublibrary renderers/scivis renderers::scivis renderers
+sublibrary renderers/picture renderers::picture renderers
 sublibrary wall/service wall::service wall
 # The renderers core reaches the scivis renderer through its registries only: its code (comments
 # aside) never names it.
@@ -126,7 +127,7 @@ done
 
 if [[ $status -eq 0 ]]; then
   echo "base/ -> nothing; messaging/ -> base/ only; dfb/ -> messaging/ only; renderers/, wall/ -> dfb/, messaging/ only; runtime/ -> no apps/, api/; api/ self-contained; bench/, examples/ -> no tests/: holds"
-  echo "renderers/scivis/ in renderers::scivis, wall/service/ in wall::service; the renderers core names no scivis: holds"
+  echo "renderers/scivis/ in renderers::scivis, renderers/picture/ in renderers::picture, wall/service/ in wall::service; the renderers core names no scivis: holds"
   echo "no folder includes another in a cycle; the arrows between sub-folders:"
   printf '%s' "$arrows"
 fi

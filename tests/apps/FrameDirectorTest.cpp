@@ -3,6 +3,7 @@
 // wall has converged.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -51,7 +52,10 @@ TEST(FrameDirector, AStillCameraKeepsItsEpochAndConvergesAtTheBudget) {
 TEST(FrameDirector, AMovedWindowAccumulatesAgainFromEpochZero) {
   FrameDirector d(still(4));
   d.next(1, {});
-  d.next(2, {camera(1)});  // a new epoch, converged after its budget
+  SteeringRequest dolly = camera(1);
+  dolly.fields = SteeringRequest::kDolly;
+  dolly.dolly = 2;
+  d.next(2, {dolly});  // a new epoch, converged after its budget
   d.next(3, {});
   EXPECT_TRUE(d.converged());
   EXPECT_EQ(d.epoch(), 1u);
@@ -64,6 +68,20 @@ TEST(FrameDirector, AMovedWindowAccumulatesAgainFromEpochZero) {
   EXPECT_FALSE(d.converged());
   d.next(5, {});
   EXPECT_EQ(d.epoch(), 0u);
+  EXPECT_TRUE(d.converged());
+}
+
+// `dfbwall show`: a sequence of three pictures, one sample each; converged only once the next
+// frame would show the picture the last one showed.
+TEST(FrameDirector, ASequenceConvergesWhenTheNextFrameShowsTheSamePicture) {
+  DirectorOptions o = still(1);
+  o.content = [](std::uint32_t frameId) { return std::min<std::uint32_t>(frameId, 3); };
+  FrameDirector d(o);
+  for (std::uint32_t f = 1; f <= 2; ++f) {
+    d.next(f, {});
+    EXPECT_FALSE(d.converged()) << "frame " << f;
+  }
+  d.next(3, {});
   EXPECT_TRUE(d.converged());
 }
 

@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# The command line tells the truth, for each command (the render job, serve, relay, and the
+# The command line tells the truth, for each command (the render job, serve, relay, show and the
 # dfbwall-layout helper):
 #  - its --help lists exactly the options it reads, in its groups (the lists below);
 #  - an option of another command is refused: one message naming the option and the command,
 #    exit 2, nothing started (no image, no wall, no relay);
-#  - a good command line still runs: a --dry-run, an image, and a job through a relay to a wall
-#    that serve runs, each command with every group's options it can take here.
+#  - a good command line still runs: a --dry-run, an image, and a job and a picture through a
+#    relay to a wall that serve runs, each command with every group's options it can take here.
 # Needs DFBWALL, DFBWALL_LAYOUT (dfbwall-layout) and MPIEXEC in the environment.
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
@@ -40,7 +40,7 @@ Throughput: --frames-in-flight --handler-threads --no-compress --compress-within
 Failure handling: --timeout --memory-limit
 Output: --image --capture --capture-every --preview --stats --quiet
 Help: --help
-Subcommands: serve relay'
+Subcommands: serve relay show'
 serve_command='Wall: --wall --offscreen --max-jobs
 Network and security: --listen --process --join --advertise --token-file --token --server-key --curve
 Throughput: --frames-in-flight --handler-threads
@@ -50,6 +50,12 @@ Help: --help'
 relay_command='Network: --listen --wall --token-file --token --server-key --curve
 Failure handling: --timeout
 Output: --stats
+Help: --help'
+show_command='Positionals:
+Pictures: --fps --loop --once --filter --background
+Connect to a wall service: --connect --token-file --token --server-key --codec --wait --window
+Failure handling: --timeout --memory-limit
+Output: --capture --capture-every --stats --quiet
 Help: --help'
 
 # groups HELP_TEXT: "Group: --option ..." per group, as --help lists them (subcommands too).
@@ -63,11 +69,12 @@ groups() {
 }
 
 # 1. --help: exactly the expected options, in their groups; exit 0.
-for command in render_job serve_command relay_command; do
+for command in render_job serve_command relay_command show_command; do
   case $command in
     render_job) args=() ;;
     serve_command) args=(serve) ;;
     relay_command) args=(relay) ;;
+    show_command) args=(show) ;;
   esac
   help=$("$DFBWALL" ${args[@]+"${args[@]}"} --help) || fail "dfbwall ${args[*]} --help exited non-zero"
   listed=$(groups "$help")
@@ -76,7 +83,7 @@ $listed
 expected
 ${!command}"
 done
-echo "--help: the render job, serve and relay list exactly their options, in their groups"
+echo "--help: the render job, serve, relay and show list exactly their options, in their groups"
 
 # options LIST: the options of a command's list, one a line.
 options() { sed 's/^[^:]*://' <<<"$1" | tr ' ' '\n' | grep '^--' | grep -vx -- --help; }
@@ -96,23 +103,39 @@ refused() {
 }
 refusals=0
 for option in $(options "$serve_command
-$relay_command" | sort -u); do
+$relay_command
+$show_command" | sort -u); do
   takes "$render_job" "$option" ||
-    refused render "dfbwall: error: $option is not an option of the render job; dfbwall serve" \
+    refused render "dfbwall: error: $option is not an option of the render job; dfbwall " \
       --size 16x16 --image "$work/refused.png" "$option" 1
 done
 for option in $(options "$render_job
-$relay_command" | sort -u); do
+$relay_command
+$show_command" | sort -u); do
   takes "$serve_command" "$option" ||
     refused serve "dfbwall serve: error: $option is not an option of serve; " \
       serve --wall "$layout" --process 0 --listen 127.0.0.1:0 --offscreen "$option"
 done
 for option in $(options "$render_job
-$serve_command" | sort -u); do
+$serve_command
+$show_command" | sort -u); do
   takes "$relay_command" "$option" ||
     refused relay "dfbwall relay: error: $option is not an option of relay; " \
       relay --listen 127.0.0.1:0 --wall 127.0.0.1:1 "$option"
 done
+for option in $(options "$render_job
+$serve_command
+$relay_command" | sort -u); do
+  takes "$show_command" "$option" ||
+    refused show "dfbwall show: error: $option is not an option of show; " \
+      show --connect 127.0.0.1:1 "$work/refused.png" "$option"
+done
+# show: a wall to connect to, and one way to end.
+refused show "dfbwall show: error: show needs --connect HOST:PORT" show "$work/refused.png"
+refused show "dfbwall show: error: --loop and --once" \
+  show --connect 127.0.0.1:1 --loop --once "$work/refused.png"
+refused show "dfbwall show: error: $work/none-%03d.png: no file in" \
+  show --connect 127.0.0.1:1 "$work/none-%03d.png"
 # Before the subcommand's name, even an option it takes goes to the render job: refused too.
 refused serve "dfbwall serve: error: --offscreen was given before serve" \
   --offscreen serve --wall "$layout" --process 0 --listen 127.0.0.1:0
@@ -152,6 +175,12 @@ relayAddress=$(sed -n 's/^dfbwall: relay on \([^ ]*\) .*/\1/p' "$work/relay.out"
 mpi -np 1 "$DFBWALL" --connect "$relayAddress" --codec raw --renderer pattern --frames 2 --quiet \
   --timeout 30 --capture "$work/captures" >"$work/job.out" 2>&1 || fail "a job through the relay failed"
 ls "$work"/captures/*/frame-*.png >/dev/null 2>&1 || fail "the wall captured nothing of the job"
+"$DFBWALL" show --connect "$relayAddress" --codec raw --window full --fps 50 --once \
+  --filter nearest --background "#102030" --timeout 30 --memory-limit 1G --capture-every 1 \
+  --capture "$work/pictures" --stats "$work/show.jsonl" --quiet "$work/job.png" "$work/job.png" \
+  >"$work/show.out" 2>&1 || fail "show through the relay failed"
+ls "$work"/pictures/*/frame-000002.png >/dev/null 2>&1 || fail "the wall captured no picture"
+[ "$(grep -c '^{"frame"' "$work/show.jsonl")" -eq 2 ] || fail "show --stats: not 2 frames"
 for p in relay serve; do
   kill -USR1 "${!p}"
   waitFor 20 sh -c "! kill -0 ${!p} 2>/dev/null" || fail "$p did not stop on SIGUSR1"
@@ -159,4 +188,4 @@ for p in relay serve; do
   eval "$p=''"
 done
 [ -s "$work/serve.jsonl" ] || fail "serve --stats is empty"
-echo "ran: --dry-run, an image, a job through dfbwall relay to dfbwall serve"
+echo "ran: --dry-run, an image, a job and a picture through dfbwall relay to dfbwall serve"

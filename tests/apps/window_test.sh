@@ -14,8 +14,10 @@
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 work=$(mktemp -d)
-serve=""
+serve="" job="" job2=""
 cleanup() {
+  # A job's mpirun and its ranks (killed alone it would leave them running).
+  for p in $job $job2; do kill -9 $(pgrep -P "$p") "$p" 2>/dev/null || true; done
   [ -n "$serve" ] && kill -9 "$serve" 2>/dev/null || true
   rm -rf "$work"
 }
@@ -99,4 +101,87 @@ for _ in $(seq 100); do kill -0 "$serve" 2>/dev/null || break; sleep 0.1; done
 if kill -0 "$serve" 2>/dev/null; then fail "serve did not stop on SIGUSR1"; fi
 wait "$serve" || fail "serve exited non-zero after SIGUSR1"
 serve=""
-echo "PASS: window jobs (raw, snappy, a display) equal the one-process render; 3 bad windows refused; the next job (full) too"
+
+# Converged jobs in windows that leave out wall processes (which have no pieces to wait for),
+# two at once on a serve of its own with a short timeout: one in r1c1 (the head is out of it),
+# one in r0c0 (the head is its only process). Both idle past the timeout: no process is dropped;
+# a camera change through a job's control API brings new frames; SIGUSR1 stops each after the
+# frame it names, and the wall names the same frame (none presented past the job's last). Then
+# kill -9 of a rank of a job in r1c0: the wall drops it at once and takes the next job.
+short=$((2 * ${DFBWALL_TIME_SCALE:-1})) port2=$((port + 1))
+rm -f "$work/serve.out" "$work/serve.err"  # the first serve's
+"$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
+  -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port2" \
+  --offscreen --timeout "$short" --max-jobs 2 --background "#000000" \
+  >"$work/serve.out" 2>"$work/serve.err" &
+serve=$!
+for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
+grep -q "wall service on 127.0.0.1:$port2" "$work/serve.out" || fail "the second serve did not start"
+DFBWALL_CONTROL_TOKEN=$(od -An -N16 -tx1 /dev/urandom | tr -d ' \n')
+export DFBWALL_CONTROL_TOKEN
+auth="Authorization: Bearer $DFBWALL_CONTROL_TOKEN"
+# status BASE FIELD: the job's /api/status field.
+status() { curl -sf -H "$auth" "$1/api/status" | python3 -c "import json, sys; print(json.load(sys.stdin)['$2'])"; }
+# until_true SECONDS WHAT COMMAND...
+until_true() {
+  local seconds=$1 what=$2; shift 2
+  for _ in $(seq $((seconds * 10))); do "$@" 2>/dev/null && return 0; sleep 0.1; done
+  cat "$work"/idle-*.out; fail "$what: not within $seconds s"
+}
+# idle_job WINDOW: a converged primary job (1 sample per pixel) with its control API, in the
+# background (mpirun itself: signals reach its ranks), its output in idle-WINDOW.out.
+idle_job() {
+  "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
+    -np 2 "$DFBWALL" --connect "127.0.0.1:$port2" --window "$1" --renderer primary \
+    --frames 0 --max-spp 1 --timeout 30 --control 127.0.0.1:0 >"$work/idle-$1.out" 2>&1 &
+}
+base_of() { grep -o 'http://[0-9.]*:[0-9]*' "$work/idle-$1.out" | head -n1; }
+idle() { [ "$(status "$(base_of "$1")" idle)" = True ]; }
+# stop_job PID WINDOW: SIGUSR1; the job exits 0 after the frame it names, and the wall's log
+# names the same one for the job that ended next.
+ended=0
+stop_job() {
+  kill -USR1 "$1"
+  wait "$1" || { cat "$work/idle-$2.out"; fail "the idle job in $2 exited non-zero on SIGUSR1"; }
+  local last
+  last=$(grep -o "stopped after frame [0-9]*" "$work/idle-$2.out" | grep -o "[0-9]*$")
+  [ -n "$last" ] || { cat "$work/idle-$2.out"; fail "the job in $2 did not say its last frame"; }
+  ended=$((ended + 1))
+  until_true 10 "the wall ending the job in $2" \
+    sh -c "[ \$(grep -c 'ended after frame' '$work/serve.err') -ge $ended ]"
+  grep "ended after frame" "$work/serve.err" | sed -n "${ended}p" | grep -q "ended after frame $last\$" ||
+    fail "the wall did not end the job in $2 after its last frame, $last"
+}
+idle_job r1c1
+job=$!
+idle_job r0c0
+job2=$!
+until_true 30 "the converged job in r1c1" idle r1c1
+until_true 30 "the converged job in r0c0" idle r0c0
+sleep $((short + 1))
+grep -q "lost wall process" "$work/serve.err" && fail "a wall process was dropped while the jobs idled"
+a=$(base_of r1c1)
+frame=$(status "$a" presented)
+curl -sf -H "$auth" -d '{"orbit": 10}' "$a/api/camera" >/dev/null || fail "camera change refused"
+until_true 10 "new frames after the camera change" sh -c "[ \$(curl -sf -H '$auth' '$a/api/status' | python3 -c 'import json, sys; print(json.load(sys.stdin)[\"presented\"])') -gt $frame ]"
+stop_job "$job" r1c1
+job=""
+stop_job "$job2" r0c0
+job2=""
+"$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
+  -np 2 "$DFBWALL" --connect "127.0.0.1:$port2" --window r1c0 --renderer primary \
+  --frames 0 --max-spp 1 --timeout 30 >"$work/idle-r1c0.out" 2>&1 &
+job=$!
+until_true 30 "the job in r1c0 on the wall" grep -q "window r1c0" "$work/serve.err"
+kill -9 "$(pgrep -P "$job" -f dfbwall | head -1)"
+wait "$job" 2>/dev/null || true
+job=""
+until_true 1 "the wall dropping the killed job at once" grep -q "dropping the job from .*: its connection closed" "$work/serve.err"
+mpi -np 1 "$DFBWALL" --connect "127.0.0.1:$port2" --renderer pattern --frames 2 --quiet \
+  --timeout 30 >"$work/next.out" 2>&1 || { cat "$work/next.out"; fail "the job after the killed one"; }
+kill -USR1 "$serve"
+for _ in $(seq 100); do kill -0 "$serve" 2>/dev/null || break; sleep 0.1; done
+kill -0 "$serve" 2>/dev/null && fail "the second serve did not stop on SIGUSR1"
+wait "$serve" || fail "the second serve exited non-zero after SIGUSR1"
+serve=""
+echo "PASS: window jobs (raw, snappy, a display) equal the one-process render; 3 bad windows refused; the next job (full) too; idle jobs in windows that leave out processes idle, steer and stop cleanly"

@@ -56,6 +56,42 @@ TEST(FrameAgreements, ABarrierOpenPastTheDeadlineNamesWhoDidNotCome) {
   EXPECT_EQ(board.overdue(takesPart, t + 3s).at(0).missing, std::vector<int>{1});
 }
 
+// A job in a window: process 0 is out of it (it has no pieces to wait for), process 1 in it.
+TEST(FrameAgreements, ABarrierOnlyProcessesOutOfTheWindowCameToWaitsForTheWindowOrTheJobsEnd) {
+  FrameAgreements board(2);
+  bool oneTakesPart = true;
+  const auto takesPart = [&](int p, std::uint32_t) { return p != 1 || oneTakesPart; };
+  const auto t = Clock::now();
+  ASSERT_TRUE(board.arrive(0, 2, {1}, t, false));
+  EXPECT_TRUE(board.overdue(takesPart, t + 1h).empty());  // not open: the job may idle
+  oneTakesPart = false;                                   // process 1 is done
+  EXPECT_TRUE(board.complete(takesPart).empty());         // nobody rendered frame 2
+  const auto from = [](std::uint32_t first) {
+    return [first](std::uint32_t frameId) { return frameId >= first; };
+  };
+  EXPECT_TRUE(board.complete(takesPart, from(3)).empty());   // the job ends after frame 2
+  const auto released = board.complete(takesPart, from(2));  // the job ends after frame 1
+  ASSERT_EQ(released.size(), 1u);
+  EXPECT_EQ(released[0].processes, std::vector<int>{0});
+}
+
+TEST(FrameAgreements, ABarrierOpensAtTheFirstArrivalInTheWindow) {
+  FrameAgreements board(2);
+  const auto takesPart = [](int, std::uint32_t) { return true; };
+  const auto t = Clock::now();
+  ASSERT_TRUE(board.arrive(0, 3, {1}, t, false));
+  ASSERT_TRUE(board.arrive(0, 2, {1}, t, false));
+  ASSERT_TRUE(board.arrive(1, 2, {1}, t + 10s, true));
+  EXPECT_TRUE(board.overdue(takesPart, t + 10s).empty());
+  EXPECT_EQ(board.complete(takesPart).size(), 1u);      // frame 2; frame 3 is not paced yet
+  ASSERT_TRUE(board.arrive(1, 4, {1}, t + 20s, true));  // the window's process is past frame 3
+  const auto late = board.overdue(takesPart, t + 21s);
+  ASSERT_EQ(late.size(), 2u);
+  EXPECT_EQ(late[0].frameId, 3u);  // open since the window came to a later frame
+  EXPECT_EQ(late[0].missing, std::vector<int>{1});
+  EXPECT_EQ(late[1].missing, std::vector<int>{0});
+}
+
 TEST(FrameAgreements, AGatherCompletesWithEveryoneOrAtItsDeadlineWithGaps) {
   FrameAgreements board(3);
   const auto all = [](int, std::uint32_t) { return true; };

@@ -201,6 +201,95 @@ TEST_F(JobDeskTest, AJobInAWindowGetsTheWindowsLayout) {
   EXPECT_TRUE(given(allReady(t0), Command::FirstFrame).empty());
 }
 
+// Processes out of a job's window come to each barrier as soon as the one before is released:
+// only the window's process paces the job. A converged job idles past the timeout with them
+// waiting at the next frame, and nobody is dropped; its goodbye lets them go once the window's
+// process is done, and no frame past the job's last is presented.
+TEST_F(JobDeskTest, AJobInAWindowIdlesPastTheTimeoutAndEndsAfterItsLastFrame) {
+  Hello hello = helloFrom("render1");
+  hello.window = parseWindowRequest("130,0,40,40");  // display 2 only: processes 0 and 1 are out
+  jobs.hello("job-a", hello, t0);
+  EXPECT_EQ(given(allReady(t0), Command::FirstFrame), (std::vector<int>{0, 1}));
+  const std::uint64_t session = jobs.session();
+  jobs.arrive(0, session, 1, {1}, t0 + 10ms);
+  EXPECT_TRUE(only<JobDesk::Release>(jobs.arrive(1, session, 1, {1}, t0 + 10ms)).empty());
+  EXPECT_EQ(only<JobDesk::Release>(jobs.arrive(2, session, 1, {1}, t0 + 20ms)).size(), 3u);
+  jobs.presented(session, 1, 0);
+  // Converged: 0 and 1 wait at frame 2, which the job does not render.
+  jobs.arrive(0, session, 2, {1}, t0 + 30ms);
+  jobs.arrive(1, session, 2, {1}, t0 + 30ms);
+  for (int beat = 1; beat <= 4; ++beat) {
+    const auto now = t0 + beat * kTimeout;
+    members.heard(1, now);
+    members.heard(2, now);
+    jobs.message({"job-a", Kind::Keepalive, session, {}, {}}, now);
+    const Actions ticked = jobs.tick(now + 1ms);
+    EXPECT_TRUE(only<JobDesk::Drop>(ticked).empty()) << "beat " << beat;
+    EXPECT_TRUE(only<JobDesk::Release>(ticked).empty()) << "beat " << beat;
+  }
+  const auto end = t0 + 5 * kTimeout;
+  const Actions bye = jobs.message({"job-a", Kind::Bye, session, {1, 0}, {}}, end);
+  EXPECT_EQ(given(bye, Command::LastFrame), (std::vector<int>{0, 1, 2}));
+  EXPECT_TRUE(only<JobDesk::Release>(bye).empty());  // process 2 may still come to frame 2
+  const auto letGo = only<JobDesk::Release>(jobs.answer(2, answer(Command::Done, 1, 100), end));
+  ASSERT_EQ(letGo.size(), 2u);
+  EXPECT_EQ(letGo[0].frameId, 2u);
+  // They do not present it (told the last frame is 1): Done after frame 1.
+  jobs.answer(0, answer(Command::Done, 1, 0), end);
+  const auto job = records(jobs.answer(1, answer(Command::Done, 1, 0), end));
+  ASSERT_EQ(job.size(), 1u);
+  EXPECT_EQ(job[0]["frames_presented"], 1);
+  EXPECT_EQ(job[0]["ended"], "last frame");
+}
+
+// A frame nobody in the window came to is no frame of the job's: with the window's process lost
+// the others wait, and are let go when the job is dropped (they were told to abort first).
+TEST_F(JobDeskTest, ProcessesOutOfAWindowWithNobodyInItAreLetGoWhenTheJobEnds) {
+  Hello hello = helloFrom("render1");
+  hello.window = parseWindowRequest("130,0,40,40");
+  jobs.hello("job-a", hello, t0);
+  allReady(t0);
+  const std::uint64_t session = jobs.session();
+  jobs.arrive(0, session, 1, {1}, t0);
+  jobs.arrive(1, session, 1, {1}, t0);
+  EXPECT_TRUE(only<JobDesk::Release>(lose(2, "gone", t0 + 10ms)).empty());
+  EXPECT_TRUE(only<JobDesk::Release>(jobs.tick(t0 + 20ms)).empty());
+  const Actions died = jobs.disconnected("job-a", t0 + 30ms);
+  EXPECT_EQ(given(died, Command::Abort), (std::vector<int>{0, 1}));
+  const auto letGo = only<JobDesk::Release>(died);
+  ASSERT_EQ(letGo.size(), 2u);
+  EXPECT_EQ(letGo[0].frameId, 1u);
+}
+
+// The window's only process lost, the others wait rather than present frames nobody shows; back
+// in the job from a later frame, the frames before it go (the job may have rendered them and
+// needs their credits to render that one), and the later ones wait for it again.
+TEST_F(JobDeskTest, AWindowsProcessBackInTheJobLetsTheFramesBeforeItsFirstGo) {
+  Hello hello = helloFrom("render1");
+  hello.window = parseWindowRequest("130,0,40,40");
+  jobs.hello("job-a", hello, t0);
+  allReady(t0);
+  const std::uint64_t session = jobs.session();
+  for (int p = 0; p < 3; ++p) jobs.arrive(p, session, 1, {1}, t0);
+  jobs.presented(session, 1, 0);
+  jobs.arrive(0, session, 2, {1}, t0 + 10ms);
+  jobs.arrive(1, session, 2, {1}, t0 + 10ms);
+  EXPECT_TRUE(only<JobDesk::Release>(lose(2, "gone", t0 + 20ms)).empty());
+  EXPECT_TRUE(only<JobDesk::Release>(jobs.tick(t0 + 30ms)).empty());
+  members.admit("link2b", joinOf(2, 2), t0 + 40ms);
+  EXPECT_EQ(given(jobs.joined(2, t0 + 40ms), Command::Start), std::vector<int>{2});
+  const Actions back = jobs.answer(2, answer(Command::Ready, 1), t0 + 50ms);
+  EXPECT_EQ(commandTo(back, 2, Command::FirstFrame).header.a, 4);  // credited 1, granted 2
+  const auto frame2 = only<JobDesk::Release>(back);
+  ASSERT_EQ(frame2.size(), 2u);
+  EXPECT_EQ(frame2[0].frameId, 2u);
+  jobs.arrive(0, session, 3, {1}, t0 + 60ms);
+  EXPECT_EQ(only<JobDesk::Release>(jobs.arrive(1, session, 3, {1}, t0 + 60ms)).size(), 2u);
+  jobs.arrive(0, session, 4, {1}, t0 + 70ms);
+  EXPECT_TRUE(only<JobDesk::Release>(jobs.arrive(1, session, 4, {1}, t0 + 70ms)).empty());
+  EXPECT_EQ(only<JobDesk::Release>(jobs.arrive(2, session, 4, {1}, t0 + 80ms)).size(), 3u);
+}
+
 TEST_F(JobDeskTest, AWindowTheWallDoesNotHaveIsRefusedAndTheNextJobRuns) {
   // An unknown display, a rectangle past the canvas (192x64), an empty one (from the wire).
   WindowRequest unknown, outside, empty;

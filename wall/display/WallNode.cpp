@@ -425,6 +425,20 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
     }
   }
   peers_.agreeMax(frameId, agreed, kAgreed, deadline);
+  if (mine_.empty()) {
+    // Out of the job's window this process came here before the job rendered the frame (it has
+    // nothing to wait for); a service wall's head lets it go without the frame once the job
+    // was told to stop before it or to abort (wall/service/server/FrameAgreements.h).
+    std::lock_guard lock(mutex_);
+    const bool unrendered = aborted_ || (stopAfter_ >= 0 && frameId > stopAfter_);
+    if (unrendered) {
+      slots_.erase(frameId);
+      report.stopped = true;
+      report.abandoned = aborted_;
+      if (aborted_) report.failure = abortReason_;
+      return report;
+    }
+  }
   if (agreed[4] != 0) {
     dropSlot(frameId);
     showLastPresented();  // what draw() put in the back buffer may show offscreen

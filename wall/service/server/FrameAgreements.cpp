@@ -11,30 +11,40 @@ constexpr std::size_t kMaxGathers = 8;
 void FrameAgreements::clear() {
   barriers_.clear();
   gathers_.clear();
+  pacedUpTo_.reset();
 }
 
 bool FrameAgreements::arrive(int process, std::uint32_t frameId,
-                             const std::vector<std::int64_t>& values, Clock::time_point now) {
+                             const std::vector<std::int64_t>& values, Clock::time_point now,
+                             bool paces) {
   auto [at, fresh] = barriers_.try_emplace(frameId);
   Barrier& b = at->second;
   if (fresh) {
     b.values = values;
     b.arrived.assign(static_cast<size_t>(processCount_), false);
-    b.opened = now;
   } else {
     if (values.size() != b.values.size()) return false;
     for (size_t i = 0; i < values.size(); ++i) b.values[i] = std::max(b.values[i], values[i]);
   }
   b.arrived[static_cast<size_t>(process)] = true;
+  if (paces) {
+    // The job is at this frame: it and every earlier barrier are frames it rendered.
+    pacedUpTo_ = std::max(pacedUpTo_.value_or(0), frameId);
+    for (auto& [frame, earlier] : barriers_) {
+      if (frame > frameId) break;
+      if (!earlier.opened) earlier.opened = now;
+    }
+  }
   return true;
 }
 
-std::vector<FrameAgreements::Release> FrameAgreements::complete(const TakesPart& takesPart) {
+std::vector<FrameAgreements::Release> FrameAgreements::complete(const TakesPart& takesPart,
+                                                                const GoesUnpaced& goesUnpaced) {
   std::vector<Release> out;
   for (auto at = barriers_.begin(); at != barriers_.end();) {
     const std::uint32_t frameId = at->first;
     Barrier& b = at->second;
-    bool all = true;
+    bool all = (pacedUpTo_ && frameId <= *pacedUpTo_) || (goesUnpaced && goesUnpaced(frameId));
     for (int p = 0; p < processCount_ && all; ++p)
       all = !takesPart(p, frameId) || b.arrived[static_cast<size_t>(p)];
     if (!all) {
@@ -54,7 +64,7 @@ std::vector<FrameAgreements::Overdue> FrameAgreements::overdue(
     const TakesPart& takesPart, Clock::time_point openedBefore) const {
   std::vector<Overdue> out;
   for (const auto& [frameId, b] : barriers_) {
-    if (b.opened >= openedBefore) continue;
+    if (!b.opened || *b.opened >= openedBefore) continue;
     Overdue o{frameId, {}};
     for (int p = 0; p < processCount_; ++p)
       if (takesPart(p, frameId) && !b.arrived[static_cast<size_t>(p)]) o.missing.push_back(p);

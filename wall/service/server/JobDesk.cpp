@@ -157,6 +157,7 @@ void JobDesk::onControl(const JobMessage& m) {
       if (m.control.second < 0) return endJob("the job left without naming its last frame");
       j_->namedLastFrame = static_cast<std::uint32_t>(m.control.value);
       toJob(command(Command::LastFrame, static_cast<std::int64_t>(m.control.value)));
+      notRenderedFrom(*j_->namedLastFrame + 1);
       break;
     default:
       endJob("unexpected message kind " + std::to_string(static_cast<int>(m.kind)));
@@ -274,11 +275,11 @@ void JobDesk::onDone(int p, const ServiceCommand& c) {
     // This process could not go on (its node failed); the others can.
     log(members_.who(p) + " left the job: " + reason(c.text));
     sendRoster(0, members_.who(p) + " left the job: " + reason(c.text));
-    releaseWhatCan();
   } else {
     if (!c.text.empty() && j_->failure.empty()) j_->failure = reason(c.text);
     if (j_->state == State::Running) j_->state = State::Ending;  // it ended by itself
   }
+  releaseWhatCan();  // a barrier it held up (one past the job's last frame, out of the window)
 }
 
 JobDesk::Actions JobDesk::joined(int p, Clock::time_point now) {
@@ -351,7 +352,7 @@ JobDesk::Actions JobDesk::arrive(int p, std::uint64_t session, std::uint32_t fra
                      ".." + std::to_string(latest) + ")"});
     return take();
   }
-  if (!j_->agreements.arrive(p, frameId, values, now)) {
+  if (!j_->agreements.arrive(p, frameId, values, now, inWindowAt(p, frameId))) {
     emit(Drop{p, "its swap barrier of frame " + std::to_string(frameId) + " has " +
                      std::to_string(values.size()) + " values, not the others' count"});
     return take();
@@ -386,8 +387,10 @@ JobDesk::Actions JobDesk::presented(std::uint64_t session, std::uint32_t frameId
   j_ = bySession(session);
   if (!j_ || (j_->state != State::Running && j_->state != State::Ending)) return take();
   j_->lastCredited = std::max(j_->lastCredited, frameId);
-  if (j_->move && j_->move->fromFrame > 0 && j_->lastCredited >= j_->move->fromFrame)
+  if (j_->move && j_->move->fromFrame > 0 && j_->lastCredited >= j_->move->fromFrame) {
+    j_->inWindow = j_->move->inWindow;
     j_->move.reset();  // the new window is on the wall: the next move may come
+  }
   std::erase_if(j_->pendingCaptures, [&](std::uint32_t f) { return f <= j_->lastCredited; });
   reply(j_->job.peer, Kind::Presented,
         packControl(Kind::Presented, j_->job.session, frameId, completeNs));
@@ -595,6 +598,11 @@ void JobDesk::startJob() {
   j_->job.started = now_;
   j_->failure.clear();
   j_->namedLastFrame.reset();
+  j_->unrenderedFrom.reset();
+  const Layout seen = windowLayout(*s_.layout, j_->window);
+  j_->inWindow.assign(static_cast<size_t>(members_.processCount()), false);
+  for (int p = 0; p < members_.processCount(); ++p)
+    j_->inWindow[static_cast<size_t>(p)] = !seen.displaysOfProcess(p).empty();
   j_->lastPresented = j_->bytes = 0;
   j_->lastCredited = 0;
   j_->rosterVersion = 0;
@@ -644,6 +652,7 @@ void JobDesk::endJob(const std::string& why) {
   if (j_->state != State::Running && j_->state != State::Starting) return;
   j_->failure = why;
   toJob(command(j_->state == State::Starting ? Command::Cancel : Command::Abort, 0, 0, why));
+  notRenderedFrom(0);
   reply(j_->job.peer, Kind::Ended, packText(Kind::Ended, j_->job.session, why));
   j_->state = State::Ending;
   log("dropping the job from " + peerText(j_->job.hello.host) + ": " + why);
@@ -708,7 +717,7 @@ void JobDesk::maybeRun() {
   // barrier (it has no pieces to wait for): one it came to before the job ran would be lost.
   for (int p = 0; p < members_.processCount(); ++p) {
     const Seat& seat = j_->seats[static_cast<size_t>(p)];
-    if (seat.in && !seat.done && d.layout.displaysOfProcess(p).empty())
+    if (seat.in && !seat.done && !j_->inWindow[static_cast<size_t>(p)])
       emit(ToProcess{p, command(Command::FirstFrame, 1)});
   }
   for (int p : j_->waitingToJoinJob) admitToJob(p);
@@ -749,9 +758,17 @@ void JobDesk::joinedJob(int p) {
                             {"host", members_.member(p).host},
                             {"frame", first}})});
   sendRoster(first, line);
+  releaseWhatCan();  // frames before its first that no other process of the window shows
 }
 
 // ---- barriers and gathers ----
+
+// The processes were told the job renders no frame from `frameId` on: a process out of the
+// window waiting at such a frame's barrier is let go (it does not present it: WallNode).
+void JobDesk::notRenderedFrom(std::uint32_t frameId) {
+  j_->unrenderedFrom = std::min(j_->unrenderedFrom.value_or(frameId), frameId);
+  releaseWhatCan();
+}
 
 bool JobDesk::participates(int p, std::uint32_t frameId) const {
   const Seat& seat = j_->seats[static_cast<size_t>(p)];
@@ -776,7 +793,21 @@ void JobDesk::dropOverdue() {
 // Barriers and gathers that nobody holds up any more go back to their processes.
 void JobDesk::releaseWhatCan() {
   const auto takesPart = [this](int p, std::uint32_t frameId) { return participates(p, frameId); };
-  for (FrameAgreements::Release& r : j_->agreements.complete(takesPart))
+  // A frame no process of the window came to goes when the job will not render it, or when no
+  // process of the window can show it: one back in the job shows frames from a later one only,
+  // and the job may have rendered those before it (it gets their credits to go on).
+  const auto goesUnpaced = [this](std::uint32_t frameId) {
+    if (j_->unrenderedFrom && frameId >= *j_->unrenderedFrom) return true;
+    bool later = false;
+    for (int p = 0; p < members_.processCount(); ++p) {
+      if (!inWindowAt(p, frameId)) continue;
+      if (participates(p, frameId)) return false;
+      const Seat& seat = j_->seats[static_cast<size_t>(p)];
+      later = later || (seat.in && !seat.done && members_.live(p) && seat.fromFrame != kNotYet);
+    }
+    return later;
+  };
+  for (FrameAgreements::Release& r : j_->agreements.complete(takesPart, goesUnpaced))
     for (int p : r.processes) emit(Release{p, j_->job.session, r.frameId, r.values});
   for (FrameAgreements::Gathered& g : j_->agreements.gathered(takesPart, now_))
     emit(Gathered{j_->job.session, g.frameId, std::move(g.pixels)});
@@ -861,6 +892,10 @@ void JobDesk::commitMoveIfBuilt() {
   move.fromFrame = switchFrame(j_->lastCredited, j_->granted);
   j_->window = move.window;
   j_->pieceSession = move.pieceSession;
+  const Layout seen = windowLayout(*s_.layout, move.window);
+  move.inWindow.assign(static_cast<size_t>(members_.processCount()), false);
+  for (int p = 0; p < members_.processCount(); ++p)
+    move.inWindow[static_cast<size_t>(p)] = !seen.displaysOfProcess(p).empty();
   Reshape r;
   r.session = j_->job.session;
   r.version = ++j_->reshapeVersion;
@@ -876,6 +911,11 @@ void JobDesk::commitMoveIfBuilt() {
   ServiceCommand at = command(Command::ReshapeAt, move.fromFrame);
   at.header.pieceSession = move.pieceSession;
   toJob(at);
+}
+
+bool JobDesk::inWindowAt(int p, std::uint32_t frameId) const {
+  const bool moved = j_->move && j_->move->fromFrame > 0 && frameId >= j_->move->fromFrame;
+  return (moved ? j_->move->inWindow : j_->inWindow)[static_cast<size_t>(p)];
 }
 
 dfb::Region JobDesk::window(std::uint64_t session) const {

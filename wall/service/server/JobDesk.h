@@ -241,8 +241,11 @@ class JobDesk {
   void joinedJob(int p);
   bool participates(int p, std::uint32_t frameId) const;
   void releaseWhatCan();
+  void notRenderedFrom(std::uint32_t frameId);
   void closeIfIdle();
   void onReshaped(int p, const ServiceCommand& c);
+  // Whether process `p` has a display in the window the job renders frame `frameId` in.
+  bool inWindowAt(int p, std::uint32_t frameId) const;
   void commitMoveIfBuilt();
 
   // One job on the wall and all that is its own (up to Setup::maxJobs side by side).
@@ -258,6 +261,11 @@ class JobDesk {
     std::deque<std::uint32_t> pendingCaptures;
     std::string failure;
     std::optional<std::uint32_t> namedLastFrame;  // from the job's goodbye
+    // Whether each process has a display in the window (paces the job's frames: FrameAgreements)
+    // and the first frame the job will not render, once its processes were told (LastFrame, or
+    // Abort: every frame).
+    std::vector<bool> inWindow;
+    std::optional<std::uint32_t> unrenderedFrom;
     std::int64_t lastPresented = 0, bytes = 0;
     std::uint32_t lastCredited = 0, granted = 2, rosterVersion = 0;
     int processesLost = 0, processesRejoined = 0;
@@ -269,6 +277,7 @@ class JobDesk {
       std::uint64_t pieceSession = 0;
       std::set<int> building;
       std::uint32_t fromFrame = 0;
+      std::vector<bool> inWindow;  // of the new window (inWindow's), from fromFrame on
     };
     std::optional<Move> move;
     std::uint32_t reshapeVersion = 0;
