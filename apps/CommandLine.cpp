@@ -290,8 +290,8 @@ void addServe(CLI::App& serve, Options& o, RawOptions& raw) {
   serve
       .add_option("--max-jobs", o.maxJobs,
                   "N: jobs on the wall at once, each in its window, the newest on top; a job "
-                  "beyond them is refused busy or waits with --wait (default: 1; above 1 needs "
-                  "--offscreen)")
+                  "beyond them is refused busy or waits with --wait (default: 4; 1: one job "
+                  "at a time, on the whole wall)")
       ->check(CLI::Range(1, 16))
       ->group(kWall);
   addListen(serve, o.listen, kNetworkSecurity,
@@ -341,9 +341,10 @@ void addServe(CLI::App& serve, Options& o, RawOptions& raw) {
       ->group(kOutput);
   serve
       .add_option("--capture", o.captureDir,
-                  "write what each of this process's displays shows (the job's window over "
+                  "write what each of this process's displays shows (the jobs' windows over "
                   "the background) as DIR/<display>/frame-N.png, N the wall's presented-frame "
-                  "count (a folder outside --capture-root; made when missing)")
+                  "count (with --max-jobs above 1: this process's; a folder outside "
+                  "--capture-root; made when missing)")
       ->group(kOutput);
   serve
       .add_option("--capture-every", o.captureEvery,

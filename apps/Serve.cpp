@@ -177,16 +177,6 @@ int runServe(const Options& o, int worldRank, StopSignals& signals, FailurePath&
       problem = std::string("--stats ") + e.what();
     }
   }
-  // Several jobs present from their own threads: offscreen contexts only (a window's belongs to
-  // the thread that polls its events).
-  if (problem.empty() && o.maxJobs > 1 && !o.offscreen)
-    problem = "--max-jobs above 1 needs --offscreen";
-  // The wall's own captures count one wall frame per swap; with several jobs each swaps on its
-  // own thread, and which frame is "the wall's" is not defined yet.
-  if (problem.empty() && o.maxJobs > 1 && !o.captureDir.empty())
-    problem =
-        "serve --capture is for --max-jobs 1 (the wall's captures with several jobs at "
-        "once are not done yet); a job's own --capture writes its window";
   std::shared_ptr<const base::ConfinedFolder> captureRoot;
   if (problem.empty() && !o.captureRoot.empty()) {
     try {

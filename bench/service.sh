@@ -11,7 +11,10 @@
 #     through `dfbwall relay` on a gateway, with 2 render hosts and with 1, interleaved.
 #  4. The cost of CURVE at 1 Gbit/s: the same jobs (pattern raw, path tracer snappy) on a wall
 #     serving PLAIN and on one serving CURVE (serve --curve, jobs --server-key), interleaved.
-# BENCH_SERVICE_PARTS (default "route codecs relay curve") runs some of them only.
+#  5. Several jobs at once at 1 Gbit/s: a pattern job (raw) in the wall's left half alone, then
+#     it and another in the right half at once (serve's default --max-jobs): each job's frame rate
+#     and the pixels per second the wall receives, together over alone (goal >= 0.9x).
+# BENCH_SERVICE_PARTS (default "route codecs relay curve jobs") runs some of them only.
 # Launching only some of a cluster's ranks: scripts/cluster up writes one mpirun for every rank
 # (render ranks 0..R-1, then the wall processes). service_subset writes beside it a hostfile, a
 # rankfile and an mpirun for the ranks of one role only (same agent, same TCP settings): the
@@ -98,7 +101,7 @@ fig_service() {
   service_token=$(od -An -tx1 -N16 /dev/urandom | tr -d ' \n')
   service_port=7000
   local gbit=125000000 mbit100=12500000 loadAtStart goals=() rows="" parts panels=()
-  parts=" ${BENCH_SERVICE_PARTS:-route codecs relay curve} "
+  parts=" ${BENCH_SERVICE_PARTS:-route codecs relay curve jobs} "
   loadAtStart=$(cut -d' ' -f1-3 /proc/loadavg)
   echo "== service: dfbwall serve on the wall hosts vs the single-job route; codecs at 100 Mbit/s; the relay's cost; load $loadAtStart"
   [ "$(id -u)" -eq 0 ] || { echo "bench: the service figure needs root (scripts/cluster)" >&2; return 1; }
@@ -243,6 +246,37 @@ fig_service() {
     echo "  $r: CURVE/PLAIN frame rate ${cr}x"
     goals+=("CURVE >= 0.9x PLAIN frame rate, $r, 1 Gbit/s: ${cr}x, $(awk -v a="$cr" 'BEGIN {print (a >= 0.9) ? "met" : "missed"}')")
   done
+  fi
+
+  if [[ "$parts" == *" jobs "* ]]; then
+  # --- 5. 1 Gbit/s: two pattern jobs at once, each in half of the wall, vs one alone.
+  service_cluster 1gbit
+  local left=0,0,1920,2160 right=1920,0,1920,2160 half=$((1920 * 2160)) together
+  for rep in $(seq "$reps"); do  # interleaved: alone, together, alone, together
+    service_start "$service_state" $service_port "$work/svc-serve-jobs-$rep"
+    service_job "svc-jobs-alone-$rep" raw --renderer pattern --frames "$frames" --window "$left"
+    service_job "svc-jobs-left-$rep" raw --renderer pattern --frames "$frames" --window "$left" &
+    together=$!
+    service_job "svc-jobs-right-$rep" raw --renderer pattern --frames "$frames" --window "$right"
+    wait "$together"
+    service_stop
+  done
+  cluster_down_all
+  local v pps=() sum=0
+  for v in alone left right; do
+    local files=("$work"/svc-jobs-$v-*.json) med mad cnt fr p
+    read -r med mad cnt < <(pooled frame_ms "${files[@]}" | medmad)
+    fr=$(awk -v m="$med" 'BEGIN {printf "%.4g", (m > 0) ? 1000 / m : 0}')
+    p=$(awk -v f="$fr" -v h="$half" 'BEGIN {printf "%.4g", f * h}')
+    rows+="${rows:+,}
+    {\"part\": \"jobs\", \"variant\": \"$v\", \"renderer\": \"pattern\", \"codec\": \"raw\", \"window\": \"$([ $v = right ] && echo "$right" || echo "$left")\", \"median_frame_ms\": $med, \"mad_frame_ms\": $mad, \"frames\": $cnt, \"fps\": $fr, \"pixels_per_second\": $p}"
+    echo "  1 Gbit/s, pattern raw, $v: $fr fps (median $med ms, MAD $mad), $p pixels/s"
+    [ $v = alone ] && pps=("$p") || sum=$(awk -v a="$sum" -v b="$p" 'BEGIN {print a + b}')
+  done
+  local jr
+  jr=$(awk -v a="$sum" -v b="${pps[0]}" 'BEGIN {printf "%.3g", (b > 0) ? a / b : 0}')
+  echo "  two jobs together / one alone, pixels per second: ${jr}x"
+  goals+=("two pattern jobs together >= 0.9x the pixels per second of one, 1 Gbit/s: ${jr}x, $(awk -v a="$jr" 'BEGIN {print (a >= 0.9) ? "met" : "missed"}')")
   fi
 
   goals_json ${goals[@]+"${goals[@]}"}

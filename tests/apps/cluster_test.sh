@@ -268,7 +268,7 @@ case "$scenario" in
     # The token in a file serve creates (mode 0600), never on a command line or in a log.
     tokenFile=$work/wall-token
     "$CLUSTER" mpirun-hosts "${wallHosts[@]}" --id "$id" -- "$DFBWALL" serve --wall "$layout" \
-      --listen "0.0.0.0:$port" --offscreen --timeout $((5 * ${DFBWALL_TIME_SCALE:-1})) --token-file "$tokenFile" --stats "$work/serve.jsonl" \
+      --listen "0.0.0.0:$port" --offscreen --max-jobs 1 --timeout $((5 * ${DFBWALL_TIME_SCALE:-1})) --token-file "$tokenFile" --stats "$work/serve.jsonl" \
       --capture-root "$work" >"$work/serve.out" 2>"$work/serve.err" &
     serve=$!
     for _ in $(seq 200); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done

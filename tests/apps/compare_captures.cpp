@@ -13,7 +13,10 @@
 //                  the window (W x H), and the job's wall preview equals it where displays are
 //                  --composite X,Y,W,H LAYOUT CAPTURE_DIR WINDOW_PNG FRAME #rrggbb: a serving
 //                  wall's own captures (serve --capture): each display's equals its rectangle of
-//                  the canvas filled with the background, the window's render at its offset
+//                  the canvas filled with the background, the window's render at its offset.
+//                  Several jobs at once: WINDOW+WINDOW... and PNG+PNG..., bottom first, each
+//                  render at its window in that order; FRAME `any`: some capture of each display
+//                  equals its rectangle (a wall of several jobs numbers its frames per process)
 // Invariant 2 of docs/design.md: every display's capture of frame FRAME equals its rectangle cut
 // out of a single-process render of the whole canvas, byte for byte; the wall preview exists and
 // shows the same pixels. Exit 0 when all match, 1 with a message naming the first mismatch.
@@ -25,6 +28,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "wall/display/Capture.h"
 #include "wall/image/Image.h"
@@ -127,6 +131,63 @@ int compareCaptures(const wall::Layout& layout, const std::string& dir, const wa
   return 0;
 }
 
+// --composite with FRAME `any`: per display, some capture in its folder equals its rectangle of
+// `full`. Prints which frame matched per display.
+int compareAnyCapture(const wall::Layout& layout, const std::string& dir, const wall::Image& full) {
+  for (const wall::Display& d : layout.displays) {
+    const wall::Image expected = wall::crop(full, d.rect);
+    std::set<std::string> names;
+    const std::filesystem::path folder = std::filesystem::path(dir) / d.name;
+    if (std::filesystem::is_directory(folder))
+      for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+        const std::string name = entry.path().filename().string();
+        if (name.rfind("frame-", 0) == 0 && name.size() > 4 &&
+            name.substr(name.size() - 4) == ".png")
+          names.insert(name);
+      }
+    std::string matched, lastMismatch;
+    for (const std::string& name : names) {
+      const wall::Image got = wall::readPng((folder / name).string());
+      if (got == expected) {
+        matched = name;
+        break;
+      }
+      if (got.width != expected.width || got.height != expected.height) {
+        lastMismatch = name + " is " + std::to_string(got.width) + "x" + std::to_string(got.height);
+        continue;
+      }
+      for (int y = 0; y < expected.height && lastMismatch.rfind(name, 0) != 0; ++y)
+        for (int x = 0; x < expected.width; ++x)
+          if (got.at(x, y) != expected.at(x, y)) {
+            char text[160];
+            std::snprintf(text, sizeof text, ", pixel (%d, %d): 0x%08x, expected 0x%08x", x, y,
+                          got.at(x, y), expected.at(x, y));
+            lastMismatch = name + text;
+            break;
+          }
+    }
+    if (matched.empty()) {
+      std::fprintf(stderr, "display %s: none of its %zu captures equals the composite (last: %s)\n",
+                   d.name.c_str(), names.size(), lastMismatch.c_str());
+      return 1;
+    }
+    std::printf("display %s: %s equals the composite (%zu captures)\n", d.name.c_str(),
+                matched.c_str(), names.size());
+  }
+  return 0;
+}
+
+std::vector<std::string> splitPlus(const std::string& text) {
+  std::vector<std::string> out;
+  std::size_t from = 0;
+  while (true) {
+    const std::size_t at = text.find('+', from);
+    out.push_back(text.substr(from, at == std::string::npos ? std::string::npos : at - from));
+    if (at == std::string::npos) return out;
+    from = at + 1;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -189,10 +250,9 @@ int main(int argc, char** argv) {
   if (argc == 8 && std::string(argv[1]) == "--composite") {
     try {
       const wall::Layout wall = wall::loadLayout(argv[3]);
-      const dfb::Region window = wall::resolveWindow(wall, wall::parseWindowRequest(argv[2]));
-      const wall::Image part = wall::readPng(argv[5]);
-      if (part.width != window.width() || part.height != window.height())
-        throw std::runtime_error(std::string(argv[5]) + " is not the window's size");
+      const std::vector<std::string> windows = splitPlus(argv[2]), pngs = splitPlus(argv[5]);
+      if (windows.size() != pngs.size())
+        throw std::runtime_error("as many renders as windows, please");
       const std::string b = argv[7];
       if (b.size() != 7 || b[0] != '#') throw std::runtime_error("background: #rrggbb");
       const auto rgb = static_cast<std::uint32_t>(std::stoul(b.substr(1), nullptr, 16));
@@ -200,7 +260,14 @@ int main(int argc, char** argv) {
           wall.canvasWidth, wall.canvasHeight,
           wall::rgba8(static_cast<std::uint8_t>(rgb >> 16), static_cast<std::uint8_t>(rgb >> 8),
                       static_cast<std::uint8_t>(rgb)));
-      wall::blit(canvas, window.x0, window.y0, part.pixels.data(), part.width, part.height);
+      for (std::size_t i = 0; i < windows.size(); ++i) {
+        const dfb::Region window = wall::resolveWindow(wall, wall::parseWindowRequest(windows[i]));
+        const wall::Image part = wall::readPng(pngs[i]);
+        if (part.width != window.width() || part.height != window.height())
+          throw std::runtime_error(pngs[i] + " is not the window's size");
+        wall::blit(canvas, window.x0, window.y0, part.pixels.data(), part.width, part.height);
+      }
+      if (std::string(argv[6]) == "any") return compareAnyCapture(wall, argv[4], canvas);
       return compareCaptures(wall, argv[4], canvas, static_cast<std::uint32_t>(std::stoul(argv[6])),
                              "", false);
     } catch (const std::exception& e) {

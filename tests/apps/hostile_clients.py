@@ -271,7 +271,7 @@ try:
     endpoint = "tcp://127.0.0.1:%d" % port
     with open(stderr_path, "w") as err:
         serve = start([mpiexec, "--oversubscribe", "--bind-to", "none", "-np", "4", dfbwall, "serve", "--wall", layout,
-                       "--listen", "127.0.0.1:%d" % port, "--offscreen", "--timeout",
+                       "--listen", "127.0.0.1:%d" % port, "--offscreen", "--max-jobs", "1", "--timeout",
                        str(TIMEOUT_S), "--token", TOKEN, "--capture-root", work],
                       stdout=subprocess.PIPE, stderr=err, text=True)
     # The "wall service on" line, read in a thread so a silent serve cannot hang the test.

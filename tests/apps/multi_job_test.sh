@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Several jobs on one wall at once, each in its window (docs/service.md, "Several jobs at once").
-#   multi_job_test.sh LAYOUT (the 2x2 wall)
+#   multi_job_test.sh LAYOUT [composite|glfw]   (the 2x2 wall; composite: only the composite
+#       part, offscreen; glfw: only the composite part, in GLFW windows under Xvfb, captures read
+#       from the X server)
 # One `dfbwall serve --max-jobs 2 --background "#000000"`; two jobs of the pattern renderer in
 # overlapping windows across display borders, running at the same time:
 #  - each job's captures (its window's part of each display) equal the one-process render of its
@@ -8,8 +10,17 @@
 #  - a third job is refused busy while both run;
 #  - kill -9 of a rank of one job: the other keeps presenting new frames (well within the
 #    timeout that would end the dead one) and ends as usual.
+# The composite: a `serve --capture` wall (default --max-jobs) with two jobs of the primary
+# renderer (the same frame every frame; one raw, one snappy) in the same windows: some capture of
+# every display equals the background with both one-process renders at their windows, the newer
+# on top, byte for byte.
 # Needs DFBWALL, COMPARE and MPIEXEC in the environment.
 set -euo pipefail
+if [ "${2:-}" = glfw ] && [ -z "${MULTI_JOB_TEST_INNER:-}" ]; then
+  # A server number of its own, so a concurrent Xvfb test elsewhere cannot take the same one.
+  exec xvfb-run -a -n $((300 + RANDOM % 500)) -s "-screen 0 1280x1024x24" \
+    env MULTI_JOB_TEST_INNER=1 "$0" "$@"
+fi
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 work=$(mktemp -d)
 serve="" a="" b=""
@@ -22,7 +33,7 @@ cleanup() {
 trap cleanup EXIT
 fail() {
   echo "FAIL: $*"
-  for f in serve.out serve.err a.out b.out c.out; do echo "--- $f:"; cat "$work/$f" 2>/dev/null || true; done
+  for f in serve.out serve.err a.out b.out c.out serve2.out serve2.err a2.out b2.out; do echo "--- $f:"; cat "$work/$f" 2>/dev/null || true; done
   exit 1
 }
 mpi() { "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 "$@"; }
@@ -44,6 +55,66 @@ until_frame() {
 
 layout=$1
 port=$((20000 + $$ % 20000))
+window_a=90,70,250,170 window_b=20,20,200,150
+
+# composite [SERVE OPTIONS...]: the wall's own captures of two jobs at once equal the composite.
+composite() {
+  local port2=$((port + 1)) ca=$work/jobs/composite-a cb=$work/jobs/composite-b
+  mkdir -p "$work/jobs"  # the jobs' capture root; the wall's own captures outside it
+  local x=()
+  [ -z "${DISPLAY:-}" ] || x=(-x DISPLAY -x XAUTHORITY)
+  "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 "${x[@]}" \
+    -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port2" \
+    --timeout "$timeout" --capture-root "$work/jobs" --background "#000000" --capture "$work/wall" \
+    --capture-every 3 "$@" >"$work/serve2.out" 2>"$work/serve2.err" &
+  serve=$!
+  for _ in $(seq 100); do grep -q "wall service on" "$work/serve2.out" 2>/dev/null && break; sleep 0.1; done
+  grep -q "wall service on 127.0.0.1:$port2" "$work/serve2.out" || fail "serve (composite) did not start"
+  mpi -np 1 "$DFBWALL" --renderer primary --size 250x170 --frames 1 --quiet \
+    --image "$work/prim-a.png" || fail "reference a (primary)"
+  mpi -np 1 "$DFBWALL" --renderer primary --size 200x150 --frames 1 --quiet \
+    --image "$work/prim-b.png" || fail "reference b (primary)"
+  "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
+    -np 2 "$DFBWALL" --connect "127.0.0.1:$port2" --window "$window_a" --renderer primary \
+    --codec raw --frames 100000 --capture-every 5 --quiet --timeout 30 --capture "$ca" \
+    >"$work/a2.out" 2>&1 &
+  a=$!
+  until_frame "$ca" r1c1 5 $((20 * scale)) || fail "job a (composite) presents no frame"
+  "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
+    -np 2 "$DFBWALL" --connect "127.0.0.1:$port2" --window "$window_b" --renderer primary \
+    --codec snappy --frames 100000 --capture-every 5 --quiet --timeout 30 --capture "$cb" \
+    >"$work/b2.out" 2>&1 &
+  b=$!
+  until_frame "$cb" r0c0 10 $((20 * scale)) || fail "job b (composite) presents no frame"
+  until_frame "$ca" r1c1 $(($(newest "$ca" r1c1) + 10)) $((20 * scale)) ||
+    fail "job a (composite) stopped presenting when b came"
+  kill -USR1 "$a" "$b"
+  wait "$a" || fail "job a (composite) did not end well"
+  wait "$b" || fail "job b (composite) did not end well"
+  a="" b=""
+  kill -USR1 "$serve"
+  for _ in $(seq $((100 * scale))); do kill -0 "$serve" 2>/dev/null || break; sleep 0.1; done
+  kill -0 "$serve" 2>/dev/null && fail "serve (composite) did not stop on SIGUSR1"
+  wait "$serve" || fail "serve (composite) exited non-zero after SIGUSR1"
+  serve=""
+  "$COMPARE" --composite "$window_a+$window_b" "$layout" "$work/wall" \
+    "$work/prim-a.png+$work/prim-b.png" any "#000000" || fail "the wall's captures of two jobs"
+  # The other order is another picture: the comparison sees which window is on top.
+  if "$COMPARE" --composite "$window_b+$window_a" "$layout" "$work/wall" \
+    "$work/prim-b.png+$work/prim-a.png" any "#000000" >/dev/null 2>&1; then
+    fail "the captures also equal the windows in the other order"
+  fi
+}
+if [ "${2:-}" = glfw ]; then
+  composite
+  echo "PASS: two jobs at once in GLFW windows: the displays show both windows, the newer on top, byte for byte"
+  exit 0
+fi
+if [ "${2:-}" = composite ]; then
+  composite --offscreen
+  echo "PASS: two jobs at once (raw, snappy): the wall's captures show both windows, the newer on top, byte for byte"
+  exit 0
+fi
 "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
   -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" \
   --offscreen --timeout "$timeout" --capture-root "$work" --max-jobs 2 \
@@ -59,7 +130,6 @@ mpi -np 1 "$DFBWALL" --renderer pattern --size 200x150 --frames 10 --quiet \
   --image "$work/ref-b.png" || fail "reference b"
 
 # Job a: 90..340 x 70..240, all four displays; job b: 20..220 x 20..170, over a's top-left.
-window_a=90,70,250,170 window_b=20,20,200,150
 "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
   -np 2 "$DFBWALL" --connect "127.0.0.1:$port" --window "$window_a" --renderer pattern \
   --frames 100000 --capture-every 10 --quiet --timeout 30 --capture "$work/a" \

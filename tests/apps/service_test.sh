@@ -46,7 +46,7 @@ port=$((20000 + $$ % 20000))
 # Straight, not through mpi(): $! must be mpirun itself (it forwards SIGUSR1 to the wall).
 "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
   -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" \
-  --offscreen --timeout "$timeout" --stats "$work/serve.jsonl" --capture-root "$work" \
+  --offscreen --max-jobs 1 --timeout "$timeout" --stats "$work/serve.jsonl" --capture-root "$work" \
   >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
 for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done

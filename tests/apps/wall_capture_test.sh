@@ -49,7 +49,7 @@ refused "serve --capture-every K needs --capture DIR" --alone --capture-every 2
 
 # mpirun itself in the background (not a function's subshell): SIGUSR1 goes to it.
 "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 -np "$np" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" --offscreen \
-  --timeout $((5 * ${DFBWALL_TIME_SCALE:-1})) --background "$background" \
+  --max-jobs 1 --timeout $((5 * ${DFBWALL_TIME_SCALE:-1})) --background "$background" \
   --capture "$work/wall" --capture-every 2 >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
 for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done

@@ -240,6 +240,11 @@ WindowOptions windowOptionsFor(const Display& d) {
   o.height = d.rect.height();
   o.fullscreen = d.fullscreen;
   o.monitor = d.monitor;
+  // Windowed, the displays sit where the canvas has them: on one screen (Xvfb, a desktop) they
+  // would otherwise open on top of each other, and a window's pixels read back from the X server
+  // are only its own where no other window covers it.
+  o.x = d.rect.x0;
+  o.y = d.rect.y0;
   return o;
 }
 

@@ -1,20 +1,27 @@
 #pragma once
-// A display of a service wall that several jobs share, each in its window (issue 37; see
-// docs/design.md, "Several jobs on one wall"): each job's node presents its window's part of the
-// display through its own layer, and the display shows the background with every layer's last
-// presented part on it, in the order the layers were added (the newest on top). A layer's frame
-// becomes visible at its swap(), after the job's swap barrier, and never waits for another
-// layer: the others show their last swapped part. A layer that goes away leaves the display at
-// once (what was under it shows again). What a layer reads back is its own part as it presented
-// it (the job's capture), not what covers it.
+// The displays of a service wall process that several jobs share, each in its window (issue 37;
+// docs/design.md, "Several jobs on one wall"). Each job's node presents its window's parts of the
+// process's displays through the layers of its Window: CPU images, no GL. One thread, the
+// process's presenting (main) thread, composes the displays that changed (compose()) and shows
+// them on their presenters; the jobs' threads never touch GL and never wait for a presentation.
 //
-// Threading: each layer is used by one job's thread; the display's presenter is used under the
-// stack's lock only, at a layer's swap (so a layer's draw() does nothing: composing after the
-// barrier keeps one job's barrier from waiting on another's lock).
+// What a display shows: the background, then each window's last swapped part, in the order the
+// windows were added (the newest on top). A window's frame becomes visible only whole: its
+// layers stage their frames at swap() and the last of them to swap commits them all at once, so
+// no composition shows a frame of a window on one display and another frame on the next (the
+// swap barrier keeps the processes together; this keeps a process's displays together). A
+// window that goes leaves the displays at the next composition. What a layer reads back is its
+// own part as it last presented it (the job's capture), not what covers it.
+//
+// Threading: a Window and its layers belong to one job's thread; compose(), frame() and
+// takeChanges() to one presenting thread; the stack's lock is held only to trade buffers, never
+// while composing.
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <memory>
 #include <mutex>
+#include <vector>
 
 #include "dfb/Tile.h"
 #include "wall/display/Presenter.h"
@@ -24,36 +31,86 @@ namespace wall {
 
 class WindowStack {
  public:
-  // `display`: the presenter of a display `width` x `height`; `background`: RGBA8 as in Image.
-  WindowStack(Presenter& display, int width, int height, std::uint32_t background);
+  struct Size {
+    int width = 0, height = 0;
+  };
+  // `displays`: this process's displays (in layout.displaysOfProcess order); `background`: RGBA8
+  // as in Image. `changed` runs (unlocked, on the calling job's thread) whenever a display needs
+  // composing again: a window's frame committed, a window came or went.
+  WindowStack(std::vector<Size> displays, std::uint32_t background,
+              std::function<void()> changed = {});
   ~WindowStack();
   WindowStack(const WindowStack&) = delete;
   WindowStack& operator=(const WindowStack&) = delete;
 
-  // A job's part of this display (in its coordinates, non-empty, inside it), on top of the
-  // layers there now. The layer must go before the stack does; when it goes, the display is
-  // presented again without it.
-  std::unique_ptr<Presenter> add(const dfb::Region& part);
-  // The background and every layer's last swapped part, in order, on the display.
-  void present();
-  std::size_t layers() const;
+  class Window;
+  // A job's window on top of the others: `parts[d]` is its part of display d in the display's
+  // coordinates (empty: it misses d; else inside d). Every display is composed again when the
+  // first window comes (the background replaces whatever was shown). The window must go before
+  // the stack does.
+  std::unique_ptr<Window> add(const std::vector<dfb::Region>& parts);
+
+  // The presenting thread: composes every display that changed since the last call into its
+  // frame() (each pixel written once: the top window's part covering it, or the background) and
+  // returns their indices (empty: nothing changed).
+  std::vector<int> compose();
+  const Image& frame(int display) const { return frames_[static_cast<size_t>(display)]; }
+  // Forgets pending changes without composing (the displays show something else: the idle
+  // screen). The first window to come after composes every display again.
+  void dropChanges();
+  std::size_t windows() const;
 
  private:
   class Layer;
   struct Shown {
-    dfb::Region part;
-    Image pixels;      // the part's size; what the layer last swapped
-    bool any = false;  // it swapped a frame yet (else it shows nothing)
+    dfb::Region part;  // on display `display`
+    int display = 0;
+    std::shared_ptr<const Image> pixels;  // the last committed frame (null: none yet)
+    std::shared_ptr<Image> staged;        // swapped, waiting for the window's other layers
+    std::shared_ptr<Image> spare;         // a buffer for the layer's next frame
   };
-  void presentLocked();
-  void remove(const Shown* shown);
+  struct Entry {
+    std::vector<Shown> layers;  // the window's non-empty parts
+    int staged = 0;             // layers that swapped since the last commit
+  };
+  void remove(Entry* entry);
+  void markAll();
 
-  Presenter& display_;
-  int width_, height_;
+  std::vector<Size> sizes_;
   std::uint32_t background_;
+  std::function<void()> changed_;
   mutable std::mutex mutex_;
-  std::list<Shown> shown_;  // bottom first
-  Image frame_;             // the display's composed frame
+  std::list<Entry> windows_;  // bottom first
+  std::vector<char> dirty_;   // by display
+  std::vector<Image> frames_;
 };
+
+// A job's window: one presenter per display it touches, for the job's node.
+class WindowStack::Window {
+ public:
+  ~Window();
+  Window(const Window&) = delete;
+  Window& operator=(const Window&) = delete;
+  // In the order of the displays (those the window misses left out).
+  std::vector<Presenter*> presenters() const;
+
+ private:
+  friend class WindowStack;
+  Window(WindowStack& stack, Entry& entry);
+  WindowStack& stack_;
+  Entry& entry_;
+  std::vector<std::unique_ptr<Layer>> layers_;
+};
+
+// Writes the display frame: every pixel the top layer's that covers it, else the background,
+// by spans of rows (bands of rows the same layers cover, each cut where a layer begins or ends).
+// `layers` bottom first; each pixel image is its part's size. Shared by WindowStack and
+// bench/composition_bench.
+struct ComposedLayer {
+  dfb::Region part;
+  const Image* pixels = nullptr;
+};
+void composeLayers(Image& frame, std::uint32_t background,
+                   const std::vector<ComposedLayer>& layers);
 
 }  // namespace wall

@@ -65,7 +65,7 @@ struct WallService::Impl {
     std::uint64_t pieceSession = 0;
     Layout seen;
     std::vector<std::unique_ptr<WindowPresenter>> parts;
-    std::vector<std::unique_ptr<Presenter>> layers;  // several jobs: the job's on each display
+    std::unique_ptr<WindowStack::Window> onStack;  // several jobs: the job's window
     std::unique_ptr<LinkPeers> peers;
     std::unique_ptr<WallNode> node;
     bool waitsForFirstFrame = false;  // no display in the window: FirstFrame names it
@@ -88,9 +88,11 @@ struct WallService::Impl {
   std::deque<ServiceCommand> commands;
   std::map<std::uint64_t, RunningJob*> jobs;
   bool linkLost = false;
-  // Several jobs at once (maxJobs > 1): each display's composition, and each job's thread (done:
-  // it returned, to be joined).
-  std::vector<std::unique_ptr<WindowStack>> stacks;
+  // Several jobs at once (maxJobs > 1): the windows on this process's displays, composed and
+  // presented by the main thread (composeWanted: a window changed since), and each job's thread
+  // (done: it returned, to be joined).
+  std::unique_ptr<WindowStack> stack;
+  bool composeWanted = false;
   struct JobThread {
     std::thread thread;
     std::shared_ptr<std::atomic<bool>> done;
@@ -106,14 +108,18 @@ struct WallService::Impl {
   void incoming(const ServiceCommand& c);
   void lost(const std::string& why);
   void showIdle(const std::string& status);
+  // Several jobs: composes the displays whose windows changed and presents them (main thread).
+  void presentWindows();
   void runJob(const ServiceCommand& start);
   // The job's node for `window` (its part of this process's displays, over the background or in
   // the displays' stacks), taking the pieces stamped `pieceSession`.
   std::unique_ptr<Shape> makeShape(const dfb::Region& window, std::uint64_t pieceSession,
                                    std::uint64_t session, std::uint64_t epoch,
                                    const WallNodeOptions& o);
-  // Command::Reshape: builds the job's next shape (with the lock held); the answer to send.
-  ServiceCommand buildNext(const ServiceCommand& c, RunningJob& job);
+  // Command::Reshape: builds the job's next shape (without the lock: a window added to the stack
+  // asks the main thread to compose under it); the answer to send and its epoch, none when the
+  // job is not on this process.
+  std::optional<std::pair<ServiceCommand, std::uint64_t>> buildNext(const ServiceCommand& c);
   void startJobThread(const ServiceCommand& start);
   // Joins the job threads that returned (all: waits for every one).
   void reapJobs(bool all);
@@ -121,8 +127,10 @@ struct WallService::Impl {
 
 void WallService::Impl::incoming(const ServiceCommand& c) {
   const CommandHeader& h = c.header;
-  std::optional<ServiceCommand> answer;
-  std::uint64_t epoch = 0;
+  if (h.kind == Command::Reshape) {
+    if (const auto answer = buildNext(c)) head->toHead(answer->first, answer->second);
+    return;
+  }
   std::unique_ptr<Shape> dropped;  // a move given up: its node goes outside the lock
   {
     std::lock_guard lock(mutex);
@@ -151,10 +159,6 @@ void WallService::Impl::incoming(const ServiceCommand& c) {
         case Command::FirstFrame:
           job.current->node->startAt(static_cast<std::uint32_t>(h.a));
           return;
-        case Command::Reshape:
-          answer = buildNext(c, job);
-          epoch = job.epoch;
-          break;
         case Command::ReshapeAt:
           if (!job.next || job.next->pieceSession != h.pieceSession) return;
           if (h.a <= 0 || h.a > std::int64_t{0xffffffff}) {  // the move is given up
@@ -169,12 +173,11 @@ void WallService::Impl::incoming(const ServiceCommand& c) {
           break;
       }
     }
-    if (!answer && !dropped && (h.kind == Command::Start || h.kind == Command::Shutdown)) {
+    if (!dropped && (h.kind == Command::Start || h.kind == Command::Shutdown)) {
       commands.push_back(c);
       commanded.notify_all();
     }
   }
-  if (answer) head->toHead(*answer, epoch);
 }
 
 std::unique_ptr<WallService::Impl::Shape> WallService::Impl::makeShape(const dfb::Region& window,
@@ -191,16 +194,14 @@ std::unique_ptr<WallService::Impl::Shape> WallService::Impl::makeShape(const dfb
   const bool whole = window == dfb::Region{0, 0, layout.canvasWidth, layout.canvasHeight};
   shape->seen = whole ? layout : windowLayout(layout, window);
   std::vector<Presenter*> jobPresenters = presenters;
-  if (!stacks.empty()) {
-    // On top of the windows there (newest on top); removed when the shape goes (layers first).
-    jobPresenters.clear();
-    const std::vector<int> ours = layout.displaysOfProcess(process);
-    for (size_t i = 0; i < ours.size(); ++i) {
-      const dfb::Region part = partOnDisplay(layout.displays[static_cast<size_t>(ours[i])], window);
-      if (part.empty()) continue;
-      shape->layers.push_back(stacks[i]->add(part));
-      jobPresenters.push_back(shape->layers.back().get());
-    }
+  if (stack) {
+    // On top of the windows there (newest on top); it leaves the displays when the shape goes.
+    // The node only trades its frames into the window's layers; the main thread presents.
+    std::vector<dfb::Region> partsOf;
+    for (int d : layout.displaysOfProcess(process))
+      partsOf.push_back(partOnDisplay(layout.displays[static_cast<size_t>(d)], window));
+    shape->onStack = stack->add(partsOf);
+    jobPresenters = shape->onStack->presenters();
   } else if (!whole) {
     jobPresenters.clear();
     const std::vector<int> ours = layout.displaysOfProcess(process);
@@ -228,8 +229,26 @@ std::unique_ptr<WallService::Impl::Shape> WallService::Impl::makeShape(const dfb
 }
 
 // Checked as a Start is (a process never trusts the head did): the window, the piece session.
-ServiceCommand WallService::Impl::buildNext(const ServiceCommand& c, RunningJob& job) {
+std::optional<std::pair<ServiceCommand, std::uint64_t>> WallService::Impl::buildNext(
+    const ServiceCommand& c) {
   const CommandHeader& h = c.header;
+  WallNodeOptions o;
+  std::uint64_t epoch = 0, currentPieces = 0;
+  Codec codec = Codec::Raw;
+  int renderRanks = 1;
+  bool moving = false;
+  {
+    std::lock_guard lock(mutex);
+    const auto found = jobs.find(h.session);
+    if (found == jobs.end()) return std::nullopt;
+    const RunningJob& job = *found->second;
+    o = job.options;
+    epoch = job.epoch;
+    codec = job.codec;
+    renderRanks = job.renderRanks;
+    currentPieces = job.current->pieceSession;
+    moving = job.next != nullptr;
+  }
   ServiceCommand answer;
   answer.header.kind = Command::Reshaped;
   answer.header.session = h.session;
@@ -238,35 +257,41 @@ ServiceCommand WallService::Impl::buildNext(const ServiceCommand& c, RunningJob&
   const dfb::Region window{h.windowX0, h.windowY0, h.windowX1, h.windowY1};
   const std::uint64_t pieceSession = h.pieceSession;
   std::string problem;
-  if (stacks.empty())
+  if (!stack)
     problem = "this wall process composes no windows (serve --max-jobs 1)";
-  else if (job.next)
+  else if (moving)
     problem = "a move of the window is under way already";
-  else if (pieceSession == 0 || pieceSession == h.session ||
-           pieceSession == job.current->pieceSession)
+  else if (pieceSession == 0 || pieceSession == h.session || pieceSession == currentPieces)
     problem = "the piece session " + std::to_string(pieceSession) + " is not a new one";
   else if (window.empty() || window.x0 < 0 || window.y0 < 0 || window.x1 > layout.canvasWidth ||
            window.y1 > layout.canvasHeight)
     problem = "the window " + std::to_string(window.x0) + "," + std::to_string(window.y0) + " to " +
               std::to_string(window.x1) + "," + std::to_string(window.y1) +
               " is not inside the canvas";
+  std::unique_ptr<Shape> next;
   if (problem.empty()) {
     try {
-      WallNodeOptions o = job.options;
       o.firstFrame = 0;  // ReshapeAt names it; until then every piece is dropped
-      job.next = makeShape(window, pieceSession, h.session, job.epoch, o);
-      receiver->attach(pieceSession, job.codec, job.renderRanks, job.next->node.get());
+      next = makeShape(window, pieceSession, h.session, epoch, o);
+      receiver->attach(pieceSession, codec, renderRanks, next->node.get());
+      std::lock_guard lock(mutex);
+      const auto found = jobs.find(h.session);
+      if (found == jobs.end() || found->second->next)
+        problem = "the job ended or moved meanwhile";
+      else
+        found->second->next = std::move(next);
     } catch (const std::exception& e) {
-      job.next.reset();
       problem = e.what();
     }
   }
+  if (next) receiver->detach(pieceSession);  // not installed: it goes (outside the lock)
+  next.reset();
   answer.header.a = problem.empty() ? 1 : 0;
   if (!problem.empty()) {
     answer.text = "wall process " + std::to_string(process) + ": " + problem;
     log("could not move a job's window: " + answer.text);
   }
-  return answer;
+  return std::make_pair(answer, epoch);
 }
 
 // The head is gone for this process: the job's frame in progress is given up here (the node's
@@ -433,7 +458,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   o.timeout = options.timeout;
   o.framesAhead = framesAheadFor(static_cast<int>(start.header.framesInFlight));
   o.abandonOnFailure = true;
-  o.wallFramesBefore = wallFrames;
+  o.wallFramesBefore = stack ? 0 : wallFrames;
   if (link) o.alive = [this] { link->mainAlive(); };
   const std::uint64_t session = start.header.session;
   o.onAbandon = [this, session, epoch](const std::string& why) {
@@ -490,8 +515,10 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
         if (retired && !r.abandoned) retired.reset();  // the new window shows: the old goes
         lastPresented = frameId;
         bytes += static_cast<std::int64_t>(r.bytesReceived);
-        wallFrames = r.wallFrame;
-        if (wallCaptures) wallCaptures->presented(r.wallFrame);
+        if (!stack) {  // several jobs: the main thread counts and captures what it presents
+          wallFrames = r.wallFrame;
+          if (wallCaptures) wallCaptures->presented(r.wallFrame);
+        }
         if (!asked && options.stopRequested && options.stopRequested()) {
           asked = true;
           if (process != 0 && options.leaveAlone) {
@@ -563,15 +590,37 @@ void WallService::Impl::reapJobs(bool all) {
   }
 }
 
+// What the displays show while jobs run: one frame per display that changed, drawn on every
+// display before any swaps (a window across two displays changes on both at once). Each such
+// presentation is one of this process's wall frames (serve --capture's numbering).
+void WallService::Impl::presentWindows() {
+  const std::vector<int> changed = stack->compose();
+  if (changed.empty()) return;
+  for (int d : changed) {
+    const Image& frame = stack->frame(d);
+    Presenter& p = *presenters[static_cast<size_t>(d)];
+    p.beginFrame(frame.width, frame.height);
+    p.upload(frame.pixels.data(), frame.width, {0, 0, frame.width, frame.height});
+    p.draw();
+  }
+  for (int d : changed) presenters[static_cast<size_t>(d)]->swap();
+  ++wallFrames;
+  if (wallCaptures) wallCaptures->presented(wallFrames);
+}
+
 void WallService::run() {
   Impl& m = *impl_;
-  if (m.options.maxJobs > 1 && m.stacks.empty())
-    for (size_t i = 0; i < m.presenters.size(); ++i) {
-      const Display& d =
-          m.layout.displays[static_cast<size_t>(m.layout.displaysOfProcess(m.process)[i])];
-      m.stacks.push_back(std::make_unique<WindowStack>(*m.presenters[i], d.rect.width(),
-                                                       d.rect.height(), m.options.background));
-    }
+  if (m.options.maxJobs > 1 && !m.stack) {
+    std::vector<WindowStack::Size> sizes;
+    for (int d : m.layout.displaysOfProcess(m.process))
+      sizes.push_back({m.layout.displays[static_cast<size_t>(d)].rect.width(),
+                       m.layout.displays[static_cast<size_t>(d)].rect.height()});
+    m.stack = std::make_unique<WindowStack>(std::move(sizes), m.options.background, [&m] {
+      std::lock_guard lock(m.mutex);
+      m.composeWanted = true;
+      m.commanded.notify_all();
+    });
+  }
   // Every job's thread ends before this returns (the desk ends the jobs before its shutdown; a
   // lost head aborts them).
   struct Joiner {
@@ -585,7 +634,8 @@ void WallService::run() {
     {
       std::unique_lock lock(m.mutex);
       m.commanded.wait_for(lock, std::chrono::milliseconds(50),
-                           [&] { return !m.commands.empty() || m.linkLost; });
+                           [&] { return !m.commands.empty() || m.linkLost || m.composeWanted; });
+      m.composeWanted = false;
       if (!m.commands.empty()) {
         command = std::move(m.commands.front());
         m.commands.pop_front();
@@ -609,6 +659,23 @@ void WallService::run() {
                         : "not in the wall: joining the head at " + m.address + " again");
       idleShown = true;
       wasJoined = joined;
+    }
+    if (m.stack && m.jobThreads.empty()) m.stack->dropChanges();  // the idle screen shows
+    if (m.stack && !m.jobThreads.empty()) {
+      try {
+        m.presentWindows();
+      } catch (const std::exception& e) {
+        // A display that fails ends this process's part in every job (their threads then
+        // return, so the Joiner does not wait for their timeouts), then the process.
+        std::lock_guard lock(m.mutex);
+        const std::string why = std::string("a display of wall process ") +
+                                std::to_string(m.process) + " failed: " + e.what();
+        for (const auto& [session, job] : m.jobs) {
+          job->current->node->abort(why);
+          if (job->next) job->next->node->abort(why);
+        }
+        throw;
+      }
     }
     if (m.link) m.link->mainAlive();
     for (Presenter* p : m.presenters) p->pollEvents();

@@ -51,7 +51,8 @@ struct ServiceOptions {
   // default black): see docs/service.md, "A job in a window".
   std::uint32_t background = 0xff000000u;
   // Jobs on the wall at once, each in its window (--max-jobs): above 1, each job runs on its own
-  // thread of every process and the displays compose their windows (wall/display/WindowStack.h).
+  // thread of every process, and the process's main thread composes their windows
+  // (wall/display/WindowStack.h) and presents them.
   std::size_t maxJobs = 1;
   // A stop asked of a process other than the head (a signal, a closed window) makes it leave
   // the wall alone (true: a process started on its own) or stop the whole wall (false).
