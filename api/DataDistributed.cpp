@@ -124,19 +124,31 @@ struct Session::Impl {
   std::uint64_t hashOfStyle = 0;  // styleHash(style)
   bool styleSet = false, dirty = false, replacing = false;
   std::vector<renderers::scivis::HeldBrick> pending;  // bricks added since the last frame
+  std::string refused;  // the first brick refused since then (the next frame's InputError)
   Camera camera, lastCamera;
   bool haveCamera = false;
   std::uint32_t frameId = 0, epoch = 0;
 
   bool isWall() const { return roles.processOfRank(rank) >= 0; }
+  // The bound of the session's own collectives: also given up at once when a rank left.
+  base::Bound bound(std::chrono::milliseconds within, const std::string& what) const {
+    base::Bound b = base::Bound::joinWithin(within, what);
+    b.unless = [messenger = messenger.get(), what] {
+      return messenger && !messenger->departed().empty() ? what + ": given up" : std::string();
+    };
+    return b;
+  }
   void setUp();  // the layout, roles and canvas; throws on bad input
   void commit();
   void startRendering();
   void renderFrame();  // in the arena
+  [[noreturn]] void throwRefusal(int refusing, std::uint32_t next);
 };
 
 Session::Session(MPI_Comm comm, const SessionOptions& options) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
+  if (comm == MPI_COMM_NULL)
+    throw InputError("dfbwall: Session needs the program's communicator; MPI_COMM_NULL given");
   m.options = options;
   m.timeout = std::chrono::seconds(std::max(1, options.timeoutSeconds));
   int level = 0;
@@ -224,7 +236,7 @@ void Session::Impl::startRendering() {
     wallSide->attach(*fb);
   }
   // Pairs with runWall's: every object of every rank is registered before anyone sends.
-  base::barrier(own, base::Bound::joinWithin(timeout, "dfbwall session start-up"));
+  base::barrier(own, bound(timeout, "dfbwall session start-up"));
 }
 
 void Session::Impl::setUp() {
@@ -269,14 +281,10 @@ void Session::Impl::setUp() {
 }
 
 Session::~Session() {
-  if (!impl_ || impl_->closed) return;
-  if (std::uncaught_exceptions() > 0) return;  // a failing job: MPI_Abort ends it, not us
-  try {
-    if (impl_->isWall()) return;  // runWall() closes on wall ranks
-    close();
-  } catch (const std::exception&) {
-    // A destructor must not throw; the program's own error path reports what went wrong.
-  }
+  if (!impl_ || impl_->closed || !impl_->messenger) return;
+  // No collective here (another rank may never join one): the others learn that this rank left
+  // and fail at once. What the session still holds is released without waiting for anyone.
+  impl_->messenger->leave();
 }
 
 bool Session::isWallRank() const { return impl_->isWall(); }
@@ -316,6 +324,7 @@ void Session::runWall() try {
 }
 
 void Session::setStyle(const Style& style) {
+  if (impl_->isWall()) throw std::logic_error("dfbwall: setStyle() on a wall rank");
   impl_->style = style;
   impl_->hashOfStyle = styleHash(style);
   impl_->styleSet = true;
@@ -325,14 +334,31 @@ void Session::setStyle(const Style& style) {
 void Session::addBrick(const Brick& brick) {
   Impl& m = *impl_;
   if (!m.styleSet) throw std::logic_error("dfbwall: addBrick() before setStyle()");
+  if (!m.replacing) {
+    m.pending.clear();
+    m.refused.clear();
+  }
+  m.replacing = true;
+  m.dirty = true;
+  // Refused here on this rank alone; thrown by the next frame on every rank, so they stay in step.
+  try {
+    m.pending.push_back({brick.id, brickContent(m.style, brick)});
+  } catch (const std::runtime_error& e) {
+    if (m.refused.empty()) m.refused = e.what();
+  }
+}
+
+void Session::refuseInput(const std::string& why) {
+  Impl& m = *impl_;
   if (!m.replacing) m.pending.clear();
   m.replacing = true;
   m.dirty = true;
-  m.pending.push_back({brick.id, brickContent(m.style, brick)});
+  if (m.refused.empty()) m.refused = why;
 }
 
 void Session::clearBricks() {
   impl_->pending.clear();
+  impl_->refused.clear();
   impl_->replacing = true;
   impl_->dirty = true;
 }
@@ -379,6 +405,22 @@ void Session::renderFrame() {
   }
 }
 
+void Session::Impl::throwRefusal(int refusing, std::uint32_t next) {
+  // The refusing rank's message, for every rank to throw alike (only on this error path).
+  std::string why = refused.starts_with("dfbwall: ") ? refused.substr(9) : refused;
+  int length = rank == refusing ? static_cast<int>(why.size()) : 0;
+  const base::Bound b = bound(timeout, "frame " + std::to_string(next) + ": refused input");
+  base::bcast(&length, sizeof length, refusing, role, b);
+  why.resize(static_cast<std::size_t>(length));
+  base::bcast(why.data(), length, refusing, role, b);
+  // The bricks given since the last frame are dropped on every rank: the program gives them again.
+  pending.clear();
+  refused.clear();
+  replacing = true;
+  throw InputError("dfbwall: render rank " + std::to_string(refusing) +
+                   " refused its input: " + why);
+}
+
 void Session::Impl::renderFrame() {
   const std::uint32_t next = frameId + 1;
   // Frames in flight: rank 0 starts frame F once the wall presented F - K.
@@ -391,22 +433,22 @@ void Session::Impl::renderFrame() {
   order.styleHash = hashOfStyle;
   if (wallSide) order.rosterVersion = wallSide->rosterVersion();
   // Rank 0 may first wait for the wall's credit: twice the timeout is the bound.
-  base::bcast(&order, sizeof order, 0, role,
-              base::Bound::joinWithin(2 * timeout, "frame " + std::to_string(next)));
+  base::bcast(&order, sizeof order, 0, role, bound(2 * timeout, "frame " + std::to_string(next)));
   // The wall lost a process or got one back: its pieces stop, or go to its new endpoint.
   if (wallSide) wallSide->followRoster(order.rosterVersion, role);
   // What the ranks must agree on, each the lowest rank it concerns as renderRanks - rank (MPI_MAX;
   // 0: none): whether any rank changed its bricks or style (a new scene version), a rank without
   // a style, a rank whose style is not render rank 0's, a rank that failed (its messenger
-  // reported an error): then every rank throws here, together, instead of the others waiting
-  // for it until their deadline.
+  // reported an error), a rank that refused a brick: then every rank throws here, together,
+  // instead of the others waiting for it until their deadline.
   const int renderRanks = roles.renderRanks, mark = renderRanks - rank;
   const bool failed = error->failed();
-  int mine[4] = {dirty || !driver ? 1 : 0, styleSet ? 0 : mark,
-                 styleSet && hashOfStyle != order.styleHash ? mark : 0, failed ? mark : 0};
-  int agreed[4] = {0, 0, 0, 0};
-  base::allreduce(mine, agreed, 4, MPI_INT, MPI_MAX, role,
-                  base::Bound::joinWithin(timeout, "frame " + std::to_string(next)));
+  int mine[5] = {dirty || !driver ? 1 : 0, styleSet ? 0 : mark,
+                 styleSet && hashOfStyle != order.styleHash ? mark : 0, failed ? mark : 0,
+                 refused.empty() ? 0 : mark};
+  int agreed[5] = {0, 0, 0, 0, 0};
+  base::allreduce(mine, agreed, 5, MPI_INT, MPI_MAX, role,
+                  bound(timeout, "frame " + std::to_string(next)));
   if (failed) error->raise();
   if (agreed[3])
     throw std::runtime_error("dfbwall: render rank " + std::to_string(renderRanks - agreed[3]) +
@@ -418,9 +460,10 @@ void Session::Impl::renderFrame() {
       throw std::logic_error("dfbwall: renderFrame() before setStyle() on render rank " +
                              std::to_string(renderRanks - agreed[1]));
     if (agreed[2])
-      throw std::runtime_error(
+      throw InputError(
           "dfbwall: the render ranks passed different styles to setStyle() (render rank " +
           std::to_string(renderRanks - agreed[2]) + " differs from render rank 0)");
+    if (agreed[4]) throwRefusal(renderRanks - agreed[4], next);
     commit();
     dirty = false;
     ++epoch;
@@ -482,10 +525,10 @@ void Session::close() try {
   throw;
 }
 
-void SessionTesting::send(Session& session, int toRank, std::uint64_t object) {
-  session.impl_->messenger->send(toRank, object, messaging::Bytes{});
+void TestedSession::send(int toRank, std::uint64_t object) {
+  impl().messenger->send(toRank, object, messaging::Bytes{});
 }
 
-void SessionTesting::quiesce(Session& session) { session.impl_->messenger->quiesce(); }
+void TestedSession::quiesce() { impl().messenger->quiesce(); }
 
 }  // namespace dfbwall

@@ -31,11 +31,20 @@
 // close() or runWall() in progress, or else its next one: "dfbwall: error on rank R (HOST):
 // cause". renderFrame() shares it in its per-frame exchange, so the other render ranks throw
 // ("render rank R failed") at the same frame; a rank waiting for a failed peer anywhere else
-// throws at its deadline at the latest. Errors every render rank finds alike in renderFrame()
-// before the frame starts (bricks that disagree, different styles, no style) leave the ranks in
-// step: give the corrected input again (setStyle; clearBricks and addBrick) and render again.
-// After any other error the session is unusable (every further renderFrame() throws; close() on
-// every rank still releases it): end the job with MPI_Abort.
+// throws at its deadline at the latest.
+//
+// Bad input is an InputError, thrown by the next renderFrame() on every render rank alike: a
+// brick that does not fit the style (addBrick keeps the refusal instead of throwing on one rank
+// only; the message names the render rank, the brick and the field) and different styles. A
+// renderFrame() before setStyle() on some rank is a std::logic_error on every rank. These leave
+// the ranks in step: give the corrected input again (setStyle; clearBricks and addBrick) and
+// render again. After any other error the session is unusable (every further renderFrame()
+// throws; close() on every rank still releases it): end the job with MPI_Abort.
+//
+// Leaving. close() is the one collective way out. The destructor never waits for another rank:
+// a session destroyed without close() (a rank that returns early, an exception) tells the other
+// ranks it left, and their renderFrame() or close() then throws "rank R (HOST) left without
+// closing" at once instead of waiting until their deadline.
 //
 // Threads and floating point. Rendering runs in the session's own TBB task arena
 // (SessionOptions::threads), joined by the thread that calls renderFrame(); its tasks run with
@@ -47,10 +56,18 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace dfbwall {
+
+// Input the session refuses (a brick outside its field, a wrong voxel count, styles that differ
+// between ranks, MPI_COMM_NULL): thrown alike on every render rank; the session stays usable.
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 using Vec3f = std::array<float, 3>;
 using Index3 = std::array<int, 3>;
@@ -196,9 +213,11 @@ class Session {
  public:
   // Collective over `comm` (not freed, not kept: the session duplicates what it needs). Throws
   // std::runtime_error (on every rank) for a bad layout, a rank count the layout does not fit,
-  // a capture folder that cannot be written, or MPI without MPI_THREAD_MULTIPLE.
+  // a capture folder that cannot be written, or MPI without MPI_THREAD_MULTIPLE; InputError for
+  // MPI_COMM_NULL (on the ranks that gave it).
   Session(MPI_Comm comm, const SessionOptions& options);
-  ~Session();  // close()s when the program did not (not while an exception unwinds)
+  // Not collective: without close() before, the session leaves (see "Leaving" above).
+  ~Session();
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
 
@@ -212,7 +231,12 @@ class Session {
 
   // Render ranks.
   void setStyle(const Style& style);
+  // Copies the brick's data. Data that does not fit the style is refused at the next
+  // renderFrame(), on every rank (InputError); a logic_error before setStyle().
   void addBrick(const Brick& brick);
+  // A binding's own check of the program's input that failed (a numpy array of a type no voxel
+  // type is): refused like a brick that does not fit, by the next renderFrame() on every rank.
+  void refuseInput(const std::string& why);
   void clearBricks();
   void setCamera(const Camera& camera);  // render rank 0's camera is the one used
   void renderFrame();
@@ -229,9 +253,11 @@ class Session {
   // together with runWall() returning on the wall ranks.
   void close();
 
- private:
-  friend struct SessionTesting;  // the tests' access to the messaging (not installed)
+ protected:
   struct Impl;
+  Impl& impl() { return *impl_; }
+
+ private:
   std::unique_ptr<Impl> impl_;
 };
 

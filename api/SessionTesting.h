@@ -7,13 +7,15 @@
 
 namespace dfbwall {
 
-struct SessionTesting {
+class TestedSession : public Session {
+ public:
+  using Session::Session;
   // An empty message from this rank to object id `object` on rank `toRank` of the session's
   // communicator, through the session's messenger.
-  static void send(Session& session, int toRank, std::uint64_t object);
+  void send(int toRank, std::uint64_t object);
   // Collective over the session's communicator: returns once every message sent before any rank
   // entered it has been handled (messaging::Messenger::quiesce).
-  static void quiesce(Session& session);
+  void quiesce();
 };
 
 }  // namespace dfbwall

@@ -182,6 +182,9 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
             wall::service::jobHello(worldSize, o.tileSize, job.codec, o.framesInFlight, o.wait,
                                     o.dryRun ? std::string() : o.captureDir, o.captureEvery);
         hello.window = wall::parseWindowRequest(o.window);
+        // The frame buffer, renderers and routing are re-planned for a moved window; the preview
+        // (the job's page, --preview) is not yet, so such a job keeps its window.
+        hello.canReshape = o.previewFile.empty() && o.control.empty();
         job.service = std::make_shared<wall::service::ServiceClient>(
             o.connect,
             wall::service::loadCredentials({o.token, o.tokenFile, {}, o.serverKey}, false), hello,

@@ -5,6 +5,7 @@
 #include <mpi.h>
 
 #include <chrono>
+#include <functional>
 #include <string>
 
 namespace base {
@@ -15,5 +16,10 @@ void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_poin
 // sleeps between polls double from 20 us up to `maxSleep`, so the wait costs (nearly) no CPU.
 void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_point deadline,
                       const std::string& timeoutMessage, std::chrono::microseconds maxSleep);
+// The same, giving up early with a DeadlineError of the text `unless` returns once that is not
+// empty (a peer that left for good; polled between tests).
+void waitWithDeadline(MPI_Request& request, std::chrono::steady_clock::time_point deadline,
+                      const std::string& timeoutMessage, std::chrono::microseconds maxSleep,
+                      const std::function<std::string()>& unless);
 
 }  // namespace base

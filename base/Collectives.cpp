@@ -48,7 +48,7 @@ Bound Bound::joinWithin(std::chrono::milliseconds timeout, const std::string& wh
 }
 
 void Pending::finish(const Bound& bound) {
-  waitWithDeadline(request_, bound.deadline(), bound.late, bound.maxSleep);
+  waitWithDeadline(request_, bound.deadline(), bound.late, bound.maxSleep, bound.unless);
 }
 
 void barrier(MPI_Comm comm, const Bound& bound) {

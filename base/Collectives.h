@@ -13,6 +13,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <functional>
 #include <span>
 #include <string>
 #include <type_traits>
@@ -36,6 +37,9 @@ struct Bound {
   // v-variants: the Error's text when one rank's values, or all ranks' together, are more than
   // an MPI count reaches (2^31-1); empty: a text that says so.
   std::string tooLarge{};
+  // Polled between tests: a reason to stop waiting before the deadline (another rank left for
+  // good: it will never join), thrown as a DeadlineError with that text; empty: keep waiting.
+  std::function<std::string()> unless{};
 
   // The deadline of a wait that starts now.
   std::chrono::steady_clock::time_point deadline() const;

@@ -17,6 +17,7 @@ enum class MessageObject : ObjectId {
   kPreview,
   kMessengerProbeRequest,
   kMessengerProbeAnswer,
+  kMessengerLeave,
 };
 
 constexpr ObjectId objectId(MessageObject object) { return static_cast<ObjectId>(object); }

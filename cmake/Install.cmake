@@ -1,17 +1,20 @@
-# `cmake --install build [--prefix P]`: the libraries, the API's header and a CMake package, so
-# a program does find_package(dfbwall) and links dfbwall::dfbwall (examples/insitu does).
+# `cmake --install build [--prefix P]`: the libraries, the API's headers, a CMake package and the
+# Python module, so a program does find_package(dfbwall) and links dfbwall::dfbwall (C++,
+# examples/insitu) or dfbwall::c (the C API in libdfbwall.so, examples/insitu-c).
 # The libraries are static; their dependencies come back through find_dependency in
 # dfbwallConfig.cmake (cmake/dfbwallConfig.cmake.in).
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 set(DFBWALL_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/dfbwall)
-install(TARGETS dfbwall_api base messaging dfb renderers wall runtime wall_glfw dfbwall_warnings
+install(TARGETS dfbwall_api dfbwall_c base messaging dfb renderers wall runtime wall_glfw dfbwall_warnings
   EXPORT dfbwallTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
-  INCLUDES DESTINATION include/dfbwall)
-install(FILES ${PROJECT_SOURCE_DIR}/api/DataDistributed.h DESTINATION include/dfbwall/api)
+  INCLUDES DESTINATION include)
+# The public header only: <dfbwall/DataDistributed.h> (the tests' api/SessionTesting.h stays out).
+install(FILES ${PROJECT_SOURCE_DIR}/api/DataDistributed.h ${PROJECT_SOURCE_DIR}/bindings/c/dfbwall.h
+  DESTINATION include/dfbwall)
 install(EXPORT dfbwallTargets NAMESPACE dfbwall:: DESTINATION ${DFBWALL_CMAKE_DIR})
 configure_package_config_file(${CMAKE_CURRENT_LIST_DIR}/dfbwallConfig.cmake.in
   ${CMAKE_CURRENT_BINARY_DIR}/dfbwallConfig.cmake INSTALL_DESTINATION ${DFBWALL_CMAKE_DIR})

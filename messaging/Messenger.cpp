@@ -30,6 +30,8 @@ constexpr int kTag = 7;
 constexpr ObjectId kProbeRequestObject =
     base::objectId(base::MessageObject::kMessengerProbeRequest);
 constexpr ObjectId kProbeAnswerObject = base::objectId(base::MessageObject::kMessengerProbeAnswer);
+// A rank that leaves without the collective stop() says so to every other rank (leave()).
+constexpr ObjectId kLeaveObject = base::objectId(base::MessageObject::kMessengerLeave);
 
 struct Packet {
   int rank;  // destination when outgoing, source when incoming
@@ -81,6 +83,10 @@ struct Messenger::Impl {
 
   std::mutex errorMutex;
   ErrorCallback onError;
+
+  // The first peer that left (leave() on its side), as departed() says it.
+  mutable std::mutex departedMutex;
+  std::string departed;
 
   std::atomic<bool> exitThreads{false};
   std::atomic<bool> resting{false};
@@ -351,6 +357,17 @@ void Messenger::Impl::dispatch(Packet& packet) {
       handleProbe(packet.rank, header.object, payload);
       return;
     }
+    if (header.object == kLeaveObject) {
+      const std::string why = "rank " + std::to_string(packet.rank) + " (" +
+                              hosts.at(static_cast<size_t>(packet.rank)) +
+                              ") left without closing (it will not join again)";
+      {
+        std::lock_guard lock(departedMutex);
+        if (departed.empty()) departed = why;
+      }
+      report(why);
+      return;
+    }
 
     std::shared_lock dispatching(dispatchMutex);
     MessageHandler* handler = nullptr;
@@ -588,13 +605,32 @@ void Messenger::quiesce() {
                     {.until = deadline,
                      .late = "messaging did not quiesce within " +
                              std::to_string(impl_->options.quiesceTimeout.count()) +
-                             " ms: another rank is not answering"});
+                             " ms: another rank is not answering",
+                     .unless = [this] { return departed(); }});
     const std::uint64_t global[2] = {counts[2], counts[3]};
     delete[] counts;
     if (global[0] == global[1] && global[0] == previous[0] && global[1] == previous[1]) return;
     previous[0] = global[0];
     previous[1] = global[1];
   }
+}
+
+void Messenger::leave() {
+  Impl& i = *impl_;
+  if (i.stopped) return;
+  i.stopped = true;
+  for (int r = 0; r < i.size; ++r)
+    if (r != i.rank) send(r, kLeaveObject, Bytes{});
+  // Small messages go eagerly: MPI has them once the MPI thread has posted them.
+  const auto deadline = Clock::now() + std::chrono::seconds(1);
+  while (i.sendsInFlight > 0 && Clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+  abandonThreads();
+}
+
+std::string Messenger::departed() const {
+  std::lock_guard lock(impl_->departedMutex);
+  return impl_->departed;
 }
 
 void Messenger::stop() {

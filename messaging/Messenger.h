@@ -20,7 +20,9 @@
 //  - A message to an id not registered on the receiver is an error reported through the error
 //    callback with both ids and counted; it never crashes and is never dropped silently.
 //    Register on every rank before anyone sends (a collective constructor does that).
-//  - quiesce() and stop() are collective over the communicator.
+//  - quiesce() and stop() are collective over the communicator; leave() is not: it tells every
+//    other rank this one is gone for good, and their quiesce(), and waits whose Bound asks
+//    departed(), fail at once instead of at their deadline.
 //  - A messenger destroyed without stop() while an exception unwinds the stack is abandoned:
 //    no collective (another rank may never join one), its threads end at once, and buffers
 //    still on the wire are left to MPI. The process is expected to end soon (MPI_Abort).
@@ -134,6 +136,12 @@ class Messenger {
   void quiesce();
   // quiesce(), then joins both threads. Idempotent.
   void stop();
+  // Instead of stop(), without a collective (a program that leaves before the others): sends
+  // every other rank a "leave" message, waits (up to 1 s) until MPI has taken them, and ends
+  // both threads. The messenger is stopped afterwards; its communicators are left to MPI.
+  void leave();
+  // The first peer that left (leave()), as "rank R (HOST) left ...", or empty. Thread-safe.
+  std::string departed() const;
 
   MessengerCounters counters() const;
   // Traffic of one distributed object between ranks, on the wire (after compression, headers

@@ -4,7 +4,8 @@
 # Top level: base/ includes nothing of ours; messaging/ only base/; dfb/ uses messaging/ only;
 # renderers/ and wall/ use dfb/ and messaging/ but not each other (nor runtime/, apps/, api/);
 # runtime/ ties them together for apps/ and api/ (the data-distributed API), which compose it and
-# neither includes the other; bench/ and examples/ never include tests/.
+# neither includes the other; bindings/ (C, Python) sees api/ alone; bench/ and examples/ never
+# include tests/.
 #
 # Sub-folders: a folder's own files and each of its sub-folders (with everything below it) are
 # the nodes of that folder's include graph; the graph must have no cycle, so every arrow between
@@ -24,14 +25,16 @@ forbid() {  # forbid FOLDER PATTERN...
     fi
   done
 }
-forbid base messaging dfb renderers wall runtime apps api
-forbid messaging dfb renderers wall runtime apps api
-forbid dfb renderers wall runtime apps api
-forbid renderers wall runtime apps api
-forbid wall renderers runtime apps api
-forbid runtime apps api
-forbid api apps
-forbid apps api
+forbid base messaging dfb renderers wall runtime apps api bindings
+forbid messaging dfb renderers wall runtime apps api bindings
+forbid dfb renderers wall runtime apps api bindings
+forbid renderers wall runtime apps api bindings
+forbid wall renderers runtime apps api bindings
+forbid runtime apps api bindings
+forbid api apps bindings
+forbid apps api bindings
+# Other languages see the data-distributed API only, as a program would.
+forbid bindings base messaging dfb renderers wall runtime apps
 # Benchmarks and examples use what a user could: never the tests' helpers.
 forbid bench tests
 forbid examples tests
@@ -53,11 +56,13 @@ if hits=$(grep -niE 'scivis' "$root"/renderers/*.h "$root"/renderers/*.cpp |
           grep -vE '^[^:]+:[0-9]+:[[:space:]]*//' | grep -iE '^[^:]+:[0-9]+:([^/]|/[^/])*scivis'); then
   echo "FAIL: the renderers core names the scivis renderer:"; echo "$hits"; status=1
 fi
-# The API's public header is all an installed program sees: MPI and the standard library only.
-if hits=$(grep -nE '#include +"' "$root/api/DataDistributed.h"); then
-  echo "FAIL: api/DataDistributed.h must include only <mpi.h> and standard headers:"; echo "$hits"
-  status=1
-fi
+# The API's public headers are all an installed program sees: MPI and the standard library only.
+for header in api/DataDistributed.h bindings/c/dfbwall.h; do
+  if hits=$(grep -nE '#include +"' "$root/$header"); then
+    echo "FAIL: $header must include only <mpi.h> and standard headers:"; echo "$hits"
+    status=1
+  fi
+done
 
 # Our source folders: the top-level ones with a CMakeLists.txt in them or one level down (not
 # build trees, which have a CMakeCache.txt).

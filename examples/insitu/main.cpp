@@ -10,6 +10,7 @@
 //
 // The grid is cut into --blocks slabs whatever the rank count (rank r holds slabs r, r + R, ...),
 // so any number of ranks computes the same field and shows the same pixels.
+#include <dfbwall/DataDistributed.h>
 #include <mpi.h>
 
 #include <algorithm>
@@ -20,8 +21,6 @@
 #include <exception>
 #include <string>
 #include <vector>
-
-#include "api/DataDistributed.h"
 
 namespace {
 

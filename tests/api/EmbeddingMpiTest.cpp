@@ -309,7 +309,7 @@ TEST(ApiEmbedding, AMessengerErrorIsThrownOnEveryRankInsteadOfAborting) {
   const int rank = testutil::worldRank();
   dfbwall::SessionOptions o = options(2);
   o.timeoutSeconds = 20;
-  dfbwall::Session session(MPI_COMM_WORLD, o);
+  dfbwall::TestedSession session(MPI_COMM_WORLD, o);
   session.setStyle(style());
   session.setCamera(camera());
   std::vector<float> storage;
@@ -320,8 +320,8 @@ TEST(ApiEmbedding, AMessengerErrorIsThrownOnEveryRankInsteadOfAborting) {
   MPI_Barrier(MPI_COMM_WORLD);
   // Rank 0 sends rank 1 a message for no object; once every rank has handled what was sent, rank
   // 1's messenger has reported it (before: MPI_Abort, the whole job gone).
-  if (rank == 0) dfbwall::SessionTesting::send(session, 1, kNobody);
-  dfbwall::SessionTesting::quiesce(session);
+  if (rank == 0) session.send(1, kNobody);
+  session.quiesce();
   setFloatMode({false, false});
   // Every rank throws at the next frame, together: rank 1 the cause, the others who failed.
   const std::string first = caught(session);
@@ -347,7 +347,7 @@ TEST(ApiEmbedding, AMessengerErrorIsThrownOnEveryRankInsteadOfAborting) {
 TEST(ApiEmbedding, AMessengerErrorAfterTheLastFrameIsThrownByClose) {
   ASSERT_GE(testutil::worldSize(), 3) << "run with 3 ranks (tests/api/CMakeLists.txt)";
   const int rank = testutil::worldRank();
-  dfbwall::Session session(MPI_COMM_WORLD, options(2));
+  dfbwall::TestedSession session(MPI_COMM_WORLD, options(2));
   session.setStyle(style());
   session.setCamera(camera());
   std::vector<float> storage;
@@ -356,7 +356,7 @@ TEST(ApiEmbedding, AMessengerErrorAfterTheLastFrameIsThrownByClose) {
   MPI_Barrier(MPI_COMM_WORLD);  // every rank is out of its frame (as above)
   // Rank 0 sends rank 2 a message for no object; close() quiesces the messaging, so rank 2 has
   // handled it before close() returns, and close() throws it there only.
-  if (rank == 0) dfbwall::SessionTesting::send(session, 2, kNobody);
+  if (rank == 0) session.send(2, kNobody);
   if (rank == 2) {
     try {
       session.close();

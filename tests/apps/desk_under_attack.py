@@ -39,11 +39,11 @@ import zmq
 import zmq.auth.thread
 
 MAGIC = 0x57424644
-PROTOCOL = 3
+PROTOCOL = 4
 HELLO, DIRECTORY, REFUSED, QUEUED, KEEPALIVE, CAPTURE, BYE, PRESENTED, ENDED, BATCH = range(1, 11)
 ROSTER, JOIN, WELCOME, BEAT, COMMAND, BARRIER, PIXELS, DROPPED = range(11, 19)
-CMD_START, CMD_SHUTDOWN, CMD_READY, CMD_INPUT = 1, 7, 8, 20
-INPUT = 19  # the wall -> job message kind of an input event
+CMD_START, CMD_SHUTDOWN, CMD_READY, CMD_INPUT = 1, 7, 8, 16
+INPUT = 20  # the wall -> job message kind of an input event
 TOKEN = "desk-secret"
 TIMEOUT_S = 2  # serve --timeout
 WATCHDOG_S = 170
@@ -152,7 +152,8 @@ def control(kind, session, value, second=0):
 def hello(token=TOKEN, host="attacker"):
     return (header(HELLO) + text(token) + text(host) + struct.pack("<II", 1, 64) +
             struct.pack("<BBBB", 0, 90, 0, 0) + struct.pack("<I", 2) + text("") +
-            struct.pack("<I", 0) + struct.pack("<Biiii", 0, 0, 0, 0, 0) + text(""))
+            struct.pack("<I", 0) + struct.pack("<Biiii", 0, 0, 0, 0, 0) + text("") +
+            struct.pack("<B", 0))
 
 
 def kind_of(m):
@@ -200,13 +201,13 @@ def layout_hash(canvas, displays, processes):
 
 
 # CommandHeader (wall/service/protocol/ServiceCommands.h): kind, process, session, a, b,
-# tileSize, renderRanks, framesInFlight, captureEvery, codec, the window (x0, y0, x1, y1),
-# textBytes.
-COMMAND_HEADER = "<IiQqq5I4iI"
+# pieceSession, tileSize, renderRanks, framesInFlight, captureEvery, codec, the window (x0, y0,
+# x1, y1), textBytes.
+COMMAND_HEADER = "<IiQqqQ5I4iI"
 
 
 def command(kind, session, a=0, tile=64, ranks=1, in_flight=2, text_=b""):
-    body = struct.pack(COMMAND_HEADER, kind, 0, session, a, 0, tile, ranks, in_flight, 0, 0,
+    body = struct.pack(COMMAND_HEADER, kind, 0, session, a, 0, 0, tile, ranks, in_flight, 0, 0,
                        0, 0, 0, 0, len(text_)) + text_
     return header(COMMAND, session) + body
 
@@ -508,7 +509,7 @@ def attack_member_that_never_arrives():
                 fields, _ = parse_command(m)
                 if fields[0] == CMD_START:
                     answer = struct.pack(COMMAND_HEADER, CMD_READY, 1, fields[2], 1, 0, 0, 0, 0,
-                                         0, 0, 0, 0, 0, 0, 0)
+                                         0, 0, 0, 0, 0, 0, 0, 0)
                     member.send(header(COMMAND, fields[2]) + answer)
                     events.setdefault("session", fields[2])
                     events.setdefault("start", time.monotonic())

@@ -97,6 +97,25 @@ TEST(BoundedWait, ARequestThatNeverCompletesEndsAtItsDeadlineWithItsMessage) {
   }
 }
 
+// A wait whose `unless` names a reason (a peer that left for good) ends with it at once, long
+// before its deadline; the request stays pending, as at a deadline.
+TEST(BoundedWait, AReasonToGiveUpEndsTheWaitBeforeItsDeadline) {
+  Receive receive(-1ms);
+  const auto start = Clock::now();
+  int polls = 0;
+  try {
+    base::waitWithDeadline(
+        receive.request, start + 30s, "frame 3: late", 1000us,
+        [&]() -> std::string { return ++polls < 5 ? "" : "rank 2 (host) left without closing"; });
+    ADD_FAILURE() << "returned without the request completing";
+  } catch (const base::DeadlineError& e) {
+    EXPECT_STREQ(e.what(), "rank 2 (host) left without closing");
+  }
+  EXPECT_EQ(polls, 5);
+  EXPECT_LT(secondsSince(start), 3.0) << "the deadline was 30 s";
+  EXPECT_NE(receive.request, MPI_REQUEST_NULL);
+}
+
 // The long wait (a rank idling until the next order) sleeps longer and longer between polls:
 // a second of waiting costs this thread a few milliseconds of CPU, not a core; and it still
 // notices the completion within its longest sleep.

@@ -17,7 +17,11 @@ layout=$SOURCE/configs/walls/2x2.toml
 
 cmake --install "$BUILD" --prefix "$work/prefix" >/dev/null
 test -f "$work/prefix/lib/cmake/dfbwall/dfbwallConfig.cmake"
-test -f "$work/prefix/include/dfbwall/api/DataDistributed.h"
+test -f "$work/prefix/include/dfbwall/DataDistributed.h"
+# The installed headers hold no test hook.
+if grep -rlE 'SessionTesting|TestedSession|friend ' "$work/prefix/include"; then
+  echo "FAIL: a test hook in the installed headers"; exit 1
+fi
 compiler=$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$BUILD/CMakeCache.txt")
 launcher=$(sed -n 's/^CMAKE_CXX_COMPILER_LAUNCHER:[A-Z]*=//p' "$BUILD/CMakeCache.txt")
 cmake -S "$SOURCE/examples/insitu" -B "$work/build" -DCMAKE_PREFIX_PATH="$work/prefix" \

@@ -164,6 +164,46 @@ TEST(Messenger, MessageToUnknownIdIsReportedWithBothIds) {
   messenger.stop();
 }
 
+// leave() is not collective: the last rank leaves, and every other rank's messenger reports it
+// by rank and host, says so in departed(), and its quiesce() gives up at once instead of at its
+// deadline.
+TEST(Messenger, ARankThatLeavesIsReportedAndQuiesceGivesUpAtOnce) {
+  if (worldSize() < 2) GTEST_SKIP() << "needs 2 ranks";
+  MessengerOptions options;
+  options.quiesceTimeout = std::chrono::seconds(60);
+  Messenger messenger(MPI_COMM_WORLD, options);
+  std::vector<std::string> errors;
+  std::mutex errorsMutex;
+  messenger.setErrorCallback([&](const std::string& e) {
+    std::lock_guard lock(errorsMutex);
+    errors.push_back(e);
+  });
+  const int leaving = worldSize() - 1;
+  if (worldRank() == leaving) {
+    messenger.leave();
+    EXPECT_TRUE(messenger.departed().empty());
+    EXPECT_NO_THROW(messenger.stop());  // stopped already: nothing to do
+    return;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    messenger.quiesce();
+    ADD_FAILURE() << "quiesce() with a rank gone";
+  } catch (const base::DeadlineError& e) {
+    EXPECT_NE(std::string(e.what()).find("rank " + std::to_string(leaving) + " ("),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+  EXPECT_NE(messenger.departed().find("left without closing"), std::string::npos);
+  {
+    std::lock_guard lock(errorsMutex);
+    ASSERT_GE(errors.size(), 1u);  // another survivor may leave meanwhile: reported after
+    EXPECT_EQ(errors[0], messenger.departed());
+  }
+  messenger.leave();  // the others go too, without a collective
+}
+
 // A handler that forwards a token around the ring until it has travelled `hops` times:
 // quiesce must also wait for messages sent by handlers.
 struct Relay : MessageHandler {
