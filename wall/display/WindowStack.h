@@ -48,7 +48,8 @@ class WindowStack {
   // coordinates (empty: it misses d; else inside d). Every display is composed again when the
   // first window comes (the background replaces whatever was shown). The window must go before
   // the stack does.
-  std::unique_ptr<Window> add(const std::vector<dfb::Region>& parts);
+  // `tag`: what topAt() answers for the window (the service: its job's session).
+  std::unique_ptr<Window> add(const std::vector<dfb::Region>& parts, std::uint64_t tag = 0);
 
   // The presenting thread: composes every display that changed since the last call into its
   // frame() (each pixel written once: the top window's part covering it, or the background) and
@@ -59,6 +60,9 @@ class WindowStack {
   // screen). The first window to come after composes every display again.
   void dropChanges();
   std::size_t windows() const;
+  // The tag of the top window covering pixel (x, y) of display `display` (where a key or a click
+  // on it goes), 0 where none does. Any thread.
+  std::uint64_t topAt(int display, int x, int y) const;
 
  private:
   class Layer;
@@ -72,6 +76,7 @@ class WindowStack {
   struct Entry {
     std::vector<Shown> layers;  // the window's non-empty parts
     int staged = 0;             // layers that swapped since the last commit
+    std::uint64_t tag = 0;
   };
   void remove(Entry* entry);
   void markAll();

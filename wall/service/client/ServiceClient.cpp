@@ -141,6 +141,21 @@ messaging::Bytes ServiceClient::rosterBytes() const {
   return rosterBytes_;
 }
 
+ServiceClient::ReshapeNews ServiceClient::reshapeNews() const {
+  std::lock_guard lock(mutex_);
+  return reshape_;
+}
+
+messaging::Bytes ServiceClient::reshapeBytes() const {
+  std::lock_guard lock(mutex_);
+  return reshapeBytes_;
+}
+
+void ServiceClient::onInput(std::function<void(const WindowInput&)> handler) {
+  std::lock_guard lock(mutex_);
+  onInput_ = std::move(handler);
+}
+
 void ServiceClient::run() {
   const std::uint64_t session = directory_.session;
   const auto wallTimeout = std::chrono::milliseconds(directory_.timeoutMs);
@@ -221,11 +236,25 @@ void ServiceClient::run() {
             rosterVersion_ = roster.version;
             rosterBytes_.assign(bytesOf(m), bytesOf(m) + m.size());
           }
+        } else if (h.kind == static_cast<std::uint16_t>(Kind::Reshape)) {
+          const Reshape reshape = parseReshape(bytesOf(m), m.size());
+          if (reshape.directory.processes.size() != directory_.processes.size() ||
+              reshape.session != session)
+            throw base::Error("the wall at " + address_ + " sent a move of another window");
+          std::lock_guard lock(mutex_);
+          if (reshape.version > reshape_.version) {
+            reshape_ = {reshape.version, reshape.fromFrame};
+            reshapeBytes_.assign(bytesOf(m), bytesOf(m) + m.size());
+          }
         } else if (h.kind == static_cast<std::uint16_t>(Kind::Refused)) {
           // A request of the job (a capture) the wall would not take: the job goes on.
           std::fprintf(stderr, "dfbwall: the wall at %s: %s\n", address_.c_str(),
                        parseText(bytesOf(m), m.size()).c_str());
           std::fflush(stderr);
+        } else if (h.kind == static_cast<std::uint16_t>(Kind::Input)) {
+          const WindowInput in = parseInput(bytesOf(m), m.size());
+          std::lock_guard lock(mutex_);
+          if (onInput_) onInput_(in);
         } else if (h.kind == static_cast<std::uint16_t>(Kind::Ended)) {
           fail("the wall at " + address_ + " ended the job: " + parseText(bytesOf(m), m.size()));
         } else if (h.kind != static_cast<std::uint16_t>(Kind::Keepalive)) {
@@ -295,6 +324,20 @@ Roster shareRoster(MPI_Comm comm, const ServiceClient* client, std::chrono::mill
   bytes.resize(size);
   base::bcast(bytes.data(), static_cast<int>(size), 0, comm, bound);
   return parseRoster(bytes.data(), bytes.size());
+}
+
+Reshape shareReshape(MPI_Comm comm, const ServiceClient* client,
+                     std::chrono::milliseconds timeout) {
+  messaging::Bytes bytes = client ? client->reshapeBytes() : messaging::Bytes{};
+  std::uint64_t size = bytes.size();
+  const base::Bound bound{.until = timeout,
+                          .late = "sharing the wall's move of the window: a rank did not join"};
+  base::bcast(&size, sizeof size, 0, comm, bound);
+  if (size > kMaxMessageBytes)
+    throw base::Error("a move of the window of " + std::to_string(size) + " bytes");
+  bytes.resize(size);
+  base::bcast(bytes.data(), static_cast<int>(size), 0, comm, bound);
+  return parseReshape(bytes.data(), bytes.size());
 }
 
 Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int framesInFlight, bool wait,

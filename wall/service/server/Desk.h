@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "wall/layout/Layout.h"
+#include "wall/service/server/JobDesk.h"
 #include "wall/service/server/ProcessLink.h"
 #include "wall/service/server/WallService.h"
 
@@ -52,6 +53,9 @@ class Desk : public ProcessLink {
   std::vector<int> absentProcesses() const;
   // The desk thread ended (after the wall's shutdown was sent to every process).
   bool closed() const;
+  // Thread-safe: moves and resizes job `session`'s window to `window` on the canvas
+  // (JobDesk::reshape); waits for the desk's verdict.
+  JobDesk::MoveVerdict reshape(std::uint64_t session, const dfb::Region& window);
 
   std::uint64_t epoch() const override { return 0; }
   void toHead(const ServiceCommand& command, std::uint64_t epoch) override;
