@@ -78,6 +78,12 @@ void FrameDirector::apply(const SteeringRequest& r) {
   }
 }
 
+void FrameDirector::restartAccumulation() {
+  haveView_ = false;
+  epoch_ = 0;
+  epochSpp_ = 0;
+}
+
 FrameOrder FrameDirector::next(std::uint32_t frameId,
                                const std::vector<SteeringRequest>& requests) {
   FrameOrder order;

@@ -47,6 +47,9 @@ class FrameDirector {
   // The last steering request applied and the frame that first showed it (0: none yet).
   std::uint64_t lastRequest() const { return lastRequest_; }
   std::uint32_t lastRequestFrame() const { return lastRequestFrame_; }
+  // The frame buffer was made anew (a moved window): the next frame starts accumulating from
+  // epoch 0, as the first frame of a run does.
+  void restartAccumulation();
   // Requests that could not be applied since the last call (for the status' "errors").
   std::vector<std::string> takeErrors();
 

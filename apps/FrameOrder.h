@@ -35,6 +35,9 @@ struct FrameOrder {
   // (wall/service/protocol/Protocol.h, Roster); a rank whose version differs takes the roster from
   // rank 0 before the frame.
   std::uint32_t rosterVersion = 0;
+  // --connect: the version of the move of the job's window this frame renders with
+  // (Protocol.h, Reshape); a rank whose version differs re-plans for the new window first.
+  std::uint32_t reshapeVersion = 0;
   std::uint64_t captureSequence = 0;  // > 0: the walls capture this frame
   // The last steering request this frame applies (0: none), when the first of them arrived
   // (steady_clock ns on rank 0), and the last frame every display had presented then.

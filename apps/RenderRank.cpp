@@ -102,6 +102,7 @@ class RenderRank {
   std::vector<SteeringRequest> waitWhileConverged();
   void waitForFrameTime(std::uint32_t frameId);
   void followWall(const FrameOrder& order, std::uint32_t frameId);
+  void replan(const wall::service::Reshape& moved, std::uint32_t frameId);
   void idle();
   void renderFrame(const FrameOrder& order, std::uint32_t frameId);
   void countFrame(const FrameOrder& order, const renderers::FrameReport& report,
@@ -128,6 +129,8 @@ class RenderRank {
   const std::chrono::milliseconds heartbeat_;
   const bool hasWall_, route_;
   int renderRank_ = 0;
+  // What the frames are rendered for: the job's wall or window, until the wall moves the window.
+  const wall::Layout* layout_ = nullptr;
 
   renderers::RenderSettings settings_;
   renderers::FrameDriverOptions driving_;
@@ -173,6 +176,7 @@ RenderRank::RenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm
       route_(hasWall_ && !job.gatherMode()),
       frames_(static_cast<std::uint32_t>(job.options.frames)) {
   MPI_Comm_rank(renderComm, &renderRank_);
+  if (job.layout) layout_ = &*job.layout;
   settings_.width = job.canvasWidth;
   settings_.height = job.canvasHeight;
   settings_.seed = o_.seed;
@@ -193,8 +197,8 @@ RenderRank::RenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm
 // gather mode or --image, or nothing.
 void RenderRank::chooseFormat() {
   runtime::FrameBufferSettings fb;
-  fb.width = job_.canvasWidth;
-  fb.height = job_.canvasHeight;
+  fb.width = settings_.width;
+  fb.height = settings_.height;
   fb.tileSize = o_.tileSize;
   fb.timeout = timeout_;
   fb.exposure = o_.exposure;
@@ -208,7 +212,7 @@ void RenderRank::chooseFormat() {
   dfbOptions_.operation =
       drawsDisplayPixels(o_) ? dfb::writeOperation() : dfb::accumulateOperation();
   if (route_) {
-    driving_.activeTiles = runtime::routeToDisplays(dfbOptions_, *job_.layout, o_.tileSize);
+    driving_.activeTiles = runtime::routeToDisplays(dfbOptions_, *layout_, o_.tileSize);
   } else if (hasWall_ || endsWith(o_.image, ".png")) {
     dfbOptions_.format = dfb::DisplayFormat::RGBA8;
   } else if (endsWith(o_.image, ".pfm")) {
@@ -322,15 +326,24 @@ FrameOrder RenderRank::orderFrame(std::uint32_t frameId) {
   FrameOrder order;
   if (job_.worldRank == 0) {
     std::vector<SteeringRequest> requests = steering_.take();
-    if (requests.empty() && frames_ == 0 && director_->converged() && !control_.stopRequested()) {
+    // A move of the window the wall sent is rendered even when the picture has converged.
+    const bool moveAhead = wall_ && wall_->reshapeAhead(wall_->reshapeVersion());
+    if (requests.empty() && frames_ == 0 && director_->converged() && !control_.stopRequested() &&
+        !moveAhead) {
       requests = waitWhileConverged();
       order.idle = requests.empty() ? 1 : 0;
     }
     for (const SteeringRequest& r : requests)
       if (r.kind == SteeringRequest::kStop) control_.askToStop(r.exitCode);
+    const std::uint32_t reshapeVersion =
+        wall_ ? wall_->reshapeVersionFor(frameId, wall_->reshapeVersion()) : 0;
+    if (wall_ && reshapeVersion != wall_->reshapeVersion()) director_->restartAccumulation();
     if (!order.idle) waitForFrameTime(frameId);
     if (!order.idle) order = director_->next(frameId, requests);
-    if (wall_) order.rosterVersion = wall_->rosterVersion();
+    if (wall_) {
+      order.rosterVersion = wall_->rosterVersion();
+      order.reshapeVersion = reshapeVersion;
+    }
     if (const std::optional<int> code = control_.stopRequested())
       order.stop = 1, order.exitCode = *code, order.idle = 0;
   }
@@ -371,15 +384,57 @@ void RenderRank::waitForFrameTime(std::uint32_t frameId) {
 // The pieces of this frame on go where the wall now is (Protocol.h, Roster).
 void RenderRank::followWall(const FrameOrder& order, std::uint32_t frameId) {
   if (!wall_) return;
+  if (!order.idle && !order.stop)
+    if (const std::optional<wall::service::Reshape> moved =
+            wall_->followReshape(order.reshapeVersion, renderComm_))
+      replan(*moved, frameId);
   const std::optional<wall::service::Roster> changed =
       wall_->followRoster(order.rosterVersion, renderComm_);
   if (!changed) return;
   showLost(changed->processes);
   if (!stats_) return;
   std::vector<std::string> lost;
-  for (const wall::Display& d : job_.layout->displays)
+  for (const wall::Display& d : layout_->displays)
     if (!changed->processes.at(static_cast<size_t>(d.process)).live) lost.push_back(d.name);
   stats_->writeWallRoster(changed->version, frameId, changed->why, lost);
+}
+
+// The wall moved or resized the job's window from this frame on (Protocol.h, Reshape): every rank
+// makes its frame buffer, renderers and routing anew for the new window (its canvas), as at the
+// start; accumulation starts over (rank 0's director restarted it when it ordered the frame).
+void RenderRank::replan(const wall::service::Reshape& moved, std::uint32_t frameId) {
+  const base::Bound bound = base::Bound::joinWithin(timeout_, "moving the window");
+  // No tile of an earlier frame is still on its way to a frame buffer about to go.
+  base::barrier(renderComm_, bound);
+  dfb_.reset();
+  imageDriver_.reset();
+  renderer_.reset();
+  brickDriver_.reset();
+  layout_ = &wall_->layout();
+  settings_.width = layout_->canvasWidth;
+  settings_.height = layout_->canvasHeight;
+  chooseFormat();
+  makeDrivers();
+  dfb_ = std::make_unique<dfb::DistributedFrameBuffer>(messenger_, renderComm_, dfbOptions_);
+  wall_->attach(*dfb_);
+  // What the frames were steered to holds on in the new frame buffer.
+  dfb::ToneMapSettings toneMap = dfbOptions_.toneMap;
+  toneMap.exposure = current_.exposure;
+  dfb_->setToneMap(toneMap);
+  const renderers::LiveSettings live{current_.maxDepth, current_.transferFunction,
+                                     current_.opacityScale};
+  if (brickDriver_) brickDriver_->setLiveSettings(live);
+  if (renderer_) renderer_->setLiveSettings(live);
+  if (brickDriver_) brickDriver_->setSamplesPerPixel(static_cast<std::uint32_t>(current_.spp));
+  if (imageDriver_) imageDriver_->setSamplesPerPixel(static_cast<std::uint32_t>(current_.spp));
+  // Every rank's new frame buffer is registered before any sends to it.
+  base::barrier(renderComm_, bound);
+  if (job_.worldRank == 0) {
+    const dfb::Region& w = moved.directory.window;
+    std::printf("dfbwall: the wall moved the window to %d,%d,%d,%d from frame %u\n", w.x0, w.y0,
+                w.width(), w.height(), frameId);
+    std::fflush(stdout);
+  }
 }
 
 void RenderRank::idle() {
@@ -501,7 +556,7 @@ void RenderRank::showLost(const std::vector<wall::service::DirectoryProcess>& pr
   if (job_.worldRank != 0) return;
   std::vector<std::string> names;
   std::vector<bool> lost;
-  for (const wall::Display& d : job_.layout->displays) {
+  for (const wall::Display& d : layout_->displays) {
     lost.push_back(!processes.at(static_cast<size_t>(d.process)).live);
     if (lost.back()) names.push_back(d.name);
   }

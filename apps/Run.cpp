@@ -20,6 +20,7 @@
 #include "apps/StatusBoard.h"
 #include "apps/Steering.h"
 #include "apps/StopSignals.h"
+#include "apps/WallKeys.h"
 #include "base/AtomicFile.h"
 #include "base/Collectives.h"
 #include "base/Error.h"
@@ -192,6 +193,9 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
           for (const std::string& picture : o.pictures.arguments) what += " " + picture;
         hello.job = what.substr(0, 256);
         if (server) hello.page = server->pageAddress(hello.host);
+        // The frame buffer, renderers and routing are re-planned for a moved window; the preview
+        // (the job's page, --preview) is not yet, so such a job keeps its window.
+        hello.canReshape = o.previewFile.empty() && o.control.empty();
         job.service = std::make_shared<wall::service::ServiceClient>(
             o.connect,
             wall::service::loadCredentials({o.token, o.tokenFile, {}, o.serverKey}, false), hello,
@@ -345,6 +349,25 @@ int run(int argc, char** argv) {
       job.preview = preview.get();
     }
     Steering steering(messenger);
+    // A job of a service wall: keys and the mouse over its window there steer it as its page
+    // does (docs/service.md, "Several jobs at once"); never after `steering` goes.
+    struct InputGuard {
+      wall::service::ServiceClient* client;
+      ~InputGuard() {
+        if (client) client->onInput({});
+      }
+    } inputGuard{job.service.get()};
+    if (job.service)
+      job.service->onInput([&steering, w = job.canvasWidth,
+                            h = job.canvasHeight](const wall::service::WindowInput& in) {
+        if (const std::optional<SteeringRequest> r = requestForInput(in, w, h)) {
+          try {
+            steering.submit(*r);
+          } catch (const std::exception&) {
+            // Out of range after all: the event is dropped, the job goes on.
+          }
+        }
+      });
     std::unique_ptr<StatusBoard> status;
     if (server) {
       status = std::make_unique<StatusBoard>();

@@ -17,14 +17,11 @@ std::vector<bool> routeToDisplays(dfb::DfbOptions& options, const wall::Layout& 
 RenderWall::RenderWall(messaging::Messenger& messenger, int renderRank,
                        const RenderWallSettings& settings,
                        std::function<void(const std::string&)> onServiceError)
-    : messenger_(messenger), settings_(settings) {
+    : messenger_(messenger), settings_(settings), renderRank_(renderRank) {
   const wall::Layout& layout = *settings.layout;
   if (!settings.gather) {
     if (settings.directory) {
-      serviceSink_ = std::make_shared<wall::service::ServicePieceSink>(
-          *settings.directory, settings.credentials, renderRank, settings.codec,
-          static_cast<int>(settings.timeout.count()));
-      routing_ = std::make_shared<wall::DisplayRoutingOp>(serviceSink_, layout, settings.tileSize);
+      routeWith(*settings.directory);
     } else {
       routing_ = std::make_shared<wall::DisplayRoutingOp>(messenger, layout, settings.roles,
                                                           settings.tileSize);
@@ -46,6 +43,41 @@ RenderWall::~RenderWall() {
   // The service link's thread writes into the credits: it goes first when this holds it last.
   serviceControl_.reset();
   settings_.service.reset();
+}
+
+void RenderWall::routeWith(const wall::service::Directory& directory) {
+  // The previous sink goes first: its sockets send what they still hold before they close.
+  routing_.reset();
+  serviceSink_.reset();
+  serviceSink_ = std::make_shared<wall::service::ServicePieceSink>(
+      directory, settings_.credentials, renderRank_, settings_.codec,
+      static_cast<int>(settings_.timeout.count()));
+  routing_ =
+      std::make_shared<wall::DisplayRoutingOp>(serviceSink_, directory.layout, settings_.tileSize);
+}
+
+std::uint32_t RenderWall::reshapeVersionFor(std::uint32_t frameId, std::uint32_t applied) const {
+  if (!settings_.service) return applied;
+  const wall::service::ServiceClient::ReshapeNews news = settings_.service->reshapeNews();
+  return news.version != applied && frameId >= news.fromFrame ? news.version : applied;
+}
+
+bool RenderWall::reshapeAhead(std::uint32_t applied) const {
+  return settings_.service && settings_.service->reshapeNews().version != applied;
+}
+
+std::optional<wall::service::Reshape> RenderWall::followReshape(std::uint32_t ordered,
+                                                                MPI_Comm renderComm) {
+  if (!serviceSink_ || ordered == reshapeVersion_) return std::nullopt;
+  wall::service::Reshape reshape =
+      wall::service::shareReshape(renderComm, settings_.service.get(), settings_.timeout);
+  moved_ = std::make_unique<wall::service::Directory>(reshape.directory);
+  settings_.layout = &moved_->layout;
+  settings_.directory = moved_.get();
+  routeWith(*moved_);
+  rosterVersion_ = moved_->rosterVersion;
+  reshapeVersion_ = ordered;
+  return reshape;
 }
 
 void RenderWall::attach(dfb::DistributedFrameBuffer& fb) {

@@ -67,6 +67,18 @@ class RenderWall {
   // Every render rank, with the version its frame order carries: the wall's new roster when it
   // changed (a collective over `renderComm`), which the pieces of this frame on follow.
   std::optional<wall::service::Roster> followRoster(std::uint32_t ordered, MPI_Comm renderComm);
+  // Render rank 0: the version of the move of the job's window (Protocol.h, Reshape) that frame
+  // `frameId` renders with: the newest the wall sent whose switch frame it has reached, else
+  // `applied` (the one the ranks follow now). A move sent but not reached yet: reshapeAhead.
+  std::uint32_t reshapeVersionFor(std::uint32_t frameId, std::uint32_t applied) const;
+  bool reshapeAhead(std::uint32_t applied) const;
+  std::uint32_t reshapeVersion() const { return reshapeVersion_; }
+  // Every render rank, between frames, with the version its frame order carries: the wall's move
+  // when it is new to this rank (a collective over `renderComm`). The pieces go to the new
+  // window's processes under its piece session from then on; attach() the new frame buffer.
+  std::optional<wall::service::Reshape> followReshape(std::uint32_t ordered, MPI_Comm renderComm);
+  // The layout pieces are routed by (the directory's, or the newest move's).
+  const wall::Layout& layout() const { return *settings_.layout; }
   // This rank finished frame `frameId`: the pieces held back go.
   void endFrame(std::uint32_t frameId);
   // Gather mode, render rank 0: each display its rectangle of the whole image, as Tide-like
@@ -90,7 +102,11 @@ class RenderWall {
   std::unique_ptr<wall::FrameCredits> credits_;
   std::unique_ptr<ServiceWallControl> serviceControl_;
   WallControl* control_ = nullptr;
-  std::uint32_t rosterVersion_ = 0;  // of the roster the pieces follow (0: the directory's)
+  std::uint32_t rosterVersion_ = 0;   // of the roster the pieces follow (0: the directory's)
+  std::uint32_t reshapeVersion_ = 0;  // of the move the pieces follow (0: the directory's window)
+  std::unique_ptr<wall::service::Directory> moved_;  // the newest move's directory
+  int renderRank_ = 0;
+  void routeWith(const wall::service::Directory& directory);
 };
 
 }  // namespace runtime

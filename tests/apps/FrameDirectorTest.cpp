@@ -49,6 +49,28 @@ TEST(FrameDirector, AStillCameraKeepsItsEpochAndConvergesAtTheBudget) {
   EXPECT_TRUE(d.converged());
 }
 
+TEST(FrameDirector, AMovedWindowAccumulatesAgainFromEpochZero) {
+  FrameDirector d(still(4));
+  d.next(1, {});
+  SteeringRequest dolly = camera(1);
+  dolly.fields = SteeringRequest::kDolly;
+  dolly.dolly = 2;
+  d.next(2, {dolly});  // a new epoch, converged after its budget
+  d.next(3, {});
+  EXPECT_TRUE(d.converged());
+  EXPECT_EQ(d.epoch(), 1u);
+  // A new frame buffer (the window moved): the next frame is the first of epoch 0, as a run's.
+  d.restartAccumulation();
+  const FrameOrder o = d.next(4, {});
+  EXPECT_EQ(o.frame.frameId, 4u);
+  EXPECT_EQ(o.frame.epoch, 0u);
+  EXPECT_EQ(d.epochSpp(), 2);
+  EXPECT_FALSE(d.converged());
+  d.next(5, {});
+  EXPECT_EQ(d.epoch(), 0u);
+  EXPECT_TRUE(d.converged());
+}
+
 // `dfbwall show`: a sequence of three pictures, one sample each; converged only once the next
 // frame would show the picture the last one showed.
 TEST(FrameDirector, ASequenceConvergesWhenTheNextFrameShowsTheSamePicture) {

@@ -34,6 +34,7 @@ skip() { echo "SKIPPED: $*"; exit 77; }
 fail() {
   echo "FAIL: $*"
   [ ! -f "$work/log" ] || { echo "--- job output:"; cat "$work/log"; }
+  [ ! -f "$work/b.out" ] || { echo "--- job b output:"; cat "$work/b.out"; }
   [ ! -f "$work/serve.err" ] || { echo "--- serve output:"; cat "$work/serve.out" "$work/serve.err"; }
   [ ! -f "$work/relay.err" ] || { echo "--- relay output:"; cat "$work/relay.out" "$work/relay.err"; }
   exit 1
@@ -414,7 +415,7 @@ case "$scenario" in
     t0=$(now)
     "$CLUSTER" mpirun-hosts render2 --id "$id" -- "$DFBWALL" "${connect[@]}" --window "$window_b" \
       "${bricks[@]}" --frames 3 --capture "$work/b" --stats "$work/b.jsonl" --quiet --timeout 30 \
-      >"$work/b.out" 2>&1 || { cat "$work/b.out"; fail "job b failed beside job a"; }
+      >"$work/b.out" 2>&1 || fail "job b failed beside job a"
     echo "job b (scivis, 2 bricks, beside a): $(since "$t0") s"
     kill -0 "$job" 2>/dev/null || fail "job a ended while b ran"
     before=$(newest "$work/a" r1c1)

@@ -12,7 +12,9 @@ member or flood cannot wedge the wall"). Four attacks, each followed by the wall
   3. a member that beats but never arrives: the head alone (`serve --process 0`), and a raw client
      that joins as process 1 with the token and the layout's hash, answers Start, beats, and
      never comes to a swap barrier. The head drops it within the timeout; a good job's frames go
-     on on the head's display and the job ends with exit 0.
+     on on the head's display and the job ends with exit 0. While the job runs the member also
+     sends input events the head must drop: one on the head's display (not the member's) and one
+     that is no event; the head logs both and the job never hears of them.
   4. a bad Start: a raw client as the head, `serve --process 1 --join` to it; a Start with tile
      size 0 is refused (Ready 0, naming the field), the process does not crash and still stops
      cleanly on the head's Shutdown.
@@ -37,10 +39,11 @@ import zmq
 import zmq.auth.thread
 
 MAGIC = 0x57424644
-PROTOCOL = 3
+PROTOCOL = 4
 HELLO, DIRECTORY, REFUSED, QUEUED, KEEPALIVE, CAPTURE, BYE, PRESENTED, ENDED, BATCH = range(1, 11)
 ROSTER, JOIN, WELCOME, BEAT, COMMAND, BARRIER, PIXELS, DROPPED = range(11, 19)
-CMD_START, CMD_SHUTDOWN, CMD_READY = 1, 7, 8
+CMD_START, CMD_SHUTDOWN, CMD_READY, CMD_INPUT = 1, 7, 8, 16
+INPUT = 20  # the wall -> job message kind of an input event
 TOKEN = "desk-secret"
 TIMEOUT_S = 2  # serve --timeout
 WATCHDOG_S = 170
@@ -149,7 +152,8 @@ def control(kind, session, value, second=0):
 def hello(token=TOKEN, host="attacker"):
     return (header(HELLO) + text(token) + text(host) + struct.pack("<II", 1, 64) +
             struct.pack("<BBBB", 0, 90, 0, 0) + struct.pack("<I", 2) + text("") +
-            struct.pack("<I", 0) + struct.pack("<Biiii", 0, 0, 0, 0, 0) + text(""))
+            struct.pack("<I", 0) + struct.pack("<Biiii", 0, 0, 0, 0, 0) + text("") +
+            struct.pack("<B", 0) + text("") + text(""))
 
 
 def kind_of(m):
@@ -197,13 +201,13 @@ def layout_hash(canvas, displays, processes):
 
 
 # CommandHeader (wall/service/protocol/ServiceCommands.h): kind, process, session, a, b,
-# tileSize, renderRanks, framesInFlight, captureEvery, codec, the window (x0, y0, x1, y1),
-# textBytes.
-COMMAND_HEADER = "<IiQqq5I4iI"
+# pieceSession, tileSize, renderRanks, framesInFlight, captureEvery, codec, the window (x0, y0,
+# x1, y1), textBytes.
+COMMAND_HEADER = "<IiQqqQ5I4iI"
 
 
 def command(kind, session, a=0, tile=64, ranks=1, in_flight=2, text_=b""):
-    body = struct.pack(COMMAND_HEADER, kind, 0, session, a, 0, tile, ranks, in_flight, 0, 0,
+    body = struct.pack(COMMAND_HEADER, kind, 0, session, a, 0, 0, tile, ranks, in_flight, 0, 0,
                        0, 0, 0, 0, len(text_)) + text_
     return header(COMMAND, session) + body
 
@@ -486,6 +490,14 @@ def attack_member_that_never_arrives():
             while pieces.poll(0):
                 pieces.recv_multipart()
                 events.setdefault("pieces", time.monotonic())
+            if "pieces" in events and "start" in events and "inputs" not in events:
+                # The job runs: a key at (10, 10), on the head's display, and bytes that are no
+                # input event, both for the job's session.
+                session = events["session"]
+                key = header(INPUT, session) + struct.pack("<IIiiiiB", 1, 1, 10, 10, 0, 0, 0)
+                member.send(command(CMD_INPUT, session, text_=key))
+                member.send(command(CMD_INPUT, session, text_=b"no input event"))
+                events["inputs"] = time.monotonic()
             if not member.poll(20):
                 continue
             m = member.recv()
@@ -497,8 +509,9 @@ def attack_member_that_never_arrives():
                 fields, _ = parse_command(m)
                 if fields[0] == CMD_START:
                     answer = struct.pack(COMMAND_HEADER, CMD_READY, 1, fields[2], 1, 0, 0, 0, 0,
-                                         0, 0, 0, 0, 0, 0, 0)
+                                         0, 0, 0, 0, 0, 0, 0, 0)
                     member.send(header(COMMAND, fields[2]) + answer)
+                    events.setdefault("session", fields[2])
                     events.setdefault("start", time.monotonic())
             elif kind == DROPPED:
                 events.setdefault("dropped", time.monotonic())
@@ -532,8 +545,15 @@ def attack_member_that_never_arrives():
             fail("3. the head's display presented up to frame %d of 60" % frames)
         if "pieces" not in events:
             fail("3. the fake member's piece socket got no pieces (its handshake failed?)")
+        if "inputs" not in events:
+            fail("3. the fake member sent no input events")
+        for why in ("wall process 1 sent an input event at 10,10, outside the job's window on its "
+                    "displays", "wall process 1 sent a malformed input event"):
+            if why not in read(serve_log):
+                fail("3. the head did not drop an input event: no '%s'" % why)
         print("3. a member that beats but never arrives: dropped %.1f s after its Start "
-              "(timeout %d s): '%s'; the job's 60 frames presented on the head's display, exit 0"
+              "(timeout %d s): '%s'; the job's 60 frames presented on the head's display, exit 0; "
+              "its hostile input events dropped"
               % (after, TIMEOUT_S, line.strip()), flush=True)
     finally:
         stop_member()

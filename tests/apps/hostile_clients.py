@@ -104,7 +104,7 @@ def free_port():
     return port
 
 
-PROTOCOL = 3
+PROTOCOL = 4
 
 
 def header(kind, session=0, version=PROTOCOL, magic=MAGIC):
@@ -120,7 +120,9 @@ def hello(token="", host="hostile", version=PROTOCOL, ranks=1):
     return (header(HELLO, 0, version) + text(token) + text(host) +
             struct.pack("<II", ranks, 64) + struct.pack("<BBBB", 0, 90, 0, 0) +
             struct.pack("<I", 2) + text("") + struct.pack("<I", 0) +
-            struct.pack("<Biiii", 0, 0, 0, 0, 0) + text(""))  # the window: full
+            struct.pack("<Biiii", 0, 0, 0, 0, 0) + text("") +
+            struct.pack("<B", 0) +  # the window: full; no reshape
+            text("") + text(""))  # no job name, no page
 
 
 def parse_header(m):

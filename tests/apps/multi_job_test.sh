@@ -54,22 +54,23 @@ until_frame() {
 }
 
 layout=$1
-port=$((20000 + $$ % 20000))
+port=""  # serve listens on port 0; the port it took is read from its first line
 window_a=90,70,250,170 window_b=20,20,200,150
 
 # composite [SERVE OPTIONS...]: the wall's own captures of two jobs at once equal the composite.
 composite() {
-  local port2=$((port + 1)) ca=$work/jobs/composite-a cb=$work/jobs/composite-b
+  local port2="" ca=$work/jobs/composite-a cb=$work/jobs/composite-b
   mkdir -p "$work/jobs"  # the jobs' capture root; the wall's own captures outside it
   local x=()
   [ -z "${DISPLAY:-}" ] || x=(-x DISPLAY -x XAUTHORITY)
   "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 "${x[@]}" \
-    -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port2" \
+    -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen 127.0.0.1:0 \
     --timeout "$timeout" --capture-root "$work/jobs" --background "#000000" --capture "$work/wall" \
     --capture-every 3 "$@" >"$work/serve2.out" 2>"$work/serve2.err" &
   serve=$!
   for _ in $(seq 100); do grep -q "wall service on" "$work/serve2.out" 2>/dev/null && break; sleep 0.1; done
-  grep -q "wall service on 127.0.0.1:$port2" "$work/serve2.out" || fail "serve (composite) did not start"
+  port2=$(sed -n 's/^dfbwall: wall service on 127\.0\.0\.1:\([0-9]*\).*/\1/p' "$work/serve2.out")
+  [ -n "$port2" ] || fail "serve (composite) did not start"
   mpi -np 1 "$DFBWALL" --renderer primary --size 250x170 --frames 1 --quiet \
     --image "$work/prim-a.png" || fail "reference a (primary)"
   mpi -np 1 "$DFBWALL" --renderer primary --size 200x150 --frames 1 --quiet \
@@ -116,12 +117,13 @@ if [ "${2:-}" = composite ]; then
   exit 0
 fi
 "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
-  -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" \
+  -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen 127.0.0.1:0 \
   --offscreen --timeout "$timeout" --capture-root "$work" --max-jobs 2 \
   --background "#000000" >"$work/serve.out" 2>"$work/serve.err" &
 serve=$!
 for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
-grep -q "wall service on 127.0.0.1:$port" "$work/serve.out" || fail "serve did not start"
+port=$(sed -n 's/^dfbwall: wall service on 127\.0\.0\.1:\([0-9]*\).*/\1/p' "$work/serve.out")
+[ -n "$port" ] || fail "serve did not start"
 
 # The one-process renders of both windows at frame 10.
 mpi -np 1 "$DFBWALL" --renderer pattern --size 250x170 --frames 10 --quiet \

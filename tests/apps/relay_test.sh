@@ -84,15 +84,15 @@ def dealer(endpoint):  # past the relay's handshake: PLAIN, the token as the pas
     s.connect(endpoint)
     return s
 s = dealer(sys.argv[1])
-def batch(session):  # header (magic, version 3, kind Batch), frame 1, display 1, rank 0, raw, 1 piece
+def batch(session):  # header (magic, version 4, kind Batch), frame 1, display 1, rank 0, raw, 1 piece
     piece = struct.pack("<iiiiI", 0, 0, 4, 4, 64) + b"\xff" * 64
-    return struct.pack("<IHHQ", 0x57424644, 3, 10, session) + struct.pack("<IiIII", 1, 1, 0, 0, 1) + piece
+    return struct.pack("<IHHQ", 0x57424644, 4, 10, session) + struct.pack("<IiIII", 1, 1, 0, 0, 1) + piece
 s.send(batch(0x5eed5eed5eed5eed))
 s.send(batch(0))
 s.send(b"not the protocol at all")
 # On the relay's directory socket: a wall-link message (Join, kind 12) for the wall's head.
 d = dealer(sys.argv[2])
-d.send(struct.pack("<IHHQ", 0x57424644, 3, 12, 0) + b"\0" * 32)
+d.send(struct.pack("<IHHQ", 0x57424644, 4, 12, 0) + b"\0" * 32)
 time.sleep(1)
 PY
 for _ in $(seq 50); do grep -q "protocol" "$work/relay.err" && break; sleep 0.1; done

@@ -228,9 +228,10 @@ def send_if_it_can(s, message):
 
 def hello():
     text = lambda b: struct.pack("<H", len(b)) + b
-    return (struct.pack("<IHHQ", 0x57424644, 3, 1, 0) + text(b"") + text(b"attacker") +
+    return (struct.pack("<IHHQ", 0x57424644, 4, 1, 0) + text(b"") + text(b"attacker") +
             struct.pack("<II", 1, 64) + struct.pack("<BBBB", 0, 90, 0, 0) + struct.pack("<I", 2) +
-            text(b"") + struct.pack("<I", 0) + struct.pack("<Biiii", 0, 0, 0, 0, 0) + text(b""))
+            text(b"") + struct.pack("<I", 0) + struct.pack("<Biiii", 0, 0, 0, 0, 0) + text(b"") +
+            struct.pack("<B", 0) + text(b"") + text(b""))
 
 
 def pcap(name, ports):

@@ -47,15 +47,16 @@ frames() {
 }
 
 layout=$1
-port=$((20000 + $$ % 20000))
+port=""  # serve listens on port 0; the port it took is read from its first line
 $expected make "$work"
 "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
-  -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen "127.0.0.1:$port" \
+  -np "$(processes "$layout")" "$DFBWALL" serve --wall "$layout" --listen 127.0.0.1:0 \
   --offscreen --token show-test --timeout $((8 * scale)) --capture-root "$work" --max-jobs 2 \
   --background "#000000" >"$work/serve.out" 2>&1 &
 serve=$!
 for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
-grep -q "wall service on 127.0.0.1:$port" "$work/serve.out" || fail "serve did not start"
+port=$(sed -n 's/^dfbwall: wall service on 127\.0\.0\.1:\([0-9]*\).*/\1/p' "$work/serve.out")
+[ -n "$port" ] || fail "serve did not start"
 show() { "$DFBWALL" show --connect "127.0.0.1:$port" --token show-test --quiet --timeout 30 "$@"; }
 
 # The render job beside the pictures: 20..220 x 20..170, under the first picture's window.

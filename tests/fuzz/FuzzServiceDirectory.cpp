@@ -1,8 +1,8 @@
-// libFuzzer target: the directory a wall sends a job it accepted
-// (wall/service/protocol/Protocol.h), as a render job's rank 0 reads it. Any bytes are refused with
-// a base::Error (anything else escapes and is a crash) or give a directory whose layout passes the
-// layout checks: displays inside the canvas, processes 0..W-1 with an endpoint each; it packs and
-// parses back the same.
+// libFuzzer target: the directory a wall sends a job it accepted, or with a moved window in a
+// Reshape (wall/service/protocol/Protocol.h), as a render job's rank 0 reads it. Any bytes are
+// refused with a base::Error (anything else escapes and is a crash) or give a directory whose
+// layout passes the layout checks: displays inside the canvas, processes 0..W-1 with an endpoint
+// each; it packs and parses back the same.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -11,15 +11,12 @@
 #include "wall/layout/Layout.h"
 #include "wall/service/protocol/Protocol.h"
 
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size) {
-  using namespace wall::service;
-  const auto* data = reinterpret_cast<const std::byte*>(raw);
-  Directory d;
-  try {
-    d = parseDirectory(data, size);
-  } catch (const base::Error&) {
-    return 0;
-  }
+namespace {
+
+using namespace wall::service;
+
+// A directory that passed the parser honours the caps and survives packing.
+void checkDirectory(const Directory& d) {
   const wall::Layout& l = d.layout;
   if (l.displays.empty() || l.displays.size() > static_cast<std::size_t>(wall::kMaxDisplays) ||
       l.canvasWidth <= 0 || l.canvasHeight <= 0 ||
@@ -49,5 +46,28 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size)
   for (std::size_t i = 0; same && i < d.processes.size(); ++i)
     same = back.processes[i].endpoint == d.processes[i].endpoint;
   if (!same) std::abort();  // a directory that does not survive packing
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* raw, std::size_t size) {
+  const auto* data = reinterpret_cast<const std::byte*>(raw);
+  try {
+    checkDirectory(parseDirectory(data, size));
+  } catch (const base::Error&) {
+  }
+  try {
+    const Reshape r = parseReshape(data, size);
+    if (r.version == 0 || r.fromFrame == 0 || r.directory.session == 0 ||
+        r.directory.session == r.session)
+      std::abort();  // a reshape past its checks
+    checkDirectory(r.directory);
+    const messaging::Bytes packed = packReshape(r);
+    const Reshape back = parseReshape(packed.data(), packed.size());
+    if (back.version != r.version || back.fromFrame != r.fromFrame ||
+        back.directory.session != r.directory.session)
+      std::abort();
+  } catch (const base::Error&) {
+  }
   return 0;
 }

@@ -772,7 +772,6 @@ TEST_F(JobDeskTest, NamesAPeerGaveAreLoggedPrintableAndShort) {
                                 "... (224 bytes): wrong token");
 }
 
-}  // namespace
 // ---- several jobs on one wall (Setup::maxJobs; issue 37) ----
 
 // The same wall with room for two jobs at once, each in its window.
@@ -863,6 +862,95 @@ TEST_F(TwoJobsTest, TwoJobsRunAtOnceEachWithItsOwnBarriersAndCredits) {
   EXPECT_EQ(two.sessions(), (std::vector<std::uint64_t>{b}));
   EXPECT_EQ(two.state(b), State::Running);
   EXPECT_EQ(frame(b, 2, t0 + 40ms).size(), 3u);
+}
+
+// Keys and the mouse over a window on the wall: a wall process tells the head where on the canvas
+// (Command::Input); the head tells the job under it in its window's pixels, and drops what a
+// process could not have seen (another process's display, outside the window), what does not
+// parse, names another session or a gone job, and what comes faster than the job's rate.
+ServiceCommand inputFrom(int process, std::uint64_t session, WindowInput in,
+                         std::uint64_t sessionInMessage = 0) {
+  const messaging::Bytes packed = packInput(sessionInMessage ? sessionInMessage : session, in);
+  ServiceCommand c;
+  c.header.kind = Command::Input;
+  c.header.session = session;
+  c.header.process = process;
+  c.text.assign(reinterpret_cast<const char*>(packed.data()), packed.size());
+  return c;
+}
+WindowInput keyAt(int x, int y, std::uint32_t key = WindowInput::kRight) {
+  WindowInput in;
+  in.key = key;
+  in.x = x;
+  in.y = y;
+  return in;
+}
+
+TEST_F(TwoJobsTest, InputGoesToTheJobUnderItInItsWindowsPixelsAndTheHeadDropsTheRest) {
+  const std::uint64_t a = runIn("job-a", "render1", "0,0,100,64", t0);
+  const std::uint64_t b = runIn("job-b", "render2", "50,0,100,64", t0);
+  // Process 1 drives display 1 (64..128): a key at (70, 10) over b, told to b at (20, 10).
+  auto told = replies(two.answer(1, inputFrom(1, b, keyAt(70, 10)), t0), Kind::Input);
+  ASSERT_EQ(told.size(), 1u);
+  EXPECT_EQ(told[0].peer, "job-b");
+  WindowInput in = parseInput(told[0].message.data(), told[0].message.size());
+  EXPECT_EQ(parseHeader(told[0].message.data(), told[0].message.size()).session, b);
+  EXPECT_EQ(in.kind, WindowInput::kKey);
+  EXPECT_EQ(in.key, WindowInput::kRight);
+  EXPECT_EQ(in.x, 20);
+  EXPECT_EQ(in.y, 10);
+  // A drag on display 0 over a (where b does not reach): a, with its move and flag.
+  WindowInput drag;
+  drag.kind = WindowInput::kDrag;
+  drag.x = 30;
+  drag.y = 40;
+  drag.dx = -25;
+  drag.dy = 7;
+  drag.pan = true;
+  told = replies(two.answer(0, inputFrom(0, a, drag), t0), Kind::Input);
+  ASSERT_EQ(told.size(), 1u);
+  EXPECT_EQ(told[0].peer, "job-a");
+  in = parseInput(told[0].message.data(), told[0].message.size());
+  EXPECT_EQ(in.kind, WindowInput::kDrag);
+  EXPECT_EQ(in.x, 30);
+  EXPECT_EQ(in.dx, -25);
+  EXPECT_EQ(in.dy, 7);
+  EXPECT_TRUE(in.pan);
+
+  const auto dropped = [&](int p, const ServiceCommand& c) {
+    return replies(two.answer(p, c, t0), Kind::Input).empty();
+  };
+  // Not on the sending process's display; outside the window named.
+  EXPECT_TRUE(dropped(0, inputFrom(0, b, keyAt(70, 10))));
+  EXPECT_TRUE(dropped(2, inputFrom(2, a, keyAt(130, 10))));
+  EXPECT_TRUE(dropped(0, inputFrom(0, b, keyAt(-1, 10))));
+  // Malformed: a key the job does not know, a kind, a move too large, another session inside,
+  // bytes that are not an input event, a job that is not on the wall.
+  EXPECT_TRUE(dropped(1, inputFrom(1, b, keyAt(70, 10, WindowInput::kKeyCount))));
+  WindowInput odd = keyAt(70, 10);
+  odd.kind = 7;
+  EXPECT_TRUE(dropped(1, inputFrom(1, b, odd)));
+  WindowInput far = drag;
+  far.x = 70;
+  far.dx = kMaxInputMove + 1;
+  EXPECT_TRUE(dropped(1, inputFrom(1, b, far)));
+  EXPECT_TRUE(dropped(1, inputFrom(1, b, keyAt(70, 10), a)));
+  ServiceCommand garbage = inputFrom(1, b, keyAt(70, 10));
+  garbage.text = "not an input event";
+  const Actions logged = two.answer(1, garbage, t0);
+  EXPECT_TRUE(replies(logged, Kind::Input).empty());
+  EXPECT_FALSE(only<JobDesk::Log>(logged).empty());
+  EXPECT_TRUE(dropped(1, inputFrom(1, 999, keyAt(70, 10))));
+  EXPECT_EQ(two.state(b), State::Running);  // none of it harms the job
+
+  // At most kMaxInputsPerSecond a second per job; the next second takes more.
+  std::size_t passed = 0;
+  for (int i = 0; i < JobDesk::kMaxInputsPerSecond + 30; ++i)
+    passed += replies(two.answer(1, inputFrom(1, a, keyAt(70, 10)), t0 + 2s), Kind::Input).size();
+  EXPECT_EQ(passed, static_cast<std::size_t>(JobDesk::kMaxInputsPerSecond));
+  EXPECT_EQ(
+      replies(two.answer(1, inputFrom(1, a, keyAt(70, 10)), t0 + 3s + 1ms), Kind::Input).size(),
+      1u);
 }
 
 TEST_F(TwoJobsTest, AJobThatGoesSilentEndsAloneWhileTheOtherIsCredited) {
@@ -985,6 +1073,137 @@ TEST_F(TwoJobsTest, AJobWithoutAWindowGetsTheWholeWallWhenNoDisplayIsFree) {
             (dfb::Region{0, 0, 192, 64}));
 }
 
+// ---- moving and resizing a running job's window (docs/design.md, "Moving and resizing") ----
+
+TEST_F(TwoJobsTest, AMoveBuildsTheNewWindowEverywhereThenTellsTheJobItsSwitchFrame) {
+  Hello h = inWindow("render1", "0,0,100,64");
+  h.canReshape = true;
+  const auto starts = only<JobDesk::ToProcess>(two.hello("job-a", h, t0));
+  ASSERT_FALSE(starts.empty());
+  const std::uint64_t a = starts[0].command.header.session;
+  for (int p = 0; p < 3; ++p) two.answer(p, answerOf(a, Command::Ready, 1), t0);
+  ASSERT_EQ(two.state(a), State::Running);
+  frame(a, 1, t0);
+  two.presented(a, 1, 0);
+  frame(a, 2, t0);
+  two.presented(a, 2, 0);
+
+  JobDesk::MoveVerdict verdict;
+  const Actions asked = two.reshape(a, {40, 10, 140, 60}, t0, verdict);
+  EXPECT_EQ(verdict.code, JobDesk::MoveVerdict::Code::Moving) << verdict.why;
+  EXPECT_TRUE(two.moving(a));
+  // Every process builds the new node first; the job hears nothing yet.
+  EXPECT_EQ(given(asked, Command::Reshape), (std::vector<int>{0, 1, 2}));
+  const ServiceCommand build = commandTo(asked, 1, Command::Reshape);
+  const std::uint64_t pieceSession = build.header.pieceSession;
+  EXPECT_NE(pieceSession, a);
+  EXPECT_EQ((dfb::Region{build.header.windowX0, build.header.windowY0, build.header.windowX1,
+                         build.header.windowY1}),
+            (dfb::Region{40, 10, 140, 60}));
+  EXPECT_TRUE(replies(asked, Kind::Reshape).empty());
+  // A second move while this one is under way is a conflict.
+  JobDesk::MoveVerdict again;
+  two.reshape(a, {0, 0, 64, 64}, t0, again);
+  EXPECT_EQ(again.code, JobDesk::MoveVerdict::Code::Conflict);
+  EXPECT_EQ(again.why, "the window is moving already");
+
+  // Frames go on while the processes build: the switch frame counts from the credits then.
+  frame(a, 3, t0);
+  two.presented(a, 3, 0);
+  const auto built = [&](std::uint64_t pieces) {
+    ServiceCommand c = answerOf(a, Command::Reshaped, 1);
+    c.header.pieceSession = pieces;
+    return c;
+  };
+  two.answer(0, built(pieceSession), t0);
+  two.answer(2, built(pieceSession), t0);
+  // An answer naming another piece session is not this move's.
+  EXPECT_TRUE(replies(two.answer(1, built(77), t0), Kind::Reshape).empty());
+  const Actions committed = two.answer(1, built(pieceSession), t0);
+  const auto told = replies(committed, Kind::Reshape);
+  ASSERT_EQ(told.size(), 1u);
+  EXPECT_EQ(told[0].peer, "job-a");
+  const Reshape r = parseReshape(told[0].message.data(), told[0].message.size());
+  EXPECT_EQ(r.session, a);
+  EXPECT_EQ(r.version, 1u);
+  EXPECT_EQ(r.fromFrame, 6u);  // credited 3, 2 in flight
+  EXPECT_EQ(r.directory.session, pieceSession);
+  EXPECT_EQ(r.directory.window, (dfb::Region{40, 10, 140, 60}));
+  EXPECT_EQ(r.directory.layout.canvasWidth, 100);
+  EXPECT_EQ(r.directory.layout.displays.size(), 3u);  // 64-wide displays: 40..140 touches all
+  EXPECT_EQ(given(committed, Command::ReshapeAt), (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(commandTo(committed, 2, Command::ReshapeAt).header.a, 6);
+  EXPECT_EQ(commandTo(committed, 2, Command::ReshapeAt).header.pieceSession, pieceSession);
+  EXPECT_EQ(two.window(a), (dfb::Region{40, 10, 140, 60}));
+  // Until frame 6 is credited the move is under way; then the next may come.
+  for (std::uint32_t f = 4; f <= 5; ++f) {
+    frame(a, f, t0);
+    two.presented(a, f, 0);
+    EXPECT_TRUE(two.moving(a));
+  }
+  frame(a, 6, t0);
+  two.presented(a, 6, 0);
+  EXPECT_FALSE(two.moving(a));
+  // A process that comes back after the move is given the moved window and its piece session.
+  EXPECT_TRUE(members.drop(2));
+  two.lost(2, "killed", t0 + 1s);
+  members.admit("link2-again", joinOf(2, 2), t0 + 2s);
+  const ServiceCommand back = commandTo(two.joined(2, t0 + 2s), 2, Command::Start);
+  EXPECT_EQ(back.header.pieceSession, pieceSession);
+  EXPECT_EQ((dfb::Region{back.header.windowX0, back.header.windowY0, back.header.windowX1,
+                         back.header.windowY1}),
+            (dfb::Region{40, 10, 140, 60}));
+}
+
+TEST_F(TwoJobsTest, AMoveIsRefusedWithTheReason) {
+  const std::uint64_t a = runIn("job-a", "render1", "0,0,100,64", t0);  // cannot reshape
+  JobDesk::MoveVerdict v;
+  EXPECT_TRUE(only<JobDesk::ToProcess>(two.reshape(a, {0, 0, 64, 64}, t0, v)).empty());
+  EXPECT_EQ(v.code, JobDesk::MoveVerdict::Code::Conflict);
+  EXPECT_NE(v.why.find("cannot re-plan"), std::string::npos) << v.why;
+  two.reshape(a + 100, {0, 0, 64, 64}, t0, v);
+  EXPECT_EQ(v.code, JobDesk::MoveVerdict::Code::UnknownWindow);
+
+  Hello h = inWindow("render2", "0,0,100,64");
+  h.canReshape = true;
+  const auto starts = only<JobDesk::ToProcess>(two.hello("job-b", h, t0));
+  ASSERT_FALSE(starts.empty());
+  const std::uint64_t b = starts[0].command.header.session;
+  two.reshape(b, {0, 0, 64, 64}, t0, v);
+  EXPECT_EQ(v.code, JobDesk::MoveVerdict::Code::Conflict);
+  EXPECT_EQ(v.why, "the job is starting");
+  for (int p = 0; p < 3; ++p) two.answer(p, answerOf(b, Command::Ready, 1), t0);
+  EXPECT_TRUE(only<JobDesk::ToProcess>(two.reshape(b, {0, 0, 300, 64}, t0, v)).empty());
+  EXPECT_EQ(v.code, JobDesk::MoveVerdict::Code::BadWindow);
+  EXPECT_EQ(v.why, "window 0,0,300,64 is not inside the wall's canvas (192x64)");
+  two.reshape(b, {0, 0, 8, 64}, t0, v);
+  EXPECT_EQ(v.code, JobDesk::MoveVerdict::Code::BadWindow);
+  // A process that cannot build the new window ends the job, told why.
+  const Actions asked = two.reshape(b, {0, 0, 64, 64}, t0, v);
+  ASSERT_EQ(v.code, JobDesk::MoveVerdict::Code::Moving);
+  ServiceCommand cannot = answerOf(b, Command::Reshaped, 0, 0, "no memory");
+  cannot.header.pieceSession = commandTo(asked, 0, Command::Reshape).header.pieceSession;
+  const Actions refused = two.answer(2, cannot, t0);
+  EXPECT_EQ(given(refused, Command::ReshapeAt), (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(commandTo(refused, 1, Command::ReshapeAt).header.a, 0);
+  const auto ended = replies(refused, Kind::Ended);
+  ASSERT_EQ(ended.size(), 1u);
+  EXPECT_NE(textOf(ended[0]).find("could not move the window: no memory"), std::string::npos)
+      << textOf(ended[0]);
+}
+
+TEST_F(JobDeskTest, AWallOfOneJobAtATimeDoesNotMoveItsWindow) {
+  Hello h = helloFrom("render1");
+  h.canReshape = true;
+  jobs.hello("job", h, t0);
+  allReady(t0);
+  JobDesk::MoveVerdict v;
+  jobs.reshape(jobs.session(), {0, 0, 64, 64}, t0, v);
+  EXPECT_EQ(v.code, JobDesk::MoveVerdict::Code::Conflict);
+  EXPECT_NE(v.why.find("--max-jobs 1"), std::string::npos);
+}
+
+}  // namespace
 }  // namespace wall::service
 
 namespace wall::service {

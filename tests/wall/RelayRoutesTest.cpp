@@ -90,6 +90,26 @@ TEST(RelayRoutes, RosterNamesTheRelayForProcessesWithAnEndpoint) {
   EXPECT_EQ(job.why, wall.why);
 }
 
+TEST(RelayRoutes, AMovedWindowsDirectoryNamesTheRelayToo) {
+  Reshape wall;
+  wall.session = wallDirectory().session;
+  wall.version = 1;
+  wall.fromFrame = 40;
+  wall.directory = wallDirectory();
+  wall.directory.session = wall.session + 1;  // the moved window's piece session
+  const messaging::Bytes bytes = relayReshape(wall, relayAt);
+  const Reshape job = parseReshape(bytes.data(), bytes.size());
+  ASSERT_EQ(job.directory.processes.size(), wall.directory.processes.size());
+  for (size_t p = 0; p < job.directory.processes.size(); ++p) {
+    EXPECT_EQ(job.directory.processes[p].endpoint, relayAt(static_cast<int>(p)));
+    EXPECT_EQ(job.directory.processes[p].live, wall.directory.processes[p].live);
+  }
+  EXPECT_EQ(job.session, wall.session);
+  EXPECT_EQ(job.directory.session, wall.session + 1);
+  EXPECT_EQ(job.fromFrame, 40u);
+  EXPECT_EQ(job.directory.window, wall.directory.window);
+}
+
 TEST(RelayRoutes, OnlyBatchesOfTheWallsSessionsPass) {
   RelaySessions sessions;
   const messaging::Bytes mine = batch(0xabc), stranger = batch(0xdef), unset = batch(0);
@@ -125,10 +145,10 @@ TEST(RelayRoutes, OnlyBatchesOfTheWallsSessionsPass) {
 TEST(RelayRoutes, TheDirectoryLinkCarriesJobKindsOnly) {
   for (Kind k : {Kind::Hello, Kind::Keepalive, Kind::Capture, Kind::Bye}) EXPECT_TRUE(jobKind(k));
   for (Kind k : {Kind::Batch, Kind::Join, Kind::Welcome, Kind::Beat, Kind::Command, Kind::Barrier,
-                 Kind::Pixels, Kind::Dropped, Kind::Directory, Kind::Presented})
+                 Kind::Pixels, Kind::Dropped, Kind::Directory, Kind::Presented, Kind::Input})
     EXPECT_FALSE(jobKind(k)) << static_cast<int>(k);
   for (Kind k : {Kind::Directory, Kind::Refused, Kind::Queued, Kind::Keepalive, Kind::Presented,
-                 Kind::Ended, Kind::Roster})
+                 Kind::Ended, Kind::Roster, Kind::Reshape, Kind::Input})
     EXPECT_TRUE(wallToJobKind(k));
   for (Kind k : {Kind::Welcome, Kind::Command, Kind::Barrier, Kind::Hello, Kind::Batch})
     EXPECT_FALSE(wallToJobKind(k)) << static_cast<int>(k);

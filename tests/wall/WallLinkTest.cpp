@@ -270,6 +270,23 @@ TEST_F(WallLinkTest, AnAnswerOfAnEarlierEpochIsNotTakenForTheNewOnes) {
   EXPECT_TRUE(jobError.empty()) << jobError;
 }
 
+// A job whose scene or bricks take longer than the wall's timeout to set up, between the
+// directory and its first frame, is not dropped: its link keeps it alive from the directory on.
+TEST_F(WallLinkTest, AJobThatSetsUpForLongerThanTheTimeoutIsNotDropped) {
+  Hello hello;
+  hello.host = "job";
+  Credentials credentials;
+  credentials.token = "t";
+  client = std::make_unique<ServiceClient>(address, credentials, hello, 5s);
+  std::this_thread::sleep_for(3 * kTimeout);  // setting up
+  client->start(credits, [this](const std::string& why) { jobError = why; });
+  std::this_thread::sleep_for(2 * kTimeout);
+  EXPECT_TRUE(jobError.empty()) << jobError;
+  const auto got = barrier(1, {0, 1, 2});
+  for (const auto& values : got) EXPECT_EQ(values[0], 20);
+  EXPECT_TRUE(jobError.empty()) << jobError;
+}
+
 TEST_F(WallLinkTest, AJoinWithAWrongTokenOrAnotherLayoutIsRefusedWithTheReason) {
   MemberLink::Setup setup;
   setup.head = address;

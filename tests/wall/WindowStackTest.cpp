@@ -207,8 +207,8 @@ TEST(WindowStack, SpanCompositionEqualsThePerPixelReference) {
 TEST(WindowStack, ARaisedWindowGoesOnTopAndALateWindowTakesItsPlaceByOrder) {
   wall::WindowStack stack({{kWidth, kHeight}, {kWidth, kHeight}, {kWidth, kHeight}}, kBackground);
   const dfb::Region aRight{0, 0, 20, 48};  // A also touches display 1
-  auto a = stack.add({kPartA, aRight, {}}, 1);
-  auto b = stack.add({kPartB, {}, {}}, 2);
+  auto a = stack.add({kPartA, aRight, {}}, 0, 1);
+  auto b = stack.add({kPartB, {}, {}}, 0, 2);
   const wall::Image a1 = frameOf(kPartA, 1), ar1 = frameOf(aRight, 1), b1 = frameOf(kPartB, 1);
   upload(*a->presenters()[0], a1);
   upload(*a->presenters()[1], ar1);
@@ -234,8 +234,8 @@ TEST(WindowStack, ARaisedWindowGoesOnTopAndALateWindowTakesItsPlaceByOrder) {
   // A window added with a lower order (a Start overtaken by a Raise of another window) goes
   // beneath the higher ones; with an equal order above its equal; without one, on top.
   const dfb::Region partC{0, 0, 64, 48}, partD{30, 20, 50, 40}, partE{0, 40, 10, 48};
-  auto c = stack.add({partC, {}, {}}, 4);
-  auto d = stack.add({partD, {}, {}}, 5);
+  auto c = stack.add({partC, {}, {}}, 0, 4);
+  auto d = stack.add({partD, {}, {}}, 0, 5);
   auto e = stack.add({partE, {}, {}});
   const wall::Image c1 = frameOf(partC, 1), d1 = frameOf(partD, 1), e1 = frameOf(partE, 1);
   const std::vector<std::pair<wall::WindowStack::Window*, const wall::Image*>> late{

@@ -6,6 +6,7 @@
 #include <X11/Xutil.h>
 
 #include <bit>
+#include <cmath>
 #include <optional>
 #include <utility>
 
@@ -105,6 +106,9 @@ class GlfwPresenter : public Presenter {
     if (!monitor && o.x >= 0 && o.y >= 0) glfwSetWindowPos(window_, o.x, o.y);
     glfwSetWindowUserPointer(window_, this);
     glfwSetKeyCallback(window_, &GlfwPresenter::onKey);
+    glfwSetMouseButtonCallback(window_, &GlfwPresenter::onButton);
+    glfwSetCursorPosCallback(window_, &GlfwPresenter::onCursor);
+    glfwSetScrollCallback(window_, &GlfwPresenter::onScroll);
     glfwShowWindow(window_);
     try {
       glfwMakeContextCurrent(window_);
@@ -159,7 +163,7 @@ class GlfwPresenter : public Presenter {
 
   bool closeRequested() const override { return glfwWindowShouldClose(window_); }
 
-  std::vector<WallKey> takeKeys() override { return std::exchange(keys_, {}); }
+  std::vector<WallInput> takeInput() override { return std::exchange(input_, {}); }
   void pollEvents() override { glfwPollEvents(); }
 
   std::string describe() const override {
@@ -206,12 +210,90 @@ class GlfwPresenter : public Presenter {
       default:
         break;
     }
-    if (k && self->keys_.size() < 256) self->keys_.push_back(*k);  // bounded if nobody takes
+    if (!k) return;
+    WallInput in;
+    in.key = *k;
+    self->cursorAt(in);
+    self->queue(in);
+  }
+
+  // A drag: from where its button went down (the left orbits; the right, or Shift, pans),
+  // moves coalesced into one event until something else is queued.
+  static void onButton(GLFWwindow* window, int button, int action, int mods) {
+    auto* self = static_cast<GlfwPresenter*>(glfwGetWindowUserPointer(window));
+    if (button != GLFW_MOUSE_BUTTON_LEFT && button != GLFW_MOUSE_BUTTON_RIGHT) return;
+    if (action == GLFW_RELEASE) {
+      self->dragging_ = false;
+      return;
+    }
+    WallInput at;
+    self->cursorAt(at);
+    self->dragging_ = true;
+    self->dragPan_ = button == GLFW_MOUSE_BUTTON_RIGHT || (mods & GLFW_MOD_SHIFT) != 0;
+    self->dragFrom_[0] = at.x;
+    self->dragFrom_[1] = at.y;
+    self->lastCursor_[0] = at.x;
+    self->lastCursor_[1] = at.y;
+  }
+
+  static void onCursor(GLFWwindow* window, double x, double y) {
+    auto* self = static_cast<GlfwPresenter*>(glfwGetWindowUserPointer(window));
+    const int cx = static_cast<int>(std::floor(x)), cy = static_cast<int>(std::floor(y));
+    const int dx = cx - self->lastCursor_[0], dy = cy - self->lastCursor_[1];
+    self->lastCursor_[0] = cx;
+    self->lastCursor_[1] = cy;
+    self->cursorKnown_ = true;
+    if (!self->dragging_ || (dx == 0 && dy == 0)) return;
+    std::vector<WallInput>& q = self->input_;
+    if (!q.empty() && q.back().kind == WallInput::Kind::Drag && q.back().x == self->dragFrom_[0] &&
+        q.back().y == self->dragFrom_[1] && q.back().pan == self->dragPan_) {
+      q.back().dx += dx;
+      q.back().dy += dy;
+      return;
+    }
+    WallInput in;
+    in.kind = WallInput::Kind::Drag;
+    in.x = self->dragFrom_[0];
+    in.y = self->dragFrom_[1];
+    in.dx = dx;
+    in.dy = dy;
+    in.pan = self->dragPan_;
+    self->queue(in);
+  }
+
+  static void onScroll(GLFWwindow* window, double /*dx*/, double dy) {
+    auto* self = static_cast<GlfwPresenter*>(glfwGetWindowUserPointer(window));
+    const int notches = static_cast<int>(std::lround(dy));
+    if (notches == 0) return;
+    WallInput in;
+    in.kind = WallInput::Kind::Scroll;
+    in.dy = notches;
+    self->cursorAt(in);
+    self->queue(in);
+  }
+
+  // Where the cursor was when the event at hand happened: as the events before it left it (the
+  // pointer may have moved on since: asking the X server now would tell where it is now).
+  void cursorAt(WallInput& in) const {
+    if (cursorKnown_) {
+      in.x = lastCursor_[0];
+      in.y = lastCursor_[1];
+      return;
+    }
+    double x = 0, y = 0;
+    glfwGetCursorPos(window_, &x, &y);
+    in.x = static_cast<int>(std::floor(x));
+    in.y = static_cast<int>(std::floor(y));
+  }
+  void queue(const WallInput& in) {
+    if (input_.size() < 256) input_.push_back(in);  // bounded if nobody takes
   }
 
   std::string title_;
   GLFWwindow* window_ = nullptr;
-  std::vector<WallKey> keys_;
+  std::vector<WallInput> input_;
+  bool dragging_ = false, dragPan_ = false, cursorKnown_ = false;
+  int dragFrom_[2] = {0, 0}, lastCursor_[2] = {0, 0};
   std::optional<GlFrameDrawer> drawer_;
   int lastWidth_ = 0, lastHeight_ = 0;
 };

@@ -20,6 +20,20 @@ namespace wall {
 // turns them into camera changes and a graceful stop.
 enum class WallKey { Left, Right, Up, Down, Plus, Minus, Escape };
 
+// An operator's key or mouse event in a display's window, where the cursor was: a key pressed,
+// a drag (the cursor moved with a button held: `x`, `y` where the button went down, so the whole
+// drag belongs to what was under it; `dx`, `dy` pixels moved since the last event; `pan`: the
+// right button or Shift held) or the wheel (`dy` notches, up positive). Display pixels, row 0 at
+// the top.
+struct WallInput {
+  enum class Kind { Key, Drag, Scroll };
+  Kind kind = Kind::Key;
+  WallKey key = WallKey::Escape;
+  int x = 0, y = 0;
+  int dx = 0, dy = 0;
+  bool pan = false;
+};
+
 class Presenter {
  public:
   virtual ~Presenter() = default;
@@ -62,8 +76,16 @@ class Presenter {
 
   // The user closed the window (always false offscreen).
   virtual bool closeRequested() const { return false; }
-  // Keys pressed (and repeated while held) since the last call, in order (none offscreen).
-  virtual std::vector<WallKey> takeKeys() { return {}; }
+  // Keys pressed (and repeated while held), drags and wheel turns since the last call, in order
+  // (none offscreen). Bounded: events nobody takes are dropped past a few hundred.
+  virtual std::vector<WallInput> takeInput() { return {}; }
+  // The keys of takeInput() (the rest is dropped): for a wall whose keys steer one job.
+  std::vector<WallKey> takeKeys() {
+    std::vector<WallKey> keys;
+    for (const WallInput& in : takeInput())
+      if (in.kind == WallInput::Kind::Key) keys.push_back(in.key);
+    return keys;
+  }
   // Handles window events (keys, close) without presenting: a wall waiting for its next frame
   // still hears its keyboard.
   virtual void pollEvents() {}

@@ -28,7 +28,7 @@ class WindowPresenter : public Presenter {
   void swap() override { display_.swap(); }
   Image readBack() override;
   bool closeRequested() const override { return display_.closeRequested(); }
-  std::vector<WallKey> takeKeys() override { return display_.takeKeys(); }
+  std::vector<WallInput> takeInput() override { return display_.takeInput(); }
   void pollEvents() override { display_.pollEvents(); }
   std::string describe() const override { return display_.describe(); }
 

@@ -107,20 +107,13 @@ WindowStack::WindowStack(std::vector<Size> displays, std::uint32_t background,
 
 WindowStack::~WindowStack() = default;
 
-namespace {
-constexpr std::uint64_t kOnTop = ~std::uint64_t{0};  // add() without an order: the top's
-}  // namespace
-
-std::unique_ptr<WindowStack::Window> WindowStack::add(const std::vector<dfb::Region>& parts) {
-  return add(parts, kOnTop);
-}
-
 std::unique_ptr<WindowStack::Window> WindowStack::add(const std::vector<dfb::Region>& parts,
-                                                      std::uint64_t order) {
+                                                      std::uint64_t tag, std::uint64_t order) {
   if (parts.size() != sizes_.size())
     throw base::Error("a window names " + std::to_string(parts.size()) + " display parts for " +
                       std::to_string(sizes_.size()) + " displays");
   Entry entry;
+  entry.tag = tag;
   for (size_t d = 0; d < parts.size(); ++d) {
     const dfb::Region& part = parts[d];
     if (part.empty()) continue;
@@ -211,6 +204,16 @@ std::vector<int> WindowStack::compose() {
 void WindowStack::dropChanges() {
   std::lock_guard lock(mutex_);
   std::fill(dirty_.begin(), dirty_.end(), 0);
+}
+
+std::uint64_t WindowStack::topAt(int display, int x, int y) const {
+  std::lock_guard lock(mutex_);
+  for (auto entry = windows_.rbegin(); entry != windows_.rend(); ++entry)
+    for (const Shown& layer : entry->layers)
+      if (layer.display == display && x >= layer.part.x0 && x < layer.part.x1 &&
+          y >= layer.part.y0 && y < layer.part.y1)
+        return entry->tag;
+  return 0;
 }
 
 std::size_t WindowStack::windows() const {

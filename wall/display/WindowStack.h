@@ -48,10 +48,12 @@ class WindowStack {
   // A job's window on top of the others: `parts[d]` is its part of display d in the display's
   // coordinates (empty: it misses d; else inside d). Every display is composed again when the
   // first window comes (the background replaces whatever was shown). The window must go before
-  // the stack does. With `order`: at that stacking order instead, above every window of a lower
-  // or equal order and beneath those of a higher one (a job's Start, or a Raise that came first).
-  std::unique_ptr<Window> add(const std::vector<dfb::Region>& parts);
-  std::unique_ptr<Window> add(const std::vector<dfb::Region>& parts, std::uint64_t order);
+  // the stack does. `tag`: what topAt() answers for the window (the service: its job's session).
+  // With an `order`: at that stacking order instead, above every window of a lower or equal order
+  // and beneath those of a higher one (a job's Start, or a Raise that came first).
+  static constexpr std::uint64_t kOnTop = ~std::uint64_t{0};
+  std::unique_ptr<Window> add(const std::vector<dfb::Region>& parts, std::uint64_t tag = 0,
+                              std::uint64_t order = kOnTop);
 
   // The presenting thread: composes every display that changed since the last call into its
   // frame() (each pixel written once: the top window's part covering it, or the background) and
@@ -62,6 +64,9 @@ class WindowStack {
   // screen). The first window to come after composes every display again.
   void dropChanges();
   std::size_t windows() const;
+  // The tag of the top window covering pixel (x, y) of display `display` (where a key or a click
+  // on it goes), 0 where none does. Any thread.
+  std::uint64_t topAt(int display, int x, int y) const;
 
  private:
   class Layer;
@@ -76,6 +81,7 @@ class WindowStack {
     std::vector<Shown> layers;  // the window's non-empty parts
     int staged = 0;             // layers that swapped since the last commit
     std::uint64_t order = 0;    // stacking order
+    std::uint64_t tag = 0;
   };
   std::unique_ptr<Window> addLocked(Entry entry, std::uint64_t order);
   void remove(Entry* entry);

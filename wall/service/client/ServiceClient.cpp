@@ -67,6 +67,9 @@ ServiceClient::ServiceClient(const std::string& address, const Credentials& cred
       case Kind::Directory:
         directory_ = parseDirectory(bytesOf(reply), reply.size());
         directoryBytes_.assign(bytesOf(reply), bytesOf(reply) + reply.size());
+        // The wall counts the job from now on: keepalives go while the job still sets up (a
+        // scene or bricks that take longer than the wall's timeout to load under load).
+        thread_ = std::thread([this] { run(); });
         return;
       case Kind::Refused:
         throw base::Error("the wall at " + address +
@@ -98,9 +101,12 @@ ServiceClient::~ServiceClient() {
 }
 
 void ServiceClient::start(FrameCredits& credits, std::function<void(const std::string&)> onError) {
-  credits_ = &credits;
-  onError_ = std::move(onError);
-  thread_ = std::thread([this] { run(); });
+  {
+    std::lock_guard lock(mutex_);
+    credits_ = &credits;
+    onError_ = std::move(onError);
+  }
+  waker_.notify();  // a failure the link saw before now is reported at once
 }
 
 void ServiceClient::post(messaging::Bytes message) {
@@ -135,6 +141,21 @@ messaging::Bytes ServiceClient::rosterBytes() const {
   return rosterBytes_;
 }
 
+ServiceClient::ReshapeNews ServiceClient::reshapeNews() const {
+  std::lock_guard lock(mutex_);
+  return reshape_;
+}
+
+messaging::Bytes ServiceClient::reshapeBytes() const {
+  std::lock_guard lock(mutex_);
+  return reshapeBytes_;
+}
+
+void ServiceClient::onInput(std::function<void(const WindowInput&)> handler) {
+  std::lock_guard lock(mutex_);
+  onInput_ = std::move(handler);
+}
+
 void ServiceClient::run() {
   const std::uint64_t session = directory_.session;
   const auto wallTimeout = std::chrono::milliseconds(directory_.timeoutMs);
@@ -144,13 +165,27 @@ void ServiceClient::run() {
   auto lastKeepalive = Clock::time_point{};
   auto lastHeard = Clock::now();
   bool failed = false;
+  std::string failure;         // what failed before start() gave somewhere to report it
   std::uint64_t credited = 0;  // the latest frame the wall presented
+  // Reports through onError_ once start() set it, else keeps the reason until then.
+  const auto report = [&] {
+    std::function<void(const std::string&)> onError;
+    {
+      std::lock_guard lock(mutex_);
+      onError = onError_;
+    }
+    if (failure.empty() || !onError) return;
+    onError(failure);
+    failure.clear();
+  };
   const auto fail = [&](const std::string& why) {
-    if (!failed && onError_) onError_(why);
+    if (!failed) failure = why;
     failed = true;
+    report();
   };
   try {
     while (!stop_) {
+      report();
       zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}, waker_.pollItem()};
       zmq::poll(items, 2,
                 std::min<std::chrono::milliseconds>(keepalive, std::chrono::milliseconds(200)));
@@ -172,8 +207,18 @@ void ServiceClient::run() {
         if (h.session != session) continue;  // a late answer to nothing of ours
         if (h.kind == static_cast<std::uint16_t>(Kind::Presented)) {
           const Control c = parseControl(bytesOf(m), m.size());
-          credits_->acknowledged(static_cast<std::uint32_t>(c.value), c.second,
-                                 "the wall at " + address_);
+          FrameCredits* credits = nullptr;
+          {
+            std::lock_guard lock(mutex_);
+            credits = credits_;
+          }
+          // No frame goes to the wall before start(): a credit without credits is the wall's
+          // mistake.
+          if (!credits)
+            throw base::Error("the wall at " + address_ + " presented frame " +
+                              std::to_string(c.value) + " before the job sent any");
+          credits->acknowledged(static_cast<std::uint32_t>(c.value), c.second,
+                                "the wall at " + address_);
           credited = std::max(credited, c.value);
         } else if (h.kind == static_cast<std::uint16_t>(Kind::Roster)) {
           const Roster roster = parseRoster(bytesOf(m), m.size());
@@ -191,11 +236,25 @@ void ServiceClient::run() {
             rosterVersion_ = roster.version;
             rosterBytes_.assign(bytesOf(m), bytesOf(m) + m.size());
           }
+        } else if (h.kind == static_cast<std::uint16_t>(Kind::Reshape)) {
+          const Reshape reshape = parseReshape(bytesOf(m), m.size());
+          if (reshape.directory.processes.size() != directory_.processes.size() ||
+              reshape.session != session)
+            throw base::Error("the wall at " + address_ + " sent a move of another window");
+          std::lock_guard lock(mutex_);
+          if (reshape.version > reshape_.version) {
+            reshape_ = {reshape.version, reshape.fromFrame};
+            reshapeBytes_.assign(bytesOf(m), bytesOf(m) + m.size());
+          }
         } else if (h.kind == static_cast<std::uint16_t>(Kind::Refused)) {
           // A request of the job (a capture) the wall would not take: the job goes on.
           std::fprintf(stderr, "dfbwall: the wall at %s: %s\n", address_.c_str(),
                        parseText(bytesOf(m), m.size()).c_str());
           std::fflush(stderr);
+        } else if (h.kind == static_cast<std::uint16_t>(Kind::Input)) {
+          const WindowInput in = parseInput(bytesOf(m), m.size());
+          std::lock_guard lock(mutex_);
+          if (onInput_) onInput_(in);
         } else if (h.kind == static_cast<std::uint16_t>(Kind::Ended)) {
           fail("the wall at " + address_ + " ended the job: " + parseText(bytesOf(m), m.size()));
         } else if (h.kind != static_cast<std::uint16_t>(Kind::Keepalive)) {
@@ -265,6 +324,20 @@ Roster shareRoster(MPI_Comm comm, const ServiceClient* client, std::chrono::mill
   bytes.resize(size);
   base::bcast(bytes.data(), static_cast<int>(size), 0, comm, bound);
   return parseRoster(bytes.data(), bytes.size());
+}
+
+Reshape shareReshape(MPI_Comm comm, const ServiceClient* client,
+                     std::chrono::milliseconds timeout) {
+  messaging::Bytes bytes = client ? client->reshapeBytes() : messaging::Bytes{};
+  std::uint64_t size = bytes.size();
+  const base::Bound bound{.until = timeout,
+                          .late = "sharing the wall's move of the window: a rank did not join"};
+  base::bcast(&size, sizeof size, 0, comm, bound);
+  if (size > kMaxMessageBytes)
+    throw base::Error("a move of the window of " + std::to_string(size) + " bytes");
+  bytes.resize(size);
+  base::bcast(bytes.data(), static_cast<int>(size), 0, comm, bound);
+  return parseReshape(bytes.data(), bytes.size());
 }
 
 Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int framesInFlight, bool wait,

@@ -48,9 +48,11 @@ class ServiceClient {
   // The directory as the wall sent it (for the job's other ranks: parseDirectory).
   const messaging::Bytes& directoryBytes() const { return directoryBytes_; }
 
-  // Starts the link's thread: keepalives, credits into `credits`, and a wall that ends the job
-  // (Ended: its reason) or goes silent for its timeout before the last frame's credit reported
-  // through `onError` (on the link's thread; call it once).
+  // The link's thread runs from the directory on (keepalives: a job that sets up for longer
+  // than the wall's timeout is not dropped). start() hands it the credits to fill and `onError`
+  // to report a wall that ends the job (Ended: its reason) or goes silent for its timeout
+  // before the last frame's credit (on the link's thread; also what failed before start();
+  // call it once).
   void start(FrameCredits& credits, std::function<void(const std::string&)> onError);
   // Thread-safe. Capture frame `frameId` (or the first after it), request `sequence`.
   void capture(std::uint32_t frameId, std::uint64_t sequence);
@@ -61,6 +63,17 @@ class ServiceClient {
   // a frame starts with is never older than the one the wall counted on (Protocol.h, Roster).
   std::uint32_t rosterVersion() const;
   messaging::Bytes rosterBytes() const;
+  // Thread-safe. The newest move of the job's window the wall sent (Protocol.h, Reshape): its
+  // version (0: none) and switch frame, and the message (for the job's other ranks). The link
+  // reads a reshape before any later credit, so the frame it switches at cannot have started.
+  struct ReshapeNews {
+    std::uint32_t version = 0, fromFrame = 0;
+  };
+  ReshapeNews reshapeNews() const;
+  messaging::Bytes reshapeBytes() const;
+  // Thread-safe. Where the wall's key and mouse events over the job's window go (called on the
+  // link's thread; none: they are dropped). docs/service.md, "Several jobs at once".
+  void onInput(std::function<void(const WindowInput&)> handler);
 
  private:
   void run();
@@ -72,14 +85,17 @@ class ServiceClient {
   zmq::socket_t socket_;
   Directory directory_;
   messaging::Bytes directoryBytes_;
-  FrameCredits* credits_ = nullptr;
-  std::function<void(const std::string&)> onError_;
+  FrameCredits* credits_ = nullptr;                  // set by start(), under mutex_
+  std::function<void(const std::string&)> onError_;  // set by start(), under mutex_
   mutable std::mutex mutex_;
   std::vector<messaging::Bytes> outbox_;
   bool byeSent_ = false;
   std::uint32_t lastFrame_ = 0;  // named by bye()
   std::uint32_t rosterVersion_ = 0;
   messaging::Bytes rosterBytes_;
+  ReshapeNews reshape_;
+  messaging::Bytes reshapeBytes_;
+  std::function<void(const WindowInput&)> onInput_;
   Waker waker_;
   std::atomic<bool> stop_{false};
   std::thread thread_;
@@ -96,6 +112,9 @@ Credentials shareCredentials(MPI_Comm comm, const ServiceClient* client,
 // Collective over `comm`, when the roster version a frame order carries is new to the ranks:
 // the roster `client` (rank 0 of `comm` only) has, on every rank (bounded by `timeout`).
 Roster shareRoster(MPI_Comm comm, const ServiceClient* client, std::chrono::milliseconds timeout);
+// Collective over `comm`, when the reshape version a frame order carries is new to the ranks: the
+// move `client` (rank 0 of `comm` only) has, on every rank (bounded by `timeout`).
+Reshape shareReshape(MPI_Comm comm, const ServiceClient* client, std::chrono::milliseconds timeout);
 // The hello of a job of `renderRanks` ranks on this host (its token is checked at the handshake,
 // not in the hello).
 Hello jobHello(int renderRanks, int tileSize, const CodecSpec& codec, int framesInFlight, bool wait,

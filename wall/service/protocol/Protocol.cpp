@@ -61,6 +61,7 @@ messaging::Bytes packHello(const Hello& h) {
   w.put<std::int32_t>(h.window.rect.x1);
   w.put<std::int32_t>(h.window.rect.y1);
   w.text(h.window.display);
+  w.put<std::uint8_t>(h.canReshape ? 1 : 0);
   w.text(h.job);
   w.text(h.page);
   return w.take();
@@ -86,11 +87,12 @@ Hello parseHello(const std::byte* data, std::size_t size) {
   h.window.rect.x1 = r.get<std::int32_t>();
   h.window.rect.y1 = r.get<std::int32_t>();
   h.window.display = r.text();
-  if (r.left() > 0) {  // a job of the window manager's time (a hello of before ends here)
-    h.job = r.text();
-    h.page = r.text();
-  }
+  const auto canReshape = r.get<std::uint8_t>();
+  h.job = r.text();
+  h.page = r.text();
   r.end();
+  if (canReshape > 1) r.fail("reshape flag " + std::to_string(canReshape));
+  h.canReshape = canReshape == 1;
   // The rectangle and the name are judged against the layout by the wall (resolveWindow).
   if (window > static_cast<std::uint8_t>(WindowRequest::Kind::Display))
     r.fail("window kind " + std::to_string(window));
@@ -110,8 +112,11 @@ Hello parseHello(const std::byte* data, std::size_t size) {
   return h;
 }
 
-messaging::Bytes packDirectory(const Directory& d) {
-  Writer w(Kind::Directory, d.session);
+namespace {
+
+// A directory's fields after its header (the session is the header's): for Directory and,
+// with a new window, Reshape.
+void writeDirectory(Writer& w, const Directory& d) {
   w.put<std::int32_t>(d.layout.canvasWidth);
   w.put<std::int32_t>(d.layout.canvasHeight);
   w.put<std::uint32_t>(static_cast<std::uint32_t>(d.layout.displays.size()));
@@ -136,13 +141,9 @@ messaging::Bytes packDirectory(const Directory& d) {
   w.put<std::int32_t>(d.window.y0);
   w.put<std::int32_t>(d.window.x1);
   w.put<std::int32_t>(d.window.y1);
-  return w.take();
 }
 
-Directory parseDirectory(const std::byte* data, std::size_t size) {
-  Reader r(data, size, "directory");
-  Directory d;
-  d.session = parseHeader(data, size).session;
+void readDirectory(Reader& r, Directory& d) {
   const auto width = r.get<std::int32_t>(), height = r.get<std::int32_t>();
   const auto displays = r.get<std::uint32_t>();
   if (displays < 1 || displays > static_cast<std::uint32_t>(kMaxDisplays))
@@ -175,7 +176,6 @@ Directory parseDirectory(const std::byte* data, std::size_t size) {
   d.window.y0 = r.get<std::int32_t>();
   d.window.x1 = r.get<std::int32_t>();
   d.window.y1 = r.get<std::int32_t>();
-  r.end();
   if (d.framesInFlight < 1 || d.framesInFlight > 16)
     r.fail("frames in flight " + std::to_string(d.framesInFlight));
   if (d.window.x0 < 0 || d.window.y0 < 0 || !dfb::isSaneRegion(d.window, kMaxCanvasSide) ||
@@ -193,7 +193,48 @@ Directory parseDirectory(const std::byte* data, std::size_t size) {
   d.layout.canvasWidth = width;
   d.layout.canvasHeight = height;
   d.layout.processCount = static_cast<int>(processes);
+}
+
+}  // namespace
+
+messaging::Bytes packDirectory(const Directory& d) {
+  Writer w(Kind::Directory, d.session);
+  writeDirectory(w, d);
+  return w.take();
+}
+
+Directory parseDirectory(const std::byte* data, std::size_t size) {
+  Reader r(data, size, "directory");
+  Directory d;
+  d.session = parseHeader(data, size).session;
+  readDirectory(r, d);
+  r.end();
   return d;
+}
+
+messaging::Bytes packReshape(const Reshape& reshape) {
+  Writer w(Kind::Reshape, reshape.session);
+  w.put<std::uint32_t>(reshape.version);
+  w.put<std::uint32_t>(reshape.fromFrame);
+  w.put<std::uint64_t>(reshape.directory.session);
+  writeDirectory(w, reshape.directory);
+  return w.take();
+}
+
+Reshape parseReshape(const std::byte* data, std::size_t size) {
+  Reader r(data, size, "reshape");
+  Reshape reshape;
+  reshape.session = parseHeader(data, size).session;
+  reshape.version = r.get<std::uint32_t>();
+  reshape.fromFrame = r.get<std::uint32_t>();
+  reshape.directory.session = r.get<std::uint64_t>();
+  readDirectory(r, reshape.directory);
+  r.end();
+  if (reshape.version == 0) r.fail("version 0");
+  if (reshape.fromFrame == 0) r.fail("switch frame 0");
+  if (reshape.directory.session == 0 || reshape.directory.session == reshape.session)
+    r.fail("its piece session is 0 or the job's own");
+  return reshape;
 }
 
 messaging::Bytes packRoster(const Roster& roster) {
@@ -243,6 +284,45 @@ messaging::Bytes packControl(Kind kind, std::uint64_t session, std::uint64_t val
   w.put(value);
   w.put(second);
   return w.take();
+}
+
+messaging::Bytes packInput(std::uint64_t session, const WindowInput& in) {
+  Writer w(Kind::Input, session);
+  w.put<std::uint32_t>(in.kind);
+  w.put<std::uint32_t>(in.key);
+  w.put<std::int32_t>(in.x);
+  w.put<std::int32_t>(in.y);
+  w.put<std::int32_t>(in.dx);
+  w.put<std::int32_t>(in.dy);
+  w.put<std::uint8_t>(in.pan ? 1 : 0);
+  return w.take();
+}
+
+WindowInput parseInput(const std::byte* data, std::size_t size) {
+  Reader r(data, size, "input event");
+  if (parseHeader(data, size).kind != static_cast<std::uint16_t>(Kind::Input))
+    r.fail("not an input event");
+  WindowInput in;
+  in.kind = r.get<std::uint32_t>();
+  in.key = r.get<std::uint32_t>();
+  in.x = r.get<std::int32_t>();
+  in.y = r.get<std::int32_t>();
+  in.dx = r.get<std::int32_t>();
+  in.dy = r.get<std::int32_t>();
+  const auto pan = r.get<std::uint8_t>();
+  r.end();
+  if (in.kind < WindowInput::kKey || in.kind > WindowInput::kScroll)
+    r.fail("kind " + std::to_string(in.kind) + " (expected 1..3)");
+  if (in.kind == WindowInput::kKey && in.key >= WindowInput::kKeyCount)
+    r.fail("key " + std::to_string(in.key) + " (expected 0.." +
+           std::to_string(WindowInput::kKeyCount - 1) + ")");
+  if (in.dx < -kMaxInputMove || in.dx > kMaxInputMove || in.dy < -kMaxInputMove ||
+      in.dy > kMaxInputMove)
+    r.fail("move " + std::to_string(in.dx) + "," + std::to_string(in.dy) + " (at most " +
+           std::to_string(kMaxInputMove) + " a side)");
+  if (pan > 1) r.fail("pan flag " + std::to_string(pan));
+  in.pan = pan == 1;
+  return in;
 }
 
 Control parseControl(const std::byte* data, std::size_t size) {

@@ -5,7 +5,8 @@
 //  - render rank 0 <-> wall process 0, the wall's directory socket (`--listen`): Hello, then
 //    Directory | Refused | Queued; during the job Keepalive, Capture, Bye from the job and
 //    Presented (the credit for frames in flight), Roster (a wall process was lost or came back),
-//    Refused (a capture request it will not take) and Ended (the wall ended the job) back;
+//    Refused (a capture request it will not take), Input (a key or the mouse over the job's
+//    window on the wall) and Ended (the wall ended the job) back;
 //  - every render rank -> the wall processes its tiles touch, each process's piece socket (its
 //    endpoint is in the directory): one Batch per (render rank, display, frame) of pieces,
 //    encoded with the job's codec (wall/service/protocol/Codec.h).
@@ -33,7 +34,8 @@ namespace wall::service {
 constexpr std::uint32_t kMagic = 0x57424644;  // "DFBW"
 // 2: wall processes come and go (Roster, live flags in the directory, the wall link).
 // 3: a job asks for a window of the wall (Hello.window); its directory is the window's layout.
-constexpr std::uint16_t kProtocolVersion = 3;
+// 4: a running job's window moves or changes size (Reshape; Hello.canReshape).
+constexpr std::uint16_t kProtocolVersion = 4;
 // Caps of what one message part may say, per socket, checked by libzmq before anything is
 // allocated (ZMQ_MAXMSGSIZE; a peer that announces more is disconnected):
 //  - the directory socket of the head (and a relay's socket for jobs) carries hellos, controls
@@ -68,8 +70,10 @@ enum class Kind : std::uint16_t {
   Barrier = 16,
   Pixels = 17,
   Dropped = 18,
+  Reshape = 19,  // wall -> job: its window moves or changes size from a frame on
+  Input = 20,    // wall -> job: an operator's key or mouse event over its window (WindowInput)
 };
-constexpr Kind kLastKind = Kind::Dropped;
+constexpr Kind kLastKind = Kind::Input;
 
 struct MessageHeader {
   std::uint32_t magic = kMagic;
@@ -94,9 +98,11 @@ struct Hello {
   // The part of the wall the job covers (wall/layout/Window.h); the wall resolves it against its
   // layout and refuses one that is empty, outside its canvas or names no display of it.
   WindowRequest window;
-  // For the wall's window manager (serve --control), optional at the end of the message (a
-  // hello without them is read as before): what the job renders ("scivis builtin:wavelet"), and
-  // the address of its own control page (`--control`), empty when it has none.
+  // The job can re-plan its frame buffer for a new window while it runs (Reshape); a job that
+  // cannot is refused a move or resize with a reason, and keeps its window.
+  bool canReshape = false;
+  // For the wall's window manager (serve --control): what the job renders ("scivis
+  // builtin:wavelet"), and the address of its own control page (`--control`), empty when none.
   std::string job;
   std::string page;
 };
@@ -141,7 +147,43 @@ struct Roster {
   std::string why;  // one line for the job's log: which process, which host, why
 };
 
+// A running job's window moves or changes size (docs/design.md, "Moving and resizing a window"):
+// from frame `fromFrame` on, the job renders the new window (its canvas, displays and processes
+// in `directory`, as a directory says them) and stamps its pieces with `directory.session`, a
+// piece session of its own, so no piece of one shape lands in the other's node. Sent before the
+// credit that lets the job start `fromFrame`; the job applies the newest one it has once its
+// frame order reaches that frame. `version` counts a job's reshapes from 1.
+struct Reshape {
+  std::uint64_t session = 0;  // the job's
+  std::uint32_t version = 0;
+  std::uint32_t fromFrame = 0;
+  Directory directory;
+};
+
+// An operator's key or mouse event in a wall window (wall/display/Presenter.h, WallInput), over a
+// job's window: the wall process sends it to the head on the canvas (Command::Input), the head
+// checks it and tells the job in its window's pixels (Kind::Input), which steers as its control
+// API does (docs/service.md, "Several jobs at once": input).
+struct WindowInput {
+  enum Kind : std::uint32_t { kKey = 1, kDrag = 2, kScroll = 3 };
+  // The keys a job is told of (wall::WallKey's first six, in its order); Esc stays on the wall.
+  enum Key : std::uint32_t { kLeft = 0, kRight, kUp, kDown, kPlus, kMinus, kKeyCount };
+  std::uint32_t kind = kKey;
+  std::uint32_t key = kLeft;    // kKey
+  std::int32_t x = 0, y = 0;    // where the cursor was (kDrag: where the button went down)
+  std::int32_t dx = 0, dy = 0;  // kDrag: pixels moved; kScroll: dy notches, up positive
+  bool pan = false;             // kDrag: pan rather than orbit
+};
+// The most a drag or wheel event may move (pixels, notches) in one message.
+constexpr std::int32_t kMaxInputMove = 1 << 16;
+messaging::Bytes packInput(std::uint64_t session, const WindowInput& input);
+// Checks the kind, the key, the move's size and the flag; the position is the caller's to check.
+WindowInput parseInput(const std::byte* data, std::size_t size);
+
 messaging::Bytes packHello(const Hello& hello);
+messaging::Bytes packReshape(const Reshape& reshape);
+// The directory's checks, a version and frame above 0, a piece session neither 0 nor the job's.
+Reshape parseReshape(const std::byte* data, std::size_t size);
 messaging::Bytes packDirectory(const Directory& directory);
 messaging::Bytes packRoster(const Roster& roster);
 // Refused, Ended: a reason (a Refused with a job's session refuses one request of the job, a

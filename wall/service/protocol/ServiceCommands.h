@@ -25,7 +25,16 @@ enum class Command : std::uint32_t {
   Failed = 10,      // this process gave a frame up (text: why)
   StopAsked = 11,   // this process was asked to stop the wall
   FirstFrame = 12,  // a: the first frame of a process that joined a running job
-  Raise = 13,       // a: the job's window's new stacking order (above every other window's)
+  // The job's window moves (docs/design.md, "Moving and resizing a window"): build its node for
+  // the window in the header beside the running one, taking the pieces stamped with the header's
+  // piece session; answer Reshaped. Its first frame follows in ReshapeAt.
+  Reshape = 13,
+  ReshapeAt = 14,  // a: the frame the node of the piece session takes over (0: drop it)
+  Reshaped = 15,   // a: 1 built, 0 not (text: why); the piece session built
+  // A key or the mouse in this process's windows over the job's window (text: packInput's
+  // message, the position on the wall's canvas); the head checks it and tells the job.
+  Input = 16,
+  Raise = 17,  // a: the job's window's new stacking order (above every other window's)
 };
 
 struct CommandHeader {
@@ -33,12 +42,17 @@ struct CommandHeader {
   std::int32_t process;
   std::uint64_t session;
   std::int64_t a, b;
+  // Start, Reshape, ReshapeAt, Reshaped: what the job's pieces for the window are stamped with
+  // (a moved window's own; 0 in a Start: the job's session).
+  std::uint64_t pieceSession;
   std::uint32_t tileSize, renderRanks, framesInFlight, captureEvery;
   std::uint32_t codec;
   // Start: the job's window on the wall's canvas (resolved by the head; each process checks it).
   std::int32_t windowX0, windowY0, windowX1, windowY1;
   std::uint32_t textBytes;
 };
+
+static_assert(sizeof(CommandHeader) == 80, "the wall link's command layout (no padding)");
 
 struct ServiceCommand {
   CommandHeader header{};

@@ -77,7 +77,8 @@ struct Relay::Impl {
     zmq::socket_t wall;                         // its own connection to the wall's directory
     std::unique_ptr<HandshakeWatch> handshake;  // of `wall`
     std::string id, host = "an unnamed host", peerAddress;
-    std::uint64_t session = 0;  // from the wall's Directory
+    std::uint64_t session = 0;                 // from the wall's Directory
+    std::vector<std::uint64_t> pieceSessions;  // of its moved windows (Reshape)
     Clock::time_point lastHeard, started;
     bool wallAnswered = false;
     std::optional<Clock::time_point> over;  // goodbye, Ended or Refused: forgotten kGrace later
@@ -270,6 +271,18 @@ struct Relay::Impl {
           if (r.processes[p].live) wallProcessAt(p, r.processes[p].endpoint);
         log("job from " + job.host + ": roster " + std::to_string(r.version) + ": " + r.why);
         body = toMessage(relayRoster(r, relayEndpoint()));
+      } else if (kind == Kind::Reshape) {
+        const Reshape r = parseReshape(bytesOf(body), body.size());
+        if (r.session != job.session) throw base::Error("a reshape of another job");
+        ensureProcesses(r.directory.processes.size());
+        for (std::size_t p = 0; p < r.directory.processes.size(); ++p)
+          if (r.directory.processes[p].live) wallProcessAt(p, r.directory.processes[p].endpoint);
+        sessions.add(r.directory.session);
+        bySession[r.directory.session] = &job;
+        job.pieceSessions.push_back(r.directory.session);
+        log("job from " + job.host + ": its window moves from frame " +
+            std::to_string(r.fromFrame));
+        body = toMessage(relayReshape(r, relayEndpoint()));
       } else if ((kind == Kind::Refused && h.session == 0) || kind == Kind::Ended) {
         // (A Refused with the job's session refuses one request of the job, which goes on.)
         const std::string text = parseText(bytesOf(body), body.size());
@@ -365,6 +378,10 @@ struct Relay::Impl {
       strangers = 0;
       sessions.remove(job.session);
       bySession.erase(job.session);
+    }
+    for (const std::uint64_t pieces : job.pieceSessions) {
+      sessions.remove(pieces);
+      bySession.erase(pieces);
     }
     for (auto& p : processes)
       if (p->pendingJob == &job) p->pendingJob = nullptr;

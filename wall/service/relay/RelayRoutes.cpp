@@ -19,6 +19,13 @@ messaging::Bytes relayRoster(const Roster& roster, const RelayEndpointOf& relayE
   return packRoster(relayed);
 }
 
+messaging::Bytes relayReshape(const Reshape& reshape, const RelayEndpointOf& relayEndpoint) {
+  Reshape relayed = reshape;
+  for (size_t p = 0; p < relayed.directory.processes.size(); ++p)
+    relayed.directory.processes[p].endpoint = relayEndpoint(static_cast<int>(p));
+  return packReshape(relayed);
+}
+
 bool jobKind(Kind kind) {
   return kind == Kind::Hello || kind == Kind::Keepalive || kind == Kind::Capture ||
          kind == Kind::Bye;
@@ -27,7 +34,7 @@ bool jobKind(Kind kind) {
 bool wallToJobKind(Kind kind) {
   return kind == Kind::Directory || kind == Kind::Refused || kind == Kind::Queued ||
          kind == Kind::Keepalive || kind == Kind::Presented || kind == Kind::Ended ||
-         kind == Kind::Roster;
+         kind == Kind::Roster || kind == Kind::Reshape || kind == Kind::Input;
 }
 
 RelaySessions::Verdict RelaySessions::admit(const std::byte* data, std::size_t size) const {

@@ -27,9 +27,12 @@ using RelayEndpointOf = std::function<std::string(int process)>;
 messaging::Bytes relayDirectory(const Directory& directory, const RelayEndpointOf& relayEndpoint);
 // The same for a Roster; a process without an endpoint (lost, never joined) keeps none.
 messaging::Bytes relayRoster(const Roster& roster, const RelayEndpointOf& relayEndpoint);
+// The same for a Reshape's directory (a moved window; its piece session is forwarded too).
+messaging::Bytes relayReshape(const Reshape& reshape, const RelayEndpointOf& relayEndpoint);
 
 // The kinds a job says on the directory link (Hello, Keepalive, Capture, Bye) and the kinds the
-// wall answers a job with (Directory, Refused, Queued, Keepalive, Presented, Ended, Roster): the
+// wall answers a job with (Directory, Refused, Queued, Keepalive, Presented, Ended, Roster,
+// Reshape): the
 // relay forwards these only, so a connection to the relay never reaches the wall's own link
 // (Join, Beat, Command, ...) on the head's directory socket, nor a job the wall's.
 bool jobKind(Kind kind);

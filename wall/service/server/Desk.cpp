@@ -3,13 +3,17 @@
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <deque>
+#include <future>
 #include <map>
 #include <mutex>
 #include <optional>
 #include <random>
 #include <set>
+#include <sstream>
 #include <thread>
 #include <unordered_map>
 #include <unordered_set>
@@ -105,6 +109,48 @@ struct Desk::Impl {
   std::unordered_map<std::string, int> hellos;
   std::vector<std::pair<std::string, std::string>> unreachable;
 
+  // Test-only (the service tests, until the wall's control port moves windows):
+  // DFBWALL_TEST_MOVES="JOB:FRAME:X,Y,W,H;..." moves the window of the JOB-th job the wall took
+  // (from 1) to each rectangle once that job's credited frame reaches FRAME, in order
+  // (tests/apps/window_move_test.sh).
+  struct TestMove {
+    std::size_t job = 0;
+    std::uint32_t frame = 0;
+    dfb::Region window;
+  };
+  std::deque<TestMove> testMoves;
+  std::vector<std::uint64_t> jobsSeen;  // sessions, in the order they came
+  void readTestMoves() {
+    const char* text = std::getenv("DFBWALL_TEST_MOVES");
+    if (!text) return;
+    std::stringstream all(text);
+    std::string one;
+    while (std::getline(all, one, ';')) {
+      unsigned job = 0, frame = 0;
+      int x = 0, y = 0, w = 0, h = 0;
+      if (std::sscanf(one.c_str(), "%u:%u:%d,%d,%d,%d", &job, &frame, &x, &y, &w, &h) != 6 ||
+          job == 0)
+        throw base::Error("DFBWALL_TEST_MOVES: '" + one + "' is not JOB:FRAME:X,Y,W,H");
+      testMoves.push_back({job, frame, {x, y, x + w, y + h}});
+    }
+  }
+  void moveForTest() {
+    if (testMoves.empty()) return;
+    for (const std::uint64_t session : jobs.sessions())
+      if (std::find(jobsSeen.begin(), jobsSeen.end(), session) == jobsSeen.end())
+        jobsSeen.push_back(session);
+    const TestMove& move = testMoves.front();
+    if (jobsSeen.size() < move.job) return;
+    const std::uint64_t session = jobsSeen[move.job - 1];
+    if (jobs.state(session) != JobDesk::State::Running || jobs.moving(session) ||
+        jobs.lastCredited(session) < move.frame)
+      return;
+    JobDesk::MoveVerdict v;
+    carry(jobs.reshape(session, move.window, Clock::now(), v));
+    if (v.code != JobDesk::MoveVerdict::Code::Moving) log("DFBWALL_TEST_MOVES: " + v.why);
+    testMoves.pop_front();
+  }
+
   explicit Impl(Setup setup)
       : s(std::move(setup)),
         processCount(s.layout->processCount),
@@ -119,6 +165,7 @@ struct Desk::Impl {
     // sees, never a silent drop: a barrier release that does not go out loses that process.
     socket.set(zmq::sockopt::router_mandatory, 1);
     absent = members.absent();
+    readTestMoves();
   }
 
   void post(std::function<void()> task) {
@@ -442,6 +489,7 @@ struct Desk::Impl {
       // A closing wall waits for the processes' confirmations only: no beats, no drops.
       if (jobs.state() != JobDesk::State::Closed) watch(Clock::now());
       carry(jobs.tick(Clock::now()));
+      moveForTest();
       settleUnreachable();
       publishWindows();
     }
@@ -555,6 +603,19 @@ std::vector<std::vector<std::uint32_t>> Desk::gatherToFirst(std::uint64_t, std::
   auto out = std::move(found->second);
   impl_->gathered.erase(found);
   return out;
+}
+
+JobDesk::MoveVerdict Desk::reshape(std::uint64_t session, const dfb::Region& window) {
+  auto verdict = std::make_shared<std::promise<JobDesk::MoveVerdict>>();
+  std::future<JobDesk::MoveVerdict> answered = verdict->get_future();
+  impl_->post([this, session, window, verdict] {
+    JobDesk::MoveVerdict v;
+    impl_->carry(impl_->jobs.reshape(session, window, Clock::now(), v));
+    verdict->set_value(v);
+  });
+  if (answered.wait_for(std::chrono::seconds(5)) != std::future_status::ready || impl_->isClosed)
+    return {JobDesk::MoveVerdict::Code::Conflict, "the wall is stopping"};
+  return answered.get();
 }
 
 void Desk::presented(std::uint64_t session, std::uint32_t frameId, std::int64_t completeNs) {

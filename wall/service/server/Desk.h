@@ -53,6 +53,9 @@ class Desk : public ProcessLink {
   std::vector<int> absentProcesses() const;
   // The desk thread ended (after the wall's shutdown was sent to every process).
   bool closed() const;
+  // Thread-safe: moves and resizes job `session`'s window to `window` on the canvas
+  // (JobDesk::reshape); waits for the desk's verdict.
+  JobDesk::MoveVerdict reshape(std::uint64_t session, const dfb::Region& window);
 
   // The window manager (serve --control), thread-safe. The jobs' windows as of the desk's last
   // turn (at most 100 ms ago); a raise or a close is carried out on the desk thread before it

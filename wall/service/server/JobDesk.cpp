@@ -4,8 +4,10 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "base/Error.h"
 #include "wall/display/WallNode.h"
 #include "wall/service/protocol/PeerText.h"
+#include "wall/service/server/WindowMoves.h"
 
 namespace wall::service {
 namespace {
@@ -235,11 +237,54 @@ JobDesk::Actions JobDesk::answer(int p, const ServiceCommand& c, Clock::time_poi
     case Command::Done:
       onDone(p, c);
       break;
+    case Command::Reshaped:
+      onReshaped(p, c);
+      break;
+    case Command::Input:
+      onInput(p, c);
+      break;
     default:
       break;
   }
   overIfAllDone();
   return take();
+}
+
+// A key or the mouse over the job's window on process p's display: told to the job in its
+// window's pixels, if it is a running job's, on a display of p's inside the window, well formed,
+// and within the job's rate. Anything else is dropped (a window that went, a process that lies).
+void JobDesk::onInput(int p, const ServiceCommand& c) {
+  if (j_->state != State::Running) return;
+  const std::string from = "wall process " + std::to_string(p);
+  WindowInput in;
+  try {
+    const auto* data = reinterpret_cast<const std::byte*>(c.text.data());
+    if (parseHeader(data, c.text.size()).session != j_->job.session)
+      throw base::Error("an input event for another session");
+    in = parseInput(data, c.text.size());
+  } catch (const std::exception& e) {
+    log(from + " sent a malformed input event: " + e.what(), "input " + from);
+    return;
+  }
+  const dfb::Region& w = j_->window;
+  bool onItsDisplay = false;
+  for (const Display& d : s_.layout->displays)
+    onItsDisplay = onItsDisplay || (d.process == p && in.x >= d.rect.x0 && in.x < d.rect.x1 &&
+                                    in.y >= d.rect.y0 && in.y < d.rect.y1);
+  if (!onItsDisplay || in.x < w.x0 || in.x >= w.x1 || in.y < w.y0 || in.y >= w.y1) {
+    log(from + " sent an input event at " + std::to_string(in.x) + "," + std::to_string(in.y) +
+            ", outside the job's window on its displays",
+        "input " + from);
+    return;
+  }
+  if (now_ - j_->inputSince >= std::chrono::seconds(1)) {
+    j_->inputSince = now_;
+    j_->inputs = 0;
+  }
+  if (++j_->inputs > kMaxInputsPerSecond) return;
+  in.x -= w.x0;
+  in.y -= w.y0;
+  reply(j_->job.peer, Kind::Input, packInput(j_->job.session, in));
 }
 
 void JobDesk::stopAsked(int p) {
@@ -333,6 +378,7 @@ JobDesk::Actions JobDesk::lost(int p, const std::string& why, Clock::time_point 
     ++j_->processesLost;
     j_->seats[static_cast<size_t>(p)].done = true;
     sendRoster(0, line);
+    commitMoveIfBuilt();
     if (j_->state == State::Starting) maybeRun();
     releaseWhatCan();
     overIfAllDone();
@@ -357,7 +403,7 @@ JobDesk::Actions JobDesk::arrive(int p, std::uint64_t session, std::uint32_t fra
                      ".." + std::to_string(latest) + ")"});
     return take();
   }
-  if (!j_->agreements.arrive(p, frameId, values, now, j_->inWindow[static_cast<size_t>(p)])) {
+  if (!j_->agreements.arrive(p, frameId, values, now, inWindowAt(p, frameId))) {
     emit(Drop{p, "its swap barrier of frame " + std::to_string(frameId) + " has " +
                      std::to_string(values.size()) + " values, not the others' count"});
     return take();
@@ -396,6 +442,10 @@ JobDesk::Actions JobDesk::presented(std::uint64_t session, std::uint32_t frameId
     while (j_->credits.front() < now - kFpsWindow) j_->credits.pop_front();
   }
   j_->lastCredited = std::max(j_->lastCredited, frameId);
+  if (j_->move && j_->move->fromFrame > 0 && j_->lastCredited >= j_->move->fromFrame) {
+    j_->inWindow = j_->move->inWindow;
+    j_->move.reset();  // the new window is on the wall: the next move may come
+  }
   std::erase_if(j_->pendingCaptures, [&](std::uint32_t f) { return f <= j_->lastCredited; });
   reply(j_->job.peer, Kind::Presented,
         packControl(Kind::Presented, j_->job.session, frameId, completeNs));
@@ -598,6 +648,8 @@ ServiceCommand JobDesk::command(Command kind, std::int64_t a, std::int64_t b,
 ServiceCommand JobDesk::startCommand(std::uint32_t firstFrame) const {
   ServiceCommand c = command(Command::Start, firstFrame, static_cast<std::int64_t>(j_->order),
                              j_->job.hello.captureDir);
+  // A process that joins after a move takes the moved window's pieces.
+  c.header.pieceSession = j_->pieceSession;
   c.header.tileSize = j_->job.hello.tileSize;
   c.header.renderRanks = j_->job.hello.renderRanks;
   c.header.framesInFlight = j_->granted;
@@ -674,6 +726,9 @@ void JobDesk::startJob() {
   j_->agreements.clear();
   j_->waitingToJoinJob.clear();
   j_->pendingCaptures.clear();
+  j_->move.reset();
+  j_->reshapeVersion = 0;
+  j_->pieceSession = 0;
   j_->granted = std::min<std::uint32_t>(j_->job.hello.framesInFlight,
                                         static_cast<std::uint32_t>(s_.framesInFlight));
   j_->state = State::Starting;
@@ -861,7 +916,7 @@ void JobDesk::releaseWhatCan() {
     if (j_->unrenderedFrom && frameId >= *j_->unrenderedFrom) return true;
     bool later = false;
     for (int p = 0; p < members_.processCount(); ++p) {
-      if (!j_->inWindow[static_cast<size_t>(p)]) continue;
+      if (!inWindowAt(p, frameId)) continue;
       if (participates(p, frameId)) return false;
       const Seat& seat = j_->seats[static_cast<size_t>(p)];
       later = later || (seat.in && !seat.done && members_.live(p) && seat.fromFrame != kNotYet);
@@ -872,6 +927,121 @@ void JobDesk::releaseWhatCan() {
     for (int p : r.processes) emit(Release{p, j_->job.session, r.frameId, r.values});
   for (FrameAgreements::Gathered& g : j_->agreements.gathered(takesPart, now_))
     emit(Gathered{j_->job.session, g.frameId, std::move(g.pixels)});
+}
+
+}  // namespace wall::service
+
+namespace wall::service {
+
+JobDesk::Actions JobDesk::reshape(std::uint64_t session, const dfb::Region& window,
+                                  Clock::time_point now, MoveVerdict& verdict) {
+  now_ = now;
+  using Code = MoveVerdict::Code;
+  j_ = bySession(session);
+  verdict = {};
+  if (!j_ || j_->state == State::Idle) {
+    verdict = {Code::UnknownWindow, "no window of a job " + std::to_string(session)};
+  } else if (j_->state != State::Running) {
+    verdict = {Code::Conflict,
+               j_->state == State::Starting ? "the job is starting" : "the job is ending"};
+  } else if (!j_->job.hello.canReshape) {
+    verdict = {Code::Conflict,
+               "the job cannot re-plan its frame buffer while it runs (a program on the "
+               "data-distributed API, or a job with its own page or preview): its window stays"};
+  } else if (s_.maxJobs <= 1) {
+    verdict = {Code::Conflict,
+               "this wall runs one job at a time (serve --max-jobs 1): its window does not move"};
+  } else if (j_->move) {
+    verdict = {Code::Conflict, "the window is moving already"};
+  } else if (const std::string problem = windowMoveProblem(*s_.layout, window); !problem.empty()) {
+    verdict = {Code::BadWindow, problem};
+  }
+  if (verdict.code != Code::Moving || window == j_->window) return take();
+  Slot::Move move;
+  move.window = window;
+  move.pieceSession = s_.newSession();
+  ServiceCommand build = startCommand(0);
+  build.header.kind = Command::Reshape;
+  build.header.pieceSession = move.pieceSession;
+  build.header.windowX0 = window.x0;
+  build.header.windowY0 = window.y0;
+  build.header.windowX1 = window.x1;
+  build.header.windowY1 = window.y1;
+  build.text.clear();
+  for (int p = 0; p < members_.processCount(); ++p) {
+    const Seat& seat = j_->seats[static_cast<size_t>(p)];
+    if (seat.in && !seat.done) move.building.insert(p);
+  }
+  log("moving the window of the job from " + peerText(j_->job.hello.host) + " to " +
+      std::to_string(window.x0) + "," + std::to_string(window.y0) + "," +
+      std::to_string(window.width()) + "," + std::to_string(window.height()));
+  j_->move = std::move(move);
+  toJob(build);
+  commitMoveIfBuilt();
+  return take();
+}
+
+void JobDesk::onReshaped(int p, const ServiceCommand& c) {
+  if (!j_->move || j_->move->fromFrame > 0 || c.header.pieceSession != j_->move->pieceSession)
+    return;
+  if (c.header.a == 0) {
+    // A process that cannot show the new window cannot show the job: it ends, told why.
+    ServiceCommand drop = command(Command::ReshapeAt, 0);
+    drop.header.pieceSession = j_->move->pieceSession;
+    toJob(drop);
+    j_->move.reset();
+    endJob(members_.who(p) + " could not move the window: " + reason(c.text));
+    return;
+  }
+  j_->move->building.erase(p);
+  commitMoveIfBuilt();
+}
+
+// Every process in the job has the new window's node (or left the job): the job hears its new
+// directory and switch frame before any later credit, the processes the frame their new nodes
+// take over at.
+void JobDesk::commitMoveIfBuilt() {
+  if (!j_->move || j_->move->fromFrame > 0 || j_->state != State::Running) return;
+  std::erase_if(j_->move->building, [&](int p) { return j_->seats[static_cast<size_t>(p)].done; });
+  if (!j_->move->building.empty()) return;
+  Slot::Move& move = *j_->move;
+  move.fromFrame = switchFrame(j_->lastCredited, j_->granted);
+  j_->window = move.window;
+  j_->pieceSession = move.pieceSession;
+  const Layout seen = windowLayout(*s_.layout, move.window);
+  move.inWindow.assign(static_cast<size_t>(members_.processCount()), false);
+  for (int p = 0; p < members_.processCount(); ++p)
+    move.inWindow[static_cast<size_t>(p)] = !seen.displaysOfProcess(p).empty();
+  Reshape r;
+  r.session = j_->job.session;
+  r.version = ++j_->reshapeVersion;
+  r.fromFrame = move.fromFrame;
+  r.directory.session = move.pieceSession;
+  r.directory.window = move.window;
+  r.directory.layout = windowLayout(*s_.layout, move.window);
+  r.directory.processes = roster();
+  r.directory.framesInFlight = j_->granted;
+  r.directory.timeoutMs = static_cast<std::uint32_t>(s_.timeout.count());
+  r.directory.rosterVersion = j_->rosterVersion;
+  reply(j_->job.peer, Kind::Reshape, packReshape(r));
+  ServiceCommand at = command(Command::ReshapeAt, move.fromFrame);
+  at.header.pieceSession = move.pieceSession;
+  toJob(at);
+}
+
+bool JobDesk::inWindowAt(int p, std::uint32_t frameId) const {
+  const bool moved = j_->move && j_->move->fromFrame > 0 && frameId >= j_->move->fromFrame;
+  return (moved ? j_->move->inWindow : j_->inWindow)[static_cast<size_t>(p)];
+}
+
+dfb::Region JobDesk::window(std::uint64_t session) const {
+  const Slot* slot = bySession(session);
+  return slot ? slot->window : dfb::Region{};
+}
+
+bool JobDesk::moving(std::uint64_t session) const {
+  const Slot* slot = bySession(session);
+  return slot && slot->move.has_value();
 }
 
 }  // namespace wall::service

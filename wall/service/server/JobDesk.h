@@ -22,6 +22,9 @@
 // What a job may ask for is bounded: one job per connection (a second hello from it is refused),
 // capture requests for frames near the credited one only, at most kMaxPendingCaptures not yet
 // taken; anything over is refused with a message (Refused with the job's session: the job goes on).
+// Key and mouse events from a wall process over a running job's window are told to the job only
+// when well formed, on a display of that process inside the window, and within
+// kMaxInputsPerSecond; the rest are dropped.
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -51,6 +54,8 @@ class JobDesk {
   // How far behind the last credited frame a capture request may name a frame (it is taken at
   // the next presented frame: the job's request crossed the credits on the way).
   static constexpr std::uint32_t kCaptureFramesBehind = 256;
+  // Key and mouse events from the wall's windows told to a job per second (more are dropped).
+  static constexpr int kMaxInputsPerSecond = 120;
 
   struct Setup {
     const Layout* layout = nullptr;  // what the directory tells a job
@@ -150,6 +155,18 @@ class JobDesk {
   // Time passing: gathers past their deadline, barriers a process has not arrived at within the
   // timeout (it is dropped), a job silent for the timeout, the shutdown.
   Actions tick(Clock::time_point now);
+  // Move and resize the window of job `session` to `window` on the canvas, while it runs
+  // (docs/design.md, "Moving and resizing a window"). Every process builds the new window's node
+  // beside the old one (Reshape, answered Reshaped); then the job is told its new directory and
+  // switch frame (Kind::Reshape) and every process the frame its new node takes over
+  // (ReshapeAt). `verdict` says whether it was taken and, if not, why.
+  struct MoveVerdict {
+    enum class Code { Moving, UnknownWindow, Conflict, BadWindow };
+    Code code = Code::Moving;
+    std::string why;
+  };
+  Actions reshape(std::uint64_t session, const dfb::Region& window, Clock::time_point now,
+                  MoveVerdict& verdict);
   // Handling a message from `peer` failed, or the wall cannot send to it: if it is the job's
   // connection, the job ends; a queued job from it leaves the queue.
   Actions failed(const std::string& peer, const std::string& why, Clock::time_point now);
@@ -174,6 +191,10 @@ class JobDesk {
   std::vector<std::uint64_t> sessions() const;
   State state(std::uint64_t session) const;
   std::uint32_t lastCredited(std::uint64_t session) const;
+  // The job's window on the canvas (the new one from the moment a move was committed to the job).
+  dfb::Region window(std::uint64_t session) const;
+  // A move of the job's window is under way (from reshape() until its switch frame is credited).
+  bool moving(std::uint64_t session) const;
 
   // ---- the window manager (serve --control: apps/WallControl.h) ----
   // A job's window on the wall. `number` names it (1 for the wall's first job, never reused):
@@ -225,6 +246,7 @@ class JobDesk {
   void onReady(int p, const ServiceCommand& c);
   void onDone(int p, const ServiceCommand& c);
   void stopAsked(int p);
+  void onInput(int p, const ServiceCommand& c);
 
   void emit(Action action) { out_.push_back(std::move(action)); }
   Actions take();
@@ -252,6 +274,10 @@ class JobDesk {
   void releaseWhatCan();
   void notRenderedFrom(std::uint32_t frameId);
   void closeIfIdle();
+  void onReshaped(int p, const ServiceCommand& c);
+  // Whether process `p` has a display in the window the job renders frame `frameId` in.
+  bool inWindowAt(int p, std::uint32_t frameId) const;
+  void commitMoveIfBuilt();
 
   // One job on the wall and all that is its own (up to Setup::maxJobs side by side).
   struct Slot {
@@ -277,6 +303,20 @@ class JobDesk {
     std::uint32_t lastCredited = 0, granted = 2, rosterVersion = 0;
     int processesLost = 0, processesRejoined = 0;
     FrameAgreements agreements;
+    // A move of the window under way: the processes still building its node, then (fromFrame
+    // above 0) the frame it switches at, until that frame is credited.
+    struct Move {
+      dfb::Region window;
+      std::uint64_t pieceSession = 0;
+      std::set<int> building;
+      std::uint32_t fromFrame = 0;
+      std::vector<bool> inWindow;  // of the new window (inWindow's), from fromFrame on
+    };
+    std::optional<Move> move;
+    std::uint32_t reshapeVersion = 0;
+    std::uint64_t pieceSession = 0;  // what the job's pieces are stamped with (0: its session)
+    Clock::time_point inputSince{};  // the second kMaxInputsPerSecond counts in
+    int inputs = 0;
   };
   // The job on the wall with this session / connection (none: nullptr).
   Slot* bySession(std::uint64_t session) const;

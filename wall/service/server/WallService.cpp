@@ -1,6 +1,7 @@
 #include "wall/service/server/WallService.h"
 
 #include <unistd.h>
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <deque>
@@ -58,12 +59,45 @@ struct WallService::Impl {
   std::unique_ptr<WallCaptures> wallCaptures;  // serve --capture
   std::uint64_t wallFrames = 0;                // presented, over every job (PresentReport)
 
-  // Commands for the main thread; the nodes of the jobs in progress, by session, for the link's
-  // thread.
+  // One shape of a job's window on this process: the layout its node sees, what it presents
+  // through, and the node. A move builds the next shape beside the running one (docs/design.md,
+  // "Moving and resizing a window"), its pieces under a piece session of their own.
+  struct Shape {
+    std::uint64_t pieceSession = 0;
+    Layout seen;
+    std::vector<std::unique_ptr<WindowPresenter>> parts;
+    std::unique_ptr<WindowStack::Window> onStack;  // several jobs: the job's window
+    // While it exists, a Raise reaches onStack (it leaves windowOf before onStack goes).
+    struct Raisable {
+      Impl* impl = nullptr;
+      std::uint64_t session = 0;
+      WindowStack::Window* window = nullptr;
+      Raisable() = default;
+      Raisable(const Raisable&) = delete;
+      Raisable& operator=(const Raisable&) = delete;
+      ~Raisable();
+    } raisable;
+    std::unique_ptr<LinkPeers> peers;
+    std::unique_ptr<WallNode> node;
+    bool waitsForFirstFrame = false;  // no display in the window: FirstFrame names it
+    std::uint32_t fromFrame = 0;      // the next shape's: the frame it takes over (0: not told yet)
+  };
+  // A job in progress on this process, for the link's thread: its shape now (the job's thread
+  // swaps it) and the next one a move built; what the next is built from.
+  struct RunningJob {
+    Shape* current = nullptr;
+    std::unique_ptr<Shape> next;
+    WallNodeOptions options;
+    std::uint64_t epoch = 0;
+    Codec codec = Codec::Raw;
+    int renderRanks = 1;
+  };
+
+  // Commands for the main thread; the jobs in progress, by session, for the link's thread.
   std::mutex mutex;
   std::condition_variable commanded;
   std::deque<ServiceCommand> commands;
-  std::map<std::uint64_t, WallNode*> nodes;
+  std::map<std::uint64_t, RunningJob*> jobs;
   bool linkLost = false;
   // Several jobs at once (maxJobs > 1): the windows on this process's displays, composed and
   // presented by the main thread (composeWanted: a window changed since), and each job's thread
@@ -75,7 +109,7 @@ struct WallService::Impl {
   // `mutex`, so they must not run under it.
   std::mutex windowsMutex;
   std::map<std::uint64_t, std::uint64_t> orders;
-  std::map<std::uint64_t, WindowStack::Window*> windowOf;
+  std::map<std::uint64_t, std::vector<WindowStack::Window*>> windowOf;  // a move: two at once
   struct JobThread {
     std::thread thread;
     std::shared_ptr<std::atomic<bool>> done;
@@ -93,9 +127,21 @@ struct WallService::Impl {
   void showIdle(const std::string& status);
   // Several jobs: composes the displays whose windows changed and presents them (main thread).
   void presentWindows();
+  // Several jobs: keys and the mouse in this process's windows go to the job whose window is
+  // under the cursor, through the head (main thread).
+  void forwardInput();
   void runJob(const ServiceCommand& start);
   // The job's window is no more to be raised (it is about to go).
   void forgetWindow(std::uint64_t session);
+  // The job's node for `window` (its part of this process's displays, over the background or in
+  // the displays' stacks), taking the pieces stamped `pieceSession`.
+  std::unique_ptr<Shape> makeShape(const dfb::Region& window, std::uint64_t pieceSession,
+                                   std::uint64_t session, std::uint64_t epoch,
+                                   const WallNodeOptions& o);
+  // Command::Reshape: builds the job's next shape (without the lock: a window added to the stack
+  // asks the main thread to compose under it); the answer to send and its epoch, none when the
+  // job is not on this process.
+  std::optional<std::pair<ServiceCommand, std::uint64_t>> buildNext(const ServiceCommand& c);
   void startJobThread(const ServiceCommand& start);
   // Joins the job threads that returned (all: waits for every one).
   void reapJobs(bool all);
@@ -109,7 +155,7 @@ void WallService::Impl::incoming(const ServiceCommand& c) {
     const auto order = static_cast<std::uint64_t>(std::max<std::int64_t>(0, h.a));
     orders[h.session] = order;
     if (const auto found = windowOf.find(h.session); found != windowOf.end()) {
-      found->second->setOrder(order);
+      for (WindowStack::Window* window : found->second) window->setOrder(order);
       return;
     }
     // Or the job ended here already: such orders are bounded, the oldest going first (at most
@@ -124,43 +170,188 @@ void WallService::Impl::incoming(const ServiceCommand& c) {
       }
     return;
   }
-  std::lock_guard lock(mutex);
-  if (const auto found = nodes.find(h.session); found != nodes.end()) {
-    WallNode* node = found->second;
-    switch (h.kind) {
-      case Command::Cancel:
-        node->stopAfter(0);
-        return;
-      case Command::LastFrame:
-        node->stopAfter(static_cast<std::uint32_t>(h.a));
-        return;
-      case Command::Abort:
-        node->abort(c.text);
-        return;
-      case Command::KeepWaiting:
-        node->keepWaiting();
-        return;
-      case Command::Capture:
-        node->requestCapture(static_cast<std::uint32_t>(h.a), static_cast<std::uint64_t>(h.b));
-        return;
-      case Command::FirstFrame:
-        node->startAt(static_cast<std::uint32_t>(h.a));
-        return;
-      default:
-        break;
+  if (h.kind == Command::Reshape) {
+    if (const auto answer = buildNext(c)) head->toHead(answer->first, answer->second);
+    return;
+  }
+  std::unique_ptr<Shape> dropped;  // a move given up: its node goes outside the lock
+  {
+    std::lock_guard lock(mutex);
+    if (const auto found = jobs.find(h.session); found != jobs.end()) {
+      RunningJob& job = *found->second;
+      // Until the switch, what the job says holds for the next shape too.
+      std::vector<WallNode*> nodes{job.current->node.get()};
+      if (job.next) nodes.push_back(job.next->node.get());
+      switch (h.kind) {
+        case Command::Cancel:
+          for (WallNode* node : nodes) node->stopAfter(0);
+          return;
+        case Command::LastFrame:
+          for (WallNode* node : nodes) node->stopAfter(static_cast<std::uint32_t>(h.a));
+          return;
+        case Command::Abort:
+          for (WallNode* node : nodes) node->abort(c.text);
+          return;
+        case Command::KeepWaiting:
+          for (WallNode* node : nodes) node->keepWaiting();
+          return;
+        case Command::Capture:
+          for (WallNode* node : nodes)
+            node->requestCapture(static_cast<std::uint32_t>(h.a), static_cast<std::uint64_t>(h.b));
+          return;
+        case Command::FirstFrame:
+          job.current->node->startAt(static_cast<std::uint32_t>(h.a));
+          return;
+        case Command::ReshapeAt:
+          if (!job.next || job.next->pieceSession != h.pieceSession) return;
+          if (h.a <= 0 || h.a > std::int64_t{0xffffffff}) {  // the move is given up
+            receiver->detach(job.next->pieceSession);
+            dropped = std::move(job.next);
+            break;
+          }
+          job.next->fromFrame = static_cast<std::uint32_t>(h.a);
+          job.next->node->startAt(job.next->fromFrame);
+          return;
+        default:
+          break;
+      }
+    }
+    if (!dropped && (h.kind == Command::Start || h.kind == Command::Shutdown)) {
+      commands.push_back(c);
+      commanded.notify_all();
     }
   }
-  if (h.kind == Command::Start || h.kind == Command::Shutdown) {
-    commands.push_back(c);
-    commanded.notify_all();
+}
+
+std::unique_ptr<WallService::Impl::Shape> WallService::Impl::makeShape(const dfb::Region& window,
+                                                                       std::uint64_t pieceSession,
+                                                                       std::uint64_t session,
+                                                                       std::uint64_t epoch,
+                                                                       const WallNodeOptions& o) {
+  auto shape = std::make_unique<Shape>();
+  shape->pieceSession = pieceSession;
+  // A job in a window: its node sees the window's layout (what the job's directory said) and
+  // presents through WindowPresenters, which put its part of each display at its offset over
+  // the background. Every process takes part in the job's frames; a display the window does not
+  // touch shows the background from the start of the job on. The whole canvas: as ever.
+  const bool whole = window == dfb::Region{0, 0, layout.canvasWidth, layout.canvasHeight};
+  shape->seen = whole ? layout : windowLayout(layout, window);
+  std::vector<Presenter*> jobPresenters = presenters;
+  if (stack) {
+    // On top of the windows there (newest on top); it leaves the displays when the shape goes.
+    // The node only trades its frames into the window's layers; the main thread presents.
+    std::vector<dfb::Region> partsOf;
+    for (int d : layout.displaysOfProcess(process))
+      partsOf.push_back(partOnDisplay(layout.displays[static_cast<size_t>(d)], window));
+    std::lock_guard windowsLock(windowsMutex);
+    const auto known = orders.find(session);
+    const std::uint64_t order = known != orders.end() ? known->second : WindowStack::kOnTop;
+    shape->onStack = stack->add(partsOf, session, order);
+    windowOf[session].push_back(shape->onStack.get());
+    shape->raisable.impl = this;
+    shape->raisable.session = session;
+    shape->raisable.window = shape->onStack.get();
+    jobPresenters = shape->onStack->presenters();
+  } else if (!whole) {
+    jobPresenters.clear();
+    const std::vector<int> ours = layout.displaysOfProcess(process);
+    for (size_t i = 0; i < ours.size(); ++i) {
+      const Display& d = layout.displays[static_cast<size_t>(ours[i])];
+      const dfb::Region part = partOnDisplay(d, window);
+      if (part.empty()) {
+        WindowPresenter::presentBackground(*presenters[i], d.rect.width(), d.rect.height(),
+                                           options.background);
+        continue;
+      }
+      shape->parts.push_back(std::make_unique<WindowPresenter>(
+          *presenters[i], d.rect.width(), d.rect.height(), part, options.background));
+      jobPresenters.push_back(shape->parts.back().get());
+    }
   }
+  WallNodeOptions mine = o;
+  // With no display in the window this process has no pieces to wait for: it waits for the
+  // head's FirstFrame (or ReshapeAt), sent once the job runs, before it comes to a swap barrier.
+  shape->waitsForFirstFrame = !whole && jobPresenters.empty();
+  if (shape->waitsForFirstFrame) mine.firstFrame = 0;
+  shape->peers = std::make_unique<LinkPeers>(*head, epoch, session, process, processCount);
+  shape->node = std::make_unique<WallNode>(shape->seen, *shape->peers, jobPresenters, mine);
+  return shape;
+}
+
+// Checked as a Start is (a process never trusts the head did): the window, the piece session.
+std::optional<std::pair<ServiceCommand, std::uint64_t>> WallService::Impl::buildNext(
+    const ServiceCommand& c) {
+  const CommandHeader& h = c.header;
+  WallNodeOptions o;
+  std::uint64_t epoch = 0, currentPieces = 0;
+  Codec codec = Codec::Raw;
+  int renderRanks = 1;
+  bool moving = false;
+  {
+    std::lock_guard lock(mutex);
+    const auto found = jobs.find(h.session);
+    if (found == jobs.end()) return std::nullopt;
+    const RunningJob& job = *found->second;
+    o = job.options;
+    epoch = job.epoch;
+    codec = job.codec;
+    renderRanks = job.renderRanks;
+    currentPieces = job.current->pieceSession;
+    moving = job.next != nullptr;
+  }
+  ServiceCommand answer;
+  answer.header.kind = Command::Reshaped;
+  answer.header.session = h.session;
+  answer.header.process = process;
+  answer.header.pieceSession = h.pieceSession;
+  const dfb::Region window{h.windowX0, h.windowY0, h.windowX1, h.windowY1};
+  const std::uint64_t pieceSession = h.pieceSession;
+  std::string problem;
+  if (!stack)
+    problem = "this wall process composes no windows (serve --max-jobs 1)";
+  else if (moving)
+    problem = "a move of the window is under way already";
+  else if (pieceSession == 0 || pieceSession == h.session || pieceSession == currentPieces)
+    problem = "the piece session " + std::to_string(pieceSession) + " is not a new one";
+  else if (window.empty() || window.x0 < 0 || window.y0 < 0 || window.x1 > layout.canvasWidth ||
+           window.y1 > layout.canvasHeight)
+    problem = "the window " + std::to_string(window.x0) + "," + std::to_string(window.y0) + " to " +
+              std::to_string(window.x1) + "," + std::to_string(window.y1) +
+              " is not inside the canvas";
+  std::unique_ptr<Shape> next;
+  if (problem.empty()) {
+    try {
+      o.firstFrame = 0;  // ReshapeAt names it; until then every piece is dropped
+      next = makeShape(window, pieceSession, h.session, epoch, o);
+      receiver->attach(pieceSession, codec, renderRanks, next->node.get());
+      std::lock_guard lock(mutex);
+      const auto found = jobs.find(h.session);
+      if (found == jobs.end() || found->second->next)
+        problem = "the job ended or moved meanwhile";
+      else
+        found->second->next = std::move(next);
+    } catch (const std::exception& e) {
+      problem = e.what();
+    }
+  }
+  if (next) receiver->detach(pieceSession);  // not installed: it goes (outside the lock)
+  next.reset();
+  answer.header.a = problem.empty() ? 1 : 0;
+  if (!problem.empty()) {
+    answer.text = "wall process " + std::to_string(process) + ": " + problem;
+    log("could not move a job's window: " + answer.text);
+  }
+  return std::make_pair(answer, epoch);
 }
 
 // The head is gone for this process: the job's frame in progress is given up here (the node's
 // barrier throws), and the process shows that it is out of the wall until it joined again.
 void WallService::Impl::lost(const std::string& why) {
   std::lock_guard lock(mutex);
-  for (const auto& [session, node] : nodes) node->abort("lost the wall's head: " + why);
+  for (const auto& [session, job] : jobs) {
+    job->current->node->abort("lost the wall's head: " + why);
+    if (job->next) job->next->node->abort("lost the wall's head: " + why);
+  }
   commands.clear();
   linkLost = true;
   commanded.notify_all();
@@ -233,6 +424,18 @@ WallService::~WallService() {
 }
 
 std::string WallService::address() const { return impl_->address; }
+
+std::string WallService::reshape(std::uint64_t session, const dfb::Region& window, int* code) {
+  using Code = JobDesk::MoveVerdict::Code;
+  JobDesk::MoveVerdict v{Code::Conflict, "only the wall's head moves windows"};
+  if (impl_->desk) v = impl_->desk->reshape(session, window);
+  if (code)
+    *code = v.code == Code::Moving          ? 200
+            : v.code == Code::UnknownWindow ? 404
+            : v.code == Code::BadWindow     ? 400
+                                            : 409;
+  return v.code == Code::Moving ? std::string() : v.why;
+}
 
 std::vector<int> WallService::waitForProcesses(Clock::time_point until) {
   Impl& m = *impl_;
@@ -318,75 +521,58 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   };
   std::string failure;
   std::int64_t lastPresented = 0, bytes = 0;
-  // A job in a window: its node sees the window's layout (what the job's directory said) and
-  // presents through WindowPresenters, which put its part of each display at its offset over
-  // the background. Every process takes part in the job's frames; a display the window does not
-  // touch shows the background from the start of the job on. The whole canvas: as ever.
-  const bool whole = window == dfb::Region{0, 0, layout.canvasWidth, layout.canvasHeight};
-  const Layout seen = whole ? Layout{} : windowLayout(layout, window);
-  std::vector<std::unique_ptr<WindowPresenter>> parts;
-  std::unique_ptr<WindowStack::Window> onStack;  // several jobs: this job's window
-  struct Forget {  // however runJob leaves, no Raise reaches the window once it went
+  RunningJob running;
+  running.options = o;
+  running.epoch = epoch;
+  running.codec = static_cast<Codec>(start.header.codec);
+  running.renderRanks = static_cast<int>(start.header.renderRanks);
+  // A process that joins after a move takes the moved window's pieces.
+  const std::uint64_t pieceSession =
+      start.header.pieceSession != 0 ? start.header.pieceSession : session;
+  struct Forget {  // however runJob leaves, no Raise is kept for the job once it went
     Impl& m;
     std::uint64_t session;
     ~Forget() { m.forgetWindow(session); }
   } forget{*this, session};
-  std::vector<Presenter*> jobPresenters = presenters;
   if (stack) {
-    // At the job's stacking order (a new window on top; a Raise may have come already); it
-    // leaves the displays when the job ends. The node only trades its frames into the window's
-    // layers; the main thread presents.
-    std::vector<dfb::Region> partsOf;
-    for (int d : layout.displaysOfProcess(process))
-      partsOf.push_back(partOnDisplay(layout.displays[static_cast<size_t>(d)], window));
+    // At the job's stacking order (a new window on top; a Raise may have come already).
     std::lock_guard windowsLock(windowsMutex);
-    const std::uint64_t order =
-        orders
-            .emplace(session, static_cast<std::uint64_t>(std::max<std::int64_t>(0, start.header.b)))
-            .first->second;
-    onStack = stack->add(partsOf, order);
-    windowOf[session] = onStack.get();
-    jobPresenters = onStack->presenters();
-  } else if (!whole) {
-    jobPresenters.clear();
-    const std::vector<int> ours = layout.displaysOfProcess(process);
-    for (size_t i = 0; i < ours.size(); ++i) {
-      const Display& d = layout.displays[static_cast<size_t>(ours[i])];
-      const dfb::Region part = partOnDisplay(d, window);
-      if (part.empty()) {
-        WindowPresenter::presentBackground(*presenters[i], d.rect.width(), d.rect.height(),
-                                           options.background);
-        continue;
-      }
-      parts.push_back(std::make_unique<WindowPresenter>(*presenters[i], d.rect.width(),
-                                                        d.rect.height(), part, options.background));
-      jobPresenters.push_back(parts.back().get());
-    }
+    orders.emplace(session, static_cast<std::uint64_t>(std::max<std::int64_t>(0, start.header.b)));
   }
-  // With no display in the window this process has no pieces to wait for: it waits for the
-  // head's FirstFrame, sent once the job runs, before it comes to a swap barrier.
-  if (!whole && jobPresenters.empty()) o.firstFrame = firstFrame = 0;
+  std::unique_ptr<Shape> current = makeShape(window, pieceSession, session, epoch, o);
+  if (current->waitsForFirstFrame) firstFrame = 0;
+  running.current = current.get();
+  // The shape a move replaced: its windows stay until the new shape presented a frame.
+  std::unique_ptr<Shape> retired;
   {
-    LinkPeers peers(*head, epoch, session, process, processCount);
-    WallNode job(whole ? layout : seen, peers, jobPresenters, o);
     {
       std::lock_guard lock(mutex);
-      nodes[session] = &job;
+      jobs[session] = &running;
     }
-    receiver->attach(session, static_cast<Codec>(start.header.codec),
-                     static_cast<int>(start.header.renderRanks), &job);
+    receiver->attach(pieceSession, running.codec, running.renderRanks, current->node.get());
     answer.header.kind = Command::Ready;
     answer.header.a = 1;
     head->toHead(answer, epoch);
     bool asked = false;
     try {
-      if (firstFrame == 0) firstFrame = job.waitForStart(Clock::now() + options.timeout);
+      if (firstFrame == 0) firstFrame = current->node->waitForStart(Clock::now() + options.timeout);
       for (std::uint32_t frameId = firstFrame; frameId > 0; ++frameId) {
-        const PresentReport r = job.presentFrame(frameId);
+        {
+          // A move takes over at its frame; the old shape's pieces are no longer taken.
+          std::lock_guard lock(mutex);
+          if (running.next && running.next->fromFrame == frameId) {
+            retired = std::move(current);
+            current = std::move(running.next);
+            running.current = current.get();
+            receiver->detach(retired->pieceSession);
+          }
+        }
+        const PresentReport r = current->node->presentFrame(frameId);
         if (r.stopped) {
           if (!r.failure.empty()) failure = r.failure;
           break;
         }
+        if (retired && !r.abandoned) retired.reset();  // the new window shows: the old goes
         lastPresented = frameId;
         bytes += static_cast<std::int64_t>(r.bytesReceived);
         if (!stack) {  // several jobs: the main thread counts and captures what it presents
@@ -405,7 +591,7 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
           head->toHead(stop, epoch);
         }
       }
-      job.finish();
+      current->node->finish();
     } catch (const CaptureError& e) {
       // The job asked for captures it cannot have (its quota spent, a link planted, a full
       // disk): it ends, told why, rather than going on without them.
@@ -418,17 +604,32 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
       if (failure.empty()) failure = e.what();
       log("gave the job up: " + failure);
     }
-    receiver->detach(session);
-    std::lock_guard lock(mutex);
-    nodes.erase(session);
+    std::unique_ptr<Shape> next;
+    {
+      std::lock_guard lock(mutex);
+      jobs.erase(session);
+      next = std::move(running.next);
+    }
+    receiver->detach(current->pieceSession);
+    if (next) receiver->detach(next->pieceSession);
   }
-  forgetWindow(session);
-  onStack.reset();  // the job's window leaves the displays at once
+  // The job's windows leave the displays at once.
+  retired.reset();
+  current.reset();
   answer.header.kind = Command::Done;
   answer.header.a = lastPresented;
   answer.header.b = bytes;
   answer.text = failure;
   head->toHead(answer, epoch);
+}
+
+WallService::Impl::Shape::Raisable::~Raisable() {
+  if (!impl) return;
+  std::lock_guard windowsLock(impl->windowsMutex);
+  const auto found = impl->windowOf.find(session);
+  if (found == impl->windowOf.end()) return;
+  std::erase(found->second, window);
+  if (found->second.empty()) impl->windowOf.erase(found);
 }
 
 void WallService::Impl::forgetWindow(std::uint64_t session) {
@@ -480,6 +681,40 @@ void WallService::Impl::presentWindows() {
   for (int d : changed) presenters[static_cast<size_t>(d)]->swap();
   ++wallFrames;
   if (wallCaptures) wallCaptures->presented(wallFrames);
+}
+
+static_assert(static_cast<std::uint32_t>(WallKey::Left) == WindowInput::kLeft &&
+                  static_cast<std::uint32_t>(WallKey::Minus) == WindowInput::kMinus,
+              "the wire's keys are WallKey's");
+
+void WallService::Impl::forwardInput() {
+  const std::vector<int> ours = layout.displaysOfProcess(process);
+  for (size_t i = 0; i < presenters.size(); ++i) {
+    for (const WallInput& in : presenters[i]->takeInput()) {
+      // Esc stops a single job's wall; on a shared wall a stray press would end others' work.
+      if (!stack || (in.kind == WallInput::Kind::Key && in.key == WallKey::Escape)) continue;
+      const std::uint64_t session = stack->topAt(static_cast<int>(i), in.x, in.y);
+      if (session == 0) continue;  // over the background
+      const Display& d = layout.displays[static_cast<size_t>(ours[i])];
+      WindowInput w;
+      w.kind = in.kind == WallInput::Kind::Key    ? WindowInput::kKey
+               : in.kind == WallInput::Kind::Drag ? WindowInput::kDrag
+                                                  : WindowInput::kScroll;
+      w.key = static_cast<std::uint32_t>(in.key);
+      w.x = d.rect.x0 + in.x;
+      w.y = d.rect.y0 + in.y;
+      w.dx = std::clamp(in.dx, -kMaxInputMove, kMaxInputMove);
+      w.dy = std::clamp(in.dy, -kMaxInputMove, kMaxInputMove);
+      w.pan = in.pan;
+      const messaging::Bytes packed = packInput(session, w);
+      ServiceCommand c;
+      c.header.kind = Command::Input;
+      c.header.session = session;
+      c.header.process = process;
+      c.text.assign(reinterpret_cast<const char*>(packed.data()), packed.size());
+      head->toHead(c, head->epoch());
+    }
+  }
 }
 
 void WallService::run() {
@@ -542,14 +777,18 @@ void WallService::run() {
         // A display that fails ends this process's part in every job (their threads then
         // return, so the Joiner does not wait for their timeouts), then the process.
         std::lock_guard lock(m.mutex);
-        for (const auto& [session, node] : m.nodes)
-          node->abort(std::string("a display of wall process ") + std::to_string(m.process) +
-                      " failed: " + e.what());
+        const std::string why = std::string("a display of wall process ") +
+                                std::to_string(m.process) + " failed: " + e.what();
+        for (const auto& [session, job] : m.jobs) {
+          job->current->node->abort(why);
+          if (job->next) job->next->node->abort(why);
+        }
         throw;
       }
     }
     if (m.link) m.link->mainAlive();
     for (Presenter* p : m.presenters) p->pollEvents();
+    m.forwardInput();
     bool closed = false;
     for (Presenter* p : m.presenters) closed = closed || p->closeRequested();
     if (!asked && (closed || (m.options.stopRequested && m.options.stopRequested()))) {

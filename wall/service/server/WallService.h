@@ -83,6 +83,11 @@ class WallService {
   // Another process: waits until it joined (returns nothing) or `until` (returns itself); throws
   // base::Error when the head refused it (wrong token, another layout).
   std::vector<int> waitForProcesses(std::chrono::steady_clock::time_point until);
+  // The head: moves and resizes job `session`'s window to `window` on the canvas while it runs
+  // (docs/design.md, "Moving and resizing a window"). Returns empty when the move is under way,
+  // else why not, with `code` 404 (no such job), 409 (starting, ending, moving already, or a job
+  // that cannot re-plan) or 400 (a window outside the canvas, too small, on the bezels only).
+  std::string reshape(std::uint64_t session, const dfb::Region& window, int* code = nullptr);
   // Presents jobs until the wall is asked to stop (or this process leaves it); returns then.
   // Throws base::Error when the head refuses this process.
   void run();

@@ -1,0 +1,131 @@
+#!/usr/bin/env bash
+# Keys and the mouse in a shared wall's GLFW windows steer the job under the cursor
+# (docs/service.md, "Several jobs at once"). Under Xvfb, a 2x2 `serve --max-jobs 2` wall with two
+# converged primary-renderer jobs side by side (r0c0 and r1c1), each capturing every frame:
+#  - a key over the background (display r0c1) steers nobody: no job renders a new frame;
+#  - real X events (xdotool, through XTEST) over r0c0 — the right arrow, a drag, a wheel notch —
+#    each give job a new frames that differ from its frames before; job b renders nothing new and
+#    its every captured frame stays byte-identical;
+#  - Esc over a window stops nothing on a shared wall: the wall and both jobs go on.
+#   wall_input_test.sh LAYOUT   (DFBWALL, COMPARE, MPIEXEC in the environment)
+set -euo pipefail
+if [ -z "${WALL_INPUT_TEST_INNER:-}" ]; then
+  # A server number of its own, so a concurrent Xvfb test elsewhere cannot take the same one.
+  exec xvfb-run -a -n $((300 + RANDOM % 500)) -s "-screen 0 1280x1024x24" \
+    env WALL_INPUT_TEST_INNER=1 "$0" "$@"
+fi
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+layout=$1
+work=$(mktemp -d)
+serve="" a="" b=""
+cleanup() {
+  # mpirun and its ranks (killed alone it would leave them running).
+  for p in $a $b $serve; do kill -9 $(pgrep -P "$p") "$p" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  [ -n "${KEEP:-}" ] || rm -rf "$work"
+}
+trap cleanup EXIT
+fail() {
+  echo "FAIL: $*"
+  for f in serve.out serve.err a.out b.out; do echo "--- $f:"; cat "$work/$f" 2>/dev/null || true; done
+  exit 1
+}
+scale=${DFBWALL_TIME_SCALE:-1}
+port=$((20000 + $$ % 20000))
+# newest JOB: the number of the newest frame JOB captured of its display (0: none yet).
+newest() {
+  local f
+  f=$(ls "$work/$1/$2" 2>/dev/null | grep -E '^frame-[0-9]+\.png$' | sort | tail -1)
+  [ -n "$f" ] || { echo 0; return; }
+  f=${f#frame-}; echo $((10#${f%.png}))
+}
+frame() { printf '%s/%s/%s/frame-%06d.png' "$work" "$1" "$2" "$3"; }
+# settled JOB DISPLAY: waits until JOB captured a frame and then none for a second (converged,
+# idle); prints its newest frame.
+settled() {
+  local last=-1 now
+  for _ in $(seq $((30 * scale))); do
+    now=$(newest "$1" "$2")
+    [ "$now" -gt 0 ] && [ "$now" -eq "$last" ] && { echo "$now"; return 0; }
+    last=$now
+    sleep 1
+  done
+  return 1
+}
+
+"$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
+  -np 4 -x DISPLAY -x XAUTHORITY "$DFBWALL" serve --wall "$layout" \
+  --listen "127.0.0.1:$port" --timeout $((8 * scale)) --capture-root "$work" --max-jobs 2 \
+  --background "#000000" >"$work/serve.out" 2>"$work/serve.err" &
+serve=$!
+for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
+grep -q "wall service on 127.0.0.1:$port" "$work/serve.out" || fail "serve did not start"
+# job WINDOW NAME: a converged primary-renderer job (4 frames, then idle) capturing every frame.
+job() {
+  "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
+    -np 1 "$DFBWALL" --connect "127.0.0.1:$port" --window "$1" --renderer primary \
+    --frames 0 --max-spp 4 --capture "$work/$2" --capture-every 1 --quiet --timeout 30 \
+    >"$work/$2.out" 2>&1 &
+}
+job r0c0 a
+a=$!
+job r1c1 b
+b=$!
+na=$(settled a r0c0) || fail "job a did not present and settle"
+nb=$(settled b r1c1) || fail "job b did not present and settle"
+cp "$(frame a r0c0 "$na")" "$work/a-before.png"
+echo "settled: job a at frame $na, job b at frame $nb"
+
+win() { xdotool search --sync --name "^$1\$" | head -n1; }
+# A key over the background steers nobody.
+bg=$(win r0c1)
+xdotool mousemove --window "$bg" 100 75 windowfocus --sync "$bg" key --delay 100 Right
+sleep 1.5
+[ "$(newest a r0c0)" -eq "$na" ] || fail "a key over the background steered job a"
+[ "$(newest b r1c1)" -eq "$nb" ] || fail "a key over the background steered job b"
+
+# changed WHAT: waits until job a captured a frame after $na that differs from its last before.
+changed() {
+  for _ in $(seq $((150 * scale))); do
+    local now
+    now=$(newest a r0c0)
+    if [ "$now" -gt "$na" ] && ! cmp -s "$(frame a r0c0 "$now")" "$work/a-before.png"; then
+      sleep 0.5  # its epoch's later frames
+      na=$(settled a r0c0) || fail "job a did not settle after $1"
+      echo "$1: job a at frame $na, a new picture"
+      cp "$(frame a r0c0 "$na")" "$work/a-before.png"
+      return 0
+    fi
+    sleep 0.1
+  done
+  fail "$1 over job a's window gave it no new frame (newest $(newest a r0c0), $na before)"
+}
+wa=$(win r0c0)
+xdotool mousemove --window "$wa" 100 75 windowfocus --sync "$wa" key --delay 100 Right
+changed "the right arrow"
+xdotool mousemove --window "$wa" 100 75 click 4
+changed "a wheel notch"
+# 20 px of the window's 200: 18 degrees (more turns the Cornell box's open side away).
+xdotool mousemove --window "$wa" 60 75 mousedown 1 mousemove --window "$wa" 70 75 \
+  mousemove --window "$wa" 80 75 mouseup 1
+changed "a drag"
+xdotool key Escape
+sleep 1
+for p in "$serve" "$a" "$b"; do kill -0 "$p" 2>/dev/null || fail "Esc stopped something on a shared wall"; done
+
+# Job b: nothing new, every frame as it was.
+[ "$(newest b r1c1)" -eq "$nb" ] || fail "job b rendered new frames while a was steered"
+for f in "$work"/b/r1c1/frame-*.png; do
+  cmp -s "$f" "$(frame b r1c1 "$nb")" || fail "job b's $(basename "$f") differs from its last"
+done
+
+kill -USR1 "$a" "$b"
+wait "$a" || fail "job a did not end well"
+wait "$b" || fail "job b did not end well"
+a="" b=""
+kill -USR1 "$serve"
+for _ in $(seq $((100 * scale))); do kill -0 "$serve" 2>/dev/null || break; sleep 0.1; done
+kill -0 "$serve" 2>/dev/null && fail "serve did not stop on SIGUSR1"
+wait "$serve" || fail "serve exited non-zero after SIGUSR1"
+serve=""
+echo "PASS: a key, a drag and the wheel over one job's wall window steer it alone; the other's frames stay byte-identical; the background and Esc steer nothing"
