@@ -17,35 +17,15 @@ fi
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 layout=$1
 work=$(mktemp -d)
-serve="" a="" b=""
-cleanup() {
-  # mpirun and its ranks (killed alone it would leave them running).
-  for p in $a $b $serve; do kill -9 $(pgrep -P "$p") "$p" 2>/dev/null || true; done
-  wait 2>/dev/null || true
-  [ -n "${KEEP:-}" ] || rm -rf "$work"
-}
-trap cleanup EXIT
-fail() {
-  echo "FAIL: $*"
-  for f in serve.out serve.err a.out b.out; do echo "--- $f:"; cat "$work/$f" 2>/dev/null || true; done
-  exit 1
-}
-scale=${DFBWALL_TIME_SCALE:-1}
+source "$(dirname "$0")/service_jobs_lib.sh"
 port=$((20000 + $$ % 20000))
-# newest JOB: the number of the newest frame JOB captured of its display (0: none yet).
-newest() {
-  local f
-  f=$(ls "$work/$1/$2" 2>/dev/null | grep -E '^frame-[0-9]+\.png$' | sort | tail -1)
-  [ -n "$f" ] || { echo 0; return; }
-  f=${f#frame-}; echo $((10#${f%.png}))
-}
 frame() { printf '%s/%s/%s/frame-%06d.png' "$work" "$1" "$2" "$3"; }
 # settled JOB DISPLAY: waits until JOB captured a frame and then none for a second (converged,
 # idle); prints its newest frame.
 settled() {
   local last=-1 now
   for _ in $(seq $((30 * scale))); do
-    now=$(newest "$1" "$2")
+    now=$(newest "$work/$1" "$2")
     [ "$now" -gt 0 ] && [ "$now" -eq "$last" ] && { echo "$now"; return 0; }
     last=$now
     sleep 1
@@ -81,14 +61,14 @@ win() { xdotool search --sync --name "^$1\$" | head -n1; }
 bg=$(win r0c1)
 xdotool mousemove --window "$bg" 100 75 windowfocus --sync "$bg" key --delay 100 Right
 sleep 1.5
-[ "$(newest a r0c0)" -eq "$na" ] || fail "a key over the background steered job a"
-[ "$(newest b r1c1)" -eq "$nb" ] || fail "a key over the background steered job b"
+[ "$(newest "$work/a" r0c0)" -eq "$na" ] || fail "a key over the background steered job a"
+[ "$(newest "$work/b" r1c1)" -eq "$nb" ] || fail "a key over the background steered job b"
 
 # changed WHAT: waits until job a captured a frame after $na that differs from its last before.
 changed() {
   for _ in $(seq $((150 * scale))); do
     local now
-    now=$(newest a r0c0)
+    now=$(newest "$work/a" r0c0)
     if [ "$now" -gt "$na" ] && ! cmp -s "$(frame a r0c0 "$now")" "$work/a-before.png"; then
       sleep 0.5  # its epoch's later frames
       na=$(settled a r0c0) || fail "job a did not settle after $1"
@@ -98,7 +78,7 @@ changed() {
     fi
     sleep 0.1
   done
-  fail "$1 over job a's window gave it no new frame (newest $(newest a r0c0), $na before)"
+  fail "$1 over job a's window gave it no new frame (newest $(newest "$work/a" r0c0), $na before)"
 }
 wa=$(win r0c0)
 xdotool mousemove --window "$wa" 100 75 windowfocus --sync "$wa" key --delay 100 Right
@@ -114,7 +94,7 @@ sleep 1
 for p in "$serve" "$a" "$b"; do kill -0 "$p" 2>/dev/null || fail "Esc stopped something on a shared wall"; done
 
 # Job b: nothing new, every frame as it was.
-[ "$(newest b r1c1)" -eq "$nb" ] || fail "job b rendered new frames while a was steered"
+[ "$(newest "$work/b" r1c1)" -eq "$nb" ] || fail "job b rendered new frames while a was steered"
 for f in "$work"/b/r1c1/frame-*.png; do
   cmp -s "$f" "$(frame b r1c1 "$nb")" || fail "job b's $(basename "$f") differs from its last"
 done
