@@ -207,6 +207,16 @@ dfbwall::Mesh meshOf(const float* positions, std::size_t positionCount,
   return m;
 }
 
+// A C caller may put any int in an enum; C++ may not load an enum outside its values, so the
+// bits are read as an int before they are checked.
+template <class Enum>
+int enumBits(const Enum& e) {
+  static_assert(sizeof(Enum) == sizeof(int));
+  int bits;
+  std::memcpy(&bits, &e, sizeof bits);
+  return bits;
+}
+
 dfbwall::Brick brickOf(const dfbwall_brick& c) {
   dfbwall::Brick b;
   b.id = c.id;
@@ -216,14 +226,14 @@ dfbwall::Brick brickOf(const dfbwall_brick& c) {
     throw CInputError("dfbwall: brick " + std::to_string(c.id) + ": volumes is NULL with a count");
   for (std::size_t v = 0; v < c.volume_count; ++v) {
     const dfbwall_volume_part& p = c.volumes[v];
-    if (p.type < DFBWALL_FLOAT32 || p.type > DFBWALL_FLOAT64)
+    const int type = enumBits(p.type);
+    if (type < DFBWALL_FLOAT32 || type > DFBWALL_FLOAT64)
       throw CInputError("dfbwall: brick " + std::to_string(c.id) + ": volume part " +
-                        std::to_string(v) + " has no voxel type " +
-                        std::to_string(static_cast<int>(p.type)));
+                        std::to_string(v) + " has no voxel type " + std::to_string(type));
     dfbwall::VolumePart part;
     part.lo = {p.lo[0], p.lo[1], p.lo[2]};
     part.hi = {p.hi[0], p.hi[1], p.hi[2]};
-    part.type = static_cast<dfbwall::VoxelType>(p.type);  // the same order (static_assert below)
+    part.type = static_cast<dfbwall::VoxelType>(type);  // the same order (static_assert below)
     part.voxels = p.voxels;
     b.volumes.push_back(part);
   }
@@ -345,7 +355,7 @@ dfbwall_error dfbwall_style_add_light(dfbwall_style* style, dfbwall_light_kind k
   return guarded([&] {
     dfbwall::Style& st = need(style, "the style").style;
     dfbwall::Light l;
-    switch (kind) {
+    switch (enumBits(kind)) {
       case DFBWALL_LIGHT_DIRECTIONAL:
         l.kind = dfbwall::Light::Kind::Directional;
         break;
@@ -356,7 +366,7 @@ dfbwall_error dfbwall_style_add_light(dfbwall_style* style, dfbwall_light_kind k
         l.kind = dfbwall::Light::Kind::Ambient;
         break;
       default:
-        throw CInputError("dfbwall: no light kind " + std::to_string(static_cast<int>(kind)));
+        throw CInputError("dfbwall: no light kind " + std::to_string(enumBits(kind)));
     }
     if (direction) l.direction = vec(direction, "direction");
     if (position) l.position = vec(position, "position");

@@ -100,6 +100,10 @@ int main(int argc, char** argv) {
   CHECK(dfbwall_style_set_value_range(st, 0, 0, 1) == DFBWALL_OK);
   const float white[3] = {1, 1, 1};
   CHECK(dfbwall_style_add_isosurface(st, 0, 0.5f, white, 1) == DFBWALL_OK);
+  const float down[3] = {0, -1, 0};
+  CHECK(dfbwall_style_add_light(st, (dfbwall_light_kind)7, down, NULL, white, 1) ==
+        DFBWALL_ERROR_INPUT);
+  CHECK(contains(dfbwall_last_error(), "no light kind 7"));
   CHECK(dfbwall_session_set_style(s, st) == DFBWALL_OK);
   dfbwall_style_release(st);
   const float position[3] = {20, 16, -18}, at[3] = {5.5f, 5.5f, 5.5f}, up[3] = {0, 1, 0};
