@@ -58,10 +58,14 @@ dfbwall_pkg_module(OSMESA osmesa "OSMesa" libosmesa6-dev)
 # with connection caps (docs/security.md, "The control API", says why not cpp-httplib).
 dfbwall_pkg_module(MICROHTTPD libmicrohttpd "libmicrohttpd" libmicrohttpd-dev)
 # Volume files (renderers/scivis/io/formats/): serial HDF5 (what Debian's NetCDF links; each rank
-# opens the file itself and reads its hyperslab), NetCDF, zlib for gzip-compressed NRRD/NIfTI.
+# opens the file itself and reads its hyperslab), NetCDF, zlib for gzip-compressed NRRD/NIfTI,
+# bzip2 for NRRD; VTK image data (.vti/.pvti): expat for the XML, zlib and LZ4 for its blocks.
 dfbwall_pkg_module(HDF5 hdf5-serial "HDF5" libhdf5-dev)
 dfbwall_pkg_module(NETCDF netcdf "NetCDF" libnetcdf-dev)
 dfbwall_find_package(ZLIB zlib1g-dev)
+dfbwall_find_package(BZip2 libbz2-dev)
+dfbwall_find_package(EXPAT libexpat1-dev)
+dfbwall_pkg_module(LZ4 liblz4 "LZ4" liblz4-dev)
 if(DFBWALL_BUILD_TESTS)
   dfbwall_find_package(GTest libgtest-dev)
 endif()
