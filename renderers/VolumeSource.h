@@ -40,23 +40,44 @@ struct OpenVdbParams {
   Index3 indexOrigin;
 };
 
-// A dense voxel array stored in a file (x fastest, then y, then z), raw or as a zlib/gzip
-// stream: what the NRRD, NIfTI and MetaImage readers find in a header
-// (renderers/scivis/io/formats/StoredArray.h reads it).
+// A dense voxel array stored in a file (x fastest, then y, then z), raw, as a compressed stream
+// or as text: what the NRRD, NIfTI and MetaImage readers find in a header
+// (renderers/scivis/io/formats/StoredArray.h reads it). NRRD may spread it over a list of files,
+// each holding the next `voxelsPerFile` voxels (its slices or rows).
 enum class FileType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
+// Zlib: a zlib or gzip stream (either, detected); Ascii: numbers as text; Hex: two hex digits
+// a byte; Base64: base64 text (VTK); ZlibBlocks, Lz4Blocks: VTK's compressed arrays, a header of
+// block sizes then blocks compressed one by one (raw, or base64 when `base64`).
+enum class Encoding { Raw, Zlib, Bzip2, Ascii, Hex, Base64, ZlibBlocks, Lz4Blocks };
 
 struct StoredArray {
-  std::string path;              // the file holding the voxels
-  std::uint64_t fileOffset = 0;  // where the raw voxels, or the compressed stream, start
-  std::uint64_t streamSkip = 0;  // compressed: bytes of the inflated stream before voxel 0
-  bool compressed = false;       // a zlib or gzip stream (either, detected)
+  std::string path;                 // the file holding the voxels (the first of a list)
+  std::vector<std::string> paths;   // a list of data files (NRRD); empty: `path` alone
+  std::uint64_t voxelsPerFile = 0;  // a list: the voxels each of its files holds
+  std::uint64_t lineSkip = 0;       // lines before fileOffset in each file (NRRD line skip)
+  std::uint64_t fileOffset = 0;     // where the voxels, the stream or the text start
+  std::uint64_t byteSkip = 0;       // bytes after the skipped lines (NRRD byte skip)
+  bool atEnd = false;               // raw: the voxels end the file (NRRD byte skip -1)
+  std::uint64_t streamSkip = 0;     // compressed, base64: decoded bytes before voxel 0
+  Encoding encoding = Encoding::Raw;
+  bool base64 = false;       // blocks: stored as base64 text
+  int blockHeaderBytes = 4;  // blocks: the width of the header's numbers (UInt32, UInt64)
   FileType type = FileType::UInt8;
   bool bigEndian = false;
   float slope = 1, intercept = 0;  // value = stored * slope + intercept
   bool scaled() const { return slope != 1.0f || intercept != 0.0f; }
+  bool compressed() const { return encoding == Encoding::Zlib || encoding == Encoding::Bzip2; }
+  // Read in order only (decoded as it passes), not at any offset.
+  bool streamed() const { return encoding != Encoding::Raw && encoding != Encoding::Base64; }
 };
 
-enum class VolumeFormat { Nrrd, Nifti, MetaImage, Hdf5, NetCdf };
+enum class VolumeFormat { Nrrd, Nifti, MetaImage, Hdf5, NetCdf, Vtk };
+
+// A piece of a volume stored in a file of its own (VTK's .pvti): its box of the whole grid.
+struct FilePiece {
+  VoxelBox box;
+  std::string path;
+};
 
 // A volume file in one of the formats above (source = "file").
 struct VolumeFileParams {
@@ -64,9 +85,11 @@ struct VolumeFileParams {
   VolumeFormat format = VolumeFormat::Nrrd;
   std::string dataset;   // HDF5: the dataset's path (empty: the file's only 3-D/4-D dataset)
   std::string variable;  // NetCDF: the variable (empty: the file's only 3-D/4-D variable)
+  std::string array;     // VTK: the point data array (empty: the first)
   int time = 0;          // 4-D data (t, z, y, x): the time step
   // Filled in by resolveVolumeFile from the header:
-  StoredArray stored;              // NRRD, NIfTI, MetaImage: where the voxels are
+  StoredArray stored;              // NRRD, NIfTI, MetaImage, .vti: where the voxels are
+  std::vector<FilePiece> pieces;   // .pvti: the pieces (each read as a .vti where it meets a box)
   std::vector<double> missing;     // HDF5, NetCDF: _FillValue / missing_value (become NaN)
   float slope = 1, intercept = 0;  // NetCDF scale_factor / add_offset
   bool hasGeometry = false;        // the file places its grid (spacing, origin); HDF5 does not

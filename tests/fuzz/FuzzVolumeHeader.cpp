@@ -1,6 +1,6 @@
 // libFuzzer target: volume files as dfbwall reads them. The first byte picks the format (NRRD,
-// MetaImage, NIfTI, gzipped NIfTI), the rest is the file: its header is parsed and, when it
-// asks for at most 2^20 voxels, every voxel is read (raw data with pread, compressed data
+// MetaImage, NIfTI, gzipped NIfTI, VTK .vti), the rest is the file: its header is parsed and, when
+// it asks for at most 2^20 voxels, every voxel is read (raw data with pread, compressed data
 // through the streaming inflater). Problems are base::Error, never a crash or a hang.
 #include <unistd.h>
 
@@ -19,10 +19,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     char pattern[] = "/tmp/dfbwall-fuzz-volume.XXXXXX";
     return std::string(mkdtemp(pattern));
   }();
-  static const char* const names[] = {"v.nrrd", "v.mha", "v.nii", "v.nii.gz"};
+  static const char* const names[] = {"v.nrrd", "v.mha", "v.nii", "v.nii.gz", "v.vti"};
   // A new name per input: nothing read from one input's file is resumed on the next.
   static std::uint64_t count = 0;
-  const std::string path = folder + "/" + std::to_string(count++) + names[data[0] % 4];
+  const std::string path = folder + "/" + std::to_string(count++) + names[data[0] % 5];
   FILE* f = std::fopen(path.c_str(), "wb");
   if (!f) return 0;
   std::fwrite(data + 1, 1, size - 1, f);

@@ -59,8 +59,9 @@ TEST(VolumeFile, HostileFilesGiveOneErrorNamingTheFile) {
   // Header problems are located at the value: file, line and column.
   expectError("type.nrrd", nrrd + "type: block\nsizes: 13 9 7\n\n",
               "type.nrrd:3:7: field 'type': 'block' is not one dfbwall reads");
-  expectError("enc.nrrd", nrrd + "type: uchar\nencoding: bzip2\nsizes: 13 9 7\n\n",
-              "enc.nrrd:4:11: field 'encoding': 'bzip2' is not one dfbwall reads (raw, gzip)");
+  expectError("enc.nrrd", nrrd + "type: uchar\nencoding: zstd\nsizes: 13 9 7\n\n",
+              "enc.nrrd:4:11: field 'encoding': 'zstd' is not one dfbwall reads (raw, gzip, bzip2, "
+              "ascii, hex)");
   expectError("dim.nrrd", "NRRD0004\ndimension: 4\n", "dimension 4");
   expectError("junk.nrrd", nrrd + "sizes: 13 9 x7\n",
               "junk.nrrd:3:13: field 'sizes': 'x7' is not a number");
@@ -130,6 +131,85 @@ TEST(VolumeFile, HostileFilesGiveOneErrorNamingTheFile) {
     const std::string m = errorOf(p);
     EXPECT_NE(m.find("flat.h5: the file has 0 3-D/4-D datasets"), std::string::npos) << m;
   }
+}
+
+// The newer encodings and formats: text that is not numbers, hex that is not hex, a bzip2
+// stream that is not one, lists that name the wrong number of files, VTK files that lie.
+TEST(VolumeFile, HostileEncodingsListsAndVtkFilesGiveOneNamedError) {
+  const std::string nrrd = "NRRD0004\ndimension: 3\nsizes: 3 2 2\n";
+  expectError("text.nrrd", nrrd + "type: short\nencoding: ascii\n\n1 2 3 4 5 6 7 8 9 10 11 70000\n",
+              "value 12, '70000', is not an integer that fits int16");
+  expectError("fewtext.nrrd", nrrd + "type: float\nencoding: ascii\n\n1 2 3\n",
+              "the text data ends after 12 bytes");
+  expectError("word.nrrd", nrrd + "type: float\nencoding: txt\n\n1 2 x3\n", "'x3', is not");
+  expectError("hex.nrrd", nrrd + "type: uchar\nencoding: hex\n\n00 01 0g\n",
+              "'g' after 2 bytes, not a hex digit");
+  expectError("bz.nrrd", nrrd + "type: uchar\nencoding: bzip2\n\nBZh9 not really bzip2 at all",
+              "bzip2 volume data is corrupt");
+  expectError("skip.nrrd", nrrd + "type: uchar\nencoding: gzip\nbyte skip: -1\n\n",
+              "is for raw data only, not gzip");
+  writeFile(folder() / "s0.raw", std::string(6, '\1'));
+  expectError("list.nhdr", nrrd + "type: uchar\ndata file: LIST\ns0.raw\n",
+              "field 'data file': the list names 1 files, the sizes and subdim 2 call for 2");
+  expectError("gone.nhdr", nrrd + "type: uchar\ndata file: s%d.raw 0 1 1\n", "s1.raw: cannot open");
+  expectError("format.nhdr", nrrd + "type: uchar\ndata file: s%d%d.raw 0 1 1\n",
+              "one integer conversion");
+  expectError("lines.nhdr", nrrd + "type: uchar\nline skip: 5\ndata file: s0.raw\n",
+              "ends after 0 lines, before the 5 its header skips");
+  // NIfTI-2: a header cut short, and a .hdr whose .img is missing.
+  std::string nifti2(540, '\0');
+  const std::int32_t size = 540;
+  std::memcpy(nifti2.data(), &size, 4);
+  expectError("cut.nii", nifti2.substr(0, 400), "too short for a NIfTI-2 header (540 bytes)");
+  std::memcpy(nifti2.data() + 4, "ni2\0", 4);
+  const std::int64_t dims[4] = {3, 4, 4, 4};
+  std::memcpy(nifti2.data() + 16, dims, sizeof dims);
+  const std::int16_t uint8Type = 2;
+  std::memcpy(nifti2.data() + 12, &uint8Type, 2);
+  expectError("alone.hdr", nifti2, "alone.img: cannot open");
+  // VTK: no such array (the ones there are listed), a block header that lies, a missing piece,
+  // appended raw data cut short, XML that does not parse.
+  const std::string vtkHead =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" version=\"1.0\" "
+      "byte_order=\"LittleEndian\" header_type=\"UInt32\"";
+  const std::string image =
+      ">\n<ImageData WholeExtent=\"0 2 0 1 0 1\" Origin=\"0 0 0\" Spacing=\"1 1 1\">\n"
+      "<Piece Extent=\"0 2 0 1 0 1\">\n<PointData>\n";
+  writeFile(folder() / "name.vti",
+            vtkHead + image +
+                "<DataArray type=\"UInt8\" Name=\"a\" format=\"ascii\">0 1 2 3 4 5 6 7 8 9 10 "
+                "11</DataArray></PointData></Piece></ImageData></VTKFile>\n");
+  {
+    VolumeSource named;
+    named.kind = VolumeSource::Kind::File;
+    named.file.path = (folder() / "name.vti").string();
+    named.file.format = VolumeFormat::Vtk;
+    named.file.array = "b";
+    std::string message = "(no error)";
+    try {
+      resolveVolumeFile(named);
+    } catch (const base::Error& e) {
+      message = e.what();
+    }
+    EXPECT_NE(message.find("name.vti: no point data array named 'b' (point data arrays: a)"),
+              std::string::npos)
+        << message;
+  }
+  const std::string appended =
+      "<DataArray type=\"UInt8\" Name=\"a\" format=\"appended\" offset=\"0\"/></PointData>"
+      "</Piece></ImageData><AppendedData encoding=\"raw\">\n _";
+  expectError("short.vti", vtkHead + image + appended + std::string("\x0c\0\0\0\1\2", 6),
+              "shorter than");
+  std::string lying = std::string("\1\0\0\0\x0c\0\0\0\x0c\0\0\0\x09\0\0\0", 16) + "not zlib!";
+  expectError("lying.vti",
+              vtkHead + " compressor=\"vtkZLibDataCompressor\"" + image + appended + lying,
+              "compressed block 0 is corrupt");
+  expectError("bad.vti", vtkHead + image + "<DataArray <<", "not VTK XML");
+  expectError("pieces.pvti",
+              "<VTKFile type=\"PImageData\"><PImageData WholeExtent=\"0 2 0 1 0 1\">"
+              "<PPointData><PDataArray type=\"UInt8\" Name=\"a\"/></PPointData>"
+              "<Piece Extent=\"0 2 0 1 0 1\" Source=\"nowhere.vti\"/></PImageData></VTKFile>",
+              "piece 'nowhere.vti' is missing");
 }
 
 }  // namespace

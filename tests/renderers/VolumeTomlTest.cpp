@@ -204,15 +204,17 @@ TEST(VolumeToml, FilesTakeTheirGridFromTheHeaderAndErrorsNameLineFieldAndFile) {
   EXPECT_EQ(
       errorOf("ext.toml", head + "file = \"v.dat\"\n" + tf),
       ":4:8: volume 'v'.file: the format is not known from the name (.nrrd .nhdr .nii .nii.gz "
-      ".mhd .mha .h5 .hdf5 .nc .cdf); give 'format'");
+      ".hdr .mhd .mha .h5 .hdf5 .nc .cdf .vti .pvti); give 'format'");
   EXPECT_EQ(errorOf("fmt.toml", head + "file = \"v.nrrd\"\nformat = \"tiff\"\n" + tf),
-            ":5:10: volume 'v'.format: must be \"nrrd\", \"nifti\", \"metaimage\", \"hdf5\" or "
-            "\"netcdf\", not \"tiff\"");
+            ":5:10: volume 'v'.format: must be \"nrrd\", \"nifti\", \"metaimage\", \"hdf5\", "
+            "\"netcdf\" or \"vtk\", not \"tiff\"");
   EXPECT_EQ(errorOf("var.toml", head + "file = \"v.nrrd\"\nvariable = \"T\"\n" + tf),
             ":5:12: volume 'v'.variable: is for NetCDF files");
+  EXPECT_EQ(errorOf("array.toml", head + "file = \"v.nrrd\"\narray = \"T\"\n" + tf),
+            ":5:9: volume 'v'.array: is for VTK image data (.vti, .pvti)");
   EXPECT_EQ(errorOf("dims.toml", head + "file = \"v.nrrd\"\ndims = [3, 4, 5]\n" + tf),
             ":5:1: volume 'v': unknown field 'dims'; known fields: name, source, origin, spacing, "
-            "visible, transfer_function, file, format, dataset, variable, time");
+            "visible, transfer_function, file, format, dataset, variable, array, time");
   const std::string nifti =
       errorOf("nifti.toml", head + "file = \"v.nrrd\"\nformat = \"nifti\"\n" + tf);
   EXPECT_EQ(nifti.rfind(":4:8: volume 'v'.file: " + nrrd + ": 146 bytes, too short for a NIfTI", 0),

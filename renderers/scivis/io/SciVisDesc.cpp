@@ -17,8 +17,11 @@ std::vector<std::string> SciVisDesc::inputFiles() const {
     if (v.source.kind == VolumeSource::Kind::OpenVdb) files.push_back(v.source.vdb.path);
     if (v.source.kind == VolumeSource::Kind::File) {
       files.push_back(v.source.file.path);
-      const std::string& data = v.source.file.stored.path;  // a detached data file
-      if (!data.empty() && data != v.source.file.path) files.push_back(data);
+      const StoredArray& stored = v.source.file.stored;  // detached data files
+      if (!stored.path.empty() && stored.path != v.source.file.path && stored.paths.empty())
+        files.push_back(stored.path);
+      for (const std::string& data : stored.paths) files.push_back(data);
+      for (const FilePiece& piece : v.source.file.pieces) files.push_back(piece.path);
     }
   }
   return files;

@@ -174,15 +174,16 @@ void readFile(TomlReader& r, const toml::table& t, const std::string& what,
     if (named)
       f.format = *named, formatKnown = true;
     else if (format->is_string())
-      r.problem(*format, what + ".format",
-                "must be \"nrrd\", \"nifti\", \"metaimage\", \"hdf5\" or \"netcdf\", not \"" +
-                    name + "\"");
+      r.problem(
+          *format, what + ".format",
+          "must be \"nrrd\", \"nifti\", \"metaimage\", \"hdf5\", \"netcdf\" or \"vtk\", not \"" +
+              name + "\"");
   } else if (const auto byName = volumeFormatOfPath(f.path)) {
     f.format = *byName, formatKnown = true;
   } else if (file && file->is_string()) {
     r.problem(*file, what + ".file",
-              "the format is not known from the name (.nrrd .nhdr .nii .nii.gz .mhd .mha .h5 "
-              ".hdf5 .nc .cdf); give 'format'");
+              "the format is not known from the name (.nrrd .nhdr .nii .nii.gz .hdr .mhd .mha .h5 "
+              ".hdf5 .nc .cdf .vti .pvti); give 'format'");
   }
   if (const toml::node* d = t.get("dataset")) {
     if (formatKnown && f.format != VolumeFormat::Hdf5)
@@ -193,6 +194,11 @@ void readFile(TomlReader& r, const toml::table& t, const std::string& what,
     if (formatKnown && f.format != VolumeFormat::NetCdf)
       r.problem(*v, what + ".variable", "is for NetCDF files");
     f.variable = r.string(v, what + ".variable");
+  }
+  if (const toml::node* a = t.get("array")) {
+    if (formatKnown && f.format != VolumeFormat::Vtk)
+      r.problem(*a, what + ".array", "is for VTK image data (.vti, .pvti)");
+    f.array = r.string(a, what + ".array");
   }
   if (const toml::node* time = t.get("time")) {
     const auto v = r.diagnostics().integer(*time, what + ".time");
@@ -208,7 +214,7 @@ void readFile(TomlReader& r, const toml::table& t, const std::string& what,
   } catch (const base::Error& e) {
     // Point at the field the problem is about: a dataset, variable or time step the file lacks.
     const std::string m = e.what();
-    for (const std::string field : {"dataset", "variable", "time"})
+    for (const std::string field : {"dataset", "variable", "array", "time"})
       if (const toml::node* n = t.get(field); n && m.find(" " + field + " ") != std::string::npos)
         r.fail(*n, what + "." + field, m);
     r.fail(*file, what + ".file", m);
@@ -331,7 +337,7 @@ VolumeDesc readVolume(TomlReader& r, const toml::table& t, const std::filesystem
     case VolumeSource::Kind::File:
       r.onlyKeys(t, what,
                  {"name", "source", "origin", "spacing", "visible", "transfer_function", "file",
-                  "format", "dataset", "variable", "time"});
+                  "format", "dataset", "variable", "array", "time"});
       break;
   }
   d.visible = r.boolean(t, "visible", what, d.visible);

@@ -1,5 +1,5 @@
 #pragma once
-// What the header of an NRRD, NIfTI-1 or MetaImage file says: the grid and where its voxels are
+// What the header of an NRRD, NIfTI-1/-2 or MetaImage file says: the grid and where its voxels are
 // stored. The parsers take the first bytes of the file (for .nii.gz: of the inflated stream) and
 // throw base::Error located in the file (line and column for text headers) and naming the field
 // on anything they
@@ -31,12 +31,16 @@ constexpr std::size_t kMaxTextHeader = 1 << 20;
 // resolve detached data files against its folder.
 ArrayHeader parseNrrdHeader(std::string_view bytes, const std::string& path);
 ArrayHeader parseMetaImageHeader(std::string_view bytes, const std::string& path);
-// NIfTI-1 single file (.nii, magic "n+1"): `bytes` at least the 348-byte header; `compressed`:
-// the file is gzipped (.nii.gz; bytes are then the inflated stream's first bytes). `time`
+// NIfTI-1 or NIfTI-2, a single file (.nii, magic "n+1"/"n+2") or a .hdr whose voxels are in the
+// .img beside it ("ni1"/"ni2"): `bytes` at least the header (348 or 540 bytes); `compressed`: the
+// file is gzipped (.nii.gz, .hdr.gz; bytes are then the inflated stream's first bytes). `time`
 // selects the volume of a 4-D file.
-constexpr std::size_t kNiftiHeaderBytes = 348;
+constexpr std::size_t kNiftiHeaderBytes = 540;  // the larger, NIfTI-2's
 ArrayHeader parseNiftiHeader(std::string_view bytes, const std::string& path, bool compressed,
                              int time = 0);
+
+// The .img (.img.gz) beside a NIfTI .hdr (.hdr.gz); empty when `headerPath` is not named so.
+std::string niftiImagePath(const std::string& headerPath);
 
 // What is wrong with dims against the caps ("1 voxels along axis 1, must be ..."); empty when
 // nothing is.

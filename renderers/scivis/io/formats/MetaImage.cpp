@@ -89,7 +89,7 @@ ArrayHeader parseMetaImageHeader(std::string_view bytes, const std::string& path
     } else if (key == "BinaryDataByteOrderMSB" || key == "ElementByteOrderMSB") {
       h.data.bigEndian = boolean(value, fw);
     } else if (key == "CompressedData") {
-      h.data.compressed = boolean(value, fw);
+      h.data.encoding = boolean(value, fw) ? Encoding::Zlib : Encoding::Raw;
     } else if (key == "ElementNumberOfChannels") {
       if (integers(value, 1, 0, 1 << 20, fw)[0] != 1)
         fw.fail("only single-channel (scalar) images are read");

@@ -1,8 +1,10 @@
 #pragma once
-// A dense voxel array stored in a file (x fastest, then y, then z), raw or as a zlib/gzip stream,
-// and reading any box of it. The NRRD, NIfTI and MetaImage readers describe their data with
-// one; raw data is read with pread over the box's rows only, compressed data is inflated as a
-// stream and everything outside the box is discarded as it passes (never held).
+// A dense voxel array stored in a file (x fastest, then y, then z), or in a list of files, and
+// reading any box of it. The NRRD, NIfTI, MetaImage and VTK readers describe their data with
+// one. Raw data is read with pread over the box's rows only, base64 text (VTK) by decoding just
+// the box's bytes; streams (zlib/gzip, bzip2, NRRD's ascii and hex text, VTK's compressed
+// blocks) are decoded in order and everything outside the box is discarded as it passes (never
+// held; VTK's blocks before the box are jumped, not decompressed).
 //
 // File types the renderer does not hold are converted on load, values kept: uint8 and uint16
 // stay as they are; int8, int16, uint32, int32, float64 become float32 (exact for int8, int16

@@ -13,6 +13,7 @@
 #include "base/Error.h"
 #include "renderers/scivis/io/formats/ArrayHeader.h"
 #include "renderers/scivis/io/formats/LibraryFormats.h"
+#include "renderers/scivis/io/formats/VtkImage.h"
 
 namespace renderers::scivis {
 namespace {
@@ -60,10 +61,12 @@ std::optional<VolumeFormat> volumeFormatOfPath(const std::string& path) {
   const std::string p = lowerCase(path);
   for (const char* e : {".nrrd", ".nhdr"})
     if (endsWith(p, e)) return VolumeFormat::Nrrd;
-  for (const char* e : {".nii", ".nii.gz"})
+  for (const char* e : {".nii", ".nii.gz", ".hdr", ".hdr.gz"})
     if (endsWith(p, e)) return VolumeFormat::Nifti;
   for (const char* e : {".mhd", ".mha"})
     if (endsWith(p, e)) return VolumeFormat::MetaImage;
+  for (const char* e : {".vti", ".pvti"})
+    if (endsWith(p, e)) return VolumeFormat::Vtk;
   for (const char* e : {".h5", ".hdf5", ".he5", ".hdf"})
     if (endsWith(p, e)) return VolumeFormat::Hdf5;
   for (const char* e : {".nc", ".cdf", ".nc4", ".netcdf"})
@@ -73,7 +76,7 @@ std::optional<VolumeFormat> volumeFormatOfPath(const std::string& path) {
 
 std::optional<VolumeFormat> volumeFormatNamed(const std::string& name) {
   for (VolumeFormat f : {VolumeFormat::Nrrd, VolumeFormat::Nifti, VolumeFormat::MetaImage,
-                         VolumeFormat::Hdf5, VolumeFormat::NetCdf})
+                         VolumeFormat::Hdf5, VolumeFormat::NetCdf, VolumeFormat::Vtk})
     if (name == volumeFormatName(f)) return f;
   return std::nullopt;
 }
@@ -90,6 +93,8 @@ const char* volumeFormatName(VolumeFormat format) {
       return "hdf5";
     case VolumeFormat::NetCdf:
       return "netcdf";
+    case VolumeFormat::Vtk:
+      return "vtk";
   }
   return "unknown";
 }
@@ -99,6 +104,7 @@ void resolveVolumeFile(VolumeSource& source) {
   source.kind = VolumeSource::Kind::File;
   if (f.format == VolumeFormat::Hdf5) return resolveHdf5(source);
   if (f.format == VolumeFormat::NetCdf) return resolveNetCdf(source);
+  if (f.format == VolumeFormat::Vtk) return resolveVtkImage(source);
   ArrayHeader h;
   switch (f.format) {
     case VolumeFormat::Nrrd:
@@ -138,6 +144,8 @@ Volume loadVolumeFile(const VolumeSource& source, const VoxelBox& box) {
       return loadHdf5Box(source, box);
     case VolumeFormat::NetCdf:
       return loadNetCdfBox(source, box);
+    case VolumeFormat::Vtk:
+      return loadVtkImageBox(source, box);
     default:
       return readStoredBox(source.file.stored, source.grid, box);
   }

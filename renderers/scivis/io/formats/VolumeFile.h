@@ -9,9 +9,10 @@
 
 namespace renderers::scivis {
 
-// From the file name: .nrrd/.nhdr, .nii/.nii.gz, .mhd/.mha, .h5/.hdf5/.he5, .nc/.cdf/.nc4.
+// From the file name: .nrrd/.nhdr, .nii/.nii.gz/.hdr/.hdr.gz, .mhd/.mha, .h5/.hdf5/.he5,
+// .nc/.cdf/.nc4, .vti/.pvti.
 std::optional<VolumeFormat> volumeFormatOfPath(const std::string& path);
-// "nrrd", "nifti", "metaimage", "hdf5", "netcdf"; nullopt for anything else.
+// "nrrd", "nifti", "metaimage", "hdf5", "netcdf", "vtk"; nullopt for anything else.
 std::optional<VolumeFormat> volumeFormatNamed(const std::string& name);
 const char* volumeFormatName(VolumeFormat format);
 
