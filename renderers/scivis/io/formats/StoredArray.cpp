@@ -13,6 +13,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <functional>
 #include <limits>
@@ -252,6 +253,21 @@ class TextInput {
   std::size_t at_ = 0, size_ = 0;
 };
 
+// A character of text for a message: itself when printable, else its code.
+std::string shown(int c) {
+  if (c >= 32 && c < 127) return "'" + std::string(1, static_cast<char>(c)) + "'";
+  char code[16];
+  std::snprintf(code, sizeof code, "byte 0x%02x", c & 0xff);
+  return code;
+}
+
+// Text for a message: bytes that do not print as '?'.
+std::string printable(std::string text) {
+  for (char& c : text)
+    if (c < 32 || c >= 127) c = '?';
+  return text;
+}
+
 // NRRD's hex encoding: two hex digits a byte, whitespace anywhere between bytes.
 class HexStream final : public ByteStream {
  public:
@@ -276,8 +292,7 @@ class HexStream final : public ByteStream {
             : c >= 'A' && c <= 'F' ? c - 'A' + 10
                                    : -1;
         if (d < 0)
-          throw base::Error(path_ + ": hex volume data has '" +
-                            std::string(1, static_cast<char>(c)) + "' after " +
+          throw base::Error(path_ + ": hex volume data has " + shown(c) + " after " +
                             std::to_string(produced_ + n) + " bytes, not a hex digit");
       }
       to[n] = static_cast<std::byte>(digits[0] * 16 + digits[1]);
@@ -330,7 +345,7 @@ class AsciiStream final : public ByteStream {
     if (ec != std::errc() || end != token.data() + token.size() || std::isnan(v) ||
         (integral && (v != std::floor(v) || v < lo || v > hi)))
       throw base::Error(path_ + ": text volume data: value " + std::to_string(values_ + 1) + ", '" +
-                        token.substr(0, 40) + "', is not " +
+                        printable(token.substr(0, 40)) + "', is not " +
                         (integral ? "an integer that fits " : "a number for ") +
                         fileTypeName(type_));
     ++values_;
