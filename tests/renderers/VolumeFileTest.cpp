@@ -14,6 +14,7 @@
 #include "renderers/BuiltinScenes.h"
 #include "renderers/RenderScene.h"
 #include "renderers/scivis/io/VolumeLoad.h"
+#include "renderers/scivis/io/formats/ArrayHeader.h"
 #include "renderers/scivis/io/formats/VolumeFile.h"
 #include "renderers/scivis/scene/VolumeField.h"
 #include "tests/renderers/RenderTestUtil.h"
@@ -32,6 +33,12 @@ TEST(VolumeFile, FormatsFromTheName) {
   EXPECT_EQ(volumeFormatOfPath("x.hdf5"), VolumeFormat::Hdf5);
   EXPECT_EQ(volumeFormatOfPath("x.raw"), std::nullopt);
   EXPECT_EQ(volumeFormatNamed("metaimage"), VolumeFormat::MetaImage);
+  EXPECT_EQ(volumeFormatOfPath("t1.hdr.gz"), VolumeFormat::Nifti);
+  EXPECT_EQ(volumeFormatOfPath("run/p.PVTI"), VolumeFormat::Vtk);
+  EXPECT_EQ(volumeFormatOfPath("x.vti"), VolumeFormat::Vtk);
+  EXPECT_EQ(volumeFormatNamed("vtk"), VolumeFormat::Vtk);
+  EXPECT_EQ(niftiImagePath("a/T1.HDR.gz"), "a/T1.IMG.gz");
+  EXPECT_EQ(niftiImagePath("t1.nii"), "");
 }
 
 TEST(VolumeFile, NrrdEveryEncodingAndTypeReadsTheFieldAndBricksEqualTheWhole) {

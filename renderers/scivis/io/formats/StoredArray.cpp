@@ -500,6 +500,9 @@ class VtkBlockStream final : public ByteStream {
       at += size;
     }
     starts_.push_back(at);
+    if (at > file.size())
+      throw base::Error(path + ": the compressed array's header claims " + std::to_string(at) +
+                        " bytes of blocks, more than the file's " + std::to_string(file.size()));
     // Base64: the blocks' text starts after the header's (padded to whole groups).
     dataStart_ = base64_ ? offset + 4 * ((headerBytes + 2) / 3) : offset + headerBytes;
   }
