@@ -41,7 +41,7 @@ struct OpenVdbParams {
 };
 
 // A dense voxel array stored in a file (x fastest, then y, then z), raw, as a compressed stream
-// or as text: what the NRRD, NIfTI and MetaImage readers find in a header
+// or as text: what the NRRD, NIfTI, MetaImage and VTK readers find in a header
 // (renderers/scivis/io/formats/StoredArray.h reads it). NRRD may spread it over a list of files,
 // each holding the next `voxelsPerFile` voxels (its slices or rows).
 enum class FileType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
