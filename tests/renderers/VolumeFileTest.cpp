@@ -4,9 +4,11 @@
 // range.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
@@ -120,6 +122,37 @@ TEST(VolumeFile, CompressedLayersInAnyOrderEqualTheWholeRead) {
         for (int i = layer.lo.x; i < layer.hi.x; ++i)
           ASSERT_EQ(part.at(i, j, k), whole.at(i, j, k)) << "layer from z " << z0;
   }
+}
+
+// Streams whose decoder cannot be copied (NRRD ascii here; bzip2 and hex alike) read layer after
+// layer, each starting at the previous one's last plane, replay that plane rather than decode
+// the file again from its start: about one pass over the file in all, and the whole read's
+// voxels.
+TEST(VolumeFile, TextLayersReplayTheirOverlapInsteadOfDecodingAgain) {
+  const Index3 d{64, 64, 64};
+  std::string text = "NRRD0004\ntype: short\ndimension: 3\nsizes: 64 64 64\nencoding: ascii\n\n";
+  for (int k = 0; k < d.z; ++k)
+    for (int j = 0; j < d.y; ++j)
+      for (int i = 0; i < d.x; ++i)
+        text += std::to_string((i * 7 + j * 3 + k * 5) % 2000 - 1000) + " ";
+  writeFile(folder() / "layers.nrrd", text);
+  writeFile(folder() / "layers-copy.nrrd", text);  // read whole: its stream is not the layers'
+  const VolumeSource copy = fileSource(folder() / "layers-copy.nrrd");
+  const Volume whole = loadVolume(copy, copy.grid.wholeBox());
+  const VolumeSource s = fileSource(folder() / "layers.nrrd");
+  const std::uint64_t before = volumeFileBytesRead();
+  for (int z0 = 0; z0 + 1 < d.z; z0 += 8) {
+    const VoxelBox layer{{3, 0, z0}, {60, 64, std::min(z0 + 9, d.z)}};
+    const Volume part = loadVolume(s, layer);
+    for (int k = layer.lo.z; k < layer.hi.z; ++k)
+      for (int j = layer.lo.y; j < layer.hi.y; ++j)
+        for (int i = layer.lo.x; i < layer.hi.x; ++i)
+          ASSERT_EQ(part.at(i, j, k), whole.at(i, j, k)) << "layer from z " << z0;
+  }
+  const double passes = static_cast<double>(volumeFileBytesRead() - before) / text.size();
+  EXPECT_LT(passes, 1.3) << "the layers read the file " << passes << " times over";
+  std::printf("8 overlapping layers of a %zu-byte ascii NRRD: %.2f passes over the file\n",
+              text.size(), passes);
 }
 
 TEST(VolumeFile, RawDataIsReadOverTheBrickOnly) {

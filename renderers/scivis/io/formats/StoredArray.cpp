@@ -606,11 +606,14 @@ std::unique_ptr<ByteStream> openStream(const StoredArray& a, const File& file,
   throw base::Error(path + ": raw data is not read as a stream");
 }
 
-// The last stream this thread read, kept where the read stopped, and a copy of it at the start
-// of the read's last slab (where the decoder can be copied): reading bricks or shell layers of
-// one file in increasing z decodes it once, not once per read (a ShadingShell reads a brick's
-// shell one layer of macrocells at a time, each layer starting at the previous one's last voxel
-// plane). Holds streams' states only (a decoder's window and one input chunk each), never voxels.
+// The last stream this thread read, kept where the read stopped, and a way back to the start of
+// the read's last slab: reading bricks or shell layers of one file in increasing z decodes it
+// once, not once per read (a ShadingShell reads a brick's shell one layer of macrocells at a
+// time, each layer starting at the previous one's last voxel plane). The way back is a copy of
+// the decoder (zlib can copy its state) or else the decoded bytes from there on, up to
+// kMaxReplay (bzip2, ascii, hex). Holds decoders' states and at most that many bytes a thread.
+constexpr std::size_t kMaxReplay = 32u << 20;
+
 struct StreamCache {
   std::string path;
   std::uint64_t fileOffset = 0, streamSkip = 0;
@@ -619,26 +622,80 @@ struct StreamCache {
   std::array<std::int64_t, 5> identity{};
   std::unique_ptr<File> file;
   std::unique_ptr<ByteStream> stream;  // reads `file`: declared after it, destroyed first
-  std::uint64_t at = 0;                // bytes consumed after streamSkip
+  std::uint64_t at = 0;                // where the reader is, in bytes after streamSkip
+  std::uint64_t streamPos = 0;         // where `stream` is: `at`, or ahead of it inside `replay`
   std::unique_ptr<ByteStream> mark;    // a copy of `stream` at markAt
   std::uint64_t markAt = 0;
+  std::vector<std::byte> replay;  // decoded bytes from replayAt up to streamPos, when recording
+  std::uint64_t replayAt = 0;
+  bool recording = false;
+
+  // The next `bytes` bytes into `to` (dropped when null): from the replay, then the stream.
+  void read(std::byte* to, std::uint64_t bytes) {
+    if (at < streamPos) {
+      const std::uint64_t take = std::min(bytes, streamPos - at);
+      if (to) std::memcpy(to, replay.data() + (at - replayAt), static_cast<std::size_t>(take));
+      if (to) to += take;
+      at += take, bytes -= take;
+    }
+    if (bytes == 0) return;
+    if (recording && replay.size() + bytes > kMaxReplay) {
+      recording = false;
+      replay.clear();
+    }
+    if (recording) {
+      const std::size_t old = replay.size();
+      replay.resize(old + static_cast<std::size_t>(bytes));
+      stream->read(replay.data() + old, bytes);
+      if (to) std::memcpy(to, replay.data() + old, static_cast<std::size_t>(bytes));
+    } else {
+      stream->read(to, bytes);
+    }
+    at += bytes, streamPos += bytes;
+  }
+
+  // Marks `at` as the place a later read may go back to.
+  void markHere() {
+    if (at == streamPos) {
+      if ((mark = stream->snapshot())) {
+        markAt = at;
+        return;
+      }
+    }
+    if (recording && replayAt <= at) {  // keep what is recorded from here on
+      replay.erase(replay.begin(), replay.begin() + static_cast<std::ptrdiff_t>(at - replayAt));
+    } else {
+      if (at != streamPos) return;
+      replay.clear();
+    }
+    replayAt = at;
+    recording = true;
+  }
 };
 thread_local StreamCache streamCache;
 
-// The stream of file `path` of `a` (its data starting at `offset`) positioned at byte `at`
-// after the skip: the cached one when it is the same unchanged file and not past `at`, else a
-// new one.
-ByteStream& streamAt(const StoredArray& a, const std::string& path, std::uint64_t offset,
-                     const std::array<std::int64_t, 5>& identity, std::uint64_t at) {
+// Positions the stream of file `path` of `a` (its data starting at `offset`) at byte `at` after
+// the skip: the cached one when it is the same unchanged file and `at` is not behind it (or
+// behind it where the mark or the replay reaches), else a new one.
+void streamAt(const StoredArray& a, const std::string& path, std::uint64_t offset,
+              const std::array<std::int64_t, 5>& identity, std::uint64_t at) {
   StreamCache& c = streamCache;
-  const bool same = c.stream && c.path == path && c.fileOffset == offset &&
-                    c.streamSkip == a.streamSkip && c.encoding == a.encoding && c.type == a.type &&
-                    c.identity == identity;
-  if (same && c.at > at && c.mark && c.markAt <= at) {  // resume from the mark
-    c.stream = std::move(c.mark);
-    c.at = c.markAt;
+  bool same = c.stream && c.path == path && c.fileOffset == offset &&
+              c.streamSkip == a.streamSkip && c.encoding == a.encoding && c.type == a.type &&
+              c.identity == identity;
+  if (same && at < c.at) {
+    if (c.mark && c.markAt <= at) {  // resume from the copy
+      c.stream = std::move(c.mark);
+      c.at = c.streamPos = c.markAt;
+      c.recording = false;
+      c.replay.clear();
+    } else if (c.recording && c.replayAt <= at) {  // replay what was recorded
+      c.at = at;
+    } else {
+      same = false;
+    }
   }
-  if (!(same && c.stream && c.at <= at)) {
+  if (!same) {
     c.mark.reset();
     c.stream.reset();
     c.file = std::make_unique<File>(path);
@@ -646,12 +703,12 @@ ByteStream& streamAt(const StoredArray& a, const std::string& path, std::uint64_
     c.path = path, c.fileOffset = offset, c.streamSkip = a.streamSkip;
     c.encoding = a.encoding, c.type = a.type;
     c.identity = identity;
-    c.at = 0;
+    c.at = c.streamPos = 0;
+    c.recording = false;
+    c.replay.clear();
     c.stream->read(nullptr, a.streamSkip);
   }
-  c.stream->read(nullptr, at - c.at);  // discard what lies before
-  c.at = at;
-  return *c.stream;
+  c.read(nullptr, at - c.at);  // what lies before is dropped (or recorded)
 }
 
 template <class T>
@@ -849,21 +906,15 @@ Volume readStoredBox(const StoredArray& array, const GridGeometry& grid, const V
             static_cast<std::size_t>(std::min<std::uint64_t>(left, perFile - local));
         openFile(index);
         std::uint64_t at = local * width;
-        ByteStream* stream = nullptr;
         if (array.streamed()) {
-          const std::string& path = fileOf(array, index);
-          stream = &streamAt(array, path, start, identity, at);  // skips what lies before
-          if (k + slabsPerRun >= box.hi.z && r == 0 && left == runVoxels) {
-            // The last slab: mark where it starts.
-            streamCache.mark = stream->snapshot();
-            streamCache.markAt = at;
-          }
+          streamAt(array, fileOf(array, index), start, identity, at);  // skips what lies before
+          if (k + slabsPerRun >= box.hi.z && r == 0 && left == runVoxels)
+            streamCache.markHere();  // the last slab: the next read may start here
         }
         for (std::size_t done = 0; done < inFile;) {
           const std::size_t n = std::min(pieceVoxels, inFile - done);
-          if (stream) {
-            stream->read(piece.data(), n * width);
-            streamCache.at += n * width;
+          if (array.streamed()) {
+            streamCache.read(piece.data(), n * width);
           } else if (array.encoding == Encoding::Base64) {
             base64Read(*file, fileOf(array, index), start, array.streamSkip + at, piece.data(),
                        n * width);
