@@ -20,8 +20,9 @@
 // ranks must be the same data (replication: either rank may render it).
 //
 // Every call but the accessors is collective over the render ranks (renderFrame, close; setStyle,
-// addBrick, clearBricks and setCamera are local and take effect at the next renderFrame). MPI
-// must be initialised with MPI_THREAD_MULTIPLE (the messaging runs on its own thread).
+// addBrick, clearBricks, dataChanged and setCamera are local and take effect at the next
+// renderFrame). MPI must be initialised with MPI_THREAD_MULTIPLE (the messaging runs on its own
+// thread).
 //
 // Errors are thrown, never turned into MPI_Abort by the library. Every wait is bounded by
 // SessionOptions::timeoutSeconds: a rank that stops answering (or a program that takes longer
