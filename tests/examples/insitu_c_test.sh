@@ -21,6 +21,9 @@ start=$SECONDS
 cmake --install "$BUILD" --prefix "$work/prefix" >/dev/null
 test -f "$work/prefix/include/dfbwall/dfbwall.h"
 lib=$(ls "$work"/prefix/lib/libdfbwall.so.*.* | head -1)
+# libdfbwall.so alone answers -ldfbwall: a libdfbwall.a beside it (the C++ API) would be taken by
+# a static link or by CMake's -l form in a system folder, without the C API in it.
+if [ -e "$work/prefix/lib/libdfbwall.a" ]; then echo "FAIL: a libdfbwall.a beside libdfbwall.so"; exit 1; fi
 # The shared library exports the C API and nothing else.
 if others=$(nm -D --defined-only "$lib" | awk '{print $3}' | grep -v '^dfbwall_'); then
   echo "FAIL: libdfbwall.so exports more than dfbwall_*:"; echo "$others" | head; exit 1
