@@ -1,9 +1,10 @@
 ! The Fortran module's errors and arrays on 3 ranks (run by insitu_c_test.sh against the install):
 ! a status instead of a stop, the C API's message, an array the module cannot pass refused by the
 ! next frame on every rank alike (then the session renders again), real(8) and unsigned
-! integer(2) voxels, and the image on render rank 0 only.
+! integer(2) voxels, the image on render rank 0 only, every style call, particles and meshes.
 program fortran_errors
-  use, intrinsic :: iso_c_binding, only: c_double, c_int8_t, c_int16_t, c_int64_t
+  use, intrinsic :: iso_c_binding, only: c_float, c_double, c_int8_t, c_int16_t, c_int32_t, &
+                                          c_int64_t
   use mpi_f08
   use dfbwall
   implicit none
@@ -12,6 +13,8 @@ program fortran_errors
   type(dfbwall_session) :: session
   type(dfbwall_brick) :: brick
   real(c_double), allocatable, target :: field(:, :, :)
+  real(c_float), target :: centers(3, 2), flat(2, 2), radii(1), positions(3, 3)
+  integer(c_int32_t), target :: triangles(3, 1)
   integer(c_int16_t), allocatable, target :: counts(:, :, :)
   integer(c_int8_t), pointer :: pixels(:, :, :)
   integer :: provided, rank, status, v, x, y, z, width, height, z0, z1
@@ -37,6 +40,19 @@ program fortran_errors
   call expect(status == DFBWALL_ERROR_INPUT .and. index(dfbwall_last_error(), "volume 7") > 0, &
               "a volume not in the style")
   call dfbwall_style_set_seed(style, 3_c_int64_t)
+  call dfbwall_style_set_particles(style, [0.9, 0.9, 0.2], 1.0)
+  call dfbwall_style_set_mesh(style, [0.2, 0.8, 0.9], 1.0)
+  call dfbwall_style_add_light(style, DFBWALL_LIGHT_DIRECTIONAL, [-1.0, -1.0, 1.0], &
+                               [0.0, 0.0, 0.0], [1.0, 1.0, 1.0], 2.0)
+  call dfbwall_style_add_light(style, DFBWALL_LIGHT_AMBIENT, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], &
+                               [1.0, 1.0, 1.0], 0.3)
+  call dfbwall_style_set_ambient_occlusion(style, 2, 4.0)
+  call dfbwall_style_set_shadows(style, .true.)
+  call dfbwall_style_set_sampling_rate(style, 1.0)
+  call dfbwall_style_set_samples_per_pixel(style, 1)
+  call dfbwall_style_set_background(style, [0.0, 0.0, 0.1])
+  call dfbwall_style_set_volume_visible(style, v, .true.)
+  call dfbwall_style_set_value_range(style, v, 0.0, 3.0)
   call dfbwall_session_set_style(session, style)
   call dfbwall_style_release(style)
   call dfbwall_session_set_camera(session, [30.0, 20.0, -30.0], [7.5, 7.5, 7.5], &
@@ -93,6 +109,37 @@ program fortran_errors
   call dfbwall_session_render_frame(session, status)
   call expect(status == DFBWALL_OK, "unsigned integer(2) bricks on two ranks")
   call expect(dfbwall_session_scene_bytes(session) > 0 .eqv. rank < 2, "scene bytes")
+
+  ! Particles and a triangle on rank 2, which holds none of the volume; then centres given as
+  ! 2 rows, refused on every rank.
+  centers = reshape([4.0, 4.0, 4.0, 11.0, 11.0, 11.0], [3, 2])
+  radii = 1.5
+  positions = reshape([0.0, 0.0, 15.0, 15.0, 0.0, 15.0, 0.0, 15.0, 15.0], [3, 3])
+  triangles = reshape([0, 1, 2], [3, 1])
+  flat = 1
+  call dfbwall_session_clear_bricks(session)
+  if (rank == 2) then
+    call dfbwall_brick_init(brick, 5, [0.0, 0.0, 0.0], [15.0, 15.0, 15.0])
+    call dfbwall_brick_add_no_volume(brick)
+    call dfbwall_brick_set_particles(brick, centers, radii)
+    call dfbwall_brick_set_ghost_particles(brick, centers(:, 1:1), radii)
+    call dfbwall_brick_set_mesh(brick, positions, triangles)
+    call dfbwall_brick_set_ghost_mesh(brick, positions, triangles)
+    call dfbwall_session_add_brick(session, brick)
+  end if
+  call dfbwall_session_render_frame(session, status)
+  call expect(status == DFBWALL_OK, "particles and a mesh")
+  call expect(dfbwall_session_scene_bytes(session) > 0 .eqv. rank == 2, "scene bytes of particles")
+  call dfbwall_session_clear_bricks(session)
+  if (rank == 2) then
+    call dfbwall_brick_init(brick, 5, [0.0, 0.0, 0.0], [15.0, 15.0, 15.0])
+    call dfbwall_brick_add_no_volume(brick)
+    call dfbwall_brick_set_particles(brick, flat, radii)
+    call dfbwall_session_add_brick(session, brick)
+  end if
+  call dfbwall_session_render_frame(session, status)
+  call expect(status == DFBWALL_ERROR_INPUT .and. index(dfbwall_last_error(), &
+              "brick 5: particle centers: the array has 2 rows, not 3") > 0, "centres as 2 rows")
 
   call dfbwall_session_close(session)
   call dfbwall_session_release(session)
