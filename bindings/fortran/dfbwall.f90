@@ -79,6 +79,7 @@ module dfbwall
     type(brick_c) :: c
     type(volume_part_c), allocatable :: parts(:)
     integer :: part_count = 0
+    logical :: ready = .false.                ! dfbwall_brick_init was called
     character(len=:), allocatable :: problem  ! an array the C API cannot read
   end type
 
@@ -605,6 +606,7 @@ contains
                       c_null_ptr, 0, c_null_ptr, 0)
     allocate (brick%parts(4))
     brick%part_count = 0
+    brick%ready = .true.
   end subroutine
 
   ! The next style volume's part: a part (lo, hi) of the field at voxels, or none (lo == hi).
@@ -616,9 +618,7 @@ contains
     logical, intent(in) :: contiguous
     type(volume_part_c), allocatable :: grown(:)
     character(len=32) :: number
-    if (.not. allocated(brick%parts)) then
-      call stop_with("dfbwall: dfbwall_brick_add_volume before dfbwall_brick_init")
-    end if
+    if (.not. allocated(brick%parts)) allocate (brick%parts(4))
     if (brick%part_count == size(brick%parts)) then
       allocate (grown(2*size(brick%parts)))
       grown(1:brick%part_count) = brick%parts(1:brick%part_count)
@@ -872,13 +872,20 @@ contains
     call outcome(c_session_set_style(session%ptr, style%ptr), status)
   end subroutine
 
-  ! Reads the brick's arrays. An array this module cannot pass (not contiguous, not 3 rows) is
-  ! refused like a brick that does not fit: by the next render_frame, on every render rank.
+  ! Reads the brick's arrays. An array this module cannot pass (not contiguous, not 3 rows), or a
+  ! brick not made by dfbwall_brick_init, is refused like a brick that does not fit: by the next
+  ! render_frame, on every render rank.
   subroutine dfbwall_session_add_brick(session, brick, status)
     type(dfbwall_session), intent(in) :: session
     type(dfbwall_brick), intent(inout), target :: brick
     integer, intent(out), optional :: status
     character(len=32) :: id
+    if (.not. brick%ready) then
+      call outcome(c_session_refuse_input(session%ptr, &
+                                          c_text("dfbwall: a brick before dfbwall_brick_init")), &
+                   status)
+      return
+    end if
     if (allocated(brick%problem)) then
       write (id, '(i0)') brick%c%id
       call outcome(c_session_refuse_input(session%ptr, c_text("dfbwall: brick "//trim(id)// &

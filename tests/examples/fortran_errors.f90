@@ -11,7 +11,7 @@ program fortran_errors
   type(dfbwall_options) :: options
   type(dfbwall_style) :: style
   type(dfbwall_session) :: session
-  type(dfbwall_brick) :: brick
+  type(dfbwall_brick) :: brick, never_made
   real(c_double), allocatable, target :: field(:, :, :)
   real(c_float), target :: centers(3, 2), flat(2, 2), radii(1), positions(3, 3)
   integer(c_int32_t), target :: triangles(3, 1)
@@ -140,6 +140,13 @@ program fortran_errors
   call dfbwall_session_render_frame(session, status)
   call expect(status == DFBWALL_ERROR_INPUT .and. index(dfbwall_last_error(), &
               "brick 5: particle centers: the array has 2 rows, not 3") > 0, "centres as 2 rows")
+  ! A brick never given to dfbwall_brick_init, on rank 1: refused on every rank.
+  call dfbwall_session_clear_bricks(session)
+  if (rank == 1) call dfbwall_session_add_brick(session, never_made)
+  call dfbwall_session_render_frame(session, status)
+  call expect(status == DFBWALL_ERROR_INPUT .and. index(dfbwall_last_error(), &
+              "render rank 1 refused its input: a brick before dfbwall_brick_init") > 0, &
+              "a brick never made")
 
   call dfbwall_session_close(session)
   call dfbwall_session_release(session)
