@@ -6,6 +6,7 @@ program fortran_errors
   use, intrinsic :: iso_c_binding, only: c_float, c_double, c_int8_t, c_int16_t, c_int32_t, &
                                           c_int64_t
   use mpi_f08
+  use mpi, only: old_world => MPI_COMM_WORLD  ! the old `mpi` module's integer handle
   use dfbwall
   implicit none
   type(dfbwall_options) :: options
@@ -21,6 +22,12 @@ program fortran_errors
 
   call MPI_Init_thread(MPI_THREAD_MULTIPLE, provided)
   call MPI_Comm_rank(MPI_COMM_WORLD, rank)
+  ! A session on the old module's handle, without options: an 800x600 canvas.
+  call dfbwall_session_new(session, old_world, status=status)
+  call expect(status == DFBWALL_OK .and. dfbwall_session_canvas_width(session) == 800 .and. &
+              dfbwall_session_canvas_height(session) == 600, "a session on an mpi integer handle")
+  call dfbwall_session_close(session)
+  call dfbwall_session_release(session)
   call dfbwall_options_new(options)
   call dfbwall_options_set(options, "colour", "red", status)
   call expect(status == DFBWALL_ERROR_INPUT .and. &
