@@ -15,8 +15,8 @@
 ! Bricks: dfbwall_brick_init, then one dfbwall_brick_add_volume per style volume (real(4),
 ! real(8), integer(1), integer(2), integer(4); integer(1) and (2) read as uint8/uint16 with
 ! unsigned=.true.), particles and a mesh; then dfbwall_session_add_brick, which reads the arrays.
-! Fortran's column-major v(i,j,k) is the C API's x fastest, then y, then z: voxel (i,j,k) of an
-! array added at lo is voxel lo + (i,j,k) - lbound of the whole field. The arrays must be
+! Fortran's column-major v(i,j,k) is the C API's x fastest, then y, then z: element v(i,j,k) of
+! an array added at lo (0-based) is whole-field voxel lo + (i,j,k) - lbound(v). The arrays must be
 ! contiguous, have the TARGET (or POINTER) attribute and stay where they are until
 ! dfbwall_session_add_brick returns (it copies them).
 module dfbwall
