@@ -1,0 +1,149 @@
+// Brick seams: rays that cross from brick to brick give the unbricked image. A synthetic volume
+// made like the ocean (anisotropic spacing, missing values in a continent across the seams and
+// scattered over the ghost layers, viewed at a slant) and configs/scenes/ocean.toml itself render
+// with 4 bricks on every rank within 1e-4 of 1 brick, at 1 sample a frame and at several (whose
+// samples the DFB composites one by one: a composite of each brick's mean was up to 0.13 off).
+#include <gtest/gtest.h>
+#include <mpi.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "renderers/SceneToml.h"
+#include "renderers/scivis/bricks/BrickFrameDriver.h"
+#include "tests/MpiTestUtil.h"
+#include "tests/renderers/BrickTestUtil.h"
+
+namespace renderers::scivis {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kWidth = 64, kHeight = 48, kTile = 16;
+
+// `bricks` bricks on the first `ranks` ranks of the world, `spp` samples a pixel in one frame
+// (rank 0's image; empty elsewhere).
+std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int ranks, int bricks,
+                                std::uint32_t spp) {
+  MPI_Comm comm;
+  const int rank = testutil::worldRank();
+  MPI_Comm_split(MPI_COMM_WORLD, rank < ranks ? 0 : 1, rank, &comm);
+  std::vector<float> image;
+  if (rank < ranks) {
+    RenderSettings settings;
+    settings.width = kWidth, settings.height = kHeight, settings.seed = 5;
+    image = test::renderHeldBricks(desc, settings, loadOwnBricks(*desc, bricks, 1, rank, ranks),
+                                   comm, kTile, 1, std::chrono::milliseconds(60000), true, nullptr,
+                                   FirstHits::Auto, spp);
+  }
+  MPI_Comm_free(&comm);
+  MPI_Barrier(MPI_COMM_WORLD);
+  return image;
+}
+
+// 4 bricks on every rank of the world within 1e-4 of 1 brick on one, at `spp` samples a frame.
+void checkSeams(const std::string& name, const std::shared_ptr<SceneDesc>& desc,
+                std::uint32_t spp) {
+  const std::vector<float> many = renderBricks(desc, testutil::worldSize(), 4, spp);
+  const std::vector<float> whole = renderBricks(desc, 1, 1, spp);
+  if (testutil::worldRank() != 0) return;
+  ASSERT_EQ(many.size(), 4u * kWidth * kHeight);
+  ASSERT_EQ(whole.size(), many.size());
+  float worst = 0;
+  std::size_t at = 0;
+  int lit = 0;
+  for (std::size_t i = 0; i < many.size(); ++i) {
+    const float d = std::abs(many[i] - whole[i]);
+    if (!(d <= worst)) worst = d, at = i;  // a NaN is the worst
+    if (i % 4 == 3 && whole[i] > 0.05f) ++lit;
+  }
+  EXPECT_LE(worst, 1e-4f) << name << " at " << spp << " spp: 4 bricks vs 1 brick at pixel ("
+                          << at / 4 % kWidth << ", " << at / 4 / kWidth << ") channel " << at % 4
+                          << ": " << many[at] << " vs " << whole[at];
+  EXPECT_GT(lit, kWidth * kHeight / 8) << name << ": the volume should cover much of the image";
+  std::printf("%s at %u spp: 4 bricks on %d ranks vs 1 brick: largest difference %.3g\n",
+              name.c_str(), spp, testutil::worldSize(), worst);
+}
+
+// The synthetic ocean: 40 x 32 x 12 float voxels 1 x 1 x 5 apart, a smooth field cooling with
+// depth, a NaN continent across the middle (where the bricks meet) and NaN voxels scattered
+// through (some in every brick's ghost layer), a transfer function dense enough that rays
+// through it composite much, early termination off (its own difference is bounded by
+// min_transmittance, docs/scivis.md), a camera that looks across the seams at a slant.
+std::shared_ptr<SceneDesc> syntheticOcean() {
+  const fs::path folder =
+      fs::temp_directory_path() / ("dfbwall-seams-" + std::to_string(::getpid()));
+  fs::create_directories(folder);
+  constexpr int nx = 40, ny = 32, nz = 12;
+  std::vector<float> voxels;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const float dx = static_cast<float>(i - 20) / 7.0f, dy = static_cast<float>(j - 16) / 5.0f;
+        const bool continent = dx * dx + dy * dy < 1.0f && k < 9;
+        const bool scattered = (i * 73 + j * 151 + k * 311) % 29 == 0;
+        voxels.push_back(continent || scattered
+                             ? std::numeric_limits<float>::quiet_NaN()
+                             : 24.0f - 2.0f * static_cast<float>(k) +
+                                   3.0f * std::sin(0.4f * static_cast<float>(i)) *
+                                       std::cos(0.3f * static_cast<float>(j)));
+      }
+  std::ofstream(folder / "sea.raw", std::ios::binary)
+      .write(reinterpret_cast<const char*>(voxels.data()),
+             static_cast<std::streamsize>(voxels.size() * sizeof(float)));
+  std::ofstream(folder / "sea.toml") << R"([camera]
+position = [58.0, -34.0, 120.0]
+look_at = [19.5, 15.5, 27.5]
+up = [0.0, 1.0, 0.0]
+fov = 40.0
+
+[environment]
+type = "gradient"
+bottom = [0.02, 0.02, 0.03]
+top = [0.15, 0.16, 0.2]
+
+[[volumes]]
+name = "sea"
+source = "raw"
+file = "sea.raw"
+type = "float32"
+dims = [40, 32, 12]
+origin = [0.0, 0.0, 0.0]
+spacing = [1.0, 1.0, 5.0]
+transfer_function = { preset = "cool-warm", range = [-2.0, 28.0], opacity = [[-2.0, 0.02], [10.0, 0.1], [28.0, 0.6]], opacity_unit = 5.0 }
+
+[[lights]]
+type = "ambient"
+intensity = 1.0
+
+[scivis]
+ao_samples = 0
+sampling_rate = 1.0
+min_transmittance = 0.0
+)";
+  return std::make_shared<SceneDesc>(readSceneToml((folder / "sea.toml").string()));
+}
+
+std::shared_ptr<SceneDesc> ocean() {
+  return std::make_shared<SceneDesc>(readSceneToml(std::string(DFBWALL_SCENES) + "/ocean.toml"));
+}
+
+TEST(BrickSeamsMpi, AnisotropicVolumeWithMissingValuesAcrossTheSeams) {
+  const auto desc = syntheticOcean();
+  checkSeams("synthetic ocean", desc, 1);
+  checkSeams("synthetic ocean", desc, 4);
+}
+
+TEST(BrickSeamsMpi, OceanSceneOneSampleAFrame) { checkSeams("ocean.toml", ocean(), 1); }
+
+TEST(BrickSeamsMpi, OceanSceneSeveralSamplesAFrame) { checkSeams("ocean.toml", ocean(), 4); }
+
+}  // namespace
+}  // namespace renderers::scivis
