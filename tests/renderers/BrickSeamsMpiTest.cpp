@@ -31,7 +31,8 @@ namespace fs = std::filesystem;
 constexpr int kWidth = 64, kHeight = 48, kTile = 16;
 
 // `bricks` bricks on the first `ranks` ranks of the world, `spp` samples a pixel in one frame
-// (rank 0's image; empty elsewhere).
+// (rank 0's image; empty elsewhere). 0 bricks: the whole scene unbounded (wholeScene, as
+// --bricks 0 holds it), whose rays no brick face cuts.
 std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int ranks, int bricks,
                                 std::uint32_t spp) {
   MPI_Comm comm;
@@ -41,9 +42,14 @@ std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int rank
   if (rank < ranks) {
     RenderSettings settings;
     settings.width = kWidth, settings.height = kHeight, settings.seed = 5;
-    image = test::renderHeldBricks(desc, settings, loadOwnBricks(*desc, bricks, 1, rank, ranks),
-                                   comm, kTile, 1, std::chrono::milliseconds(60000), true, nullptr,
-                                   FirstHits::Auto, spp);
+    std::vector<HeldBrick> held;
+    if (bricks == 0)
+      held.push_back({0, wholeScene(*desc)});
+    else
+      held = loadOwnBricks(*desc, bricks, 1, rank, ranks);
+    image = test::renderHeldBricks(desc, settings, std::move(held), comm, kTile, 1,
+                                   std::chrono::milliseconds(60000), true, nullptr, FirstHits::Auto,
+                                   spp);
   }
   MPI_Comm_free(&comm);
   MPI_Barrier(MPI_COMM_WORLD);
@@ -58,7 +64,13 @@ void checkSeams(const std::string& name, const std::shared_ptr<SceneDesc>& desc,
   const std::vector<float> many = renderBricks(desc, testutil::worldSize(), 4, spp);
   const std::vector<float> one = renderBricks(desc, 1, 4, spp);
   const std::vector<float> whole = renderBricks(desc, 1, 1, spp);
+  const std::vector<float> unbounded = renderBricks(desc, 1, 0, spp);
   if (testutil::worldRank() != 0) return;
+  ASSERT_EQ(unbounded.size(), many.size());
+  float worstUnbounded = 0;
+  for (std::size_t i = 0; i < many.size(); ++i)
+    worstUnbounded = std::max(worstUnbounded, std::abs(many[i] - unbounded[i]));
+  EXPECT_LE(worstUnbounded, 1e-4f) << name << " at " << spp << " spp: 4 bricks vs unbounded";
   ASSERT_EQ(many.size(), 4u * kWidth * kHeight);
   ASSERT_EQ(one.size(), many.size());
   ASSERT_EQ(whole.size(), many.size());
@@ -77,8 +89,10 @@ void checkSeams(const std::string& name, const std::shared_ptr<SceneDesc>& desc,
                           << at / 4 % kWidth << ", " << at / 4 / kWidth << ") channel " << at % 4
                           << ": " << many[at] << " vs " << whole[at];
   EXPECT_GT(lit, kWidth * kHeight / 8) << name << ": the volume should cover much of the image";
-  std::printf("%s at %u spp: 4 bricks on %d ranks vs 1 brick: largest difference %.3g\n",
-              name.c_str(), spp, testutil::worldSize(), worst);
+  std::printf(
+      "%s at %u spp: 4 bricks on %d ranks vs 1 brick: largest difference %.3g, vs the whole "
+      "scene unbounded %.3g\n",
+      name.c_str(), spp, testutil::worldSize(), worst, worstUnbounded);
 }
 
 // The synthetic ocean: 40 x 32 x 12 float voxels 1 x 1 x 5 apart, a smooth field cooling with

@@ -492,6 +492,17 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
         // is t0, brickDepth()'s own clip; a hidden ray keeps it.)
         if (renderer && r % group == 0)  // with samples apart, each one's first ray
           depths.push_back(hit || skippedRay ? ray.t0 : brickDepth(bounds, ray.origin, ray.dir));
+        // The piece goes on past the faces the brick shares with the domain's boundary, as the
+        // unbricked scene's ray does (it clips none there: a sample exactly on the boundary is
+        // in it, where a piece ending there stopped short of it); only seams cut rays.
+        if (hit && renderer) {
+          float a = 0, b = kInf;
+          for (int axis = 0; axis < 3; ++axis)
+            if (accept.lo[axis] > -kInf || accept.hi[axis] < kInf)
+              clipToSlab(accept.lo[axis], accept.hi[axis], ray.origin[axis], 1.0f / ray.dir[axis],
+                         a, b);
+          rays[r].t0 = a, rays[r].t1 = b;
+        }
       }
       if (renderer && renderer->firstHitsRasterised(spp)) {
         // First hits from this frame's raster of the brick's triangles (FirstHitRaster.h), then
