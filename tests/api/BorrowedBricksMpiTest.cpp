@@ -54,9 +54,9 @@ struct Frame {
   std::size_t sceneBytes = 0, borrowedBytes = 0;
 };
 
-Frame renderOnce(RankBricks& bricks, bool borrowed) {
+Frame renderOnce(RankBricks& bricks, bool borrowed, const dfbwall::Style& st) {
   dfbwall::Session session(MPI_COMM_WORLD, options());
-  session.setStyle(style());
+  session.setStyle(st);
   session.setCamera(camera());
   bricks.add(session, borrowed);
   session.renderFrame();
@@ -67,17 +67,22 @@ Frame renderOnce(RankBricks& bricks, bool borrowed) {
 
 TEST(BorrowedBricks, RenderTheCopiedBytesWithoutHoldingTheVoxels) {
   RankBricks bricks;
-  const Frame copied = renderOnce(bricks, false);
-  const Frame borrowed = renderOnce(bricks, true);
+  const Frame copied = renderOnce(bricks, false, style());
+  const Frame borrowed = renderOnce(bricks, true, style());
   EXPECT_EQ(copied.borrowedBytes, 0u);
   EXPECT_EQ(borrowed.borrowedBytes, bricks.voxelBytes);
-  // The copy's voxels (padded slices: at least their bytes) are all the difference.
-  EXPECT_GE(copied.sceneBytes, borrowed.sceneBytes + bricks.voxelBytes)
-      << copied.sceneBytes << " copied, " << borrowed.sceneBytes << " borrowed";
   if (testutil::worldRank() == 0) {
     ASSERT_EQ(copied.image.size(), 96u * 72u * 4u);
     EXPECT_EQ(borrowed.image, copied.image);
   }
+  // Without isosurfaces: the size of Embree's BVHs changes from build to build (1 run in 9 by
+  // ~10 KB here), the copy's voxels (padded slices: at least their bytes) do not.
+  dfbwall::Style volumeOnly = style();
+  volumeOnly.isosurfaces.clear();
+  const Frame copiedVolume = renderOnce(bricks, false, volumeOnly);
+  const Frame borrowedVolume = renderOnce(bricks, true, volumeOnly);
+  EXPECT_GE(copiedVolume.sceneBytes, borrowedVolume.sceneBytes + bricks.voxelBytes)
+      << copiedVolume.sceneBytes << " copied, " << borrowedVolume.sceneBytes << " borrowed";
 }
 
 TEST(BorrowedBricks, ChangedValuesShowInTheFrameAfterDataChanged) {
@@ -95,7 +100,7 @@ TEST(BorrowedBricks, ChangedValuesShowInTheFrameAfterDataChanged) {
   session.renderFrame();
   const std::vector<std::uint8_t> after = session.image();
   session.close();
-  const Frame fresh = renderOnce(bricks, false);
+  const Frame fresh = renderOnce(bricks, false, style());
   if (testutil::worldRank() == 0) {
     EXPECT_NE(after, before);
     EXPECT_EQ(after, fresh.image) << "the changed values, not what was built from the old ones";
