@@ -136,17 +136,32 @@ struct Style {
   std::uint64_t seed = 0;
 };
 
+// Where a volume part's ghost voxels (those beyond the brick's clip bounds that its rays and
+// gradients read) come from.
+enum class Ghosts {
+  Given,  // in [lo, hi): the program's choice (see VolumePart)
+  // [lo, hi) is the box the brick owns, no ghosts: at each scene version the session works out
+  // the voxels its renderer reads (the rule of `dfbwall --ghost reach`: gradients and seams,
+  // and with shadows or AO the isosurfaces their rays reach) and fetches them from the bricks
+  // that own them over the render ranks (MPI point-to-point). The owned boxes of a volume's
+  // exchanged parts, over all render ranks, must tile its field: no overlap, no gap (else an
+  // InputError on every rank naming the boxes).
+  Exchange,
+};
+
 // A brick's part of one volume: the voxels [lo, hi) of the whole field (x fastest, then y, then
 // z), copied by addBrick. Shading rays see exactly the voxels given, so the box is the program's
 // choice of ghost data (dfbwall --ghost offers the same two): for seams that match the whole
 // field exactly it covers the clip bounds plus 2 voxels below and 3 above on each axis (where
 // the field has them) — one ghost layer, the least memory, but ambient occlusion near the
 // brick's faces sees only the brick — and for AO that equals the whole field's, the AO distance
-// beyond that too. lo == hi: this brick has none of the volume.
+// beyond that too. Or the session exchanges them (Ghosts::Exchange). lo == hi: this brick has
+// none of the volume.
 struct VolumePart {
   Index3 lo{0, 0, 0}, hi{0, 0, 0};
   VoxelType type = VoxelType::Float32;
   const void* voxels = nullptr;
+  Ghosts ghosts = Ghosts::Given;
 };
 
 struct Particles {
@@ -248,6 +263,9 @@ class Session {
   // The bytes of brick data this rank holds in the current scene version (its bricks' voxels,
   // particles and triangles).
   std::size_t sceneBytes() const;
+  // The bytes of ghost voxels this rank received from other ranks at the last scene version
+  // (Ghosts::Exchange).
+  std::size_t ghostBytesReceived() const;
   // Render ranks: ends the wall's run after the last frame (waiting until it is presented and
   // captured) and releases the session's communicators. Collective over the whole `comm`
   // together with runWall() returning on the wall ranks.

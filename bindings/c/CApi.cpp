@@ -230,7 +230,14 @@ dfbwall::Brick brickOf(const dfbwall_brick& c) {
     if (type < DFBWALL_FLOAT32 || type > DFBWALL_FLOAT64)
       throw CInputError("dfbwall: brick " + std::to_string(c.id) + ": volume part " +
                         std::to_string(v) + " has no voxel type " + std::to_string(type));
+    const int ghosts = enumBits(p.ghosts);
+    if (ghosts != DFBWALL_GHOSTS_GIVEN && ghosts != DFBWALL_GHOSTS_EXCHANGE)
+      throw CInputError("dfbwall: brick " + std::to_string(c.id) + ": volume part " +
+                        std::to_string(v) + " has ghosts " + std::to_string(ghosts) +
+                        " (DFBWALL_GHOSTS_GIVEN or DFBWALL_GHOSTS_EXCHANGE)");
     dfbwall::VolumePart part;
+    part.ghosts =
+        ghosts == DFBWALL_GHOSTS_EXCHANGE ? dfbwall::Ghosts::Exchange : dfbwall::Ghosts::Given;
     part.lo = {p.lo[0], p.lo[1], p.lo[2]};
     part.hi = {p.hi[0], p.hi[1], p.hi[2]};
     part.type = static_cast<dfbwall::VoxelType>(type);  // the same order (static_assert below)

@@ -122,12 +122,21 @@ typedef enum dfbwall_voxel_type {
   DFBWALL_FLOAT64 = 6
 } dfbwall_voxel_type;
 
+/* Where a volume part's ghost voxels come from (dfbwall::Ghosts in <dfbwall/DataDistributed.h>):
+ * given in [lo, hi), or exchanged by the session, [lo, hi) then the box the brick owns (the owned
+ * boxes of a volume's exchanged parts over all ranks must tile its field). */
+typedef enum dfbwall_ghosts {
+  DFBWALL_GHOSTS_GIVEN = 0,
+  DFBWALL_GHOSTS_EXCHANGE = 1
+} dfbwall_ghosts;
+
 /* A brick's part of one volume: voxels [lo, hi) of the whole field, x fastest, then y, then z
  * (lo == hi: none of this volume). */
 typedef struct dfbwall_volume_part {
   int lo[3], hi[3];
   dfbwall_voxel_type type;
   const void* voxels;
+  dfbwall_ghosts ghosts; /* 0 (= {0}): given */
 } dfbwall_volume_part;
 
 /* Start from dfbwall_brick b = {0}: every array is optional (count 0). Points are 3 floats each,

@@ -211,12 +211,16 @@ class PySession {
   void addBrick(int id, const py::object& lo, const py::object& hi, const py::list& volumes,
                 const py::object& particles, const py::object& radii,
                 const py::object& ghostParticles, const py::object& ghostRadii,
-                const py::object& positions, const py::object& triangles) {
+                const py::object& positions, const py::object& triangles,
+                const std::string& ghosts) {
     dfbwall::Session& session = s();
     dfbwall::Brick b;
     b.id = id;
     std::vector<py::array> keep;  // the arrays read below, alive until addBrick has copied them
     try {
+      if (ghosts != "given" && ghosts != "exchange")
+        throw dfbwall::InputError("dfbwall: brick " + std::to_string(id) + ": ghosts='" + ghosts +
+                                  "' (\"given\": in the arrays; \"exchange\": the session's)");
       b.boundsLo = vec3(lo, "bounds_lo");
       b.boundsHi = vec3(hi, "bounds_hi");
       for (const auto& item : volumes) {
@@ -247,6 +251,7 @@ class PySession {
                 at[2] + static_cast<int>(arr.shape(0))};
         p.type = *type;
         p.voxels = arr.data();  // read in place by addBrick (no copy here)
+        p.ghosts = ghosts == "exchange" ? dfbwall::Ghosts::Exchange : dfbwall::Ghosts::Given;
         b.volumes.push_back(p);
         keep.push_back(arr);
       }
@@ -322,6 +327,8 @@ PYBIND11_MODULE(dfbwall, m) {
       .def_property_readonly("canvas_height", [](PySession& p) { return p.s().canvasHeight(); })
       .def_property_readonly("frames_rendered", [](PySession& p) { return p.s().framesRendered(); })
       .def_property_readonly("scene_bytes", [](PySession& p) { return p.s().sceneBytes(); })
+      .def_property_readonly("ghost_bytes_received",
+                             [](PySession& p) { return p.s().ghostBytesReceived(); })
       .def(
           "run_wall", [](PySession& p) { p.s().runWall(); },
           py::call_guard<py::gil_scoped_release>())
@@ -332,7 +339,8 @@ PYBIND11_MODULE(dfbwall, m) {
            py::arg("bounds_hi"), py::kw_only(), py::arg("volumes") = py::list(),
            py::arg("particles") = py::none(), py::arg("radii") = py::none(),
            py::arg("ghost_particles") = py::none(), py::arg("ghost_radii") = py::none(),
-           py::arg("positions") = py::none(), py::arg("triangles") = py::none())
+           py::arg("positions") = py::none(), py::arg("triangles") = py::none(),
+           py::arg("ghosts") = "given")
       .def("clear_bricks", [](PySession& p) { p.s().clearBricks(); })
       .def(
           "set_camera",

@@ -36,7 +36,7 @@ enum { kN = 12 };
 static float field[kN][kN][kN]; /* [z][y][x] */
 
 static dfbwall_error addWhole(dfbwall_session* s, dfbwall_voxel_type type) {
-  dfbwall_volume_part part = {{0, 0, 0}, {kN, kN, kN}, DFBWALL_FLOAT32, NULL};
+  dfbwall_volume_part part = {{0, 0, 0}, {kN, kN, kN}, DFBWALL_FLOAT32, NULL, DFBWALL_GHOSTS_GIVEN};
   part.type = type;
   part.voxels = field;
   dfbwall_brick b = {0};

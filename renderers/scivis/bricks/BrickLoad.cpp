@@ -184,6 +184,18 @@ BrickContent loadBrickData(const SceneDesc& desc, const BrickPlan& plan, const G
 
 }  // namespace
 
+VoxelBox neededVoxels(const SceneDesc& desc, std::size_t volume, const Box3& bounds,
+                      const GhostReach& reach) {
+  const GridGeometry& g = sciVisDesc(desc).volumes[volume].source.grid;
+  VoxelBox core;
+  if (!voxelsAround(g, bounds, core)) return {};
+  const BrickReach r = brickReach(desc, bounds, reach);
+  VoxelBox shell;
+  if (r.beyond && hasIsosurface(desc, volume) && voxelsAround(g, r.region, shell, true))
+    return shell;
+  return core;
+}
+
 BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const GhostReach& reach) {
   std::string part;
   try {
