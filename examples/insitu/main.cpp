@@ -261,9 +261,13 @@ int run(const Args& args) {
     session.renderFrame();
     if (rank == 0) std::printf("step %d shown (frame %u)\n", t, session.framesRendered());
   }
+  // What the session exchanged for the last frame shown, over every rank (between bricks on one
+  // rank it copies, and that is not counted).
+  unsigned long long ghosts = session.ghostBytesReceived(), allGhosts = 0;
+  MPI_Reduce(&ghosts, &allGhosts, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, 0, sim);
   if (rank == 0)
-    std::printf("brick data on rank 0: %zu bytes; ghosts it received per frame: %zu bytes\n",
-                session.sceneBytes(), session.ghostBytesReceived());
+    std::printf("brick data on rank 0: %zu bytes; ghost voxels sent between ranks: %llu bytes\n",
+                session.sceneBytes(), allGhosts);
   if (!args.image.empty()) session.writeImage(args.image);
   session.close();
   return 0;
