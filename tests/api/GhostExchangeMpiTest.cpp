@@ -156,6 +156,34 @@ TEST(GhostExchange, ExchangedGhostsRenderAsTheWholeField) {
   }
 }
 
+// A new style with the same bricks: the session exchanges again, from the owned voxels the
+// bricks kept, what the new style's rays reach (the first style has no shadows: a thin layer).
+TEST(GhostExchange, ANewStyleWithTheSameBricksExchangesWhatItReaches) {
+  const int rank = testutil::worldRank(), ranks = testutil::worldSize();
+  dfbwall::SessionOptions o;
+  o.width = 96, o.height = 72, o.tileSize = 16, o.threads = 2, o.timeoutSeconds = 60;
+  dfbwall::Session session(MPI_COMM_WORLD, o);
+  dfbwall::Style plain = style();
+  plain.aoSamples = 0;
+  session.setStyle(plain);
+  session.setCamera(camera());
+  std::vector<float> storage;
+  for (int b = rank; b < static_cast<int>(kUneven.size()); b += ranks)
+    session.addBrick(
+        brickOf(b, kUneven[static_cast<std::size_t>(b)], Held::Exchanged, plain, storage));
+  session.renderFrame();
+  const std::size_t thin = session.ghostBytesReceived();
+  session.setStyle(shadowStyle());
+  session.renderFrame();
+  EXPECT_GT(session.ghostBytesReceived(), thin);
+  const std::vector<std::uint8_t> image = session.image();
+  session.close();
+  const Rendered fresh = render(ranks, kUneven, Held::Needed);
+  if (rank == 0) {
+    EXPECT_EQ(image, fresh.image);
+  }
+}
+
 // `boxes` on every rank (brick b on rank b % ranks): the error every rank throws.
 void expectRefusedOnEveryRank(const std::vector<Box>& boxes,
                               const std::vector<std::string>& named) {

@@ -6,6 +6,7 @@
 #include <dfbwall/dfbwall.h>
 #include <mpi.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static int failures = 0;
@@ -42,6 +43,23 @@ static dfbwall_error addWhole(dfbwall_session* s, dfbwall_voxel_type type) {
   dfbwall_brick b = {0};
   b.id = 0;
   b.bounds_hi[0] = b.bounds_hi[1] = b.bounds_hi[2] = kN - 1;
+  b.volumes = &part;
+  b.volume_count = 1;
+  return dfbwall_session_add_brick(s, &b);
+}
+
+/* The planes [z0, z1) this rank owns, their ghosts `ghosts` (DFBWALL_GHOSTS_EXCHANGE: the
+ * session's), clipped to its cells (up to the next slab's first plane). */
+static dfbwall_error addSlab(dfbwall_session* s, int id, int z0, int z1, dfbwall_ghosts ghosts) {
+  dfbwall_volume_part part = {
+      {0, 0, z0}, {kN, kN, z1}, DFBWALL_FLOAT32, NULL, DFBWALL_GHOSTS_GIVEN};
+  part.ghosts = ghosts;
+  part.voxels = field[z0];
+  dfbwall_brick b = {0};
+  b.id = id;
+  b.bounds_hi[0] = b.bounds_hi[1] = kN - 1;
+  b.bounds_lo[2] = (float)z0;
+  b.bounds_hi[2] = (float)(z1 < kN - 1 ? z1 : kN - 1);
   b.volumes = &part;
   b.volume_count = 1;
   return dfbwall_session_add_brick(s, &b);
@@ -138,6 +156,31 @@ int main(int argc, char** argv) {
   /* Rank 0 holds the voxels (and what the renderer derives from them); the others nothing. */
   if (rank == 0) CHECK(dfbwall_session_scene_bytes(s) >= sizeof field);
   if (rank != 0) CHECK(dfbwall_session_scene_bytes(s) == 0);
+
+  /* A ghost mode that does not exist is refused like a voxel type; slabs that give only their
+   * own planes, the session exchanging the ghosts, render the whole field's image (up to float
+   * summation order: one 8-bit step). */
+  static uint8_t whole[64 * 48 * 4];
+  if (rank == 0) memcpy(whole, pixels, sizeof whole);
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  const int z0 = kN * rank / ranks, z1 = kN * (rank + 1) / ranks;
+  CHECK(dfbwall_session_clear_bricks(s) == DFBWALL_OK);
+  CHECK(addSlab(s, rank, z0, z1, rank == ranks - 1 ? (dfbwall_ghosts)7 : DFBWALL_GHOSTS_EXCHANGE) ==
+        DFBWALL_OK);
+  CHECK(dfbwall_session_render_frame(s) == DFBWALL_ERROR_INPUT);
+  CHECK(contains(dfbwall_last_error(), "has ghosts 7"));
+  CHECK(addSlab(s, rank, z0, z1, DFBWALL_GHOSTS_EXCHANGE) == DFBWALL_OK);
+  CHECK(dfbwall_session_render_frame(s) == DFBWALL_OK);
+  CHECK(dfbwall_session_image(s, &pixels, &w, &h) == DFBWALL_OK);
+  if (rank == 0 && pixels) {
+    int worst = 0;
+    for (int i = 0; i < 64 * 48 * 4; ++i) {
+      const int d = abs((int)pixels[i] - (int)whole[i]);
+      worst = d > worst ? d : worst;
+    }
+    CHECK(worst <= 1);
+  }
   CHECK(dfbwall_session_close(s) == DFBWALL_OK);
   dfbwall_session_release(s);
 
