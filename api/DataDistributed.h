@@ -14,10 +14,11 @@
 //
 // Scene versions. setStyle() and the bricks (addBrick / clearBricks) make a scene version; the
 // next renderFrame() after any render rank changed either is the new version: the ranks then
-// exchange their bricks' ids and bounds (one allgather) and, for volumes whose range is not
-// given, the value range. Frames of one version with one camera accumulate (progressive
-// refinement); a new version or camera starts the average afresh. The same brick id on several
-// ranks must be the same data (replication: either rank may render it).
+// exchange their bricks' ids and bounds (one allgather), for volumes whose range is not given
+// the value range, and the ghost voxels of parts given with Ghosts::Exchange. Frames of one version
+// with one camera accumulate (progressive refinement); a new version or camera starts the average
+// afresh. The same brick id on several ranks must be the same data (replication: either rank may
+// render it).
 //
 // Every call but the accessors is collective over the render ranks (renderFrame, close; setStyle,
 // addBrick, clearBricks and setCamera are local and take effect at the next renderFrame). MPI
