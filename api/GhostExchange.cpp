@@ -147,7 +147,10 @@ struct Layout {
 Layout layoutOf(Volume& v) {
   return {v.voxels.data(), v.box, v.sliceStride(), renderers::voxelBytes(v.type)};
 }
-Layout layoutOf(const Volume& v) { return layoutOf(const_cast<Volume&>(v)); }
+// Read only: held or borrowed voxels.
+Layout layoutOf(const Volume& v) {
+  return {const_cast<std::byte*>(v.data()), v.box, v.sliceStride(), renderers::voxelBytes(v.type)};
+}
 Layout layoutOf(std::vector<std::byte>& packed, const VoxelBox& region, std::size_t width) {
   const Index3 s = region.size();
   return {packed.data(), region, static_cast<std::size_t>(s.x) * static_cast<std::size_t>(s.y),

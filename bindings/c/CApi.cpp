@@ -217,11 +217,16 @@ int enumBits(const Enum& e) {
   return bits;
 }
 
-dfbwall::Brick brickOf(const dfbwall_brick& c) {
+dfbwall::Brick brickOf(const dfbwall_brick& c, bool borrowed) {
   dfbwall::Brick b;
   b.id = c.id;
   b.boundsLo = {c.bounds_lo[0], c.bounds_lo[1], c.bounds_lo[2]};
   b.boundsHi = {c.bounds_hi[0], c.bounds_hi[1], c.bounds_hi[2]};
+  const int ghosts = enumBits(c.ghosts);
+  if (ghosts != DFBWALL_GHOSTS_GIVEN && ghosts != DFBWALL_GHOSTS_EXCHANGE)
+    throw CInputError("dfbwall: brick " + std::to_string(c.id) + " has ghosts " +
+                      std::to_string(ghosts) +
+                      " (DFBWALL_GHOSTS_GIVEN or DFBWALL_GHOSTS_EXCHANGE)");
   if (c.volume_count > 0 && !c.volumes)
     throw CInputError("dfbwall: brick " + std::to_string(c.id) + ": volumes is NULL with a count");
   for (std::size_t v = 0; v < c.volume_count; ++v) {
@@ -230,11 +235,6 @@ dfbwall::Brick brickOf(const dfbwall_brick& c) {
     if (type < DFBWALL_FLOAT32 || type > DFBWALL_FLOAT64)
       throw CInputError("dfbwall: brick " + std::to_string(c.id) + ": volume part " +
                         std::to_string(v) + " has no voxel type " + std::to_string(type));
-    const int ghosts = enumBits(p.ghosts);
-    if (ghosts != DFBWALL_GHOSTS_GIVEN && ghosts != DFBWALL_GHOSTS_EXCHANGE)
-      throw CInputError("dfbwall: brick " + std::to_string(c.id) + ": volume part " +
-                        std::to_string(v) + " has ghosts " + std::to_string(ghosts) +
-                        " (DFBWALL_GHOSTS_GIVEN or DFBWALL_GHOSTS_EXCHANGE)");
     dfbwall::VolumePart part;
     part.ghosts =
         ghosts == DFBWALL_GHOSTS_EXCHANGE ? dfbwall::Ghosts::Exchange : dfbwall::Ghosts::Given;
@@ -242,6 +242,7 @@ dfbwall::Brick brickOf(const dfbwall_brick& c) {
     part.hi = {p.hi[0], p.hi[1], p.hi[2]};
     part.type = static_cast<dfbwall::VoxelType>(type);  // the same order (static_assert below)
     part.voxels = p.voxels;
+    part.borrowed = borrowed;
     b.volumes.push_back(part);
   }
   b.particles.centers = points<dfbwall::Vec3f>(c.particle_centers, c.particle_count, "particles");
@@ -266,6 +267,22 @@ static_assert(static_cast<int>(dfbwall::VoxelType::Float32) == DFBWALL_FLOAT32 &
               static_cast<int>(dfbwall::VoxelType::Float64) == DFBWALL_FLOAT64);
 static_assert(sizeof(dfbwall::Vec3f) == 3 * sizeof(float) &&
               sizeof(std::array<std::uint32_t, 3>) == 3 * sizeof(std::uint32_t));
+
+// Both forms of add_brick: the brick's volume parts copied or borrowed.
+dfbwall_error addBrick(dfbwall_session* session, const dfbwall_brick* brick, bool borrowed) {
+  return guarded([&] {
+    dfbwall::Session& s = sessionOf(session);
+    // Refused like a brick that does not fit: at the next frame, on every rank alike.
+    dfbwall::Brick b;
+    try {
+      b = brickOf(need(brick, "the brick"), borrowed);
+    } catch (const CInputError& e) {
+      s.refuseInput(e.what());
+      return;
+    }
+    s.addBrick(b);
+  });
+}
 
 }  // namespace
 
@@ -474,18 +491,16 @@ dfbwall_error dfbwall_session_set_style(dfbwall_session* session, const dfbwall_
 }
 
 dfbwall_error dfbwall_session_add_brick(dfbwall_session* session, const dfbwall_brick* brick) {
-  return guarded([&] {
-    dfbwall::Session& s = sessionOf(session);
-    // Refused like a brick that does not fit: at the next frame, on every rank alike.
-    dfbwall::Brick b;
-    try {
-      b = brickOf(need(brick, "the brick"));
-    } catch (const CInputError& e) {
-      s.refuseInput(e.what());
-      return;
-    }
-    s.addBrick(b);
-  });
+  return addBrick(session, brick, false);
+}
+
+dfbwall_error dfbwall_session_add_brick_borrowed(dfbwall_session* session,
+                                                 const dfbwall_brick* brick) {
+  return addBrick(session, brick, true);
+}
+
+dfbwall_error dfbwall_session_data_changed(dfbwall_session* session) {
+  return guarded([&] { sessionOf(session).dataChanged(); });
 }
 
 dfbwall_error dfbwall_session_clear_bricks(dfbwall_session* session) {
@@ -530,6 +545,10 @@ dfbwall_error dfbwall_session_write_image(dfbwall_session* session, const char* 
 
 size_t dfbwall_session_scene_bytes(const dfbwall_session* session) {
   return session ? session->session->sceneBytes() : 0;
+}
+
+size_t dfbwall_session_borrowed_bytes(const dfbwall_session* session) {
+  return session ? session->session->borrowedBytes() : 0;
 }
 
 dfbwall_error dfbwall_session_close(dfbwall_session* session) {

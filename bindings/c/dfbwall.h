@@ -111,7 +111,8 @@ DFBWALL_API dfbwall_error dfbwall_style_set_background(dfbwall_style* style, con
 DFBWALL_API dfbwall_error dfbwall_style_set_samples_per_pixel(dfbwall_style* style, int spp);
 DFBWALL_API dfbwall_error dfbwall_style_set_seed(dfbwall_style* style, uint64_t seed);
 
-/* ---- Bricks: what one rank holds, read (copied) by dfbwall_session_add_brick. ---- */
+/* ---- Bricks: what one rank holds, read (copied) by dfbwall_session_add_brick; its voxels
+ * borrowed (read in place) by dfbwall_session_add_brick_borrowed. ---- */
 typedef enum dfbwall_voxel_type {
   DFBWALL_FLOAT32 = 0, /* float32, uint8, uint16: held as given */
   DFBWALL_UINT8 = 1,
@@ -122,9 +123,10 @@ typedef enum dfbwall_voxel_type {
   DFBWALL_FLOAT64 = 6
 } dfbwall_voxel_type;
 
-/* Where a volume part's ghost voxels come from (dfbwall::Ghosts in <dfbwall/DataDistributed.h>):
- * given in [lo, hi), or exchanged by the session, [lo, hi) then the box the brick owns (the owned
- * boxes of a volume's exchanged parts over all ranks must tile its field). */
+/* Where a brick's volume parts get their ghost voxels (dfbwall::Ghosts in
+ * <dfbwall/DataDistributed.h>): given in each part's [lo, hi), or exchanged by the session, each
+ * [lo, hi) then the box the brick owns (the owned boxes of a volume's exchanged parts over all
+ * ranks must tile its field; such parts are copied, never borrowed). */
 typedef enum dfbwall_ghosts {
   DFBWALL_GHOSTS_GIVEN = 0,
   DFBWALL_GHOSTS_EXCHANGE = 1
@@ -136,7 +138,6 @@ typedef struct dfbwall_volume_part {
   int lo[3], hi[3];
   dfbwall_voxel_type type;
   const void* voxels;
-  dfbwall_ghosts ghosts; /* 0 (= {0}): given */
 } dfbwall_volume_part;
 
 /* Start from dfbwall_brick b = {0}: every array is optional (count 0). Points are 3 floats each,
@@ -163,6 +164,7 @@ typedef struct dfbwall_brick {
   size_t ghost_mesh_position_count;
   const uint32_t* ghost_mesh_triangles;
   size_t ghost_mesh_triangle_count;
+  dfbwall_ghosts ghosts; /* of every volume part; 0 (= {0}): given */
 } dfbwall_brick;
 
 /* ---- Session ---- */
@@ -186,6 +188,19 @@ DFBWALL_API dfbwall_error dfbwall_session_set_style(dfbwall_session* session,
                                                     const dfbwall_style* style);
 DFBWALL_API dfbwall_error dfbwall_session_add_brick(dfbwall_session* session,
                                                     const dfbwall_brick* brick);
+/* The brick with its volumes' voxels borrowed, not copied (its particles and triangles are
+ * copied): float32, uint8 or uint16, aligned to their size (other types are
+ * DFBWALL_ERROR_INPUT at the next frame, on every rank). The program keeps the voxels alive and
+ * unchanged while the session holds the brick: until the render_frame that replaces its bricks
+ * (the first after clear_bricks or a new add_brick that returns DFBWALL_OK), or close or
+ * release. It may change their values between frames, never during render_frame, and then calls
+ * dfbwall_session_data_changed before the next frame (until then frames read the new values
+ * through structures built from the old ones: stale, never outside the brick). */
+DFBWALL_API dfbwall_error dfbwall_session_add_brick_borrowed(dfbwall_session* session,
+                                                             const dfbwall_brick* brick);
+/* The program changed borrowed voxels: the next render_frame takes the value ranges again,
+ * rebuilds what depends on the values (macrocells, isosurfaces) and starts averaging afresh. */
+DFBWALL_API dfbwall_error dfbwall_session_data_changed(dfbwall_session* session);
 DFBWALL_API dfbwall_error dfbwall_session_clear_bricks(dfbwall_session* session);
 /* Render rank 0's camera is the one used. fov_y in degrees. */
 DFBWALL_API dfbwall_error dfbwall_session_set_camera(dfbwall_session* session,
@@ -200,8 +215,10 @@ DFBWALL_API dfbwall_error dfbwall_session_image(dfbwall_session* session, const 
                                                 int* width, int* height);
 /* Render rank 0 without a wall: the last frame as a PNG; elsewhere nothing. */
 DFBWALL_API dfbwall_error dfbwall_session_write_image(dfbwall_session* session, const char* path);
-/* The bytes of brick data this rank holds in the current scene version. */
+/* The bytes of brick data this rank holds in the current scene version (borrowed voxels not
+ * counted), and the bytes of borrowed voxels it reads in place. */
 DFBWALL_API size_t dfbwall_session_scene_bytes(const dfbwall_session* session);
+DFBWALL_API size_t dfbwall_session_borrowed_bytes(const dfbwall_session* session);
 /* Render ranks, collective with run_wall returning on the wall ranks. */
 DFBWALL_API dfbwall_error dfbwall_session_close(dfbwall_session* session);
 

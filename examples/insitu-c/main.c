@@ -116,8 +116,7 @@ static void step(Slab* s, int n) {
  * dfbwall_session_add_brick); the session exchanges the ghosts its renderer reads. */
 static void addSlab(dfbwall_session* session, const Slab* s, int n) {
   const float h = 2.0f / (float)(n - 1);
-  dfbwall_volume_part part = {
-      {0, 0, s->z0}, {n, n, s->z1}, DFBWALL_FLOAT32, NULL, DFBWALL_GHOSTS_EXCHANGE};
+  dfbwall_volume_part part = {{0, 0, s->z0}, {n, n, s->z1}, DFBWALL_FLOAT32, NULL};
   part.voxels = s->u + (size_t)kGhost * plane(n);
   dfbwall_brick b = {0};
   b.id = s->id;
@@ -126,6 +125,7 @@ static void addSlab(dfbwall_session* session, const Slab* s, int n) {
   b.bounds_hi[2] = -1 + h * (float)(s->z1 < n - 1 ? s->z1 : n - 1);
   b.volumes = &part;
   b.volume_count = 1;
+  b.ghosts = DFBWALL_GHOSTS_EXCHANGE;
   check(dfbwall_session_add_brick(session, &b));
 }
 

@@ -217,6 +217,41 @@ void expectRefusedOnEveryRank(const std::vector<Box>& boxes,
   session.close();
 }
 
+// The session holds an exchanged part's owned voxels and ghosts as one copy: borrowing it is
+// refused (on every rank, at the next frame), and the session renders after it.
+TEST(GhostExchange, BorrowedVoxelsWithExchangedGhostsAreRefused) {
+  const int rank = testutil::worldRank(), ranks = testutil::worldSize();
+  dfbwall::SessionOptions o;
+  o.width = 32, o.height = 24, o.tileSize = 16, o.threads = 1, o.timeoutSeconds = 30;
+  dfbwall::Session session(MPI_COMM_WORLD, o);
+  session.setStyle(style());
+  session.setCamera(camera());
+  std::vector<std::vector<float>> storage(kSlabs.size());
+  auto add = [&](bool borrow) {
+    session.clearBricks();
+    for (int b = rank; b < static_cast<int>(kSlabs.size()); b += ranks) {
+      dfbwall::Brick brick = brickOf(b, kSlabs[static_cast<std::size_t>(b)], Held::Exchanged,
+                                     style(), storage[static_cast<std::size_t>(b)]);
+      brick.volumes[0].borrowed = borrow && b == 1;
+      session.addBrick(brick);
+    }
+  };
+  add(true);
+  try {
+    session.renderFrame();
+    ADD_FAILURE() << "no error on rank " << rank;
+  } catch (const dfbwall::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("brick 1: volume 'volume': borrowed voxels with "
+                                         "Ghosts::Exchange"),
+              std::string::npos)
+        << e.what();
+  }
+  add(false);
+  session.renderFrame();
+  EXPECT_EQ(session.framesRendered(), 1u);
+  session.close();
+}
+
 TEST(GhostExchange, OverlappingBoxesFailOnEveryRankNamingBoth) {
   std::vector<Box> boxes = kSlabs;
   boxes[2][0][0] = 14;  // brick 2 (rank 2) reaches into brick 1 (rank 1)
