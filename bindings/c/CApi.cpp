@@ -461,6 +461,11 @@ dfbwall_error dfbwall_session_new(MPI_Comm comm, const dfbwall_options* options,
   });
 }
 
+dfbwall_error dfbwall_session_new_f(MPI_Fint comm, const dfbwall_options* options,
+                                    dfbwall_session** out) {
+  return dfbwall_session_new(MPI_Comm_f2c(comm), options, out);
+}
+
 void dfbwall_session_release(dfbwall_session* session) {
   // The destructor waits for nobody and throws nothing (api/DataDistributed.h, "Leaving").
   delete session;
@@ -472,6 +477,10 @@ int dfbwall_session_is_wall_rank(const dfbwall_session* session) {
 
 MPI_Comm dfbwall_session_render_comm(const dfbwall_session* session) {
   return session ? session->session->renderComm() : MPI_COMM_NULL;
+}
+
+MPI_Fint dfbwall_session_render_comm_f(const dfbwall_session* session) {
+  return MPI_Comm_c2f(dfbwall_session_render_comm(session));
 }
 
 int dfbwall_session_canvas_width(const dfbwall_session* session) {
@@ -505,6 +514,10 @@ dfbwall_error dfbwall_session_data_changed(dfbwall_session* session) {
 
 dfbwall_error dfbwall_session_clear_bricks(dfbwall_session* session) {
   return guarded([&] { sessionOf(session).clearBricks(); });
+}
+
+dfbwall_error dfbwall_session_refuse_input(dfbwall_session* session, const char* why) {
+  return guarded([&] { sessionOf(session).refuseInput(text(why, "why")); });
 }
 
 dfbwall_error dfbwall_session_set_camera(dfbwall_session* session, const float position[3],

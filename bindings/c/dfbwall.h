@@ -173,12 +173,18 @@ typedef struct dfbwall_session dfbwall_session;
 /* Collective over comm (duplicated, not kept). options may be NULL (an 800x600 image). */
 DFBWALL_API dfbwall_error dfbwall_session_new(MPI_Comm comm, const dfbwall_options* options,
                                               dfbwall_session** out);
+/* dfbwall_session_new for Fortran and other languages that hold MPI handles as MPI_Fint: the old
+ * `mpi` module's integer or mpi_f08's MPI_Comm%MPI_VAL (converted with MPI_Comm_f2c). */
+DFBWALL_API dfbwall_error dfbwall_session_new_f(MPI_Fint comm, const dfbwall_options* options,
+                                                dfbwall_session** out);
 /* Not collective: without dfbwall_session_close() before, the session leaves (the others fail at
  * once, naming this rank). NULL is allowed. */
 DFBWALL_API void dfbwall_session_release(dfbwall_session* session);
 DFBWALL_API int dfbwall_session_is_wall_rank(const dfbwall_session* session);
 /* The render ranks' communicator (MPI_COMM_NULL on wall ranks): simulate on it. */
 DFBWALL_API MPI_Comm dfbwall_session_render_comm(const dfbwall_session* session);
+/* The same as an MPI_Fint (MPI_Comm_c2f): the Fortran handle of the render ranks' communicator. */
+DFBWALL_API MPI_Fint dfbwall_session_render_comm_f(const dfbwall_session* session);
 DFBWALL_API int dfbwall_session_canvas_width(const dfbwall_session* session);
 DFBWALL_API int dfbwall_session_canvas_height(const dfbwall_session* session);
 /* Wall ranks: presents frames until the render ranks close the session. */
@@ -202,6 +208,10 @@ DFBWALL_API dfbwall_error dfbwall_session_add_brick_borrowed(dfbwall_session* se
  * rebuilds what depends on the values (macrocells, isosurfaces) and starts averaging afresh. */
 DFBWALL_API dfbwall_error dfbwall_session_data_changed(dfbwall_session* session);
 DFBWALL_API dfbwall_error dfbwall_session_clear_bricks(dfbwall_session* session);
+/* A binding's own check of the program's input failed on this rank (a Fortran array that is not
+ * contiguous, ...): refused like a brick that does not fit, by the next render_frame on every
+ * render rank alike, with `why` as the message. */
+DFBWALL_API dfbwall_error dfbwall_session_refuse_input(dfbwall_session* session, const char* why);
 /* Render rank 0's camera is the one used. fov_y in degrees. */
 DFBWALL_API dfbwall_error dfbwall_session_set_camera(dfbwall_session* session,
                                                      const float position[3],

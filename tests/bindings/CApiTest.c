@@ -109,9 +109,13 @@ int main(int argc, char** argv) {
   CHECK(contains(dfbwall_last_error(), "MPI_COMM_NULL"));
   CHECK(dfbwall_session_render_frame(NULL) == DFBWALL_ERROR_INPUT);
 
-  CHECK(dfbwall_session_new(MPI_COMM_WORLD, o, &s) == DFBWALL_OK);
+  /* The communicator as a Fortran handle (the Fortran module's way in) and back. */
+  CHECK(dfbwall_session_new_f(MPI_Comm_c2f(MPI_COMM_WORLD), o, &s) == DFBWALL_OK);
   dfbwall_options_release(o);
   CHECK(!dfbwall_session_is_wall_rank(s));
+  int same = MPI_UNEQUAL;
+  MPI_Comm_compare(MPI_Comm_f2c(dfbwall_session_render_comm_f(s)), MPI_COMM_WORLD, &same);
+  CHECK(same == MPI_CONGRUENT);
   CHECK(dfbwall_session_canvas_width(s) == 64 && dfbwall_session_canvas_height(s) == 48);
 
   /* A frame before any style: a call out of order, on every rank. */
@@ -149,6 +153,16 @@ int main(int argc, char** argv) {
   CHECK(contains(dfbwall_last_error(), "render rank 1 refused its input"));
   CHECK(contains(dfbwall_last_error(), "no voxel type 42"));
   CHECK(calls == before + 1);
+  CHECK(dfbwall_session_frames_rendered(s) == 0);
+
+  /* A binding's own check failed on rank 2: refused at the next frame, on every rank. */
+  if (rank == 0) CHECK(addWhole(s, DFBWALL_FLOAT32) == DFBWALL_OK);
+  if (rank == 2)
+    CHECK(dfbwall_session_refuse_input(s, "the array is not contiguous") == DFBWALL_OK);
+  CHECK(dfbwall_session_render_frame(s) == DFBWALL_ERROR_INPUT);
+  CHECK(contains(dfbwall_last_error(), "render rank 2 refused its input"));
+  CHECK(contains(dfbwall_last_error(), "the array is not contiguous"));
+  CHECK(dfbwall_session_refuse_input(s, NULL) == DFBWALL_ERROR_INPUT);
   CHECK(dfbwall_session_frames_rendered(s) == 0);
 
   /* Corrected: the session renders, and rank 0 has the image. */
