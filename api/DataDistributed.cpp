@@ -13,6 +13,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "api/GhostExchange.h"
 #include "api/SceneStyle.h"
 #include "api/SessionTesting.h"
 #include "base/AtomicFile.h"
@@ -125,6 +126,10 @@ struct Session::Impl {
   bool styleSet = false, dirty = false, replacing = false;
   std::vector<renderers::scivis::HeldBrick> pending;  // bricks added since the last frame
   std::string refused;  // the first brick refused since then (the next frame's InputError)
+  // The volume parts whose ghosts the session exchanges (Ghosts::Exchange): of the bricks added
+  // since the last frame, and of the bricks held.
+  std::vector<OwnedPart> pendingOwned, owned;
+  std::size_t ghostBytes = 0;  // received at the last scene version
   Camera camera, lastCamera;
   bool haveCamera = false;
   std::uint32_t frameId = 0, epoch = 0;
@@ -337,6 +342,7 @@ void Session::addBrick(const Brick& brick) {
   if (!m.styleSet) throw std::logic_error("dfbwall: addBrick() before setStyle()");
   if (!m.replacing) {
     m.pending.clear();
+    m.pendingOwned.clear();
     m.refused.clear();
   }
   m.replacing = true;
@@ -344,6 +350,12 @@ void Session::addBrick(const Brick& brick) {
   // Refused here on this rank alone; thrown by the next frame on every rank, so they stay in step.
   try {
     m.pending.push_back({brick.id, brickContent(m.style, brick)});
+    for (std::size_t v = 0; v < brick.volumes.size(); ++v) {
+      const VolumePart& p = brick.volumes[v];
+      if (p.ghosts == Ghosts::Exchange && p.lo != p.hi)
+        m.pendingOwned.push_back(
+            {brick.id, v, {{p.lo[0], p.lo[1], p.lo[2]}, {p.hi[0], p.hi[1], p.hi[2]}}});
+    }
   } catch (const std::runtime_error& e) {
     if (m.refused.empty()) m.refused = e.what();
   }
@@ -356,7 +368,10 @@ void Session::dataChanged() {
 
 void Session::refuseInput(const std::string& why) {
   Impl& m = *impl_;
-  if (!m.replacing) m.pending.clear();
+  if (!m.replacing) {
+    m.pending.clear();
+    m.pendingOwned.clear();
+  }
   m.replacing = true;
   m.dirty = true;
   if (m.refused.empty()) m.refused = why;
@@ -364,6 +379,7 @@ void Session::refuseInput(const std::string& why) {
 
 void Session::clearBricks() {
   impl_->pending.clear();
+  impl_->pendingOwned.clear();
   impl_->refused.clear();
   impl_->replacing = true;
   impl_->dirty = true;
@@ -379,9 +395,18 @@ void Session::Impl::commit() {
   std::vector<renderers::scivis::HeldBrick> bricks =
       replacing ? std::move(pending)
                 : (driver ? driver->releaseBricks() : std::vector<renderers::scivis::HeldBrick>{});
+  std::vector<OwnedPart> parts = replacing ? std::move(pendingOwned)
+                                 : driver  ? std::move(owned)
+                                           : std::vector<OwnedPart>{};
   pending.clear();
+  pendingOwned.clear();
+  owned.clear();
   replacing = false;
   driver.reset();
+  // Every rank, with or without exchanged parts; the held bricks grow to what their renderer reads
+  // (from the owned voxels they keep, for a new style with the same bricks).
+  ghostBytes = exchangeGhosts(style, bricks, parts, role, bound(timeout, "ghost exchange"));
+  owned = std::move(parts);
   // Borrowed voxels may have changed since they were added or last rendered (dataChanged()):
   // their value ranges are taken now, before the ranges are shared and the scenes built.
   borrowedBytes = 0;
@@ -430,6 +455,7 @@ void Session::Impl::throwRefusal(int refusing, std::uint32_t next) {
   base::bcast(why.data(), length, refusing, role, b);
   // The bricks given since the last frame are dropped on every rank: the program gives them again.
   pending.clear();
+  pendingOwned.clear();
   refused.clear();
   replacing = true;
   throw InputError("dfbwall: render rank " + std::to_string(refusing) +
@@ -520,6 +546,8 @@ void Session::writeImage(const std::string& path) const {
 
 std::size_t Session::sceneBytes() const { return impl_->driver ? impl_->driver->sceneBytes() : 0; }
 std::size_t Session::borrowedBytes() const { return impl_->driver ? impl_->borrowedBytes : 0; }
+
+std::size_t Session::ghostBytesReceived() const { return impl_->ghostBytes; }
 
 void Session::close() try {
   Impl& m = *impl_;

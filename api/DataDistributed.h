@@ -14,10 +14,11 @@
 //
 // Scene versions. setStyle() and the bricks (addBrick / clearBricks) make a scene version; the
 // next renderFrame() after any render rank changed either is the new version: the ranks then
-// exchange their bricks' ids and bounds (one allgather) and, for volumes whose range is not
-// given, the value range. Frames of one version with one camera accumulate (progressive
-// refinement); a new version or camera starts the average afresh. The same brick id on several
-// ranks must be the same data (replication: either rank may render it).
+// exchange their bricks' ids and bounds (one allgather), for volumes whose range is not given
+// the value range, and the ghost voxels of parts given with Ghosts::Exchange. Frames of one version
+// with one camera accumulate (progressive refinement); a new version or camera starts the average
+// afresh. The same brick id on several ranks must be the same data (replication: either rank may
+// render it).
 //
 // Every call but the accessors is collective over the render ranks (renderFrame, close; setStyle,
 // addBrick, clearBricks, dataChanged and setCamera are local and take effect at the next
@@ -137,13 +138,27 @@ struct Style {
   std::uint64_t seed = 0;
 };
 
+// Where a volume part's ghost voxels (those beyond the brick's clip bounds that its rays and
+// gradients read) come from.
+enum class Ghosts {
+  Given,  // in [lo, hi): the program's choice (see VolumePart)
+  // [lo, hi) is the box the brick owns, no ghosts: at each scene version the session works out
+  // the voxels its renderer reads (the rule of `dfbwall --ghost reach`: gradients and seams,
+  // and with shadows or AO the isosurfaces their rays reach) and fetches them from the bricks
+  // that own them over the render ranks (MPI point-to-point). The owned boxes of a volume's
+  // exchanged parts, over all render ranks, must tile its field: no overlap, no gap (else an
+  // InputError on every rank naming the boxes).
+  Exchange,
+};
+
 // A brick's part of one volume: the voxels [lo, hi) of the whole field (x fastest, then y, then
 // z), copied by addBrick, or borrowed (below). Shading rays see exactly the voxels given, so the
 // box is the program's choice of ghost data (dfbwall --ghost offers the same two): for seams that
 // match the whole field exactly it covers the clip bounds plus 2 voxels below and 3 above on each
 // axis (where the field has them) — one ghost layer, the least memory, but ambient occlusion near
 // the brick's faces sees only the brick — and for AO that equals the whole field's, the AO
-// distance beyond that too. lo == hi: this brick has none of the volume.
+// distance beyond that too. Or the session exchanges them (Ghosts::Exchange). lo == hi: this
+// brick has none of the volume.
 //
 // Borrowed voxels (`borrowed`, float32, uint8 and uint16 only, aligned to their size) are read
 // where they are: the session holds no copy (sceneBytes() leaves them out; borrowedBytes()
@@ -155,13 +170,16 @@ struct Style {
 // reads the new values through structures built from the old ones (value ranges, macrocells,
 // isosurfaces): stale, never outside the box. `owner`, when given, is held as long as the
 // session holds the voxels (the Python module keeps its numpy arrays alive this way). Other
-// voxel types are converted when added, so borrowing them is refused (InputError).
+// voxel types are converted when added, so borrowing them is refused (InputError), and so is
+// borrowing with Ghosts::Exchange (the session holds the owned voxels and their ghosts as one
+// copy).
 struct VolumePart {
   Index3 lo{0, 0, 0}, hi{0, 0, 0};
   VoxelType type = VoxelType::Float32;
   const void* voxels = nullptr;
   bool borrowed = false;
   std::shared_ptr<const void> owner;
+  Ghosts ghosts = Ghosts::Given;
 };
 
 struct Particles {
@@ -270,6 +288,9 @@ class Session {
   std::size_t sceneBytes() const;
   // The bytes of borrowed voxels this rank reads in place in the current scene version.
   std::size_t borrowedBytes() const;
+  // The bytes of ghost voxels this rank received from other ranks at the last scene version
+  // (Ghosts::Exchange).
+  std::size_t ghostBytesReceived() const;
   // Render ranks: ends the wall's run after the last frame (waiting until it is presented and
   // captured) and releases the session's communicators. Collective over the whole `comm`
   // together with runWall() returning on the wall ranks.

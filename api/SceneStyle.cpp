@@ -216,11 +216,17 @@ renderers::scivis::BrickContent brickContent(const Style& style, const Brick& br
       const std::string name = "volume '" + style.volumes[v].name + "'";
       if (box.empty() || !volume.grid.wholeBox().contains(box))
         fail(brick, name + ": the voxel box is empty or outside the field's dims");
+      // An owned box (Ghosts::Exchange) may be one voxel thin: the exchange adds its neighbours'.
       for (int a = 0; a < 3; ++a)
-        if (box.hi[a] - box.lo[a] < 2) fail(brick, name + ": the voxel box is under 2 voxels wide");
+        if (part->ghosts == Ghosts::Given && box.hi[a] - box.lo[a] < 2)
+          fail(brick, name + ": the voxel box is under 2 voxels wide");
       if (!part->voxels) fail(brick, name + ": voxels is null");
       volume.box = box;
       if (part->borrowed) {
+        if (part->ghosts == Ghosts::Exchange)
+          fail(brick, name +
+                          ": borrowed voxels with Ghosts::Exchange (the session holds the owned "
+                          "voxels and their ghosts as one copy: give them without borrowed)");
         borrow(brick, name, *part, volume);
       } else {
         volume.voxels = renderers::allocateVoxelBytes(box, volume.type);

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""examples/insitu in Python: the same heat-equation simulation (numpy slabs, ghost planes
-exchanged with mpi4py), the same flags, the same pixels, through the `dfbwall` module.
+"""examples/insitu in Python: the same heat-equation simulation (numpy slabs, the stencil's ghost
+planes exchanged with mpi4py), the same flags, the same pixels, through the `dfbwall` module,
+which exchanges the renderer's ghosts itself (add_brick(..., ghosts="exchange")).
 
   mpirun -np 6 python3 insitu.py --wall 2x2.toml --capture caps    # 2 simulating, 4 wall ranks
   mpirun -np 2 python3 insitu.py --size 400x300 --image last.png   # no wall: the last frame
@@ -16,7 +17,7 @@ from mpi4py import MPI
 
 import dfbwall
 
-GHOST = 3  # planes each side: 1 for the stencil, 2 below and 3 above for seams that match
+GHOST = 1  # planes each side for the stencil (the renderer's ghosts: the session's)
 F = np.float32
 
 
@@ -116,13 +117,12 @@ def step(s, n):
 
 
 def add_slab(session, s, n):
-    """The slab as a brick: clipped to its own planes, voxels with the ghost planes the renderer
-    needs, handed over as a view of the simulation's array."""
+    """The slab as a brick: clipped to its own planes, voxels the planes it owns, handed over as a
+    view of the simulation's array; the session exchanges the ghosts its renderer reads."""
     h = F(2.0) / F(n - 1)
-    lo, hi = max(0, s.z0 - 2), min(n, s.z1 + 3)
     session.add_brick(s.id, (-1, -1, F(-1) + h * F(s.z0)),
                       (1, 1, F(-1) + h * F(min(s.z1, n - 1))),
-                      volumes=[((0, 0, lo), s.u[lo - s.z0 + GHOST:hi - s.z0 + GHOST])])
+                      volumes=[((0, 0, s.z0), s.owned(s.u))], ghosts="exchange")
 
 
 def style(n):

@@ -222,6 +222,11 @@ dfbwall::Brick brickOf(const dfbwall_brick& c, bool borrowed) {
   b.id = c.id;
   b.boundsLo = {c.bounds_lo[0], c.bounds_lo[1], c.bounds_lo[2]};
   b.boundsHi = {c.bounds_hi[0], c.bounds_hi[1], c.bounds_hi[2]};
+  const int ghosts = enumBits(c.ghosts);
+  if (ghosts != DFBWALL_GHOSTS_GIVEN && ghosts != DFBWALL_GHOSTS_EXCHANGE)
+    throw CInputError("dfbwall: brick " + std::to_string(c.id) + " has ghosts " +
+                      std::to_string(ghosts) +
+                      " (DFBWALL_GHOSTS_GIVEN or DFBWALL_GHOSTS_EXCHANGE)");
   if (c.volume_count > 0 && !c.volumes)
     throw CInputError("dfbwall: brick " + std::to_string(c.id) + ": volumes is NULL with a count");
   for (std::size_t v = 0; v < c.volume_count; ++v) {
@@ -231,6 +236,8 @@ dfbwall::Brick brickOf(const dfbwall_brick& c, bool borrowed) {
       throw CInputError("dfbwall: brick " + std::to_string(c.id) + ": volume part " +
                         std::to_string(v) + " has no voxel type " + std::to_string(type));
     dfbwall::VolumePart part;
+    part.ghosts =
+        ghosts == DFBWALL_GHOSTS_EXCHANGE ? dfbwall::Ghosts::Exchange : dfbwall::Ghosts::Given;
     part.lo = {p.lo[0], p.lo[1], p.lo[2]};
     part.hi = {p.hi[0], p.hi[1], p.hi[2]};
     part.type = static_cast<dfbwall::VoxelType>(type);  // the same order (static_assert below)

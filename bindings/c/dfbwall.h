@@ -123,6 +123,15 @@ typedef enum dfbwall_voxel_type {
   DFBWALL_FLOAT64 = 6
 } dfbwall_voxel_type;
 
+/* Where a brick's volume parts get their ghost voxels (dfbwall::Ghosts in
+ * <dfbwall/DataDistributed.h>): given in each part's [lo, hi), or exchanged by the session, each
+ * [lo, hi) then the box the brick owns (the owned boxes of a volume's exchanged parts over all
+ * ranks must tile its field; such parts are copied, never borrowed). */
+typedef enum dfbwall_ghosts {
+  DFBWALL_GHOSTS_GIVEN = 0,
+  DFBWALL_GHOSTS_EXCHANGE = 1
+} dfbwall_ghosts;
+
 /* A brick's part of one volume: voxels [lo, hi) of the whole field, x fastest, then y, then z
  * (lo == hi: none of this volume). */
 typedef struct dfbwall_volume_part {
@@ -155,6 +164,7 @@ typedef struct dfbwall_brick {
   size_t ghost_mesh_position_count;
   const uint32_t* ghost_mesh_triangles;
   size_t ghost_mesh_triangle_count;
+  dfbwall_ghosts ghosts; /* of every volume part; 0 (= {0}): given */
 } dfbwall_brick;
 
 /* ---- Session ---- */

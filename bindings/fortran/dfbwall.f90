@@ -71,6 +71,7 @@ module dfbwall
     integer(c_size_t) :: ghost_mesh_position_count
     type(c_ptr) :: ghost_mesh_triangles
     integer(c_size_t) :: ghost_mesh_triangle_count
+    integer(c_int) :: ghosts  ! DFBWALL_GHOSTS_GIVEN (0): this module gives ghosts in the arrays
   end type
 
   ! What one rank holds: addresses of the program's arrays, read by dfbwall_session_add_brick.
@@ -603,7 +604,7 @@ contains
     real(c_float), intent(in) :: bounds_lo(3), bounds_hi(3)
     brick%c = brick_c(int(id, c_int), bounds_lo, bounds_hi, c_null_ptr, 0, c_null_ptr, 0, &
                       c_null_ptr, 0, c_null_ptr, 0, c_null_ptr, 0, c_null_ptr, 0, c_null_ptr, 0, &
-                      c_null_ptr, 0, c_null_ptr, 0)
+                      c_null_ptr, 0, c_null_ptr, 0, 0)
     allocate (brick%parts(4))
     brick%part_count = 0
     brick%ready = .true.

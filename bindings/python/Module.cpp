@@ -224,12 +224,16 @@ class PySession {
   void addBrick(int id, const py::object& lo, const py::object& hi, const py::list& volumes,
                 const py::object& particles, const py::object& radii,
                 const py::object& ghostParticles, const py::object& ghostRadii,
-                const py::object& positions, const py::object& triangles, bool copy) {
+                const py::object& positions, const py::object& triangles, bool copy,
+                const std::string& ghosts) {
     dfbwall::Session& session = s();
     dfbwall::Brick b;
     b.id = id;
     std::vector<py::array> keep;  // the arrays read below, alive until addBrick has copied them
     try {
+      if (ghosts != "given" && ghosts != "exchange")
+        throw dfbwall::InputError("dfbwall: brick " + std::to_string(id) + ": ghosts='" + ghosts +
+                                  "' (\"given\": in the arrays; \"exchange\": the session's)");
       b.boundsLo = vec3(lo, "bounds_lo");
       b.boundsHi = vec3(hi, "bounds_hi");
       for (const auto& item : volumes) {
@@ -260,9 +264,12 @@ class PySession {
                 at[2] + static_cast<int>(arr.shape(0))};
         p.type = *type;
         p.voxels = arr.data();  // read in place (no copy here)
+        p.ghosts = ghosts == "exchange" ? dfbwall::Ghosts::Exchange : dfbwall::Ghosts::Given;
         const bool held = *type == dfbwall::VoxelType::Float32 ||
                           *type == dfbwall::VoxelType::UInt8 || *type == dfbwall::VoxelType::UInt16;
-        if (!copy && held && (arr.flags() & py::detail::npy_api::NPY_ARRAY_ALIGNED_)) {
+        // Exchanged ghosts: the session holds the owned voxels and their ghosts as one copy.
+        if (!copy && held && p.ghosts == dfbwall::Ghosts::Given &&
+            (arr.flags() & py::detail::npy_api::NPY_ARRAY_ALIGNED_)) {
           p.borrowed = true;
           p.owner = keepAlive(arr);
         }
@@ -342,6 +349,8 @@ PYBIND11_MODULE(dfbwall, m) {
       .def_property_readonly("frames_rendered", [](PySession& p) { return p.s().framesRendered(); })
       .def_property_readonly("scene_bytes", [](PySession& p) { return p.s().sceneBytes(); })
       .def_property_readonly("borrowed_bytes", [](PySession& p) { return p.s().borrowedBytes(); })
+      .def_property_readonly("ghost_bytes_received",
+                             [](PySession& p) { return p.s().ghostBytesReceived(); })
       .def(
           "run_wall", [](PySession& p) { p.s().runWall(); },
           py::call_guard<py::gil_scoped_release>())
@@ -353,7 +362,7 @@ PYBIND11_MODULE(dfbwall, m) {
            py::arg("particles") = py::none(), py::arg("radii") = py::none(),
            py::arg("ghost_particles") = py::none(), py::arg("ghost_radii") = py::none(),
            py::arg("positions") = py::none(), py::arg("triangles") = py::none(),
-           py::arg("copy") = false)
+           py::arg("copy") = false, py::arg("ghosts") = "given")
       .def("data_changed", [](PySession& p) { p.s().dataChanged(); })
       .def("clear_bricks", [](PySession& p) { p.s().clearBricks(); })
       .def(

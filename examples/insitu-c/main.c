@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { kGhost = 3 }; /* planes each side: 1 for the stencil, 2 below and 3 above for seams */
+enum { kGhost = 1 }; /* planes each side for the stencil (the renderer's: the session's) */
 
 typedef struct Slab {
   int id, z0, z1;
@@ -112,13 +112,12 @@ static void step(Slab* s, int n) {
   s->next = t;
 }
 
-/* The slab as a brick: clipped to its own planes, its voxels with the ghost planes the renderer
- * needs (read by dfbwall_session_add_brick). */
+/* The slab as a brick: clipped to its own planes, its voxels the planes it owns (read by
+ * dfbwall_session_add_brick); the session exchanges the ghosts its renderer reads. */
 static void addSlab(dfbwall_session* session, const Slab* s, int n) {
   const float h = 2.0f / (float)(n - 1);
-  const int lo = s->z0 - 2 > 0 ? s->z0 - 2 : 0, hi = s->z1 + 3 < n ? s->z1 + 3 : n;
-  dfbwall_volume_part part = {{0, 0, lo}, {n, n, hi}, DFBWALL_FLOAT32, NULL};
-  part.voxels = s->u + (size_t)(lo - s->z0 + kGhost) * plane(n);
+  dfbwall_volume_part part = {{0, 0, s->z0}, {n, n, s->z1}, DFBWALL_FLOAT32, NULL};
+  part.voxels = s->u + (size_t)kGhost * plane(n);
   dfbwall_brick b = {0};
   b.id = s->id;
   b.bounds_lo[0] = -1, b.bounds_lo[1] = -1, b.bounds_lo[2] = -1 + h * (float)s->z0;
@@ -126,6 +125,7 @@ static void addSlab(dfbwall_session* session, const Slab* s, int n) {
   b.bounds_hi[2] = -1 + h * (float)(s->z1 < n - 1 ? s->z1 : n - 1);
   b.volumes = &part;
   b.volume_count = 1;
+  b.ghosts = DFBWALL_GHOSTS_EXCHANGE;
   check(dfbwall_session_add_brick(session, &b));
 }
 

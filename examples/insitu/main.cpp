@@ -1,7 +1,9 @@
 // In-situ visualization with dfbwall's data-distributed API: an MPI program that evolves the heat
-// equation on a 3-D grid cut into slabs (each rank its slabs, with ghost planes exchanged by MPI
-// every step) and shows every K-th step on a display wall, straight from the simulation's
-// memory: no file is written (but the wall's captures, when asked for).
+// equation on a 3-D grid cut into slabs (each rank its slabs, with the stencil's ghost planes
+// exchanged by MPI every step) and shows every K-th step on a display wall, straight from the
+// simulation's memory: no file is written (but the wall's captures, when asked for). The
+// renderer's own ghosts are the session's business (Ghosts::Exchange): a slab gives the planes it
+// owns.
 //
 //   mpirun -np 6 insitu --wall 2x2.toml --capture caps    # 2 simulating ranks, 4 wall ranks
 //   mpirun -np 2 insitu --size 400x300 --image last.png   # no wall: the last frame as a PNG
@@ -91,9 +93,8 @@ Args parse(int argc, char** argv) {
 }
 
 // The simulation's own data: one slab of the N^3 grid, planes [z0, z1) owned, kGhost planes on
-// either side copied from the neighbouring slabs (for the stencil, and for the renderer, which
-// needs 2 planes below and 3 above its clip bounds for seams that match one whole grid).
-constexpr int kGhost = 3;
+// either side copied from the neighbouring slabs for the stencil.
+constexpr int kGhost = 1;
 
 struct Slab {
   int id = 0, z0 = 0, z1 = 0;
@@ -176,8 +177,8 @@ void step(Slab& s, int n) {
   std::swap(s.u, s.next);
 }
 
-// The slab as a brick: clipped to its own planes (up to the next slab's first), its voxels with
-// the ghost planes the renderer needs.
+// The slab as a brick: clipped to its own planes (up to the next slab's first), its voxels the
+// planes it owns; the session exchanges the ghosts its renderer reads.
 dfbwall::Brick brickOf(const Slab& s, int n) {
   const float h = 2.0f / static_cast<float>(n - 1);
   dfbwall::Brick b;
@@ -185,11 +186,11 @@ dfbwall::Brick brickOf(const Slab& s, int n) {
   b.boundsLo = {-1, -1, -1 + h * s.z0};
   b.boundsHi = {1, 1, -1 + h * std::min(s.z1, n - 1)};
   dfbwall::VolumePart part;
-  const int lo = std::max(0, s.z0 - 2), hi = std::min(n, s.z1 + 3);
-  part.lo = {0, 0, lo};
-  part.hi = {n, n, hi};
+  part.lo = {0, 0, s.z0};
+  part.hi = {n, n, s.z1};
   part.type = dfbwall::VoxelType::Float32;
-  part.voxels = s.u.data() + static_cast<std::size_t>(lo - s.z0 + kGhost) * n * n;
+  part.voxels = s.u.data() + static_cast<std::size_t>(kGhost) * n * n;
+  part.ghosts = dfbwall::Ghosts::Exchange;
   b.volumes.push_back(part);
   return b;
 }
@@ -260,7 +261,13 @@ int run(const Args& args) {
     session.renderFrame();
     if (rank == 0) std::printf("step %d shown (frame %u)\n", t, session.framesRendered());
   }
-  if (rank == 0) std::printf("brick data on rank 0: %zu bytes\n", session.sceneBytes());
+  // What the session exchanged for the last frame shown, over every rank (between bricks on one
+  // rank it copies, and that is not counted).
+  unsigned long long ghosts = session.ghostBytesReceived(), allGhosts = 0;
+  MPI_Reduce(&ghosts, &allGhosts, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, 0, sim);
+  if (rank == 0)
+    std::printf("brick data on rank 0: %zu bytes; ghost voxels sent between ranks: %llu bytes\n",
+                session.sceneBytes(), allGhosts);
   if (!args.image.empty()) session.writeImage(args.image);
   session.close();
   return 0;

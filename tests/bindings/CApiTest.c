@@ -8,6 +8,7 @@
 #include <dfbwall/dfbwall.h>
 #include <mpi.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static int failures = 0;
@@ -59,6 +60,22 @@ static void frameInto(dfbwall_session* s, uint8_t* into, size_t bytes) {
   const uint8_t* pixels = NULL;
   CHECK(dfbwall_session_image(s, &pixels, NULL, NULL) == DFBWALL_OK);
   if (pixels) memcpy(into, pixels, bytes);
+}
+
+/* The planes [z0, z1) this rank owns, their ghosts `ghosts` (DFBWALL_GHOSTS_EXCHANGE: the
+ * session's), clipped to its cells (up to the next slab's first plane). */
+static dfbwall_error addSlab(dfbwall_session* s, int id, int z0, int z1, dfbwall_ghosts ghosts) {
+  dfbwall_volume_part part = {{0, 0, z0}, {kN, kN, z1}, DFBWALL_FLOAT32, NULL};
+  part.voxels = field[z0];
+  dfbwall_brick b = {0};
+  b.id = id;
+  b.bounds_hi[0] = b.bounds_hi[1] = kN - 1;
+  b.bounds_lo[2] = (float)z0;
+  b.bounds_hi[2] = (float)(z1 < kN - 1 ? z1 : kN - 1);
+  b.volumes = &part;
+  b.volume_count = 1;
+  b.ghosts = ghosts;
+  return dfbwall_session_add_brick(s, &b);
 }
 
 int main(int argc, char** argv) {
@@ -200,6 +217,29 @@ int main(int argc, char** argv) {
   if (rank == 0) CHECK(addWhole(s, DFBWALL_FLOAT32) == DFBWALL_OK);
   frameInto(s, copied, sizeof copied);
   if (rank == 0) CHECK(memcmp(changed, copied, sizeof copied) == 0);
+
+  /* A ghost mode that does not exist is refused like a voxel type; slabs that give only their
+   * own planes, the session exchanging the ghosts, render the whole field's image (up to float
+   * summation order: one 8-bit step; `copied` is the whole changed field's). */
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  const int z0 = kN * rank / ranks, z1 = kN * (rank + 1) / ranks;
+  CHECK(dfbwall_session_clear_bricks(s) == DFBWALL_OK);
+  CHECK(addSlab(s, rank, z0, z1, rank == ranks - 1 ? (dfbwall_ghosts)7 : DFBWALL_GHOSTS_EXCHANGE) ==
+        DFBWALL_OK);
+  CHECK(dfbwall_session_render_frame(s) == DFBWALL_ERROR_INPUT);
+  CHECK(contains(dfbwall_last_error(), "has ghosts 7"));
+  CHECK(addSlab(s, rank, z0, z1, DFBWALL_GHOSTS_EXCHANGE) == DFBWALL_OK);
+  CHECK(dfbwall_session_render_frame(s) == DFBWALL_OK);
+  CHECK(dfbwall_session_image(s, &pixels, &w, &h) == DFBWALL_OK);
+  if (rank == 0 && pixels) {
+    int worst = 0;
+    for (int i = 0; i < 64 * 48 * 4; ++i) {
+      const int d = abs((int)pixels[i] - (int)copied[i]);
+      worst = d > worst ? d : worst;
+    }
+    CHECK(worst <= 1);
+  }
   CHECK(dfbwall_session_close(s) == DFBWALL_OK);
   dfbwall_session_release(s);
 

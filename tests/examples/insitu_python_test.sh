@@ -54,6 +54,16 @@ try:
 except dfbwall.InputError as e:
     assert "render rank 0 refused its input: brick 0: voxels of dtype complex64" in str(e), str(e)
     assert isinstance(e, ValueError)
+# ghosts= is "given" or "exchange": anything else is refused on every rank alike.
+s.clear_bricks()
+if rank == 1:
+    s.add_brick(1, (0, 0, 0), (15, 15, 15), volumes=[((0, 0, 0), field.astype(np.float32))],
+                ghosts="both")
+try:
+    s.render_frame()
+    sys.exit("rank %d: no error for ghosts='both'" % rank)
+except dfbwall.InputError as e:
+    assert "render rank 1 refused its input: brick 1: ghosts='both'" in str(e), str(e)
 add(np.float32)
 s.render_frame()
 image = s.image()

@@ -61,10 +61,16 @@ WorldMesh selectTriangles(const WorldMesh& m, Keep keep) {
 // value range and bounds it has in the whole field, and shading rays skip exactly the stretches
 // they skip there.
 bool voxelsAround(const GridGeometry& g, const Box3& region, VoxelBox& box, bool whole = false) {
+  // A face on a voxel plane, off by float rounding, is on it: the margins (2 below, 3 above)
+  // hold more than such an offset, and a brick cut at plane z needs voxel z - 2, not z - 3.
+  auto index = [&](float at, int a) {
+    const double t = (double(at) - g.origin[a]) / g.spacing[a];
+    return std::abs(t - std::round(t)) < 1e-3 ? std::round(t) : t;
+  };
   bool empty = false;
   for (int a = 0; a < 3; ++a) {
-    const double lo = std::floor((double(region.lo[a]) - g.origin[a]) / g.spacing[a]) - 2;
-    const double hi = std::ceil((double(region.hi[a]) - g.origin[a]) / g.spacing[a]) + 3;
+    const double lo = std::floor(index(region.lo[a], a)) - 2;
+    const double hi = std::ceil(index(region.hi[a], a)) + 3;
     int i0 = static_cast<int>(std::clamp(lo, 0.0, double(g.dims[a])));
     int i1 = static_cast<int>(std::clamp(hi, 0.0, double(g.dims[a])));
     if (whole && i1 > i0) {
@@ -183,6 +189,18 @@ BrickContent loadBrickData(const SceneDesc& desc, const BrickPlan& plan, const G
 }
 
 }  // namespace
+
+VoxelBox neededVoxels(const SceneDesc& desc, std::size_t volume, const Box3& bounds,
+                      const GhostReach& reach) {
+  const GridGeometry& g = sciVisDesc(desc).volumes[volume].source.grid;
+  VoxelBox core;
+  if (!voxelsAround(g, bounds, core)) return {};
+  const BrickReach r = brickReach(desc, bounds, reach);
+  VoxelBox shell;
+  if (r.beyond && hasIsosurface(desc, volume) && voxelsAround(g, r.region, shell, true))
+    return shell;
+  return core;
+}
 
 BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const GhostReach& reach) {
   std::string part;

@@ -19,6 +19,14 @@ namespace renderers::scivis {
 // and triangles) it was loading.
 BrickContent loadBrick(const SceneDesc& desc, const BrickPlan& plan, const GhostReach& reach);
 
+// The voxels of volume `volume` that a brick with clip bounds `bounds` holds densely when it
+// holds them as one box (what loadBrick holds when its shell is dense): around the bounds, two
+// beyond them, and where the volume has isosurfaces and `reach` leaves the bounds, the whole
+// macrocells of the region its shading rays reach. Empty when that is under 2 voxels on an axis.
+// The data-distributed API's ghost exchange asks its neighbours for these (api/GhostExchange.h).
+VoxelBox neededVoxels(const SceneDesc& desc, std::size_t volume, const Box3& bounds,
+                      const GhostReach& reach);
+
 // The memory budget of loading `plans` with `reach` (base/MemoryBudget.h): what loadBrick holds
 // for them at most — dense voxel boxes with their ghost layers and macrocells, ghost shells
 // counted both sparse and dense, the particles and triangles they reach — with the scene
