@@ -10,9 +10,13 @@ primary renderer (the same picture every frame) in overlapping windows across di
  - POST {"raise": true} puts job a's window on top (z), and on the wall: a Raise reaches every
    process, and the wall's own captures, which showed b over a (and never a over b) before,
    show a over b (the composite, compare_captures --composite) without either job restarting;
- - move and resize answer 501, other bodies 400, unknown windows 404;
+ - bad bodies and rectangles 400, unknown windows 404;
  - attacks: no token, a wrong token, a rebinding Host, the page's cookie without JSON or from
    another Origin, a body over 64 KiB: refused, nothing changed; then a good client still works;
+ - POST {"x", "y", "w", "h"} moves and resizes job b's window (job a, with its own page, is
+   refused 409 and keeps its window): GET /api/windows shows the new rectangle, job b re-plans
+   without reconnecting, its captures from the switch frame on equal the one-process render at
+   the new size, and the wall's own captures show a with b over it at its new place;
  - DELETE of job b's window: b exits non-zero saying "closed from the wall's control page" on
    its rank 0, its window leaves the list at once, and job a keeps presenting new frames.
 Needs DFBWALL, COMPARE and MPIEXEC in the environment.
@@ -33,6 +37,7 @@ SCALE = int(os.environ.get("DFBWALL_TIME_SCALE", "1"))
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
 MPI = [MPIEXEC, "--oversubscribe", "--bind-to", "none", "--mca", "mpi_yield_when_idle", "1"]
 WINDOW_A, WINDOW_B = "90,70,250,170", "20,20,200,150"
+MOVED_B = "150,100,240,180"  # job b's window after its move: elsewhere and larger
 
 
 class Test:
@@ -160,9 +165,12 @@ def run(t):
     if api.get("/api/windows")[2] != []:
         t.fail("windows before any job")
 
-    # One-process renders of both windows, for the jobs' and the wall's captures.
+    # One-process renders of both windows (and of b's after its move), for the jobs' and the
+    # wall's captures.
     ref_a, ref_b = os.path.join(t.work, "ref-a.png"), os.path.join(t.work, "ref-b.png")
-    for size, ref in [("250x170", ref_a), ("200x150", ref_b)]:
+    ref_moved = os.path.join(t.work, "ref-b-moved.png")
+    for size, ref in [("250x170", ref_a), ("200x150", ref_b),
+                      ("%sx%s" % tuple(MOVED_B.split(",")[2:]), ref_moved)]:
         subprocess.check_call(MPI + ["-np", "1", DFBWALL, "--renderer", "primary", "--size", size,
                                      "--frames", "1", "--quiet", "--image", ref], env=ENV)
     job = ["--renderer", "primary", "--frames", "100000", "--capture-every", "10", "--quiet",
@@ -220,8 +228,9 @@ def run(t):
     if api.send("POST", "/api/windows/1", body='{"raise": true}')[0] != 200:
         t.fail("raising the top window again")
     # Refused bodies and windows.
-    for body, expected in [('{"x": 10, "y": 10, "w": 100, "h": 100}', 501),
-                           ('{"fullscreen": true}', 501), ('{"raise": false}', 400),
+    for body, expected in [('{"x": 300}', 400), ('{"w": 0}', 400), ('{"x": 1.5}', 400),
+                           ('{"x": 10, "raise": true}', 400), ('{"fullscreen": false}', 400),
+                           ('{"w": 8, "h": 8}', 400), ('{"raise": false}', 400),
                            ('{"nope": 1}', 400), ('raise', 400), ('[]', 400), ('{}', 400),
                            (None, 400)]:
         status, _, reply = api.send("POST", "/api/windows/2", body=body)
@@ -273,6 +282,8 @@ def run(t):
     if status != 200 or {w["id"]: w["z"] for w in api.get("/api/windows")[2]} != {"1": 0, "2": 1}:
         t.fail("the page's raise after the attacks: %d %r" % (status, reply))
 
+    moved = move_b(t, api, jobs, wall_captures, ref_a, ref_moved)
+
     # Close job b: it ends non-zero, told why; its window leaves at once; a goes on.
     closed_at = time.time()
     status, _, reply = api.send("DELETE", "/api/windows/2")
@@ -300,10 +311,56 @@ def run(t):
     if t.procs["a"].wait(timeout=20 * SCALE) == 0:
         t.fail("job a did not hear that the wall stopped")
     print("PASS: /api/wall and /api/windows describe the wall and both windows; raise reorders "
-          "them (the wall's captures show it %.2f s after the request); move/resize 501; bad "
-          "bodies 400, unknown windows 404; 7 attacks refused; DELETE ended job b (window gone "
-          "%.2f s after the request) while job a went on (frame %d, then %d)"
-          % (shown, gone, before, t.newest("a", "r1c1")))
+          "them (the wall's captures show it %.2f s after the request); a POST moved and resized "
+          "window 2 (%s); bad bodies 400, unknown windows 404; 7 attacks refused; DELETE ended "
+          "job b (window gone %.2f s after the request) while job a went on (frame %d, then %d)"
+          % (shown, moved, gone, before, t.newest("a", "r1c1")))
+
+
+def move_b(t, api, jobs, wall_captures, ref_a, ref_moved):
+    """Moves and resizes job b's window through the API; returns what it measured."""
+    # Job a has its own page: it cannot re-plan, so the wall refuses and its window stays.
+    status, _, reply = api.send("POST", "/api/windows/1", body='{"x": 100}')
+    if status != 409 or "re-plan" not in reply.get("error", ""):
+        t.fail("moving job a (with --control): %d %r" % (status, reply))
+    x, y, w, h = map(int, MOVED_B.split(","))
+    forget_captures(wall_captures)
+    asked = time.time()
+    status, _, reply = api.send("POST", "/api/windows/2",
+                                body=json.dumps({"x": x, "y": y, "w": w, "h": h}))
+    if status != 200 or reply != {"id": "2", "rect": {"x": x, "y": y, "w": w, "h": h}}:
+        t.fail("moving window 2: %d %r" % (status, reply))
+    rects = lambda: {i["id"]: i["rect"] for i in api.get("/api/windows")[2]}
+    t.wait_for("GET /api/windows to show window 2 moved",
+               lambda: rects()["2"] == {"x": x, "y": y, "w": w, "h": h}, 10)
+    if rects()["1"] != {"x": 90, "y": 70, "w": 250, "h": 170}:
+        t.fail("window 1 moved with window 2: %r" % rects())
+    line = t.wait_for("job b to say it moved", lambda: re.search(
+        r"the wall moved the window to %s from frame (\d+)" % MOVED_B, t.log("b")), 10)
+    switch = int(line.group(1))
+    # Job b captures every 10th frame: the first at or after the switch is the new window's.
+    first = (switch + 9) // 10 * 10
+    t.wait_for("job b's frame %d" % first, lambda: t.newest("b", "r1c1") >= first, 20)
+    if subprocess.call([COMPARE, "--window", MOVED_B, t.layout, os.path.join(jobs, "b"),
+                        ref_moved, str(first)]) != 0:
+        t.fail("job b's frame %d (switch %d) is not the one-process render at %s" %
+               (first, switch, MOVED_B))
+    # The wall shows a, with b on top at its new place and size.
+    t.wait_for("the wall's captures of b moved over a", lambda: composite(
+        t, WINDOW_A + "+" + MOVED_B, ref_a + "+" + ref_moved, wall_captures), 10)
+    if t.procs["b"].poll() is not None:
+        t.fail("job b ended after its move")
+    return "switch at frame %d, the wall showed it %.2f s after the request" % (
+        switch, time.time() - asked)
+
+
+def forget_captures(captures):
+    """Removes the wall's captures so far: a wait for a new composite then reads only later ones
+    (compare_captures --composite with FRAME any decodes every capture of a display)."""
+    for display in os.listdir(captures):
+        for name in os.listdir(os.path.join(captures, display)):
+            if re.fullmatch(r"frame-\d+\.png", name):
+                os.remove(os.path.join(captures, display, name))
 
 
 def composite(t, windows, renders, captures):

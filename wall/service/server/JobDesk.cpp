@@ -584,6 +584,12 @@ std::optional<JobDesk::Actions> JobDesk::raise(std::uint64_t number) {
   return take();
 }
 
+std::optional<std::uint64_t> JobDesk::sessionOf(std::uint64_t number) const {
+  const Slot* slot = byNumber(number);
+  if (!slot) return std::nullopt;
+  return slot->job.session;
+}
+
 std::optional<JobDesk::Actions> JobDesk::close(std::uint64_t number, const std::string& why,
                                                Clock::time_point now) {
   now_ = now;

@@ -425,16 +425,31 @@ WallService::~WallService() {
 
 std::string WallService::address() const { return impl_->address; }
 
-std::string WallService::reshape(std::uint64_t session, const dfb::Region& window, int* code) {
+namespace {
+// A move's verdict as the window manager answers it: empty and 200 when under way.
+std::string moveAnswer(const JobDesk::MoveVerdict& v, int* code) {
   using Code = JobDesk::MoveVerdict::Code;
-  JobDesk::MoveVerdict v{Code::Conflict, "only the wall's head moves windows"};
-  if (impl_->desk) v = impl_->desk->reshape(session, window);
   if (code)
     *code = v.code == Code::Moving          ? 200
             : v.code == Code::UnknownWindow ? 404
             : v.code == Code::BadWindow     ? 400
                                             : 409;
   return v.code == Code::Moving ? std::string() : v.why;
+}
+}  // namespace
+
+std::string WallService::reshape(std::uint64_t session, const dfb::Region& window, int* code) {
+  JobDesk::MoveVerdict v{JobDesk::MoveVerdict::Code::Conflict,
+                         "only the wall's head moves windows"};
+  if (impl_->desk) v = impl_->desk->reshape(session, window);
+  return moveAnswer(v, code);
+}
+
+std::string WallService::moveWindow(std::uint64_t number, const dfb::Region& window, int* code) {
+  JobDesk::MoveVerdict v{JobDesk::MoveVerdict::Code::Conflict,
+                         "only the wall's head moves windows"};
+  if (impl_->desk) v = impl_->desk->moveWindow(number, window);
+  return moveAnswer(v, code);
 }
 
 std::vector<int> WallService::waitForProcesses(Clock::time_point until) {
