@@ -951,9 +951,11 @@ JobDesk::Actions JobDesk::reshape(std::uint64_t session, const dfb::Region& wind
     verdict = {Code::Conflict,
                j_->state == State::Starting ? "the job is starting" : "the job is ending"};
   } else if (!j_->job.hello.canReshape) {
-    verdict = {Code::Conflict,
-               "the job cannot re-plan its frame buffer while it runs (a program on the "
-               "data-distributed API, or a job with its own page or preview): its window stays"};
+    verdict = {
+        Code::Conflict,
+        "the job cannot re-plan its frame buffer while it runs (a program on the "
+        "data-distributed API, or a job of an earlier dfbwall with its own page or preview): "
+        "its window stays"};
   } else if (s_.maxJobs <= 1) {
     verdict = {Code::Conflict,
                "this wall runs one job at a time (serve --max-jobs 1): its window does not move"};
