@@ -358,9 +358,11 @@ int run(int argc, char** argv) {
       }
     } inputGuard{job.service.get()};
     if (job.service)
-      job.service->onInput([&steering, w = job.canvasWidth,
-                            h = job.canvasHeight](const wall::service::WindowInput& in) {
-        if (const std::optional<SteeringRequest> r = requestForInput(in, w, h)) {
+      job.service->onInput([&steering,
+                            client = job.service.get()](const wall::service::WindowInput& in) {
+        // A drag across the window orbits 180°: the window it came in, moved and resized or not.
+        const wall::service::ServiceClient::Size size = client->windowSize();
+        if (const std::optional<SteeringRequest> r = requestForInput(in, size.width, size.height)) {
           try {
             steering.submit(*r);
           } catch (const std::exception&) {

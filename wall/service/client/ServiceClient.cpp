@@ -66,6 +66,8 @@ ServiceClient::ServiceClient(const std::string& address, const Credentials& cred
     switch (static_cast<Kind>(h.kind)) {
       case Kind::Directory:
         directory_ = parseDirectory(bytesOf(reply), reply.size());
+        windowWidth_ = directory_.layout.canvasWidth;
+        windowHeight_ = directory_.layout.canvasHeight;
         directoryBytes_.assign(bytesOf(reply), bytesOf(reply) + reply.size());
         // The wall counts the job from now on: keepalives go while the job still sets up (a
         // scene or bricks that take longer than the wall's timeout to load under load).
@@ -140,6 +142,8 @@ messaging::Bytes ServiceClient::rosterBytes() const {
   std::lock_guard lock(mutex_);
   return rosterBytes_;
 }
+
+ServiceClient::Size ServiceClient::windowSize() const { return {windowWidth_, windowHeight_}; }
 
 ServiceClient::ReshapeNews ServiceClient::reshapeNews() const {
   std::lock_guard lock(mutex_);
@@ -243,6 +247,8 @@ void ServiceClient::run() {
             throw base::Error("the wall at " + address_ + " sent a move of another window");
           std::lock_guard lock(mutex_);
           if (reshape.version > reshape_.version) {
+            windowWidth_ = reshape.directory.layout.canvasWidth;
+            windowHeight_ = reshape.directory.layout.canvasHeight;
             reshape_ = {reshape.version, reshape.fromFrame};
             reshapeBytes_.assign(bytesOf(m), bytesOf(m) + m.size());
           }
