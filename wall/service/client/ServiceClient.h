@@ -91,7 +91,8 @@ class ServiceClient {
   zmq::context_t context_{1};
   zmq::socket_t socket_;
   Directory directory_;
-  std::atomic<int> windowWidth_{0}, windowHeight_{0};
+  std::atomic<std::uint64_t> windowSize_{0};  // width << 32 | height: read whole, never torn
+  void setWindowSize(const Layout& window);
   messaging::Bytes directoryBytes_;
   FrameCredits* credits_ = nullptr;                  // set by start(), under mutex_
   std::function<void(const std::string&)> onError_;  // set by start(), under mutex_
