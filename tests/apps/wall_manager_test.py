@@ -322,8 +322,8 @@ def run(t):
     if t.procs["a"].wait(timeout=20 * SCALE) == 0:
         t.fail("job a did not hear that the wall stopped")
     print("PASS: /api/wall and /api/windows describe the wall and both windows; raise reorders "
-          "them (the wall's captures show it %.2f s after the request); a POST moved and resized "
-          "window 2 (%s); bad bodies 400, unknown windows 404; 7 attacks refused; DELETE ended "
+          "them (the wall's captures show it %.2f s after the request); POSTs moved and resized "
+          "windows 1 and 2 (%s); bad bodies 400, unknown windows 404; 7 attacks refused; DELETE ended "
           "job b (window gone %.2f s after the request) while job a went on (frame %d, then %d)"
           % (shown, moved, gone, before, t.newest("a", "r1c1")))
 
