@@ -128,6 +128,7 @@ struct Session::Impl {
   Camera camera, lastCamera;
   bool haveCamera = false;
   std::uint32_t frameId = 0, epoch = 0;
+  std::size_t borrowedBytes = 0;  // of the bricks the driver holds
 
   bool isWall() const { return roles.processOfRank(rank) >= 0; }
   // The bound of the session's own collectives: also given up at once when a rank left.
@@ -348,6 +349,11 @@ void Session::addBrick(const Brick& brick) {
   }
 }
 
+void Session::dataChanged() {
+  if (impl_->isWall()) throw std::logic_error("dfbwall: dataChanged() on a wall rank");
+  impl_->dirty = true;
+}
+
 void Session::refuseInput(const std::string& why) {
   Impl& m = *impl_;
   if (!m.replacing) m.pending.clear();
@@ -376,6 +382,15 @@ void Session::Impl::commit() {
   pending.clear();
   replacing = false;
   driver.reset();
+  // Borrowed voxels may have changed since they were added or last rendered (dataChanged()):
+  // their value ranges are taken now, before the ranges are shared and the scenes built.
+  borrowedBytes = 0;
+  for (renderers::scivis::HeldBrick& b : bricks)
+    for (renderers::Volume& v : b.content.volumes)
+      if (v.borrowed) {
+        v.updateRange();
+        borrowedBytes += v.dataBytes();
+      }
   renderers::RenderSettings settings;
   settings.width = width;
   settings.height = height;
@@ -504,6 +519,7 @@ void Session::writeImage(const std::string& path) const {
 }
 
 std::size_t Session::sceneBytes() const { return impl_->driver ? impl_->driver->sceneBytes() : 0; }
+std::size_t Session::borrowedBytes() const { return impl_->driver ? impl_->borrowedBytes : 0; }
 
 void Session::close() try {
   Impl& m = *impl_;

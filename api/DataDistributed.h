@@ -20,8 +20,9 @@
 // ranks must be the same data (replication: either rank may render it).
 //
 // Every call but the accessors is collective over the render ranks (renderFrame, close; setStyle,
-// addBrick, clearBricks and setCamera are local and take effect at the next renderFrame). MPI
-// must be initialised with MPI_THREAD_MULTIPLE (the messaging runs on its own thread).
+// addBrick, clearBricks, dataChanged and setCamera are local and take effect at the next
+// renderFrame). MPI must be initialised with MPI_THREAD_MULTIPLE (the messaging runs on its own
+// thread).
 //
 // Errors are thrown, never turned into MPI_Abort by the library. Every wait is bounded by
 // SessionOptions::timeoutSeconds: a rank that stops answering (or a program that takes longer
@@ -137,16 +138,30 @@ struct Style {
 };
 
 // A brick's part of one volume: the voxels [lo, hi) of the whole field (x fastest, then y, then
-// z), copied by addBrick. Shading rays see exactly the voxels given, so the box is the program's
-// choice of ghost data (dfbwall --ghost offers the same two): for seams that match the whole
-// field exactly it covers the clip bounds plus 2 voxels below and 3 above on each axis (where
-// the field has them) — one ghost layer, the least memory, but ambient occlusion near the
-// brick's faces sees only the brick — and for AO that equals the whole field's, the AO distance
-// beyond that too. lo == hi: this brick has none of the volume.
+// z), copied by addBrick, or borrowed (below). Shading rays see exactly the voxels given, so the
+// box is the program's choice of ghost data (dfbwall --ghost offers the same two): for seams that
+// match the whole field exactly it covers the clip bounds plus 2 voxels below and 3 above on each
+// axis (where the field has them) — one ghost layer, the least memory, but ambient occlusion near
+// the brick's faces sees only the brick — and for AO that equals the whole field's, the AO
+// distance beyond that too. lo == hi: this brick has none of the volume.
+//
+// Borrowed voxels (`borrowed`, float32, uint8 and uint16 only, aligned to their size) are read
+// where they are: the session holds no copy (sceneBytes() leaves them out; borrowedBytes()
+// counts them). The program keeps them alive and unchanged while the session holds the brick:
+// from addBrick() until the renderFrame() that replaces its bricks (the first one after
+// clearBricks() or a new addBrick() that commits; a frame that throws keeps the old ones), or
+// close() or the destructor. It may change their values between frames (never while
+// renderFrame() runs) and then calls dataChanged() before the next frame; a frame without it
+// reads the new values through structures built from the old ones (value ranges, macrocells,
+// isosurfaces): stale, never outside the box. `owner`, when given, is held as long as the
+// session holds the voxels (the Python module keeps its numpy arrays alive this way). Other
+// voxel types are converted when added, so borrowing them is refused (InputError).
 struct VolumePart {
   Index3 lo{0, 0, 0}, hi{0, 0, 0};
   VoxelType type = VoxelType::Float32;
   const void* voxels = nullptr;
+  bool borrowed = false;
+  std::shared_ptr<const void> owner;
 };
 
 struct Particles {
@@ -231,9 +246,14 @@ class Session {
 
   // Render ranks.
   void setStyle(const Style& style);
-  // Copies the brick's data. Data that does not fit the style is refused at the next
-  // renderFrame(), on every rank (InputError); a logic_error before setStyle().
+  // Copies the brick's data (all but borrowed voxels: VolumePart). Data that does not fit the
+  // style is refused at the next renderFrame(), on every rank (InputError); a logic_error before
+  // setStyle().
   void addBrick(const Brick& brick);
+  // The program changed the values of borrowed voxels: the next renderFrame() (on every rank,
+  // as for a new scene version) takes the value ranges again, rebuilds the macrocells and
+  // isosurfaces of this rank's bricks, and starts the accumulation afresh. Local, like addBrick.
+  void dataChanged();
   // A binding's own check of the program's input that failed (a numpy array of a type no voxel
   // type is): refused like a brick that does not fit, by the next renderFrame() on every rank.
   void refuseInput(const std::string& why);
@@ -245,9 +265,11 @@ class Session {
   std::vector<std::uint8_t> image() const;
   // Render rank 0 without a wall: writes the last frame as a PNG (atomically); elsewhere nothing.
   void writeImage(const std::string& path) const;
-  // The bytes of brick data this rank holds in the current scene version (its bricks' voxels,
-  // particles and triangles).
+  // The bytes of brick data this rank holds in the current scene version (its bricks' copied
+  // voxels, particles and triangles, and what it built from them; borrowed voxels not counted).
   std::size_t sceneBytes() const;
+  // The bytes of borrowed voxels this rank reads in place in the current scene version.
+  std::size_t borrowedBytes() const;
   // Render ranks: ends the wall's run after the last frame (waiting until it is presented and
   // captured) and releases the session's communicators. Collective over the whole `comm`
   // together with runWall() returning on the wall ranks.

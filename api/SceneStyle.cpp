@@ -65,6 +65,25 @@ void convertVoxels(VoxelType t, const void* from, std::byte* to, std::size_t cou
   throw std::runtime_error("dfbwall: brick " + std::to_string(brick.id) + ": " + what);
 }
 
+// The program's voxels read where they are, its owner (if any) held with them. Their value range
+// is taken when the scene version that uses them is made (Session::Impl::commit), not here: the
+// program may still change them until that frame.
+void borrow(const Brick& brick, const std::string& name, const VolumePart& part,
+            renderers::Volume& volume) {
+  if (part.type != VoxelType::Float32 && part.type != VoxelType::UInt8 &&
+      part.type != VoxelType::UInt16)
+    fail(brick, name +
+                    ": borrowed voxels must be float32, uint8 or uint16 (the others are "
+                    "converted to float32, so they are copied: give them without borrowed)");
+  const std::size_t width = renderers::voxelBytes(volume.type);
+  if (reinterpret_cast<std::uintptr_t>(part.voxels) % width != 0)
+    fail(brick, name + ": borrowed voxels must be aligned to their size (" + std::to_string(width) +
+                    " bytes)");
+  volume.borrowed =
+      std::shared_ptr<const std::byte>(part.owner, static_cast<const std::byte*>(part.voxels));
+  volume.borrowedBytes = volume.box.voxelCount() * width;
+}
+
 renderers::scivis::ParticlesDesc particles(const Brick& brick, const Particles& p,
                                            const char* field) {
   if (!(p.radii.size() == 1 || p.radii.size() == p.centers.size()) && !p.centers.empty())
@@ -201,9 +220,13 @@ renderers::scivis::BrickContent brickContent(const Style& style, const Brick& br
         if (box.hi[a] - box.lo[a] < 2) fail(brick, name + ": the voxel box is under 2 voxels wide");
       if (!part->voxels) fail(brick, name + ": voxels is null");
       volume.box = box;
-      volume.voxels = renderers::allocateVoxelBytes(box, volume.type);
-      convertVoxels(part->type, part->voxels, volume.voxels.data(), box.voxelCount());
-      volume.updateRange();
+      if (part->borrowed) {
+        borrow(brick, name, *part, volume);
+      } else {
+        volume.voxels = renderers::allocateVoxelBytes(box, volume.type);
+        convertVoxels(part->type, part->voxels, volume.voxels.data(), box.voxelCount());
+        volume.updateRange();
+      }
     }
     c.volumes.push_back(std::move(volume));
   }
@@ -238,7 +261,7 @@ renderers::SceneDesc sceneDesc(const Style& style,
   for (const renderers::scivis::HeldBrick& b : mine)
     for (std::size_t v = 0; v < n && v < b.content.volumes.size(); ++v) {
       const renderers::Volume& vol = b.content.volumes[v];
-      if (vol.voxels.empty()) continue;
+      if (vol.dataBytes() == 0) continue;
       local[2 * v] = std::max(local[2 * v], -vol.valueMin);
       local[2 * v + 1] = std::max(local[2 * v + 1], vol.valueMax);
     }

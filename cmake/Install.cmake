@@ -1,13 +1,18 @@
 # `cmake --install build [--prefix P]`: the libraries, the API's headers, a CMake package and the
 # Python module, so a program does find_package(dfbwall) and links dfbwall::dfbwall (C++,
-# examples/insitu) or dfbwall::c (the C API in libdfbwall.so, examples/insitu-c).
+# examples/insitu), dfbwall::c (the C API in libdfbwall.so, examples/insitu-c) or dfbwall::fortran
+# (the Fortran module over it, examples/insitu-f90, when built).
 # The libraries are static; their dependencies come back through find_dependency in
 # dfbwallConfig.cmake (cmake/dfbwallConfig.cmake.in).
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 set(DFBWALL_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/dfbwall)
-install(TARGETS dfbwall_api dfbwall_c base messaging dfb renderers wall runtime wall_glfw dfbwall_warnings
+set(DFBWALL_INSTALLED_TARGETS dfbwall_api dfbwall_c)
+if(TARGET dfbwall_fortran)
+  list(APPEND DFBWALL_INSTALLED_TARGETS dfbwall_fortran)
+endif()
+install(TARGETS ${DFBWALL_INSTALLED_TARGETS} base messaging dfb renderers wall runtime wall_glfw dfbwall_warnings
   EXPORT dfbwallTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}

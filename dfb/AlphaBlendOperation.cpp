@@ -89,10 +89,18 @@ class AlphaBlendOperation final : public TileOperation {
     finished_.region = region_;
     finished_.generation = finished_.children = 0;
     finished_.accumulationId = finished_.sequence = 0;
-    finished_.weight = 1;
+    finished_.weight = finished_.samples = 1;
     finished_.color.resize(4 * n);
     finished_.depth.resize(n);
     finished_.normal.clear(), finished_.albedo.clear(), finished_.rgba8.clear();
+    std::uint32_t samples = 1;
+    for (const Tile* t : ordered) samples = std::max(samples, t->samples);
+    for (const Tile* t : ordered)
+      if (t->samples != 1 && t->samples != samples)
+        throw base::Error(where() + ": a tile of " + std::to_string(t->samples) +
+                          " samples in a tree of " + std::to_string(samples) +
+                          " (every tile carries that many, or 1)");
+    if (samples > 1) return blendSamples(ordered, samples);
     if (ordered.size() == 1) return blendOne(*ordered[0]);
     if (ordered.size() == 2) return blendTwo(*ordered[0], *ordered[1]);
     std::vector<std::pair<float, const Tile*>> fragments(ordered.size());
@@ -115,6 +123,52 @@ class AlphaBlendOperation final : public TileOperation {
       }
       for (int k = 0; k < 4; ++k) finished_.color[4 * p + static_cast<size_t>(k)] = out[k];
       finished_.depth[p] = fragments.empty() ? infinity : fragments.front().first;
+    }
+  }
+
+  // blend() of tiles that carry `samples` samples apart (or 1, standing for every sample): each
+  // sample's fragments composited as blend() composites a pixel (two tiles: blendPixelPair, as
+  // blendTwo), then their mean; the depth is sample 0's.
+  void blendSamples(const std::vector<const Tile*>& ordered, std::uint32_t samples) {
+    const size_t n = static_cast<size_t>(region_.pixelCount());
+    const float infinity = std::numeric_limits<float>::infinity();
+    auto at = [n](const Tile& t, std::uint32_t s, size_t p) {
+      return (t.samples == 1 ? 0 : static_cast<size_t>(s) * n) + p;
+    };
+    auto depthOf = [&](const Tile& t, std::uint32_t s, size_t p) {
+      return t.depth.empty() ? infinity : t.depth[at(t, s, p)];
+    };
+    std::vector<float> composites(4 * static_cast<size_t>(samples));
+    std::vector<std::pair<float, const Tile*>> fragments(ordered.size());
+    for (size_t p = 0; p < n; ++p) {
+      float front = infinity;
+      for (std::uint32_t s = 0; s < samples; ++s) {
+        float* out = &composites[4 * s];
+        if (ordered.size() == 2) {
+          const Tile &a = *ordered[0], &b = *ordered[1];
+          const float d = blendPixelPair(&a.color[4 * at(a, s, p)], depthOf(a, s, p),
+                                         &b.color[4 * at(b, s, p)], depthOf(b, s, p), out);
+          if (s == 0) front = d;
+          continue;
+        }
+        for (size_t i = 0; i < ordered.size(); ++i)
+          fragments[i] = {depthOf(*ordered[i], s, p), ordered[i]};
+        for (size_t i = 1; i < fragments.size(); ++i) {  // insertion, as blend()
+          const std::pair<float, const Tile*> f = fragments[i];
+          size_t j = i;
+          for (; j > 0 && f.first < fragments[j - 1].first; --j) fragments[j] = fragments[j - 1];
+          fragments[j] = f;
+        }
+        for (int k = 0; k < 4; ++k) out[k] = 0;
+        for (const auto& [depth, tile] : fragments) {
+          const float* c = &tile->color[4 * at(*tile, s, p)];
+          const float transmitted = 1.0f - out[3];
+          for (int k = 0; k < 4; ++k) out[k] += transmitted * c[k];
+        }
+        if (s == 0) front = fragments.front().first;
+      }
+      meanOfComposites(composites.data(), samples, &finished_.color[4 * p]);
+      finished_.depth[p] = front;
     }
   }
 

@@ -34,6 +34,11 @@ struct Tile {
   // `weight` (the samples per pixel behind it), so the result does not depend on arrival order.
   std::uint32_t sequence = 0;
   std::uint32_t weight = 1;
+  // Fragments per pixel of a tile in a sort-last tree: a brick's samples of one frame travel
+  // apart (color and depth hold `samples` blocks of the region's pixels, sample 0's first) and
+  // are composited sample by sample, then averaged: a composite of per-brick means is not the
+  // mean of the composites (it was 0.13 off along brick seams at 2 spp). 1: a plain tile.
+  std::uint32_t samples = 1;
 
   std::vector<float> color;   // RGBA per pixel, row-major over the region; RGB linear radiance
   std::vector<float> depth;   // one per pixel; empty means "at infinity"
@@ -49,6 +54,10 @@ struct Tile {
   void reset(const Region& r, bool withDepth = false);
   int pixelCount() const { return region.pixelCount(); }
 };
+
+// The most samples a tile may carry apart (Tile::samples): 16 RGBA-and-depth blocks of a 64²
+// tile are 1.3 MB.
+constexpr std::uint32_t kMaxTileSamples = 16;
 
 // Which tiles an image of a given size has, at a given tile size.
 class TileGrid {

@@ -38,16 +38,27 @@ Admission admitInput(const Tile& input, const FrameInfo& label, const TileState&
   if (input.region != tile.region)
     throw base::Error("input region " + describe(input.region) + " is not the tile's " +
                       describe(tile.region));
+  if (input.samples < 1 || input.samples > kMaxTileSamples)
+    throw base::Error("input carries " + std::to_string(input.samples) + " samples apart (1 to " +
+                      std::to_string(kMaxTileSamples) + ")");
+  if (input.samples > 1 && !tile.needs.tree)
+    throw base::Error("input carries " + std::to_string(input.samples) +
+                      " samples apart, but this tile operation composites no tree (1 only)");
+  if (input.samples > 1 && (!input.normal.empty() || !input.albedo.empty() || !input.rgba8.empty()))
+    throw base::Error(
+        "input carries " + std::to_string(input.samples) +
+        " samples apart with normals, albedo or display pixels (color and depth only)");
+  const size_t samples = input.samples;
   const size_t n = static_cast<size_t>(tile.region.pixelCount());
   const bool pixelsForColor =
       tile.needs.displayPixelsForColor && input.color.empty() && input.rgba8.size() == n;
-  if (input.color.size() != 4 * n && !pixelsForColor)
-    throw base::Error("color has " + std::to_string(input.color.size()) +
-                      " floats, the tile needs " + std::to_string(4 * n) + " (4 per pixel)" +
-                      (tile.needs.displayPixelsForColor
-                           ? " or display pixels instead (" + std::to_string(n) + ")"
-                           : std::string()));
-  checkOptional("depth", input.depth.size(), 1, n);
+  if (input.color.size() != 4 * n * samples && !pixelsForColor)
+    throw base::Error(
+        "color has " + std::to_string(input.color.size()) + " floats, the tile needs " +
+        std::to_string(4 * n * samples) + " (4 per pixel and sample)" +
+        (tile.needs.displayPixelsForColor ? " or display pixels instead (" + std::to_string(n) + ")"
+                                          : std::string()));
+  checkOptional("depth", input.depth.size(), samples, n);
   checkOptional("normal", input.normal.size(), 3, n);
   checkOptional("albedo", input.albedo.size(), 3, n);
   checkOptional("display pixels", input.rgba8.size(), 1, n);

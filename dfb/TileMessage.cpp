@@ -30,7 +30,12 @@ messaging::Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId
     throw base::Error("tile " + std::to_string(tileIndex) + " has " +
                       std::to_string(tile.rgba8.size()) + " RGBA8 pixels for " + std::to_string(n) +
                       " pixels");
-  if (tile.color.size() != 4 * n && !(rgba8 && tile.color.empty()))
+  const size_t samples = tile.samples;
+  if (samples < 1 || samples > kMaxTileSamples || (samples > 1 && rgba8))
+    throw base::Error("tile " + std::to_string(tileIndex) + " carries " + std::to_string(samples) +
+                      " samples apart (1 to " + std::to_string(kMaxTileSamples) +
+                      ", and 1 with RGBA8 pixels)");
+  if (tile.color.size() != 4 * n * samples && !(rgba8 && tile.color.empty()))
     throw base::Error("tile " + std::to_string(tileIndex) + " has " +
                       std::to_string(tile.color.size()) + " color floats for " + std::to_string(n) +
                       " pixels");
@@ -48,9 +53,10 @@ messaging::Bytes packTile(const Tile& tile, int tileIndex, std::uint32_t frameId
   header.children = tile.children;
   header.sequence = tile.sequence;
   header.weight = tile.weight;
-  size_t floats = tile.color.empty() ? 0 : 4 * n;
+  header.samples = tile.samples;
+  size_t floats = tile.color.empty() ? 0 : 4 * n * samples;
   if (tile.color.empty()) header.channels |= kNoColor;
-  if (tile.depth.size() == n) header.channels |= kHasDepth, floats += n;
+  if (tile.depth.size() == n * samples) header.channels |= kHasDepth, floats += n * samples;
   if (tile.normal.size() == 3 * n) header.channels |= kHasNormal, floats += 3 * n;
   if (tile.albedo.size() == 3 * n) header.channels |= kHasAlbedo, floats += 3 * n;
   if (rgba8) header.channels |= kHasRgba8;
@@ -94,8 +100,15 @@ Tile unpackTile(const messaging::Bytes& bytes, TileMessageHeader& header) {
   if (noColor && !rgba8)
     throw base::Error("tile message for tile " + std::to_string(header.tileIndex) +
                       " has neither color nor RGBA8 pixels");
-  size_t floats = noColor ? 0 : 4 * n;
-  if (header.channels & kHasDepth) floats += n;
+  const size_t samples = header.samples;
+  if (samples < 1 || samples > kMaxTileSamples ||
+      (samples > 1 && (rgba8 || (header.channels & (kHasNormal | kHasAlbedo)))))
+    throw base::Error("tile message for tile " + std::to_string(header.tileIndex) + " carries " +
+                      std::to_string(samples) + " samples apart (1 to " +
+                      std::to_string(kMaxTileSamples) + ", and 1 with normals, albedo or RGBA8)");
+  tile.samples = header.samples;
+  size_t floats = noColor ? 0 : 4 * n * samples;
+  if (header.channels & kHasDepth) floats += n * samples;
   if (header.channels & kHasNormal) floats += 3 * n;
   if (header.channels & kHasAlbedo) floats += 3 * n;
   const size_t payload = floats * sizeof(float) + (rgba8 ? n * sizeof(std::uint32_t) : 0);
@@ -104,8 +117,8 @@ Tile unpackTile(const messaging::Bytes& bytes, TileMessageHeader& header) {
                       std::to_string(bytes.size() - sizeof header) +
                       " payload bytes, its header implies " + std::to_string(payload));
   size_t at = sizeof header;
-  if (!noColor) take(bytes, at, tile.color, 4 * n);
-  if (header.channels & kHasDepth) take(bytes, at, tile.depth, n);
+  if (!noColor) take(bytes, at, tile.color, 4 * n * samples);
+  if (header.channels & kHasDepth) take(bytes, at, tile.depth, n * samples);
   if (header.channels & kHasNormal) take(bytes, at, tile.normal, 3 * n);
   if (header.channels & kHasAlbedo) take(bytes, at, tile.albedo, 3 * n);
   if (rgba8) {

@@ -20,7 +20,7 @@ struct TileMessageHeader {
   std::uint32_t sequence, weight;
   std::uint32_t channels;  // kHasDepth | kHasNormal | kHasAlbedo | kHasRgba8 | kNoColor
   std::uint32_t payloadBytes;
-  std::uint32_t reserved;
+  std::uint32_t samples;  // Tile::samples: color and depth hold that many blocks
 };
 static_assert(sizeof(TileMessageHeader) == 64, "the tile header is part of the protocol");
 

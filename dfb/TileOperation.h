@@ -19,7 +19,9 @@ struct FrameInfo {
 // What an operation needs of every input; the DFB's door (dfb/TileDoor.h) refuses an input that
 // does not provide it, so an operation never checks its inputs itself. Every input has its
 // tile's region and color (4 floats a pixel); depth (1), normal and albedo (3) and display
-// pixels (1) are either absent or sized for the region.
+// pixels (1) are either absent or sized for the region. Only a tree's inputs may carry several
+// samples apart (Tile::samples, at most kMaxTileSamples): color and depth then hold that many
+// blocks, and no normal, albedo or display pixels.
 struct InputNeeds {
   // Display pixels (Tile::rgba8) may stand in for color: color may then be empty.
   bool displayPixelsForColor = false;
@@ -75,7 +77,10 @@ TileOperationFactory writeOperation();
 TileOperationFactory accumulateOperation();
 // Sort-last compositing: collects the whole dependency tree (any order, children before
 // parents), then per pixel sorts fragments by depth and blends front to back. Colors are
-// premultiplied by alpha.
+// premultiplied by alpha. Inputs that carry S samples apart are blended sample by sample and
+// the S composites averaged (meanOfComposites); every input then carries S or 1 (a fragment
+// that stands for every sample, such as a constant background), and the result's depth is
+// sample 0's.
 TileOperationFactory alphaBlendOperation();
 // One pixel of two fragments as alphaBlendOperation() blends them, bit for bit: `a` (depth
 // `da`) comes first in the tree's order, so it goes in front on a tie. Writes the blended RGBA
@@ -90,6 +95,17 @@ inline float blendPixelPair(const float a[4], float da, const float b[4], float 
   const float transmitted = 1.0f - sum[3];
   for (int k = 0; k < 4; ++k) out[k] = sum[k] + transmitted * back[k];
   return bFirst ? db : da;
+}
+// The pixel of a tile whose samples were composited apart (Tile::samples): the mean of the
+// `samples` composites (4 floats each, in sample order), summed in that order.
+// alphaBlendOperation() and a renderer that blends a lone root itself both average with it, so they
+// agree bit for bit.
+inline void meanOfComposites(const float* composites, std::uint32_t samples, float out[4]) {
+  float sum[4] = {0, 0, 0, 0};
+  for (std::uint32_t s = 0; s < samples; ++s)
+    for (int k = 0; k < 4; ++k) sum[k] += composites[4 * s + static_cast<std::uint32_t>(k)];
+  const float inv = 1.0f / static_cast<float>(samples);
+  for (int k = 0; k < 4; ++k) out[k] = sum[k] * inv;
 }
 // Sort-last compositing with progressive refinement: each frame's tree is alpha-blended, then the
 // composited tiles of the epoch are averaged (weighted by the root tile's `weight`).

@@ -120,7 +120,7 @@ float Volume::at(int i, int j, int k) const {
       static_cast<std::size_t>(k - box.lo.z) * sliceStride() +
       static_cast<std::size_t>(j - box.lo.y) * static_cast<std::size_t>(box.size().x) +
       static_cast<std::size_t>(i - box.lo.x);
-  return valueAt(voxels.data(), type, n);
+  return valueAt(data(), type, n);
 }
 
 std::size_t Volume::sliceVoxels() const {
@@ -138,19 +138,19 @@ std::size_t slicePaddingFor(const VoxelBox& box, VoxelType type) {
 
 void Volume::spreadSlices() {
   const std::size_t padding = slicePaddingFor(box, type);
-  if (slicePadding != 0 || padding == 0) return;
+  if (slicePadding != 0 || padding == 0 || borrowed) return;
   const std::size_t width = voxelBytes(type), slice = sliceVoxels() * width;
   const std::size_t slices = static_cast<std::size_t>(box.size().z),
                     stride = slice + padding * width;
   if (voxels.size() != slice * slices) return;  // not dense voxels of the box: left as they are
   voxels.resize(stride * slices);
   // From the last slice down: each moves up, past slices already moved, never over one not yet.
-  std::byte* data = voxels.data();
+  std::byte* buffer = voxels.data();
   for (std::size_t z = slices; z-- > 1;) {
-    std::memmove(data + z * stride, data + z * slice, slice);
-    std::memset(data + z * stride - padding * width, 0, padding * width);
+    std::memmove(buffer + z * stride, buffer + z * slice, slice);
+    std::memset(buffer + z * stride - padding * width, 0, padding * width);
   }
-  std::memset(data + slices * stride - padding * width, 0, padding * width);
+  std::memset(buffer + slices * stride - padding * width, 0, padding * width);
   slicePadding = padding;
 }
 
@@ -175,7 +175,7 @@ std::vector<std::byte> allocateVoxelBytes(const VoxelBox& box, VoxelType type) {
 void Volume::updateRange() {
   const std::size_t count = box.voxelCount();
   if (count == 0 ||
-      voxels.size() < sliceStride() * static_cast<std::size_t>(box.size().z) * voxelBytes(type)) {
+      dataBytes() < sliceStride() * static_cast<std::size_t>(box.size().z) * voxelBytes(type)) {
     valueMin = valueMax = 0;
     return;
   }
@@ -188,7 +188,7 @@ void Volume::updateRange() {
   base::parallelFor(slabs, [&](std::size_t z) {
     float l = lo[z], h = hi[z];
     for (std::size_t n = z * stride, end = n + slab; n < end; ++n) {
-      const float v = valueAt(voxels.data(), type, n);
+      const float v = valueAt(data(), type, n);
       if (v < l) l = v;
       if (v > h) h = v;
     }

@@ -9,6 +9,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -55,20 +56,29 @@ struct GridGeometry {
   std::string problem() const;
 };
 
-// The held voxels of one volume. Plain data: copyable, movable, no hidden state.
+// The voxels of one volume, held (`voxels`) or borrowed from the program that made them
+// (`borrowed`, the data-distributed API's zero-copy bricks). Plain data: copyable (a copy of a
+// borrowed volume borrows the same voxels), movable, no hidden state.
 struct Volume {
   GridGeometry grid;
-  VoxelBox box;  // the held voxels (a sub-box of grid.wholeBox())
+  VoxelBox box;  // the voxels (a sub-box of grid.wholeBox())
   VoxelType type = VoxelType::Float32;
   // x fastest, then y, then z: slices of sliceVoxels() voxels, sliceStride() voxels apart (each
   // slice followed by slicePadding voxels no one reads; none until spreadSlices()).
   std::vector<std::byte> voxels;
+  // When set, the voxels are read here instead (dense, `voxels` empty): memory this Volume does
+  // not own, kept alive by the pointer's owner (none: its lender's promise). Renderers read
+  // data(), never `voxels`, so either works.
+  std::shared_ptr<const std::byte> borrowed;
+  std::size_t borrowedBytes = 0;
   std::size_t slicePadding = 0;
-  float valueMin = 0, valueMax = 0;  // over the held voxels
+  float valueMin = 0, valueMax = 0;  // over the voxels
 
   // The value of voxel (i, j, k), given in whole-field indices inside `box`.
   float at(int i, int j, int k) const;
-  std::size_t bytes() const { return voxels.size(); }
+  const std::byte* data() const { return borrowed ? borrowed.get() : voxels.data(); }
+  std::size_t dataBytes() const { return borrowed ? borrowedBytes : voxels.size(); }
+  std::size_t bytes() const { return voxels.size(); }  // held: a borrowed volume holds none
   std::size_t sliceVoxels() const;
   std::size_t sliceStride() const { return sliceVoxels() + slicePadding; }
   // Recomputes valueMin / valueMax from the voxels.
@@ -78,7 +88,7 @@ struct Volume {
   // power-of-two slice), the same rows of neighbouring slices map onto the same few sets of the
   // L1 cache (one way spans 4 KiB), and the march's 16 rays, crossing slices, evict each
   // other's voxels. In place when the buffer came from allocateVoxelBytes (its capacity holds
-  // the padding).
+  // the padding); borrowed voxels are left as they are.
   void spreadSlices();
 };
 

@@ -217,7 +217,7 @@ int enumBits(const Enum& e) {
   return bits;
 }
 
-dfbwall::Brick brickOf(const dfbwall_brick& c) {
+dfbwall::Brick brickOf(const dfbwall_brick& c, bool borrowed) {
   dfbwall::Brick b;
   b.id = c.id;
   b.boundsLo = {c.bounds_lo[0], c.bounds_lo[1], c.bounds_lo[2]};
@@ -235,6 +235,7 @@ dfbwall::Brick brickOf(const dfbwall_brick& c) {
     part.hi = {p.hi[0], p.hi[1], p.hi[2]};
     part.type = static_cast<dfbwall::VoxelType>(type);  // the same order (static_assert below)
     part.voxels = p.voxels;
+    part.borrowed = borrowed;
     b.volumes.push_back(part);
   }
   b.particles.centers = points<dfbwall::Vec3f>(c.particle_centers, c.particle_count, "particles");
@@ -259,6 +260,22 @@ static_assert(static_cast<int>(dfbwall::VoxelType::Float32) == DFBWALL_FLOAT32 &
               static_cast<int>(dfbwall::VoxelType::Float64) == DFBWALL_FLOAT64);
 static_assert(sizeof(dfbwall::Vec3f) == 3 * sizeof(float) &&
               sizeof(std::array<std::uint32_t, 3>) == 3 * sizeof(std::uint32_t));
+
+// Both forms of add_brick: the brick's volume parts copied or borrowed.
+dfbwall_error addBrick(dfbwall_session* session, const dfbwall_brick* brick, bool borrowed) {
+  return guarded([&] {
+    dfbwall::Session& s = sessionOf(session);
+    // Refused like a brick that does not fit: at the next frame, on every rank alike.
+    dfbwall::Brick b;
+    try {
+      b = brickOf(need(brick, "the brick"), borrowed);
+    } catch (const CInputError& e) {
+      s.refuseInput(e.what());
+      return;
+    }
+    s.addBrick(b);
+  });
+}
 
 }  // namespace
 
@@ -437,6 +454,11 @@ dfbwall_error dfbwall_session_new(MPI_Comm comm, const dfbwall_options* options,
   });
 }
 
+dfbwall_error dfbwall_session_new_f(MPI_Fint comm, const dfbwall_options* options,
+                                    dfbwall_session** out) {
+  return dfbwall_session_new(MPI_Comm_f2c(comm), options, out);
+}
+
 void dfbwall_session_release(dfbwall_session* session) {
   // The destructor waits for nobody and throws nothing (api/DataDistributed.h, "Leaving").
   delete session;
@@ -448,6 +470,10 @@ int dfbwall_session_is_wall_rank(const dfbwall_session* session) {
 
 MPI_Comm dfbwall_session_render_comm(const dfbwall_session* session) {
   return session ? session->session->renderComm() : MPI_COMM_NULL;
+}
+
+MPI_Fint dfbwall_session_render_comm_f(const dfbwall_session* session) {
+  return MPI_Comm_c2f(dfbwall_session_render_comm(session));
 }
 
 int dfbwall_session_canvas_width(const dfbwall_session* session) {
@@ -467,22 +493,24 @@ dfbwall_error dfbwall_session_set_style(dfbwall_session* session, const dfbwall_
 }
 
 dfbwall_error dfbwall_session_add_brick(dfbwall_session* session, const dfbwall_brick* brick) {
-  return guarded([&] {
-    dfbwall::Session& s = sessionOf(session);
-    // Refused like a brick that does not fit: at the next frame, on every rank alike.
-    dfbwall::Brick b;
-    try {
-      b = brickOf(need(brick, "the brick"));
-    } catch (const CInputError& e) {
-      s.refuseInput(e.what());
-      return;
-    }
-    s.addBrick(b);
-  });
+  return addBrick(session, brick, false);
+}
+
+dfbwall_error dfbwall_session_add_brick_borrowed(dfbwall_session* session,
+                                                 const dfbwall_brick* brick) {
+  return addBrick(session, brick, true);
+}
+
+dfbwall_error dfbwall_session_data_changed(dfbwall_session* session) {
+  return guarded([&] { sessionOf(session).dataChanged(); });
 }
 
 dfbwall_error dfbwall_session_clear_bricks(dfbwall_session* session) {
   return guarded([&] { sessionOf(session).clearBricks(); });
+}
+
+dfbwall_error dfbwall_session_refuse_input(dfbwall_session* session, const char* why) {
+  return guarded([&] { sessionOf(session).refuseInput(text(why, "why")); });
 }
 
 dfbwall_error dfbwall_session_set_camera(dfbwall_session* session, const float position[3],
@@ -523,6 +551,10 @@ dfbwall_error dfbwall_session_write_image(dfbwall_session* session, const char* 
 
 size_t dfbwall_session_scene_bytes(const dfbwall_session* session) {
   return session ? session->session->sceneBytes() : 0;
+}
+
+size_t dfbwall_session_borrowed_bytes(const dfbwall_session* session) {
+  return session ? session->session->borrowedBytes() : 0;
 }
 
 dfbwall_error dfbwall_session_close(dfbwall_session* session) {

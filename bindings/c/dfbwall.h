@@ -111,7 +111,8 @@ DFBWALL_API dfbwall_error dfbwall_style_set_background(dfbwall_style* style, con
 DFBWALL_API dfbwall_error dfbwall_style_set_samples_per_pixel(dfbwall_style* style, int spp);
 DFBWALL_API dfbwall_error dfbwall_style_set_seed(dfbwall_style* style, uint64_t seed);
 
-/* ---- Bricks: what one rank holds, read (copied) by dfbwall_session_add_brick. ---- */
+/* ---- Bricks: what one rank holds, read (copied) by dfbwall_session_add_brick; its voxels
+ * borrowed (read in place) by dfbwall_session_add_brick_borrowed. ---- */
 typedef enum dfbwall_voxel_type {
   DFBWALL_FLOAT32 = 0, /* float32, uint8, uint16: held as given */
   DFBWALL_UINT8 = 1,
@@ -162,12 +163,18 @@ typedef struct dfbwall_session dfbwall_session;
 /* Collective over comm (duplicated, not kept). options may be NULL (an 800x600 image). */
 DFBWALL_API dfbwall_error dfbwall_session_new(MPI_Comm comm, const dfbwall_options* options,
                                               dfbwall_session** out);
+/* dfbwall_session_new for Fortran and other languages that hold MPI handles as MPI_Fint: the old
+ * `mpi` module's integer or mpi_f08's MPI_Comm%MPI_VAL (converted with MPI_Comm_f2c). */
+DFBWALL_API dfbwall_error dfbwall_session_new_f(MPI_Fint comm, const dfbwall_options* options,
+                                                dfbwall_session** out);
 /* Not collective: without dfbwall_session_close() before, the session leaves (the others fail at
  * once, naming this rank). NULL is allowed. */
 DFBWALL_API void dfbwall_session_release(dfbwall_session* session);
 DFBWALL_API int dfbwall_session_is_wall_rank(const dfbwall_session* session);
 /* The render ranks' communicator (MPI_COMM_NULL on wall ranks): simulate on it. */
 DFBWALL_API MPI_Comm dfbwall_session_render_comm(const dfbwall_session* session);
+/* The same as an MPI_Fint (MPI_Comm_c2f): the Fortran handle of the render ranks' communicator. */
+DFBWALL_API MPI_Fint dfbwall_session_render_comm_f(const dfbwall_session* session);
 DFBWALL_API int dfbwall_session_canvas_width(const dfbwall_session* session);
 DFBWALL_API int dfbwall_session_canvas_height(const dfbwall_session* session);
 /* Wall ranks: presents frames until the render ranks close the session. */
@@ -177,7 +184,24 @@ DFBWALL_API dfbwall_error dfbwall_session_set_style(dfbwall_session* session,
                                                     const dfbwall_style* style);
 DFBWALL_API dfbwall_error dfbwall_session_add_brick(dfbwall_session* session,
                                                     const dfbwall_brick* brick);
+/* The brick with its volumes' voxels borrowed, not copied (its particles and triangles are
+ * copied): float32, uint8 or uint16, aligned to their size (other types are
+ * DFBWALL_ERROR_INPUT at the next frame, on every rank). The program keeps the voxels alive and
+ * unchanged while the session holds the brick: until the render_frame that replaces its bricks
+ * (the first after clear_bricks or a new add_brick that returns DFBWALL_OK), or close or
+ * release. It may change their values between frames, never during render_frame, and then calls
+ * dfbwall_session_data_changed before the next frame (until then frames read the new values
+ * through structures built from the old ones: stale, never outside the brick). */
+DFBWALL_API dfbwall_error dfbwall_session_add_brick_borrowed(dfbwall_session* session,
+                                                             const dfbwall_brick* brick);
+/* The program changed borrowed voxels: the next render_frame takes the value ranges again,
+ * rebuilds what depends on the values (macrocells, isosurfaces) and starts averaging afresh. */
+DFBWALL_API dfbwall_error dfbwall_session_data_changed(dfbwall_session* session);
 DFBWALL_API dfbwall_error dfbwall_session_clear_bricks(dfbwall_session* session);
+/* A binding's own check of the program's input failed on this rank (a Fortran array that is not
+ * contiguous, ...): refused like a brick that does not fit, by the next render_frame on every
+ * render rank alike, with `why` as the message. */
+DFBWALL_API dfbwall_error dfbwall_session_refuse_input(dfbwall_session* session, const char* why);
 /* Render rank 0's camera is the one used. fov_y in degrees. */
 DFBWALL_API dfbwall_error dfbwall_session_set_camera(dfbwall_session* session,
                                                      const float position[3],
@@ -191,8 +215,10 @@ DFBWALL_API dfbwall_error dfbwall_session_image(dfbwall_session* session, const 
                                                 int* width, int* height);
 /* Render rank 0 without a wall: the last frame as a PNG; elsewhere nothing. */
 DFBWALL_API dfbwall_error dfbwall_session_write_image(dfbwall_session* session, const char* path);
-/* The bytes of brick data this rank holds in the current scene version. */
+/* The bytes of brick data this rank holds in the current scene version (borrowed voxels not
+ * counted), and the bytes of borrowed voxels it reads in place. */
 DFBWALL_API size_t dfbwall_session_scene_bytes(const dfbwall_session* session);
+DFBWALL_API size_t dfbwall_session_borrowed_bytes(const dfbwall_session* session);
 /* Render ranks, collective with run_wall returning on the wall ranks. */
 DFBWALL_API dfbwall_error dfbwall_session_close(dfbwall_session* session);
 

@@ -1,7 +1,8 @@
 // The Python module `dfbwall` (pybind11) over the data-distributed API: a Session on an mpi4py
-// communicator, the style as a dict, bricks from numpy arrays, the image as a numpy array. Errors
-// are Python exceptions: dfbwall.InputError (a ValueError) for input the session refused, at the
-// next render_frame() on every rank alike; RuntimeError for the rest.
+// communicator, the style as a dict, bricks from numpy arrays (voxels borrowed where their dtype
+// is one the renderer holds), the image as a numpy array. Errors are Python exceptions:
+// dfbwall.InputError (a ValueError) for input the session refused, at the next render_frame() on
+// every rank alike; RuntimeError for the rest.
 #include <mpi.h>
 #include <mpi4py/mpi4py.h>
 #include <pybind11/numpy.h>
@@ -158,6 +159,16 @@ std::optional<dfbwall::VoxelType> voxelTypeOf(const py::dtype& t) {
   return std::nullopt;
 }
 
+// The session's hold on a numpy array it borrows voxels from: released (under the GIL, from
+// whichever thread drops the brick) when the session no longer holds the brick.
+std::shared_ptr<const void> keepAlive(const py::array& array) {
+  auto* held = new py::object(array);
+  return std::shared_ptr<const void>(held->ptr(), [held](const void*) {
+    py::gil_scoped_acquire gil;
+    delete held;
+  });
+}
+
 // A numpy array of N points: shape (N, 3), float32, C order (converted when it is not).
 std::vector<dfbwall::Vec3f> pointsOf(const py::handle& a, const char* what) {
   auto arr = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(a);
@@ -207,11 +218,13 @@ class PySession {
   }
 
   // A brick from numpy arrays. Whatever does not fit (a dtype, a shape) is refused by the next
-  // render_frame() on every rank alike, as the C++ API refuses a brick outside its field.
+  // render_frame() on every rank alike, as the C++ API refuses a brick outside its field. Voxel
+  // arrays of float32, uint8 or uint16 are borrowed (unless `copy`): read in place, the array
+  // held by the session as long as it holds the brick; the other dtypes are converted (copied).
   void addBrick(int id, const py::object& lo, const py::object& hi, const py::list& volumes,
                 const py::object& particles, const py::object& radii,
                 const py::object& ghostParticles, const py::object& ghostRadii,
-                const py::object& positions, const py::object& triangles) {
+                const py::object& positions, const py::object& triangles, bool copy) {
     dfbwall::Session& session = s();
     dfbwall::Brick b;
     b.id = id;
@@ -246,7 +259,13 @@ class PySession {
         p.hi = {at[0] + static_cast<int>(arr.shape(2)), at[1] + static_cast<int>(arr.shape(1)),
                 at[2] + static_cast<int>(arr.shape(0))};
         p.type = *type;
-        p.voxels = arr.data();  // read in place by addBrick (no copy here)
+        p.voxels = arr.data();  // read in place (no copy here)
+        const bool held = *type == dfbwall::VoxelType::Float32 ||
+                          *type == dfbwall::VoxelType::UInt8 || *type == dfbwall::VoxelType::UInt16;
+        if (!copy && held && (arr.flags() & py::detail::npy_api::NPY_ARRAY_ALIGNED_)) {
+          p.borrowed = true;
+          p.owner = keepAlive(arr);
+        }
         b.volumes.push_back(p);
         keep.push_back(arr);
       }
@@ -322,6 +341,7 @@ PYBIND11_MODULE(dfbwall, m) {
       .def_property_readonly("canvas_height", [](PySession& p) { return p.s().canvasHeight(); })
       .def_property_readonly("frames_rendered", [](PySession& p) { return p.s().framesRendered(); })
       .def_property_readonly("scene_bytes", [](PySession& p) { return p.s().sceneBytes(); })
+      .def_property_readonly("borrowed_bytes", [](PySession& p) { return p.s().borrowedBytes(); })
       .def(
           "run_wall", [](PySession& p) { p.s().runWall(); },
           py::call_guard<py::gil_scoped_release>())
@@ -332,7 +352,9 @@ PYBIND11_MODULE(dfbwall, m) {
            py::arg("bounds_hi"), py::kw_only(), py::arg("volumes") = py::list(),
            py::arg("particles") = py::none(), py::arg("radii") = py::none(),
            py::arg("ghost_particles") = py::none(), py::arg("ghost_radii") = py::none(),
-           py::arg("positions") = py::none(), py::arg("triangles") = py::none())
+           py::arg("positions") = py::none(), py::arg("triangles") = py::none(),
+           py::arg("copy") = false)
+      .def("data_changed", [](PySession& p) { p.s().dataChanged(); })
       .def("clear_bricks", [](PySession& p) { p.s().clearBricks(); })
       .def(
           "set_camera",

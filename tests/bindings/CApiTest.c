@@ -2,7 +2,9 @@
  * every failure is a code, the thread's last message and a call of the error function, never an
  * exception or an abort; bad input on one rank is DFBWALL_ERROR_INPUT at the next frame on every
  * rank, after which the session renders; a call out of order is DFBWALL_ERROR_USAGE; the image
- * is there on render rank 0. Exits non-zero on any rank whose checks failed. */
+ * is there on render rank 0; borrowed voxels render the copy's image without a copy held, and
+ * values changed in place show after dfbwall_session_data_changed. Exits non-zero on any rank
+ * whose checks failed. */
 #include <dfbwall/dfbwall.h>
 #include <mpi.h>
 #include <stdio.h>
@@ -35,7 +37,7 @@ static int contains(const char* text, const char* part) { return strstr(text, pa
 enum { kN = 12 };
 static float field[kN][kN][kN]; /* [z][y][x] */
 
-static dfbwall_error addWhole(dfbwall_session* s, dfbwall_voxel_type type) {
+static dfbwall_error addPart(dfbwall_session* s, dfbwall_voxel_type type, int borrowed) {
   dfbwall_volume_part part = {{0, 0, 0}, {kN, kN, kN}, DFBWALL_FLOAT32, NULL};
   part.type = type;
   part.voxels = field;
@@ -44,7 +46,19 @@ static dfbwall_error addWhole(dfbwall_session* s, dfbwall_voxel_type type) {
   b.bounds_hi[0] = b.bounds_hi[1] = b.bounds_hi[2] = kN - 1;
   b.volumes = &part;
   b.volume_count = 1;
-  return dfbwall_session_add_brick(s, &b);
+  return borrowed ? dfbwall_session_add_brick_borrowed(s, &b) : dfbwall_session_add_brick(s, &b);
+}
+
+static dfbwall_error addWhole(dfbwall_session* s, dfbwall_voxel_type type) {
+  return addPart(s, type, 0);
+}
+
+/* Render rank 0's image of the next frame into `into` (elsewhere nothing). */
+static void frameInto(dfbwall_session* s, uint8_t* into, size_t bytes) {
+  CHECK(dfbwall_session_render_frame(s) == DFBWALL_OK);
+  const uint8_t* pixels = NULL;
+  CHECK(dfbwall_session_image(s, &pixels, NULL, NULL) == DFBWALL_OK);
+  if (pixels) memcpy(into, pixels, bytes);
 }
 
 int main(int argc, char** argv) {
@@ -78,9 +92,13 @@ int main(int argc, char** argv) {
   CHECK(contains(dfbwall_last_error(), "MPI_COMM_NULL"));
   CHECK(dfbwall_session_render_frame(NULL) == DFBWALL_ERROR_INPUT);
 
-  CHECK(dfbwall_session_new(MPI_COMM_WORLD, o, &s) == DFBWALL_OK);
+  /* The communicator as a Fortran handle (the Fortran module's way in) and back. */
+  CHECK(dfbwall_session_new_f(MPI_Comm_c2f(MPI_COMM_WORLD), o, &s) == DFBWALL_OK);
   dfbwall_options_release(o);
   CHECK(!dfbwall_session_is_wall_rank(s));
+  int same = MPI_UNEQUAL;
+  MPI_Comm_compare(MPI_Comm_f2c(dfbwall_session_render_comm_f(s)), MPI_COMM_WORLD, &same);
+  CHECK(same == MPI_CONGRUENT);
   CHECK(dfbwall_session_canvas_width(s) == 64 && dfbwall_session_canvas_height(s) == 48);
 
   /* A frame before any style: a call out of order, on every rank. */
@@ -120,6 +138,16 @@ int main(int argc, char** argv) {
   CHECK(calls == before + 1);
   CHECK(dfbwall_session_frames_rendered(s) == 0);
 
+  /* A binding's own check failed on rank 2: refused at the next frame, on every rank. */
+  if (rank == 0) CHECK(addWhole(s, DFBWALL_FLOAT32) == DFBWALL_OK);
+  if (rank == 2)
+    CHECK(dfbwall_session_refuse_input(s, "the array is not contiguous") == DFBWALL_OK);
+  CHECK(dfbwall_session_render_frame(s) == DFBWALL_ERROR_INPUT);
+  CHECK(contains(dfbwall_last_error(), "render rank 2 refused its input"));
+  CHECK(contains(dfbwall_last_error(), "the array is not contiguous"));
+  CHECK(dfbwall_session_refuse_input(s, NULL) == DFBWALL_ERROR_INPUT);
+  CHECK(dfbwall_session_frames_rendered(s) == 0);
+
   /* Corrected: the session renders, and rank 0 has the image. */
   if (rank == 0) CHECK(addWhole(s, DFBWALL_FLOAT32) == DFBWALL_OK);
   CHECK(dfbwall_session_render_frame(s) == DFBWALL_OK);
@@ -138,6 +166,40 @@ int main(int argc, char** argv) {
   /* Rank 0 holds the voxels (and what the renderer derives from them); the others nothing. */
   if (rank == 0) CHECK(dfbwall_session_scene_bytes(s) >= sizeof field);
   if (rank != 0) CHECK(dfbwall_session_scene_bytes(s) == 0);
+  CHECK(dfbwall_session_borrowed_bytes(s) == 0);
+
+  /* Borrowed voxels: the copy's image, with no copy held. */
+  static uint8_t copied[64 * 48 * 4], borrowed[64 * 48 * 4], changed[64 * 48 * 4];
+  if (rank == 0 && pixels) memcpy(copied, pixels, sizeof copied);
+  const size_t held = dfbwall_session_scene_bytes(s);
+  CHECK(dfbwall_session_clear_bricks(s) == DFBWALL_OK);
+  if (rank == 0) CHECK(addPart(s, DFBWALL_FLOAT32, 1) == DFBWALL_OK);
+  frameInto(s, borrowed, sizeof borrowed);
+  if (rank == 0) {
+    CHECK(memcmp(borrowed, copied, sizeof copied) == 0);
+    CHECK(dfbwall_session_borrowed_bytes(s) == sizeof field);
+    CHECK(dfbwall_session_scene_bytes(s) + sizeof field <= held);
+  }
+  /* int16 voxels are converted, so they cannot be borrowed: refused on every rank. */
+  CHECK(dfbwall_session_clear_bricks(s) == DFBWALL_OK);
+  if (rank == 2) CHECK(addPart(s, DFBWALL_INT16, 1) == DFBWALL_OK);
+  CHECK(dfbwall_session_render_frame(s) == DFBWALL_ERROR_INPUT);
+  CHECK(contains(dfbwall_last_error(), "render rank 2 refused its input") &&
+        contains(dfbwall_last_error(), "borrowed voxels must be float32"));
+  if (rank == 0) CHECK(addPart(s, DFBWALL_FLOAT32, 1) == DFBWALL_OK);
+  frameInto(s, borrowed, sizeof borrowed);
+  /* The program changes the values in place and says so: the next frame shows them, as a fresh
+   * copy of them renders. */
+  for (int z = 0; z < kN; ++z)
+    for (int y = 0; y < kN; ++y)
+      for (int x = 0; x < kN; ++x) field[z][y][x] = 1.0f - field[z][y][x] * field[z][y][x];
+  if (rank == 0) CHECK(dfbwall_session_data_changed(s) == DFBWALL_OK);
+  frameInto(s, changed, sizeof changed);
+  if (rank == 0) CHECK(memcmp(changed, borrowed, sizeof changed) != 0);
+  CHECK(dfbwall_session_clear_bricks(s) == DFBWALL_OK);
+  if (rank == 0) CHECK(addWhole(s, DFBWALL_FLOAT32) == DFBWALL_OK);
+  frameInto(s, copied, sizeof copied);
+  if (rank == 0) CHECK(memcmp(changed, copied, sizeof copied) == 0);
   CHECK(dfbwall_session_close(s) == DFBWALL_OK);
   dfbwall_session_release(s);
 

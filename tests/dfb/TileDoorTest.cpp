@@ -173,6 +173,41 @@ TEST_P(Door, AccumulatingOperationsRefuseAnotherPassAndWeightZero) {
   }
 }
 
+// Samples carried apart (Tile::samples): only into a tree, 1 to kMaxTileSamples of them, color
+// and depth sized for all, and nothing else beside them.
+TEST_P(Door, TakesSamplesApartOnlyIntoATreeAndBounded) {
+  const size_t n = static_cast<size_t>(kRegion.pixelCount());
+  auto apart = [&](std::uint32_t samples) {
+    Tile input = goodInput();
+    input.samples = samples;
+    input.color.assign(4 * n * samples, 0.25f);
+    input.depth.assign(n * samples, 1.0f);
+    return input;
+  };
+  for (const std::uint32_t bad : {0u, kMaxTileSamples + 1})
+    EXPECT_NE(refusal(apart(bad), state).find("samples apart (1 to 16)"), std::string::npos)
+        << bad << ": " << refusal(apart(bad), state);
+  const std::string why = refusal(apart(3), state);
+  if (state.needs.tree) {
+    EXPECT_EQ(why, "");
+    Tile shortColor = apart(3);
+    shortColor.color.resize(4 * n);
+    EXPECT_NE(refusal(shortColor, state).find("the tile needs 8640 (4 per pixel and sample)"),
+              std::string::npos)
+        << refusal(shortColor, state);
+    Tile shortDepth = apart(3);
+    shortDepth.depth.resize(n);
+    EXPECT_NE(refusal(shortDepth, state).find("depth has 720 values, the tile needs 2160"),
+              std::string::npos)
+        << refusal(shortDepth, state);
+    Tile withNormals = apart(3);
+    withNormals.normal.assign(3 * n, 0.0f);
+    EXPECT_NE(refusal(withNormals, state).find("color and depth only"), std::string::npos);
+  } else {
+    EXPECT_NE(why.find("composites no tree (1 only)"), std::string::npos) << why;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(EveryOperation, Door, ::testing::ValuesIn(kOperations), [](const auto& p) {
   std::string name = p.param.name;
   for (char& c : name)

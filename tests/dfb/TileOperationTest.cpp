@@ -240,6 +240,82 @@ TEST(AlphaBlendOperation, ALoneRootIsItsOwnBlend) {
   }
 }
 
+// Tiles that carry a pixel's samples apart (a brick's samples of one frame) blend sample by
+// sample, then average: bit for bit the per-sample composite (a tile of 1 sample standing for
+// every sample) and meanOfComposites, with sample 0's depth. Two tiles blend as blendPixelPair
+// per sample (what a renderer blending a lone root itself does). Mixed counts are an error.
+TEST(AlphaBlendOperation, SamplesApartBlendOneByOneThenAverage) {
+  constexpr std::uint32_t kSamples = 3;
+  std::mt19937 random(5);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const float inf = std::numeric_limits<float>::infinity();
+  const size_t n = static_cast<size_t>(kRegion.pixelCount());
+  auto fragments = [&](std::uint32_t samples, bool depth) {
+    Tile t;
+    t.reset(kRegion);
+    t.samples = samples;
+    t.color.resize(4 * n * samples);
+    for (size_t i = 0; i < t.color.size(); i += 4) {
+      const float a = unit(random) < 0.3f ? 1.0f : unit(random);
+      for (size_t c = 0; c < 3; ++c) t.color[i + c] = a * unit(random);
+      t.color[i + 3] = a;
+    }
+    if (depth)
+      for (size_t i = 0; i < n * samples; ++i)
+        t.depth.push_back(unit(random) < 0.2f ? 1.0f : unit(random));
+    return t;
+  };
+  for (const int bricks : {1, 2}) {
+    Tile background = fragments(1, false);  // one fragment for every sample, infinitely far
+    background.children = bricks;
+    std::vector<Tile> tree = {background};
+    for (int b = 0; b < bricks; ++b) {
+      tree.push_back(fragments(kSamples, true));
+      tree.back().generation = 1, tree.back().sequence = static_cast<std::uint32_t>(b + 1);
+    }
+    auto op = alphaBlendOperation()(kRegion);
+    op->newFrame({}, 0, 1);
+    for (size_t i = tree.size(); i-- > 0;) EXPECT_EQ(op->process(Tile(tree[i])), i == 0);
+    const Tile& got = op->finished();
+    ASSERT_EQ(got.color.size(), 4 * n);
+    for (size_t p = 0; p < n; ++p) {
+      float composites[4 * kSamples];
+      float front = inf;
+      for (std::uint32_t s = 0; s < kSamples; ++s) {
+        auto at = [&](const Tile& t) { return (t.samples == 1 ? 0 : s * n) + p; };
+        std::vector<std::pair<float, const float*>> list;
+        for (const Tile& t : tree)
+          list.push_back({t.depth.empty() ? inf : t.depth[at(t)], &t.color[4 * at(t)]});
+        std::stable_sort(list.begin(), list.end(),
+                         [](const auto& a, const auto& b) { return a.first < b.first; });
+        float* want = &composites[4 * s];
+        for (int k = 0; k < 4; ++k) want[k] = 0;
+        for (const auto& fragment : list) {
+          const float transmitted = 1.0f - want[3];
+          for (int k = 0; k < 4; ++k) want[k] += transmitted * fragment.second[k];
+        }
+        if (s == 0) front = list.front().first;
+      }
+      float want[4];
+      meanOfComposites(composites, kSamples, want);
+      ASSERT_EQ(std::memcmp(want, &got.color[4 * p], sizeof want), 0) << bricks << " " << p;
+      ASSERT_EQ(got.depth[p], front);
+    }
+  }
+  auto op = alphaBlendOperation()(kRegion);
+  op->newFrame({}, 0, 1);
+  Tile root = fragments(2, true), child = fragments(3, true);
+  root.children = 1, child.generation = 1;
+  EXPECT_FALSE(op->process(std::move(child)));
+  try {
+    op->process(std::move(root));
+    ADD_FAILURE() << "a tree of 2 and 3 samples was blended";
+  } catch (const base::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("a tile of 2 samples in a tree of 3"), std::string::npos)
+        << e.what();
+  }
+}
+
 // CompositeAccumulateOperation hands the blended tile on by exchanging buffers with its parts
 // (exchangeFinished) instead of copying it: over frames of new and continued epochs its result
 // must stay, bit for bit, the blend's result accumulated as a copy.
@@ -355,6 +431,30 @@ TEST(TileMessage, PacksAndUnpacksEveryChannel) {
   EXPECT_EQ(dback.rgba8, d.rgba8);
   d.rgba8.pop_back();
   EXPECT_THROW(packTile(d, 5, 99, 4), base::Error);
+}
+
+// A tile with samples apart travels with its count, color and depth for each; a header that
+// says 0 samples or more than kMaxTileSamples is refused.
+TEST(TileMessage, PacksAndUnpacksSamplesApart) {
+  const size_t n = static_cast<size_t>(kRegion.pixelCount());
+  Tile t;
+  t.region = kRegion;
+  t.samples = 4;
+  for (size_t i = 0; i < 4 * n * 4; ++i) t.color.push_back(static_cast<float>(i));
+  for (size_t i = 0; i < n * 4; ++i) t.depth.push_back(static_cast<float>(i) * 0.5f);
+  messaging::Bytes bytes = packTile(t, 2, 9, 1);
+  TileMessageHeader header;
+  const Tile back = unpackTile(bytes, header);
+  EXPECT_EQ(back.samples, 4u);
+  EXPECT_EQ(back.color, t.color);
+  EXPECT_EQ(back.depth, t.depth);
+  for (const std::uint32_t bad : {0u, kMaxTileSamples + 1}) {
+    header.samples = bad;
+    std::memcpy(bytes.data(), &header, sizeof header);
+    EXPECT_THROW(unpackTile(bytes, header), base::Error) << bad;
+  }
+  t.samples = 0;
+  EXPECT_THROW(packTile(t, 2, 9, 1), base::Error);
 }
 
 // Found by fuzz_tile_message: a header whose region's width times height overflowed an int

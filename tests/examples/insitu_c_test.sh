@@ -4,28 +4,39 @@
 # simulation as examples/insitu renders the one-rank C++ example's image byte for byte on 3
 # ranks, and on the offscreen 2x2 wall (its own 4 wall ranks) every display's capture equals that
 # image cut out. Bad input: one message naming it, a non-zero exit, no hang.
-# Environment: BUILD (the dfbwall build tree), SOURCE, MPIEXEC, COMPARE (compare_captures).
+# It also builds examples/insitu-f90 (dfbwall::fortran) when dfbwall has its Fortran module, and
+# leaves the prefix, the three examples and the C++ image in $BUILD/examples-installed for
+# example_insitu_f90 and example_insitu_served (CTest fixture insitu_installed).
+# Environment: BUILD (the dfbwall build tree), SOURCE, MPIEXEC, COMPARE (compare_captures),
+# FORTRAN (1: dfbwall was built with its Fortran module).
 set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
-work=$(mktemp -d /tmp/dfbwall-insitu-c.XXXXXX)
-trap 'rm -rf "$work"' EXIT
+work=$BUILD/examples-installed
+rm -rf "$work"
+mkdir -p "$work"
+trap 'rm -rf "$work/caps" "$work/out"' EXIT
 layout=$SOURCE/configs/walls/2x2.toml
 start=$SECONDS
 
 cmake --install "$BUILD" --prefix "$work/prefix" >/dev/null
 test -f "$work/prefix/include/dfbwall/dfbwall.h"
 lib=$(ls "$work"/prefix/lib/libdfbwall.so.*.* | head -1)
+# libdfbwall.so alone answers -ldfbwall: a libdfbwall.a beside it (the C++ API) would be taken by
+# a static link or by CMake's -l form in a system folder, without the C API in it.
+if [ -e "$work/prefix/lib/libdfbwall.a" ]; then echo "FAIL: a libdfbwall.a beside libdfbwall.so"; exit 1; fi
 # The shared library exports the C API and nothing else.
 if others=$(nm -D --defined-only "$lib" | awk '{print $3}' | grep -v '^dfbwall_'); then
   echo "FAIL: libdfbwall.so exports more than dfbwall_*:"; echo "$others" | head; exit 1
 fi
 build() {  # build EXAMPLE: configure and build examples/EXAMPLE against the prefix
-  local c cxx launcher
+  local c cxx fortran launcher
   c=$(sed -n 's/^CMAKE_C_COMPILER:[A-Z]*=//p' "$BUILD/CMakeCache.txt")
   cxx=$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$BUILD/CMakeCache.txt")
+  fortran=$(sed -n 's/^CMAKE_Fortran_COMPILER:[A-Z]*=//p' "$BUILD/CMakeCache.txt")
   launcher=$(sed -n 's/^CMAKE_CXX_COMPILER_LAUNCHER:[A-Z]*=//p' "$BUILD/CMakeCache.txt")
   cmake -S "$SOURCE/examples/$1" -B "$work/build-$1" -DCMAKE_PREFIX_PATH="$work/prefix" \
     -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER="$c" -DCMAKE_CXX_COMPILER="$cxx" \
+    ${fortran:+-DCMAKE_Fortran_COMPILER=$fortran} \
     ${launcher:+-DCMAKE_C_COMPILER_LAUNCHER=$launcher -DCMAKE_CXX_COMPILER_LAUNCHER=$launcher} \
     >/dev/null
   cmake --build "$work/build-$1" -j2 >/dev/null
@@ -33,6 +44,10 @@ build() {  # build EXAMPLE: configure and build examples/EXAMPLE against the pre
 build insitu
 build insitu-c
 c=$work/build-insitu-c/insitu-c
+if [ "${FORTRAN:-0}" = 1 ]; then
+  test -f "$work/prefix/include/dfbwall/fortran/dfbwall.mod"
+  build insitu-f90
+fi
 # One dfbwall library in the C program's link; Embree, TBB and the rest come with it.
 needed=$(readelf -d "$c" | sed -n 's/.*NEEDED.*\[\(.*\)\]/\1/p' | tr '\n' ' ')
 echo "insitu-c needs: $needed"
@@ -59,4 +74,5 @@ expect_failure() {  # expect_failure TEXT NP ARGS...
   echo "fails as it should in $((SECONDS - began)) s: $(grep -m1 -- "$text" "$work/out")"
 }
 expect_failure "2x2.toml" 3 --wall "$layout"
+
 echo "PASS in $((SECONDS - start)) s: the C example renders the C++ example's image, on 3 ranks and on the wall"

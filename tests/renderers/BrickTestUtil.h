@@ -16,14 +16,16 @@ namespace renderers::test {
 // The RGBAF32 image of `frames` accumulated frames of the bricks `held` on the ranks of `comm`
 // (rank 0's copy; empty elsewhere), rendered with 2 threads a rank in tiles of `tileSize`.
 // `occlusionCut`: BrickDriverOptions::occlusionCut; `raysSkipped` (if given): this rank's
-// BrickFrameDriver::raysSkipped() at the end.
+// BrickFrameDriver::raysSkipped() at the end; `samplesPerPixel`: per frame.
 inline std::vector<float> renderHeldBricks(
     const std::shared_ptr<SceneDesc>& desc, const RenderSettings& settings,
     std::vector<scivis::HeldBrick> held, MPI_Comm comm, int tileSize, int frames,
     std::chrono::milliseconds frameTimeout, bool occlusionCut = true,
-    std::uint64_t* raysSkipped = nullptr, scivis::FirstHits firstHits = scivis::FirstHits::Auto) {
+    std::uint64_t* raysSkipped = nullptr, scivis::FirstHits firstHits = scivis::FirstHits::Auto,
+    std::uint32_t samplesPerPixel = 1) {
   scivis::BrickDriverOptions bo;
   bo.threads = 2;
+  bo.samplesPerPixel = samplesPerPixel;
   bo.occlusionCut = occlusionCut;
   bo.firstHits = firstHits;
   scivis::BrickFrameDriver driver(desc, settings, bo, std::move(held), comm);

@@ -105,6 +105,15 @@ void backgroundPixel(const Environment& background, const SciVisRenderer::RayPie
   for (int c = 0; c < 4; ++c) out[c] = sum[c] * inv;
 }
 
+// How many of a frame's `spp` samples a brick's tile carries apart (dfb::Tile::samples), so the
+// DFB composites them one by one as one renderer would: all of them up to dfb::kMaxTileSamples,
+// beyond that the most that divide them into equal groups (each such sample the mean of a group).
+std::uint32_t samplesApart(std::uint32_t spp) {
+  std::uint32_t apart = std::min(spp, dfb::kMaxTileSamples);
+  while (spp % apart != 0) --apart;
+  return apart;
+}
+
 }  // namespace
 
 struct BrickFrameDriver::Impl {
@@ -328,6 +337,9 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
   for (const auto& tileJobs : perTile) jobs.insert(jobs.end(), tileJobs.begin(), tileJobs.end());
   const std::uint32_t spp = m.options.samplesPerPixel;
   const float inv = 1.0f / static_cast<float>(spp);
+  // Samples carried apart, each the mean of a group of `group` consecutive ones.
+  const std::uint32_t apart = samplesApart(spp), group = spp / apart;
+  const float invGroup = 1.0f / static_cast<float>(group);
   const Environment& background = m.desc->environment;
   // Camera rays 16 at a time in AVX-512 where the march runs it, as SciVisRenderer::render.
   const bool simdRows =
@@ -338,7 +350,8 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     const dfb::Region region = grid.region(job.tile);
     dfb::Tile tile;
     prepareTile(region, accumulationId, 0, spp, tile);
-    tile.depth.assign(static_cast<std::size_t>(region.pixelCount()), kInf);
+    const std::size_t pixels = static_cast<std::size_t>(region.pixelCount());
+    tile.depth.assign(pixels, kInf);
     tile.generation = job.brick < 0 || job.withBackground ? 0 : 1;
     tile.children = job.children;
     const BrickPlan* plan =
@@ -384,12 +397,57 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
     thread_local std::vector<float> depths;  // per pixel: brickDepth() of its first sample's ray
     thread_local std::vector<std::uint8_t> inside;
     thread_local std::vector<SciVisRenderer::FirstSurface> firsts, pieceFirsts;
-    // The background tile's pixel whose rays start at rays[first].
+    // The background tile's pixel whose rays start at rays[first]; with samples apart, the
+    // sample whose group's rays start there.
     const auto backgroundAt = [&](std::size_t first, float out[4]) {
       if (constantBackground)
         std::copy(constantPixel, constantPixel + 4, out);
-      else
+      else if (apart == 1)
         backgroundPixel(background, rays.data() + first, spp, inv, out);
+      else
+        backgroundPixel(background, rays.data() + first, group, invGroup, out);
+    };
+    // A pixel's samples apart: the tile holds `apart` blocks of its pixels (a constant
+    // background's tile stands for every sample; a lone root is blended here, one block).
+    if (apart > 1 && !job.withBackground && (renderer || !constantBackground)) {
+      tile.samples = apart;
+      tile.color.assign(4 * pixels * apart, 0.0f);
+      tile.depth.assign(pixels * apart, kInf);
+    }
+    // Pixel p with samples apart, its rays from rays[first], its samples' depths from
+    // depths[apart * rowPixel]: each sample the mean of its group's fragments, written to its
+    // block, or for a lone root blended with its background and averaged as the DFB would.
+    const auto pixelApart = [&](std::size_t first, std::size_t p, std::size_t rowPixel) {
+      float composites[4 * dfb::kMaxTileSamples];
+      float front = kInf;
+      for (std::uint32_t s = 0; s < apart; ++s) {
+        const std::size_t from = first + std::size_t{s} * group, block = std::size_t{s} * pixels;
+        float* out = job.withBackground ? &composites[4 * s] : &tile.color[4 * (block + p)];
+        if (!renderer) {
+          backgroundAt(from, out);
+          continue;
+        }
+        float sum[4] = {0, 0, 0, 0};
+        for (std::size_t r = from; r < from + group; ++r) {
+          if (!hits[r]) continue;
+          const Fragment& f = fragments[slots[r]];
+          for (int c = 0; c < 4; ++c) sum[c] += f.rgba[c];
+        }
+        for (int c = 0; c < 4; ++c) out[c] = sum[c] * invGroup;
+        const float depth = depths[apart * rowPixel + s];
+        if (!job.withBackground) {
+          tile.depth[block + p] = depth;
+          continue;
+        }
+        float bg[4];
+        backgroundAt(from, bg);
+        const float d = dfb::blendPixelPair(bg, kInf, out, depth, out);
+        if (s == 0) front = d;
+      }
+      if (job.withBackground) {
+        dfb::meanOfComposites(composites, apart, &tile.color[4 * p]);
+        tile.depth[p] = front;
+      }
     };
     const RowRays row{&camera, bounds, m.settings.seed, accumulationId, 0, spp, simdRows};
     // Where the raster accepts the brick's first hits: its bounds, but not at the faces it shares
@@ -432,8 +490,19 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
         // case) every sample's fragments then composite in exactly its own ray's order,
         // also in pixels that see a brick border edge-on. (Where the ray enters the brick
         // is t0, brickDepth()'s own clip; a hidden ray keeps it.)
-        if (renderer && r % spp == 0)
+        if (renderer && r % group == 0)  // with samples apart, each one's first ray
           depths.push_back(hit || skippedRay ? ray.t0 : brickDepth(bounds, ray.origin, ray.dir));
+        // The piece goes on past the faces the brick shares with the domain's boundary, as the
+        // unbricked scene's ray does (it clips none there: a sample exactly on the boundary is
+        // in it, where a piece ending there stopped short of it); only seams cut rays.
+        if (hit && renderer) {
+          float a = 0, b = kInf;
+          for (int axis = 0; axis < 3; ++axis)
+            if (accept.lo[axis] > -kInf || accept.hi[axis] < kInf)
+              clipToSlab(accept.lo[axis], accept.hi[axis], ray.origin[axis], 1.0f / ray.dir[axis],
+                         a, b);
+          rays[r].t0 = a, rays[r].t1 = b;
+        }
       }
       if (renderer && renderer->firstHitsRasterised(spp)) {
         // First hits from this frame's raster of the brick's triangles (FirstHitRaster.h), then
@@ -467,6 +536,12 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
           const std::size_t p = static_cast<std::size_t>(y - region.y0) * region.width() +
                                 static_cast<std::size_t>(x - region.x0);
           float* out = &tile.color[4 * p];
+          if (apart > 1) {
+            pixelApart(first, p,
+                       static_cast<std::size_t>(y - y0) * region.width() +
+                           static_cast<std::size_t>(x - region.x0));
+            continue;
+          }
           if (!renderer) {
             backgroundAt(first, out);
             continue;

@@ -142,11 +142,11 @@ struct Field8 {
 AVX2_INLINE void setUp(Field8& f, const SciVisScene::VolumeLayer& v) {
   const FieldGeometry::Layout g = v.field->layout();
   f.field = v.field;
-  f.voxels = reinterpret_cast<const float*>(v.field->volume().voxels.data());
+  f.voxels = reinterpret_cast<const float*>(v.field->volume().data());
   f.empty = v.emptyMacrocells.data();
   f.table = v.table.data();
   f.strideY = static_cast<int>(g.strideY), f.strideZ = static_cast<int>(g.strideZ);
-  f.prefetch = v.field->volume().bytes() > march::kPrefetchAboveBytes;
+  f.prefetch = v.field->volume().dataBytes() > march::kPrefetchAboveBytes;
   f.first = g.first, f.lastCell = g.lastCell;
   f.gx = _mm256_set1_ps(g.origin.x), f.gy = _mm256_set1_ps(g.origin.y);
   f.gz = _mm256_set1_ps(g.origin.z);
@@ -422,7 +422,7 @@ __attribute__((target("avx2"))) void marchPacketAvx2(const SciVisScene::VolumeLa
 
 // Whether every voxel offset of the field fits the packet kernel's 32-bit lane arithmetic.
 bool offsetsFitInt(const VolumeField& field) {
-  return field.volume().voxels.size() / voxelBytes(field.volume().type) <=
+  return field.volume().dataBytes() / voxelBytes(field.volume().type) <=
          static_cast<std::size_t>(INT_MAX);
 }
 

@@ -137,11 +137,11 @@ struct Field16 {
 AVX512_INLINE void setUp(Field16& f, const SciVisScene::VolumeLayer& v) {
   const FieldGeometry::Layout g = v.field->layout();
   f.field = v.field;
-  f.voxels = v.field->volume().voxels.data();
+  f.voxels = v.field->volume().data();
   f.empty = v.emptyMacrocells.data();
   f.table = v.table.data();
   f.strideY = static_cast<int>(g.strideY), f.strideZ = static_cast<int>(g.strideZ);
-  f.prefetch = v.field->volume().bytes() > kPrefetchAboveBytes;
+  f.prefetch = v.field->volume().dataBytes() > kPrefetchAboveBytes;
   f.first = g.first, f.lastCell = g.lastCell;
   f.gx = _mm512_set1_ps(g.origin.x), f.gy = _mm512_set1_ps(g.origin.y);
   f.gz = _mm512_set1_ps(g.origin.z);

@@ -110,7 +110,7 @@ VolumeField::VolumeField(const Volume& volume)
     float* lo = &macroMin_[mz * slab];
     float* hi = &macroMax_[mz * slab];
     const int z0 = z.from[mz], z1 = z.to[mz];
-    const std::byte* voxels = volume.voxels.data();
+    const std::byte* voxels = volume.data();
     switch (volume.type) {
       case VoxelType::Float32:
         slabRanges(reinterpret_cast<const float*>(voxels), strideY_, strideZ_, x, y, z0, z1, lo,

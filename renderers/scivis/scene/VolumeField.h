@@ -132,7 +132,7 @@ class VolumeField : public FieldGeometry {
   // The trilinear value in cell c, with the voxels read as T (the volume's voxel type).
   template <class T>
   float interpolate(const Cell& cell) const {
-    const T* v = reinterpret_cast<const T*>(volume_->voxels.data()) + cell.offset;
+    const T* v = reinterpret_cast<const T*>(volume_->data()) + cell.offset;
     const float c[8] = {static_cast<float>(v[0]),
                         static_cast<float>(v[1]),
                         static_cast<float>(v[strideY_]),
@@ -206,7 +206,7 @@ class VolumeField : public FieldGeometry {
     if (mask & 1) macro0 = macroIndexOf(Cell{0, cx[0], cy[0], cz[0], 0, 0, 0});
     // Per lane (c0 c1 c2 c3) and (c4 c5 c6 c7), transposed to one corner per register.
     __m128 lo[4], hi[4];
-    const T* voxels = reinterpret_cast<const T*>(volume_->voxels.data());
+    const T* voxels = reinterpret_cast<const T*>(volume_->data());
     for (int lane = 0; lane < 4; ++lane) {
       const T* v = voxels + static_cast<std::size_t>(cx[lane] - first_.x) +
                    static_cast<std::size_t>(cy[lane] - first_.y) * strideY_ +
