@@ -159,7 +159,7 @@ Json statusJson(const StatusBoard& status, const ControlFacts& facts) {
   Json list = Json::array();
   // The swap barrier presents a frame on every display at once: one number each. A
   // display of a wall process the wall lost (--connect) shows nothing of this job.
-  for (const std::string& name : facts.displays) {
+  for (const std::string& name : s.displays.empty() ? facts.displays : s.displays) {
     const bool lost =
         std::find(s.lostDisplays.begin(), s.lostDisplays.end(), name) != s.lostDisplays.end();
     list.push_back(

@@ -6,15 +6,15 @@
 //   GET /, /index.html, /app.js, /style.css
 //   GET /api/preview.png   the assembled preview (bezels dark, outlines), canvas / factor
 //   GET /api/layout        {"canvas": [w, h], "preview": {"size": [w, h], "factor": f},
-//                           "displays": [{"name", "rect": [x0, y0, x1, y1], "process"}]}
+//                           "displays": [{"name", "rect": [x0, y0, x1, y1], "process"}]}: the
+//                          canvas now (a service wall may move or resize the window)
 namespace app {
 
 class ControlRequests;
 class Preview;
-struct Job;
 
 // Before the server starts. `preview` must outlive the server.
-void addPageRoutes(ControlRequests& server, const Job& job, const Preview& preview);
+void addPageRoutes(ControlRequests& server, const Preview& preview);
 // The wall's own page (serve --control; its API: apps/WallControl.h): "/" and its files.
 void addWallPageRoutes(ControlRequests& server);
 

@@ -400,8 +400,9 @@ void RenderRank::followWall(const FrameOrder& order, std::uint32_t frameId) {
 }
 
 // The wall moved or resized the job's window from this frame on (Protocol.h, Reshape): every rank
-// makes its frame buffer, renderers and routing anew for the new window (its canvas), as at the
-// start; accumulation starts over (rank 0's director restarted it when it ordered the frame).
+// makes its frame buffer, renderers, routing and preview anew for the new window (its canvas), as
+// at the start; accumulation starts over (rank 0's director restarted it when it ordered the
+// frame).
 void RenderRank::replan(const wall::service::Reshape& moved, std::uint32_t frameId) {
   const base::Bound bound = base::Bound::joinWithin(timeout_, "moving the window");
   // No tile of an earlier frame is still on its way to a frame buffer about to go.
@@ -417,6 +418,11 @@ void RenderRank::replan(const wall::service::Reshape& moved, std::uint32_t frame
   makeDrivers();
   dfb_ = std::make_unique<dfb::DistributedFrameBuffer>(messenger_, renderComm_, dfbOptions_);
   wall_->attach(*dfb_);
+  // The job's page and --preview show the new window from this frame on.
+  if (preview_) {
+    preview_->replan(*layout_, frameId);
+    dfb_->addPixelOp(preview_->op());
+  }
   // What the frames were steered to holds on in the new frame buffer.
   dfb::ToneMapSettings toneMap = dfbOptions_.toneMap;
   toneMap.exposure = current_.exposure;
@@ -430,6 +436,13 @@ void RenderRank::replan(const wall::service::Reshape& moved, std::uint32_t frame
   // Every rank's new frame buffer is registered before any sends to it.
   base::barrier(renderComm_, bound);
   if (job_.worldRank == 0) {
+    // Rank 0's page: the new window's displays, and which of them the wall lost.
+    if (status_) {
+      std::vector<std::string> names;
+      for (const wall::Display& d : layout_->displays) names.push_back(d.name);
+      status_->setDisplays(std::move(names));
+    }
+    showLost(moved.directory.processes);
     const dfb::Region& w = moved.directory.window;
     std::printf("dfbwall: the wall moved the window to %d,%d,%d,%d from frame %u\n", w.x0, w.y0,
                 w.width(), w.height(), frameId);

@@ -193,9 +193,9 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
           for (const std::string& picture : o.pictures.arguments) what += " " + picture;
         hello.job = what.substr(0, 256);
         if (server) hello.page = server->pageAddress(hello.host);
-        // The frame buffer, renderers and routing are re-planned for a moved window; the preview
-        // (the job's page, --preview) is not yet, so such a job keeps its window.
-        hello.canReshape = o.previewFile.empty() && o.control.empty();
+        // The frame buffer, renderers, routing and preview (the job's page, --preview) are
+        // re-planned for a moved window (RenderRank::replan).
+        hello.canReshape = true;
         job.service = std::make_shared<wall::service::ServiceClient>(
             o.connect,
             wall::service::loadCredentials({o.token, o.tokenFile, {}, o.serverKey}, false), hello,
@@ -358,9 +358,11 @@ int run(int argc, char** argv) {
       }
     } inputGuard{job.service.get()};
     if (job.service)
-      job.service->onInput([&steering, w = job.canvasWidth,
-                            h = job.canvasHeight](const wall::service::WindowInput& in) {
-        if (const std::optional<SteeringRequest> r = requestForInput(in, w, h)) {
+      job.service->onInput([&steering,
+                            client = job.service.get()](const wall::service::WindowInput& in) {
+        // A drag across the window orbits 180°: the window it came in, moved and resized or not.
+        const wall::service::ServiceClient::Size size = client->windowSize();
+        if (const std::optional<SteeringRequest> r = requestForInput(in, size.width, size.height)) {
           try {
             steering.submit(*r);
           } catch (const std::exception&) {
@@ -371,7 +373,7 @@ int run(int argc, char** argv) {
     std::unique_ptr<StatusBoard> status;
     if (server) {
       status = std::make_unique<StatusBoard>();
-      addPageRoutes(server->requests(), job, *preview);  // the controller page and the preview
+      addPageRoutes(server->requests(), *preview);  // the controller page and the preview
       addApiRoutes(
           server->requests(), controlFacts(job),
           [&steering](const SteeringRequest& r) { return steering.submit(r); }, *status);

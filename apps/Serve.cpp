@@ -171,6 +171,9 @@ std::unique_ptr<ControlServer> startWallControl(const Options& o, const wall::La
   windows.close = [&wall](std::uint64_t number, const std::string& why) {
     return wall.close(number, why);
   };
+  windows.move = [&wall](std::uint64_t number, const dfb::Region& rect, int& code) {
+    return wall.moveWindow(number, rect, &code);
+  };
   addWallRoutes(server->requests(), WallFacts{&layout, o.background, o.maxJobs},
                 std::move(windows));
   addWallPageRoutes(server->requests());

@@ -38,11 +38,17 @@ void StatusBoard::setLostDisplays(std::vector<std::string> names) {
   lostDisplays_ = std::move(names);
 }
 
+void StatusBoard::setDisplays(std::vector<std::string> names) {
+  std::lock_guard lock(mutex_);
+  displays_ = std::move(names);
+}
+
 RunStatus StatusBoard::snapshot() const {
   std::lock_guard lock(mutex_);
   RunStatus out = status_;
   out.errors.assign(errors_.begin(), errors_.end());
   out.lostDisplays = lostDisplays_;
+  out.displays = displays_;
   return out;
 }
 

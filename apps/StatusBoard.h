@@ -26,6 +26,9 @@ struct RunStatus {
   std::vector<std::string> errors;     // the latest last
   // --connect: displays of wall processes the wall lost (dark until they rejoin).
   std::vector<std::string> lostDisplays;
+  // --connect: the displays the job's window touches after the wall moved it (empty: those at
+  // its start, ControlFacts::displays).
+  std::vector<std::string> displays;
 };
 
 class StatusBoard {
@@ -36,6 +39,8 @@ class StatusBoard {
   void addError(std::string message);
   // The wall lost (or got back) processes: the displays that show nothing of this job now.
   void setLostDisplays(std::vector<std::string> names);
+  // The wall moved the job's window: the displays it touches now.
+  void setDisplays(std::vector<std::string> names);
   RunStatus snapshot() const;
   // The server starts before the scene is loaded; a request checked against the view must wait
   // for the first publish, or it is checked against a default camera. False after `wait`.
@@ -48,6 +53,7 @@ class StatusBoard {
   RunStatus status_;
   std::deque<std::string> errors_;
   std::vector<std::string> lostDisplays_;
+  std::vector<std::string> displays_;
   std::deque<std::chrono::steady_clock::time_point> frameTimes_;  // of the last frames
 };
 

@@ -25,7 +25,7 @@ HttpReply error(int status, const std::string& message) {
   return json(status, Json{{"error", message}});
 }
 
-Json rect(const dfb::Region& r) {
+Json rectJson(const dfb::Region& r) {
   return {{"x", r.x0}, {"y", r.y0}, {"w", r.width()}, {"h", r.height()}};
 }
 
@@ -44,7 +44,7 @@ Json windowJson(const Window& w) {
   return {{"id", std::to_string(w.number)},
           {"job", w.job},
           {"host", w.host},
-          {"rect", rect(w.rect)},
+          {"rect", rectJson(w.rect)},
           {"z", w.z},
           {"fps", std::round(w.fps * 10) / 10},
           {"state", stateName(w)},
@@ -62,7 +62,7 @@ std::string colorText(std::uint32_t rgba) {
 Json wallJson(const WallFacts& facts) {
   Json displays = Json::array();
   for (const wall::Display& d : facts.layout->displays)
-    displays.push_back({{"name", d.name}, {"rect", rect(d.rect)}, {"process", d.process}});
+    displays.push_back({{"name", d.name}, {"rect", rectJson(d.rect)}, {"process", d.process}});
   return {{"canvas", {{"w", facts.layout->canvasWidth}, {"h", facts.layout->canvasHeight}}},
           {"displays", std::move(displays)},
           {"background", colorText(facts.background)},
@@ -70,33 +70,72 @@ Json wallJson(const WallFacts& facts) {
 }
 
 // The window a path's id names, if it is on the wall; else the reply that says why not.
-std::optional<std::uint64_t> findWindow(const HttpRequest& request, const WallWindows& windows,
-                                        HttpReply& refusal) {
+std::optional<Window> findWindow(const HttpRequest& request, const WallWindows& windows,
+                                 HttpReply& refusal) {
   const std::string id = lastSegment(request.path);
   const std::optional<std::uint64_t> number = windowNumber(id);
   if (number)
     for (const Window& w : windows.list())
-      if (w.number == *number) return number;
+      if (w.number == *number) return w;
   const std::string shown = id.size() > 24 ? id.substr(0, 24) + "..." : id;
   refusal = error(404, "no window '" + shown + "' on the wall (GET /api/windows lists them)");
   return std::nullopt;
 }
 
+constexpr const char* kBodies =
+    "the body must be a JSON object: {\"raise\": true}, any of {\"x\", \"y\", \"w\", \"h\"}, "
+    "or {\"fullscreen\": true}";
+
+// The rectangle a move body asks for: each of x, y, w, h given (an integer) or kept from
+// `now`; {"fullscreen": true} the whole canvas. Throws std::invalid_argument naming the field.
+dfb::Region askedRect(const Json& body, const dfb::Region& now, const WallFacts& facts) {
+  const int canvasW = facts.layout->canvasWidth, canvasH = facts.layout->canvasHeight;
+  if (body.contains("fullscreen")) {
+    if (body.size() != 1)
+      throw std::invalid_argument("fullscreen goes alone (it sets x, y, w and h)");
+    if (!body["fullscreen"].is_boolean() || !body["fullscreen"].get<bool>())
+      throw std::invalid_argument("fullscreen must be true");
+    return {0, 0, canvasW, canvasH};
+  }
+  // Wider than int, so that x + w cannot overflow before the canvas check.
+  std::int64_t v[4] = {now.x0, now.y0, now.width(), now.height()};
+  const char* names[4] = {"x", "y", "w", "h"};
+  for (int i = 0; i < 4; ++i) {
+    if (!body.contains(names[i])) continue;
+    const Json& value = body[names[i]];
+    if (!value.is_number_integer() || value.get<std::int64_t>() < -(std::int64_t{1} << 31) ||
+        value.get<std::int64_t>() >= (std::int64_t{1} << 31) ||
+        (value.is_number_unsigned() && value.get<std::uint64_t>() >= (std::uint64_t{1} << 31)))
+      throw std::invalid_argument(std::string(names[i]) +
+                                  " must be an integer (canvas pixels), not " +
+                                  value.dump().substr(0, 32));
+    v[i] = value.get<std::int64_t>();
+  }
+  const std::string text = std::to_string(v[0]) + "," + std::to_string(v[1]) + "," +
+                           std::to_string(v[2]) + "," + std::to_string(v[3]);
+  if (v[2] <= 0 || v[3] <= 0)
+    throw std::invalid_argument("window " + text + ": w and h must be positive");
+  if (v[0] < 0 || v[1] < 0 || v[0] + v[2] > canvasW || v[1] + v[3] > canvasH)
+    throw std::invalid_argument("window " + text + " is not inside the wall's canvas (" +
+                                std::to_string(canvasW) + "x" + std::to_string(canvasH) + ")");
+  return {static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[0] + v[2]),
+          static_cast<int>(v[1] + v[3])};
+}
+
 // POST /api/windows/ID: what the body asks, checked before anything is done.
-HttpReply changeWindow(const HttpRequest& request, const WallWindows& windows) {
+HttpReply changeWindow(const HttpRequest& request, const WallFacts& facts,
+                       const WallWindows& windows) {
   HttpReply refusal;
-  const std::optional<std::uint64_t> number = findWindow(request, windows, refusal);
-  if (!number) return refusal;
+  const std::optional<Window> window = findWindow(request, windows, refusal);
+  if (!window) return refusal;
+  const std::string id = std::to_string(window->number);
   Json body;
   try {
     body = Json::parse(request.body);
   } catch (const Json::parse_error&) {
-    throw std::invalid_argument(
-        "the body must be a JSON object: {\"raise\": true}, or {\"x\", \"y\", \"w\", \"h\"}");
+    throw std::invalid_argument(kBodies);
   }
-  if (!body.is_object() || body.empty())
-    throw std::invalid_argument(
-        "the body must be a JSON object: {\"raise\": true}, or {\"x\", \"y\", \"w\", \"h\"}");
+  if (!body.is_object() || body.empty()) throw std::invalid_argument(kBodies);
   bool moves = false;
   for (const auto& [key, value] : body.items()) {
     if (key == "x" || key == "y" || key == "w" || key == "h" || key == "fullscreen")
@@ -105,24 +144,30 @@ HttpReply changeWindow(const HttpRequest& request, const WallWindows& windows) {
       throw std::invalid_argument("unknown field '" + key.substr(0, 32) +
                                   "' (expected raise, or x, y, w, h, or fullscreen)");
   }
-  if (moves)
-    return error(501,
-                 "moving and resizing a window is not done yet: its job keeps its place and size "
-                 "(raise and close work)");
+  if (moves) {
+    if (body.contains("raise"))
+      throw std::invalid_argument(
+          "raise goes in a request of its own (a moved window keeps its place in the stack)");
+    const dfb::Region rect = askedRect(body, window->rect, facts);
+    int code = 200;
+    const std::string why = windows.move(window->number, rect, code);
+    if (code != 200) return error(code, "window " + id + ": " + why);
+    return json(200, Json{{"id", id}, {"rect", rectJson(rect)}});
+  }
   if (!body["raise"].is_boolean() || !body["raise"].get<bool>())
     throw std::invalid_argument("raise must be true");
-  if (!windows.raise(*number))
-    return error(404, "window " + std::to_string(*number) + " left the wall");
-  return json(200, Json{{"id", std::to_string(*number)}, {"raised", true}});
+  if (!windows.raise(window->number)) return error(404, "window " + id + " left the wall");
+  return json(200, Json{{"id", id}, {"raised", true}});
 }
 
 HttpReply closeWindow(const HttpRequest& request, const WallWindows& windows) {
   HttpReply refusal;
-  const std::optional<std::uint64_t> number = findWindow(request, windows, refusal);
-  if (!number) return refusal;
-  if (!windows.close(*number, kClosedFromThePage))
-    return error(404, "window " + std::to_string(*number) + " left the wall");
-  return json(200, Json{{"id", std::to_string(*number)}, {"closed", true}});
+  const std::optional<Window> window = findWindow(request, windows, refusal);
+  if (!window) return refusal;
+  const std::string id = std::to_string(window->number);
+  if (!windows.close(window->number, kClosedFromThePage))
+    return error(404, "window " + id + " left the wall");
+  return json(200, Json{{"id", id}, {"closed", true}});
 }
 
 }  // namespace
@@ -143,8 +188,9 @@ void addWallRoutes(ControlRequests& requests, WallFacts facts, WallWindows windo
     for (const Window& w : windows.list()) list.push_back(windowJson(w));
     return json(200, list);
   });
-  requests.post("/api/windows/*",
-                [windows](const HttpRequest& request) { return changeWindow(request, windows); });
+  requests.post("/api/windows/*", [facts, windows](const HttpRequest& request) {
+    return changeWindow(request, facts, windows);
+  });
   requests.remove("/api/windows/*",
                   [windows](const HttpRequest& request) { return closeWindow(request, windows); });
 }

@@ -8,14 +8,16 @@
 //                             "background": "#rrggbb", "max_jobs"}
 //   GET    /api/windows      [{"id", "job", "host", "rect": {"x", "y", "w", "h"}, "z", "fps",
 //                              "state", "frames", "page"}], the oldest job first; z 0 at the bottom
-//   POST   /api/windows/ID   {"raise": true}: on top on every display; {"x", "y", "w", "h"} and
-//                            {"fullscreen": true} (move, resize): 501 for now
+//   POST   /api/windows/ID   {"raise": true}: on top on every display; any of {"x", "y", "w",
+//                            "h"} (the others kept), or {"fullscreen": true}: the window moves
+//                            and resizes (its job re-plans), answered {"id", "rect"}
 //   DELETE /api/windows/ID   the job is ended, told kClosedFromThePage; its window closes at once
 // The page itself (/, /index.html, /wall.js, /wall.css, from apps/control/wall/) is served by
 // addWallPageRoutes (apps/PageRoutes.h).
 //
-// The handlers read the desk's last published windows and hand a raise or a close to the desk
-// thread (wall::service::Desk), which answers within a turn: a client never holds up a frame.
+// The handlers read the desk's last published windows and hand a raise, a move or a close to the
+// desk thread (wall::service::Desk), which answers within a turn: a client never holds up a
+// frame.
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -35,6 +37,10 @@ struct WallWindows {
   // False: no job of that number on the wall.
   std::function<bool(std::uint64_t number)> raise;
   std::function<bool(std::uint64_t number, const std::string& why)> close;
+  // The window moved and resized to `rect` (WallService::moveWindow): empty when under way, else
+  // why not, with `code` 400 (a window the wall cannot show), 404 (gone) or 409 (the job cannot
+  // move now, or at all).
+  std::function<std::string(std::uint64_t number, const dfb::Region& rect, int& code)> move;
 };
 
 // The wall's fixed facts for GET /api/wall.

@@ -65,6 +65,11 @@ class WallControlTest : public ::testing::Test {
       closed.emplace_back(n, why);
       return true;
     };
+    windows.move = [this](std::uint64_t n, const dfb::Region& rect, int& code) {
+      moved.emplace_back(n, rect);
+      code = moveCode;
+      return code == 200 ? std::string() : std::string("the window is moving already");
+    };
     addWallRoutes(requests, WallFacts{&layout, 0xff302010u, 3}, std::move(windows));
   }
 
@@ -83,6 +88,8 @@ class WallControlTest : public ::testing::Test {
   std::vector<Window> list;
   std::vector<std::uint64_t> raised;
   std::vector<std::pair<std::uint64_t, std::string>> closed;
+  std::vector<std::pair<std::uint64_t, dfb::Region>> moved;
+  int moveCode = 200;
   bool goneBeforeRaise = false;
 };
 
@@ -127,19 +134,70 @@ TEST_F(WallControlTest, RaiseAndCloseReachTheWall) {
   EXPECT_EQ(send("POST", "/api/windows/12", R"({"raise": true})").status, 404);
 }
 
-TEST_F(WallControlTest, BadBodiesAndUnknownWindowsAreRefusedAndNothingIsDone) {
-  for (const char* body : {R"({"x": 1, "y": 2, "w": 30, "h": 40})", R"({"fullscreen": true})",
-                           R"({"raise": true, "x": 5})"}) {
-    const HttpReply r = send("POST", "/api/windows/1", body);
-    EXPECT_EQ(r.status, 501) << body;
-    EXPECT_NE(json(r)["error"].get<std::string>().find("not done yet"), std::string::npos);
+TEST_F(WallControlTest, MovesAndResizesKeepTheFieldsNotGivenAndReachTheWall) {
+  // Window 12 is 100,20,300,100 on a 410x150 canvas.
+  const HttpReply all = send("POST", "/api/windows/12", R"({"x": 1, "y": 2, "w": 30, "h": 40})");
+  EXPECT_EQ(all.status, 200);
+  EXPECT_EQ(json(all),
+            nlohmann::json::parse(R"({"id": "12", "rect": {"x": 1, "y": 2, "w": 30, "h": 40}})"));
+  EXPECT_EQ(send("POST", "/api/windows/12", R"({"x": 0})").status, 200);
+  EXPECT_EQ(send("POST", "/api/windows/12", R"({"w": 310, "h": 130})").status, 200);
+  EXPECT_EQ(send("POST", "/api/windows/1", R"({"fullscreen": true})").status, 200);
+  const std::vector<std::pair<std::uint64_t, dfb::Region>> expected = {{12, {1, 2, 31, 42}},
+                                                                       {12, {0, 20, 300, 120}},
+                                                                       {12, {100, 20, 410, 150}},
+                                                                       {1, {0, 0, 410, 150}}};
+  ASSERT_EQ(moved.size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_EQ(moved[i].first, expected[i].first) << i;
+    EXPECT_EQ(moved[i].second, expected[i].second) << i;
   }
-  for (const char* body : {"", "raise", "[]", "{}", "null", R"({"raise": false})",
-                           R"({"raise": 1})", R"({"raise": true, "colour": "red"})"}) {
-    const HttpReply r = send("POST", "/api/windows/1", body);
+}
+
+TEST_F(WallControlTest, TheWallsRefusalOfAMoveIsPassedOnWithItsCode) {
+  for (const int code : {400, 404, 409}) {
+    moveCode = code;
+    const HttpReply r = send("POST", "/api/windows/1", R"({"x": 10})");
+    EXPECT_EQ(r.status, code);
+    EXPECT_EQ(json(r)["error"], "window 1: the window is moving already");
+  }
+}
+
+TEST_F(WallControlTest, BadBodiesAndUnknownWindowsAreRefusedAndNothingIsDone) {
+  for (const char* body : {"",
+                           "raise",
+                           "[]",
+                           "{}",
+                           "null",
+                           R"({"raise": false})",
+                           R"({"raise": 1})",
+                           R"({"raise": true, "colour": "red"})",
+                           R"({"raise": true, "x": 5})",
+                           R"({"fullscreen": false})",
+                           R"({"fullscreen": 1})",
+                           R"({"fullscreen": true, "x": 0})",
+                           R"({"x": 1.5})",
+                           R"({"x": "1"})",
+                           R"({"x": null})",
+                           R"({"w": 0})",
+                           R"({"h": -3})",
+                           R"({"x": -1})",
+                           R"({"y": 51})",
+                           R"({"x": 111})",
+                           R"({"x": 4294967296})",
+                           R"({"w": 18446744073709551615})",
+                           R"({"x": 2147483647, "w": 2147483647})",
+                           R"({"x": 1, "size": 3})"}) {
+    const HttpReply r = send("POST", "/api/windows/12", body);
     EXPECT_EQ(r.status, 400) << body;
     EXPECT_TRUE(json(r).contains("error")) << body;
   }
+  EXPECT_EQ(json(send("POST", "/api/windows/12", R"({"x": 111})"))["error"],
+            "window 111,20,300,100 is not inside the wall's canvas (410x150)");
+  EXPECT_EQ(json(send("POST", "/api/windows/12", R"({"w": 0})"))["error"],
+            "window 100,20,0,100: w and h must be positive");
+  EXPECT_EQ(json(send("POST", "/api/windows/12", R"({"x": 1.5})"))["error"],
+            "x must be an integer (canvas pixels), not 1.5");
   for (const char* path :
        {"/api/windows/2", "/api/windows/01", "/api/windows/+1", "/api/windows/1x",
         "/api/windows/18446744073709551616", "/api/windows/%31"}) {
@@ -154,6 +212,9 @@ TEST_F(WallControlTest, BadBodiesAndUnknownWindowsAreRefusedAndNothingIsDone) {
   EXPECT_EQ(put.status, 405);
   EXPECT_TRUE(raised.empty());
   EXPECT_TRUE(closed.empty());
+  EXPECT_TRUE(moved.empty());
+  EXPECT_EQ(send("POST", "/api/windows/2", R"({"x": 1})").status, 404);
+  EXPECT_TRUE(moved.empty());
 }
 
 TEST_F(WallControlTest, EveryRouteIsBehindTheServersChecks) {
@@ -174,6 +235,7 @@ TEST_F(WallControlTest, EveryRouteIsBehindTheServersChecks) {
   EXPECT_EQ(send("POST", "/api/windows/1", std::string(kMaxControlBody + 1, ' ')).status, 413);
   EXPECT_TRUE(raised.empty());
   EXPECT_TRUE(closed.empty());
+  EXPECT_TRUE(moved.empty());
 }
 
 TEST(WindowNumber, OnlyPlainDecimalNumbers) {

@@ -2,7 +2,9 @@
 //                                                            (or: compare_captures --info LAYOUT)
 //                  DISPLAY: only that display's capture (a wall that lost processes has no
 //                  complete frame of every display)
-//                  --preview LAYOUT PREVIEW_PNG FULL_CANVAS_PNG
+//                  --preview LAYOUT PREVIEW_PNG FULL_CANVAS_PNG [X,Y,W,H]: a job's preview
+//                  (its page's /api/preview.png) equals the box filter of the render inside
+//                  every display; with a window, of a service job in that window of the wall
 //                  --colors PNG: how many distinct colours the image has, to tell a picture
 //                  from a blank
 //                  --raw PNG OUT: the image's pixels as they sit in memory (and travel in a raw
@@ -201,10 +203,13 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  if (argc == 5 && std::string(argv[1]) == "--preview") {
+  if ((argc == 5 || argc == 6) && std::string(argv[1]) == "--preview") {
     try {
-      return comparePreview(wall::loadLayout(argv[2]), wall::readPng(argv[3]),
-                            wall::readPng(argv[4]));
+      wall::Layout layout = wall::loadLayout(argv[2]);
+      if (argc == 6)
+        layout = wall::windowLayout(layout,
+                                    wall::resolveWindow(layout, wall::parseWindowRequest(argv[5])));
+      return comparePreview(layout, wall::readPng(argv[3]), wall::readPng(argv[4]));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "compare_captures: %s\n", e.what());
       return 1;

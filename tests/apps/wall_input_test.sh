@@ -7,6 +7,9 @@
 #    each give job a new frames that differ from its frames before; job b renders nothing new and
 #    its every captured frame stays byte-identical;
 #  - Esc over a window stops nothing on a shared wall: the wall and both jobs go on.
+# Then the same wall with `--max-jobs 1` (one job at a time, presented on the process's main
+# thread) and one job in r0c0: a key over the background steers nothing, the right arrow and a
+# wheel notch over its window steer it, Esc stops nothing.
 #   wall_input_test.sh LAYOUT   (DFBWALL, COMPARE, MPIEXEC in the environment)
 set -euo pipefail
 if [ -z "${WALL_INPUT_TEST_INNER:-}" ]; then
@@ -33,13 +36,25 @@ settled() {
   return 1
 }
 
-"$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
-  -np 4 -x DISPLAY -x XAUTHORITY "$DFBWALL" serve --wall "$layout" \
-  --listen "127.0.0.1:$port" --timeout $((8 * scale)) --capture-root "$work" --max-jobs 2 \
-  --background "#000000" >"$work/serve.out" 2>"$work/serve.err" &
-serve=$!
-for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
-grep -q "wall service on 127.0.0.1:$port" "$work/serve.out" || fail "serve did not start"
+# start_wall MAX_JOBS: the wall, in GLFW windows on the X server.
+start_wall() {
+  "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
+    -np 4 -x DISPLAY -x XAUTHORITY "$DFBWALL" serve --wall "$layout" \
+    --listen "127.0.0.1:$port" --timeout $((8 * scale)) --capture-root "$work" --max-jobs "$1" \
+    --background "#000000" >"$work/serve.out" 2>"$work/serve.err" &
+  serve=$!
+  for _ in $(seq 100); do grep -q "wall service on" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
+  grep -q "wall service on 127.0.0.1:$port" "$work/serve.out" || fail "serve did not start"
+}
+# stop_wall: SIGUSR1, and it exits 0.
+stop_wall() {
+  kill -USR1 "$serve"
+  for _ in $(seq $((100 * scale))); do kill -0 "$serve" 2>/dev/null || break; sleep 0.1; done
+  kill -0 "$serve" 2>/dev/null && fail "serve did not stop on SIGUSR1"
+  wait "$serve" || fail "serve exited non-zero after SIGUSR1"
+  serve=""
+}
+start_wall 2
 # job WINDOW NAME: a converged primary-renderer job (4 frames, then idle) capturing every frame.
 job() {
   "$MPIEXEC" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
@@ -103,9 +118,31 @@ kill -USR1 "$a" "$b"
 wait "$a" || fail "job a did not end well"
 wait "$b" || fail "job b did not end well"
 a="" b=""
-kill -USR1 "$serve"
-for _ in $(seq $((100 * scale))); do kill -0 "$serve" 2>/dev/null || break; sleep 0.1; done
-kill -0 "$serve" 2>/dev/null && fail "serve did not stop on SIGUSR1"
-wait "$serve" || fail "serve exited non-zero after SIGUSR1"
-serve=""
-echo "PASS: a key, a drag and the wheel over one job's wall window steer it alone; the other's frames stay byte-identical; the background and Esc steer nothing"
+stop_wall
+
+# One job at a time: the same keys and wheel steer the one job, over its window only.
+rm -rf "$work/a"
+port=$((port + 1))
+start_wall 1
+job r0c0 a
+a=$!
+na=$(settled a r0c0) || fail "job a did not present and settle on a --max-jobs 1 wall"
+cp "$(frame a r0c0 "$na")" "$work/a-before.png"
+echo "--max-jobs 1: job a settled at frame $na"
+bg=$(win r0c1)
+xdotool mousemove --window "$bg" 100 75 windowfocus --sync "$bg" key --delay 100 Right
+sleep 1.5
+[ "$(newest "$work/a" r0c0)" -eq "$na" ] || fail "a key over the background steered job a (--max-jobs 1)"
+wa=$(win r0c0)
+xdotool mousemove --window "$wa" 100 75 windowfocus --sync "$wa" key --delay 100 Right
+changed "the right arrow (--max-jobs 1)"
+xdotool mousemove --window "$wa" 100 75 click 4
+changed "a wheel notch (--max-jobs 1)"
+xdotool key Escape
+sleep 1
+for p in "$serve" "$a"; do kill -0 "$p" 2>/dev/null || fail "Esc stopped something on a --max-jobs 1 service wall"; done
+kill -USR1 "$a"
+wait "$a" || fail "job a did not end well (--max-jobs 1)"
+a=""
+stop_wall
+echo "PASS: a key, a drag and the wheel over one job's wall window steer it alone; the other's frames stay byte-identical; the background and Esc steer nothing; on a --max-jobs 1 wall a key and the wheel over the job's window steer it, over the background and Esc nothing"

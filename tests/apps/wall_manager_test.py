@@ -10,9 +10,14 @@ primary renderer (the same picture every frame) in overlapping windows across di
  - POST {"raise": true} puts job a's window on top (z), and on the wall: a Raise reaches every
    process, and the wall's own captures, which showed b over a (and never a over b) before,
    show a over b (the composite, compare_captures --composite) without either job restarting;
- - move and resize answer 501, other bodies 400, unknown windows 404;
+ - bad bodies and rectangles 400, unknown windows 404;
  - attacks: no token, a wrong token, a rebinding Host, the page's cookie without JSON or from
    another Origin, a body over 64 KiB: refused, nothing changed; then a good client still works;
+ - POST {"x", "y", "w", "h"} moves and resizes job a's window, then job b's: GET /api/windows
+   shows each new rectangle, each job re-plans without reconnecting, its captures from the
+   switch frame on equal the one-process render at the new size; job a's own page follows
+   (/api/layout is the new window's, /api/preview.png the new window's render where displays
+   are); the wall's own captures show both at their new places;
  - DELETE of job b's window: b exits non-zero saying "closed from the wall's control page" on
    its rank 0, its window leaves the list at once, and job a keeps presenting new frames.
 Needs DFBWALL, COMPARE and MPIEXEC in the environment.
@@ -33,6 +38,8 @@ SCALE = int(os.environ.get("DFBWALL_TIME_SCALE", "1"))
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
 MPI = [MPIEXEC, "--oversubscribe", "--bind-to", "none", "--mca", "mpi_yield_when_idle", "1"]
 WINDOW_A, WINDOW_B = "90,70,250,170", "20,20,200,150"
+MOVED_A = "100,80,260,180"  # job a's window after its move (a job with its own page and preview)
+MOVED_B = "150,100,240,180"  # job b's window after its move: elsewhere and larger
 
 
 class Test:
@@ -83,6 +90,15 @@ class Test:
         frames = [int(f[6:12]) for f in os.listdir(folder)
                   if re.fullmatch(r"frame-\d{6}\.png", f)] if os.path.isdir(folder) else []
         return max(frames, default=0)
+
+    def captured(self, job, frame):
+        """Frame FRAME of job JOB is captured whole: every display folder's and the wall
+        preview (each process writes its own displays, the job's rank 0 the preview)."""
+        folder = os.path.join(self.work, "jobs", job)
+        name = "frame-%06d.png" % frame
+        displays = [d for d in os.listdir(folder) if os.path.isdir(os.path.join(folder, d))]
+        return bool(displays) and os.path.exists(os.path.join(folder, "wall-%06d.png" % frame)) \
+            and all(os.path.exists(os.path.join(folder, d, name)) for d in displays)
 
 
 class Http:
@@ -160,17 +176,20 @@ def run(t):
     if api.get("/api/windows")[2] != []:
         t.fail("windows before any job")
 
-    # One-process renders of both windows, for the jobs' and the wall's captures.
+    # One-process renders of both windows (and of b's after its move), for the jobs' and the
+    # wall's captures.
     ref_a, ref_b = os.path.join(t.work, "ref-a.png"), os.path.join(t.work, "ref-b.png")
-    for size, ref in [("250x170", ref_a), ("200x150", ref_b)]:
+    ref_moved = os.path.join(t.work, "ref-b-moved.png")
+    ref_moved_a = os.path.join(t.work, "ref-a-moved.png")
+    for size, ref in [("250x170", ref_a), ("200x150", ref_b),
+                      ("%sx%s" % tuple(MOVED_B.split(",")[2:]), ref_moved),
+                      ("%sx%s" % tuple(MOVED_A.split(",")[2:]), ref_moved_a)]:
         subprocess.check_call(MPI + ["-np", "1", DFBWALL, "--renderer", "primary", "--size", size,
                                      "--frames", "1", "--quiet", "--image", ref], env=ENV)
     job = ["--renderer", "primary", "--frames", "100000", "--capture-every", "10", "--quiet",
            "--timeout", "30"]
-    # Job a has a page (--control). One rank: with two, a fast pattern job's preview on rank 0
-    # was seen to end it under load ("preview message from rank 0 for frame 440, far ahead of
-    # frame 423": the other rank's preview cells lag behind its pieces).
-    t.start("a", MPI + ["-np", "1", DFBWALL, "--connect", "127.0.0.1:%d" % port, "--window",
+    # Job a has a page (--control), on two ranks: its preview's cells travel from both.
+    t.start("a", MPI + ["-np", "2", DFBWALL, "--connect", "127.0.0.1:%d" % port, "--window",
                         WINDOW_A, "--capture", os.path.join(jobs, "a"), "--control",
                         "127.0.0.1:0", "--control-token-file",
                         os.path.join(t.work, "job-token")] + job)
@@ -220,8 +239,9 @@ def run(t):
     if api.send("POST", "/api/windows/1", body='{"raise": true}')[0] != 200:
         t.fail("raising the top window again")
     # Refused bodies and windows.
-    for body, expected in [('{"x": 10, "y": 10, "w": 100, "h": 100}', 501),
-                           ('{"fullscreen": true}', 501), ('{"raise": false}', 400),
+    for body, expected in [('{"x": 300}', 400), ('{"w": 0}', 400), ('{"x": 1.5}', 400),
+                           ('{"x": 10, "raise": true}', 400), ('{"fullscreen": false}', 400),
+                           ('{"w": 8, "h": 8}', 400), ('{"raise": false}', 400),
                            ('{"nope": 1}', 400), ('raise', 400), ('[]', 400), ('{}', 400),
                            (None, 400)]:
         status, _, reply = api.send("POST", "/api/windows/2", body=body)
@@ -273,6 +293,8 @@ def run(t):
     if status != 200 or {w["id"]: w["z"] for w in api.get("/api/windows")[2]} != {"1": 0, "2": 1}:
         t.fail("the page's raise after the attacks: %d %r" % (status, reply))
 
+    moved = move_windows(t, api, jobs, wall_captures, ref_moved_a, ref_moved)
+
     # Close job b: it ends non-zero, told why; its window leaves at once; a goes on.
     closed_at = time.time()
     status, _, reply = api.send("DELETE", "/api/windows/2")
@@ -300,10 +322,91 @@ def run(t):
     if t.procs["a"].wait(timeout=20 * SCALE) == 0:
         t.fail("job a did not hear that the wall stopped")
     print("PASS: /api/wall and /api/windows describe the wall and both windows; raise reorders "
-          "them (the wall's captures show it %.2f s after the request); move/resize 501; bad "
-          "bodies 400, unknown windows 404; 7 attacks refused; DELETE ended job b (window gone "
-          "%.2f s after the request) while job a went on (frame %d, then %d)"
-          % (shown, gone, before, t.newest("a", "r1c1")))
+          "them (the wall's captures show it %.2f s after the request); POSTs moved and resized "
+          "windows 1 and 2 (%s); bad bodies 400, unknown windows 404; 7 attacks refused; DELETE ended "
+          "job b (window gone %.2f s after the request) while job a went on (frame %d, then %d)"
+          % (shown, moved, gone, before, t.newest("a", "r1c1")))
+
+
+def rect_of(text):
+    x, y, w, h = map(int, text.split(","))
+    return {"x": x, "y": y, "w": w, "h": h}
+
+
+def move_windows(t, api, jobs, wall_captures, ref_moved_a, ref_moved):
+    """Moves and resizes both windows through the API; returns what it measured."""
+    rects = lambda: {i["id"]: i["rect"] for i in api.get("/api/windows")[2]}
+    # Job a has its own page and preview: they follow its window to the new size.
+    job_page = re.search(r"control API on http://127\.0\.0\.1:(\d+)/", t.log("a"))
+    page = Http(int(job_page.group(1)), open(os.path.join(t.work, "job-token")).read().strip())
+    status, _, reply = api.send("POST", "/api/windows/1", body=json.dumps(rect_of(MOVED_A)))
+    if status != 200 or reply != {"id": "1", "rect": rect_of(MOVED_A)}:
+        t.fail("moving window 1 (a job with --control): %d %r" % (status, reply))
+    t.wait_for("GET /api/windows to show window 1 moved", lambda: rects()["1"] == rect_of(MOVED_A),
+               10)
+    switch_a = int(t.wait_for("job a to say it moved", lambda: re.search(
+        r"the wall moved the window to %s from frame (\d+)" % MOVED_A, t.log("a")), 10).group(1))
+    w, h = rect_of(MOVED_A)["w"], rect_of(MOVED_A)["h"]
+    layout = page.get("/api/layout")[2]
+    if layout["canvas"] != [w, h] or layout["preview"]["size"] != [w, h] or \
+            not layout["displays"] or any(d["rect"][2] > w or d["rect"][3] > h
+                                          for d in layout["displays"]):
+        t.fail("job a's /api/layout after its move: %r" % layout)
+    preview = os.path.join(t.work, "preview-a.png")
+
+    def preview_is_the_new_window():
+        status, _, png = page.get("/api/preview.png")
+        with open(preview, "wb") as f:
+            f.write(png if status == 200 else b"")
+        return subprocess.call([COMPARE, "--preview", t.layout, preview, ref_moved_a, MOVED_A],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) == 0
+    t.wait_for("job a's preview of its new window", preview_is_the_new_window, 10)
+    if page.get("/api/status")[2]["frame"] < switch_a:
+        t.fail("job a's status is of a frame before its move")
+    first_a = (switch_a + 9) // 10 * 10
+    t.wait_for("job a's frame %d" % first_a, lambda: t.captured("a", first_a), 20)
+    if subprocess.call([COMPARE, "--window", MOVED_A, t.layout, os.path.join(jobs, "a"),
+                        ref_moved_a, str(first_a)]) != 0:
+        t.fail("job a's frame %d (switch %d) is not the one-process render at %s" %
+               (first_a, switch_a, MOVED_A))
+
+    x, y, w, h = map(int, MOVED_B.split(","))
+    forget_captures(wall_captures)
+    asked = time.time()
+    status, _, reply = api.send("POST", "/api/windows/2",
+                                body=json.dumps({"x": x, "y": y, "w": w, "h": h}))
+    if status != 200 or reply != {"id": "2", "rect": {"x": x, "y": y, "w": w, "h": h}}:
+        t.fail("moving window 2: %d %r" % (status, reply))
+    t.wait_for("GET /api/windows to show window 2 moved",
+               lambda: rects()["2"] == {"x": x, "y": y, "w": w, "h": h}, 10)
+    if rects()["1"] != rect_of(MOVED_A):
+        t.fail("window 1 moved with window 2: %r" % rects())
+    line = t.wait_for("job b to say it moved", lambda: re.search(
+        r"the wall moved the window to %s from frame (\d+)" % MOVED_B, t.log("b")), 10)
+    switch = int(line.group(1))
+    # Job b captures every 10th frame: the first at or after the switch is the new window's.
+    first = (switch + 9) // 10 * 10
+    t.wait_for("job b's frame %d" % first, lambda: t.captured("b", first), 20)
+    if subprocess.call([COMPARE, "--window", MOVED_B, t.layout, os.path.join(jobs, "b"),
+                        ref_moved, str(first)]) != 0:
+        t.fail("job b's frame %d (switch %d) is not the one-process render at %s" %
+               (first, switch, MOVED_B))
+    # The wall shows a, with b on top at its new place and size.
+    t.wait_for("the wall's captures of b moved over a", lambda: composite(
+        t, MOVED_A + "+" + MOVED_B, ref_moved_a + "+" + ref_moved, wall_captures), 10)
+    if t.procs["b"].poll() is not None:
+        t.fail("job b ended after its move")
+    return ("window 1 with its page's preview at frame %d, window 2 at frame %d, the wall showed "
+            "it %.2f s after the request" % (switch_a, switch, time.time() - asked))
+
+
+def forget_captures(captures):
+    """Removes the wall's captures so far: a wait for a new composite then reads only later ones
+    (compare_captures --composite with FRAME any decodes every capture of a display)."""
+    for display in os.listdir(captures):
+        for name in os.listdir(os.path.join(captures, display)):
+            if re.fullmatch(r"frame-\d+\.png", name):
+                os.remove(os.path.join(captures, display, name))
 
 
 def composite(t, windows, renders, captures):

@@ -6,7 +6,10 @@
 #include <tbb/parallel_for.h>
 
 #include <chrono>
+#include <cstring>
 #include <memory>
+
+#include "base/Error.h"
 
 #include "dfb/DistributedFrameBuffer.h"
 #include "tests/MpiTestUtil.h"
@@ -156,6 +159,71 @@ TEST(PreviewMpi, WithoutAGatherRank0GetsOnlyThePreview) {
                 active[static_cast<size_t>(t)] ? expected.at(cx, cy) : 0u)
           << cx << "," << cy;
     }
+}
+
+// A tile owner's preview message for `tile` of `frame`, every cell `value`.
+messaging::Bytes previewMessage(const PreviewGrid& grid, const dfb::Region& tile,
+                                std::uint32_t frame, std::uint32_t value) {
+  const PreviewHeader h{kPreviewMagic, frame, tile.x0, tile.y0, tile.x1, tile.y1};
+  const std::vector<std::uint32_t> cells(static_cast<size_t>(grid.cellsOf(tile).pixelCount()),
+                                         value);
+  messaging::Bytes bytes(sizeof h + 4 * cells.size());
+  std::memcpy(bytes.data(), &h, sizeof h);
+  std::memcpy(bytes.data() + sizeof h, cells.data(), 4 * cells.size());
+  return bytes;
+}
+
+// Under load one rank's cells were seen 17 frames behind the others' (a service job's frames
+// reach the wall over its own sockets, its previews rank 0 over the messenger): the job ended
+// with "far ahead". Now the oldest frames are given up, the job goes on, and the preview is
+// whole again once the late rank catches up.
+TEST(PreviewAssembler, ALaggingRankCostsFramesOfThePreviewNotTheJob) {
+  messaging::Messenger messenger(MPI_COMM_WORLD);
+  const PreviewGrid grid{128, 64, 8};
+  const dfb::Region left{0, 0, 64, 64}, right{64, 0, 128, 64};
+  PreviewAssembler assembler(messenger, grid, 64, {true, true});
+  // The left tile's owner runs 40 frames ahead of the right's.
+  for (std::uint32_t f = 1; f <= 40; ++f)
+    EXPECT_NO_THROW(assembler.incoming(0, previewMessage(grid, left, f, f)));
+  EXPECT_EQ(assembler.latest()->frame, 0u);
+  EXPECT_EQ(assembler.framesGivenUp(), 40u - PreviewAssembler::kFramesKept);
+  // The right one catches up: frames given up stay so, the kept ones complete.
+  for (std::uint32_t f = 1; f <= 40; ++f)
+    EXPECT_NO_THROW(assembler.incoming(1, previewMessage(grid, right, f, 1000 + f)));
+  const auto latest = assembler.latest();
+  EXPECT_EQ(latest->frame, 40u);
+  EXPECT_EQ(latest->image.at(0, 0), 40u);
+  EXPECT_EQ(latest->image.at(15, 7), 1040u);
+  // A message of a frame older than the latest is dropped; a broken one still fails.
+  EXPECT_NO_THROW(assembler.incoming(0, previewMessage(grid, left, 3, 3)));
+  EXPECT_THROW(assembler.incoming(0, previewMessage(grid, {1, 0, 65, 64}, 41, 0)), base::Error);
+  messenger.stop();
+}
+
+// A service wall moved and resized the job's window at frame 5: cells of earlier frames (the old
+// canvas's tiles) are dropped, the new canvas is assembled from frame 5 on.
+TEST(PreviewAssembler, ARestartTakesTheNewCanvasFromItsFrame) {
+  messaging::Messenger messenger(MPI_COMM_WORLD);
+  const PreviewGrid before{128, 64, 8}, after{64, 128, 8};
+  PreviewAssembler assembler(messenger, before, 64, {true, true});
+  assembler.incoming(0, previewMessage(before, {0, 0, 64, 64}, 3, 7));
+  assembler.restart(after, 64, {true, false}, 5);
+  EXPECT_EQ(assembler.latest()->frame, 4u);
+  EXPECT_EQ(assembler.latest()->grid.canvasHeight, 128);
+  EXPECT_TRUE(assembler.waitFor(4, std::chrono::steady_clock::now()));
+  // Late cells of the old canvas, whatever their tile, are not the new canvas's.
+  EXPECT_NO_THROW(assembler.incoming(0, previewMessage(before, {64, 0, 128, 64}, 3, 7)));
+  EXPECT_NO_THROW(assembler.incoming(0, previewMessage(before, {64, 0, 128, 64}, 4, 7)));
+  assembler.incoming(0, previewMessage(after, {0, 0, 64, 64}, 5, 9));
+  const auto latest = assembler.latest();
+  EXPECT_EQ(latest->frame, 5u);
+  EXPECT_EQ(latest->image.width, 8);
+  EXPECT_EQ(latest->image.height, 16);
+  EXPECT_EQ(latest->image.at(7, 7), 9u);
+  EXPECT_EQ(latest->image.at(0, 8), 0u);  // the tile no display shows
+  // The old canvas's right tile is no tile of the new one.
+  EXPECT_THROW(assembler.incoming(0, previewMessage(before, {64, 0, 128, 64}, 6, 7)), base::Error);
+  messenger.stop();
 }
 
 }  // namespace

@@ -259,6 +259,7 @@ void WallNode::requestCapture(std::uint32_t frameId, std::uint64_t sequence) {
 }
 
 void WallNode::pollWindows() {
+  if (options_.pollInput) options_.pollInput();
   if (!options_.onKeys) return;
   std::vector<WallKey> keys;
   for (auto& presenter : presenters_) {
@@ -336,7 +337,7 @@ PresentReport WallNode::presentFrame(std::uint32_t frameId) {
       deadline = std::max(start, waitFrom_) + options_.timeout;
       if (Clock::now() >= deadline) break;
       if (options_.alive) options_.alive();
-      if (!options_.onKeys) {
+      if (!options_.onKeys && !options_.pollInput) {
         complete_.wait_until(lock, options_.alive
                                        ? std::min(deadline, Clock::now() + options_.aliveEvery)
                                        : deadline);

@@ -65,6 +65,10 @@ struct WallNodeOptions {
   // they come, also while presentFrame waits for a frame (every `eventPoll` then: a converged,
   // idle wall still hears its keyboard). Empty: keys are ignored.
   std::function<void(const std::vector<WallKey>&)> onKeys;
+  // Or the caller polls its windows itself (all of its displays, also those the node does not
+  // present, and the mouse too): called on the main thread when onKeys would be. A service wall
+  // of one job at a time steers its job so.
+  std::function<void()> pollInput;
   std::chrono::milliseconds eventPoll{50};
   // A service wall outlives its render jobs: a frame this process cannot complete (a bad piece,
   // its deadline, abort()) is given up in the swap barrier on every process and presentFrame

@@ -9,10 +9,14 @@
 
 namespace wall {
 namespace {
-// Frames being assembled at once. Render ranks finish frames one after another, so two are in
-// progress at most (a fast rank's next frame while a slow rank's last tile travels); a message
-// further ahead than this is corrupt, not early.
-constexpr std::uint32_t kFramesAhead = 16;
+std::vector<bool> checkedMask(std::vector<bool> tilesOfFrame, const dfb::TileGrid& tiles) {
+  if (static_cast<int>(tilesOfFrame.size()) != tiles.tileCount())
+    throw base::Error("preview: the tile mask does not match the canvas's tiles");
+  return tilesOfFrame;
+}
+int countOf(const std::vector<bool>& mask) {
+  return static_cast<int>(std::count(mask.begin(), mask.end(), true));
+}
 }  // namespace
 
 PreviewAssembler::PreviewAssembler(messaging::Messenger& messenger, PreviewGrid grid, int tileSize,
@@ -20,12 +24,9 @@ PreviewAssembler::PreviewAssembler(messaging::Messenger& messenger, PreviewGrid 
     : messenger_(messenger),
       grid_(grid),
       tiles_(grid.canvasWidth, grid.canvasHeight, tileSize),
-      tilesOfFrame_(std::move(tilesOfFrame)),
-      tilesPerFrame_(
-          static_cast<int>(std::count(tilesOfFrame_.begin(), tilesOfFrame_.end(), true))),
-      latest_(std::make_shared<Snapshot>(Snapshot{0, Image(grid.width(), grid.height())})) {
-  if (static_cast<int>(tilesOfFrame_.size()) != tiles_.tileCount())
-    throw base::Error("preview: the tile mask does not match the canvas's tiles");
+      tilesOfFrame_(checkedMask(std::move(tilesOfFrame), tiles_)),
+      tilesPerFrame_(countOf(tilesOfFrame_)),
+      latest_(std::make_shared<Snapshot>(Snapshot{0, grid, Image(grid.width(), grid.height())})) {
   messenger_.registerObject(kPreviewObject, this);
 }
 
@@ -36,22 +37,60 @@ std::shared_ptr<const PreviewAssembler::Snapshot> PreviewAssembler::latest() con
   return latest_;
 }
 
+PreviewGrid PreviewAssembler::grid() const {
+  std::lock_guard lock(mutex_);
+  return grid_;
+}
+
+std::uint64_t PreviewAssembler::framesGivenUp() const {
+  std::lock_guard lock(mutex_);
+  return framesGivenUp_;
+}
+
+void PreviewAssembler::restart(PreviewGrid grid, int tileSize, std::vector<bool> tilesOfFrame,
+                               std::uint32_t fromFrame) {
+  dfb::TileGrid tiles(grid.canvasWidth, grid.canvasHeight, tileSize);
+  tilesOfFrame = checkedMask(std::move(tilesOfFrame), tiles);
+  std::lock_guard lock(mutex_);
+  grid_ = grid;
+  tiles_ = tiles;
+  tilesOfFrame_ = std::move(tilesOfFrame);
+  tilesPerFrame_ = countOf(tilesOfFrame_);
+  pending_.clear();
+  const std::uint32_t before = fromFrame > 0 ? fromFrame - 1 : 0;
+  latest_ = std::make_shared<Snapshot>(Snapshot{before, grid, Image(grid.width(), grid.height())});
+  givenUpThrough_ = std::max(givenUpThrough_, before);
+  published_.notify_all();
+}
+
 bool PreviewAssembler::waitFor(std::uint32_t frame,
                                std::chrono::steady_clock::time_point deadline) const {
   std::unique_lock lock(mutex_);
   return published_.wait_until(lock, deadline, [&] { return latest_->frame >= frame; });
 }
 
-PreviewAssembler::Assembly& PreviewAssembler::assemblyOf(std::uint32_t frame) {
+PreviewAssembler::Assembly* PreviewAssembler::assemblyOf(std::uint32_t frame) {
   auto it = pending_.find(frame);
-  if (it != pending_.end()) return it->second;
+  if (it != pending_.end()) return &it->second;
+  // A new frame beyond the frames kept: the oldest is given up (it may be this one).
+  if (pending_.size() >= kFramesKept) {
+    const std::uint32_t oldest = std::min(pending_.begin()->first, frame);
+    if (oldest == frame) {
+      givenUpThrough_ = std::max(givenUpThrough_, frame);
+      ++framesGivenUp_;
+      return nullptr;
+    }
+    pending_.erase(pending_.begin());
+    givenUpThrough_ = std::max(givenUpThrough_, oldest);
+    ++framesGivenUp_;
+  }
   Assembly& a = pending_[frame];
   const size_t cells = static_cast<size_t>(grid_.width()) * static_cast<size_t>(grid_.height());
   a.sums.assign(4 * cells, 0);
   a.weights.assign(cells, 0);
   a.seen.assign(tilesOfFrame_.size(), false);
   a.missing = tilesPerFrame_;
-  return a;
+  return &a;
 }
 
 void PreviewAssembler::incoming(int fromRank, messaging::Bytes&& payload) {
@@ -59,13 +98,20 @@ void PreviewAssembler::incoming(int fromRank, messaging::Bytes&& payload) {
   if (payload.size() < sizeof h)
     throw base::Error("preview message from rank " + std::to_string(fromRank) + " is too short");
   std::memcpy(&h, payload.data(), sizeof h);
+  if (h.magic != kPreviewMagic)
+    throw base::Error("malformed preview message from rank " + std::to_string(fromRank) +
+                      " (bad magic)");
+
+  std::lock_guard lock(mutex_);
+  // A newer frame is out already, or the frame was given up, or it is of the canvas before a
+  // restart: nobody wants it.
+  if (h.frameId <= std::max(latest_->frame, givenUpThrough_)) return;
   const dfb::Region region{h.x0, h.y0, h.x1, h.y1};
-  const int tile = h.magic == kPreviewMagic && dfb::isSaneRegion(region, kMaxCanvasSide)
-                       ? tiles_.indexOfOrigin(h.x0, h.y0)
-                       : -1;
+  const int tile =
+      dfb::isSaneRegion(region, kMaxCanvasSide) ? tiles_.indexOfOrigin(h.x0, h.y0) : -1;
   if (tile < 0 || tiles_.region(tile) != region || !tilesOfFrame_[static_cast<size_t>(tile)])
     throw base::Error("malformed preview message from rank " + std::to_string(fromRank) +
-                      " (bad magic, or a rectangle that is no tile of the frame)");
+                      " (a rectangle that is no tile of the frame)");
   const dfb::Region cells = grid_.cellsOf(region);
   if (payload.size() != sizeof h + 4 * static_cast<size_t>(cells.pixelCount()))
     throw base::Error("preview message from rank " + std::to_string(fromRank) + " has " +
@@ -74,14 +120,9 @@ void PreviewAssembler::incoming(int fromRank, messaging::Bytes&& payload) {
   std::vector<std::uint32_t> values(static_cast<size_t>(cells.pixelCount()));
   std::memcpy(values.data(), payload.data() + sizeof h, 4 * values.size());
 
-  std::lock_guard lock(mutex_);
-  const std::uint32_t published = latest_->frame;
-  if (h.frameId <= published) return;  // a newer frame is out already: nobody wants this one
-  if (h.frameId - published > kFramesAhead)
-    throw base::Error("preview message from rank " + std::to_string(fromRank) + " for frame " +
-                      std::to_string(h.frameId) + ", far ahead of frame " +
-                      std::to_string(published));
-  Assembly& a = assemblyOf(h.frameId);
+  Assembly* found = assemblyOf(h.frameId);
+  if (!found) return;
+  Assembly& a = *found;
   if (a.seen[static_cast<size_t>(tile)])
     throw base::Error("preview of tile " + std::to_string(tile) + " of frame " +
                       std::to_string(h.frameId) + " arrived twice");
@@ -103,6 +144,7 @@ void PreviewAssembler::incoming(int fromRank, messaging::Bytes&& payload) {
 void PreviewAssembler::publish(std::uint32_t frame, const Assembly& a) {
   auto snapshot = std::make_shared<Snapshot>();
   snapshot->frame = frame;
+  snapshot->grid = grid_;
   snapshot->image = Image(grid_.width(), grid_.height());
   for (size_t cell = 0; cell < a.weights.size(); ++cell) {
     const std::uint32_t w = a.weights[cell];

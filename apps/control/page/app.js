@@ -115,7 +115,14 @@ function nextPreview() {
   if (stopped) return;
   img.src = '/api/preview.png?n=' + (++previewCount);
 }
-img.addEventListener('load', () => setTimeout(nextPreview, 200));
+let previewSize = '';
+img.addEventListener('load', () => {
+  // A service wall moved or resized the job's window: the outlines are the new window's.
+  const size = img.naturalWidth + 'x' + img.naturalHeight;
+  if (previewSize && size !== previewSize) drawOutlines();
+  previewSize = size;
+  setTimeout(nextPreview, 200);
+});
 img.addEventListener('error', () => setTimeout(nextPreview, 1000));
 
 async function drawOutlines() {

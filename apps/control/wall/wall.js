@@ -1,6 +1,6 @@
 // The wall's page (serve --control): the wall to scale, each job's window on it; a click raises
-// a window, × closes it (its job ends), dragging its title bar asks to move it. Polls
-// /api/windows; plain JavaScript, no library, nothing fetched from elsewhere.
+// a window, × closes it (its job ends), dragging its title bar moves it, its corner resizes it.
+// Polls /api/windows; plain JavaScript, no library, nothing fetched from elsewhere.
 'use strict';
 
 // The page authenticates with the cookie set when it was opened at the printed address
@@ -26,7 +26,6 @@ async function explain(response) {
   if (response.status === 401)
     return 'The wall refused the request: it needs the access token. Open this page with the ' +
            'address dfbwall serve printed at start (it ends in ?token=…).';
-  if (response.status === 501) return 'Not done yet: ' + message;
   if (response.status === 404) return 'That window is gone: ' + message;
   return 'The wall answered ' + response.status + ': ' + message;
 }
@@ -57,6 +56,10 @@ async function api(method, path, body) {
 let wall = null;  // GET /api/wall
 const boxes = new Map();  // window id -> its element
 let dragging = null;
+// Moves the wall took but does not list yet (a window changes place at its job's switch
+// frame): id -> {rect, until}; the window is drawn there meanwhile, not back at the old place.
+const moving = new Map();
+const kMinSide = 16;  // the wall refuses smaller windows
 
 function place(element, r) {
   const { w, h } = wall.canvas;
@@ -110,10 +113,14 @@ function windowBox(id) {
   bar.append(title, link, close);
   const info = document.createElement('div');
   info.className = 'info';
-  box.append(bar, info);
+  const corner = document.createElement('div');
+  corner.className = 'resize';
+  corner.title = 'Drag to resize this window (its job renders at the new size)';
+  box.append(bar, info, corner);
   close.addEventListener('click', (e) => { e.stopPropagation(); closeWindow(id); });
   link.addEventListener('click', (e) => e.stopPropagation());
-  bar.addEventListener('pointerdown', (e) => startDrag(e, id, box));
+  bar.addEventListener('pointerdown', (e) => startDrag(e, id, box, 'move'));
+  corner.addEventListener('pointerdown', (e) => startDrag(e, id, box, 'resize'));
   box.addEventListener('click', () => raiseWindow(id));
   return box;
 }
@@ -141,9 +148,14 @@ function showWindows(list) {
     // Only the server's checked http(s) address, never another scheme.
     link.hidden = !(typeof w.page === 'string' && /^https?:\/\//.test(w.page));
     if (!link.hidden) link.href = w.page;
+    const asked = moving.get(w.id);
+    const same = (a, b) => a.x === b.x && a.y === b.y && a.w === b.w && a.h === b.h;
+    if (asked && (same(asked.rect, w.rect) || Date.now() > asked.until)) moving.delete(w.id);
+    const rect = moving.has(w.id) ? moving.get(w.id).rect : w.rect;
+    box.classList.toggle('moving', moving.has(w.id));
     if (!dragging || dragging.id !== w.id) {
-      place(box, w.rect);
-      box.dataset.rect = [w.rect.x, w.rect.y, w.rect.w, w.rect.h].join(',');
+      place(box, rect);
+      box.dataset.rect = [rect.x, rect.y, rect.w, rect.h].join(',');
     }
   }
   for (const [id, box] of boxes) {
@@ -185,10 +197,11 @@ async function closeWindow(id) {
   }
 }
 
-function startDrag(e, id, box) {
+function startDrag(e, id, box, mode) {
   if (e.button !== 0 || e.target.closest('button, a')) return;
+  e.stopPropagation();  // the corner is inside the box: one drag, not two
   const r = box.dataset.rect.split(',').map(Number);
-  dragging = { id, box, x0: e.clientX, y0: e.clientY, rect: r, moved: false };
+  dragging = { id, box, mode, x0: e.clientX, y0: e.clientY, rect: r, moved: false };
   box.setPointerCapture(e.pointerId);
   box.classList.add('dragging');
   e.preventDefault();
@@ -201,10 +214,17 @@ function dragTo(e) {
   const dy = Math.round((e.clientY - dragging.y0) * scale);
   if (Math.abs(e.clientX - dragging.x0) + Math.abs(e.clientY - dragging.y0) > 3) dragging.moved = true;
   const [x, y, w, h] = dragging.rect;
-  dragging.to = {
-    x: Math.max(0, Math.min(wall.canvas.w - w, x + dx)),
-    y: Math.max(0, Math.min(wall.canvas.h - h, y + dy)), w, h
-  };
+  if (dragging.mode === 'resize') {
+    dragging.to = {
+      x, y, w: Math.max(kMinSide, Math.min(wall.canvas.w - x, w + dx)),
+      h: Math.max(kMinSide, Math.min(wall.canvas.h - y, h + dy))
+    };
+  } else {
+    dragging.to = {
+      x: Math.max(0, Math.min(wall.canvas.w - w, x + dx)),
+      y: Math.max(0, Math.min(wall.canvas.h - h, y + dy)), w, h
+    };
+  }
   place(dragging.box, dragging.to);
 }
 
@@ -219,11 +239,16 @@ async function endDrag() {
   // The click that ends a drag is not a raise.
   d.box.addEventListener('click', (e) => e.stopImmediatePropagation(), { capture: true, once: true });
   try {
-    await api('POST', '/api/windows/' + encodeURIComponent(d.id), d.to);
+    const answer = await api('POST', '/api/windows/' + encodeURIComponent(d.id), d.to);
+    // Drawn where the wall put it until the wall lists it there (or 10 s pass: it did not).
+    moving.set(d.id, { rect: answer.rect, until: Date.now() + 10000 });
     showError('');
   } catch (e) {
-    showError(e.status === 501 ? 'Moving windows is not done yet: the window stays where it is.'
-                               : e.message);
+    // Refused (409: its job cannot move now or at all; 400: not a window the wall can show):
+    // said in words, and the window goes back where the wall has it.
+    showError(e.status === 409 || e.status === 400
+                  ? 'The wall did not move window ' + d.id + ': ' + e.message.replace(/^The wall answered \d+: (window \S+: )?/, '')
+                  : e.message);
   }
   dragging = null;
   await poll();

@@ -66,6 +66,7 @@ ServiceClient::ServiceClient(const std::string& address, const Credentials& cred
     switch (static_cast<Kind>(h.kind)) {
       case Kind::Directory:
         directory_ = parseDirectory(bytesOf(reply), reply.size());
+        setWindowSize(directory_.layout);
         directoryBytes_.assign(bytesOf(reply), bytesOf(reply) + reply.size());
         // The wall counts the job from now on: keepalives go while the job still sets up (a
         // scene or bricks that take longer than the wall's timeout to load under load).
@@ -139,6 +140,16 @@ std::uint32_t ServiceClient::rosterVersion() const {
 messaging::Bytes ServiceClient::rosterBytes() const {
   std::lock_guard lock(mutex_);
   return rosterBytes_;
+}
+
+ServiceClient::Size ServiceClient::windowSize() const {
+  const std::uint64_t packed = windowSize_;
+  return {static_cast<int>(packed >> 32), static_cast<int>(packed & 0xffffffffu)};
+}
+
+void ServiceClient::setWindowSize(const Layout& window) {
+  windowSize_ = static_cast<std::uint64_t>(static_cast<std::uint32_t>(window.canvasWidth)) << 32 |
+                static_cast<std::uint32_t>(window.canvasHeight);
 }
 
 ServiceClient::ReshapeNews ServiceClient::reshapeNews() const {
@@ -243,6 +254,7 @@ void ServiceClient::run() {
             throw base::Error("the wall at " + address_ + " sent a move of another window");
           std::lock_guard lock(mutex_);
           if (reshape.version > reshape_.version) {
+            setWindowSize(reshape.directory.layout);
             reshape_ = {reshape.version, reshape.fromFrame};
             reshapeBytes_.assign(bytesOf(m), bytesOf(m) + m.size());
           }

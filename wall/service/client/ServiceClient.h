@@ -74,6 +74,13 @@ class ServiceClient {
   // Thread-safe. Where the wall's key and mouse events over the job's window go (called on the
   // link's thread; none: they are dropped). docs/service.md, "Several jobs at once".
   void onInput(std::function<void(const WindowInput&)> handler);
+  // Thread-safe, also from the input handler: the size of the window the wall's events come in
+  // (the directory's, then the newest move's: the wall sends a move before any event in the new
+  // window's pixels).
+  struct Size {
+    int width = 0, height = 0;
+  };
+  Size windowSize() const;
 
  private:
   void run();
@@ -84,6 +91,8 @@ class ServiceClient {
   zmq::context_t context_{1};
   zmq::socket_t socket_;
   Directory directory_;
+  std::atomic<std::uint64_t> windowSize_{0};  // width << 32 | height: read whole, never torn
+  void setWindowSize(const Layout& window);
   messaging::Bytes directoryBytes_;
   FrameCredits* credits_ = nullptr;                  // set by start(), under mutex_
   std::function<void(const std::string&)> onError_;  // set by start(), under mutex_

@@ -250,6 +250,22 @@ struct Desk::Impl {
     if (!answer->has_value()) throw base::Error("the wall's desk did not answer (it stopped)");
     return **answer;
   }
+  // A move of the window of the job `session()` names (on the desk thread), and its verdict.
+  JobDesk::MoveVerdict moveOnDeskThread(std::function<std::optional<std::uint64_t>()> session,
+                                        const dfb::Region& window) {
+    auto verdict = std::make_shared<std::promise<JobDesk::MoveVerdict>>();
+    std::future<JobDesk::MoveVerdict> answered = verdict->get_future();
+    post([this, session, window, verdict] {
+      JobDesk::MoveVerdict v{JobDesk::MoveVerdict::Code::UnknownWindow, "no such window"};
+      if (const std::optional<std::uint64_t> id = session())
+        carry(jobs.reshape(*id, window, Clock::now(), v));
+      publishWindows();
+      verdict->set_value(v);
+    });
+    if (answered.wait_for(std::chrono::seconds(5)) != std::future_status::ready || isClosed)
+      return {JobDesk::MoveVerdict::Code::Conflict, "the wall is stopping"};
+    return answered.get();
+  }
   void handBack(const std::function<void()>& change) {
     std::lock_guard lock(mutex);
     change();
@@ -606,16 +622,12 @@ std::vector<std::vector<std::uint32_t>> Desk::gatherToFirst(std::uint64_t, std::
 }
 
 JobDesk::MoveVerdict Desk::reshape(std::uint64_t session, const dfb::Region& window) {
-  auto verdict = std::make_shared<std::promise<JobDesk::MoveVerdict>>();
-  std::future<JobDesk::MoveVerdict> answered = verdict->get_future();
-  impl_->post([this, session, window, verdict] {
-    JobDesk::MoveVerdict v;
-    impl_->carry(impl_->jobs.reshape(session, window, Clock::now(), v));
-    verdict->set_value(v);
-  });
-  if (answered.wait_for(std::chrono::seconds(5)) != std::future_status::ready || impl_->isClosed)
-    return {JobDesk::MoveVerdict::Code::Conflict, "the wall is stopping"};
-  return answered.get();
+  return impl_->moveOnDeskThread([session] { return std::optional<std::uint64_t>(session); },
+                                 window);
+}
+
+JobDesk::MoveVerdict Desk::moveWindow(std::uint64_t number, const dfb::Region& window) {
+  return impl_->moveOnDeskThread([this, number] { return impl_->jobs.sessionOf(number); }, window);
 }
 
 void Desk::presented(std::uint64_t session, std::uint32_t frameId, std::int64_t completeNs) {

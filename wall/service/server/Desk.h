@@ -64,6 +64,9 @@ class Desk : public ProcessLink {
   std::vector<JobDesk::Window> windows() const;
   bool raise(std::uint64_t number);
   bool close(std::uint64_t number, const std::string& why);
+  // Job `number`'s window moved and resized to `window` (reshape() of its session; the verdict
+  // says UnknownWindow when no job of that number is on the wall).
+  JobDesk::MoveVerdict moveWindow(std::uint64_t number, const dfb::Region& window);
 
   std::uint64_t epoch() const override { return 0; }
   void toHead(const ServiceCommand& command, std::uint64_t epoch) override;

@@ -584,6 +584,12 @@ std::optional<JobDesk::Actions> JobDesk::raise(std::uint64_t number) {
   return take();
 }
 
+std::optional<std::uint64_t> JobDesk::sessionOf(std::uint64_t number) const {
+  const Slot* slot = byNumber(number);
+  if (!slot) return std::nullopt;
+  return slot->job.session;
+}
+
 std::optional<JobDesk::Actions> JobDesk::close(std::uint64_t number, const std::string& why,
                                                Clock::time_point now) {
   now_ = now;
@@ -945,9 +951,11 @@ JobDesk::Actions JobDesk::reshape(std::uint64_t session, const dfb::Region& wind
     verdict = {Code::Conflict,
                j_->state == State::Starting ? "the job is starting" : "the job is ending"};
   } else if (!j_->job.hello.canReshape) {
-    verdict = {Code::Conflict,
-               "the job cannot re-plan its frame buffer while it runs (a program on the "
-               "data-distributed API, or a job with its own page or preview): its window stays"};
+    verdict = {
+        Code::Conflict,
+        "the job cannot re-plan its frame buffer while it runs (a program on the "
+        "data-distributed API, or a job of an earlier dfbwall with its own page or preview): "
+        "its window stays"};
   } else if (s_.maxJobs <= 1) {
     verdict = {Code::Conflict,
                "this wall runs one job at a time (serve --max-jobs 1): its window does not move"};

@@ -219,6 +219,9 @@ class JobDesk {
   std::optional<Actions> raise(std::uint64_t number);
   // Job `number` ends as a dropped job does: told `why` (Ended), its window closed at once.
   std::optional<Actions> close(std::uint64_t number, const std::string& why, Clock::time_point now);
+  // The session of job `number` (its window's move goes through reshape()); nullopt when no job
+  // of that number is on the wall.
+  std::optional<std::uint64_t> sessionOf(std::uint64_t number) const;
 
  private:
   struct Job {

@@ -127,9 +127,11 @@ struct WallService::Impl {
   void showIdle(const std::string& status);
   // Several jobs: composes the displays whose windows changed and presents them (main thread).
   void presentWindows();
-  // Several jobs: keys and the mouse in this process's windows go to the job whose window is
-  // under the cursor, through the head (main thread).
-  void forwardInput();
+  // Keys and the mouse in this process's windows go to the job whose window is under the cursor,
+  // through the head (main thread): `jobAt(display, x, y)` names it (0: the background) for a
+  // point of this process's display (index among its displays, the display's pixels). Several
+  // jobs: the stack's top window there; one job at a time: the job, inside its window.
+  void forwardInput(const std::function<std::uint64_t(int, int, int)>& jobAt);
   void runJob(const ServiceCommand& start);
   // The job's window is no more to be raised (it is about to go).
   void forgetWindow(std::uint64_t session);
@@ -425,16 +427,31 @@ WallService::~WallService() {
 
 std::string WallService::address() const { return impl_->address; }
 
-std::string WallService::reshape(std::uint64_t session, const dfb::Region& window, int* code) {
+namespace {
+// A move's verdict as the window manager answers it: empty and 200 when under way.
+std::string moveAnswer(const JobDesk::MoveVerdict& v, int* code) {
   using Code = JobDesk::MoveVerdict::Code;
-  JobDesk::MoveVerdict v{Code::Conflict, "only the wall's head moves windows"};
-  if (impl_->desk) v = impl_->desk->reshape(session, window);
   if (code)
     *code = v.code == Code::Moving          ? 200
             : v.code == Code::UnknownWindow ? 404
             : v.code == Code::BadWindow     ? 400
                                             : 409;
   return v.code == Code::Moving ? std::string() : v.why;
+}
+}  // namespace
+
+std::string WallService::reshape(std::uint64_t session, const dfb::Region& window, int* code) {
+  JobDesk::MoveVerdict v{JobDesk::MoveVerdict::Code::Conflict,
+                         "only the wall's head moves windows"};
+  if (impl_->desk) v = impl_->desk->reshape(session, window);
+  return moveAnswer(v, code);
+}
+
+std::string WallService::moveWindow(std::uint64_t number, const dfb::Region& window, int* code) {
+  JobDesk::MoveVerdict v{JobDesk::MoveVerdict::Code::Conflict,
+                         "only the wall's head moves windows"};
+  if (impl_->desk) v = impl_->desk->moveWindow(number, window);
+  return moveAnswer(v, code);
 }
 
 std::vector<int> WallService::waitForProcesses(Clock::time_point until) {
@@ -511,6 +528,21 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
   o.wallFramesBefore = stack ? 0 : wallFrames;
   if (link) o.alive = [this] { link->mainAlive(); };
   const std::uint64_t session = start.header.session;
+  if (!stack) {
+    // One job at a time, on this (the main) thread: its node polls the windows while it
+    // presents, and what falls inside the job's window (the one it has now: a wall of one job
+    // moves none) steers it.
+    const std::vector<int> ours = layout.displaysOfProcess(process);
+    o.pollInput = [this, ours, window, session] {
+      for (Presenter* p : presenters) p->pollEvents();
+      forwardInput([&](int display, int x, int y) -> std::uint64_t {
+        const dfb::Region& d =
+            layout.displays[static_cast<size_t>(ours[static_cast<size_t>(display)])].rect;
+        const int wx = d.x0 + x, wy = d.y0 + y;
+        return wx >= window.x0 && wx < window.x1 && wy >= window.y0 && wy < window.y1 ? session : 0;
+      });
+    };
+  }
   o.onAbandon = [this, session, epoch](const std::string& why) {
     ServiceCommand failed;
     failed.header.kind = Command::Failed;
@@ -579,7 +611,10 @@ void WallService::Impl::runJob(const ServiceCommand& start) {
           wallFrames = r.wallFrame;
           if (wallCaptures) wallCaptures->presented(r.wallFrame);
         }
-        if (!asked && options.stopRequested && options.stopRequested()) {
+        // A closed display window stops the wall: one job at a time, its node polls the windows
+        // while it presents (several: the main thread does).
+        const bool closed = !stack && !r.closedDisplay.empty();
+        if (!asked && (closed || (options.stopRequested && options.stopRequested()))) {
           asked = true;
           if (process != 0 && options.leaveAlone) {
             failure = "wall process " + std::to_string(process) + " was asked to stop";
@@ -687,13 +722,14 @@ static_assert(static_cast<std::uint32_t>(WallKey::Left) == WindowInput::kLeft &&
                   static_cast<std::uint32_t>(WallKey::Minus) == WindowInput::kMinus,
               "the wire's keys are WallKey's");
 
-void WallService::Impl::forwardInput() {
+void WallService::Impl::forwardInput(const std::function<std::uint64_t(int, int, int)>& jobAt) {
   const std::vector<int> ours = layout.displaysOfProcess(process);
   for (size_t i = 0; i < presenters.size(); ++i) {
     for (const WallInput& in : presenters[i]->takeInput()) {
-      // Esc stops a single job's wall; on a shared wall a stray press would end others' work.
-      if (!stack || (in.kind == WallInput::Kind::Key && in.key == WallKey::Escape)) continue;
-      const std::uint64_t session = stack->topAt(static_cast<int>(i), in.x, in.y);
+      // Esc stops a single job's wall; on a service wall, which outlives its jobs and may be
+      // shared, a stray press would end someone's work.
+      if (in.kind == WallInput::Kind::Key && in.key == WallKey::Escape) continue;
+      const std::uint64_t session = jobAt(static_cast<int>(i), in.x, in.y);
       if (session == 0) continue;  // over the background
       const Display& d = layout.displays[static_cast<size_t>(ours[i])];
       WindowInput w;
@@ -788,7 +824,10 @@ void WallService::run() {
     }
     if (m.link) m.link->mainAlive();
     for (Presenter* p : m.presenters) p->pollEvents();
-    m.forwardInput();
+    // Between jobs of a one-job wall nobody is steered: the events are dropped.
+    m.forwardInput([&m](int display, int x, int y) -> std::uint64_t {
+      return m.stack ? m.stack->topAt(display, x, y) : 0;
+    });
     bool closed = false;
     for (Presenter* p : m.presenters) closed = closed || p->closeRequested();
     if (!asked && (closed || (m.options.stopRequested && m.options.stopRequested()))) {

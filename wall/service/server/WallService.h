@@ -98,6 +98,8 @@ class WallService {
   std::vector<JobDesk::Window> windows() const;
   bool raise(std::uint64_t number);
   bool close(std::uint64_t number, const std::string& why);
+  // Job `number`'s window moved and resized to `window`, as reshape() does with its session.
+  std::string moveWindow(std::uint64_t number, const dfb::Region& window, int* code = nullptr);
 
  private:
   struct Impl;
