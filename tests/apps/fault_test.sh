@@ -173,7 +173,7 @@ wait $job
 SH
     set +e
     WORK="$work" CLOSE_WINDOW="$(dirname "$0")/close_window.py" \
-      xvfb-run -a -n $((300 + RANDOM % 500)) -s "-screen 0 1280x1024x24" bash "$work/inside.sh"
+      xvfb-run -a -n $((300 + RANDOM % 500)) -s "-screen 0 1280x1024x24 -noreset" bash "$work/inside.sh"
     code=$?
     set -e
     [ "$code" -ne 3 ] || fail "no window titled r1c0 appeared"

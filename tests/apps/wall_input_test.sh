@@ -14,7 +14,7 @@
 set -euo pipefail
 if [ -z "${WALL_INPUT_TEST_INNER:-}" ]; then
   # A server number of its own, so a concurrent Xvfb test elsewhere cannot take the same one.
-  exec xvfb-run -a -n $((300 + RANDOM % 500)) -s "-screen 0 1280x1024x24" \
+  exec xvfb-run -a -n $((300 + RANDOM % 500)) -s "-screen 0 1280x1024x24 -noreset" \
     env WALL_INPUT_TEST_INNER=1 "$0" "$@"
 fi
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1

@@ -128,7 +128,7 @@ PY
     w=$(processes "$layout")
     mpi $((renders + w)) "$DFBWALL" --wall "$layout" --offscreen --capture "$work/off" --frames 2 --quiet
     # A server number of its own, so a concurrent Xvfb test elsewhere cannot take the same one.
-    xvfb-run -a -n $((300 + RANDOM % 500)) -s "-screen 0 1280x1024x24" \
+    xvfb-run -a -n $((300 + RANDOM % 500)) -s "-screen 0 1280x1024x24 -noreset" \
       "$MPIEXEC" -n $((renders + w)) --oversubscribe --bind-to none -x DISPLAY -x XAUTHORITY \
       "$DFBWALL" --wall "$layout" --capture "$work/win" --frames 2 --quiet
     # The window's pixels are read back from the X server: they must equal the offscreen frame.
