@@ -41,11 +41,7 @@ struct View {
 // --bricks 0 holds it), whose rays no brick face cuts.
 std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int ranks, int bricks,
                                 std::uint32_t spp, const View& view) {
-  MPI_Comm comm;
-  const int rank = testutil::worldRank();
-  MPI_Comm_split(MPI_COMM_WORLD, rank < ranks ? 0 : 1, rank, &comm);
-  std::vector<float> image;
-  if (rank < ranks) {
+  return test::onFirstRanks(ranks, [&](MPI_Comm comm, int rank) {
     RenderSettings settings;
     settings.width = view.width, settings.height = view.height, settings.seed = view.seed;
     std::vector<HeldBrick> held;
@@ -53,13 +49,10 @@ std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int rank
       held.push_back({0, wholeScene(*desc)});
     else
       held = loadOwnBricks(*desc, bricks, 1, rank, ranks);
-    image = test::renderHeldBricks(desc, settings, std::move(held), comm, kTile, 1,
-                                   std::chrono::milliseconds(60000), true, nullptr, FirstHits::Auto,
-                                   spp);
-  }
-  MPI_Comm_free(&comm);
-  MPI_Barrier(MPI_COMM_WORLD);
-  return image;
+    return test::renderHeldBricks(desc, settings, std::move(held), comm, kTile, 1,
+                                  std::chrono::milliseconds(60000), true, nullptr, FirstHits::Auto,
+                                  spp);
+  });
 }
 
 // 4 bricks on every rank of the world within 1e-4 of 1 brick on one, at `spp` samples a frame,

@@ -47,4 +47,19 @@ inline std::vector<float> renderHeldBricks(
   return image;
 }
 
+// `render(comm, rank)` on the first `ranks` ranks of the world, on a communicator of their own
+// (its image on rank 0; empty elsewhere); every rank of the world returns together.
+template <class Render>
+std::vector<float> onFirstRanks(int ranks, Render render) {
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm comm;
+  MPI_Comm_split(MPI_COMM_WORLD, rank < ranks ? 0 : 1, rank, &comm);
+  std::vector<float> image;
+  if (rank < ranks) image = render(comm, rank);
+  MPI_Comm_free(&comm);
+  MPI_Barrier(MPI_COMM_WORLD);
+  return image;
+}
+
 }  // namespace renderers::test

@@ -20,19 +20,12 @@ constexpr int kWidth = 64, kHeight = 48, kTile = 16;
 
 // `bricks` bricks on the first `ranks` ranks of the world (rank 0's image; empty elsewhere).
 std::vector<float> renderBricks(const std::shared_ptr<SceneDesc>& desc, int ranks, int bricks) {
-  MPI_Comm comm;
-  const int rank = testutil::worldRank();
-  MPI_Comm_split(MPI_COMM_WORLD, rank < ranks ? 0 : 1, rank, &comm);
-  std::vector<float> image;
-  if (rank < ranks) {
+  return test::onFirstRanks(ranks, [&](MPI_Comm comm, int rank) {
     RenderSettings settings;
     settings.width = kWidth, settings.height = kHeight, settings.seed = 11;
-    image = test::renderHeldBricks(desc, settings, loadOwnBricks(*desc, bricks, 1, rank, ranks),
-                                   comm, kTile, 1, std::chrono::milliseconds(60000));
-  }
-  MPI_Comm_free(&comm);
-  MPI_Barrier(MPI_COMM_WORLD);
-  return image;
+    return test::renderHeldBricks(desc, settings, loadOwnBricks(*desc, bricks, 1, rank, ranks),
+                                  comm, kTile, 1, std::chrono::milliseconds(60000));
+  });
 }
 
 void checkScene(const std::string& name) {

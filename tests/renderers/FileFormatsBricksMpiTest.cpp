@@ -67,19 +67,12 @@ std::shared_ptr<SceneDesc> scene(const std::string& name, const std::string& vol
 
 // 4 bricks on the first `ranks` ranks (rank 0's image; empty elsewhere).
 std::vector<float> render(const std::shared_ptr<SceneDesc>& desc, int ranks) {
-  MPI_Comm comm;
-  const int rank = testutil::worldRank();
-  MPI_Comm_split(MPI_COMM_WORLD, rank < ranks ? 0 : 1, rank, &comm);
-  std::vector<float> image;
-  if (rank < ranks) {
+  return test::onFirstRanks(ranks, [&](MPI_Comm comm, int rank) {
     RenderSettings settings;
     settings.width = kWidth, settings.height = kHeight, settings.seed = 3;
-    image = test::renderHeldBricks(desc, settings, loadOwnBricks(*desc, 4, 1, rank, ranks), comm,
-                                   kTile, 1, std::chrono::milliseconds(60000));
-  }
-  MPI_Comm_free(&comm);
-  MPI_Barrier(MPI_COMM_WORLD);
-  return image;
+    return test::renderHeldBricks(desc, settings, loadOwnBricks(*desc, 4, 1, rank, ranks), comm,
+                                  kTile, 1, std::chrono::milliseconds(60000));
+  });
 }
 
 // `extra`: more fields of the files' volumes.
