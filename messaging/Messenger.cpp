@@ -361,11 +361,13 @@ void Messenger::Impl::dispatch(Packet& packet) {
       const std::string why = "rank " + std::to_string(packet.rank) + " (" +
                               hosts.at(static_cast<size_t>(packet.rank)) +
                               ") left without closing (it will not join again)";
+      // Reported before departed() says so: whoever sees departed() (quiesce giving up) may
+      // count on the error callback having been told.
+      report(why);
       {
         std::lock_guard lock(departedMutex);
         if (departed.empty()) departed = why;
       }
-      report(why);
       return;
     }
 
