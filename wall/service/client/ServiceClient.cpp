@@ -30,7 +30,7 @@ ServiceClient::ServiceClient(const std::string& address, const Credentials& cred
     : address_(address), credentials_(credentials), socket_(context_, zmq::socket_type::dealer) {
   const std::string endpoint = tcpEndpoint(address, "--connect");
   // The goodbye of a job that fails gets a second to leave.
-  configureSocket(socket_, static_cast<int>(timeout.count()), kMaxMessageBytes, 1000);
+  configureSocket(socket_, Side::dials, static_cast<int>(timeout.count()), kMaxMessageBytes, 1000);
   makeClient(socket_, credentials);
   HandshakeWatch watch(context_, socket_);
   socket_.connect(endpoint);
@@ -394,7 +394,7 @@ ServicePieceSink::ServicePieceSink(const Directory& directory, const Credentials
 void ServicePieceSink::connect(size_t process, const std::string& endpoint) {
   zmq::socket_t socket(context_, zmq::socket_type::dealer);
   // A rank that is done still delivers its last batches (up to the timeout) as it exits.
-  configureSocket(socket, deadPeerMs_, kMaxLinkMessageBytes, deadPeerMs_);
+  configureSocket(socket, Side::dials, deadPeerMs_, kMaxLinkMessageBytes, deadPeerMs_);
   makeClient(socket, credentials_);
   // A few frames of a whole display in flight at most; then send() waits (back-pressure).
   socket.set(zmq::sockopt::sndhwm, 64);

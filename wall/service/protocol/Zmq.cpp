@@ -25,13 +25,22 @@ zmq::message_t toMessage(messaging::Bytes&& bytes) {
       [](void*, void* hint) { delete static_cast<messaging::Bytes*>(hint); }, owned);
 }
 
-void configureSocket(zmq::socket_t& socket, int deadPeerMs, std::size_t maxMessageBytes,
+void configureSocket(zmq::socket_t& socket, Side side, int deadPeerMs, std::size_t maxMessageBytes,
                      int lingerMs) {
   socket.set(zmq::sockopt::linger, lingerMs);
   socket.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(maxMessageBytes));
-  socket.set(zmq::sockopt::heartbeat_ivl, std::max(100, deadPeerMs / 4));
-  socket.set(zmq::sockopt::heartbeat_timeout, deadPeerMs);
-  socket.set(zmq::sockopt::heartbeat_ttl, deadPeerMs);
+  if (side == Side::dials) {
+    socket.set(zmq::sockopt::heartbeat_ivl, std::max(100, deadPeerMs / 4));
+    socket.set(zmq::sockopt::heartbeat_timeout, deadPeerMs);
+    socket.set(zmq::sockopt::heartbeat_ttl, deadPeerMs);
+  } else {
+    // Keepalive probes start after half the timeout of silence, one a second (whole seconds).
+    const int halfSeconds = std::max(1, deadPeerMs / 2000);
+    socket.set(zmq::sockopt::tcp_keepalive, 1);
+    socket.set(zmq::sockopt::tcp_keepalive_idle, halfSeconds);
+    socket.set(zmq::sockopt::tcp_keepalive_intvl, 1);
+    socket.set(zmq::sockopt::tcp_keepalive_cnt, halfSeconds);
+  }
   // A handshake takes milliseconds; a peer that dawdles in it holds a connection for nothing.
   socket.set(zmq::sockopt::handshake_ivl, std::min(deadPeerMs, 10000));
 }

@@ -19,12 +19,19 @@ namespace wall::service {
 
 // A message owning `bytes` (no copy).
 zmq::message_t toMessage(messaging::Bytes&& bytes);
-// Limits and heartbeats every socket of ours gets: a message part over `maxMessageBytes` (what
-// the socket carries: Protocol.h) closes the connection; a peer silent for `deadPeerMs` after a
-// heartbeat is disconnected, one that has not finished its handshake after a few seconds too.
+// Which end of its connections a socket is: one that binds and takes peers, or one that dials.
+enum class Side { accepts, dials };
+// Limits and liveness every socket of ours gets: a message part over `maxMessageBytes` (what
+// the socket carries: Protocol.h) closes the connection; one that has not finished its handshake
+// after a few seconds too. A dialing socket sends heartbeats and closes a connection silent for
+// `deadPeerMs`; an accepting one answers them, closes a connection whose peer stops sending
+// them (their time-to-live is `deadPeerMs`), and TCP keepalives find a dead host that never sent
+// one. An accepting socket never sends heartbeats of its own: libzmq 4.3.4 aborts the process
+// when its heartbeat timer fires on a connection reset while that peer's queue was full
+// (docs/security.md, "A flooding peer and libzmq's heartbeats").
 // `lingerMs`: how long closing the socket waits for messages still queued (a job's last pieces
 // must reach the wall after its rank is done; the wall's own sockets wait for nobody).
-void configureSocket(zmq::socket_t& socket, int deadPeerMs, std::size_t maxMessageBytes,
+void configureSocket(zmq::socket_t& socket, Side side, int deadPeerMs, std::size_t maxMessageBytes,
                      int lingerMs = 0);
 // A message larger than the receiver's part cap goes as several parts of `partBytes`; the
 // receiver joins them (receiveJoined).

@@ -123,14 +123,14 @@ struct Relay::Impl {
     while (processes.size() < count) {
       auto p = std::make_unique<Process>();
       p->down = zmq::socket_t(context, zmq::socket_type::router);
-      configureSocket(p->down, deadPeerMs, kMaxBatchBytes);
+      configureSocket(p->down, Side::accepts, deadPeerMs, kMaxBatchBytes);
       makeServer(p->down, options.credentials);
       p->down.set(zmq::sockopt::rcvhwm, kPieceHwm);
       p->down.bind("tcp://" + bindHost + ":*");
       p->relayEndpoint =
           "tcp://" + advertised + ":" + std::to_string(portOf(lastEndpoint(p->down)));
       p->up = zmq::socket_t(context, zmq::socket_type::dealer);
-      configureSocket(p->up, deadPeerMs, kMaxLinkMessageBytes);
+      configureSocket(p->up, Side::dials, deadPeerMs, kMaxLinkMessageBytes);
       makeClient(p->up, options.credentials);
       p->up.set(zmq::sockopt::sndhwm, kPieceHwm);
       log("wall process " + std::to_string(processes.size()) + ": pieces on " + p->relayEndpoint);
@@ -209,7 +209,7 @@ struct Relay::Impl {
       job->started = Clock::now();
       job->wall = zmq::socket_t(context, zmq::socket_type::dealer);
       // A job's goodbye gets a second to reach the wall after the relay forgets the job.
-      configureSocket(job->wall, deadPeerMs, kMaxMessageBytes, 1000);
+      configureSocket(job->wall, Side::dials, deadPeerMs, kMaxMessageBytes, 1000);
       job->wall.set(zmq::sockopt::sndhwm, kPieceHwm * 4);
       makeClient(job->wall, options.credentials);
       job->handshake = std::make_unique<HandshakeWatch>(context, job->wall);
@@ -448,7 +448,7 @@ Relay::Relay(RelayOptions options) : impl_(std::make_unique<Impl>()) {
   m.bindHost = listenHost == "*" ? "0.0.0.0" : listenHost;
   m.advertised = advertisedHost(listenHost);
   m.gatekeeper = std::make_unique<Gatekeeper>(m.context, m.options.credentials, m.options.log);
-  configureSocket(m.front, m.deadPeerMs, kMaxLinkMessageBytes);
+  configureSocket(m.front, Side::accepts, m.deadPeerMs, kMaxLinkMessageBytes);
   makeServer(m.front, m.options.credentials);
   m.front.set(zmq::sockopt::router_mandatory, 0);
   try {

@@ -159,7 +159,8 @@ struct Desk::Impl {
         connections(context, socket),
         members(membershipSetup(s), Clock::now()),
         jobs(jobSetup(s), members) {
-    configureSocket(socket, static_cast<int>(s.options.timeout.count()), kMaxLinkMessageBytes);
+    configureSocket(socket, Side::accepts, static_cast<int>(s.options.timeout.count()),
+                    kMaxLinkMessageBytes);
     makeServer(socket, s.options.credentials);
     // A message the desk cannot hand to a connection (gone, or its queue full) is an error it
     // sees, never a silent drop: a barrier release that does not go out loses that process.
@@ -213,8 +214,8 @@ struct Desk::Impl {
     }
   }
   // A connection that sent something malformed: out of the desk's tables, and what it sends
-  // from now on is dropped unread (a ROUTER socket cannot close one connection; libzmq's
-  // heartbeats close it once the peer stops answering them).
+  // from now on is dropped unread (a ROUTER socket cannot close one connection; it closes once
+  // the peer's heartbeats stop or its host stops answering TCP keepalives).
   void banish(const std::string& peer, const std::string& why) {
     hellos.erase(peer);
     carry(jobs.failed(peer, why, Clock::now()));

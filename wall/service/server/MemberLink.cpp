@@ -63,7 +63,7 @@ struct MemberLink::Impl {
   void newSocket() {
     watch.reset();
     socket = std::make_unique<zmq::socket_t>(context, zmq::socket_type::dealer);
-    configureSocket(*socket, static_cast<int>(s.timeout.count()), kMaxBatchBytes);
+    configureSocket(*socket, Side::dials, static_cast<int>(s.timeout.count()), kMaxBatchBytes);
     makeClient(*socket, s.credentials);
     watch = std::make_unique<HandshakeWatch>(context, *socket);
     // Nothing queues for a head that is not connected: joins are repeated, and anything else

@@ -27,7 +27,7 @@ PieceReceiver::PieceReceiver(const std::string& bindEndpoint, const Credentials&
       socket_(context_, zmq::socket_type::router),
       log_(std::move(log)),
       arena_(handlerThreads > 0 ? handlerThreads : tbb::task_arena::automatic) {
-  configureSocket(socket_, deadPeerMs, kMaxBatchBytes);
+  configureSocket(socket_, Side::accepts, deadPeerMs, kMaxBatchBytes);
   makeServer(socket_, credentials);
   socket_.set(zmq::sockopt::rcvhwm, 256);
   socket_.bind(bindEndpoint);
