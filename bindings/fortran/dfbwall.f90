@@ -25,6 +25,7 @@ module dfbwall
   implicit none
   private
 
+  integer(c_int), parameter, public :: DFBWALL_GHOSTS_GIVEN = 0, DFBWALL_GHOSTS_EXCHANGE = 1
   integer, parameter, public :: DFBWALL_OK = 0, DFBWALL_ERROR_INPUT = 1, &
                                 DFBWALL_ERROR_USAGE = 2, DFBWALL_ERROR_FAILED = 3, &
                                 DFBWALL_ERROR_OUT_OF_MEMORY = 4, DFBWALL_ERROR_UNKNOWN = 5
@@ -71,7 +72,7 @@ module dfbwall
     integer(c_size_t) :: ghost_mesh_position_count
     type(c_ptr) :: ghost_mesh_triangles
     integer(c_size_t) :: ghost_mesh_triangle_count
-    integer(c_int) :: ghosts  ! DFBWALL_GHOSTS_GIVEN (0): this module gives ghosts in the arrays
+    integer(c_int) :: ghosts  ! DFBWALL_GHOSTS_GIVEN or DFBWALL_GHOSTS_EXCHANGE
   end type
 
   ! What one rank holds: addresses of the program's arrays, read by dfbwall_session_add_brick.
@@ -597,14 +598,22 @@ contains
   ! ---- Bricks ----
 
   ! A brick with nothing in it yet: id >= 0 (the same id on two ranks: the same data); camera
-  ! rays are clipped to [bounds_lo, bounds_hi].
-  subroutine dfbwall_brick_init(brick, id, bounds_lo, bounds_hi)
+  ! rays are clipped to [bounds_lo, bounds_hi]. exchange_ghosts=.true.: each volume part is the
+  ! box the brick owns and the session exchanges the ghost voxels its renderer reads
+  ! (DFBWALL_GHOSTS_EXCHANGE); otherwise the parts carry them.
+  subroutine dfbwall_brick_init(brick, id, bounds_lo, bounds_hi, exchange_ghosts)
     type(dfbwall_brick), intent(out) :: brick
     integer, intent(in) :: id
     real(c_float), intent(in) :: bounds_lo(3), bounds_hi(3)
+    logical, intent(in), optional :: exchange_ghosts
+    integer(c_int) :: ghosts
+    ghosts = DFBWALL_GHOSTS_GIVEN
+    if (present(exchange_ghosts)) then
+      if (exchange_ghosts) ghosts = DFBWALL_GHOSTS_EXCHANGE
+    end if
     brick%c = brick_c(int(id, c_int), bounds_lo, bounds_hi, c_null_ptr, 0, c_null_ptr, 0, &
                       c_null_ptr, 0, c_null_ptr, 0, c_null_ptr, 0, c_null_ptr, 0, c_null_ptr, 0, &
-                      c_null_ptr, 0, c_null_ptr, 0, 0)
+                      c_null_ptr, 0, c_null_ptr, 0, ghosts)
     allocate (brick%parts(4))
     brick%part_count = 0
     brick%ready = .true.

@@ -294,19 +294,17 @@ contains
     call move_alloc(t, s%next)
   end subroutine
 
-  ! The slab as a brick: clipped to its own planes, its voxels with the ghost planes the
-  ! renderer needs (read by dfbwall_session_add_brick).
+  ! The slab as a brick: clipped to its own planes, its voxels its own planes only (read by
+  ! dfbwall_session_add_brick); the session exchanges the ghosts its renderer reads.
   subroutine add_slab(s)
     type(slab), intent(in), target :: s
     type(dfbwall_brick) :: brick
     real(c_float) :: h
-    integer :: lo, hi
     h = 2.0/real(n - 1, c_float)
-    lo = max(s%z0 - 2, 0)
-    hi = min(s%z1 + 3, n)
     call dfbwall_brick_init(brick, s%id, [-1.0, -1.0, -1 + h*real(s%z0, c_float)], &
-                            [1.0, 1.0, -1 + h*real(min(s%z1, n - 1), c_float)])
-    call dfbwall_brick_add_volume(brick, [0, 0, lo], s%u(:, :, lo:hi - 1))
+                            [1.0, 1.0, -1 + h*real(min(s%z1, n - 1), c_float)], &
+                            exchange_ghosts=.true.)
+    call dfbwall_brick_add_volume(brick, [0, 0, s%z0], s%u(:, :, s%z0:s%z1 - 1))
     call dfbwall_session_add_brick(session, brick)
   end subroutine
 
