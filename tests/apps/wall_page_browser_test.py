@@ -178,6 +178,7 @@ def run(t):
 
     # Each window's live thumbnail: loaded (the cookie authenticates it), the thumbnail's size
     # (320 on the long side at most: the windows' own sizes here), not blank, and refreshed.
+    colors = []
     for wid, window in [("1", WINDOW_A), ("2", WINDOW_B)]:
         size = [int(v) for v in window.split(",")[2:]]
         shown = t.wait_for("window %s's thumbnail on the page" % wid,
@@ -186,11 +187,14 @@ def run(t):
             t.fail("window %s's thumbnail on the page: %r (its window is %s)" %
                    (wid, shown, window))
         first = shown["src"]
-        t.wait_for("window %s's thumbnail to refresh" % wid,
-                   lambda: thumbnail_shown(driver, windows[wid])["src"] != first, 5)
-    print("each window shows its thumbnail (%d and %d colours), refreshed" %
-          (thumbnail_shown(driver, windows["1"])["colors"],
-           thumbnail_shown(driver, windows["2"])["colors"]))
+        later = t.wait_for("window %s's thumbnail to be loaded again" % wid, lambda: (
+            lambda now: now if now and now["src"] != first else None)(
+                thumbnail_shown(driver, windows[wid])), 5)
+        if later["size"] != size or later["colors"] < 16:
+            t.fail("window %s's thumbnail loaded again: %r" % (wid, later))
+        colors.append(later["colors"])
+    print("each window shows its thumbnail (%d and %d colours), loaded again within 5 s" %
+          tuple(colors))
 
     # A click on window 1 (where window 2 does not cover it) raises it.
     r1 = box_rect(driver, windows["1"])

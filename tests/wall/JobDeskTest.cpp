@@ -1293,11 +1293,12 @@ namespace wall::service {
 namespace {
 
 // The windows' thumbnails (serve --control): the head asks every live process once per
-// thumbnailEvery, takes each one's cell sums of a window once per request, and publishes the
-// window's thumbnail once every process in the window answered. What nobody asked for, a second
-// answer, a part of another window or with more pixels in a cell than it covers is dropped.
+// thumbnailEvery (here 200 ms, within the job's timeout), takes each one's cell sums of a window
+// once per request, and publishes the window's thumbnail once every process in the window answered.
+// What nobody asked for, a second answer, a part of another window or with more pixels in a cell
+// than it covers is dropped.
 TEST_F(TwoJobsTest, ThumbnailsAreAssembledFromTheProcessesAskedAndNothingElse) {
-  JobDesk::Setup setup{&layout, "t", kTimeout, 2, [this] { return ++lastSession; }, 2, 16, 1s};
+  JobDesk::Setup setup{&layout, "t", kTimeout, 2, [this] { return ++lastSession; }, 2, 16, 200ms};
   JobDesk desk(setup, members);
   const Actions started = desk.hello("job-a", inWindow("render1", "0,0,100,64"), t0);
   const std::uint64_t a = only<JobDesk::ToProcess>(started).at(0).command.header.session;
@@ -1309,7 +1310,7 @@ TEST_F(TwoJobsTest, ThumbnailsAreAssembledFromTheProcessesAskedAndNothingElse) {
   const std::uint32_t request =
       static_cast<std::uint32_t>(only<JobDesk::ToProcess>(asked).at(0).command.header.a);
   EXPECT_EQ(only<JobDesk::ToProcess>(asked).at(0).command.header.b, 16);
-  EXPECT_TRUE(given(desk.tick(t0 + 500ms), Command::Thumbnails).empty());  // once a second
+  EXPECT_TRUE(given(desk.tick(t0 + 100ms), Command::Thumbnails).empty());  // once per 200 ms
 
   // The window 100 x 64 at factor 7: 15 x 10 cells; process 0 shows its pixels 0..63, process 1
   // 64..99, so cell column 9 (pixels 63..69) holds both.
@@ -1349,15 +1350,15 @@ TEST_F(TwoJobsTest, ThumbnailsAreAssembledFromTheProcessesAskedAndNothingElse) {
 
   // The next request: process 1 alone answers; at the request after, process 0's cells keep
   // the last thumbnail's values.
-  const Actions again = desk.tick(t0 + 1s);
+  const Actions again = desk.tick(t0 + 200ms);
   const std::uint32_t next =
       static_cast<std::uint32_t>(only<JobDesk::ToProcess>(again).at(0).command.header.a);
   EXPECT_EQ(next, request + 1);
   desk.thumbnail(1, a, partOf(c0, 64, 100, request));  // the last request's: dropped
   desk.thumbnail(1, a, partOf(c0, 64, 100, next));
-  EXPECT_EQ(desk.windows(t0 + 1s)[0].thumbnail, shown);
-  desk.tick(t0 + 2s);
-  const std::shared_ptr<const Image> later = desk.windows(t0 + 2s)[0].thumbnail;
+  EXPECT_EQ(desk.windows(t0 + 200ms)[0].thumbnail, shown);
+  desk.tick(t0 + 400ms);
+  const std::shared_ptr<const Image> later = desk.windows(t0 + 400ms)[0].thumbnail;
   ASSERT_NE(later, shown);
   EXPECT_EQ(later->at(0, 0), c0);
   EXPECT_EQ(later->at(14, 9), c0);

@@ -503,7 +503,8 @@ void JobDesk::askThumbnails() {
 void JobDesk::thumbnail(int p, std::uint64_t session, const ThumbnailPart& part) {
   Slot* slot = bySession(session);
   if (!slot || slot->state != State::Running || part.request != thumbnailRequest_ ||
-      part.request == 0 || p < 0 || static_cast<std::size_t>(p) >= thumbnailAsked_.size() ||
+      part.request == 0 || part.request == slot->publishedRequest || p < 0 ||
+      static_cast<std::size_t>(p) >= thumbnailAsked_.size() ||
       !thumbnailAsked_[static_cast<std::size_t>(p)] || part.window != slot->window)
     return;
   const int w = part.window.width(), h = part.window.height();
@@ -555,6 +556,7 @@ void JobDesk::publishThumbnail(Slot& slot) {
   Slot::Assembly& a = *slot.assembling;
   const Image* previous = slot.thumbnail.get();
   slot.thumbnail = std::make_shared<const Image>(averageCells(a.grid, a.sums, previous));
+  slot.publishedRequest = a.request;
   slot.assembling.reset();
 }
 

@@ -347,6 +347,7 @@ class JobDesk {
       std::set<int> answered;
     };
     std::optional<Assembly> assembling;
+    std::uint32_t publishedRequest = 0;  // what came after its publication is dropped
   };
   void publishThumbnail(Slot& slot);
   // The job on the wall with this session / connection (none: nullptr).
