@@ -37,19 +37,29 @@ void addPixels(CellSums& into, const ThumbnailGrid& grid, const Image& image, in
   if (touched.x0 < c.x0 || touched.y0 < c.y0 || touched.x1 > c.x1 || touched.y1 > c.y1)
     throw base::Error("thumbnail: pixels outside the cells summed");
   const int f = grid.factor, stride = c.width();
+  // By runs of a row inside one cell: the channels summed in registers, one division per cell.
   for (int row = 0; row < image.height; ++row) {
     const std::uint32_t* in = image.pixels.data() + static_cast<std::size_t>(row) * image.width;
     std::uint32_t* cellRow = into.sums.data() + static_cast<std::size_t>((y + row) / f - c.y0) *
                                                     stride * CellSums::kChannels;
-    for (int col = 0; col < image.width; ++col) {
-      const std::uint32_t p = in[col];
-      std::uint32_t* cell =
-          cellRow + static_cast<std::size_t>((x + col) / f - c.x0) * CellSums::kChannels;
-      cell[0] += p & 0xffu;
-      cell[1] += (p >> 8) & 0xffu;
-      cell[2] += (p >> 16) & 0xffu;
-      cell[3] += p >> 24;
-      cell[4] += 1;
+    for (int col = 0; col < image.width;) {
+      const int cx = (x + col) / f;
+      const int end = std::min(image.width, (cx + 1) * f - x);
+      std::uint32_t r = 0, g = 0, b = 0, a = 0;
+      for (int i = col; i < end; ++i) {
+        const std::uint32_t p = in[i];
+        r += p & 0xffu;
+        g += (p >> 8) & 0xffu;
+        b += (p >> 16) & 0xffu;
+        a += p >> 24;
+      }
+      std::uint32_t* cell = cellRow + static_cast<std::size_t>(cx - c.x0) * CellSums::kChannels;
+      cell[0] += r;
+      cell[1] += g;
+      cell[2] += b;
+      cell[3] += a;
+      cell[4] += static_cast<std::uint32_t>(end - col);
+      col = end;
     }
   }
 }
