@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "wall/image/Thumbnail.h"
 #include "wall/layout/Layout.h"
 
 namespace app {
@@ -303,6 +304,12 @@ void addWallControl(CLI::App& serve, Options& o) {
                   "NAME: a host name clients reach the window manager by, besides its address "
                   "and localhost (other Host headers get 403); repeatable")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+      ->group(kControl);
+  serve
+      .add_option("--thumbnail-size", o.thumbnailSize,
+                  "N: the longest side of the windows' live thumbnails on the window manager's "
+                  "page, in pixels (default: 320; made with --max-jobs above 1 only)")
+      ->check(CLI::Range(16, wall::kMaxThumbnailSide))
       ->group(kControl);
 }
 

@@ -140,6 +140,13 @@ void ControlRequests::remove(const std::string& path, Handler handler) {
 
 std::string lastSegment(const std::string& path) { return path.substr(path.rfind('/') + 1); }
 
+std::string segmentBeforeLast(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  if (slash == std::string::npos || slash == 0) return {};
+  const size_t before = path.rfind('/', slash - 1);
+  return path.substr(before + 1, slash - before - 1);
+}
+
 const ControlRequests::Handler* ControlRequests::find(const std::string& method,
                                                       const std::string& path) const {
   const auto routes = routes_.find(method == "HEAD" ? "GET" : method);
@@ -150,7 +157,12 @@ const ControlRequests::Handler* ControlRequests::find(const std::string& method,
   const size_t slash = path.rfind('/');
   if (slash == std::string::npos || slash + 1 == path.size()) return nullptr;
   const auto pattern = routes->second.find(path.substr(0, slash + 1) + "*");
-  return pattern == routes->second.end() ? nullptr : &pattern->second;
+  if (pattern != routes->second.end()) return &pattern->second;
+  // A "/*/LEAF" route: the segment before the last one, not empty.
+  const size_t before = slash == 0 ? std::string::npos : path.rfind('/', slash - 1);
+  if (before == std::string::npos || before + 1 == slash) return nullptr;
+  const auto inner = routes->second.find(path.substr(0, before + 1) + "*" + path.substr(slash));
+  return inner == routes->second.end() ? nullptr : &inner->second;
 }
 
 // 403 with why the request's Host is not this server, or nullopt.

@@ -58,7 +58,8 @@ class ControlRequests {
 
   // Before the first handle(). A handler that throws std::invalid_argument gives 400 with its
   // message, any other exception 500. A path ending in "/*" serves every path one segment
-  // deeper (its handler reads the segment from the request's path: see lastSegment).
+  // deeper (its handler reads the segment from the request's path: see lastSegment), and one
+  // ending in "/*/LEAF" every path with one segment in its place (see segmentBeforeLast).
   void get(const std::string& path, Handler handler);
   void post(const std::string& path, Handler handler);
   void remove(const std::string& path, Handler handler);  // DELETE
@@ -84,6 +85,9 @@ class ControlRequests {
 
 // What follows the last '/' of a path served by a "/*" route ("/api/windows/3": "3").
 std::string lastSegment(const std::string& path);
+// The segment before the last of a path served by a "/*/LEAF" route ("/api/windows/3/thumbnail":
+// "3").
+std::string segmentBeforeLast(const std::string& path);
 
 // Bodies larger than this are refused with 413 before they are read to the end.
 constexpr std::size_t kMaxControlBody = 64 * 1024;

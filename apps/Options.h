@@ -84,6 +84,7 @@ struct Options {
   std::string window;            // connect: full | X,Y,W,H | DISPLAY (wall/layout/Window.h)
   std::uint32_t background = 0xff000000u;  // serve: RGBA8 outside a job's window (black)
   int maxJobs = 4;                         // serve: jobs on the wall at once (--max-jobs)
+  int thumbnailSize = 320;                 // serve --control: the thumbnails' longest side
 
   // Steering.
   std::string control;           // [ADDR:]PORT of the control server on render rank 0; empty: none

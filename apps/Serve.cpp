@@ -123,6 +123,7 @@ wall::service::ServiceOptions serviceOptions(const Options& o, int process, bool
   service.handlerThreads = o.handlerThreads;
   service.framesInFlight = o.framesInFlight;
   service.maxJobs = static_cast<std::size_t>(o.maxJobs);
+  service.thumbnailSide = o.control.empty() ? 0 : o.thumbnailSize;
   service.leaveAlone = alone;
   service.stopRequested = [&signals, &stopSignal] {
     if (const int s = signals.poll()) stopSignal = s;

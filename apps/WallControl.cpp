@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "apps/ControlRequests.h"
+#include "wall/image/Png.h"
 
 namespace app {
 namespace {
@@ -70,9 +71,8 @@ Json wallJson(const WallFacts& facts) {
 }
 
 // The window a path's id names, if it is on the wall; else the reply that says why not.
-std::optional<Window> findWindow(const HttpRequest& request, const WallWindows& windows,
+std::optional<Window> findWindow(const std::string& id, const WallWindows& windows,
                                  HttpReply& refusal) {
-  const std::string id = lastSegment(request.path);
   const std::optional<std::uint64_t> number = windowNumber(id);
   if (number)
     for (const Window& w : windows.list())
@@ -126,7 +126,7 @@ dfb::Region askedRect(const Json& body, const dfb::Region& now, const WallFacts&
 HttpReply changeWindow(const HttpRequest& request, const WallFacts& facts,
                        const WallWindows& windows) {
   HttpReply refusal;
-  const std::optional<Window> window = findWindow(request, windows, refusal);
+  const std::optional<Window> window = findWindow(lastSegment(request.path), windows, refusal);
   if (!window) return refusal;
   const std::string id = std::to_string(window->number);
   Json body;
@@ -162,12 +162,29 @@ HttpReply changeWindow(const HttpRequest& request, const WallFacts& facts,
 
 HttpReply closeWindow(const HttpRequest& request, const WallWindows& windows) {
   HttpReply refusal;
-  const std::optional<Window> window = findWindow(request, windows, refusal);
+  const std::optional<Window> window = findWindow(lastSegment(request.path), windows, refusal);
   if (!window) return refusal;
   const std::string id = std::to_string(window->number);
   if (!windows.close(window->number, kClosedFromThePage))
     return error(404, "window " + id + " left the wall");
   return json(200, Json{{"id", id}, {"closed", true}});
+}
+
+// GET /api/windows/ID/thumbnail: the window's last thumbnail as PNG (lossless: what the
+// displays show, shrunk; transparent where only bezels are).
+HttpReply thumbnail(const HttpRequest& request, const WallFacts& facts,
+                    const WallWindows& windows) {
+  HttpReply refusal;
+  const std::optional<Window> window =
+      findWindow(segmentBeforeLast(request.path), windows, refusal);
+  if (!window) return refusal;
+  if (facts.maxJobs < 2)
+    return error(503, "the wall makes thumbnails with serve --max-jobs 2 or more only");
+  if (!window->thumbnail)
+    return error(503, "window " + std::to_string(window->number) +
+                          " has no thumbnail yet (the wall makes one about every second once "
+                          "its job shows frames)");
+  return {200, "image/png", wall::encodePng(*window->thumbnail), {}};
 }
 
 }  // namespace
@@ -187,6 +204,9 @@ void addWallRoutes(ControlRequests& requests, WallFacts facts, WallWindows windo
     Json list = Json::array();
     for (const Window& w : windows.list()) list.push_back(windowJson(w));
     return json(200, list);
+  });
+  requests.get("/api/windows/*/thumbnail", [facts, windows](const HttpRequest& request) {
+    return thumbnail(request, facts, windows);
   });
   requests.post("/api/windows/*", [facts, windows](const HttpRequest& request) {
     return changeWindow(request, facts, windows);

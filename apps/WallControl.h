@@ -12,6 +12,8 @@
 //                            "h"} (the others kept), or {"fullscreen": true}: the window moves
 //                            and resizes (its job re-plans), answered {"id", "rect"}
 //   DELETE /api/windows/ID   the job is ended, told kClosedFromThePage; its window closes at once
+//   GET    /api/windows/ID/thumbnail   what the window shows, shrunk, as PNG (503 before the
+//                            first, and on a --max-jobs 1 wall)
 // The page itself (/, /index.html, /wall.js, /wall.css, from apps/control/wall/) is served by
 // addWallPageRoutes (apps/PageRoutes.h).
 //

@@ -3,8 +3,10 @@
 // by spans (each pixel written once: the top window's or the background), beside the painter's way
 // (background, then every window over it in order) and a plain copy of one frame (the floor). Also
 // a whole display frame through WindowStack: a job's swap of a window across the display, then
-// compose(). Prints ms per display frame (median of runs) and writes JSON (argv[1], default
-// bench/results/composition.json). Goal: <= 2 ms per 1080p display.
+// compose(). And what a window's thumbnail costs once a second (wall/image/Thumbnail.h): a
+// process summing one display's part of a 3840x2160 window (factor 12, 320x180 cells), and the
+// head averaging the cells. Prints ms per display frame (median of runs) and writes JSON (argv[1],
+// default bench/results/composition.json). Goal: <= 2 ms per 1080p display.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -16,6 +18,7 @@
 
 #include "wall/display/WindowStack.h"
 #include "wall/image/Image.h"
+#include "wall/image/Thumbnail.h"
 
 namespace {
 
@@ -113,10 +116,27 @@ int main(int argc, char** argv) {
             ", \"job_upload_swap_ms\": " + std::to_string(swapMs) +
             ", \"swap_compose_ms\": " + std::to_string(stackMs) + "}";
   }
+  // A thumbnail: this display is the top-left quarter of a 3840x2160 window.
+  const wall::ThumbnailGrid grid = wall::thumbnailGrid(2 * kWidth, 2 * kHeight, 320);
+  const wall::Image part = imageOf({0, 0, kWidth, kHeight}, 1);
+  wall::CellSums sums = wall::emptySums(wall::cellsOf(grid, {0, 0, kWidth, kHeight}));
+  const double thumbnailSumsMs = medianMs(runs, [&] {
+    std::fill(sums.sums.begin(), sums.sums.end(), 0u);
+    wall::addPixels(sums, grid, part, 0, 0);
+  });
+  wall::CellSums whole = wall::emptySums({0, 0, grid.width, grid.height});
+  const double thumbnailAverageMs =
+      medianMs(runs, [&] { wall::averageCells(grid, whole, nullptr); });
+  std::printf(
+      "  thumbnail (%dx%d cells, factor %d): a display's sums %.3f ms, the head's average "
+      "%.3f ms (once a second each)\n",
+      grid.width, grid.height, grid.factor, thumbnailSumsMs, thumbnailAverageMs);
   std::ofstream json(out);
   json << "{\"figure\": \"composition\", \"display\": \"" << kWidth << "x" << kHeight
        << "\", \"runs\": " << runs << ", \"threads\": " << std::thread::hardware_concurrency()
        << ", \"copy_floor_ms\": " << floorMs << ", \"goal\": \"<= 2 ms per 1080p display\","
+       << " \"thumbnail_display_sums_ms\": " << thumbnailSumsMs
+       << ", \"thumbnail_average_ms\": " << thumbnailAverageMs << ","
        << "\n \"results\": [" << rows << "\n ]}\n";
   if (!json) {
     std::fprintf(stderr, "composition_bench: cannot write %s\n", out.c_str());

@@ -7,6 +7,7 @@
 
 #include "apps/ControlRequests.h"
 #include "apps/WallControl.h"
+#include "wall/image/Png.h"
 #include "wall/layout/Layout.h"
 
 namespace app {
@@ -215,6 +216,26 @@ TEST_F(WallControlTest, BadBodiesAndUnknownWindowsAreRefusedAndNothingIsDone) {
   EXPECT_TRUE(moved.empty());
   EXPECT_EQ(send("POST", "/api/windows/2", R"({"x": 1})").status, 404);
   EXPECT_TRUE(moved.empty());
+}
+
+TEST_F(WallControlTest, AThumbnailIsItsWindowsPngOrSaysWhyNot) {
+  // Before the wall made one: 503, saying so.
+  HttpReply r = send("GET", "/api/windows/1/thumbnail");
+  EXPECT_EQ(r.status, 503);
+  EXPECT_NE(r.body.find("no thumbnail yet"), std::string::npos) << r.body;
+  auto image = std::make_shared<wall::Image>(3, 2, wall::rgba8(9, 8, 7));
+  image->at(2, 1) = 0;  // a cell on the bezels only: transparent
+  list[0].thumbnail = image;
+  r = send("GET", "/api/windows/1/thumbnail");
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(r.contentType, "image/png");
+  EXPECT_EQ(r.body, wall::encodePng(*image));
+  // Unknown windows, ids that are no number, other methods.
+  for (const char* path : {"/api/windows/3/thumbnail", "/api/windows/x/thumbnail",
+                           "/api/windows/01/thumbnail", "/api/windows//thumbnail"})
+    EXPECT_EQ(send("GET", path).status, 404) << path;
+  EXPECT_EQ(send("POST", "/api/windows/1/thumbnail", "{}").status, 405);
+  EXPECT_EQ(send("GET", "/api/windows/1/other").status, 404);
 }
 
 TEST_F(WallControlTest, EveryRouteIsBehindTheServersChecks) {

@@ -49,7 +49,7 @@ Network and security: --listen --process --join --advertise --token-file --token
 Throughput: --frames-in-flight --handler-threads
 Failure handling: --timeout
 Output: --stats --capture-root --capture-quota --capture --capture-every --background
-Control: --control --control-token-file --control-host
+Control: --control --control-token-file --control-host --thumbnail-size
 Help: --help'
 relay_command='Network: --listen --wall --token-file --token --server-key --curve
 Failure handling: --timeout

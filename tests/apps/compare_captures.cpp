@@ -19,6 +19,12 @@
 //                  Several jobs at once: WINDOW+WINDOW... and PNG+PNG..., bottom first, each
 //                  render at its window in that order; FRAME `any`: some capture of each display
 //                  equals its rectangle (a wall of several jobs numbers its frames per process)
+//                  --thumbnail X,Y,W,H LAYOUT THUMB_PNG WINDOW_PNG SIDE: a window's thumbnail
+//                  (serve --control: GET /api/windows/ID/thumbnail, its longest side at most
+//                  SIDE) equals the box filter of the window's one-process render by the
+//                  smallest whole factor, each cell the rounded mean of its pixels that a display
+//                  shows and transparent where none does, exactly (computed here on its own, not
+//                  with the wall's code)
 // Invariant 2 of docs/design.md: every display's capture of frame FRAME equals its rectangle cut
 // out of a single-process render of the whole canvas, byte for byte; the wall preview exists and
 // shows the same pixels. Exit 0 when all match, 1 with a message naming the first mismatch.
@@ -192,6 +198,51 @@ std::vector<std::string> splitPlus(const std::string& text) {
 
 }  // namespace
 
+// --thumbnail: the expected thumbnail, pixel by pixel, and the comparison (exact).
+int compareThumbnail(const wall::Layout& layout, const dfb::Region& window,
+                     const wall::Image& thumbnail, const wall::Image& render, int side) {
+  if (render.width != window.width() || render.height != window.height())
+    throw std::runtime_error("the render is not the window's size");
+  const int f = (std::max(window.width(), window.height()) + side - 1) / side;
+  const int w = (window.width() + f - 1) / f, h = (window.height() + f - 1) / f;
+  if (thumbnail.width != w || thumbnail.height != h) {
+    std::fprintf(stderr, "thumbnail is %dx%d, expected %dx%d (factor %d)\n", thumbnail.width,
+                 thumbnail.height, w, h, f);
+    return 1;
+  }
+  const auto shown = [&](int x, int y) {  // canvas pixel on a display
+    for (const wall::Display& d : layout.displays)
+      if (x >= d.rect.x0 && x < d.rect.x1 && y >= d.rect.y0 && y < d.rect.y1) return true;
+    return false;
+  };
+  int mismatches = 0, empty = 0;
+  for (int cy = 0; cy < h; ++cy)
+    for (int cx = 0; cx < w; ++cx) {
+      std::uint64_t sum[4] = {0, 0, 0, 0}, n = 0;
+      for (int y = cy * f; y < std::min((cy + 1) * f, window.height()); ++y)
+        for (int x = cx * f; x < std::min((cx + 1) * f, window.width()); ++x) {
+          if (!shown(window.x0 + x, window.y0 + y)) continue;
+          const std::uint32_t p = render.at(x, y);
+          for (int c = 0; c < 4; ++c) sum[c] += (p >> (8 * c)) & 0xffu;
+          ++n;
+        }
+      std::uint32_t expected = 0;
+      if (n == 0) ++empty;
+      for (int c = 0; n > 0 && c < 4; ++c)
+        expected |= static_cast<std::uint32_t>((sum[c] + n / 2) / n) << (8 * c);
+      if (thumbnail.at(cx, cy) != expected && mismatches++ < 5)
+        std::fprintf(stderr, "thumbnail cell (%d, %d) is %08x, expected %08x (%d pixels)\n", cx, cy,
+                     thumbnail.at(cx, cy), expected, static_cast<int>(n));
+    }
+  if (mismatches) {
+    std::fprintf(stderr, "%d of %d thumbnail cells differ\n", mismatches, w * h);
+    return 1;
+  }
+  std::printf("thumbnail %dx%d (factor %d) equals the render's box filter, %d cells on bezels\n", w,
+              h, f, empty);
+  return 0;
+}
+
 int main(int argc, char** argv) {
   if (argc == 3 && std::string(argv[1]) == "--info") {  // "W WIDTHxHEIGHT" for the test script
     try {
@@ -247,6 +298,17 @@ int main(int argc, char** argv) {
       const wall::Layout seen = wall::windowLayout(wall, wall::resolveWindow(wall, request));
       return compareCaptures(seen, argv[4], wall::readPng(argv[5]),
                              static_cast<std::uint32_t>(std::stoul(argv[6])), "");
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "compare_captures: %s\n", e.what());
+      return 1;
+    }
+  }
+  if (argc == 7 && std::string(argv[1]) == "--thumbnail") {
+    try {
+      const wall::Layout wall = wall::loadLayout(argv[3]);
+      const dfb::Region window = wall::resolveWindow(wall, wall::parseWindowRequest(argv[2]));
+      return compareThumbnail(wall, window, wall::readPng(argv[4]), wall::readPng(argv[5]),
+                              std::stoi(argv[6]));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "compare_captures: %s\n", e.what());
       return 1;

@@ -18,6 +18,10 @@ primary renderer (the same picture every frame) in overlapping windows across di
    switch frame on equal the one-process render at the new size; job a's own page follows
    (/api/layout is the new window's, /api/preview.png the new window's render where displays
    are); the wall's own captures show both at their new places;
+ - GET /api/windows/ID/thumbnail (`--thumbnail-size 64`): each window's live thumbnail, a PNG
+   assembled on the head from every process's cell sums, equals the box filter (factor 4) of
+   the window's one-process render over the pixels displays show, exactly (compare_captures
+   --thumbnail); after window 2's move, the new window's; unknown windows 404, no token 401;
  - DELETE of job b's window: b exits non-zero saying "closed from the wall's control page" on
    its rank 0, its window leaves the list at once, and job a keeps presenting new frames.
 Needs DFBWALL, COMPARE and MPIEXEC in the environment.
@@ -40,6 +44,7 @@ MPI = [MPIEXEC, "--oversubscribe", "--bind-to", "none", "--mca", "mpi_yield_when
 WINDOW_A, WINDOW_B = "90,70,250,170", "20,20,200,150"
 MOVED_A = "100,80,260,180"  # job a's window after its move (a job with its own page and preview)
 MOVED_B = "150,100,240,180"  # job b's window after its move: elsewhere and larger
+THUMBNAIL_SIDE = 64  # serve --thumbnail-size: factor 4 for both windows, cells cut by bezels
 
 
 class Test:
@@ -156,8 +161,9 @@ def run(t):
     serve = t.start("serve", MPI + [
         "-np", str(processes), DFBWALL, "serve", "--wall", t.layout, "--listen",
         "127.0.0.1:%d" % port, "--offscreen", "--timeout", str(8 * SCALE), "--capture-root",
-        jobs, "--capture", wall_captures, "--capture-every", "4", "--max-jobs", "2", "--background", "#000000", "--control", "127.0.0.1:%d" % control,
-        "--control-token-file", token_file])
+        jobs, "--capture", wall_captures, "--capture-every", "4", "--max-jobs", "2", "--background", "#000000", "--control",
+        "127.0.0.1:%d" % control, "--control-token-file", token_file, "--thumbnail-size",
+        str(THUMBNAIL_SIDE)])
     t.wait_for("serve to start", lambda: "window manager:" in t.log("serve"), 20)
     line = re.search(r"window manager: control API on (http://\S+)", t.log("serve"))
     if not line or line.group(1) != "http://127.0.0.1:%d/" % control:
@@ -217,6 +223,22 @@ def run(t):
     later = api.get("/api/windows")[2]
     if later[0]["frames"] <= a["frames"] or later[0]["fps"] <= 0 or later[1]["fps"] <= 0:
         t.fail("frames and rates do not grow: %r then %r" % (windows, later))
+
+    # Each window's thumbnail: the box filter of its own render (what it shows, not what covers
+    # it), assembled from the cells of every process whose displays it crosses.
+    for number, window, ref in [("1", WINDOW_A, ref_a), ("2", WINDOW_B, ref_b)]:
+        t.wait_for("window %s's thumbnail" % number,
+                   lambda: thumbnail_is(t, api, number, window, ref), 10)
+    status, headers, _ = api.get("/api/windows/1/thumbnail")
+    if headers["Content-Type"] != "image/png" or headers["X-Content-Type-Options"] != "nosniff" \
+            or headers["Cache-Control"] != "no-store":
+        t.fail("the thumbnail's headers: %r" % dict(headers))
+    for path, expected in [("/api/windows/3/thumbnail", 404), ("/api/windows/x/thumbnail", 404),
+                           ("/api/windows//thumbnail", 404)]:
+        if api.get(path)[0] != expected:
+            t.fail("GET %s: %d, expected %d" % (path, api.get(path)[0], expected))
+    if api.send("GET", "/api/windows/1/thumbnail", auth=False)[0] != 401:
+        t.fail("a thumbnail without the token")
 
     # The wall shows b over a (the newer on top), never a over b so far.
     b_over_a = lambda: composite(t, WINDOW_A + "+" + WINDOW_B, ref_a + "+" + ref_b, wall_captures)
@@ -294,6 +316,8 @@ def run(t):
         t.fail("the page's raise after the attacks: %d %r" % (status, reply))
 
     moved = move_windows(t, api, jobs, wall_captures, ref_moved_a, ref_moved)
+    t.wait_for("window 2's thumbnail at its new size",
+               lambda: thumbnail_is(t, api, "2", MOVED_B, ref_moved), 10)
 
     # Close job b: it ends non-zero, told why; its window leaves at once; a goes on.
     closed_at = time.time()
@@ -326,6 +350,18 @@ def run(t):
           "windows 1 and 2 (%s); bad bodies 400, unknown windows 404; 7 attacks refused; DELETE ended "
           "job b (window gone %.2f s after the request) while job a went on (frame %d, then %d)"
           % (shown, moved, gone, before, t.newest("a", "r1c1")))
+
+
+def thumbnail_is(t, api, number, window, render):
+    """Window NUMBER's thumbnail is the box filter of RENDER, its window's one-process render."""
+    status, headers, png = api.get("/api/windows/%s/thumbnail" % number)
+    if status != 200:
+        return False
+    path = os.path.join(t.work, "thumbnail-%s.png" % number)
+    with open(path, "wb") as f:
+        f.write(png)
+    return subprocess.call([COMPARE, "--thumbnail", window, t.layout, path, render,
+                            str(THUMBNAIL_SIDE)], stdout=subprocess.DEVNULL) == 0
 
 
 def rect_of(text):

@@ -8,6 +8,8 @@ overlapping windows.
 
  - the page draws the four displays and both windows to scale, the newest on top, job a's window
    linking its job's page and job b's (which has none) linking nothing;
+ - each window shows its live thumbnail: an <img> per window, loaded from the wall's API (its
+   cookie), of the window's thumbnail size and not blank, reloaded at least once a second;
  - a click on job a's window raises it: the wall's API says so, and the page marks it on top;
  - a drag of job a's title bar (a job with its own page and preview) moves its window: the
    wall's API lists it at the new place and the page draws it there;
@@ -68,6 +70,28 @@ def placed(driver, element, window):
     x, y, w, h = map(int, window.split(","))
     expected = [wall[0] + x * scale, wall[1] + y * scale, w * scale, h * scale]
     return all(abs(a - b) <= 1.5 for a, b in zip(box_rect(driver, element), expected))
+
+
+def thumbnail_shown(driver, box):
+    """The window's thumbnail <img> once it loaded: its natural size, the distinct colours of
+    its pixels (read back through a canvas: a same-origin image), whether it is shown, its
+    address; None before."""
+    return driver.execute_script("""
+        const img = arguments[0].querySelector('img.thumb');
+        if (!img || !img.complete || img.naturalWidth === 0) return null;
+        const c = document.createElement('canvas');
+        c.width = img.naturalWidth;
+        c.height = img.naturalHeight;
+        const g = c.getContext('2d');
+        g.drawImage(img, 0, 0);
+        const d = g.getImageData(0, 0, c.width, c.height).data;
+        const colors = new Set();
+        for (let i = 0; i < d.length; i += 4)
+          colors.add((d[i] << 16) | (d[i + 1] << 8) | d[i + 2]);
+        const r = img.getBoundingClientRect();
+        return {size: [img.naturalWidth, img.naturalHeight], colors: colors.size,
+                visible: !img.hidden && r.width > 0 && r.height > 0,
+                src: img.getAttribute('src')};""", box)
 
 
 def as_rect(window):
@@ -151,6 +175,26 @@ def run(t):
     if windows["2"].find_element(By.CSS_SELECTOR, "a.page").is_displayed():
         t.fail("window 2 links a page its job does not have")
     print("the page draws 4 displays and 2 windows to scale; window 1 links %s" % page_a)
+
+    # Each window's live thumbnail: loaded (the cookie authenticates it), the thumbnail's size
+    # (320 on the long side at most: the windows' own sizes here), not blank, and refreshed.
+    colors = []
+    for wid, window in [("1", WINDOW_A), ("2", WINDOW_B)]:
+        size = [int(v) for v in window.split(",")[2:]]
+        shown = t.wait_for("window %s's thumbnail on the page" % wid,
+                           lambda: thumbnail_shown(driver, windows[wid]), 15)
+        if shown["size"] != size or shown["colors"] < 16 or not shown["visible"]:
+            t.fail("window %s's thumbnail on the page: %r (its window is %s)" %
+                   (wid, shown, window))
+        first = shown["src"]
+        later = t.wait_for("window %s's thumbnail to be loaded again" % wid, lambda: (
+            lambda now: now if now and now["src"] != first else None)(
+                thumbnail_shown(driver, windows[wid])), 5)
+        if later["size"] != size or later["colors"] < 16:
+            t.fail("window %s's thumbnail loaded again: %r" % (wid, later))
+        colors.append(later["colors"])
+    print("each window shows its thumbnail (%d and %d colours), loaded again within 5 s" %
+          tuple(colors))
 
     # A click on window 1 (where window 2 does not cover it) raises it.
     r1 = box_rect(driver, windows["1"])

@@ -1288,3 +1288,82 @@ TEST_F(TwoJobsTest, AWindowLinksOnlyAPlainWebAddressAsItsJobsPage) {
 
 }  // namespace
 }  // namespace wall::service
+
+namespace wall::service {
+namespace {
+
+// The windows' thumbnails (serve --control): the head asks every live process once per
+// thumbnailEvery (here 200 ms, within the job's timeout), takes each one's cell sums of a window
+// once per request, and publishes the window's thumbnail once every process in the window answered.
+// What nobody asked for, a second answer, a part of another window or with more pixels in a cell
+// than it covers is dropped.
+TEST_F(TwoJobsTest, ThumbnailsAreAssembledFromTheProcessesAskedAndNothingElse) {
+  JobDesk::Setup setup{&layout, "t", kTimeout, 2, [this] { return ++lastSession; }, 2, 16, 200ms};
+  JobDesk desk(setup, members);
+  const Actions started = desk.hello("job-a", inWindow("render1", "0,0,100,64"), t0);
+  const std::uint64_t a = only<JobDesk::ToProcess>(started).at(0).command.header.session;
+  for (int p = 0; p < 3; ++p) desk.answer(p, answerOf(a, Command::Ready, 1), t0);
+  ASSERT_EQ(desk.state(a), State::Running);
+
+  const Actions asked = desk.tick(t0);
+  EXPECT_EQ(given(asked, Command::Thumbnails), (std::vector<int>{0, 1, 2}));
+  const std::uint32_t request =
+      static_cast<std::uint32_t>(only<JobDesk::ToProcess>(asked).at(0).command.header.a);
+  EXPECT_EQ(only<JobDesk::ToProcess>(asked).at(0).command.header.b, 16);
+  EXPECT_TRUE(given(desk.tick(t0 + 100ms), Command::Thumbnails).empty());  // once per 200 ms
+
+  // The window 100 x 64 at factor 7: 15 x 10 cells; process 0 shows its pixels 0..63, process 1
+  // 64..99, so cell column 9 (pixels 63..69) holds both.
+  const dfb::Region window{0, 0, 100, 64};
+  const ThumbnailGrid grid = thumbnailGrid(100, 64, 16);
+  ASSERT_EQ(grid, (ThumbnailGrid{7, 15, 10}));
+  const std::uint32_t c0 = rgba8(70, 0, 0), c1 = rgba8(0, 140, 7);
+  const auto partOf = [&](std::uint32_t color, int x0, int x1, std::uint32_t req) {
+    ThumbnailPart part{req, window, emptySums(cellsOf(grid, {x0, 0, x1, 64}))};
+    addPixels(part.cells, grid, Image(x1 - x0, 64, color), x0, 0);
+    return part;
+  };
+  desk.thumbnail(0, a, partOf(c0, 0, 64, request + 1));  // a request not made
+  ThumbnailPart elsewhere = partOf(c0, 0, 64, request);
+  elsewhere.window = {0, 0, 100, 63};
+  desk.thumbnail(0, a, elsewhere);                         // not the job's window
+  desk.thumbnail(0, a + 100, partOf(c0, 0, 64, request));  // no such job
+  ThumbnailPart overfull = partOf(c0, 0, 64, request);
+  overfull.cells.sums[4] = 50;  // cell (0, 0) covers 49 pixels
+  desk.thumbnail(0, a, overfull);
+  EXPECT_EQ(desk.windows(t0)[0].thumbnail, nullptr);
+
+  desk.thumbnail(0, a, partOf(c0, 0, 64, request));
+  desk.thumbnail(0, a, partOf(c1, 0, 64, request));   // a second answer of process 0: dropped
+  EXPECT_EQ(desk.windows(t0)[0].thumbnail, nullptr);  // process 1 has not answered
+  desk.thumbnail(1, a, partOf(c1, 64, 100, request));
+  const std::shared_ptr<const Image> shown = desk.windows(t0)[0].thumbnail;
+  ASSERT_NE(shown, nullptr);  // process 2 shows none of the window: not waited for
+  EXPECT_EQ(shown->width, 15);
+  EXPECT_EQ(shown->height, 10);
+  EXPECT_EQ(shown->at(0, 0), c0);
+  EXPECT_EQ(shown->at(14, 9), c1);
+  // Column 9: 1 pixel of c0 and 6 of c1 per row, rounded to nearest.
+  EXPECT_EQ(shown->at(9, 3), rgba8(10, 120, 6));
+  desk.thumbnail(1, a, partOf(c0, 64, 100, request));  // after publication: dropped
+  EXPECT_EQ(desk.windows(t0)[0].thumbnail, shown);
+
+  // The next request: process 1 alone answers; at the request after, process 0's cells keep
+  // the last thumbnail's values.
+  const Actions again = desk.tick(t0 + 200ms);
+  const std::uint32_t next =
+      static_cast<std::uint32_t>(only<JobDesk::ToProcess>(again).at(0).command.header.a);
+  EXPECT_EQ(next, request + 1);
+  desk.thumbnail(1, a, partOf(c0, 64, 100, request));  // the last request's: dropped
+  desk.thumbnail(1, a, partOf(c0, 64, 100, next));
+  EXPECT_EQ(desk.windows(t0 + 200ms)[0].thumbnail, shown);
+  desk.tick(t0 + 400ms);
+  const std::shared_ptr<const Image> later = desk.windows(t0 + 400ms)[0].thumbnail;
+  ASSERT_NE(later, shown);
+  EXPECT_EQ(later->at(0, 0), c0);
+  EXPECT_EQ(later->at(14, 9), c0);
+  EXPECT_EQ(later->at(9, 3), c0);
+}
+
+}  // namespace
+}  // namespace wall::service

@@ -140,6 +140,43 @@ TEST(LinkProtocol, NoPixelsAtAllRoundTrip) {
   EXPECT_TRUE(parsePixels(bytes.data(), bytes.size()).pixels.empty());
 }
 
+TEST(LinkProtocol, ThumbnailsRoundTripAndTheirSizesAreCheckedBeforeAnythingIsAllocated) {
+  ThumbnailPart part{7, {10, 20, 110, 84}, emptySums({3, 0, 5, 2})};
+  for (std::size_t i = 0; i < part.cells.sums.size(); ++i)
+    part.cells.sums[i] = static_cast<std::uint32_t>(i);
+  const messaging::Bytes bytes = packThumbnail(42, part);
+  EXPECT_EQ(parseHeader(bytes.data(), bytes.size()).session, 42u);
+  const ThumbnailPart back = parseThumbnail(bytes.data(), bytes.size());
+  EXPECT_EQ(back.request, 7u);
+  EXPECT_EQ(back.window, part.window);
+  EXPECT_EQ(back.cells.cells, part.cells.cells);
+  EXPECT_EQ(back.cells.sums, part.cells.sums);
+  // Sums missing or left over, every truncation.
+  messaging::Bytes longer = bytes;
+  longer.resize(bytes.size() + 4);
+  EXPECT_NE(errorOf([&] { parseThumbnail(longer.data(), longer.size()); }).find("4 cells in"),
+            std::string::npos);
+  for (std::size_t n = sizeof(MessageHeader); n < bytes.size(); n += 3)
+    EXPECT_THROW(parseThumbnail(bytes.data(), n), base::Error) << n;
+  // Cells outside the window's largest grid (100 x 64 at factor 1), an empty or huge window.
+  const auto refused = [](const ThumbnailPart& bad) {
+    const messaging::Bytes b = packThumbnail(1, bad);
+    return !errorOf([&] { parseThumbnail(b.data(), b.size()); }).empty();
+  };
+  ThumbnailPart outside = part;
+  outside.cells = emptySums({99, 0, 101, 1});
+  EXPECT_TRUE(refused(outside));
+  ThumbnailPart empty = part;
+  empty.cells = emptySums({5, 0, 5, 2});
+  EXPECT_TRUE(refused(empty));
+  ThumbnailPart noWindow = part;
+  noWindow.window = {10, 20, 10, 84};
+  EXPECT_TRUE(refused(noWindow));
+  ThumbnailPart huge = part;
+  huge.window = {0, 0, (1 << 20) + 1, 64};
+  EXPECT_TRUE(refused(huge));
+}
+
 TEST(LinkProtocol, CommandsRoundTripAndUnknownOnesAreRefused) {
   ServiceCommand c;
   c.header.kind = Command::Start;

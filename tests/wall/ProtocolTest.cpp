@@ -583,7 +583,7 @@ TEST(ProtocolHostile, WrongVersionNamesBothVersions) {
 }
 
 TEST(ProtocolHostile, UnknownKind) {
-  for (const std::uint16_t kind : {std::uint16_t{0}, std::uint16_t{21}, std::uint16_t{0xFFFF}}) {
+  for (const std::uint16_t kind : {std::uint16_t{0}, std::uint16_t{22}, std::uint16_t{0xFFFF}}) {
     messaging::Bytes bytes = packControl(Kind::Keepalive, 3, 0);
     poke(bytes, kKindAt, kind);
     EXPECT_ERROR_HAS(parseHeader(bytes.data(), bytes.size()),

@@ -96,6 +96,14 @@ std::vector<Presenter*> WindowStack::Window::presenters() const {
 
 void WindowStack::Window::setOrder(std::uint64_t order) { stack_.setOrder(&entry_, order); }
 
+std::vector<WindowStack::Window::Shown> WindowStack::Window::shown() const {
+  std::lock_guard lock(stack_.mutex_);
+  std::vector<Shown> out;
+  for (const WindowStack::Shown& layer : entry_.layers)
+    out.push_back({layer.display, layer.part, layer.pixels});
+  return out;
+}
+
 WindowStack::WindowStack(std::vector<Size> displays, std::uint32_t background,
                          std::function<void()> changed)
     : sizes_(std::move(displays)),

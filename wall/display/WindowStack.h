@@ -109,6 +109,14 @@ class WindowStack::Window {
   // The window takes stacking order `order` (the window manager's raise): above every window of
   // a lower or equal order. The displays it touches are composed again, without a new frame.
   void setOrder(std::uint64_t order);
+  // What the window shows now on each display it touches: its last committed frame's parts
+  // (null pixels before the first), held so that no later frame writes into them.
+  struct Shown {
+    int display = 0;   // index among the stack's displays
+    dfb::Region part;  // in that display's coordinates
+    std::shared_ptr<const Image> pixels;
+  };
+  std::vector<Shown> shown() const;
 
  private:
   friend class WindowStack;

@@ -1,6 +1,7 @@
-// The wall's page (serve --control): the wall to scale, each job's window on it; a click raises
-// a window, × closes it (its job ends), dragging its title bar moves it, its corner resizes it.
-// Polls /api/windows; plain JavaScript, no library, nothing fetched from elsewhere.
+// The wall's page (serve --control): the wall to scale, each job's window on it with a live
+// thumbnail of what it shows; a click raises a window, × closes it (its job ends), dragging its
+// title bar moves it, its corner resizes it. Polls /api/windows and, once a second, each
+// window's thumbnail; plain JavaScript, no library, nothing fetched from elsewhere.
 'use strict';
 
 // The page authenticates with the cookie set when it was opened at the printed address
@@ -113,16 +114,34 @@ function windowBox(id) {
   bar.append(title, link, close);
   const info = document.createElement('div');
   info.className = 'info';
+  // What the window shows, refreshed once a second (refreshThumbnail); hidden until one came.
+  const thumb = document.createElement('img');
+  thumb.className = 'thumb';
+  thumb.alt = '';
+  thumb.hidden = true;
+  thumb.addEventListener('load', () => { thumb.hidden = false; });
+  thumb.addEventListener('error', () => { thumb.hidden = true; });  // none yet (503), or gone
   const corner = document.createElement('div');
   corner.className = 'resize';
   corner.title = 'Drag to resize this window (its job renders at the new size)';
-  box.append(bar, info, corner);
+  box.append(thumb, bar, info, corner);
   close.addEventListener('click', (e) => { e.stopPropagation(); closeWindow(id); });
   link.addEventListener('click', (e) => e.stopPropagation());
   bar.addEventListener('pointerdown', (e) => startDrag(e, id, box, 'move'));
   corner.addEventListener('pointerdown', (e) => startDrag(e, id, box, 'resize'));
   box.addEventListener('click', () => raiseWindow(id));
   return box;
+}
+
+// A fresh address each time: replies are never cached (Cache-Control: no-store).
+const kThumbnailEveryMs = 1000;
+let thumbnailLoads = 0;
+function refreshThumbnail(box, id) {
+  const now = Date.now();
+  if (now - Number(box.dataset.thumbAt || 0) < kThumbnailEveryMs) return;
+  box.dataset.thumbAt = String(now);
+  box.querySelector('.thumb').src =
+      '/api/windows/' + encodeURIComponent(id) + '/thumbnail?n=' + (++thumbnailLoads);
 }
 
 function showWindows(list) {
@@ -141,6 +160,7 @@ function showWindows(list) {
     box.classList.toggle('ending', w.state === 'ending');
     box.dataset.z = String(w.z);
     box.dataset.state = w.state;
+    if (w.state !== 'starting') refreshThumbnail(box, w.id);
     box.querySelector('.title').textContent = w.id + ' · ' + (w.job || 'job') + ' · ' + w.host;
     box.querySelector('.info').textContent =
       w.state + ' · ' + w.fps.toFixed(1) + ' frames/s · frame ' + w.frames;

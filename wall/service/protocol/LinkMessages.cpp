@@ -89,6 +89,44 @@ CapturePixels parsePixels(const std::byte* data, std::size_t size) {
   return c;
 }
 
+messaging::Bytes packThumbnail(std::uint64_t session, const ThumbnailPart& part) {
+  Writer w(Kind::Thumbnail, session);
+  w.put<std::uint32_t>(part.request);
+  for (const int v : {part.window.x0, part.window.y0, part.window.x1, part.window.y1})
+    w.put<std::int32_t>(v);
+  const dfb::Region& c = part.cells.cells;
+  for (const int v : {c.x0, c.y0, c.x1, c.y1}) w.put<std::int32_t>(v);
+  w.raw(part.cells.sums.data(), part.cells.sums.size() * sizeof(std::uint32_t));
+  return w.take();
+}
+
+ThumbnailPart parseThumbnail(const std::byte* data, std::size_t size) {
+  Reader r(data, size, "thumbnail");
+  ThumbnailPart t;
+  t.request = r.get<std::uint32_t>();
+  int v[8];
+  for (int& each : v) each = r.get<std::int32_t>();
+  t.window = {v[0], v[1], v[2], v[3]};
+  const dfb::Region cells{v[4], v[5], v[6], v[7]};
+  // Canvases are at most 2^20 pixels a side (docs/design.md, "Hostile input").
+  if (!dfb::isSaneRegion(t.window, 1 << 20) || t.window.x0 < 0 || t.window.y0 < 0)
+    r.fail("window " + std::to_string(v[0]) + "," + std::to_string(v[1]) + " to " +
+           std::to_string(v[2]) + "," + std::to_string(v[3]));
+  const ThumbnailGrid grid = thumbnailGrid(t.window.width(), t.window.height(), kMaxThumbnailSide);
+  // The largest grid any thumbnail size gives (the head checks its own).
+  if (!dfb::isSaneRegion(cells, kMaxThumbnailSide) || cells.x0 < 0 || cells.y0 < 0 ||
+      cells.x1 > grid.width || cells.y1 > grid.height)
+    r.fail("cells " + std::to_string(v[4]) + "," + std::to_string(v[5]) + " to " +
+           std::to_string(v[6]) + "," + std::to_string(v[7]));
+  const std::size_t count = static_cast<std::size_t>(cells.pixelCount()) * CellSums::kChannels;
+  if (r.left() != count * sizeof(std::uint32_t))
+    r.fail(std::to_string(cells.pixelCount()) + " cells in " + std::to_string(r.left()) + " bytes");
+  t.cells = emptySums(cells);
+  r.raw(t.cells.sums.data(), count * sizeof(std::uint32_t));
+  r.end();
+  return t;
+}
+
 messaging::Bytes packCommandMessage(std::uint64_t session, const messaging::Bytes& body) {
   Writer w(Kind::Command, session);
   w.raw(body.data(), body.size());

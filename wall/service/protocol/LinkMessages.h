@@ -15,11 +15,14 @@
 //  - Barrier (both ways): a member's values for frame F's swap barrier, and the head's release
 //    with the element-wise maximum over every process in F's barrier.
 //  - Pixels (member -> head): its displays' pixels of a captured frame, for the wall preview.
+//  - Thumbnail (member -> head): its displays' cell sums of a window's thumbnail, answering the
+//    head's Command::Thumbnails (wall/image/Thumbnail.h).
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "messaging/Compression.h"
+#include "wall/image/Thumbnail.h"
 #include "wall/layout/Layout.h"
 #include "wall/service/protocol/Protocol.h"
 
@@ -54,6 +57,18 @@ struct CapturePixels {
 messaging::Bytes packPixels(std::uint64_t session, std::uint32_t frameId,
                             const std::vector<std::uint32_t>& pixels);
 CapturePixels parsePixels(const std::byte* data, std::size_t size);
+
+// A process's part of job `session`'s window thumbnail: the sums of the cells its displays show
+// of the window `window` (on the canvas), for the head's request `request`. The parser checks the
+// window's size and that the cells lie in its grid of at most kMaxThumbnailSide cells a side,
+// and that the message holds exactly their sums, before it allocates anything.
+struct ThumbnailPart {
+  std::uint32_t request = 0;
+  dfb::Region window;
+  CellSums cells;
+};
+messaging::Bytes packThumbnail(std::uint64_t session, const ThumbnailPart& part);
+ThumbnailPart parseThumbnail(const std::byte* data, std::size_t size);
 
 // Command: an opaque body the service lays out itself.
 messaging::Bytes packCommandMessage(std::uint64_t session, const messaging::Bytes& body);

@@ -70,10 +70,11 @@ enum class Kind : std::uint16_t {
   Barrier = 16,
   Pixels = 17,
   Dropped = 18,
-  Reshape = 19,  // wall -> job: its window moves or changes size from a frame on
-  Input = 20,    // wall -> job: an operator's key or mouse event over its window (WindowInput)
+  Reshape = 19,    // wall -> job: its window moves or changes size from a frame on
+  Input = 20,      // wall -> job: an operator's key or mouse event over its window (WindowInput)
+  Thumbnail = 21,  // member -> head: its cells of a window's thumbnail (LinkMessages.h)
 };
-constexpr Kind kLastKind = Kind::Input;
+constexpr Kind kLastKind = Kind::Thumbnail;
 
 struct MessageHeader {
   std::uint32_t magic = kMagic;

@@ -25,7 +25,7 @@ ServiceCommand parseCommand(const messaging::Bytes& body) {
     throw base::Error("malformed service command");
   const auto kind = static_cast<std::uint32_t>(c.header.kind);
   if (kind < static_cast<std::uint32_t>(Command::Start) ||
-      kind > static_cast<std::uint32_t>(Command::Raise))
+      kind > static_cast<std::uint32_t>(Command::Thumbnails))
     throw base::Error("unknown service command " + std::to_string(kind));
   c.text.assign(reinterpret_cast<const char*>(body.data() + sizeof c.header), c.header.textBytes);
   return c;

@@ -35,6 +35,10 @@ enum class Command : std::uint32_t {
   // message, the position on the wall's canvas); the head checks it and tells the job.
   Input = 16,
   Raise = 17,  // a: the job's window's new stacking order (above every other window's)
+  // The head asks for the windows' thumbnails (serve --control): a: the request's number, b: the
+  // thumbnail's longest side. Each process answers with its cells of every window it shows
+  // (ProcessLink::thumbnail).
+  Thumbnails = 18,
 };
 
 struct CommandHeader {

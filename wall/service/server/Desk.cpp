@@ -60,7 +60,13 @@ Membership::Setup membershipSetup(const Desk::Setup& s) {
 }
 
 JobDesk::Setup jobSetup(const Desk::Setup& s) {
-  return {s.layout, {}, s.options.timeout, s.options.framesInFlight, randomId, s.options.maxJobs};
+  return {s.layout,
+          {},
+          s.options.timeout,
+          s.options.framesInFlight,
+          randomId,
+          s.options.maxJobs,
+          s.options.maxJobs > 1 ? s.options.thumbnailSide : 0};
 }
 
 template <class... F>
@@ -381,6 +387,8 @@ struct Desk::Impl {
         CapturePixels c = parsePixels(data, size);
         return carry(jobs.pixels(p, h.session, c.frameId, std::move(c.pixels), now));
       }
+      case Kind::Thumbnail:
+        return jobs.thumbnail(p, h.session, parseThumbnail(data, size));
       default:
         logOnce(peer, "ignored a message on the directory port: message kind " +
                           std::to_string(h.kind) + " from " + members.who(p));
@@ -442,7 +450,8 @@ struct Desk::Impl {
     }
     const Kind kind = static_cast<Kind>(h.kind);
     const bool fromMember = kind == Kind::Join || kind == Kind::Beat || kind == Kind::Command ||
-                            kind == Kind::Barrier || kind == Kind::Pixels;
+                            kind == Kind::Barrier || kind == Kind::Pixels ||
+                            kind == Kind::Thumbnail;
     try {
       if (fromMember)
         onMemberMessage(peer, h, data, size);
@@ -629,6 +638,10 @@ JobDesk::MoveVerdict Desk::reshape(std::uint64_t session, const dfb::Region& win
 
 JobDesk::MoveVerdict Desk::moveWindow(std::uint64_t number, const dfb::Region& window) {
   return impl_->moveOnDeskThread([this, number] { return impl_->jobs.sessionOf(number); }, window);
+}
+
+void Desk::thumbnail(std::uint64_t session, const ThumbnailPart& part) {
+  impl_->post([this, session, part] { impl_->jobs.thumbnail(0, session, part); });
 }
 
 void Desk::presented(std::uint64_t session, std::uint32_t frameId, std::int64_t completeNs) {

@@ -77,6 +77,7 @@ class Desk : public ProcessLink {
                                                         std::vector<std::uint32_t> mine,
                                                         Clock::time_point deadline) override;
   void presented(std::uint64_t session, std::uint32_t frameId, std::int64_t completeNs) override;
+  void thumbnail(std::uint64_t session, const ThumbnailPart& part) override;
 
  private:
   struct Impl;

@@ -472,7 +472,92 @@ JobDesk::Actions JobDesk::tick(Clock::time_point now) {
       endJob("no word from the job for " + durationText(s_.timeout));
   }
   closeIfIdle();
+  if (s_.thumbnailSide > 0 && now >= nextThumbnails_) {
+    nextThumbnails_ = now + s_.thumbnailEvery;
+    askThumbnails();
+  }
   return take();
+}
+
+// What the last request brought is published (a process that did not answer keeps its cells of
+// the thumbnail before), and every live process is asked again while a job runs.
+void JobDesk::askThumbnails() {
+  for (const std::unique_ptr<Slot>& slot : slots_)
+    if (slot->assembling) publishThumbnail(*slot);
+  const bool running = std::any_of(slots_.begin(), slots_.end(),
+                                   [](const auto& slot) { return slot->state == State::Running; });
+  if (!running) return;
+  ++thumbnailRequest_;
+  thumbnailAsked_.assign(static_cast<std::size_t>(members_.processCount()), false);
+  for (int p = 0; p < members_.processCount(); ++p) {
+    if (p != 0 && !members_.live(p)) continue;
+    thumbnailAsked_[static_cast<std::size_t>(p)] = true;
+    ServiceCommand c;
+    c.header.kind = Command::Thumbnails;
+    c.header.a = thumbnailRequest_;
+    c.header.b = s_.thumbnailSide;
+    emit(ToProcess{p, c});
+  }
+}
+
+void JobDesk::thumbnail(int p, std::uint64_t session, const ThumbnailPart& part) {
+  Slot* slot = bySession(session);
+  if (!slot || slot->state != State::Running || part.request != thumbnailRequest_ ||
+      part.request == 0 || part.request == slot->publishedRequest || p < 0 ||
+      static_cast<std::size_t>(p) >= thumbnailAsked_.size() ||
+      !thumbnailAsked_[static_cast<std::size_t>(p)] || part.window != slot->window)
+    return;
+  const int w = part.window.width(), h = part.window.height();
+  const ThumbnailGrid grid = thumbnailGrid(w, h, s_.thumbnailSide);
+  const dfb::Region& cells = part.cells.cells;
+  if (cells.empty() || cells.x1 > grid.width || cells.y1 > grid.height) return;
+  if (slot->assembling && slot->assembling->request != part.request) publishThumbnail(*slot);
+  if (slot->assembling && slot->assembling->answered.count(p)) return;
+  // No cell may hold more pixels than it covers, counting what other processes sent: so no sum
+  // can wrap (wall/image/Thumbnail.h), and a process cannot fill another's cells.
+  const CellSums* had = slot->assembling ? &slot->assembling->sums : nullptr;
+  for (int cy = cells.y0; cy < cells.y1; ++cy)
+    for (int cx = cells.x0; cx < cells.x1; ++cx) {
+      const std::uint32_t* in =
+          part.cells.sums.data() +
+          static_cast<std::size_t>((cy - cells.y0) * cells.width() + (cx - cells.x0)) *
+              CellSums::kChannels;
+      const std::uint64_t before =
+          had ? had->sums[(static_cast<std::size_t>(cy) * grid.width + cx) * CellSums::kChannels +
+                          4]
+              : 0;
+      if (before + in[4] > cellArea(grid, w, h, cx, cy)) return;
+      for (int ch = 0; ch < 4; ++ch)
+        if (in[ch] > 255ull * in[4]) return;
+    }
+  if (!slot->assembling)
+    slot->assembling = Slot::Assembly{
+        part.request, part.window, grid, emptySums({0, 0, grid.width, grid.height}), {}};
+  Slot::Assembly& a = *slot->assembling;
+  for (int cy = cells.y0; cy < cells.y1; ++cy) {
+    const std::uint32_t* in = part.cells.sums.data() + static_cast<std::size_t>(cy - cells.y0) *
+                                                           cells.width() * CellSums::kChannels;
+    std::uint32_t* out =
+        a.sums.sums.data() +
+        (static_cast<std::size_t>(cy) * grid.width + cells.x0) * CellSums::kChannels;
+    for (int i = 0; i < cells.width() * CellSums::kChannels; ++i) out[i] += in[i];
+  }
+  a.answered.insert(p);
+  // Every process asked that shows a part of the window answered: no need to wait.
+  for (int q = 0; q < static_cast<int>(slot->inWindow.size()); ++q)
+    if (slot->inWindow[static_cast<std::size_t>(q)] &&
+        thumbnailAsked_[static_cast<std::size_t>(q)] && (q == 0 || members_.live(q)) &&
+        !a.answered.count(q))
+      return;
+  publishThumbnail(*slot);
+}
+
+void JobDesk::publishThumbnail(Slot& slot) {
+  Slot::Assembly& a = *slot.assembling;
+  const Image* previous = slot.thumbnail.get();
+  slot.thumbnail = std::make_shared<const Image>(averageCells(a.grid, a.sums, previous));
+  slot.publishedRequest = a.request;
+  slot.assembling.reset();
 }
 
 JobDesk::Actions JobDesk::failed(const std::string& peer, const std::string& why,
@@ -568,6 +653,7 @@ std::vector<JobDesk::Window> JobDesk::windows(Clock::time_point now) const {
     w.fps = span > 0 ? static_cast<double>(recent) / span : 0;
     const Clock::time_point last = slot->credits.empty() ? slot->job.started : slot->credits.back();
     w.idle = slot->state == State::Running && now - last > kIdleAfter;
+    w.thumbnail = slot->thumbnail;
     out.push_back(std::move(w));
   }
   return out;

@@ -36,8 +36,10 @@
 #include <variant>
 #include <vector>
 
+#include "wall/image/Thumbnail.h"
 #include "wall/layout/Layout.h"
 #include "wall/layout/Window.h"
+#include "wall/service/protocol/LinkMessages.h"
 #include "wall/service/protocol/Protocol.h"
 #include "wall/service/protocol/ServiceCommands.h"
 #include "wall/service/server/FrameAgreements.h"
@@ -65,6 +67,10 @@ class JobDesk {
     // A fresh, non-zero session id for each job.
     std::function<std::uint64_t()> newSession;
     std::size_t maxJobs = 1;  // jobs on the wall at once (each in its window)
+    // The windows' thumbnails (serve --control's page): their longest side (0: none are made)
+    // and how often every process is asked for its cells.
+    int thumbnailSide = 0;
+    std::chrono::milliseconds thumbnailEvery{1000};
   };
 
   // A message to a connection on the directory socket (a job, or a refused stranger).
@@ -146,6 +152,12 @@ class JobDesk {
                  const std::vector<std::int64_t>& values, Clock::time_point now);
   Actions pixels(int process, std::uint64_t session, std::uint32_t frameId,
                  std::vector<std::uint32_t> pixels, Clock::time_point now);
+  // Process p's cells of job `session`'s window thumbnail (ProcessLink::thumbnail). Taken only
+  // for the request under way, once per process and job, from a process asked, for the job's
+  // window as it is now, inside its grid, never more pixels in a cell than it has; the rest is
+  // dropped. A job's thumbnail is published once every process in its window answered, or when
+  // the next request goes out.
+  void thumbnail(int p, std::uint64_t session, const ThumbnailPart& part);
   Actions headPixels(std::uint64_t session, std::uint32_t frameId,
                      std::vector<std::uint32_t> pixels, Clock::time_point deadline,
                      Clock::time_point now);
@@ -210,6 +222,8 @@ class JobDesk {
     bool idle = false;         // running, no frame presented for kIdleAfter (converged, or stalled)
     std::uint32_t frames = 0;  // presented on every display (credited)
     double fps = 0;            // presented frames per second over the last kFpsWindow
+    // What the window shows, shrunk (wall/image/Thumbnail.h); null until the first is made.
+    std::shared_ptr<const Image> thumbnail;
   };
   static constexpr auto kFpsWindow = std::chrono::seconds(2);
   static constexpr auto kIdleAfter = std::chrono::seconds(2);
@@ -281,6 +295,8 @@ class JobDesk {
   // Whether process `p` has a display in the window the job renders frame `frameId` in.
   bool inWindowAt(int p, std::uint32_t frameId) const;
   void commitMoveIfBuilt();
+  // Thumbnails: every process asked for its cells (tick), and a job's assembled one published.
+  void askThumbnails();
 
   // One job on the wall and all that is its own (up to Setup::maxJobs side by side).
   struct Slot {
@@ -320,7 +336,20 @@ class JobDesk {
     std::uint64_t pieceSession = 0;  // what the job's pieces are stamped with (0: its session)
     Clock::time_point inputSince{};  // the second kMaxInputsPerSecond counts in
     int inputs = 0;
+    // The window's last thumbnail, and the one being assembled from the processes' cells (of
+    // request `request`, for `window`; `answered`: the processes whose cells are in).
+    std::shared_ptr<const Image> thumbnail;
+    struct Assembly {
+      std::uint32_t request = 0;
+      dfb::Region window;
+      ThumbnailGrid grid;
+      CellSums sums;
+      std::set<int> answered;
+    };
+    std::optional<Assembly> assembling;
+    std::uint32_t publishedRequest = 0;  // what came after its publication is dropped
   };
+  void publishThumbnail(Slot& slot);
   // The job on the wall with this session / connection (none: nullptr).
   Slot* bySession(std::uint64_t session) const;
   Slot* byPeer(const std::string& peer) const;
@@ -342,6 +371,10 @@ class JobDesk {
   std::uint64_t jobsStarted_ = 0, stackTop_ = 0;
   bool shuttingDown_ = false, closed_ = false;
   int shutdownAcks_ = 0;  // members that confirmed the shutdown (State::Closed)
+  // Thumbnails: the request under way (0: none yet), the processes asked for it, the next one.
+  std::uint32_t thumbnailRequest_ = 0;
+  std::vector<bool> thumbnailAsked_;
+  Clock::time_point nextThumbnails_{};
   Clock::time_point closedAt_;
 };
 

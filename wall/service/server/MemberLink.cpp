@@ -278,6 +278,10 @@ void MemberLink::toHead(const ServiceCommand& command, std::uint64_t epoch) {
   impl_->post(packCommandMessage(command.header.session, packCommand(command)), epoch);
 }
 
+void MemberLink::thumbnail(std::uint64_t session, const ThumbnailPart& part) {
+  impl_->post(packThumbnail(session, part), epoch());
+}
+
 void MemberLink::agreeMax(std::uint64_t epoch, std::uint64_t session, std::uint32_t frameId,
                           std::int64_t* values, int count, Clock::time_point) {
   std::unique_lock lock(impl_->mutex);

@@ -59,6 +59,7 @@ class MemberLink : public ProcessLink {
                                                         std::vector<std::uint32_t> mine,
                                                         Clock::time_point deadline) override;
   void presented(std::uint64_t, std::uint32_t, std::int64_t) override {}
+  void thumbnail(std::uint64_t session, const ThumbnailPart& part) override;
 
  private:
   struct Impl;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "wall/display/WallPeers.h"
+#include "wall/service/protocol/LinkMessages.h"
 #include "wall/service/protocol/ServiceCommands.h"
 
 namespace wall::service {
@@ -39,6 +40,9 @@ class ProcessLink {
   // The head's process presented `frameId` on every display still in the wall: the job's
   // credit. Nothing on members.
   virtual void presented(std::uint64_t session, std::uint32_t frameId, std::int64_t completeNs) = 0;
+  // Thread-safe. This process's cells of job `session`'s window thumbnail, answering the head's
+  // Command::Thumbnails (dropped while a member is not joined).
+  virtual void thumbnail(std::uint64_t session, const ThumbnailPart& part) = 0;
 };
 
 class LinkPeers : public WallPeers {

@@ -72,6 +72,7 @@ struct WallService::Impl {
       Impl* impl = nullptr;
       std::uint64_t session = 0;
       WindowStack::Window* window = nullptr;
+      dfb::Region rect;  // the window on the canvas
       Raisable() = default;
       Raisable(const Raisable&) = delete;
       Raisable& operator=(const Raisable&) = delete;
@@ -109,7 +110,11 @@ struct WallService::Impl {
   // `mutex`, so they must not run under it.
   std::mutex windowsMutex;
   std::map<std::uint64_t, std::uint64_t> orders;
-  std::map<std::uint64_t, std::vector<WindowStack::Window*>> windowOf;  // a move: two at once
+  struct OnStack {
+    WindowStack::Window* window = nullptr;
+    dfb::Region rect;  // on the canvas
+  };
+  std::map<std::uint64_t, std::vector<OnStack>> windowOf;  // a move: two at once
   struct JobThread {
     std::thread thread;
     std::shared_ptr<std::atomic<bool>> done;
@@ -147,6 +152,9 @@ struct WallService::Impl {
   void startJobThread(const ServiceCommand& start);
   // Joins the job threads that returned (all: waits for every one).
   void reapJobs(bool all);
+  // Command::Thumbnails (several jobs, main thread): this process's cells of every window it
+  // shows, to the head.
+  void sendThumbnails(const ServiceCommand& c);
 };
 
 void WallService::Impl::incoming(const ServiceCommand& c) {
@@ -157,7 +165,7 @@ void WallService::Impl::incoming(const ServiceCommand& c) {
     const auto order = static_cast<std::uint64_t>(std::max<std::int64_t>(0, h.a));
     orders[h.session] = order;
     if (const auto found = windowOf.find(h.session); found != windowOf.end()) {
-      for (WindowStack::Window* window : found->second) window->setOrder(order);
+      for (const OnStack& shown : found->second) shown.window->setOrder(order);
       return;
     }
     // Or the job ended here already: such orders are bounded, the oldest going first (at most
@@ -218,7 +226,8 @@ void WallService::Impl::incoming(const ServiceCommand& c) {
           break;
       }
     }
-    if (!dropped && (h.kind == Command::Start || h.kind == Command::Shutdown)) {
+    if (!dropped && (h.kind == Command::Start || h.kind == Command::Shutdown ||
+                     (h.kind == Command::Thumbnails && stack))) {
       commands.push_back(c);
       commanded.notify_all();
     }
@@ -249,10 +258,11 @@ std::unique_ptr<WallService::Impl::Shape> WallService::Impl::makeShape(const dfb
     const auto known = orders.find(session);
     const std::uint64_t order = known != orders.end() ? known->second : WindowStack::kOnTop;
     shape->onStack = stack->add(partsOf, session, order);
-    windowOf[session].push_back(shape->onStack.get());
+    windowOf[session].push_back({shape->onStack.get(), window});
     shape->raisable.impl = this;
     shape->raisable.session = session;
     shape->raisable.window = shape->onStack.get();
+    shape->raisable.rect = window;
     jobPresenters = shape->onStack->presenters();
   } else if (!whole) {
     jobPresenters.clear();
@@ -663,7 +673,7 @@ WallService::Impl::Shape::Raisable::~Raisable() {
   std::lock_guard windowsLock(impl->windowsMutex);
   const auto found = impl->windowOf.find(session);
   if (found == impl->windowOf.end()) return;
-  std::erase(found->second, window);
+  std::erase_if(found->second, [&](const OnStack& shown) { return shown.window == window; });
   if (found->second.empty()) impl->windowOf.erase(found);
 }
 
@@ -716,6 +726,51 @@ void WallService::Impl::presentWindows() {
   for (int d : changed) presenters[static_cast<size_t>(d)]->swap();
   ++wallFrames;
   if (wallCaptures) wallCaptures->presented(wallFrames);
+}
+
+// Only the sums of each cell travel: the pixels stay on the process that shows them.
+void WallService::Impl::sendThumbnails(const ServiceCommand& c) {
+  const int side = static_cast<int>(std::clamp<std::int64_t>(c.header.b, 1, kMaxThumbnailSide));
+  struct Taken {
+    std::uint64_t session = 0;
+    dfb::Region window;
+    std::vector<WindowStack::Window::Shown> parts;
+  };
+  std::vector<Taken> taken;
+  {
+    std::lock_guard windowsLock(windowsMutex);  // no window goes while it is read
+    for (const auto& [session, shown] : windowOf)
+      for (const OnStack& each : shown) taken.push_back({session, each.rect, each.window->shown()});
+  }
+  const std::vector<int> ours = layout.displaysOfProcess(process);
+  for (const Taken& t : taken) {
+    const ThumbnailGrid grid = thumbnailGrid(t.window.width(), t.window.height(), side);
+    // Where each part's first pixel is in the window, and every cell they touch.
+    std::vector<std::pair<int, int>> at;
+    dfb::Region cells;
+    for (const WindowStack::Window::Shown& p : t.parts) {
+      const dfb::Region& d =
+          layout.displays[static_cast<size_t>(ours[static_cast<size_t>(p.display)])].rect;
+      at.emplace_back(d.x0 + p.part.x0 - t.window.x0, d.y0 + p.part.y0 - t.window.y0);
+      if (!p.pixels) continue;
+      const dfb::Region touched =
+          cellsOf(grid, {at.back().first, at.back().second, at.back().first + p.part.width(),
+                         at.back().second + p.part.height()});
+      cells = cells.empty()
+                  ? touched
+                  : dfb::Region{std::min(cells.x0, touched.x0), std::min(cells.y0, touched.y0),
+                                std::max(cells.x1, touched.x1), std::max(cells.y1, touched.y1)};
+    }
+    if (cells.empty()) continue;  // no frame of the window shown here yet
+    ThumbnailPart part;
+    part.request = static_cast<std::uint32_t>(c.header.a);
+    part.window = t.window;
+    part.cells = emptySums(cells);
+    for (size_t i = 0; i < t.parts.size(); ++i)
+      if (t.parts[i].pixels)
+        addPixels(part.cells, grid, *t.parts[i].pixels, at[i].first, at[i].second);
+    head->thumbnail(t.session, part);
+  }
 }
 
 static_assert(static_cast<std::uint32_t>(WallKey::Left) == WindowInput::kLeft &&
@@ -842,6 +897,10 @@ void WallService::run() {
     }
     if (!command) continue;
     if (command->header.kind == Command::Shutdown) break;
+    if (command->header.kind == Command::Thumbnails) {
+      m.sendThumbnails(*command);
+      continue;
+    }
     if (command->header.kind == Command::Start && m.options.maxJobs > 1) {
       m.startJobThread(*command);
     } else if (command->header.kind == Command::Start) {

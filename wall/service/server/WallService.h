@@ -55,6 +55,10 @@ struct ServiceOptions {
   // thread of every process, and the process's main thread composes their windows
   // (wall/display/WindowStack.h) and presents them.
   std::size_t maxJobs = 1;
+  // The windows' thumbnails for serve --control's page (docs/service.md, "The wall's control
+  // page"): their longest side, 16..kMaxThumbnailSide (0: none). Made with several jobs only:
+  // each process shrinks its windows' parts, and the head asks for them about once a second.
+  int thumbnailSide = 0;
   // A stop asked of a process other than the head (a signal, a closed window) makes it leave
   // the wall alone (true: a process started on its own) or stop the whole wall (false).
   bool leaveAlone = false;
