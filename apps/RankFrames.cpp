@@ -33,6 +33,10 @@ FrameRecord combine(const std::vector<RankFrame>& all) {
     r.tilesRendered += f.tiles;
     r.samples += f.samples;
     r.lastSetTileNs = std::max(r.lastSetTileNs, f.lastSetTileNs);
+    r.stepReadMs = std::max(r.stepReadMs, f.stepReadMs);
+    r.stepBuildMs = std::max(r.stepBuildMs, f.stepBuildMs);
+    r.stepWaitMs = std::max(r.stepWaitMs, f.stepWaitMs);
+    r.stepSwitchMs = std::max(r.stepSwitchMs, f.stepSwitchMs);
   }
   return r;
 }
