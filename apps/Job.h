@@ -93,7 +93,7 @@ struct FrameRecord {
   std::uint64_t requestId = 0;
   std::int64_t requestNs = 0, presentedAtRequest = 0, displaysPresentedNs = 0;
   // A time series: the step shown (-1: none), whether this frame switched to it, and the
-  // slowest render rank's times for it (RankFrame).
+  // render ranks' times for it (RankFrame: the slowest rank's, the switch the fastest's).
   std::int64_t timeStep = -1;
   bool stepChanged = false;
   double stepReadMs = 0, stepBuildMs = 0, stepWaitMs = 0, stepSwitchMs = 0;

@@ -36,7 +36,9 @@ FrameRecord combine(const std::vector<RankFrame>& all) {
     r.stepReadMs = std::max(r.stepReadMs, f.stepReadMs);
     r.stepBuildMs = std::max(r.stepBuildMs, f.stepBuildMs);
     r.stepWaitMs = std::max(r.stepWaitMs, f.stepWaitMs);
-    r.stepSwitchMs = std::max(r.stepSwitchMs, f.stepSwitchMs);
+    // The least: the other ranks' switch includes waiting in the bricks' exchange for the rank
+    // whose step came last (its wait is stepWaitMs).
+    r.stepSwitchMs = &f == &all.front() ? f.stepSwitchMs : std::min(r.stepSwitchMs, f.stepSwitchMs);
   }
   return r;
 }

@@ -24,7 +24,7 @@ struct RankFrame {
   std::uint64_t wallPiecesDropped;  // for wall processes the wall lost (--connect)
   // A frame that showed a new time step (else 0): making the step's data (read, build; on the
   // prefetch thread), how long the frame waited for it and switching to it (the bricks'
-  // exchange, renderers).
+  // exchange, renderers). Combined: the slowest rank's, but the switch the fastest's.
   double stepReadMs, stepBuildMs, stepWaitMs, stepSwitchMs;
 };
 

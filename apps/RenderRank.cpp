@@ -293,10 +293,10 @@ void RenderRank::makeDrivers() {
 // A time step's data on this rank, on the prefetch thread: its own bricks read and built
 // (--bricks), else the whole scene of that step.
 StepData RenderRank::loadStep(std::uint32_t step) const {
+  const auto start = Clock::now();
   StepData data;
   data.step = step;
   data.desc = renderers::scivis::sceneAtStep(*job_.scene.desc, step);
-  const auto start = Clock::now();
   if (o_.bricks > 0) {
     std::vector<renderers::scivis::HeldBrick> held = renderers::scivis::loadOwnBricks(
         *data.desc, o_.bricks, o_.replication, renderRank_, renderRanks_,

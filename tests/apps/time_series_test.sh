@@ -3,7 +3,9 @@
 #  - 6 steps of a small NRRD series (step-%02d.nrrd, one step a frame) play on an offscreen 2x2
 #    wall with --bricks 4 on 3 render ranks: every frame's captures equal a one-process render
 #    of that step alone (its own scene file naming the one file), byte for byte;
-#  - the same series named by a glob plays the same frames;
+#  - the same series named by a glob plays the same frames; image-parallel on 2 ranks too;
+#  - the control API pauses and seeks it (the status shows the step, the picture converges) and
+#    refuses a seek past its end;
 #  - a missing step and a step whose dims differ: one error naming the step's file, every rank
 #    exits non-zero, no hang.
 #   time_series_test.sh LAYOUT
@@ -12,7 +14,13 @@ set -euo pipefail
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 series="/usr/bin/python3 $(cd "$(dirname "$0")/../.." && pwd)/scripts/write_series.py"
 work=$(mktemp -d)
-trap '[ -n "${KEEP:-}" ] || rm -rf "$work"' EXIT
+job=""
+cleanup() {
+  # mpirun and its ranks (killed alone it would leave them running).
+  [ -z "$job" ] || kill -9 $(pgrep -P "$job") "$job" 2>/dev/null || true
+  [ -n "${KEEP:-}" ] || rm -rf "$work"
+}
+trap cleanup EXIT
 fail() { echo "FAIL: $*"; exit 1; }
 mpi() { local n=$1; shift; "$MPIEXEC" -n "$n" --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 "$@"; }
 processes() { "$COMPARE" --info "$1" | cut -d' ' -f1; }
@@ -82,6 +90,40 @@ for k in 0 1 2; do
   "$COMPARE" "$layout" "$work/glob" "$work/ref-$k.png" $((k + 1)) || fail "glob frame $((k + 1))"
 done
 
+# Image-parallel (no --bricks), 2 ranks: each rank builds the whole scene of the next step on
+# its prefetch thread; frame 3 is step 2.
+mpi 2 "$DFBWALL" --scene "$work/good/series.toml" --size "$size" --frames 3 \
+  --image "$work/image-parallel.png" "${common[@]}" || fail "the series image-parallel"
+cmp -s "$work/image-parallel.png" "$work/ref-2.png" ||
+  fail "image-parallel frame 3 is not step 2's one-process render"
+
+# Steering the series through the control API: pause, seek, the status' time, bad requests.
+port=$((20000 + $$ % 20000))
+token=series-test-token-0123456789
+(umask 077 && echo "$token" >"$work/token")
+"$MPIEXEC" -n $((3 + walls)) --oversubscribe --bind-to none --mca mpi_yield_when_idle 1 \
+  "$DFBWALL" --wall "$layout" --offscreen --scene "$work/good/series.toml" --bricks 4 \
+  --frames 0 --max-spp 1 --control "127.0.0.1:$port" --control-token-file "$work/token" \
+  "${common[@]}" >"$work/control.out" 2>&1 &
+job=$!
+api() { curl -s -o "$work/reply" -w '%{http_code}' -H "Authorization: Bearer $token" "$@"; }
+status() { api "http://127.0.0.1:$port/api/status" >/dev/null; cat "$work/reply"; }
+for _ in $(seq 300); do [ "$(api "http://127.0.0.1:$port/api/status")" = 200 ] && break; sleep 0.1; done
+[ "$(api -d '{"play": false}' "http://127.0.0.1:$port/api/time")" = 200 ] || fail "pause: $(cat "$work/reply")"
+[ "$(api -d '{"seek": 4}' "http://127.0.0.1:$port/api/time")" = 200 ] || fail "seek: $(cat "$work/reply")"
+for _ in $(seq 300); do
+  status | grep -q '"idle":true' && status | grep -q '"time":{"step":4,"steps":6,"playing":false}' && break
+  sleep 0.1
+done
+status | grep -q '"time":{"step":4,"steps":6,"playing":false}' || fail "the status after a seek: $(status)"
+status | grep -q '"idle":true' || fail "paused, the series did not converge: $(status)"
+[ "$(api -d '{"seek": 6}' "http://127.0.0.1:$port/api/time")" = 400 ] || fail "a seek past the series was taken"
+grep -q "past the series' 6 steps" "$work/reply" || fail "the refused seek says: $(cat "$work/reply")"
+[ "$(api -d '{"play": 1}' "http://127.0.0.1:$port/api/time")" = 400 ] || fail "play 1 was taken"
+[ "$(api -X POST "http://127.0.0.1:$port/api/stop")" = 200 ] || fail "stop"
+wait "$job" || { cat "$work/control.out"; fail "the steered series did not stop with exit 0"; }
+job=""
+
 # fails WHAT TEXT SCENE: every rank exits non-zero within the timeout, one error naming TEXT.
 fails() {
   local what=$1 text=$2 sceneFile=$3 output code
@@ -103,4 +145,4 @@ scene "$work/bad/series.toml" $'file = "step-%02d.nrrd"\ntime_steps = 4'
 fails "a step of other dims" \
   "time step 2 ($work/bad/step-02.nrrd) is 25x20x16 float32, the first step ($work/bad/step-00.nrrd) 24x20x16 float32" \
   "$work/bad/series.toml"
-echo "PASS: $steps steps on the wall (--bricks 4, 3 render ranks) equal each step's one-process render; a glob plays the same; a missing step and changed dims are one named error"
+echo "PASS: $steps steps on the wall (--bricks 4, 3 render ranks) equal each step's one-process render; a glob and image-parallel play the same; pause and seek through the API; a missing step and changed dims are one named error"
