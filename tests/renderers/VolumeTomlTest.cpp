@@ -2,6 +2,7 @@
 // name file:line:column and the field.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -10,6 +11,7 @@
 #include "base/TomlDiagnostics.h"
 #include "renderers/scivis/io/VolumeToml.h"
 #include "tests/DiagnosticsTestUtil.h"
+#include "tests/renderers/VolumeFileTestUtil.h"
 
 namespace renderers::scivis {
 namespace {
@@ -268,6 +270,34 @@ TEST(VolumeToml, ATimeSeriesResolvesEveryStepAndNamesTheStepThatIsWrong) {
       << along;
   EXPECT_EQ(errorOf("noglob.toml", head + "file = \"none*.nrrd\"\n" + tf),
             ":4:8: volume 's'.file: no file matches '" + (testDir() / "none*.nrrd").string() + "'");
+}
+
+TEST(VolumeToml, ASeriesAlongA4dNiftiReadsEachStepOfTheOneFile) {
+  // (t, z, y, x) uint8, 3 time steps, step k holding k + 1 everywhere.
+  std::string header = volfiletest::niftiHeader(Index3{4, 3, 2}, 2, 8);
+  const std::int16_t four = 4, steps = 3;
+  std::memcpy(header.data() + 40, &four, 2);
+  std::memcpy(header.data() + 48, &steps, 2);
+  std::string voxels;
+  for (char k = 1; k <= 3; ++k) voxels += std::string(4 * 3 * 2, k);
+  const std::string nii = writeFile("t4.nii", header + voxels);
+  const std::string head = "[[volumes]]\nname = \"t\"\nsource = \"file\"\nfile = \"t4.nii\"\n";
+  const std::string tf = "transfer_function = { preset = \"viridis\", range = [0, 9] }\n";
+  const VolumeDesc d =
+      readFirst(writeFile("t4.toml", head + "time_steps = 2\nfirst_step = 1\n" + tf));
+  ASSERT_EQ(d.steps.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(d.steps[k].file.path, nii);
+    EXPECT_EQ(d.steps[k].file.time, static_cast<int>(k) + 1);
+    const Volume v = loadVolume(d.steps[k], d.steps[k].grid.wholeBox());
+    EXPECT_EQ(v.at(3, 2, 1), static_cast<float>(k + 2)) << "step " << k;
+  }
+  EXPECT_EQ(readFirst(writeFile("t4-all.toml", head + "time_steps = 3\n" + tf)).steps.size(), 3u);
+  const std::string past = errorOf("t4-past.toml", head + "time_steps = 4\n" + tf);
+  EXPECT_EQ(past.rfind(":4:8: volume 't'.file: time step 3 (" + nii + "): ", 0), 0u) << past;
+  EXPECT_EQ(errorOf("t4-time.toml", head + "time_steps = 2\ntime = 1\n" + tf),
+            ":6:8: volume 't'.time: a series along the file's time dimension starts at "
+            "'first_step', not 'time'");
 }
 
 TEST(VolumeToml, FieldErrorsNameFileLineAndField) {
