@@ -16,7 +16,7 @@ void readKeyframe(renderers::TomlReader& r, const toml::table& t, int number,
                   const renderers::CameraDesc& previous, double earlier, bool first,
                   renderers::CameraDesc& camera, double& time) {
   const std::string what = "keyframe #" + std::to_string(number);
-  r.onlyKeys(t, what, {"time", "position", "look_at", "up", "fov"});
+  r.onlyKeys(t, what, {"time", "position", "look_at", "up", "fov", "step"});
   const std::size_t before = r.problems();
   const toml::node* timeNode = r.need(t, "time", what);
   time = r.number(timeNode, what + ".time");
@@ -43,7 +43,8 @@ void readKeyframe(renderers::TomlReader& r, const toml::table& t, int number,
 
 }  // namespace
 
-CameraPath CameraPath::load(const std::string& path, const renderers::CameraDesc& sceneCamera) {
+CameraPath CameraPath::load(const std::string& path, const renderers::CameraDesc& sceneCamera,
+                            std::uint32_t timeSteps) {
   base::TomlDiagnostics diagnostics(path);
   std::optional<toml::table> root;
   if (diagnostics.readFile("camera path")) root = diagnostics.parse();
@@ -63,6 +64,17 @@ CameraPath CameraPath::load(const std::string& path, const renderers::CameraDesc
         readKeyframe(r, *keys[i], static_cast<int>(i + 1), previous,
                      out.keys_.empty() ? 0.0 : out.keys_.back().time, out.keys_.empty(), k.camera,
                      k.time);
+        if (const toml::node* step = keys[i]->get("step")) {
+          const std::string field = "keyframe #" + std::to_string(i + 1) + ".step";
+          const auto v = r.diagnostics().integer(*step, field);
+          if (v && (*v < 0 || *v >= timeSteps))
+            r.problem(*step, field,
+                      timeSteps > 1 ? "must be from 0 to " + std::to_string(timeSteps - 1) +
+                                          " (the scene's time steps), not " + std::to_string(*v)
+                                    : std::string("is for a scene with a time series"));
+          else if (v)
+            k.step = static_cast<std::uint32_t>(*v);
+        }
         previous = k.camera;
         out.keys_.push_back(k);
       });
@@ -75,9 +87,24 @@ CameraPath CameraPath::load(const std::string& path, const renderers::CameraDesc
   return out;
 }
 
-renderers::CameraDesc CameraPath::at(std::uint32_t frameId) const {
+double CameraPath::timeOf(std::uint32_t frameId) const {
   double t = frameId > 0 ? double(frameId - 1) / fps_ : 0.0;
   if (loop_ && duration() > 0) t = std::fmod(t, duration());
+  return t;
+}
+
+std::optional<std::uint32_t> CameraPath::stepAt(std::uint32_t frameId) const {
+  const double t = timeOf(frameId);
+  std::optional<std::uint32_t> step;
+  for (const Key& k : keys_) {
+    if (k.time > t) break;
+    if (k.step) step = k.step;
+  }
+  return step;
+}
+
+renderers::CameraDesc CameraPath::at(std::uint32_t frameId) const {
+  const double t = timeOf(frameId);
   if (t <= keys_.front().time) return keys_.front().camera;
   if (t >= keys_.back().time) return keys_.back().camera;
   const auto after = std::upper_bound(keys_.begin(), keys_.end(), t,

@@ -130,6 +130,29 @@ SteeringRequest settingsRequest(const Json& j, const std::string& renderer) {
   return r;
 }
 
+// POST /api/time: {"play": bool}, {"step": n} (forward or back n steps, pausing) or {"seek": n}
+// (the step to show), play with either of the others.
+SteeringRequest timeRequest(const Json& j) {
+  SteeringRequest r;
+  r.kind = SteeringRequest::kTime;
+  for (const auto& [key, value] : j.items()) {
+    if (key == "play") {
+      if (!value.is_boolean()) throw BadRequest("play must be true or false");
+      r.play = value.get<bool>() ? 1 : 0;
+      r.fields |= SteeringRequest::kPlay;
+    } else if (key == "step") {
+      r.stepBy = integer(value, "step");
+      r.fields |= SteeringRequest::kStepBy;
+    } else if (key == "seek") {
+      r.seek = integer(value, "seek");
+      r.fields |= SteeringRequest::kSeek;
+    } else {
+      throw BadRequest("unknown field '" + key + "' (time: play, step, seek)");
+    }
+  }
+  return r;
+}
+
 // GET /api/status: what rank 0 published last, and the job's fixed facts.
 Json statusJson(const StatusBoard& status, const ControlFacts& facts) {
   const RunStatus s = status.snapshot();
@@ -166,6 +189,8 @@ Json statusJson(const StatusBoard& status, const ControlFacts& facts) {
         {{"name", name}, {"presented", s.presented}, {"state", lost ? "lost" : "presenting"}});
   }
   j["displays"] = list;
+  if (s.timeSteps > 1)
+    j["time"] = {{"step", s.view.timeStep}, {"steps", s.timeSteps}, {"playing", s.playing}};
   j["lost_displays"] = s.lostDisplays;
   j["errors"] = s.errors;
   return j;
@@ -196,6 +221,16 @@ void addApiRoutes(ControlRequests& requests, ControlFacts facts,
   });
   requests.post("/api/settings", [submit, renderer = facts.renderer](const HttpRequest& req) {
     const SteeringRequest r = settingsRequest(parseObject(req.body), renderer);
+    return json(200, Json{{"request", submit(r)}});
+  });
+  requests.post("/api/time", [submit, &status](const HttpRequest& req) {
+    const SteeringRequest r = timeRequest(parseObject(req.body));
+    if (const std::string problem = checkRequest(r); !problem.empty()) throw BadRequest(problem);
+    const RunStatus now = status.snapshot();
+    if (now.timeSteps <= 1) throw BadRequest("the scene has no time series");
+    if (r.has(SteeringRequest::kSeek) && static_cast<std::uint32_t>(r.seek) >= now.timeSteps)
+      throw BadRequest("seek " + std::to_string(r.seek) + " is past the series' " +
+                       std::to_string(now.timeSteps) + " steps");
     return json(200, Json{{"request", submit(r)}});
   });
   requests.post("/api/capture", [submit, canCapture = facts.canCapture](const HttpRequest& req) {

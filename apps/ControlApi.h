@@ -6,6 +6,8 @@
 //   GET  /api/status    frame, fps, spp, camera, displays, renderer, errors
 //   POST /api/camera    {"position", "look_at", "up", "fov"} (any subset), "orbit", "pan", "dolly"
 //   POST /api/settings  {"exposure", "spp", "max_depth", "transfer_function", "opacity_scale"}
+//   POST /api/time      a time series: {"play": bool}, {"step": n} (n steps on, pausing),
+//                       {"seek": n} (show step n); the status' "time" has step, steps, playing
 //   POST /api/capture   every display captures the next frame to the --capture folder
 //   POST /api/stop      graceful stop: statistics and captures written, exit 0
 //

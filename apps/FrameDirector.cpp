@@ -26,6 +26,7 @@ bool FrameView::sameAs(const FrameView& o) const {
 FrameDirector::FrameDirector(DirectorOptions options)
     : options_(std::move(options)), base_(options_.initial), view_(options_.initial) {
   pathActive_ = static_cast<bool>(options_.path);
+  playing_ = options_.timeSteps > 1;
 }
 
 bool steerView(FrameView& view, const CameraDesc& shown, const SteeringRequest& r) {
@@ -78,6 +79,54 @@ void FrameDirector::apply(const SteeringRequest& r) {
   }
 }
 
+void FrameDirector::applyTime(const SteeringRequest& r) {
+  const std::int64_t steps = options_.timeSteps;
+  if (steps <= 1) {
+    errors_.push_back("time request " + std::to_string(r.id) +
+                      " not applied: the scene has no time series");
+    return;
+  }
+  if (r.has(SteeringRequest::kSeek) && r.seek >= steps) {
+    errors_.push_back("time request " + std::to_string(r.id) + " not applied: step " +
+                      std::to_string(r.seek) + " is past the series' " + std::to_string(steps) +
+                      " steps");
+    return;
+  }
+  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(options_.fps > 0 ? 1.0 / options_.fps : 0.0));
+  if (r.has(SteeringRequest::kPlay)) {
+    if (r.play && !playing_) nextStepDue_ = options_.now() + period;
+    playing_ = r.play != 0;
+  }
+  if (r.has(SteeringRequest::kStepBy)) {
+    const std::int64_t to = ((std::int64_t(base_.timeStep) + r.stepBy) % steps + steps) % steps;
+    base_.timeStep = static_cast<std::uint32_t>(to);
+    playing_ = false;
+    timeMoved_ = true;
+  }
+  if (r.has(SteeringRequest::kSeek)) {
+    base_.timeStep = static_cast<std::uint32_t>(r.seek);
+    nextStepDue_ = options_.now() + period;
+    timeMoved_ = true;
+  }
+}
+
+void FrameDirector::advanceTime() {
+  if (!playing_ || options_.timeSteps <= 1) return;
+  const auto now = options_.now();
+  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(options_.fps > 0 ? 1.0 / options_.fps : 0.0));
+  // The first frame shows the first step; a request that moved the step holds it a frame.
+  if (!haveView_ || timeMoved_) {
+    nextStepDue_ = now + period;
+    return;
+  }
+  if (options_.fps > 0 && now < nextStepDue_) return;
+  base_.timeStep = (base_.timeStep + 1) % options_.timeSteps;
+  // On schedule while frames keep up; one step a frame from now on when they fall behind.
+  nextStepDue_ = nextStepDue_ + period < now ? now + period : nextStepDue_ + period;
+}
+
 void FrameDirector::restartAccumulation() {
   haveView_ = false;
   epoch_ = 0;
@@ -100,10 +149,20 @@ FrameOrder FrameDirector::next(std::uint32_t frameId,
       case SteeringRequest::kCapture:
         order.captureSequence = ++captures_;
         break;
+      case SteeringRequest::kTime:
+        applyTime(r);
+        break;
       default:
         apply(r);
     }
   }
+  const std::optional<std::uint32_t> pathStep =
+      pathActive_ && options_.pathStep ? options_.pathStep(frameId) : std::nullopt;
+  if (pathStep)
+    base_.timeStep = *pathStep;
+  else
+    advanceTime();
+  timeMoved_ = false;
   if (orbitFrom_ == 0) orbitFrom_ = frameId;
   FrameView view = base_;
   if (pathActive_) view.camera = options_.path(frameId);
@@ -133,11 +192,15 @@ FrameOrder FrameDirector::next(std::uint32_t frameId,
 bool FrameDirector::converged() const {
   if (options_.maxSpp <= 0 || epochSpp_ < options_.maxSpp || options_.orbitDegrees != 0)
     return false;
+  if (playing_ && options_.timeSteps > 1) return false;
   if (options_.content && options_.content(lastFrame_ + 1) != options_.content(lastFrame_))
     return false;
   // A camera path that has reached its last keyframe holds still.
   if (!pathActive_) return true;
   const renderers::CameraDesc next = options_.path(lastFrame_ + 1);
+  if (options_.pathStep &&
+      options_.pathStep(lastFrame_ + 1).value_or(view_.timeStep) != view_.timeStep)
+    return false;
   return std::memcmp(&next, &view_.camera, sizeof next) == 0;
 }
 

@@ -3,8 +3,10 @@
 // camera, an --orbit, a --camera-path, steering requests on top), its accumulation epoch, and
 // whether the wall has converged (--max-spp reached with a still camera) so the ranks can idle.
 // Pure bookkeeping, no communication: RenderRank.cpp broadcasts what it decides.
+#include <chrono>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,9 +27,18 @@ struct DirectorOptions {
   // The camera of frame F from a --camera-path (empty: none). A steering camera request ends
   // the path: the operator has the camera from then on.
   std::function<renderers::CameraDesc(std::uint32_t frameId)> path;
+  // The time step frame F shows from the camera path's keyframes, when they name one; while it
+  // gives one, the path holds the series' time (play, step and seek wait until it ends).
+  std::function<std::optional<std::uint32_t>(std::uint32_t frameId)> pathStep;
   // What frame F draws besides the camera (`dfbwall show`: the index of its picture); not
   // converged while the next frame's differs. Empty: nothing else.
   std::function<std::uint64_t(std::uint32_t frameId)> content;
+  // A time series (docs/scivis.md, "Time series"): its steps (1: none) and playback rate (steps
+  // a second; 0: one a frame, the next frame always the next step). It plays from step 0,
+  // looping, never skipping a step: when frames are slower than `fps`, one step a frame.
+  std::uint32_t timeSteps = 1;
+  float fps = 0;
+  std::function<std::chrono::steady_clock::time_point()> now = std::chrono::steady_clock::now;
 };
 
 class FrameDirector {
@@ -50,11 +61,16 @@ class FrameDirector {
   // The frame buffer was made anew (a moved window): the next frame starts accumulating from
   // epoch 0, as the first frame of a run does.
   void restartAccumulation();
+  // The time series: playing or paused (the status' "time").
+  bool playing() const { return playing_; }
   // Requests that could not be applied since the last call (for the status' "errors").
   std::vector<std::string> takeErrors();
 
  private:
   void apply(const SteeringRequest& r);
+  void applyTime(const SteeringRequest& r);
+  // While playing: base_.timeStep moves on to the step the frame being ordered shows.
+  void advanceTime();
 
   DirectorOptions options_;
   FrameView base_;  // before the orbit / path of the frame
@@ -69,6 +85,9 @@ class FrameDirector {
   std::uint64_t lastRequest_ = 0;
   std::uint32_t lastRequestFrame_ = 0;
   std::vector<std::string> errors_;
+  bool playing_ = false;
+  bool timeMoved_ = false;  // a request moved the step of the frame being ordered
+  std::chrono::steady_clock::time_point nextStepDue_{};
 };
 
 }  // namespace app

@@ -19,6 +19,9 @@ struct FrameView {
   std::int32_t maxDepth = 8;           // path tracer
   std::int32_t transferFunction = -1;  // scivis: preset index; -1: the scene's own
   float opacityScale = 1;              // scivis
+  // scivis: the time step of the scene's series shown (0 without one); a new step starts a new
+  // epoch like any change of view.
+  std::uint32_t timeStep = 0;
 
   bool sameAs(const FrameView& o) const;
 };

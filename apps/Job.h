@@ -92,6 +92,11 @@ struct FrameRecord {
   std::uint32_t epoch = 0;
   std::uint64_t requestId = 0;
   std::int64_t requestNs = 0, presentedAtRequest = 0, displaysPresentedNs = 0;
+  // A time series: the step shown (-1: none), whether this frame switched to it, and the
+  // render ranks' times for it (RankFrame: the slowest rank's, the switch the fastest's).
+  std::int64_t timeStep = -1;
+  bool stepChanged = false;
+  double stepReadMs = 0, stepBuildMs = 0, stepWaitMs = 0, stepSwitchMs = 0;
 };
 
 // Where one rank's time went over the whole run, in milliseconds summed over tiles or frames.

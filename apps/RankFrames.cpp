@@ -33,6 +33,12 @@ FrameRecord combine(const std::vector<RankFrame>& all) {
     r.tilesRendered += f.tiles;
     r.samples += f.samples;
     r.lastSetTileNs = std::max(r.lastSetTileNs, f.lastSetTileNs);
+    r.stepReadMs = std::max(r.stepReadMs, f.stepReadMs);
+    r.stepBuildMs = std::max(r.stepBuildMs, f.stepBuildMs);
+    r.stepWaitMs = std::max(r.stepWaitMs, f.stepWaitMs);
+    // The least: the other ranks' switch includes waiting in the bricks' exchange for the rank
+    // whose step came last (its wait is stepWaitMs).
+    r.stepSwitchMs = &f == &all.front() ? f.stepSwitchMs : std::min(r.stepSwitchMs, f.stepSwitchMs);
   }
   return r;
 }

@@ -22,6 +22,10 @@ struct RankFrame {
   std::int64_t lastSetTileNs;
   std::uint64_t previewBytes;
   std::uint64_t wallPiecesDropped;  // for wall processes the wall lost (--connect)
+  // A frame that showed a new time step (else 0): making the step's data (read, build; on the
+  // prefetch thread), how long the frame waited for it and switching to it (the bricks'
+  // exchange, renderers). Combined: the slowest rank's, but the switch the fastest's.
+  double stepReadMs, stepBuildMs, stepWaitMs, stepSwitchMs;
 };
 
 // Collective over `comm`: every rank's numbers, on rank 0 (empty elsewhere).

@@ -16,6 +16,7 @@
 #include "apps/Stats.h"
 #include "apps/StatusBoard.h"
 #include "apps/Steering.h"
+#include "apps/StepPrefetch.h"
 #include "base/Collectives.h"
 #include "base/Timing.h"
 #include "dfb/DistributedFrameBuffer.h"
@@ -25,6 +26,7 @@
 #include "renderers/picture/PictureSequence.h"
 #include "renderers/scivis/Registration.h"
 #include "renderers/scivis/bricks/BrickFrameDriver.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 #include "renderers/scivis/scene/SciVisScene.h"
 #include "runtime/FrameBuffer.h"
 #include "runtime/RenderWall.h"
@@ -73,7 +75,10 @@ DirectorOptions directorOptions(const Job& job, const FrameView& initial) {
   if (job.cameraPath) {
     const CameraPath path = *job.cameraPath;
     d.path = [path](std::uint32_t frameId) { return path.at(frameId); };
+    d.pathStep = [path](std::uint32_t frameId) { return path.stepAt(frameId); };
   }
+  d.timeSteps = renderers::scivis::timeSteps(*job.scene.desc);
+  d.fps = renderers::scivis::playbackFps(*job.scene.desc);
   return d;
 }
 
@@ -97,6 +102,9 @@ class RenderRank {
  private:
   void chooseFormat();
   void makeDrivers();
+  StepData loadStep(std::uint32_t step) const;
+  void showStep(std::uint32_t step);
+  void reapplyView();
   void connectWall(runtime::MpiWallControl& wallControl);
   FrameOrder orderFrame(std::uint32_t frameId);
   std::vector<SteeringRequest> waitWhileConverged();
@@ -106,7 +114,7 @@ class RenderRank {
   void idle();
   void renderFrame(const FrameOrder& order, std::uint32_t frameId);
   void countFrame(const FrameOrder& order, const renderers::FrameReport& report,
-                  const wall::DisplayRoutingOp::Sent& sent, double relayMs);
+                  const wall::DisplayRoutingOp::Sent& sent, double relayMs, bool stepChanged);
   void applyView(const FrameView& next);
   void showLost(const std::vector<wall::service::DirectoryProcess>& processes);
   void publish(std::uint32_t frame, bool idle);
@@ -128,7 +136,7 @@ class RenderRank {
   // by the timeout (invariant 6), and a rank that died is still noticed.
   const std::chrono::milliseconds heartbeat_;
   const bool hasWall_, route_;
-  int renderRank_ = 0;
+  int renderRank_ = 0, renderRanks_ = 1;
   // What the frames are rendered for: the job's wall or window, until the wall moves the window.
   const wall::Layout* layout_ = nullptr;
 
@@ -143,6 +151,13 @@ class RenderRank {
   Preview* preview_ = nullptr;
   std::optional<FrameDirector> director_;  // rank 0 decides every frame
   FrameView current_;                      // what every rank renders with now
+  // The scene as the step shown (a time series: each step's, docs/scivis.md "Time series"), the
+  // whole scene of that step when rendering image-parallel, and the next step's data on its way.
+  std::shared_ptr<const renderers::SceneDesc> desc_;
+  std::optional<renderers::RenderScene> stepScene_;
+  const std::uint32_t timeSteps_;
+  std::unique_ptr<StepPrefetch> prefetch_;
+  RankFrame stepTimes_{};  // of the step switched to this frame (its step fields only)
 
   // The statistics of a frame are written once its frame time (at the next frame's start) and
   // its wall acknowledgement are known: at most frames-in-flight + 1 records wait here.
@@ -174,8 +189,11 @@ RenderRank::RenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm
       heartbeat_(std::min<std::chrono::milliseconds>(std::chrono::seconds(1), timeout_ / 4)),
       hasWall_(job.layout.has_value()),
       route_(hasWall_ && !job.gatherMode()),
+      desc_(job.scene.desc),
+      timeSteps_(renderers::scivis::timeSteps(*job.scene.desc)),
       frames_(static_cast<std::uint32_t>(job.options.frames)) {
   MPI_Comm_rank(renderComm, &renderRank_);
+  MPI_Comm_size(renderComm, &renderRanks_);
   if (job.layout) layout_ = &*job.layout;
   settings_.width = job.canvasWidth;
   settings_.height = job.canvasHeight;
@@ -189,6 +207,12 @@ RenderRank::RenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm
   if (preview_) dfb_->addPixelOp(preview_->op());
   current_ = initialView(o_, job.scene.desc->camera);
   if (job.worldRank == 0) director_.emplace(directorOptions(job, current_));
+  if (timeSteps_ > 1) {
+    // Step 0 is what makeDrivers loaded (the scene's sources are its); step 1 is read meanwhile.
+    prefetch_ =
+        std::make_unique<StepPrefetch>([this](std::uint32_t step) { return loadStep(step); });
+    prefetch_->start(1);
+  }
   if (wall::FrameCredits* credits = wall_ ? wall_->credits() : nullptr)
     steering_.setPresentedProbe([credits] { return credits->lastPresented(); });
 }
@@ -243,8 +267,8 @@ void RenderRank::makeDrivers() {
     // Each rank loads only its own bricks; the ranks then exchange their bounds, as programs
     // that bring their own data do (api/DataDistributed.h).
     brickDriver_ = std::make_unique<renderers::scivis::BrickFrameDriver>(
-        job_.scene.desc, settings_, bricks,
-        renderers::scivis::loadOwnBricks(*job_.scene.desc, o_.bricks, o_.replication, renderRank_,
+        desc_, settings_, bricks,
+        renderers::scivis::loadOwnBricks(*desc_, o_.bricks, o_.replication, renderRank_,
                                          renderRanks,
                                          renderers::scivis::ghostModeFromName(o_.ghost)),
         renderComm_);
@@ -252,10 +276,11 @@ void RenderRank::makeDrivers() {
     totals_.sceneBytes = static_cast<double>(brickDriver_->sceneBytes());
     iso = brickDriver_->isosurfaceStats();
   } else {
-    renderer_ = renderers::makeRenderer(o_.renderer, job_.scene, settings_);
+    const renderers::RenderScene& scene = stepScene_ ? *stepScene_ : job_.scene;
+    renderer_ = renderers::makeRenderer(o_.renderer, scene, settings_);
     imageDriver_ = std::make_unique<renderers::FrameDriver>(*renderer_, driving_);
     imageDriver_->configure(dfbOptions_);
-    const renderers::scivis::SciVisScene* scivis = renderers::scivis::findSciVisScene(job_.scene);
+    const renderers::scivis::SciVisScene* scivis = renderers::scivis::findSciVisScene(scene);
     if (!scivis) return;
     totals_.sceneBytes = static_cast<double>(scivis->bytes());
     iso = scivis->isosurfaceStats();
@@ -263,6 +288,71 @@ void RenderRank::makeDrivers() {
   totals_.isosurfaceTriangles = static_cast<double>(iso.cameraTriangles);
   totals_.shadingOnlyTriangles = static_cast<double>(iso.shadingTriangles);
   totals_.isosurfaceSeconds = iso.seconds;
+}
+
+// A time step's data on this rank, on the prefetch thread: its own bricks read and built
+// (--bricks), else the whole scene of that step.
+StepData RenderRank::loadStep(std::uint32_t step) const {
+  const auto start = Clock::now();
+  StepData data;
+  data.step = step;
+  data.desc = renderers::scivis::sceneAtStep(*job_.scene.desc, step);
+  if (o_.bricks > 0) {
+    std::vector<renderers::scivis::HeldBrick> held = renderers::scivis::loadOwnBricks(
+        *data.desc, o_.bricks, o_.replication, renderRank_, renderRanks_,
+        renderers::scivis::ghostModeFromName(o_.ghost));
+    const auto read = Clock::now();
+    data.bricks = renderers::scivis::buildBricks(data.desc, std::move(held));
+    data.readMs = msBetween(start, read);
+    data.buildMs = msBetween(read, Clock::now());
+  } else {
+    data.scene = renderers::buildRenderScene(o_.renderer, *data.desc);
+    data.readMs = msBetween(start, Clock::now());
+  }
+  return data;
+}
+
+// Every render rank, at the same frame (the order says so): the drivers render step `step` from
+// now on, and the step after it is read meanwhile.
+void RenderRank::showStep(std::uint32_t step) {
+  stepTimes_ = RankFrame{};
+  StepData data = prefetch_->take(step, stepTimes_.stepWaitMs);
+  stepTimes_.stepReadMs = data.readMs;
+  stepTimes_.stepBuildMs = data.buildMs;
+  const auto start = Clock::now();
+  desc_ = data.desc;
+  if (brickDriver_) {
+    brickDriver_.reset();
+    renderers::scivis::BrickDriverOptions bricks;
+    bricks.samplesPerPixel = static_cast<std::uint32_t>(o_.spp);
+    bricks.threads = o_.threads;
+    bricks.activeTiles = driving_.activeTiles;
+    bricks.timeout = timeout_;
+    brickDriver_ = std::make_unique<renderers::scivis::BrickFrameDriver>(
+        desc_, settings_, bricks, std::move(data.bricks), renderComm_);
+  } else {
+    imageDriver_.reset();
+    renderer_.reset();  // before the scene it draws
+    stepScene_ = std::move(data.scene);
+    renderer_ = renderers::makeRenderer(o_.renderer, *stepScene_, settings_);
+    imageDriver_ = std::make_unique<renderers::FrameDriver>(*renderer_, driving_);
+  }
+  reapplyView();
+  stepTimes_.stepSwitchMs = msBetween(start, Clock::now());
+  prefetch_->start((step + 1) % timeSteps_);
+}
+
+// What the frames were steered to holds on in new drivers or a new frame buffer.
+void RenderRank::reapplyView() {
+  dfb::ToneMapSettings toneMap = dfbOptions_.toneMap;
+  toneMap.exposure = current_.exposure;
+  dfb_->setToneMap(toneMap);
+  const renderers::LiveSettings live{current_.maxDepth, current_.transferFunction,
+                                     current_.opacityScale};
+  if (brickDriver_) brickDriver_->setLiveSettings(live);
+  if (renderer_) renderer_->setLiveSettings(live);
+  if (brickDriver_) brickDriver_->setSamplesPerPixel(static_cast<std::uint32_t>(current_.spp));
+  if (imageDriver_) imageDriver_->setSamplesPerPixel(static_cast<std::uint32_t>(current_.spp));
 }
 
 void RenderRank::connectWall(runtime::MpiWallControl& wallControl) {
@@ -423,16 +513,7 @@ void RenderRank::replan(const wall::service::Reshape& moved, std::uint32_t frame
     preview_->replan(*layout_, frameId);
     dfb_->addPixelOp(preview_->op());
   }
-  // What the frames were steered to holds on in the new frame buffer.
-  dfb::ToneMapSettings toneMap = dfbOptions_.toneMap;
-  toneMap.exposure = current_.exposure;
-  dfb_->setToneMap(toneMap);
-  const renderers::LiveSettings live{current_.maxDepth, current_.transferFunction,
-                                     current_.opacityScale};
-  if (brickDriver_) brickDriver_->setLiveSettings(live);
-  if (renderer_) renderer_->setLiveSettings(live);
-  if (brickDriver_) brickDriver_->setSamplesPerPixel(static_cast<std::uint32_t>(current_.spp));
-  if (imageDriver_) imageDriver_->setSamplesPerPixel(static_cast<std::uint32_t>(current_.spp));
+  reapplyView();
   // Every rank's new frame buffer is registered before any sends to it.
   base::barrier(renderComm_, bound);
   if (job_.worldRank == 0) {
@@ -463,6 +544,8 @@ void RenderRank::idle() {
 void RenderRank::renderFrame(const FrameOrder& order, std::uint32_t frameId) {
   if (idling_) messenger_.setResting(false);
   idling_ = false;
+  const bool stepChanged = order.view.timeStep != current_.timeStep;
+  if (stepChanged) showStep(order.view.timeStep);
   applyView(order.view);
   if (wall_ && wall_->control() && order.captureSequence > 0)
     wall_->control()->capture(frameId, order.captureSequence);
@@ -485,13 +568,14 @@ void RenderRank::renderFrame(const FrameOrder& order, std::uint32_t frameId) {
   if (hasWall_ && !route_ && job_.worldRank == 0)
     sent = wall_->relayGathered(frameId, dfb_->imageRgba8());
   lastFrame_ = frameId;
-  countFrame(order, report, sent, base::msBetween(relayStart, Clock::now()));
+  countFrame(order, report, sent, base::msBetween(relayStart, Clock::now()), stepChanged);
   publish(frameId, false);
   printProgress(frameId);
 }
 
 void RenderRank::countFrame(const FrameOrder& order, const renderers::FrameReport& report,
-                            const wall::DisplayRoutingOp::Sent& sent, double relayMs) {
+                            const wall::DisplayRoutingOp::Sent& sent, double relayMs,
+                            bool stepChanged) {
   const dfb::FrameStats stats = dfb_->stats();
   wall::service::ServicePieceSink* const serviceSink = wall_ ? wall_->serviceSink() : nullptr;
   messaging::Messenger::ObjectTraffic wallNow = messenger_.traffic(wall::kWallNodeObject);
@@ -528,7 +612,11 @@ void RenderRank::countFrame(const FrameOrder& order, const renderers::FrameRepor
                          report.samples,
                          stats.lastSetTileNs,
                          preview_ ? preview_->op()->takeBytesSent() : 0,
-                         serviceSink ? serviceSink->takeDropped() : 0};
+                         serviceSink ? serviceSink->takeDropped() : 0,
+                         stepChanged ? stepTimes_.stepReadMs : 0,
+                         stepChanged ? stepTimes_.stepBuildMs : 0,
+                         stepChanged ? stepTimes_.stepWaitMs : 0,
+                         stepChanged ? stepTimes_.stepSwitchMs : 0};
     const std::vector<RankFrame> all = gatherRankFrames(mine, renderComm_, timeout_);
     if (job_.worldRank == 0) {
       FrameRecord record = combine(all);
@@ -538,6 +626,8 @@ void RenderRank::countFrame(const FrameOrder& order, const renderers::FrameRepor
       record.requestNs = order.requestNs;
       record.presentedAtRequest = order.presentedAtRequest;
       record.rank0PixelBytes = stats.pixelBytesReceived;
+      if (timeSteps_ > 1) record.timeStep = order.view.timeStep;
+      record.stepChanged = stepChanged;
       pending_.push_back(record);
     }
   }
@@ -591,6 +681,8 @@ void RenderRank::publish(std::uint32_t frame, bool idle) {
   now.view = current_;
   now.lastRequest = director_->lastRequest();
   now.lastRequestFrame = director_->lastRequestFrame();
+  now.timeSteps = timeSteps_;
+  now.playing = director_->playing();
   status_->publish(std::move(now));
 }
 

@@ -30,6 +30,7 @@
 #include "renderers/picture/PictureRenderer.h"
 #include "renderers/scivis/bricks/BrickLoad.h"
 #include "renderers/scivis/bricks/BrickPlan.h"
+#include "renderers/scivis/io/SciVisDesc.h"
 #include "runtime/SetupAgreement.h"
 #include "runtime/WallControl.h"
 #include "wall/display/Capture.h"
@@ -172,7 +173,8 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
                                                 job.worldRank, job.roles.renderRanks,
                                                 renderers::scivis::ghostModeFromName(o.ghost));
       if (job.worldRank == 0 && !o.cameraPath.empty())
-        job.cameraPath = CameraPath::load(o.cameraPath, job.scene.desc->camera);
+        job.cameraPath = CameraPath::load(o.cameraPath, job.scene.desc->camera,
+                                          renderers::scivis::timeSteps(*job.scene.desc));
     }
     // Bound now, so a port in use is a setup error on every rank (and a job's hello can name its
     // page); served once frames start.

@@ -165,6 +165,12 @@ void StatsStream::writeFrame(const FrameRecord& f) {
   line["tiles_rendered"] = f.tilesRendered;
   line["samples"] = f.samples;
   line["epoch"] = f.epoch;
+  if (f.timeStep >= 0) line["time_step"] = f.timeStep;
+  if (f.stepChanged)
+    line["step"] = {{"read_ms", f.stepReadMs},
+                    {"build_ms", f.stepBuildMs},
+                    {"wait_ms", f.stepWaitMs},
+                    {"switch_ms", f.stepSwitchMs}};
   if (f.requestId > 0) {
     // A steering request reached every display with this frame: how long after it arrived, and
     // how many frames the displays presented in between (this one included).

@@ -21,6 +21,8 @@ struct RunStatus {
   std::uint32_t epoch = 0;
   bool idle = false;  // converged: nothing is rendered until something changes
   FrameView view;
+  std::uint32_t timeSteps = 1;         // a time series' steps (view.timeStep is the one shown)
+  bool playing = false;                // the series plays (else paused)
   std::uint64_t lastRequest = 0;       // the last steering request applied ...
   std::uint32_t lastRequestFrame = 0;  // ... first shown by this frame
   std::vector<std::string> errors;     // the latest last

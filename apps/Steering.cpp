@@ -48,6 +48,16 @@ std::string checkRequest(const SteeringRequest& r) {
       if (r.fields == 0) return "a settings request needs at least one field";
       if (r.fields & ~settingsFields) return "a settings request has a camera field";
       break;
+    case R::kTime:
+      if (r.fields == 0) return "a time request needs play, step or seek";
+      if (r.fields & ~(R::kPlay | R::kStepBy | R::kSeek))
+        return "a time request has a camera or settings field";
+      if (r.has(R::kStepBy) && r.has(R::kSeek)) return "a time request steps or seeks, not both";
+      if (r.has(R::kPlay) && r.play != 0 && r.play != 1) return "play must be true or false";
+      if (r.has(R::kStepBy) && !(r.stepBy >= -(1 << 20) && r.stepBy <= 1 << 20))
+        return "step must be in [-1048576, 1048576]";
+      if (r.has(R::kSeek) && r.seek < 0) return "seek must not be negative";
+      return {};  // steps beyond the series: checked by the director, which knows its length
     case R::kCapture:
     case R::kStop:
       if (r.fields != 0) return "capture and stop take no fields";

@@ -30,7 +30,7 @@ constexpr messaging::ObjectId kSteeringObject = base::objectId(base::MessageObje
 // One request; trivially copyable (it travels from wall ranks to rank 0 as bytes). `fields`
 // says which of the values are set; the rest are ignored.
 struct SteeringRequest {
-  enum Kind : std::uint32_t { kCamera = 1, kSettings = 2, kCapture = 3, kStop = 4 };
+  enum Kind : std::uint32_t { kCamera = 1, kSettings = 2, kCapture = 3, kStop = 4, kTime = 5 };
   enum Field : std::uint32_t {
     // kCamera: absolute (any subset) ...
     kPosition = 1u << 0,
@@ -47,6 +47,11 @@ struct SteeringRequest {
     kMaxDepth = 1u << 10,
     kTransferFunction = 1u << 11,  // scivis: preset index in transferFunctionPresetNames()
     kOpacityScale = 1u << 12,      // scivis: multiplies every volume's opacity
+    // kTime (a scene with a time series): play or pause, step by some steps (pauses), go to a
+    // step (keeps playing or paused).
+    kPlay = 1u << 16,
+    kStepBy = 1u << 17,
+    kSeek = 1u << 18,
   };
   std::uint32_t kind = 0;
   std::uint32_t fields = 0;
@@ -57,6 +62,9 @@ struct SteeringRequest {
   std::int32_t spp = 1, maxDepth = 8, transferFunction = -1;
   float opacityScale = 1;
   std::int32_t exitCode = 0;  // kStop
+  std::int32_t play = 0;      // kTime: 1 play, 0 pause
+  std::int32_t stepBy = 0;    // kTime: steps forward (negative: back), wrapping around
+  std::int32_t seek = 0;      // kTime: the step to show
   // Set on rank 0 when the request arrives: its id (1, 2, ...), the steady_clock time and the
   // last frame every display had presented then (for the latency statistics).
   std::uint64_t id = 0;

@@ -287,6 +287,29 @@ void checkSampling(TomlReader& r, const std::vector<const toml::table*>& tables,
   }
 }
 
+// The series of a scene play together: the same number of steps at the same rate.
+void checkSeries(TomlReader& r, const std::vector<const toml::table*>& tables, const SceneDesc& d) {
+  const std::vector<VolumeDesc>& volumes = sciVisDesc(d).volumes;
+  const VolumeDesc* first = nullptr;
+  for (std::size_t i = 0; i < volumes.size(); ++i) {
+    const VolumeDesc& v = volumes[i];
+    if (v.steps.empty()) continue;
+    if (!first) {
+      first = &v;
+      continue;
+    }
+    const toml::table& t = *tables[i];
+    if (v.steps.size() != first->steps.size())
+      r.problem(t.get("time_steps") ? *t.get("time_steps") : *t.get("file"),
+                "volume '" + v.name + "'.time_steps",
+                "is " + std::to_string(v.steps.size()) + ", volume '" + first->name + "' has " +
+                    std::to_string(first->steps.size()) + ": the series of a scene play together");
+    if (v.fps != first->fps)
+      r.problem(t.get("fps") ? *t.get("fps") : t, "volume '" + v.name + "'.fps",
+                "differs from volume '" + first->name + "''s: the series of a scene play together");
+  }
+}
+
 }  // namespace
 
 void readSciVis(TomlReader& r, const toml::table& root, const std::filesystem::path& folder,
@@ -322,6 +345,7 @@ void readSciVis(TomlReader& r, const toml::table& root, const std::filesystem::p
     });
   // Judged on a file read cleanly: a volume that failed is not in parts.volumes.
   if (r.diagnostics().ok()) checkSampling(r, volumes, d);
+  if (r.diagnostics().ok()) checkSeries(r, volumes, d);
 }
 
 }  // namespace renderers::scivis

@@ -160,6 +160,87 @@ TEST(FrameDirector, SettingsStartANewEpochCapturesDoNot) {
   EXPECT_EQ(d.epochSpp(), 8);
 }
 
+SteeringRequest timeRequest(std::uint64_t id, std::uint32_t fields) {
+  SteeringRequest r;
+  r.kind = SteeringRequest::kTime;
+  r.fields = fields;
+  r.id = id;
+  return r;
+}
+
+TEST(FrameDirector, ASeriesPlaysOneStepAFrameLoopingEachANewEpoch) {
+  DirectorOptions o = still(2);
+  o.timeSteps = 3;
+  FrameDirector d(o);
+  std::vector<std::uint32_t> steps, epochs;
+  for (std::uint32_t f = 1; f <= 5; ++f) {
+    const FrameOrder order = d.next(f, {});
+    steps.push_back(order.view.timeStep);
+    epochs.push_back(order.frame.epoch);
+    EXPECT_FALSE(d.converged()) << "a playing series never converges";
+  }
+  EXPECT_EQ(steps, (std::vector<std::uint32_t>{0, 1, 2, 0, 1}));
+  EXPECT_EQ(epochs, (std::vector<std::uint32_t>{0, 1, 2, 3, 4}));
+}
+
+TEST(FrameDirector, AtFpsAStepLastsItsPeriodAndNeverSkips) {
+  DirectorOptions o = still(0);
+  o.timeSteps = 10;
+  o.fps = 10;  // 100 ms a step
+  std::chrono::steady_clock::time_point now{};
+  o.now = [&now] { return now; };
+  FrameDirector d(o);
+  using std::chrono::milliseconds;
+  EXPECT_EQ(d.next(1, {}).view.timeStep, 0u);
+  now += milliseconds(60);
+  EXPECT_EQ(d.next(2, {}).view.timeStep, 0u);  // not due yet
+  now += milliseconds(50);
+  EXPECT_EQ(d.next(3, {}).view.timeStep, 1u);
+  now += milliseconds(1000);  // frames fell behind: the next step, not ten steps on
+  EXPECT_EQ(d.next(4, {}).view.timeStep, 2u);
+  EXPECT_EQ(d.next(5, {}).view.timeStep, 2u);  // from now on the period again
+  now += milliseconds(100);
+  EXPECT_EQ(d.next(6, {}).view.timeStep, 3u);
+}
+
+TEST(FrameDirector, PauseStepAndSeek) {
+  DirectorOptions o = still(2);
+  o.timeSteps = 4;
+  FrameDirector d(o);
+  d.next(1, {});
+  d.next(2, {});  // step 1
+  SteeringRequest pause = timeRequest(1, SteeringRequest::kPlay);
+  pause.play = 0;
+  EXPECT_EQ(d.next(3, {pause}).view.timeStep, 1u);
+  EXPECT_FALSE(d.playing());
+  EXPECT_TRUE(d.converged()) << "paused, the step's samples reached";
+  EXPECT_EQ(d.next(4, {}).view.timeStep, 1u);
+  SteeringRequest back = timeRequest(2, SteeringRequest::kStepBy);
+  back.stepBy = -2;  // wraps around
+  EXPECT_EQ(d.next(5, {back}).view.timeStep, 3u);
+  SteeringRequest seek = timeRequest(3, SteeringRequest::kSeek | SteeringRequest::kPlay);
+  seek.seek = 2;
+  seek.play = 1;
+  EXPECT_EQ(d.next(6, {seek}).view.timeStep, 2u) << "a seek shows its step a frame";
+  EXPECT_EQ(d.next(7, {}).view.timeStep, 3u);
+  SteeringRequest past = timeRequest(4, SteeringRequest::kSeek);
+  past.seek = 4;
+  EXPECT_EQ(d.next(8, {past}).view.timeStep, 0u);
+  const std::vector<std::string> errors = d.takeErrors();
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("step 4 is past the series' 4 steps"), std::string::npos) << errors[0];
+}
+
+TEST(FrameDirector, ATimeRequestWithoutASeriesIsAnError) {
+  FrameDirector d(still(2));
+  SteeringRequest play = timeRequest(1, SteeringRequest::kPlay);
+  play.play = 1;
+  EXPECT_EQ(d.next(1, {play}).view.timeStep, 0u);
+  const std::vector<std::string> errors = d.takeErrors();
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("no time series"), std::string::npos) << errors[0];
+}
+
 TEST(SteeringRequest, ChecksRangesAndKinds) {
   SteeringRequest r = camera(1);
   EXPECT_FALSE(checkRequest(r).empty());  // no field
@@ -194,6 +275,36 @@ TEST(CameraPath, InterpolatesBetweenKeyframesAndHoldsAfterTheLast) {
   EXPECT_FLOAT_EQ(path.at(6).position.x, 5.0f);  // frame 6: t = 0.5 s
   EXPECT_FLOAT_EQ(path.at(6).fovY, 50.0f);
   EXPECT_TRUE(same(path.at(11), path.at(500)));  // holds after the last keyframe
+  std::remove(file.c_str());
+}
+
+TEST(CameraPath, KeyframesMayHoldATimeStep) {
+  const std::string file = writeFile(
+      "fps = 10\n[[keyframe]]\ntime = 0\nposition = [0, 0, -10]\nlook_at = [0, 0, 0]\n"
+      "[[keyframe]]\ntime = 0.5\nposition = [5, 0, -10]\nlook_at = [0, 0, 0]\nstep = 3\n"
+      "[[keyframe]]\ntime = 1\nposition = [10, 0, -10]\nlook_at = [0, 0, 0]\nstep = 1\n");
+  const CameraPath path = CameraPath::load(file, {}, 4);
+  EXPECT_FALSE(path.stepAt(1).has_value());  // before any keyframe names one
+  EXPECT_EQ(path.stepAt(6).value_or(99), 3u);
+  EXPECT_EQ(path.stepAt(10).value_or(99), 3u);  // held, not interpolated
+  EXPECT_EQ(path.stepAt(11).value_or(99), 1u);
+  DirectorOptions o = still(0);
+  o.timeSteps = 4;
+  o.path = [&path](std::uint32_t f) { return path.at(f); };
+  o.pathStep = [&path](std::uint32_t f) { return path.stepAt(f); };
+  FrameDirector d(o);
+  EXPECT_EQ(d.next(1, {}).view.timeStep, 0u);
+  EXPECT_EQ(d.next(2, {}).view.timeStep, 1u);  // playing until the path names a step
+  EXPECT_EQ(d.next(6, {}).view.timeStep, 3u);
+  EXPECT_EQ(d.next(7, {}).view.timeStep, 3u);
+  try {
+    CameraPath::load(file, {}, 2);
+    FAIL() << "a step past the series was accepted";
+  } catch (const base::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("keyframe #2.step: must be from 0 to 1"),
+              std::string::npos)
+        << e.what();
+  }
   std::remove(file.c_str());
 }
 

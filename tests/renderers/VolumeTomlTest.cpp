@@ -2,6 +2,7 @@
 // name file:line:column and the field.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -10,6 +11,7 @@
 #include "base/TomlDiagnostics.h"
 #include "renderers/scivis/io/VolumeToml.h"
 #include "tests/DiagnosticsTestUtil.h"
+#include "tests/renderers/VolumeFileTestUtil.h"
 
 namespace renderers::scivis {
 namespace {
@@ -214,12 +216,88 @@ TEST(VolumeToml, FilesTakeTheirGridFromTheHeaderAndErrorsNameLineFieldAndFile) {
             ":5:9: volume 'v'.array: is for VTK image data (.vti, .pvti)");
   EXPECT_EQ(errorOf("dims.toml", head + "file = \"v.nrrd\"\ndims = [3, 4, 5]\n" + tf),
             ":5:1: volume 'v': unknown field 'dims'; known fields: name, source, origin, spacing, "
-            "visible, transfer_function, file, format, dataset, variable, array, time");
+            "visible, transfer_function, file, format, dataset, variable, array, time, "
+            "time_steps, first_step, fps");
   const std::string nifti =
       errorOf("nifti.toml", head + "file = \"v.nrrd\"\nformat = \"nifti\"\n" + tf);
   EXPECT_EQ(nifti.rfind(":4:8: volume 'v'.file: " + nrrd + ": 146 bytes, too short for a NIfTI", 0),
             0u)
       << nifti;
+}
+
+TEST(VolumeToml, ATimeSeriesResolvesEveryStepAndNamesTheStepThatIsWrong) {
+  const std::string header = "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 3 4 5\n\n";
+  for (int k = 0; k < 3; ++k)
+    writeFile("s" + std::to_string(10 + k) + ".nrrd", header + std::string(60, char(k)));
+  const std::string head = "[[volumes]]\nname = \"s\"\nsource = \"file\"\n";  // lines 1-3
+  const std::string tf = "transfer_function = { preset = \"viridis\", range = [0, 9] }\n";
+  const VolumeDesc d = readFirst(
+      writeFile("series.toml",
+                head + "file = \"s%02d.nrrd\"\ntime_steps = 3\nfirst_step = 10\nfps = 4\n" + tf));
+  ASSERT_EQ(d.steps.size(), 3u);
+  EXPECT_EQ(d.fps, 4.0f);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(d.steps[static_cast<std::size_t>(k)].file.path,
+              (testDir() / ("s" + std::to_string(10 + k) + ".nrrd")).string());
+    EXPECT_EQ(d.steps[static_cast<std::size_t>(k)].grid.dims, d.source.grid.dims);
+    EXPECT_EQ(d.steps[static_cast<std::size_t>(k)].grid.spacing, d.source.grid.spacing);
+    EXPECT_EQ(d.steps[static_cast<std::size_t>(k)].grid.origin, d.source.grid.origin);
+  }
+  EXPECT_EQ(d.source.file.path, d.steps[0].file.path);
+  const VolumeDesc glob = readFirst(writeFile("glob.toml", head + "file = \"s1?.nrrd\"\n" + tf));
+  ASSERT_EQ(glob.steps.size(), 3u);
+  EXPECT_EQ(glob.steps[2].file.path, d.steps[2].file.path);
+  EXPECT_EQ(errorOf("nosteps.toml", head + "file = \"s%02d.nrrd\"\n" + tf),
+            ":4:8: volume 's'.file: names a pattern of files: give 'time_steps'");
+  EXPECT_EQ(errorOf("conv.toml", head + "file = \"s%s.nrrd\"\ntime_steps = 2\n" + tf),
+            ":4:8: volume 's'.file: the pattern 's%s.nrrd' has a conversion other than %d, %Nd "
+            "or %0Nd (N up to 20) at '%s' (write %% for a '%')");
+  EXPECT_EQ(
+      errorOf("missing.toml",
+              head + "file = \"s%02d.nrrd\"\ntime_steps = 4\nfirst_step = 10\n" + tf)
+          .rfind(":4:8: volume 's'.file: time step 3 (" + (testDir() / "s13.nrrd").string() + "): ",
+                 0),
+      0u);
+  EXPECT_EQ(errorOf("fps.toml", head + "file = \"s10.nrrd\"\nfps = 2\n" + tf),
+            ":5:7: volume 's'.fps: is for a time series (time_steps, a pattern or a glob)");
+  // A 3-D file has no time dimension to step along: step 1 is the error.
+  const std::string along =
+      errorOf("along.toml", head + "file = \"s10.nrrd\"\ntime_steps = 2\n" + tf);
+  EXPECT_EQ(
+      along.rfind(
+          ":4:8: volume 's'.file: time step 1 (" + (testDir() / "s10.nrrd").string() + "): ", 0),
+      0u)
+      << along;
+  EXPECT_EQ(errorOf("noglob.toml", head + "file = \"none*.nrrd\"\n" + tf),
+            ":4:8: volume 's'.file: no file matches '" + (testDir() / "none*.nrrd").string() + "'");
+}
+
+TEST(VolumeToml, ASeriesAlongA4dNiftiReadsEachStepOfTheOneFile) {
+  // (t, z, y, x) uint8, 3 time steps, step k holding k + 1 everywhere.
+  std::string header = volfiletest::niftiHeader(Index3{4, 3, 2}, 2, 8);
+  const std::int16_t four = 4, steps = 3;
+  std::memcpy(header.data() + 40, &four, 2);
+  std::memcpy(header.data() + 48, &steps, 2);
+  std::string voxels;
+  for (char k = 1; k <= 3; ++k) voxels += std::string(4 * 3 * 2, k);
+  const std::string nii = writeFile("t4.nii", header + voxels);
+  const std::string head = "[[volumes]]\nname = \"t\"\nsource = \"file\"\nfile = \"t4.nii\"\n";
+  const std::string tf = "transfer_function = { preset = \"viridis\", range = [0, 9] }\n";
+  const VolumeDesc d =
+      readFirst(writeFile("t4.toml", head + "time_steps = 2\nfirst_step = 1\n" + tf));
+  ASSERT_EQ(d.steps.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(d.steps[k].file.path, nii);
+    EXPECT_EQ(d.steps[k].file.time, static_cast<int>(k) + 1);
+    const Volume v = loadVolume(d.steps[k], d.steps[k].grid.wholeBox());
+    EXPECT_EQ(v.at(3, 2, 1), static_cast<float>(k + 2)) << "step " << k;
+  }
+  EXPECT_EQ(readFirst(writeFile("t4-all.toml", head + "time_steps = 3\n" + tf)).steps.size(), 3u);
+  const std::string past = errorOf("t4-past.toml", head + "time_steps = 4\n" + tf);
+  EXPECT_EQ(past.rfind(":4:8: volume 't'.file: time step 3 (" + nii + "): ", 0), 0u) << past;
+  EXPECT_EQ(errorOf("t4-time.toml", head + "time_steps = 2\ntime = 1\n" + tf),
+            ":6:8: volume 't'.time: a series along the file's time dimension starts at "
+            "'first_step', not 'time'");
 }
 
 TEST(VolumeToml, FieldErrorsNameFileLineAndField) {

@@ -1,5 +1,6 @@
 // The controller page: polls /api/status, refreshes /api/preview.png, turns drags, wheel and
-// pinches into POST /api/camera, the controls into POST /api/settings, /api/capture, /api/stop.
+// pinches into POST /api/camera, the controls into POST /api/settings, /api/time, /api/capture,
+// /api/stop.
 // Plain JavaScript, no library: served by dfbwall itself, with no network beyond it.
 'use strict';
 
@@ -88,6 +89,7 @@ function showStatus(s) {
     settingsShown = true;
     showSettings(s.settings);
   }
+  showTime(s.time);
   const errors = s.errors || [];
   if (errors.length) showError('The wall reports: ' + errors.join('; '));
   setState(s.stopping ? 'stopping' : s.idle ? 'converged, idle' : 'running', 'ok');
@@ -291,6 +293,36 @@ $('stop').addEventListener('click', async () => {
     showError(e.message);
   }
 });
+
+// --- a time series: play, pause, step, seek -------------------------------------------------
+let playing = false;
+let seeking = false;  // the slider is held: the status does not move it meanwhile
+function showTime(t) {
+  $('time-controls').hidden = !t;
+  if (!t) return;
+  playing = t.playing;
+  $('play').textContent = playing ? 'Pause' : 'Play';
+  $('step-value').textContent = (t.step + 1) + ' / ' + t.steps;
+  $('seek').max = t.steps - 1;
+  if (!seeking) $('seek').value = t.step;
+}
+async function postTime(body) {
+  try {
+    await api('POST', '/api/time', body);
+    showError('');
+  } catch (e) {
+    showError(e.message);
+  }
+}
+$('play').addEventListener('click', () => postTime({ play: !playing }));
+$('step-back').addEventListener('click', () => postTime({ step: -1 }));
+$('step-on').addEventListener('click', () => postTime({ step: 1 }));
+const sendSeek = debounce((step) => postTime({ seek: step }), 150);
+$('seek').addEventListener('input', () => {
+  seeking = true;
+  sendSeek(Number($('seek').value));
+});
+$('seek').addEventListener('change', () => { seeking = false; });
 
 // The sliders start where the wall is (the settings in the first status).
 function showSettings(s) {

@@ -143,47 +143,62 @@ struct BrickFrameDriver::Impl {
         threads(options.threads) {}
 };
 
+std::vector<BuiltBrick> buildBricks(std::shared_ptr<const SceneDesc> desc,
+                                    std::vector<HeldBrick> mine) {
+  std::vector<BuiltBrick> built;
+  for (HeldBrick& b : mine) {
+    if (b.content.volumes.size() != sciVisDesc(*desc).volumes.size())
+      throw base::Error("brick " + std::to_string(b.id) + " has " +
+                        std::to_string(b.content.volumes.size()) + " volumes, the scene " +
+                        std::to_string(sciVisDesc(*desc).volumes.size()));
+    built.push_back({b.id, std::make_unique<SciVisScene>(desc, std::move(b.content))});
+  }
+  return built;
+}
+
 BrickFrameDriver::BrickFrameDriver(std::shared_ptr<const SceneDesc> desc,
                                    const RenderSettings& settings, BrickDriverOptions options,
                                    std::vector<HeldBrick> mine, MPI_Comm comm)
+    : BrickFrameDriver(desc, settings, std::move(options), buildBricks(desc, std::move(mine)),
+                       comm) {}
+
+BrickFrameDriver::BrickFrameDriver(std::shared_ptr<const SceneDesc> desc,
+                                   const RenderSettings& settings, BrickDriverOptions options,
+                                   std::vector<BuiltBrick> mine, MPI_Comm comm)
     : impl_(std::make_unique<Impl>(std::move(desc), settings, std::move(options), 0, 1)) {
   Impl& m = *impl_;
   MPI_Comm_rank(comm, &m.rank);
   MPI_Comm_size(comm, &m.ranks);
   std::vector<BrickPlan> held;
-  for (const HeldBrick& b : mine) {
-    if (b.content.volumes.size() != sciVisDesc(*m.desc).volumes.size())
-      throw base::Error("brick " + std::to_string(b.id) + " has " +
-                        std::to_string(b.content.volumes.size()) + " volumes, the scene " +
-                        std::to_string(sciVisDesc(*m.desc).volumes.size()));
+  for (const BuiltBrick& b : mine) {
     for (const BrickPlan& p : held)
       if (p.id == b.id)
         throw base::Error("brick " + std::to_string(b.id) + " is added twice on render rank " +
                           std::to_string(m.rank));
-    held.push_back({b.id, b.content.bounds});
+    held.push_back({b.id, b.scene->bounds()});
   }
   m.directory = exchangeBricks(held, comm, m.options.timeout);
   // Every rank decides alike (the same description), so all join the exchange or none.
   m.occlusionExact = BrickOcclusion::exactFor(*m.desc);
   if (m.occlusionExact) {
     std::vector<std::pair<int, const BrickContent*>> contents;
-    for (const HeldBrick& b : mine) contents.emplace_back(b.id, &b.content);
+    for (const BuiltBrick& b : mine) contents.emplace_back(b.id, &b.scene->content());
     m.occlusion =
         BrickOcclusion::exchange(*m.desc, m.directory.bricks, contents, comm, m.options.timeout);
   }
   m.scenes.resize(m.directory.bricks.size());
   m.renderers.resize(m.directory.bricks.size());
-  for (HeldBrick& b : mine) {
+  for (BuiltBrick& b : mine) {
     const auto i =
         static_cast<std::size_t>(std::find_if(m.directory.bricks.begin(), m.directory.bricks.end(),
                                               [&](const BrickPlan& p) { return p.id == b.id; }) -
                                  m.directory.bricks.begin());
-    m.scenes[i] = std::make_unique<SciVisScene>(m.desc, std::move(b.content));
+    m.scenes[i] = std::move(b.scene);
     m.bytes += m.scenes[i]->bytes();
     SciVisOptions brickOptions;
     brickOptions.background = false;
     brickOptions.firstHits = m.options.firstHits;
-    m.renderers[i] = std::make_unique<SciVisRenderer>(*m.scenes[i], settings, brickOptions);
+    m.renderers[i] = std::make_unique<SciVisRenderer>(*m.scenes[i], m.settings, brickOptions);
   }
 }
 

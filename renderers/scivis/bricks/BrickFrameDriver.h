@@ -50,6 +50,17 @@ struct BrickDriverOptions {
 // input per active tile): a DFB set up once serves every scene version's driver.
 void configureBrickDfb(dfb::DfbOptions& options, std::vector<bool> activeTiles);
 
+// A held brick with its scene built (macrocells, value ranges, isosurfaces and their BVHs):
+// the part of a driver's construction that needs no other rank, so a next time step's bricks can
+// be built on a thread of their own while the current ones render (apps/StepPrefetch.h).
+struct BuiltBrick {
+  int id = 0;
+  std::unique_ptr<SciVisScene> scene;
+};
+// Builds each brick's scene for `desc` (as the driver's constructor does). Pure.
+std::vector<BuiltBrick> buildBricks(std::shared_ptr<const SceneDesc> desc,
+                                    std::vector<HeldBrick> mine);
+
 class BrickFrameDriver {
  public:
   // `desc` gives everything but the bricks' data: materials, transfer functions, isosurfaces,
@@ -57,6 +68,9 @@ class BrickFrameDriver {
   // bricks' voxels (BrickContent::volumes has one entry per SciVisDesc::volumes).
   BrickFrameDriver(std::shared_ptr<const SceneDesc> desc, const RenderSettings& settings,
                    BrickDriverOptions options, std::vector<HeldBrick> mine, MPI_Comm comm);
+  // The same with the bricks built already (buildBricks with the same `desc`).
+  BrickFrameDriver(std::shared_ptr<const SceneDesc> desc, const RenderSettings& settings,
+                   BrickDriverOptions options, std::vector<BuiltBrick> mine, MPI_Comm comm);
   ~BrickFrameDriver();
 
   // configureBrickDfb with this driver's active tiles.

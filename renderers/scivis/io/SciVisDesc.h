@@ -24,6 +24,11 @@ struct VolumeDesc {
   // Where its size was given, for errors found after reading (the memory budget of a brick):
   // "scene.toml:7:8: volume 'ct'.dims"; empty when not read from a file.
   std::string where;
+  // A time series (file = "step-%03d.nrrd" or a glob, or time_steps along the file's time
+  // dimension): every step's source, resolved, with step 0's grid and type; `source` is the
+  // step shown. Empty: one step, `source`.
+  std::vector<VolumeSource> steps;
+  float fps = 0;  // playback rate of `steps`; 0: one step a frame
 };
 
 // One level set of a volume: a surface at `value`, shaded with a material, possibly transparent.
@@ -83,6 +88,13 @@ struct SciVisDesc final : SceneExtension {
   std::vector<std::string> inputFiles() const override;  // particle and volume files
   std::uint64_t bytes() const override;                  // the particles' bytes
 };
+
+// The time steps of `desc`'s series (every series volume has the same count; 1: none) and
+// their playback rate (steps a second; 0: one a frame).
+std::uint32_t timeSteps(const SceneDesc& desc);
+float playbackFps(const SceneDesc& desc);
+// `desc` showing time step `step` (< timeSteps): each series volume's source is that step's.
+std::shared_ptr<const SceneDesc> sceneAtStep(const SceneDesc& desc, std::uint32_t step);
 
 // The name SceneDesc::extensions holds SciVisDesc under: the renderer's.
 inline constexpr const char* kSciVisName = "scivis";

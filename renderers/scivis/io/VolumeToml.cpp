@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "base/Error.h"
+#include "renderers/scivis/io/VolumeSeries.h"
 #include "renderers/scivis/io/formats/VolumeFile.h"
 
 namespace renderers::scivis {
@@ -162,11 +163,67 @@ void readOpenVdb(TomlReader& r, const toml::table& t, const std::string& what,
                  " voxels along an axis, more than " + std::to_string(kMaxDims));
 }
 
+// A whole number in [lo, hi] from t[key], or `fallback` when absent or wrong (a problem then).
+std::int64_t readCount(TomlReader& r, const toml::table& t, std::string_view key,
+                       const std::string& what, std::int64_t fallback, std::int64_t lo,
+                       std::int64_t hi) {
+  const toml::node* n = t.get(key);
+  if (!n) return fallback;
+  const std::string field = what + "." + std::string(key);
+  const auto v = r.diagnostics().integer(*n, field);
+  if (!v) return fallback;
+  if (*v < lo || *v > hi) {
+    r.problem(*n, field,
+              "must be from " + std::to_string(lo) + " to " + std::to_string(hi) + ", got " +
+                  std::to_string(*v));
+    return fallback;
+  }
+  return *v;
+}
+
+std::string dimsText(const Index3& d) {
+  return std::to_string(d.x) + "x" + std::to_string(d.y) + "x" + std::to_string(d.z);
+}
+
+// A time series' steps (VolumeDesc::steps): step 0 is `s`, resolved by readFile; the others are
+// resolved here, each with the grid and type of the first, else an error naming the step's file.
+void resolveSteps(TomlReader& r, const toml::node& file, const std::string& what,
+                  const VolumeSource& s, const std::vector<std::string>& paths, int firstTime,
+                  std::vector<VolumeSource>& steps) {
+  const std::size_t count = paths.size();
+  steps.reserve(count);
+  steps.push_back(s);
+  for (std::size_t k = 1; k < count; ++k) {
+    VolumeSource step;
+    step.kind = VolumeSource::Kind::File;
+    step.file.path = paths[k];
+    step.file.format = s.file.format;
+    step.file.dataset = s.file.dataset;
+    step.file.variable = s.file.variable;
+    step.file.array = s.file.array;
+    step.file.time = paths[k] == paths[0] ? firstTime + static_cast<int>(k) : firstTime;
+    const std::string name = "time step " + std::to_string(k) + " (" + paths[k] + ")";
+    try {
+      resolveVolumeFile(step);
+    } catch (const base::Error& e) {
+      r.fail(file, what + ".file", name + ": " + e.what());
+    }
+    if (step.grid.dims != s.grid.dims || step.type != s.type)
+      r.fail(file, what + ".file",
+             name + " is " + dimsText(step.grid.dims) + " " + voxelTypeName(step.type) +
+                 ", the first step (" + paths[0] + ") " + dimsText(s.grid.dims) + " " +
+                 voxelTypeName(s.type) + ": every step of a series has the first one's");
+    steps.push_back(std::move(step));
+  }
+}
+
 void readFile(TomlReader& r, const toml::table& t, const std::string& what,
-              const std::filesystem::path& folder, VolumeSource& s) {
+              const std::filesystem::path& folder, VolumeSource& s,
+              std::vector<std::string>& series) {
   const toml::node* file = r.need(t, "file", what);
   VolumeFileParams& f = s.file;
-  f.path = (folder / r.string(file, what + ".file")).string();
+  const std::string given = r.string(file, what + ".file");
+  f.path = (folder / given).string();
   bool formatKnown = false;
   if (const toml::node* format = t.get("format")) {
     const std::string name = r.string(format, what + ".format");
@@ -200,20 +257,54 @@ void readFile(TomlReader& r, const toml::table& t, const std::string& what,
       r.problem(*a, what + ".array", "is for VTK image data (.vti, .pvti)");
     f.array = r.string(a, what + ".array");
   }
-  if (const toml::node* time = t.get("time")) {
-    const auto v = r.diagnostics().integer(*time, what + ".time");
-    if (v && (*v < 0 || *v > (1 << 30)))
-      r.problem(*time, what + ".time",
-                "must be from 0 to " + std::to_string(1 << 30) + ", got " + std::to_string(*v));
-    else if (v)
-      f.time = static_cast<int>(*v);
-  }
+  f.time = static_cast<int>(readCount(r, t, "time", what, 0, 0, 1 << 30));
+  // A time series: a pattern or glob of files, or time_steps along the file's time dimension.
+  const SeriesNaming naming = seriesNaming(given);
+  const toml::node* steps = t.get("time_steps");
+  const toml::node* first = t.get("first_step");
+  const auto count = static_cast<std::size_t>(readCount(r, t, "time_steps", what, 1, 1, 100000));
+  const auto firstStep = readCount(r, t, "first_step", what, 0, 0, 1 << 30);
+  if (naming == SeriesNaming::Pattern && !steps && file)
+    r.problem(*file, what + ".file", "names a pattern of files: give 'time_steps'");
+  if (naming == SeriesNaming::One && (steps || first) && t.get("time"))
+    r.problem(*t.get("time"), what + ".time",
+              "a series along the file's time dimension starts at 'first_step', not 'time'");
+  const bool isSeries = naming != SeriesNaming::One || steps || first;
+  if (const toml::node* fps = t.get("fps"); fps && !isSeries)
+    r.problem(*fps, what + ".fps", "is for a time series (time_steps, a pattern or a glob)");
   r.settle();  // the file is read as the fields above say
+  try {
+    if (naming == SeriesNaming::Pattern) {
+      for (std::size_t k = 0; k < count; ++k)
+        series.push_back(
+            (folder / patternFile(given, static_cast<std::uint64_t>(firstStep) + k)).string());
+    } else if (naming == SeriesNaming::Glob) {
+      const std::vector<std::string> matches = globFiles((folder / given).string());
+      const auto skip = static_cast<std::size_t>(firstStep);
+      if (skip >= matches.size())
+        throw base::Error("first_step " + std::to_string(skip) + " is past the " +
+                          std::to_string(matches.size()) + " files matching '" + given + "'");
+      if (steps && skip + count > matches.size())
+        throw base::Error("time_steps " + std::to_string(count) + " from first_step " +
+                          std::to_string(skip) + " needs more than the " +
+                          std::to_string(matches.size()) + " files matching '" + given + "'");
+      const std::size_t end = steps ? skip + count : matches.size();
+      series.assign(matches.begin() + static_cast<std::ptrdiff_t>(skip),
+                    matches.begin() + static_cast<std::ptrdiff_t>(end));
+    } else if (isSeries) {
+      series.assign(count, f.path);
+      f.time = static_cast<int>(firstStep);
+    }
+  } catch (const base::Error& e) {
+    r.fail(*file, what + ".file", e.what());
+  }
+  if (!series.empty()) f.path = series.front();
   try {
     resolveVolumeFile(s);
   } catch (const base::Error& e) {
     // Point at the field the problem is about: a dataset, variable or time step the file lacks.
-    const std::string m = e.what();
+    const std::string m =
+        series.size() > 1 ? "time step 0 (" + f.path + "): " + e.what() : e.what();
     for (const std::string field : {"dataset", "variable", "array", "time"})
       if (const toml::node* n = t.get(field); n && m.find(" " + field + " ") != std::string::npos)
         r.fail(*n, what + "." + field, m);
@@ -313,6 +404,7 @@ VolumeDesc readVolume(TomlReader& r, const toml::table& t, const std::filesystem
   const std::string what = nameNode && nameNode->is_string() ? "volume '" + d.name + "'" : "volume";
   VolumeSource& s = d.source;
   s.kind = readKind(r, t, what);
+  std::vector<std::string> series;  // a time series' files, step by step
   switch (s.kind) {
     case VolumeSource::Kind::Wavelet:
       r.onlyKeys(t, what,
@@ -335,9 +427,10 @@ VolumeDesc readVolume(TomlReader& r, const toml::table& t, const std::filesystem
           {"name", "source", "origin", "spacing", "visible", "transfer_function", "file", "grid"});
       break;
     case VolumeSource::Kind::File:
-      r.onlyKeys(t, what,
-                 {"name", "source", "origin", "spacing", "visible", "transfer_function", "file",
-                  "format", "dataset", "variable", "array", "time"});
+      r.onlyKeys(
+          t, what,
+          {"name", "source", "origin", "spacing", "visible", "transfer_function", "file", "format",
+           "dataset", "variable", "array", "time", "time_steps", "first_step", "fps"});
       break;
   }
   d.visible = r.boolean(t, "visible", what, d.visible);
@@ -379,7 +472,7 @@ VolumeDesc readVolume(TomlReader& r, const toml::table& t, const std::filesystem
       readOpenVdb(r, t, what, folder, s);
       break;
     case VolumeSource::Kind::File:
-      readFile(r, t, what, folder, s);
+      readFile(r, t, what, folder, s, series);
       break;
   }
 
@@ -399,6 +492,16 @@ VolumeDesc readVolume(TomlReader& r, const toml::table& t, const std::filesystem
     s.grid.origin = {-0.5f * s.grid.spacing.x * static_cast<float>(n.x - 1),
                      -0.5f * s.grid.spacing.y * static_cast<float>(n.y - 1),
                      -0.5f * s.grid.spacing.z * static_cast<float>(n.z - 1)};
+
+  // Every step of a series has the first one's grid (and its own file's voxels).
+  if (!series.empty()) {
+    resolveSteps(r, *t.get("file"), what, s, series, s.file.time, d.steps);
+    for (VolumeSource& step : d.steps) step.grid = s.grid;
+    if (const toml::node* fps = t.get("fps")) {
+      d.fps = r.number(*fps, what + ".fps");
+      if (!(d.fps >= 0 && d.fps <= 1000)) r.problem(*fps, what + ".fps", "must be in [0, 1000]");
+    }
+  }
 
   // Where its size was given (a brick's memory budget names it), and whether float can place
   // its voxels.

@@ -25,6 +25,10 @@
 //   #      dataset (HDF5) / variable (NetCDF) (default: the file's only 3-D/4-D one), time
 //   #      (4-D data, default 0); dims, type and (except HDF5) spacing and origin come from the
 //   #      file's header, read with the scene; spacing/origin here override them
+//   #      A time series: file a printf pattern ("step-%03d.nrrd", with time_steps) or a glob,
+//   #      or time_steps along a 4-D file's time dimension; first_step, fps (steps a second,
+//   #      0: one a frame). Every step's header is read here: a missing step or one whose dims
+//   #      or type differ from the first is an error naming it (docs/scivis.md, "Time series")
 //   transfer_function = { preset = "cool-warm", range = [37, 277], opacity = [[37, 0], [277, 0.4]]
 //   } # preset: cool-warm | viridis | inferno | grayscale | rainbow, or # colors = [[value, r, g,
 //   b], ...] (r, g, b in [0, 1]); exactly one of the two. # opacity = [[value, opacity], ...]
