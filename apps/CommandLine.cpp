@@ -242,6 +242,10 @@ void addJobFailureOptions(CLI::App& app, RawOptions& raw) {
 }
 
 void addJobOutputGroup(CLI::App& app, Options& o) {
+  app.add_option("--view", o.view,
+                 "with --wall and --image: render what display DISPLAY of the layout shows, in "
+                 "this job alone (no wall ranks): the reference for its captures")
+      ->group(kOutput);
   app.add_option("--image", o.image,
                  "without a wall: write the last frame on rank 0: .png (tone-mapped) or .pfm "
                  "(linear)")

@@ -47,7 +47,10 @@ struct Options {
   std::string ghost = "reach";
 
   // The wall.
-  std::string wall;        // layout file; empty: no wall (serve: the wall it runs)
+  std::string wall;  // layout file; empty: no wall (serve: the wall it runs)
+  // --view DISPLAY with --wall: no wall, one image of what that display shows (--image). The
+  // parser moves --wall's file here, so the job has no wall ranks.
+  std::string view, viewLayout;
   bool offscreen = false;  // serve too
   std::string captureDir;
   int captureEvery = 0;

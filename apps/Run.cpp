@@ -30,6 +30,7 @@
 #include "renderers/picture/PictureRenderer.h"
 #include "renderers/scivis/bricks/BrickLoad.h"
 #include "renderers/scivis/bricks/BrickPlan.h"
+#include "runtime/RoomView.h"
 #include "runtime/SetupAgreement.h"
 #include "runtime/WallControl.h"
 #include "wall/display/Capture.h"
@@ -138,6 +139,7 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
       job.roles = wall::rankRoles(*job.layout, worldSize);
       job.canvasWidth = job.layout->canvasWidth;
       job.canvasHeight = job.layout->canvasHeight;
+      job.room = runtime::roomView(*job.layout);
       if (job.isWallRank()) {
         char name[MPI_MAX_PROCESSOR_NAME];
         int length = 0;
@@ -147,6 +149,22 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
                                 std::string(name, static_cast<size_t>(length))))
           std::fprintf(stderr, "dfbwall: warning: %s\n", w.c_str());
       }
+    } else if (!o.viewLayout.empty()) {  // --view: the wall's canvas, one display's picture
+      hashes.layout = hashFile(o.viewLayout);
+      const wall::Layout layout = wall::loadLayout(o.viewLayout);
+      const int display = layout.findDisplay(o.view);
+      if (display < 0) {
+        std::string names;
+        for (const wall::Display& d : layout.displays)
+          names += (names.empty() ? "" : ", ") + d.name;
+        return "--view " + o.view + ": " + o.viewLayout + " has no such display (it has " + names +
+               ")";
+      }
+      job.roles = wall::RankRoles{worldSize, 0};
+      job.canvasWidth = layout.canvasWidth;
+      job.canvasHeight = layout.canvasHeight;
+      job.room = runtime::roomView(layout);
+      job.view = layout.displays[static_cast<std::size_t>(display)].rect;
     } else {
       job.roles = wall::RankRoles{worldSize, 0};
       job.canvasWidth = o.width;
