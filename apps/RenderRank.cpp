@@ -54,6 +54,14 @@ std::vector<bool> tilesMeeting(const dfb::TileGrid& grid, const dfb::Region& reg
   return out;
 }
 
+// --view: `image` with each kViewedDisplay replaced by the display's name.
+std::string viewImagePath(std::string image, const std::string& display) {
+  const std::string key = kViewedDisplay;
+  for (std::size_t at = image.find(key); at != std::string::npos; at = image.find(key, at))
+    image.replace(at, key.size(), display), at += display.size();
+  return image;
+}
+
 // --view: the display's pixels of the gathered canvas (`width` pixels a row), as a PNG.
 void writeView(const std::string& path, const std::uint32_t* canvas, int width,
                const dfb::Region& view) {
@@ -242,10 +250,15 @@ void RenderRank::chooseFormat() {
   } else {
     dfbOptions_.format = dfb::DisplayFormat::NONE;
   }
-  // --view: only the tiles of that display, as its wall would have them rendered.
-  if (job_.view) {
-    driving_.activeTiles =
-        tilesMeeting(dfb::TileGrid(fb.width, fb.height, fb.tileSize), *job_.view);
+  // --view: only the tiles of those displays, as their wall would have them rendered.
+  if (!job_.views.empty()) {
+    const dfb::TileGrid grid(fb.width, fb.height, fb.tileSize);
+    driving_.activeTiles.assign(static_cast<std::size_t>(grid.tileCount()), false);
+    for (const Job::ViewedDisplay& v : job_.views) {
+      const std::vector<bool> tiles = tilesMeeting(grid, v.pixels);
+      for (std::size_t t = 0; t < tiles.size(); ++t)
+        if (tiles[t]) driving_.activeTiles[t] = true;
+    }
     dfbOptions_.ownership = renderers::activeTileOwnership(driving_.activeTiles);
   }
   // The pattern writes display pixels straight away, unless linear output is asked for.
@@ -669,8 +682,10 @@ void RenderRank::endJob() {
   }
   if (!dfbOptions_.gatherEveryFrame && !o_.image.empty() && lastFrame_ > 0) dfb_->gatherImage();
   if (job_.worldRank == 0 && !o_.image.empty() && lastFrame_ > 0) {
-    if (job_.view)
-      writeView(o_.image, dfb_->imageRgba8().data(), job_.canvasWidth, *job_.view);
+    if (!job_.views.empty())
+      for (const Job::ViewedDisplay& v : job_.views)
+        writeView(viewImagePath(o_.image, v.name), dfb_->imageRgba8().data(), job_.canvasWidth,
+                  v.pixels);
     else if (endsWith(o_.image, ".png"))
       wall::writePng(o_.image, dfb_->imageRgba8().data(), job_.canvasWidth, job_.canvasHeight);
     else

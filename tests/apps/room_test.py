@@ -5,8 +5,8 @@
 
 Renders LAYOUT on the wall (RENDER_RANKS render ranks and its wall processes, --capture), then
 runs the checks named in CHECKS (comma-separated) on the captures of the last frame:
-  views      every display's capture equals `dfbwall --view DISPLAY --image` (one process, no
-             wall) byte for byte;
+  views      every display's capture equals `dfbwall --view DISPLAY,... --image` (one process,
+             no wall, every display at once) byte for byte;
   pinhole    the captures put together at their canvas places equal a pinhole render of the
              canvas (--size, the scene's field of view) within TOLERANCE below: the wall is flat,
              its head centred, and the scene's field of view matches it;
@@ -83,10 +83,10 @@ def main():
         fail("every display captured the same picture: nothing to compare")
 
     if "views" in checks:
+        mpi(1, ["--wall", layout, "--view", ",".join(displays), "--image",
+                 work + "/view-{display}.png", "--quiet"] + options)
         for name in displays:
-            mpi(1, ["--wall", layout, "--view", name, "--image", f"{work}/{name}.png",
-                     "--quiet"] + options)
-            view = pixels(f"{work}/{name}.png")
+            view = pixels(f"{work}/view-{name}.png")
             if view.shape != captures[name].shape or not np.array_equal(view, captures[name]):
                 differ = np.count_nonzero(np.any(view != captures[name], axis=-1)) \
                     if view.shape == captures[name].shape else "all"
