@@ -26,6 +26,7 @@
 #include "renderers/scivis/bricks/BrickFrameDriver.h"
 #include "runtime/MpiWallProcess.h"
 #include "runtime/RenderWall.h"
+#include "runtime/RoomView.h"
 #include "runtime/SetupAgreement.h"
 #include "runtime/WallControl.h"
 #include "wall/display/Capture.h"
@@ -420,6 +421,7 @@ void Session::Impl::commit() {
   settings.width = width;
   settings.height = height;
   settings.seed = style.seed;
+  settings.room = layout ? runtime::roomView(*layout) : nullptr;  // screens placed in a room
   auto desc = std::make_shared<renderers::SceneDesc>(sceneDesc(style, bricks, role, timeout));
   renderers::scivis::BrickDriverOptions driving;
   driving.samplesPerPixel = static_cast<std::uint32_t>(std::max(1, style.samplesPerPixel));

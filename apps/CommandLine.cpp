@@ -243,6 +243,11 @@ void addJobFailureOptions(CLI::App& app, RawOptions& raw) {
 }
 
 void addJobOutputGroup(CLI::App& app, Options& o) {
+  app.add_option("--view", o.view,
+                 "DISPLAY[,DISPLAY...] with --wall and --image: render what those displays of "
+                 "the layout show, in this job alone (no wall ranks): the references for their "
+                 "captures; {display} in --image's name is each display's name")
+      ->group(kOutput);
   app.add_option("--image", o.image,
                  "without a wall: write the last frame on rank 0: .png (tone-mapped) or .pfm "
                  "(linear)")

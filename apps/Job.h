@@ -5,6 +5,7 @@
 
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "apps/CameraPath.h"
@@ -12,6 +13,7 @@
 #include "apps/Options.h"
 #include "messaging/Messenger.h"
 #include "renderers/RenderScene.h"
+#include "renderers/RoomView.h"
 #include "wall/layout/Layout.h"
 #include "wall/layout/Ranks.h"
 #include "wall/service/protocol/Codec.h"
@@ -41,6 +43,14 @@ struct Job {
   wall::RankRoles roles;  // without a wall: every rank renders
   int worldRank = 0;
   int canvasWidth = 0, canvasHeight = 0;
+  // The layout's screens in the room (null: one pinhole image over the canvas), with --wall or
+  // --view; and with --view, each display's name and canvas pixels, whose picture --image gets.
+  std::shared_ptr<const renderers::RoomView> room;
+  struct ViewedDisplay {
+    std::string name;
+    dfb::Region pixels;
+  };
+  std::vector<ViewedDisplay> views;
   renderers::RenderScene scene;          // render ranks only
   std::optional<CameraPath> cameraPath;  // render rank 0, with --camera-path
   // Where a failure during the frames goes. The frame loops catch into it while their objects

@@ -195,6 +195,18 @@ std::string serveProblem(Options& o, const RawOptions& raw) {
 // The render job: options that contradict each other or name what cannot be written. Empty when
 // fine; fills the fields `raw` holds.
 std::string renderJobProblem(Options& o, const RawOptions& raw, bool ghostGiven) {
+  if (!o.view.empty()) {
+    if (o.wall.empty() || !o.connect.empty())
+      return "--view DISPLAY needs --wall FILE.toml: the layout that has the display";
+    if (!o.image.ends_with(".png"))
+      return "--view DISPLAY writes what the display shows to --image FILE.png";
+    if (o.offscreen || !o.captureDir.empty() || o.mode != "route" || o.dryRun ||
+        !o.previewFile.empty())
+      return "--view renders one display in this job, without a wall: no --offscreen, "
+             "--capture, --mode, --dry-run or --preview";
+    o.viewLayout = std::move(o.wall);
+    o.wall.clear();
+  }
   if (!o.connect.empty() && !o.wall.empty())
     return "--connect and --wall: the wall you connect to has its own layout";
   if (!o.connect.empty() && (o.offscreen || o.mode != "route"))

@@ -47,7 +47,11 @@ struct Options {
   std::string ghost = "reach";
 
   // The wall.
-  std::string wall;        // layout file; empty: no wall (serve: the wall it runs)
+  std::string wall;  // layout file; empty: no wall (serve: the wall it runs)
+  // --view DISPLAY[,DISPLAY...] with --wall: no wall, an image of what each display shows
+  // (--image, kViewedDisplay in its name replaced by the display's). The parser moves --wall's
+  // file here, so the job has no wall ranks.
+  std::string view, viewLayout;
   bool offscreen = false;  // serve too
   std::string captureDir;
   int captureEvery = 0;
@@ -103,6 +107,9 @@ struct Options {
 int parseOptions(int argc, char** argv, Options& options, bool print);
 // True when the hub or the wall is on the other end: a wall of this job (--wall) or a serving
 // wall (--connect).
+// In --image's name with --view: replaced by each display's name.
+inline constexpr const char* kViewedDisplay = "{display}";
+
 inline bool hasWall(const Options& o) { return !o.wall.empty() || !o.connect.empty(); }
 
 // `dfbwall relay` (apps/Relay.cpp): argv from "relay" on. Same return convention.

@@ -48,6 +48,35 @@ constexpr auto kSignalPoll = std::chrono::milliseconds(100);
 // The other render ranks, idle: the longest sleep between polls of the next frame order.
 constexpr auto kIdlePoll = std::chrono::microseconds(10000);
 
+// The tiles of `grid` that hold a pixel of `region`.
+std::vector<bool> tilesMeeting(const dfb::TileGrid& grid, const dfb::Region& region) {
+  std::vector<bool> out(static_cast<std::size_t>(grid.tileCount()), false);
+  for (int t = 0; t < grid.tileCount(); ++t)
+    out[static_cast<std::size_t>(t)] = !dfb::intersect(grid.region(t), region).empty();
+  return out;
+}
+
+// --view: `image` with each kViewedDisplay replaced by the display's name.
+std::string viewImagePath(std::string image, const std::string& display) {
+  const std::string key = kViewedDisplay;
+  for (std::size_t at = image.find(key); at != std::string::npos; at = image.find(key, at))
+    image.replace(at, key.size(), display), at += display.size();
+  return image;
+}
+
+// --view: the display's pixels of the gathered canvas (`width` pixels a row), as a PNG.
+void writeView(const std::string& path, const std::uint32_t* canvas, int width,
+               const dfb::Region& view) {
+  std::vector<std::uint32_t> pixels;
+  pixels.reserve(static_cast<std::size_t>(view.pixelCount()));
+  for (int y = view.y0; y < view.y1; ++y) {
+    const std::uint32_t* row =
+        canvas + static_cast<std::size_t>(y) * static_cast<std::size_t>(width);
+    pixels.insert(pixels.end(), row + view.x0, row + view.x1);
+  }
+  wall::writePng(path, pixels.data(), view.width(), view.height());
+}
+
 // The first frame's camera and settings, from the scene and the command line.
 FrameView initialView(const Options& o, const renderers::CameraDesc& sceneCamera) {
   FrameView v;
@@ -199,6 +228,7 @@ RenderRank::RenderRank(const Job& job, messaging::Messenger& messenger, MPI_Comm
   settings_.height = job.canvasHeight;
   settings_.seed = o_.seed;
   settings_.maxDepth = o_.maxDepth;
+  settings_.room = job.room;
   chooseFormat();
   makeDrivers();
   dfb_ = std::make_unique<dfb::DistributedFrameBuffer>(messenger, renderComm, dfbOptions_);
@@ -243,6 +273,17 @@ void RenderRank::chooseFormat() {
     dfbOptions_.format = dfb::DisplayFormat::RGBAF32;
   } else {
     dfbOptions_.format = dfb::DisplayFormat::NONE;
+  }
+  // --view: only the tiles of those displays, as their wall would have them rendered.
+  if (!job_.views.empty()) {
+    const dfb::TileGrid grid(fb.width, fb.height, fb.tileSize);
+    driving_.activeTiles.assign(static_cast<std::size_t>(grid.tileCount()), false);
+    for (const Job::ViewedDisplay& v : job_.views) {
+      const std::vector<bool> tiles = tilesMeeting(grid, v.pixels);
+      for (std::size_t t = 0; t < tiles.size(); ++t)
+        if (tiles[t]) driving_.activeTiles[t] = true;
+    }
+    dfbOptions_.ownership = renderers::activeTileOwnership(driving_.activeTiles);
   }
   // The pattern writes display pixels straight away, unless linear output is asked for.
   if (drawsDisplayPixels(o_) && dfbOptions_.format != dfb::DisplayFormat::RGBAF32)
@@ -733,7 +774,11 @@ void RenderRank::endJob() {
   }
   if (!dfbOptions_.gatherEveryFrame && !o_.image.empty() && lastFrame_ > 0) dfb_->gatherImage();
   if (job_.worldRank == 0 && !o_.image.empty() && lastFrame_ > 0) {
-    if (endsWith(o_.image, ".png"))
+    if (!job_.views.empty())
+      for (const Job::ViewedDisplay& v : job_.views)
+        writeView(viewImagePath(o_.image, v.name), dfb_->imageRgba8().data(), job_.canvasWidth,
+                  v.pixels);
+    else if (endsWith(o_.image, ".png"))
       wall::writePng(o_.image, dfb_->imageRgba8().data(), job_.canvasWidth, job_.canvasHeight);
     else
       writePfm(o_.image, dfb_->imageRgbaF32().data(), job_.canvasWidth, job_.canvasHeight);

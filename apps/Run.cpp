@@ -31,6 +31,7 @@
 #include "renderers/scivis/bricks/BrickLoad.h"
 #include "renderers/scivis/bricks/BrickPlan.h"
 #include "renderers/scivis/io/SciVisDesc.h"
+#include "runtime/RoomView.h"
 #include "runtime/SetupAgreement.h"
 #include "runtime/WallControl.h"
 #include "wall/display/Capture.h"
@@ -139,6 +140,7 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
       job.roles = wall::rankRoles(*job.layout, worldSize);
       job.canvasWidth = job.layout->canvasWidth;
       job.canvasHeight = job.layout->canvasHeight;
+      job.room = runtime::roomView(*job.layout);
       if (job.isWallRank()) {
         char name[MPI_MAX_PROCESSOR_NAME];
         int length = 0;
@@ -148,6 +150,30 @@ std::string setUp(Job& job, int worldSize, std::unique_ptr<StatsStream>& stats,
                                 std::string(name, static_cast<size_t>(length))))
           std::fprintf(stderr, "dfbwall: warning: %s\n", w.c_str());
       }
+    } else if (!o.viewLayout.empty()) {  // --view: the wall's canvas, some displays' pictures
+      hashes.layout = hashFile(o.viewLayout);
+      const wall::Layout layout = wall::loadLayout(o.viewLayout);
+      for (std::size_t from = 0; from <= o.view.size();) {
+        const std::size_t comma = std::min(o.view.find(',', from), o.view.size());
+        const std::string name = o.view.substr(from, comma - from);
+        from = comma + 1;
+        const int display = layout.findDisplay(name);
+        if (display < 0) {
+          std::string names;
+          for (const wall::Display& d : layout.displays)
+            names += (names.empty() ? "" : ", ") + d.name;
+          return "--view " + name + ": " + o.viewLayout + " has no such display (it has " + names +
+                 ")";
+        }
+        job.views.push_back({name, layout.displays[static_cast<std::size_t>(display)].rect});
+      }
+      if (job.views.size() > 1 && o.image.find(kViewedDisplay) == std::string::npos)
+        return "--view with several displays writes one image each: put " +
+               std::string(kViewedDisplay) + " in --image's name (got " + o.image + ")";
+      job.roles = wall::RankRoles{worldSize, 0};
+      job.canvasWidth = layout.canvasWidth;
+      job.canvasHeight = layout.canvasHeight;
+      job.room = runtime::roomView(layout);
     } else {
       job.roles = wall::RankRoles{worldSize, 0};
       job.canvasWidth = o.width;

@@ -66,6 +66,10 @@ std::string checkStart(const Options& o, int worldSize, int process, bool alone,
                        std::optional<wall::Layout>& layout) {
   try {
     layout = wall::loadLayout(o.wall);
+    if (layout->inRoom())
+      return o.wall +
+             ": its displays are placed in a room (docs/rooms.md); a serving wall does not hand "
+             "that to its jobs yet: run the job with --wall";
     if (alone && worldSize != 1)
       return "serve --process starts one wall process on its own; under mpirun -np " +
              std::to_string(worldSize) + " every rank is a process already (leave it out)";

@@ -1,6 +1,7 @@
 #include "renderers/Camera.h"
 
 #include <cmath>
+#include <utility>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -18,7 +19,8 @@ CameraDesc orbitCamera(const CameraDesc& desc, float degrees) {
   return out;
 }
 
-Camera::Camera(const CameraDesc& d, int width, int height) : origin_(d.position) {
+Camera::Camera(const CameraDesc& d, int width, int height, std::shared_ptr<const RoomView> room)
+    : origin_(d.position), room_(std::move(room)) {
   if (width <= 0 || height <= 0) throw base::Error("camera: image size must be positive");
   const Vec3 view = d.lookAt - d.position;
   if (length(view) <= 0 || length(cross(view, d.up)) <= 0)
@@ -36,14 +38,27 @@ Camera::Camera(const CameraDesc& d, int width, int height) : origin_(d.position)
   focus_ = d.focusDistance > 0 ? d.focusDistance : length(view);
 }
 
-void Camera::ray(float px, float py, float u, float v, Vec3& origin, Vec3& direction) const {
+bool Camera::ray(float px, float py, float u, float v, Vec3& origin, Vec3& direction) const {
+  if (room_) {
+    const int s =
+        room_->screenAt(static_cast<int>(std::floor(px)), static_cast<int>(std::floor(py)));
+    if (s < 0) {
+      origin = origin_;
+      direction = forward_;
+      return false;
+    }
+    const Vec3 eye = room_->screens[static_cast<std::size_t>(s)].eye;
+    origin = origin_ + toWorld(eye);
+    direction = normalize(toWorld(room_->pointOn(s, px, py) - eye));
+    return true;
+  }
   const float sx = (2.0f * px * invWidth_ - 1.0f) * halfWidth_;
   const float sy = (1.0f - 2.0f * py * invHeight_) * halfHeight_;
   const Vec3 d = forward_ + right_ * sx + up_ * sy;
   if (lensRadius_ <= 0) {
     origin = origin_;
     direction = normalize(d);
-    return;
+    return true;
   }
   // Concentric-free polar lens sample is enough here: uniform over the disk.
   const float r = lensRadius_ * std::sqrt(u), phi = 2.0f * kPi * v;
@@ -51,6 +66,7 @@ void Camera::ray(float px, float py, float u, float v, Vec3& origin, Vec3& direc
   const Vec3 focusPoint = origin_ + d * focus_;
   origin = origin_ + lens;
   direction = normalize(focusPoint - origin);
+  return true;
 }
 
 void Camera::pinholeRays(std::size_t n, const float* px, const float* py, Vec3* dirs,

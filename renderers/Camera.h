@@ -1,9 +1,13 @@
 #pragma once
-// Pinhole camera (position, look-at, up, vertical field of view), optionally a thin lens.
-// Image plane coordinates are canvas pixels, x right and y down, as the DFB's tiles are.
+// Pinhole camera (position, look-at, up, vertical field of view), optionally a thin lens; or,
+// given a room (RoomView.h), an off-axis view per screen from its eye, the camera placing the
+// room in the world. Image plane coordinates are canvas pixels, x right and y down, as the DFB's
+// tiles are.
 #include <cstddef>
+#include <memory>
 
 #include "renderers/Math.h"
+#include "renderers/RoomView.h"
 
 namespace renderers {
 
@@ -30,11 +34,17 @@ CameraDesc orbitCamera(const CameraDesc& desc, float degrees);
 
 class Camera {
  public:
-  Camera(const CameraDesc& desc, int width, int height);
-  // The ray through canvas point (px, py); (u, v) in [0,1)^2 pick the point on the lens.
-  void ray(float px, float py, float u, float v, Vec3& origin, Vec3& direction) const;
-  // Without a lens every ray starts at position(): pinholeRays() then gives many at once.
-  bool pinhole() const { return lensRadius_ <= 0; }
+  // With `room`, the screens' frusta replace fovY and the lens (they are ignored).
+  Camera(const CameraDesc& desc, int width, int height,
+         std::shared_ptr<const RoomView> room = nullptr);
+  // The ray through canvas point (px, py); (u, v) in [0,1)^2 pick the point on the lens. False
+  // for a point no screen of the room shows (under a bezel): not to be traced (the ray given is
+  // then the view direction, finite).
+  bool ray(float px, float py, float u, float v, Vec3& origin, Vec3& direction) const;
+  // Without a lens or a room every ray starts at position(): pinholeRays() gives many at once.
+  bool pinhole() const { return lensRadius_ <= 0 && !room_; }
+  // Whether the camera is the room's per-screen frusta.
+  bool inRoom() const { return room_ != nullptr; }
   Vec3 position() const { return origin_; }
   // Pinhole only: for i < n the direction ray() gives through canvas point (px[i], py[i]) and
   // its per-axis reciprocal (1 / component, as clipToBox wants), the same bits, 4 rays at a time
@@ -51,7 +61,7 @@ class Camera {
     float halfWidth, halfHeight, invWidth, invHeight;
   };
   bool pinhole(Pinhole& out) const {
-    if (lensRadius_ > 0) return false;
+    if (!pinhole()) return false;
     out = {origin_, forward_, right_, up_, halfWidth_, halfHeight_, invWidth_, invHeight_};
     return true;
   }
@@ -59,6 +69,9 @@ class Camera {
  private:
   Vec3 origin_, forward_, right_, up_;
   float halfWidth_, halfHeight_, invWidth_, invHeight_, lensRadius_, focus_;
+  std::shared_ptr<const RoomView> room_;
+  // A vector given in the room's axes, in the world's (the room turns with the camera).
+  Vec3 toWorld(Vec3 v) const { return right_ * v.x + up_ * v.y - forward_ * v.z; }
 };
 
 }  // namespace renderers

@@ -25,11 +25,11 @@ float powerHeuristic(float a, float b) {
 PathTracer::PathTracer(const Scene& scene, const RenderSettings& settings)
     : scene_(scene),
       settings_(settings),
-      camera_(scene.desc().camera, settings.width, settings.height),
+      camera_(scene.desc().camera, settings.width, settings.height, settings.room),
       epsilon_(1e-4f * scene.extent()) {}
 
 void PathTracer::beginFrame(const dfb::FrameInfo& /*frame*/, const CameraDesc& camera) {
-  camera_ = Camera(camera, settings_.width, settings_.height);
+  camera_ = Camera(camera, settings_.width, settings_.height, settings_.room);
 }
 
 Vec3 PathTracer::radiance(Vec3 origin, Vec3 direction, const Sampler& sampler) const {
@@ -117,7 +117,6 @@ void PathTracer::render(const dfb::Region& region, std::uint32_t accumulationId,
   constexpr int n = RayPacket::kSize;
   RayPacket rays;
   PacketHits hits;
-  std::fill(std::begin(rays.active), std::end(rays.active), true);
   forEachBlock(region, [&](const PixelBlock& b) {
     Vec3 sum[n] = {};
     for (std::uint32_t s = firstSample; s < firstSample + samples; ++s) {
@@ -125,13 +124,14 @@ void PathTracer::render(const dfb::Region& region, std::uint32_t accumulationId,
       for (int i = 0; i < n; ++i) {
         const Sampler& sampler = samplers[i] =
             Sampler(settings_.seed, b.x(i), b.y(i), accumulationId, s);
-        camera_.ray(static_cast<float>(b.x(i)) + sampler.get(0),
-                    static_cast<float>(b.y(i)) + sampler.get(1), sampler.get(2), sampler.get(3),
-                    rays.origin[i], rays.direction[i]);
+        // False under a room's bezels: that pixel stays black.
+        rays.active[i] = camera_.ray(static_cast<float>(b.x(i)) + sampler.get(0),
+                                     static_cast<float>(b.y(i)) + sampler.get(1), sampler.get(2),
+                                     sampler.get(3), rays.origin[i], rays.direction[i]);
       }
       scene_.intersect(rays, hits);
       for (int i = 0; i < n; ++i) {
-        if (!b.inside(region, i)) continue;
+        if (!b.inside(region, i) || !rays.active[i]) continue;
         const Vec3 l =
             radiance(rays.origin[i], rays.direction[i], hits.found[i], hits.hit[i], samplers[i]);
         // A NaN or infinity from a degenerate path would poison the whole accumulation.

@@ -32,6 +32,9 @@ struct RenderSettings {
   // float pixels, no tone mapping. Only for the DFB's write operation, and not for linear
   // output (RGBAF32).
   std::optional<dfb::ToneMapSettings> displayPixels = std::nullopt;
+  // Screens placed in a room (RoomView.h): each pixel's ray from its screen's frustum, pixels
+  // no screen shows not traced. Null: one pinhole image over the canvas.
+  std::shared_ptr<const RoomView> room = nullptr;
 };
 
 // Settings an operator may change while the wall runs (steering). Set between frames,

@@ -41,7 +41,7 @@ Connect to a wall service: --connect --token-file --token --server-key --codec -
 Control: --control --control-token-file --control-host --max-spp
 Throughput: --frames-in-flight --handler-threads --no-compress --compress-within-host
 Failure handling: --timeout --memory-limit
-Output: --image --capture --capture-every --preview --stats --quiet
+Output: --view --image --capture --capture-every --preview --stats --quiet
 Help: --help
 Subcommands: serve relay show'
 serve_command='Wall: --wall --offscreen --max-jobs

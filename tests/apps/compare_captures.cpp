@@ -1,5 +1,6 @@
 // compare_captures LAYOUT CAPTURE_DIR FULL_CANVAS_PNG FRAME [DISPLAY]
 //                                                            (or: compare_captures --info LAYOUT)
+//                  --displays LAYOUT: a line "NAME X Y WIDTH HEIGHT" per display
 //                  DISPLAY: only that display's capture (a wall that lost processes has no
 //                  complete frame of every display)
 //                  --preview LAYOUT PREVIEW_PNG FULL_CANVAS_PNG [X,Y,W,H]: a job's preview
@@ -244,10 +245,16 @@ int compareThumbnail(const wall::Layout& layout, const dfb::Region& window,
 }
 
 int main(int argc, char** argv) {
-  if (argc == 3 && std::string(argv[1]) == "--info") {  // "W WIDTHxHEIGHT" for the test script
+  // "W WIDTHxHEIGHT" for the test scripts; --displays: a line "NAME X Y WIDTH HEIGHT" per display.
+  if (argc == 3 && (std::string(argv[1]) == "--info" || std::string(argv[1]) == "--displays")) {
     try {
       const wall::Layout layout = wall::loadLayout(argv[2]);
-      std::printf("%d %dx%d\n", layout.processCount, layout.canvasWidth, layout.canvasHeight);
+      if (std::string(argv[1]) == "--info")
+        std::printf("%d %dx%d\n", layout.processCount, layout.canvasWidth, layout.canvasHeight);
+      else
+        for (const wall::Display& d : layout.displays)
+          std::printf("%s %d %d %d %d\n", d.name.c_str(), d.rect.x0, d.rect.y0, d.rect.width(),
+                      d.rect.height());
       return 0;
     } catch (const std::exception& e) {
       std::fprintf(stderr, "compare_captures: %s\n", e.what());

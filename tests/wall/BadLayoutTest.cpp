@@ -142,8 +142,8 @@ colour = "red"
 TEST(BadLayout, ValidateLayoutOnACodeBuiltLayout) {
   wall::Layout l;
   l.file = "code";
-  l.displays.push_back({"x", {0, 0, 10, 10}, 0, "", 0, false, {}, {}});
-  l.displays.push_back({"x", {5, 5, 15, 15}, 3, "", 0, false, {}, {}});
+  l.displays.push_back({"x", {0, 0, 10, 10}, 0, "", 0, false, {}, wall::Eye::Centre, {}, {}});
+  l.displays.push_back({"x", {5, 5, 15, 15}, 3, "", 0, false, {}, wall::Eye::Centre, {}, {}});
   const wall::Problems p = wall::validateLayout(l);
   // Duplicate name, overlap, and processes 1 and 2 missing (one message per gap).
   ASSERT_EQ(p.size(), 3u) << wall::joinProblems(p);

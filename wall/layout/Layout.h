@@ -6,11 +6,13 @@
 // Coordinates are canvas pixels, x right, y down. The canvas is the bounding box of all
 // displays, moved so that it starts at (0, 0): whatever origins the file uses, the top-left-most
 // display edge lands on x = 0 and y = 0, so canvas tiles start where the picture starts.
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "dfb/Tile.h"
+#include "wall/layout/Room.h"
 
 namespace wall {
 
@@ -21,10 +23,13 @@ struct Display {
   std::string host;  // expected MPI processor name; empty = any (mismatch is a warning)
   int monitor = 0;   // GLFW monitor index for window mode (0 = primary)
   bool fullscreen = false;
+  // Where its picture is in the room (metres), and which eye it shows; no screen: a flat canvas.
+  std::optional<Screen> screen;
+  Eye eye = Eye::Centre;
   // Where each field was written (line and column, from 1), for messages; 0 when the field was
   // not written (defaults; grid-expanded displays use the [grid]'s places).
   struct Places {
-    int table = 0, name = 0, origin = 0, size = 0, process = 0;
+    int table = 0, name = 0, origin = 0, size = 0, process = 0, screen = 0, eye = 0;
   };
   Places lines, columns;
 };
@@ -41,6 +46,10 @@ struct Layout {
   int canvasHeight = 0;
   int processCount = 0;  // wall processes W: the last W ranks of the job
   std::vector<Display> displays;
+  // [viewer]: set exactly when the displays are placed in a room (the default viewer if the
+  // file has no [viewer]). Every display then has a screen.
+  std::optional<Viewer> viewer;
+  bool inRoom() const { return viewer.has_value(); }
 
   // Display indices driven by wall process `process`, in file order.
   std::vector<int> displaysOfProcess(int process) const;

@@ -15,16 +15,18 @@
 #include "base/TomlDiagnostics.h"
 #include "wall/layout/Layout.h"
 #include "wall/layout/LayoutChecks.h"
+#include "wall/layout/RoomToml.h"
 
 namespace wall {
 namespace {
 
-constexpr std::array<std::string_view, 3> kTopKeys = {"display", "grid", "description"};
-constexpr std::array<std::string_view, 7> kDisplayKeys = {"name", "origin",  "size",      "process",
-                                                          "host", "monitor", "fullscreen"};
-constexpr std::array<std::string_view, 9> kGridKeys = {"columns",    "rows",     "display_size",
-                                                       "bezel_px",   "bezel_mm", "pixel_pitch_mm",
-                                                       "fullscreen", "monitor",  "process_per"};
+constexpr std::array<std::string_view, 4> kTopKeys = {"display", "grid", "description", "viewer"};
+constexpr std::array<std::string_view, 11> kDisplayKeys = {
+    "name",       "origin",      "size",         "process",  "host", "monitor",
+    "fullscreen", "bottom_left", "bottom_right", "top_left", "eye"};
+constexpr std::array<std::string_view, 10> kGridKeys = {
+    "columns",        "rows",       "display_size", "bezel_px",    "bezel_mm",
+    "pixel_pitch_mm", "fullscreen", "monitor",      "process_per", "room"};
 
 int lineOf(const toml::node& n) { return static_cast<int>(n.source().begin.line); }
 int columnOf(const toml::node& n) { return static_cast<int>(n.source().begin.column); }
@@ -142,6 +144,7 @@ bool readDisplay(const toml::table& t, int index, Display& d, base::TomlDiagnost
   }
   if (const toml::node* n = t.get("fullscreen"))
     d.fullscreen = readBool(*n, r, subject, "fullscreen").value_or(false);
+  detail::readDisplayScreen(t, subject, d, r);
   return setProcess;
 }
 
@@ -344,6 +347,8 @@ void readGrid(const toml::table& t, Layout& layout, base::TomlDiagnostics& r) {
       layout.displays.push_back(std::move(d));
     }
   }
+  if (const toml::node* room = t.get("room"))
+    detail::placeGrid(*room, columns, rows, layout.displays, r);
 }
 
 void readRoot(const toml::table& root, Layout& layout, std::vector<bool>& trusted,
@@ -367,6 +372,7 @@ void readRoot(const toml::table& root, Layout& layout, std::vector<bool>& truste
   } else {
     r.add(1, 1, "", "no displays: describe them with [[display]] tables or a [grid] table");
   }
+  detail::readRoom(root.get("viewer"), layout, r);
 }
 
 }  // namespace

@@ -268,8 +268,10 @@ std::vector<int> BrickFrameDriver::candidateBricks(const CameraDesc& camera,
   const std::vector<BrickPlan>& plans = impl_->directory.bricks;
   for (std::size_t b = 0; b < plans.size(); ++b) {
     float x0, y0, x1, y1;
-    // A pixel's samples jitter within it: widen the projection by a pixel.
-    if (!projectBox(camera, impl_->settings.width, impl_->settings.height, plans[b].bounds, x0, y0,
+    // A pixel's samples jitter within it: widen the projection by a pixel. A room's screens are
+    // not one pinhole image: every brick is a candidate, the tile's rays decide.
+    if (impl_->settings.room ||
+        !projectBox(camera, impl_->settings.width, impl_->settings.height, plans[b].bounds, x0, y0,
                     x1, y1) ||
         (x0 - 1 < static_cast<float>(region.x1) && x1 + 1 > static_cast<float>(region.x0) &&
          y0 - 1 < static_cast<float>(region.y1) && y1 + 1 > static_cast<float>(region.y0)))
@@ -290,7 +292,8 @@ void BrickFrameDriver::setLiveSettings(const LiveSettings& live) {
 std::vector<int> BrickFrameDriver::bricksOfTile(const CameraDesc& cameraDesc,
                                                 const dfb::Region& region,
                                                 std::uint32_t accumulationId) const {
-  const Camera camera(cameraDesc, impl_->settings.width, impl_->settings.height);
+  const Camera camera(cameraDesc, impl_->settings.width, impl_->settings.height,
+                      impl_->settings.room);
   std::vector<int> out;
   for (int b : candidateBricks(cameraDesc, region))
     if (raysMeetBox(camera, impl_->settings.seed, region, accumulationId,
@@ -306,7 +309,7 @@ FrameReport BrickFrameDriver::renderFrame(dfb::DistributedFrameBuffer& dfb,
   using base::Clock;
   const auto t0 = Clock::now();
   Impl& m = *impl_;
-  const Camera camera(cameraDesc, m.settings.width, m.settings.height);
+  const Camera camera(cameraDesc, m.settings.width, m.settings.height, m.settings.room);
   for (auto& r : m.renderers)
     if (r) r->beginFrame(frame, cameraDesc);
 

@@ -18,10 +18,12 @@ SciVisRenderer::RayPiece scalarRay(const RowRays& row, int x, int y, std::uint32
                                    bool& inside) {
   const Sampler sampler(row.seed, x, y, row.accumulationId, s);
   Vec3 origin, dir;
-  row.camera->ray(static_cast<float>(x) + sampler.get(0), static_cast<float>(y) + sampler.get(1),
-                  0.5f, 0.5f, origin, dir);
+  // Under a room's bezels the ray is not traced: an empty piece, as for one missing the bounds.
+  const bool traced =
+      row.camera->ray(static_cast<float>(x) + sampler.get(0),
+                      static_cast<float>(y) + sampler.get(1), 0.5f, 0.5f, origin, dir);
   float t0 = 0, t1 = kInf;
-  inside = clipToBox(row.bounds, origin, reciprocal(dir), t0, t1);
+  inside = traced && clipToBox(row.bounds, origin, reciprocal(dir), t0, t1);
   if (!inside) t0 = t1 = 0;
   return {origin, dir, t0, t1, sampler};
 }
