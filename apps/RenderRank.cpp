@@ -131,6 +131,7 @@ class RenderRank {
  private:
   void chooseFormat();
   void makeDrivers();
+  renderers::scivis::BrickDriverOptions brickOptions() const;
   StepData loadStep(std::uint32_t step) const;
   void showStep(std::uint32_t step);
   void reapplyView();
@@ -292,6 +293,15 @@ void RenderRank::chooseFormat() {
 
 // Image-parallel: one renderer over the whole scene, tiles planned by the frame driver.
 // Data-parallel (--bricks): this rank's bricks, tiles planned per brick.
+renderers::scivis::BrickDriverOptions RenderRank::brickOptions() const {
+  renderers::scivis::BrickDriverOptions bricks;
+  bricks.samplesPerPixel = static_cast<std::uint32_t>(o_.spp);
+  bricks.threads = o_.threads;
+  bricks.activeTiles = driving_.activeTiles;
+  bricks.timeout = timeout_;
+  return bricks;
+}
+
 void RenderRank::makeDrivers() {
   driving_.distribution = renderers::distributionFromName(o_.distribution);
   driving_.samplesPerPixel = static_cast<std::uint32_t>(o_.spp);
@@ -300,11 +310,7 @@ void RenderRank::makeDrivers() {
   if (o_.bricks > 0) {
     int renderRanks = 1;
     MPI_Comm_size(renderComm_, &renderRanks);
-    renderers::scivis::BrickDriverOptions bricks;
-    bricks.samplesPerPixel = static_cast<std::uint32_t>(o_.spp);
-    bricks.threads = o_.threads;
-    bricks.activeTiles = driving_.activeTiles;
-    bricks.timeout = timeout_;
+    const renderers::scivis::BrickDriverOptions bricks = brickOptions();
     // Each rank loads only its own bricks; the ranks then exchange their bounds, as programs
     // that bring their own data do (api/DataDistributed.h).
     brickDriver_ = std::make_unique<renderers::scivis::BrickFrameDriver>(
@@ -364,11 +370,7 @@ void RenderRank::showStep(std::uint32_t step) {
   desc_ = data.desc;
   if (brickDriver_) {
     brickDriver_.reset();
-    renderers::scivis::BrickDriverOptions bricks;
-    bricks.samplesPerPixel = static_cast<std::uint32_t>(o_.spp);
-    bricks.threads = o_.threads;
-    bricks.activeTiles = driving_.activeTiles;
-    bricks.timeout = timeout_;
+    const renderers::scivis::BrickDriverOptions bricks = brickOptions();
     brickDriver_ = std::make_unique<renderers::scivis::BrickFrameDriver>(
         desc_, settings_, bricks, std::move(data.bricks), renderComm_);
   } else {
