@@ -108,7 +108,8 @@ token=series-test-token-0123456789
 job=$!
 api() { curl -s -o "$work/reply" -w '%{http_code}' -H "Authorization: Bearer $token" "$@"; }
 status() { api "http://127.0.0.1:$port/api/status" >/dev/null; cat "$work/reply"; }
-for _ in $(seq 300); do [ "$(api "http://127.0.0.1:$port/api/status")" = 200 ] && break; sleep 0.1; done
+# The control port answers before the scene is read; the series is known once the status says so.
+for _ in $(seq 300); do status | grep -q '"time":{' && break; sleep 0.1; done
 [ "$(api -d '{"play": false}' "http://127.0.0.1:$port/api/time")" = 200 ] || fail "pause: $(cat "$work/reply")"
 [ "$(api -d '{"seek": 4}' "http://127.0.0.1:$port/api/time")" = 200 ] || fail "seek: $(cat "$work/reply")"
 for _ in $(seq 300); do
