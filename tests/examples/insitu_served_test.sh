@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The in-situ examples in C, Fortran and Python on one served wall: `dfbwall serve` runs the
+# The in-situ examples in C++, C, Fortran and Python on one served wall: `dfbwall serve` runs the
 # offscreen 2x2 wall with a token file; each example in turn connects (--connect, --token-file),
 # 2 ranks simulating and rendering, and the wall's captures of its last frame equal the one-rank
 # C++ example's image cut out, byte for byte (issue 38, "Done when"). A job without the token is
@@ -42,17 +42,18 @@ show() {
   echo "$name: the served wall shows the C++ image ($((SECONDS - began)) s)"
   shown=$((shown + 1))
 }
-show c "${run[@]}" -np 2 "$installed/build-insitu-c/insitu-c"
+show c++ "${run[@]}" -np 2 "$installed/build/insitu/insitu" --codec raw
+show c "${run[@]}" -np 2 "$installed/build/insitu-c/insitu-c"
 # A job with another token is refused with a message, and does not hang.
 echo "not-the-token" >"$work/other-token"
 chmod 600 "$work/other-token"
 status=0
-timeout 60 "${run[@]}" -np 1 "$installed/build-insitu-c/insitu-c" "${args[@]}" \
+timeout 60 "${run[@]}" -np 1 "$installed/build/insitu-c/insitu-c" "${args[@]}" \
   --connect "127.0.0.1:$port" --token-file "$work/other-token" >"$work/job.out" 2>&1 || status=$?
 if [ $status -eq 0 ] || [ $status -eq 124 ]; then fail "a job with a wrong token (exit $status)"; fi
 echo "a wrong token: refused (exit $status): $(grep -m1 -i 'token\|refused\|denied' "$work/job.out" || head -1 "$work/job.out")"
-if [ -x "$installed/build-insitu-f90/insitu-f90" ]; then
-  show fortran "${run[@]}" -np 2 "$installed/build-insitu-f90/insitu-f90"
+if [ -x "$installed/build/insitu-f90/insitu-f90" ]; then
+  show fortran "${run[@]}" -np 2 "$installed/build/insitu-f90/insitu-f90"
 fi
 if [ -n "${PYTHON:-}" ]; then
   site=$(ls -d "$installed"/prefix/lib*/python3*/site-packages)
