@@ -5,25 +5,18 @@
 #include <string>
 
 #include "base/Error.h"
+#include "tests/wall/ShippedLayoutTestUtil.h"
 #include "wall/layout/Layout.h"
 #include "wall/layout/Ranks.h"
 
 namespace {
 
-std::string config(const std::string& name) {
-  return std::string(DFBWALL_SOURCE_DIR) + "/configs/walls/" + name;
-}
-
-wall::Layout load(const std::string& name) {
-  wall::LayoutResult r = wall::readLayoutFile(config(name));
-  EXPECT_TRUE(r.ok()) << wall::joinProblems(r.problems);
-  return r.layout;
-}
+using test::loadShippedLayout;
 
 dfb::Region rect(int x, int y, int w, int h) { return {x, y, x + w, y + h}; }
 
 TEST(Layout, OneByOne) {
-  const wall::Layout l = load("1x1.toml");
+  const wall::Layout l = loadShippedLayout("1x1.toml");
   EXPECT_EQ(l.canvasWidth, 300);
   EXPECT_EQ(l.canvasHeight, 200);
   ASSERT_EQ(l.displays.size(), 1u);
@@ -34,7 +27,7 @@ TEST(Layout, OneByOne) {
 }
 
 TEST(Layout, TwoByTwoGridWithBezels) {
-  const wall::Layout l = load("2x2.toml");
+  const wall::Layout l = loadShippedLayout("2x2.toml");
   // 2 * 200 + (6 right + 6 left) = 412; 2 * 150 + (5 bottom + 5 top) = 310.
   EXPECT_EQ(l.canvasWidth, 412);
   EXPECT_EQ(l.canvasHeight, 310);
@@ -53,7 +46,7 @@ TEST(Layout, TwoByTwoGridWithBezels) {
 }
 
 TEST(Layout, AsymmetricBezelsInMillimetres) {
-  const wall::Layout l = load("3x2-bezels.toml");
+  const wall::Layout l = loadShippedLayout("3x2-bezels.toml");
   // 0.3 mm pitch: left 15, right 30, top 10, bottom 20 px. Column pitch 160 + 45, row 120 + 30.
   EXPECT_EQ(l.canvasWidth, 570);
   EXPECT_EQ(l.canvasHeight, 270);
@@ -94,7 +87,7 @@ TEST(Layout, GridProcessPerRowAndDisplay) {
 }
 
 TEST(Layout, MixedSizesAndOneProcessDrivingTwo) {
-  const wall::Layout l = load("mixed.toml");
+  const wall::Layout l = loadShippedLayout("mixed.toml");
   EXPECT_EQ(l.canvasWidth, 590);
   EXPECT_EQ(l.canvasHeight, 220);
   EXPECT_EQ(l.processCount, 3);
@@ -111,7 +104,7 @@ TEST(Layout, MixedSizesAndOneProcessDrivingTwo) {
 
 TEST(Layout, ShippedSizesAreNotTileMultiples) {
   for (const char* name : {"1x1.toml", "2x2.toml", "3x2-bezels.toml", "mixed.toml"}) {
-    const wall::Layout l = load(name);
+    const wall::Layout l = loadShippedLayout(name);
     EXPECT_TRUE(l.canvasWidth % 64 != 0 || l.canvasHeight % 64 != 0) << name;
     for (const wall::Display& d : l.displays)
       EXPECT_TRUE(d.rect.width() % 64 != 0 || d.rect.height() % 64 != 0) << name << " " << d.name;
@@ -150,7 +143,7 @@ TEST(Layout, LoadLayoutThrowsWithEveryProblem) {
     EXPECT_NE(std::string(e.what()).find("overlap.toml:"), std::string::npos) << e.what();
   }
   try {
-    wall::loadLayout(config("does-not-exist.toml"));
+    wall::loadLayout(test::shippedLayoutPath("does-not-exist.toml"));
     FAIL() << "no exception";
   } catch (const base::Error& e) {
     EXPECT_NE(std::string(e.what()).find("does-not-exist.toml: cannot read"), std::string::npos)
@@ -159,7 +152,7 @@ TEST(Layout, LoadLayoutThrowsWithEveryProblem) {
 }
 
 TEST(Ranks, RenderRanksAreTheRest) {
-  const wall::Layout l = load("2x2.toml");  // 4 wall processes
+  const wall::Layout l = loadShippedLayout("2x2.toml");  // 4 wall processes
   EXPECT_FALSE(wall::checkRankCount(l, 5));
   EXPECT_FALSE(wall::checkRankCount(l, 9));
   const wall::RankRoles roles = wall::rankRoles(l, 6);
@@ -172,7 +165,7 @@ TEST(Ranks, RenderRanksAreTheRest) {
 }
 
 TEST(Ranks, TooFewRanksIsAClearError) {
-  const wall::Layout l = load("2x2.toml");
+  const wall::Layout l = loadShippedLayout("2x2.toml");
   const auto message = wall::checkRankCount(l, 4);
   ASSERT_TRUE(message);
   EXPECT_NE(message->find("2x2.toml"), std::string::npos) << *message;
@@ -183,7 +176,7 @@ TEST(Ranks, TooFewRanksIsAClearError) {
 }
 
 TEST(Ranks, ExplicitRenderRanksMustAddUp) {
-  const wall::Layout l = load("mixed.toml");  // 3 wall processes
+  const wall::Layout l = loadShippedLayout("mixed.toml");  // 3 wall processes
   EXPECT_FALSE(wall::checkRankCount(l, 5, 2));
   const auto message = wall::checkRankCount(l, 6, 2);
   ASSERT_TRUE(message);

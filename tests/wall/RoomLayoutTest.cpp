@@ -7,19 +7,12 @@
 #include <string>
 #include <vector>
 
+#include "tests/wall/ShippedLayoutTestUtil.h"
 #include "wall/layout/Layout.h"
 
 namespace {
 
-std::string config(const std::string& name) {
-  return std::string(DFBWALL_SOURCE_DIR) + "/configs/walls/" + name;
-}
-
-wall::Layout load(const std::string& name) {
-  wall::LayoutResult r = wall::readLayoutFile(config(name));
-  EXPECT_TRUE(r.ok()) << wall::joinProblems(r.problems);
-  return r.layout;
-}
+using test::loadShippedLayout;
 
 void expectNear(const wall::Point3& got, const wall::Point3& want) {
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(got[i], want[i], 1e-9) << "coordinate " << i;
@@ -36,14 +29,14 @@ void expectProblems(const std::string& text, const std::vector<std::string>& exp
 
 TEST(RoomLayout, FlatLayoutsHaveNoRoom) {
   for (const char* name : {"1x1.toml", "2x2.toml", "3x2-bezels.toml", "mixed.toml"}) {
-    const wall::Layout l = load(name);
+    const wall::Layout l = loadShippedLayout(name);
     EXPECT_FALSE(l.inRoom()) << name;
     for (const wall::Display& d : l.displays) EXPECT_FALSE(d.screen.has_value()) << name;
   }
 }
 
 TEST(RoomLayout, CaveCorner) {
-  const wall::Layout l = load("cave-corner.toml");
+  const wall::Layout l = loadShippedLayout("cave-corner.toml");
   ASSERT_TRUE(l.inRoom());
   ASSERT_EQ(l.displays.size(), 3u);
   EXPECT_EQ(l.canvasWidth, 240);
@@ -57,7 +50,7 @@ TEST(RoomLayout, CaveCorner) {
 }
 
 TEST(RoomLayout, CylinderColumnsFaceTheAxis) {
-  const wall::Layout l = load("cylinder-3x2.toml");
+  const wall::Layout l = loadShippedLayout("cylinder-3x2.toml");
   ASSERT_TRUE(l.inRoom());
   ASSERT_EQ(l.displays.size(), 6u);
   // The middle column is straight ahead: its picture centred on x = 0 at z = -radius.
@@ -78,7 +71,7 @@ TEST(RoomLayout, CylinderColumnsFaceTheAxis) {
 }
 
 TEST(RoomLayout, PassiveStereoEyes) {
-  const wall::Layout l = load("stereo-2x2.toml");
+  const wall::Layout l = loadShippedLayout("stereo-2x2.toml");
   ASSERT_TRUE(l.inRoom());
   ASSERT_EQ(l.displays.size(), 8u);
   EXPECT_EQ(l.processCount, 4);

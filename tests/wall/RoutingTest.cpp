@@ -7,22 +7,21 @@
 #include <vector>
 
 #include "base/Error.h"
+#include "tests/wall/ShippedLayoutTestUtil.h"
 #include "wall/layout/Layout.h"
 #include "wall/route/PieceMessage.h"
 #include "wall/route/Routing.h"
 
 namespace {
 
-wall::Layout load(const std::string& name) {
-  return wall::loadLayout(std::string(DFBWALL_SOURCE_DIR) + "/configs/walls/" + name);
-}
+using test::loadShippedLayout;
 
 const char* kLayouts[] = {"1x1.toml", "2x2.toml", "3x2-bezels.toml", "mixed.toml"};
 const int kTileSizes[] = {64, 50, 17, 1000};
 
 TEST(Routing, PiecesCoverEveryDisplayedPixelOnce) {
   for (const char* name : kLayouts) {
-    const wall::Layout l = load(name);
+    const wall::Layout l = loadShippedLayout(name);
     // Which display (or -1) each canvas pixel belongs to.
     std::vector<int> owner(static_cast<size_t>(l.canvasWidth) * l.canvasHeight, -1);
     for (size_t i = 0; i < l.displays.size(); ++i) {
@@ -63,7 +62,7 @@ TEST(Routing, PiecesCoverEveryDisplayedPixelOnce) {
 
 TEST(Routing, TilesOfDisplayAgreeWithPiecesOf) {
   for (const char* name : kLayouts) {
-    const wall::Layout l = load(name);
+    const wall::Layout l = loadShippedLayout(name);
     for (int tileSize : kTileSizes) {
       SCOPED_TRACE(std::string(name) + " tile " + std::to_string(tileSize));
       const dfb::TileGrid tiles = wall::canvasTiles(l, tileSize);
@@ -93,7 +92,7 @@ TEST(Routing, TilesOfDisplayAgreeWithPiecesOf) {
 }
 
 TEST(Routing, ATileAcrossTheBezelCross) {
-  const wall::Layout l = load("2x2.toml");  // panels at x 0 and 212, y 0 and 160
+  const wall::Layout l = loadShippedLayout("2x2.toml");  // panels at x 0 and 212, y 0 and 160
   const dfb::TileGrid tiles = wall::canvasTiles(l, 64);
   EXPECT_EQ(tiles.tilesX(), 7);  // 412 / 64 rounded up
   EXPECT_EQ(tiles.tilesY(), 5);  // 310 / 64 rounded up
@@ -110,7 +109,7 @@ TEST(Routing, ATileAcrossTheBezelCross) {
 }
 
 TEST(Routing, TilesBehindBezelsAreNotShown) {
-  const wall::Layout l = load("3x2-bezels.toml");  // 45 px between columns: x 160..205
+  const wall::Layout l = loadShippedLayout("3x2-bezels.toml");  // 45 px between columns: x 160..205
   const dfb::TileGrid tiles = wall::canvasTiles(l, 16);
   const std::vector<bool> shown = wall::tilesShownByAnyDisplay(l, 16);
   // Column tx = 11 spans x 176..192, wholly behind the first column gap; and 30 px between rows
@@ -126,7 +125,7 @@ TEST(Routing, TilesBehindBezelsAreNotShown) {
   // Hidden columns: 10, 11 (x 160..192) and 23, 24 (x 368..400, in the gap 365..410); row 8.
   EXPECT_EQ(hidden, 4 * tiles.tilesY() + tiles.tilesX() - 4);
   // Every tile of a gapless single display is shown.
-  const std::vector<bool> all = wall::tilesShownByAnyDisplay(load("1x1.toml"), 64);
+  const std::vector<bool> all = wall::tilesShownByAnyDisplay(loadShippedLayout("1x1.toml"), 64);
   EXPECT_EQ(all, std::vector<bool>(all.size(), true));
 }
 
